@@ -1,0 +1,121 @@
+"""Every error the rosbridge client raises.
+
+The tree::
+
+    RosbridgeError                  base: anything that went wrong talking to the bridge
+    ├── NotConnectedError           no open connection right now (the robot is down, wrong address, ...)
+    ├── ConnectionLostError         the connection dropped while this request was waiting for its reply
+    ├── RequestTimeoutError         no reply within the deadline (rosbridge answers most errors with silence)
+    ├── ServiceError                ``service_response`` with ``result: false``; carries the bridge's own text
+    ├── ActionError                 ``action_result`` with ``result: false``, or an action that cannot be reached
+    ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
+    │                               because the bridge drops such messages without a word)
+    ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
+    └── ProtocolError               a frame that breaks the rosbridge v2 protocol
+
+Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
+and what to check. The MCP layer turns these into tool errors at one place (``server.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+__all__ = [
+    "ActionError",
+    "ConnectionLostError",
+    "InvalidMessageError",
+    "NotConnectedError",
+    "ProtocolError",
+    "RequestTimeoutError",
+    "RosbridgeError",
+    "ServiceError",
+    "UnknownTypeError",
+]
+
+
+class RosbridgeError(Exception):
+    """Base of every error raised by the rosbridge client."""
+
+
+class NotConnectedError(RosbridgeError):
+    """There is no open connection to the bridge, so nothing was sent."""
+
+    def __init__(self, url: str, reason: str | None = None) -> None:
+        self.url = url
+        self.reason = reason
+        detail = f" ({reason})" if reason else ""
+        super().__init__(
+            f"Not connected to rosbridge at {url}{detail}; nothing was sent. "
+            "Check that the robot is on, that rosbridge_server is running there "
+            "(ROS 2: `ros2 launch rosbridge_server rosbridge_websocket_launch.xml`, "
+            "ROS 1: `roslaunch rosbridge_server rosbridge_websocket.launch`), and that "
+            "ROSBRIDGE_HOST/ROSBRIDGE_PORT (or ROSBRIDGE_URL) point at it. "
+            "The server keeps reconnecting in the background; try again in a few seconds."
+        )
+
+
+class ConnectionLostError(RosbridgeError):
+    """The connection dropped while a request was waiting for its reply."""
+
+    def __init__(self, url: str, what: str) -> None:
+        self.url = url
+        self.what = what
+        super().__init__(
+            f"The connection to rosbridge at {url} dropped while waiting for {what}; "
+            "its outcome on the robot is unknown. Nothing will be re-sent automatically."
+        )
+
+
+class RequestTimeoutError(RosbridgeError):
+    """No reply arrived within the deadline."""
+
+    def __init__(self, what: str, timeout: float, hint: str | None = None) -> None:
+        self.what = what
+        self.timeout = timeout
+        extra = f" {hint}" if hint else ""
+        super().__init__(f"No reply to {what} within {timeout:g} s.{extra}")
+
+
+class ServiceError(RosbridgeError):
+    """A service call failed; ``message`` is the bridge's own text."""
+
+    def __init__(self, service: str, message: str) -> None:
+        self.service = service
+        self.message = message
+        super().__init__(f"Service call {service} failed: {message}")
+
+
+class ActionError(RosbridgeError):
+    """An action goal failed before reaching a terminal state, or could not be sent."""
+
+    def __init__(self, action: str, message: str) -> None:
+        self.action = action
+        self.message = message
+        super().__init__(f"Action {action} failed: {message}")
+
+
+class InvalidMessageError(RosbridgeError):
+    """A message does not fit its ROS type; ``problems`` names each field that is wrong."""
+
+    def __init__(self, type_name: str, problems: Sequence[str]) -> None:
+        self.type_name = type_name
+        self.problems = list(problems)
+        listed = "; ".join(self.problems)
+        super().__init__(f"The message does not fit {type_name}: {listed}")
+
+
+class UnknownTypeError(RosbridgeError):
+    """The bridge has no definition for this type."""
+
+    def __init__(self, type_name: str, hint: str | None = None) -> None:
+        self.type_name = type_name
+        extra = f" {hint}" if hint else ""
+        super().__init__(
+            f"rosbridge does not know the type {type_name!r} (its interface package is not installed "
+            f"on the robot, or the name is misspelled).{extra}"
+        )
+
+
+class ProtocolError(RosbridgeError):
+    """A frame broke the rosbridge v2 protocol."""
