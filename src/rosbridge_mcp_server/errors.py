@@ -6,8 +6,10 @@ The tree::
     ├── NotConnectedError           no open connection right now (the robot is down, wrong address, ...)
     ├── ConnectionLostError         the connection dropped while this request was waiting for its reply
     ├── RequestTimeoutError         no reply within the deadline (rosbridge answers most errors with silence)
+    │   └── GoalTimeoutError        an action goal did not finish in time; we asked to cancel it and carry
+    │                               whatever partial outcome arrived
     ├── ServiceError                ``service_response`` with ``result: false``; carries the bridge's own text
-    ├── ActionError                 ``action_result`` with ``result: false``, or an action that cannot be reached
+    ├── ActionError                 ``action_result`` with ``result: false``, or an unreachable action
     ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
     │                               because the bridge drops such messages without a word)
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
@@ -24,6 +26,7 @@ from collections.abc import Sequence
 __all__ = [
     "ActionError",
     "ConnectionLostError",
+    "GoalTimeoutError",
     "InvalidMessageError",
     "NotConnectedError",
     "ProtocolError",
@@ -75,6 +78,40 @@ class RequestTimeoutError(RosbridgeError):
         self.timeout = timeout
         extra = f" {hint}" if hint else ""
         super().__init__(f"No reply to {what} within {timeout:g} s.{extra}")
+
+
+class GoalTimeoutError(RequestTimeoutError):
+    """An action goal did not finish within its deadline; a cancel was sent for it.
+
+    ``status`` and ``result`` are the goal's final state and result if the canceled result arrived
+    within a short grace after the cancel (``None`` otherwise); ``feedback`` is the last feedback seen.
+    """
+
+    def __init__(
+        self,
+        action: str,
+        goal_id: str,
+        timeout: float,
+        *,
+        status: int | None = None,
+        result: object = None,
+        feedback: object = None,
+    ) -> None:
+        self.action = action
+        self.goal_id = goal_id
+        self.status = status
+        self.result = result
+        self.feedback = feedback
+        after = (
+            f"The goal ended with status {status} after the cancel."
+            if status is not None
+            else "No final result arrived after the cancel; the goal may still be running."
+        )
+        super().__init__(
+            f"action goal {goal_id} on {action}",
+            timeout,
+            f"A cancel was sent. {after}",
+        )
 
 
 class ServiceError(RosbridgeError):

@@ -1,0 +1,727 @@
+"""``RosbridgeClient``: one shared WebSocket, background reconnects, lanes for in-order bridges."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import random
+import time
+from collections.abc import Awaitable, Callable, Coroutine
+from dataclasses import dataclass, field
+from types import TracebackType
+from typing import Any, Self
+
+from rosbridge_mcp_server import protocol
+from rosbridge_mcp_server.client._connection import Connection, GoalStream, open_connection
+from rosbridge_mcp_server.client._lanes import LanePool
+from rosbridge_mcp_server.client._subscription import Subscription
+from rosbridge_mcp_server.dialect import (
+    RosInfo,
+    action_type_names,
+    adapt_message,
+    goal_status_name,
+    normalize_type,
+)
+from rosbridge_mcp_server.errors import (
+    ActionError,
+    ConnectionLostError,
+    GoalTimeoutError,
+    NotConnectedError,
+    RequestTimeoutError,
+    RosbridgeError,
+    ServiceError,
+)
+
+__all__ = ["ActionResult", "GoalHandle", "RosbridgeClient"]
+
+logger = logging.getLogger("rosbridge_mcp_server.client")
+
+#: After a goal's deadline we send a cancel and wait this long for the canceled result.
+CANCEL_GRACE_SECONDS = 2.0
+
+
+@dataclass(frozen=True, slots=True)
+class ActionResult:
+    """The end of a ROS 2 goal: ROS 2 status number (4 succeeded, 5 canceled, 6 aborted) and result."""
+
+    goal_id: str
+    status: int
+    values: Any
+
+    @property
+    def status_name(self) -> str:
+        return goal_status_name(self.status, 2)
+
+
+@dataclass(slots=True)
+class GoalHandle:
+    """A goal this client has in flight."""
+
+    goal_id: str
+    action: str
+    action_type: str
+    started: float = field(default_factory=time.monotonic)
+    feedback_count: int = 0
+    last_feedback: Any = None
+    cancel_requested: bool = False
+
+
+@dataclass(slots=True)
+class _Advert:
+    id: str
+    wire_type: str
+    latch: bool
+    queue_size: int
+
+
+class RosbridgeClient:
+    """An asyncio client for a rosbridge v2 server (ROS 1 0.11.x, ROS 2 Humble…Rolling).
+
+    One main WebSocket is shared by every caller; a reader task routes frames and replies are
+    matched by id. The connection is kept up in the background with exponential backoff. While
+    disconnected every call raises :class:`NotConnectedError` at once: nothing is queued and
+    nothing is replayed (a stale velocity command is a safety bug); only subscriptions and
+    advertisements still wanted are restored after a reconnect.
+    """
+
+    def __init__(
+        self,
+        url: str,
+        *,
+        connect_timeout: float = 5.0,
+        request_timeout: float = 10.0,
+        reconnect_min: float = 0.2,
+        reconnect_max: float = 5.0,
+        lane_cap: int = 16,
+        lane_idle_seconds: float = 30.0,
+    ) -> None:
+        self.url = url
+        self.connect_timeout = connect_timeout
+        self.request_timeout = request_timeout
+        self.reconnect_min = reconnect_min
+        self.reconnect_max = max(reconnect_max, reconnect_min)
+        self._ids = protocol.IdMinter()
+        self._main: Connection | None = None
+        self._info: RosInfo | None = None
+        self._last_reason: str | None = "not started"
+        self._runner: asyncio.Task[None] | None = None
+        self._closing = False
+        self._closed = False
+        self._attempt_done: asyncio.Event | None = None
+        self._connected_event = asyncio.Event()
+        self._disconnected_event = asyncio.Event()
+        self._disconnected_event.set()
+        self._subs: dict[str, dict[str, Subscription]] = {}
+        self._adverts: dict[str, _Advert] = {}
+        self._goals: dict[str, GoalHandle] = {}
+        self._goal_lanes: set[Connection] = set()
+        self._background: set[asyncio.Task[Any]] = set()
+        self._lanes = LanePool(
+            self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
+        )
+        self.connections_made = 0
+
+    # --- lifecycle --------------------------------------------------------------------------------
+
+    @property
+    def connected(self) -> bool:
+        """The main connection is open and the bridge's flavour is known."""
+        return self._main is not None and self._main.is_open
+
+    @property
+    def lanes(self) -> LanePool:
+        """The pool of single-call lanes (for diagnostics)."""
+        return self._lanes
+
+    async def start(self) -> None:
+        """Start the background connect/reconnect loop; returns at once."""
+        if self._closed:
+            raise RuntimeError("this RosbridgeClient is closed")
+        if self._runner is not None:
+            return
+        # Marks an attempt as in progress before the loop runs, so a call right after start()
+        # waits for the first attempt instead of failing.
+        self._attempt_done = asyncio.Event()
+        self._runner = asyncio.create_task(self._run(), name=f"rosbridge connect loop ({self.url})")
+
+    async def __aenter__(self) -> Self:
+        await self.start()
+        return self
+
+    async def __aexit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.close()
+
+    async def close(self) -> None:
+        """Cancel everything, cancel our goals, unadvertise, close every socket. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        self._closing = True
+        main = self._main
+        if main is not None and main.is_open:
+            for goal in list(self._goals.values()):
+                await self._send_quietly(main, protocol.cancel_action_goal(goal.action, id=goal.goal_id))
+            for topic, advert in list(self._adverts.items()):
+                if topic in main.advertised:
+                    await self._send_quietly(main, protocol.unadvertise(topic, id=advert.id))
+        if self._runner is not None:
+            self._runner.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._runner
+        lanes = self._lanes.close_all() + list(self._goal_lanes)
+        self._goal_lanes.clear()
+        await asyncio.gather(*(lane.aclose() for lane in lanes), return_exceptions=True)
+        if main is not None:
+            await main.aclose()
+        self._set_disconnected(main, "the client was closed")
+        for subs in list(self._subs.values()):
+            for sub in list(subs.values()):
+                sub.is_open = False
+                sub.is_closed = True
+                sub._interrupt(NotConnectedError(self.url, "the client was closed"))
+        self._subs.clear()
+        self._adverts.clear()
+        if self._background:
+            await asyncio.gather(*list(self._background), return_exceptions=True)
+
+    async def wait_connected(self, timeout: float) -> None:
+        """Wait until connected; raises :class:`NotConnectedError` naming the URL and last reason."""
+        if self.connected:
+            return
+        try:
+            async with asyncio.timeout(timeout):
+                await self._connected_event.wait()
+        except TimeoutError:
+            raise NotConnectedError(
+                self.url, f"no connection within {timeout:g} s; last error: {self._last_reason}"
+            ) from None
+
+    async def wait_disconnected(self, timeout: float) -> None:
+        """Wait until the main connection is down (diagnostics and tests); raises TimeoutError."""
+        async with asyncio.timeout(timeout):
+            await self._disconnected_event.wait()
+
+    # --- the connect loop ---------------------------------------------------------------------------
+
+    async def _run(self) -> None:
+        delay = self.reconnect_min
+        failures = 0
+        ever_connected = False
+        while not self._closing:
+            if self._attempt_done is None or self._attempt_done.is_set():
+                self._attempt_done = asyncio.Event()
+            attempt_done = self._attempt_done
+            conn: Connection | None = None
+            try:
+                conn = await open_connection(self.url, "main", self.connect_timeout, self._route_publish)
+                info = await self._detect(conn)
+                await self._restore(conn)
+            except NotConnectedError as exc:
+                self._last_reason = exc.reason
+                if conn is not None:
+                    await conn.aclose()
+                failures += 1
+                if failures == 1:
+                    logger.warning(
+                        "Cannot reach rosbridge at %s (%s); retrying in the background", self.url, exc.reason
+                    )
+                else:
+                    logger.debug("rosbridge at %s still unreachable (%s)", self.url, exc.reason)
+            except Exception as exc:
+                self._last_reason = f"{type(exc).__name__}: {exc}"
+                if conn is not None:
+                    await conn.aclose()
+                failures += 1
+                logger.warning("Setting up the connection to %s failed: %s", self.url, self._last_reason)
+            else:
+                self._info = info
+                self._main = conn
+                self._last_reason = None
+                self.connections_made += 1
+                self._disconnected_event.clear()
+                self._connected_event.set()
+                attempt_done.set()
+                logger.info(
+                    "%s rosbridge at %s: %s",
+                    "Reconnected to" if ever_connected else "Connected to",
+                    self.url,
+                    info.describe(),
+                )
+                ever_connected = True
+                failures = 0
+                delay = self.reconnect_min
+                await conn.closed.wait()
+                reason = conn.close_reason or "the connection closed"
+                self._set_disconnected(conn, reason)
+                if not self._closing:
+                    logger.warning(
+                        "Lost the connection to rosbridge at %s (%s); reconnecting", self.url, reason
+                    )
+            finally:
+                attempt_done.set()
+            sleep = random.uniform(delay / 2, delay)
+            delay = min(delay * 2, self.reconnect_max)
+            # No attempt is in progress while we sleep: calls fail at once instead of waiting.
+            await asyncio.sleep(sleep)
+
+    def _set_disconnected(self, conn: Connection | None, reason: str) -> None:
+        if conn is not None and self._main is conn:
+            self._main = None
+            self._info = None
+            self._last_reason = reason
+        self._connected_event.clear()
+        self._disconnected_event.set()
+        # Idle lanes belong to the old bridge session; busy ones fail on their own when it is gone.
+        self._lanes.drop_idle()
+        lost = ConnectionLostError(self.url, "messages")
+        for subs in self._subs.values():
+            for sub in subs.values():
+                sub._interrupt(lost)
+
+    async def _detect(self, conn: Connection) -> RosInfo:
+        """Ask the bridge what it is (once per connection)."""
+        timeout = min(self.connect_timeout, self.request_timeout)
+        try:
+            values = await self._call_on(conn, "/rosapi/get_ros_version", None, timeout, send_timeout=False)
+        except ServiceError:
+            # ROS 1 (0.11.x) and ROS 2 before rosbridge 1.2.0 answer "Service /rosapi/get_ros_version
+            # does not exist"; the type names tell them apart.
+            pass
+        except RequestTimeoutError:
+            logger.warning("rosbridge at %s did not answer /rosapi/get_ros_version; assuming ROS 2", self.url)
+            return RosInfo(2, None)
+        else:
+            version = values.get("version") if isinstance(values, dict) else None
+            distro = values.get("distro") if isinstance(values, dict) else None
+            if version == 1:
+                return RosInfo(1, distro or None)
+            return RosInfo(2, str(distro) if distro else None)
+        try:
+            values = await self._call_on(conn, "/rosapi/topics", None, timeout, send_timeout=False)
+        except (ServiceError, RequestTimeoutError) as exc:
+            logger.warning("Cannot tell the ROS version of %s (no rosapi? %s); assuming ROS 2", self.url, exc)
+            return RosInfo(2, None)
+        types = values.get("types", []) if isinstance(values, dict) else []
+        if any(isinstance(t, str) and "/msg/" in t for t in types):
+            return RosInfo(2, None)
+        return RosInfo(1, None)
+
+    async def _restore(self, conn: Connection) -> None:
+        """Re-advertise and re-subscribe what is still wanted. Never re-sends a publish."""
+        for topic, advert in self._adverts.items():
+            await conn.send(
+                protocol.advertise(
+                    topic, advert.wire_type, id=advert.id, latch=advert.latch, queue_size=advert.queue_size
+                )
+            )
+            conn.advertised.add(topic)
+        for topic, subs in self._subs.items():
+            for sub in subs.values():
+                await conn.send(
+                    protocol.subscribe(
+                        topic,
+                        sub.wire_type,
+                        id=sub.id,
+                        throttle_rate=sub.throttle_rate,
+                        queue_length=sub.queue_length,
+                    )
+                )
+
+    async def _main_connection(self, deadline: float | None = None) -> Connection:
+        """The open main connection, waiting only for an attempt already in progress."""
+        conn = self._main
+        if conn is not None and conn.is_open:
+            return conn
+        if self._closed:
+            raise NotConnectedError(self.url, "the client is closed")
+        attempt = self._attempt_done
+        if attempt is not None and not attempt.is_set():
+            loop = asyncio.get_running_loop()
+            until = loop.time() + self.connect_timeout
+            if deadline is not None:
+                until = min(until, deadline)
+            try:
+                async with asyncio.timeout_at(until):
+                    await attempt.wait()
+            except TimeoutError:
+                pass
+            conn = self._main
+            if conn is not None and conn.is_open:
+                return conn
+        raise NotConnectedError(self.url, self._last_reason)
+
+    def _require_main(self) -> tuple[Connection, RosInfo]:
+        conn = self._main
+        info = self._info
+        if conn is None or info is None or not conn.is_open:
+            raise NotConnectedError(self.url, self._last_reason)
+        return conn, info
+
+    async def ros_info(self) -> RosInfo:
+        """What the bridge is: ROS version and distro, detected once per connection."""
+        await self._main_connection()
+        info = self._info
+        if info is None:
+            raise NotConnectedError(self.url, self._last_reason)
+        return info
+
+    # --- background helpers -------------------------------------------------------------------------
+
+    def _spawn(self, coro: Coroutine[Any, Any, Any], name: str) -> asyncio.Task[Any]:
+        task = asyncio.get_running_loop().create_task(coro, name=name)
+        self._background.add(task)
+        task.add_done_callback(self._background.discard)
+        return task
+
+    def _close_in_background(self, conn: Connection) -> None:
+        self._spawn(conn.aclose(), f"close {conn.name}")
+
+    async def _send_quietly(self, conn: Connection | None, op: dict[str, Any]) -> bool:
+        if conn is None or not conn.is_open:
+            return False
+        try:
+            await conn.send(op)
+        except RosbridgeError:
+            return False
+        except Exception:
+            logger.debug("sending %s failed", op.get("op"), exc_info=True)
+            return False
+        return True
+
+    async def _open_lane(self, timeout: float) -> Connection:
+        return await open_connection(
+            self.url, f"lane {self._ids.mint('lane', '')}", min(timeout, self.connect_timeout)
+        )
+
+    # --- services -----------------------------------------------------------------------------------
+
+    async def _call_on(
+        self,
+        conn: Connection,
+        service: str,
+        args: dict[str, Any] | list[Any] | None,
+        timeout: float,
+        *,
+        send_timeout: bool,
+    ) -> Any:
+        rid = self._ids.mint("call_service", service)
+        op = protocol.call_service(service, args, id=rid, timeout=timeout if send_timeout else None)
+        reply = await conn.request(rid, op, f"service {service}", timeout)
+        return _service_values(service, reply)
+
+    async def call_service(
+        self,
+        service: str,
+        args: dict[str, Any] | list[Any] | None = None,
+        *,
+        timeout: float | None = None,
+        isolated: bool | None = None,
+    ) -> Any:
+        """Call a ROS service and return its response fields (``values``).
+
+        Runs on the shared connection, or on a lane of its own when the bridge may handle one
+        connection in order (Humble) or when *isolated* is true. Raises :class:`ServiceError`
+        with the bridge's text, :class:`RequestTimeoutError`, :class:`ConnectionLostError`,
+        :class:`NotConnectedError`.
+        """
+        t = self.request_timeout if timeout is None else timeout
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + t
+        conn = self._main
+        if conn is None or not conn.is_open:
+            conn = await self._main_connection(deadline)
+        info = self._info
+        if info is None:
+            raise NotConnectedError(self.url, self._last_reason)
+        use_lane = info.may_be_in_order if isolated is None else isolated
+        if not use_lane:
+            return await self._call_on(conn, service, args, t, send_timeout=info.honours_service_timeout)
+        what = f"service {service}"
+        lane = await self._lanes.acquire(deadline, what, t)
+        reusable = False
+        try:
+            remaining = max(deadline - loop.time(), 0.001)
+            rid = self._ids.mint("call_service", service)
+            op = protocol.call_service(
+                service, args, id=rid, timeout=remaining if info.honours_service_timeout else None
+            )
+            try:
+                reply = await lane.request(rid, op, what, remaining)
+            except RequestTimeoutError:
+                raise RequestTimeoutError(what, t, "The bridge answers many errors with silence.") from None
+            reusable = True
+        finally:
+            self._lanes.release(lane, reusable)
+        return _service_values(service, reply)
+
+    # --- topics -------------------------------------------------------------------------------------
+
+    async def advertise(
+        self, topic: str, msg_type: str, *, latch: bool = False, queue_size: int = 10
+    ) -> None:
+        """Advertise *topic* now (``publish`` does this on first use); restored after reconnects."""
+        conn, info = self._require_main()
+        await self._ensure_advertised(conn, info, topic, msg_type, latch=latch, queue_size=queue_size)
+
+    async def _ensure_advertised(
+        self, conn: Connection, info: RosInfo, topic: str, msg_type: str, *, latch: bool, queue_size: int
+    ) -> None:
+        wire_type = normalize_type(msg_type, info.version, "msg")
+        advert = self._adverts.get(topic)
+        if advert is not None and (advert.wire_type != wire_type or advert.latch != latch):
+            conn.advertised.discard(topic)
+            del self._adverts[topic]
+            await conn.send(protocol.unadvertise(topic, id=advert.id))
+            advert = None
+        if advert is None:
+            advert = _Advert(self._ids.mint("advertise", topic), wire_type, latch, queue_size)
+            self._adverts[topic] = advert
+        if topic not in conn.advertised:
+            conn.advertised.add(topic)
+            try:
+                await conn.send(
+                    protocol.advertise(
+                        topic, wire_type, id=advert.id, latch=latch, queue_size=advert.queue_size
+                    )
+                )
+            except BaseException:
+                conn.advertised.discard(topic)
+                raise
+
+    async def publish(
+        self,
+        topic: str,
+        msg_type: str,
+        msg: dict[str, Any],
+        *,
+        latch: bool = False,
+        queue_size: int = 10,
+    ) -> None:
+        """Publish one message now, or raise :class:`NotConnectedError`. Never queued, never replayed.
+
+        The topic is advertised once (per topic and type) and the advertisement reused; time
+        fields are respelled for ROS 1, which ignores ``sec``/``nanosec``.
+        """
+        conn, info = self._require_main()
+        advert = self._adverts.get(topic)
+        if (
+            advert is None
+            or topic not in conn.advertised
+            or advert.latch != latch
+            or advert.wire_type != normalize_type(msg_type, info.version, "msg")
+        ):
+            await self._ensure_advertised(conn, info, topic, msg_type, latch=latch, queue_size=queue_size)
+        payload = adapt_message(msg, info.version) if info.version == 1 else msg
+        await conn.send(protocol.publish(topic, payload))
+
+    async def unadvertise(self, topic: str) -> None:
+        """Stop advertising *topic* (our advertisement only)."""
+        advert = self._adverts.pop(topic, None)
+        conn = self._main
+        if advert is not None and conn is not None and topic in conn.advertised:
+            conn.advertised.discard(topic)
+            await self._send_quietly(conn, protocol.unadvertise(topic, id=advert.id))
+
+    def subscribe(
+        self,
+        topic: str,
+        msg_type: str | None = None,
+        *,
+        throttle_rate: int = 0,
+        queue_length: int = 0,
+        max_queue: int = 1000,
+    ) -> Subscription:
+        """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``)."""
+        return Subscription(
+            self,
+            topic,
+            msg_type,
+            sub_id=self._ids.mint("subscribe", topic),
+            throttle_rate=throttle_rate,
+            queue_length=queue_length,
+            max_queue=max_queue,
+        )
+
+    async def _open_subscription(self, sub: Subscription) -> None:
+        conn = await self._main_connection()
+        info = self._info
+        if info is None:
+            raise NotConnectedError(self.url, self._last_reason)
+        sub.wire_type = normalize_type(sub.msg_type, info.version, "msg") if sub.msg_type else None
+        self._subs.setdefault(sub.topic, {})[sub.id] = sub
+        try:
+            await conn.send(
+                protocol.subscribe(
+                    sub.topic,
+                    sub.wire_type,
+                    id=sub.id,
+                    throttle_rate=sub.throttle_rate,
+                    queue_length=sub.queue_length,
+                )
+            )
+        except BaseException:
+            self._forget_subscription(sub)
+            raise
+
+    def _forget_subscription(self, sub: Subscription) -> None:
+        subs = self._subs.get(sub.topic)
+        if subs is not None:
+            subs.pop(sub.id, None)
+            if not subs:
+                del self._subs[sub.topic]
+
+    async def _close_subscription(self, sub: Subscription) -> None:
+        self._forget_subscription(sub)
+        conn = self._main
+        if conn is not None and conn.is_open:
+            # Shielded: this runs in `finally`/`__aexit__`, often while the caller is being cancelled.
+            await asyncio.shield(self._send_quietly(conn, protocol.unsubscribe(sub.topic, id=sub.id)))
+
+    def _route_publish(self, event: protocol.PublishEvent) -> None:
+        subs = self._subs.get(event.topic)
+        if subs:
+            for sub in subs.values():
+                sub._push(event.msg)
+
+    async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:
+        """The next message on *topic*, within *timeout* seconds."""
+        async with self.subscribe(topic, msg_type, max_queue=1) as sub:
+            return await sub.get(timeout)
+
+    # --- ROS 2 actions ------------------------------------------------------------------------------
+
+    def running_goals(self, action: str | None = None) -> list[GoalHandle]:
+        """Goals this client has in flight (all, or those of *action*)."""
+        return [g for g in self._goals.values() if action is None or g.action == action]
+
+    async def cancel_action_goal(self, action: str, goal_id: str) -> None:
+        """Ask the bridge to cancel goal *goal_id*, on the main connection.
+
+        rosbridge keeps one goal table per process, so this reaches a goal running on a lane (or
+        on another client's connection) too. No reply comes; the goal's result says what happened.
+        """
+        conn, _info = self._require_main()
+        handle = self._goals.get(goal_id)
+        if handle is not None:
+            handle.cancel_requested = True
+        await conn.send(protocol.cancel_action_goal(action, id=goal_id))
+
+    async def send_action_goal(
+        self,
+        action: str,
+        action_type: str,
+        goal: dict[str, Any],
+        *,
+        on_feedback: Callable[[dict[str, Any]], Awaitable[None]] | None = None,
+        timeout: float,
+        goal_id: str | None = None,
+    ) -> ActionResult:
+        """Send a ROS 2 goal on a lane of its own and wait for its result.
+
+        Raises :class:`ActionError` when the bridge refuses the goal ("No action server
+        available", ...), :class:`GoalTimeoutError` after *timeout* (a cancel was sent; the error
+        carries the canceled result if it came within a short grace), :class:`ConnectionLostError`.
+        If the awaiting task is cancelled, the goal is cancelled too before the task ends.
+        """
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        _conn, info = self._require_main()
+        if not info.has_action_ops:
+            raise ActionError(action, "this bridge runs ROS 1, which has no action ops; use actionlib topics")
+        wire_type = action_type_names(action_type).ros2
+        gid = goal_id if goal_id is not None else self._ids.goal_id(action)
+        if gid in self._goals:
+            raise ActionError(action, f"goal id {gid!r} is already in use by a running goal")
+        handle = GoalHandle(gid, action, wire_type)
+        what = f"action goal {gid} on {action}"
+        stream = GoalStream(what)
+        lane: Connection | None = None
+        sent = False
+        finished = False
+        self._goals[gid] = handle
+        try:
+            try:
+                lane = await self._open_lane(max(deadline - loop.time(), 0.05))
+            except NotConnectedError as exc:
+                raise NotConnectedError(
+                    self.url, f"could not open a lane for the goal: {exc.reason}"
+                ) from None
+            self._goal_lanes.add(lane)
+            lane.pending[gid] = stream
+            await lane.send(protocol.send_action_goal(action, wire_type, goal, id=gid, feedback=True))
+            sent = True
+            try:
+                async with asyncio.timeout_at(deadline):
+                    frame = await self._follow_goal(stream, handle, on_feedback)
+            except TimeoutError:
+                await asyncio.shield(self._cancel_quietly(action, gid, lane))
+                late: dict[str, Any] | None = None
+                try:
+                    async with asyncio.timeout(CANCEL_GRACE_SECONDS):
+                        late = await self._follow_goal(stream, handle, None)
+                except (TimeoutError, ConnectionLostError):
+                    pass
+                if late is None:
+                    raise GoalTimeoutError(action, gid, timeout, feedback=handle.last_feedback) from None
+                finished = True
+                status, values = _goal_result(action, late)
+                raise GoalTimeoutError(
+                    action, gid, timeout, status=status, result=values, feedback=handle.last_feedback
+                ) from None
+            finished = True
+            status, values = _goal_result(action, frame)
+            return ActionResult(gid, status, values)
+        finally:
+            self._goals.pop(gid, None)
+            if sent and not finished:
+                await asyncio.shield(self._cancel_quietly(action, gid, lane))
+            if lane is not None:
+                lane.pending.pop(gid, None)
+                self._goal_lanes.discard(lane)
+                self._close_in_background(lane)
+
+    async def _follow_goal(
+        self,
+        stream: GoalStream,
+        handle: GoalHandle,
+        on_feedback: Callable[[dict[str, Any]], Awaitable[None]] | None,
+    ) -> dict[str, Any]:
+        while True:
+            item = await stream.queue.get()
+            if isinstance(item, BaseException):
+                raise item
+            op, frame = item
+            if op == "action_result":
+                return frame
+            if op == "action_feedback":
+                values = frame.get("values")
+                handle.feedback_count += 1
+                handle.last_feedback = values
+                if on_feedback is not None and isinstance(values, dict):
+                    await on_feedback(values)
+
+    async def _cancel_quietly(self, action: str, goal_id: str, lane: Connection | None) -> None:
+        op = protocol.cancel_action_goal(action, id=goal_id)
+        # The main connection first: on an in-order bridge the goal's own lane is blocked by the goal.
+        if not await self._send_quietly(self._main, op) and not await self._send_quietly(lane, op):
+            logger.warning(
+                "Could not send a cancel for goal %s on %s; it may still be running", goal_id, action
+            )
+
+
+def _service_values(service: str, reply: dict[str, Any]) -> Any:
+    values = reply.get("values")
+    if reply.get("result") is False:
+        raise ServiceError(service, values if isinstance(values, str) else repr(values))
+    return values
+
+
+def _goal_result(action: str, frame: dict[str, Any]) -> tuple[int, Any]:
+    values = frame.get("values")
+    if frame.get("result") is False:
+        raise ActionError(action, values if isinstance(values, str) else repr(values))
+    status = frame.get("status")
+    return (status if isinstance(status, int) and not isinstance(status, bool) else 0), values

@@ -1,0 +1,211 @@
+"""One WebSocket to the bridge: its reader task and its table of requests waiting for replies."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Callable
+from typing import Any, Final
+
+from websockets.asyncio.client import ClientConnection, connect
+from websockets.exceptions import ConnectionClosed
+
+from rosbridge_mcp_server import protocol
+from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
+
+__all__ = ["Connection", "GoalStream", "ReplyWaiter", "open_connection"]
+
+logger = logging.getLogger("rosbridge_mcp_server.client")
+
+_LEVELS: Final = {"debug": logging.DEBUG, "info": logging.INFO, "warning": logging.WARNING}
+
+# Large maps and point clouds exceed websockets' 1 MiB default; ROS 2 fragments only above 10 MB
+# (launch file default), so the limit sits above that.
+MAX_FRAME_BYTES: Final = 64 * 1024 * 1024
+
+
+class ReplyWaiter:
+    """A request waiting for exactly one reply."""
+
+    __slots__ = ("future", "what")
+
+    def __init__(self, future: asyncio.Future[dict[str, Any]], what: str) -> None:
+        self.future = future
+        self.what = what
+
+    def deliver(self, op: str, frame: dict[str, Any]) -> None:
+        if not self.future.done():
+            self.future.set_result(frame)
+
+    def lost(self, exc: BaseException) -> None:
+        if not self.future.done():
+            self.future.set_exception(exc)
+
+
+class GoalStream:
+    """An action goal waiting for feedback frames and one result."""
+
+    __slots__ = ("dropped_feedback", "max_feedback", "queue", "what")
+
+    def __init__(self, what: str, max_feedback: int = 256) -> None:
+        self.what = what
+        self.queue: asyncio.Queue[tuple[str, dict[str, Any]] | BaseException] = asyncio.Queue()
+        self.max_feedback = max_feedback
+        self.dropped_feedback = 0
+
+    def deliver(self, op: str, frame: dict[str, Any]) -> None:
+        # Feedback beyond the bound is dropped (a slow on_feedback must not grow memory); results never are.
+        if op == "action_feedback" and self.queue.qsize() >= self.max_feedback:
+            self.dropped_feedback += 1
+            return
+        self.queue.put_nowait((op, frame))
+
+    def lost(self, exc: BaseException) -> None:
+        self.queue.put_nowait(exc)
+
+
+Waiting = ReplyWaiter | GoalStream
+
+
+class Connection:
+    """A WebSocket with a reader task routing every frame; replies are matched by id.
+
+    When the socket closes, every request still waiting fails at once with
+    :class:`ConnectionLostError`.
+    """
+
+    def __init__(
+        self,
+        ws: ClientConnection,
+        url: str,
+        name: str,
+        on_publish: Callable[[protocol.PublishEvent], None] | None = None,
+    ) -> None:
+        self.ws = ws
+        self.url = url
+        self.name = name
+        self.pending: dict[str, Waiting] = {}
+        self.advertised: set[str] = set()
+        self.is_open = True
+        self.close_reason: str | None = None
+        self._on_publish = on_publish
+        self._decoder = protocol.InboundDecoder()
+        self.closed = asyncio.Event()
+        self.reader = asyncio.create_task(self._read(), name=f"rosbridge reader ({name})")
+
+    async def _read(self) -> None:
+        decoder = self._decoder
+        pending = self.pending
+        try:
+            async for data in self.ws:
+                try:
+                    event = decoder.feed(data)
+                    if type(event) is protocol.ReplyEvent:
+                        waiting = pending.get(event.id)
+                        if waiting is not None:
+                            waiting.deliver(event.op, event.frame)
+                        elif logger.isEnabledFor(logging.DEBUG):
+                            logger.debug(
+                                "%s: %s for %s, which nobody awaits any more", self.name, event.op, event.id
+                            )
+                    elif type(event) is protocol.PublishEvent:
+                        if self._on_publish is not None:
+                            self._on_publish(event)
+                    elif isinstance(event, protocol.Notice):
+                        level = _LEVELS[event.level]
+                        if logger.isEnabledFor(level):
+                            logger.log(level, "%s: %s", self.name, event.text)
+                except Exception:
+                    # One bad frame (or a bug in a listener) must not end the connection's reader.
+                    logger.exception("%s: error while handling a frame; frame dropped", self.name)
+            self.close_reason = _close_text(self.ws)
+        except ConnectionClosed:
+            self.close_reason = _close_text(self.ws)
+        except Exception as exc:  # a transport error: treat as a drop
+            self.close_reason = f"{type(exc).__name__}: {exc}"
+            logger.debug("%s: reader stopped", self.name, exc_info=True)
+        finally:
+            self.is_open = False
+            self.fail_pending()
+            self.closed.set()
+
+    def fail_pending(self) -> None:
+        """Fail every waiting request with :class:`ConnectionLostError` and empty the table."""
+        waiting = list(self.pending.values())
+        self.pending.clear()
+        for item in waiting:
+            item.lost(ConnectionLostError(self.url, item.what))
+
+    async def send(self, op: dict[str, Any]) -> None:
+        """Send one op now; raises :class:`NotConnectedError` if the socket is closed (nothing sent)."""
+        if not self.is_open:
+            raise NotConnectedError(self.url, self.close_reason or "the connection closed")
+        try:
+            await self.ws.send(protocol.encode(op))
+        except ConnectionClosed:
+            raise NotConnectedError(self.url, "the connection closed") from None
+
+    async def request(self, rid: str, op: dict[str, Any], what: str, timeout: float) -> dict[str, Any]:
+        """Send *op* and wait up to *timeout* seconds for the reply with id *rid*."""
+        future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
+        self.pending[rid] = ReplyWaiter(future, what)
+        try:
+            await self.send(op)
+            async with asyncio.timeout(timeout):
+                return await future
+        except TimeoutError:
+            raise RequestTimeoutError(what, timeout, "The bridge answers many errors with silence.") from None
+        finally:
+            self.pending.pop(rid, None)
+
+    async def aclose(self) -> None:
+        """Close the socket and wait for the reader to finish (fails whatever is pending)."""
+        self.is_open = False
+        try:
+            await self.ws.close()
+        except Exception:
+            logger.debug("%s: error while closing", self.name, exc_info=True)
+        if not self.reader.done():
+            try:
+                async with asyncio.timeout(2.0):
+                    await asyncio.shield(self.reader)
+            except TimeoutError:
+                self.reader.cancel()
+        self.fail_pending()
+
+
+def _close_text(ws: ClientConnection) -> str:
+    code = ws.close_code
+    if code is not None:
+        reason = f": {ws.close_reason}" if ws.close_reason else ""
+        return f"the connection closed (code {code}{reason})"
+    return "the connection closed"
+
+
+async def open_connection(
+    url: str,
+    name: str,
+    timeout: float,
+    on_publish: Callable[[protocol.PublishEvent], None] | None = None,
+) -> Connection:
+    """Open a WebSocket to *url* within *timeout* seconds; raises :class:`NotConnectedError`."""
+    try:
+        ws = await connect(
+            url,
+            open_timeout=timeout,
+            close_timeout=1.0,
+            max_size=MAX_FRAME_BYTES,
+            # rosbridge (tornado) does not negotiate permessage-deflate; skipping the offer keeps
+            # the handshake and every frame lean. No proxy: a robot is on the local network.
+            compression=None,
+            proxy=None,
+        )
+    except asyncio.CancelledError:
+        raise
+    except TimeoutError:
+        raise NotConnectedError(url, f"no answer within {timeout:g} s") from None
+    except OSError as exc:
+        raise NotConnectedError(url, exc.strerror or str(exc)) from None
+    except Exception as exc:
+        raise NotConnectedError(url, f"{type(exc).__name__}: {exc}") from None
+    return Connection(ws, url, name, on_publish)

@@ -1,0 +1,148 @@
+"""One listener on a topic: its own rosbridge subscription id and a bounded local queue."""
+
+from __future__ import annotations
+
+import asyncio
+from collections import deque
+from types import TracebackType
+from typing import TYPE_CHECKING, Any, Self
+
+from rosbridge_mcp_server.errors import NotConnectedError, RequestTimeoutError
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client._client import RosbridgeClient
+
+__all__ = ["Subscription"]
+
+
+class Subscription:
+    """Messages of one topic, for one listener.
+
+    Use as ``async with client.subscribe("/chatter") as sub:`` then ``await sub.get(timeout)`` or
+    ``async for msg in sub``. Each subscription has its own rosbridge id, so closing it never
+    removes another listener of the same topic. When the consumer is slow the oldest messages are
+    dropped (counted in :attr:`dropped`). It is restored after a reconnect while open; a drop while
+    a consumer waits in :meth:`get` raises :class:`ConnectionLostError` there.
+    """
+
+    def __init__(
+        self,
+        client: RosbridgeClient,
+        topic: str,
+        msg_type: str | None,
+        *,
+        sub_id: str,
+        throttle_rate: int,
+        queue_length: int,
+        max_queue: int,
+    ) -> None:
+        if max_queue < 1:
+            raise ValueError("max_queue must be at least 1")
+        self.topic = topic
+        self.msg_type = msg_type
+        self.id = sub_id
+        self.throttle_rate = int(throttle_rate)
+        self.queue_length = int(queue_length)
+        self.max_queue = max_queue
+        self.dropped = 0
+        self.received = 0
+        self.wire_type: str | None = None
+        self._client = client
+        self._queue: deque[dict[str, Any]] = deque()
+        self._waiter: asyncio.Future[None] | None = None
+        self.is_open = False
+        self.is_closed = False
+
+    # --- called by the client -------------------------------------------------------------------
+
+    def _push(self, msg: dict[str, Any]) -> None:
+        self.received += 1
+        if len(self._queue) >= self.max_queue:
+            self._queue.popleft()
+            self.dropped += 1
+        self._queue.append(msg)
+        waiter = self._waiter
+        if waiter is not None and not waiter.done():
+            waiter.set_result(None)
+
+    def _interrupt(self, exc: BaseException) -> None:
+        waiter = self._waiter
+        if waiter is not None and not waiter.done():
+            waiter.set_exception(exc)
+
+    # --- public ---------------------------------------------------------------------------------
+
+    async def open(self) -> Self:
+        """Send the ``subscribe``; raises :class:`NotConnectedError` if there is no connection."""
+        if self.is_closed:
+            raise NotConnectedError(self._client.url, f"the subscription to {self.topic} was closed")
+        if not self.is_open:
+            await self._client._open_subscription(self)
+            self.is_open = True
+        return self
+
+    async def close(self) -> None:
+        """Send ``unsubscribe`` for this id only; idempotent and safe during cancellation."""
+        if self.is_closed:
+            return
+        self.is_closed = True
+        was_open = self.is_open
+        self.is_open = False
+        self._interrupt(NotConnectedError(self._client.url, f"the subscription to {self.topic} was closed"))
+        if was_open:
+            await self._client._close_subscription(self)
+
+    async def __aenter__(self) -> Self:
+        return await self.open()
+
+    async def __aexit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.close()
+
+    def pending(self) -> int:
+        """Messages received and not yet taken."""
+        return len(self._queue)
+
+    def get_nowait(self) -> dict[str, Any] | None:
+        """The oldest queued message, or None."""
+        return self._queue.popleft() if self._queue else None
+
+    async def get(self, timeout: float | None = None) -> dict[str, Any]:
+        """The next message; waits up to *timeout* seconds (forever if None)."""
+        if self._queue:
+            return self._queue.popleft()
+        if self.is_closed:
+            raise NotConnectedError(self._client.url, f"the subscription to {self.topic} was closed")
+        loop = asyncio.get_running_loop()
+        waiter: asyncio.Future[None] = loop.create_future()
+        self._waiter = waiter
+        try:
+            if timeout is None:
+                await waiter
+            else:
+                async with asyncio.timeout(timeout):
+                    await waiter
+        except TimeoutError:
+            raise RequestTimeoutError(
+                f"a message on {self.topic}",
+                timeout if timeout is not None else 0.0,
+                "Is anything publishing on it? Check the topic name and type.",
+            ) from None
+        finally:
+            if self._waiter is waiter:
+                self._waiter = None
+        return self._queue.popleft()
+
+    def __aiter__(self) -> Self:
+        return self
+
+    async def __anext__(self) -> dict[str, Any]:
+        if not self._queue and self.is_closed:
+            raise StopAsyncIteration
+        try:
+            return await self.get()
+        except NotConnectedError:
+            if self.is_closed:
+                raise StopAsyncIteration from None
+            raise

@@ -1,0 +1,253 @@
+"""ROS 1 vs ROS 2 rules, without I/O.
+
+* Type names: ROS 1 (rosbridge 0.11.x) only accepts ``pkg/Type``; a three-part name is an invalid
+  type string there. ROS 2 accepts both ``pkg/Type`` and ``pkg/msg/Type``; we send the full form,
+  which is also what its graph queries return.
+* Action types as people write them (``pkg/Fibonacci``, ``pkg/action/Fibonacci``,
+  ``pkg/FibonacciAction``) map to the ROS 2 ``pkg/action/Fibonacci`` and to the ROS 1 actionlib
+  message family (``pkg/FibonacciAction``, ``...ActionGoal``, ``...ActionFeedback``, ``...ActionResult``).
+* Time fields: ROS 1 reads only ``secs``/``nsecs`` and silently ignores ``sec``/``nanosec`` (the time
+  stays 0), so messages are converted before they go to ROS 1. ROS 2 accepts both spellings.
+* Goal status numbers differ: ROS 2 ``action_msgs/GoalStatus`` 0..6, ROS 1
+  ``actionlib_msgs/GoalStatus`` 0..9.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any, Final, Literal
+
+from rosbridge_mcp_server.errors import UnknownTypeError
+
+__all__ = [
+    "IN_ORDER_DISTROS",
+    "ROS1_GOAL_STATUS",
+    "ROS1_TERMINAL",
+    "ROS2_GOAL_STATUS",
+    "ROS2_TERMINAL",
+    "ActionTypeNames",
+    "Ros1ActionTypes",
+    "RosInfo",
+    "action_type_names",
+    "adapt_message",
+    "goal_status_name",
+    "is_success_status",
+    "is_terminal_status",
+    "normalize_type",
+    "split_type",
+    "to_ros1_time",
+    "to_ros2_time",
+]
+
+Category = Literal["msg", "srv", "action"]
+
+_NAME = r"[A-Za-z][A-Za-z0-9_]*"
+_TYPE_RE: Final = re.compile(rf"^/?({_NAME})/(?:(msg|srv|action)/)?({_NAME})$")
+
+#: ROS 2 distros whose rosbridge runs one connection's service calls and goals strictly in order
+#: by default (Humble 2.0.x; Iron/Jazzy 2.1.0 too; older distros had no threading at all).
+IN_ORDER_DISTROS: Final = frozenset(
+    {"ardent", "bouncy", "crystal", "dashing", "eloquent", "foxy", "galactic", "humble", "iron"}
+)
+
+
+@dataclass(frozen=True, slots=True)
+class RosInfo:
+    """What kind of bridge is on the other side, detected once per connection."""
+
+    version: Literal[1, 2]
+    distro: str | None = None
+
+    @property
+    def has_action_ops(self) -> bool:
+        """The bridge has ``send_action_goal`` (ROS 2; ROS 1 uses actionlib topics)."""
+        return self.version == 2
+
+    @property
+    def honours_service_timeout(self) -> bool:
+        """``call_service`` reads ``timeout`` (ROS 2 Humble 2.0.1+, Jazzy 2.2.0+; ignored before)."""
+        return self.version == 2
+
+    @property
+    def may_be_in_order(self) -> bool:
+        """One connection's service calls and goals may block each other (Humble-era defaults).
+
+        A ROS 2 bridge that does not tell its distro is treated as in-order: it is older than
+        ``get_ros_version`` (rosbridge 1.2.0), so it predates threaded calls too.
+        """
+        if self.version != 2:
+            return False
+        return self.distro is None or self.distro.lower() in IN_ORDER_DISTROS
+
+    def describe(self) -> str:
+        """``ROS 2 (jazzy)``, ``ROS 1``."""
+        return f"ROS {self.version}" + (f" ({self.distro})" if self.distro else "")
+
+
+def split_type(type_name: str) -> tuple[str, str | None, str]:
+    """``(package, category or None, name)`` of a type name; raises :class:`UnknownTypeError`."""
+    match = _TYPE_RE.match(type_name.strip())
+    if match is None:
+        raise UnknownTypeError(
+            type_name,
+            "A type name looks like `pkg/Type` (ROS 1 and 2) or `pkg/msg/Type` (ROS 2), "
+            "e.g. `geometry_msgs/Twist`.",
+        )
+    pkg, category, name = match.groups()
+    return pkg, category, name
+
+
+def normalize_type(type_name: str, version: int, category: Category = "msg") -> str:
+    """The spelling of *type_name* that the bridge of this ROS *version* accepts.
+
+    ROS 1: ``pkg/Type``. ROS 2: ``pkg/<category>/Type`` (*category* fills in a missing middle part).
+    """
+    pkg, given, name = split_type(type_name)
+    if version == 1:
+        return f"{pkg}/{name}"
+    return f"{pkg}/{given or category}/{name}"
+
+
+@dataclass(frozen=True, slots=True)
+class Ros1ActionTypes:
+    """The actionlib message family of one ROS 1 action."""
+
+    action: str
+    goal: str
+    feedback: str
+    result: str
+    goal_id: str = "actionlib_msgs/GoalID"
+    status_array: str = "actionlib_msgs/GoalStatusArray"
+
+
+@dataclass(frozen=True, slots=True)
+class ActionTypeNames:
+    """Every spelling of one action type."""
+
+    package: str
+    name: str
+
+    @property
+    def ros2(self) -> str:
+        """``pkg/action/Name``."""
+        return f"{self.package}/action/{self.name}"
+
+    @property
+    def ros1(self) -> Ros1ActionTypes:
+        """``pkg/NameAction`` and its ``...ActionGoal``/``...ActionFeedback``/``...ActionResult``."""
+        base = f"{self.package}/{self.name}Action"
+        return Ros1ActionTypes(
+            action=base, goal=f"{base}Goal", feedback=f"{base}Feedback", result=f"{base}Result"
+        )
+
+    def for_version(self, version: int) -> str:
+        """The name the bridge of this ROS *version* knows the action by."""
+        return self.ros2 if version == 2 else self.ros1.action
+
+
+_ACTION_SUFFIXES: Final = ("ActionGoal", "ActionFeedback", "ActionResult", "Action")
+
+
+def action_type_names(type_name: str) -> ActionTypeNames:
+    """Read an action type as users write it.
+
+    ``pkg/Fibonacci``, ``pkg/action/Fibonacci``, ``pkg/FibonacciAction``, ``pkg/msg/FibonacciAction``
+    and ``pkg/FibonacciActionGoal`` all name the same action. In the ``pkg/action/Name`` form the
+    name is taken as written (ROS 2 action names do not carry an ``Action`` suffix).
+    """
+    pkg, category, name = split_type(type_name)
+    if category == "srv":
+        raise UnknownTypeError(
+            type_name, "That is a service type; an action type looks like `pkg/action/Name`."
+        )
+    if category != "action":
+        for suffix in _ACTION_SUFFIXES:
+            if name.endswith(suffix) and len(name) > len(suffix):
+                name = name[: -len(suffix)]
+                break
+    return ActionTypeNames(pkg, name)
+
+
+# --- time fields ------------------------------------------------------------------------------------
+
+_ROS2_TIME_KEYS: Final = frozenset({"sec", "nanosec"})
+_ROS1_TIME_KEYS: Final = frozenset({"secs", "nsecs"})
+
+
+def _convert_time(value: Any, from_keys: frozenset[str], mapping: dict[str, str]) -> Any:
+    if isinstance(value, dict):
+        keys = value.keys()
+        if keys and keys <= from_keys and all(isinstance(v, int | float) for v in value.values()):
+            return {mapping[k]: v for k, v in value.items()}
+        return {k: _convert_time(v, from_keys, mapping) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_convert_time(v, from_keys, mapping) for v in value]
+    return value
+
+
+def to_ros1_time(msg: Any) -> Any:
+    """A copy of *msg* with every ``{sec, nanosec}`` object spelled ``{secs, nsecs}``.
+
+    ROS 1 rosbridge (0.11.x) reads only ``secs``/``nsecs`` and silently leaves a time at zero when
+    given ``sec``/``nanosec``.
+    """
+    return _convert_time(msg, _ROS2_TIME_KEYS, {"sec": "secs", "nanosec": "nsecs"})
+
+
+def to_ros2_time(msg: Any) -> Any:
+    """A copy of *msg* with every ``{secs, nsecs}`` object spelled ``{sec, nanosec}``."""
+    return _convert_time(msg, _ROS1_TIME_KEYS, {"secs": "sec", "nsecs": "nanosec"})
+
+
+def adapt_message(msg: Any, version: int) -> Any:
+    """*msg* with time fields spelled the way the bridge of this ROS *version* reads them.
+
+    ROS 2 reads both spellings, so its messages go out untouched.
+    """
+    return to_ros1_time(msg) if version == 1 else msg
+
+
+# --- goal status ------------------------------------------------------------------------------------
+
+ROS2_GOAL_STATUS: Final[dict[int, str]] = {
+    0: "unknown",
+    1: "accepted",
+    2: "executing",
+    3: "canceling",
+    4: "succeeded",
+    5: "canceled",
+    6: "aborted",
+}
+ROS2_TERMINAL: Final = frozenset({4, 5, 6})
+
+ROS1_GOAL_STATUS: Final[dict[int, str]] = {
+    0: "pending",
+    1: "active",
+    2: "preempted",
+    3: "succeeded",
+    4: "aborted",
+    5: "rejected",
+    6: "preempting",
+    7: "recalling",
+    8: "recalled",
+    9: "lost",
+}
+# 9 (lost) is never sent by a server; actionlib clients use it locally, so it counts as final.
+ROS1_TERMINAL: Final = frozenset({2, 3, 4, 5, 8, 9})
+
+
+def goal_status_name(code: int, version: int) -> str:
+    """The status word for *code* in the numbering of ROS *version* (``status 17`` if unknown)."""
+    names = ROS2_GOAL_STATUS if version == 2 else ROS1_GOAL_STATUS
+    return names.get(code, f"status {code}")
+
+
+def is_terminal_status(code: int, version: int) -> bool:
+    """The goal has finished in this state."""
+    return code in (ROS2_TERMINAL if version == 2 else ROS1_TERMINAL)
+
+
+def is_success_status(code: int, version: int) -> bool:
+    """The goal succeeded (4 on ROS 2, 3 on ROS 1)."""
+    return code == (4 if version == 2 else 3)

@@ -1,0 +1,427 @@
+"""The rosbridge v2 wire protocol, without I/O.
+
+Builders return plain dicts for the ops a client sends; :func:`encode` turns one into the text of one
+WebSocket frame. :class:`InboundDecoder` turns received frames into events (a ``publish`` routed by
+topic, a reply routed by id, or a notice worth logging). :class:`IdMinter` makes readable unique ids
+and :class:`FragmentAssembler` rebuilds messages the server split into ``fragment`` ops.
+
+Facts about real servers that shape this module (see ``/work/shared/rosbridge-protocol.md``):
+
+* rosbridge_suite (ROS 1 0.11.x, every ROS 2 release) reads some keys before its per-op error
+  handler, so ``png``, ``message_intervall`` or ``fragment_size: null`` can silently kill a
+  connection's reader. No builder here ever emits them.
+* ROS 2 servers may write bare ``NaN``/``Infinity`` tokens (fixed-size float arrays), so parsing is
+  lenient; the server's own parser accepts them inbound too.
+* Fragment ids of id-less messages are ``"0"`` on ROS 2 and the integer ``0`` on ROS 1, so two
+  fragmented messages may share an id: a buffer restarts on ``num == 0`` and ``total`` is checked.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import secrets
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Final, Literal
+
+from rosbridge_mcp_server.errors import ProtocolError
+
+__all__ = [
+    "REPLY_OPS",
+    "FragmentAssembler",
+    "IdMinter",
+    "InboundDecoder",
+    "Notice",
+    "PublishEvent",
+    "ReplyEvent",
+    "advertise",
+    "call_service",
+    "cancel_action_goal",
+    "decode_json",
+    "encode",
+    "publish",
+    "send_action_goal",
+    "subscribe",
+    "unadvertise",
+    "unsubscribe",
+]
+
+#: Server → client ops answered to one of our requests, matched by ``id``.
+REPLY_OPS: Final = frozenset({"service_response", "action_feedback", "action_result"})
+
+_encoder = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False, allow_nan=True)
+_decoder = json.JSONDecoder()
+
+
+def encode(op: dict[str, Any]) -> str:
+    """The text of one frame: exactly one JSON object, compact.
+
+    ``NaN``/``Infinity`` are written as bare tokens, which rosbridge's parser accepts (and ``null``
+    for a float field it rejects).
+    """
+    return _encoder.encode(op)
+
+
+def decode_json(text: str | bytes) -> Any:
+    """Parse JSON leniently (bare ``NaN``/``Infinity``/``-Infinity`` become floats)."""
+    if isinstance(text, bytes | bytearray):
+        text = text.decode("utf-8")
+    return _decoder.decode(text)
+
+
+# --- builders ---------------------------------------------------------------------------------------
+
+
+def advertise(
+    topic: str, msg_type: str, *, id: str, latch: bool = False, queue_size: int = 10
+) -> dict[str, Any]:
+    """``advertise``: create (or share) the bridge's publisher for *topic*."""
+    return {
+        "op": "advertise",
+        "id": id,
+        "topic": topic,
+        "type": msg_type,
+        "latch": bool(latch),
+        "queue_size": int(queue_size),
+    }
+
+
+def unadvertise(topic: str, *, id: str | None = None) -> dict[str, Any]:
+    """``unadvertise``: drop our advertisement *id* of *topic* (all of ours if no id)."""
+    op: dict[str, Any] = {"op": "unadvertise", "topic": topic}
+    if id is not None:
+        op["id"] = id
+    return op
+
+
+def publish(topic: str, msg: dict[str, Any], *, id: str | None = None) -> dict[str, Any]:
+    """``publish``: one message on an advertised topic."""
+    op: dict[str, Any] = {"op": "publish", "topic": topic, "msg": msg}
+    if id is not None:
+        op["id"] = id
+    return op
+
+
+def subscribe(
+    topic: str,
+    msg_type: str | None,
+    *,
+    id: str,
+    throttle_rate: int = 0,
+    queue_length: int = 0,
+) -> dict[str, Any]:
+    """``subscribe`` with its own id, so it can be removed without touching other listeners.
+
+    ``throttle_rate`` and ``queue_length`` must be JSON integers: every server type-checks them and
+    silently ignores a subscribe with ``100.0``.
+    """
+    op: dict[str, Any] = {"op": "subscribe", "id": id, "topic": topic}
+    if msg_type:
+        op["type"] = msg_type
+    if throttle_rate:
+        op["throttle_rate"] = int(throttle_rate)
+    if queue_length:
+        op["queue_length"] = int(queue_length)
+    return op
+
+
+def unsubscribe(topic: str, *, id: str) -> dict[str, Any]:
+    """``unsubscribe`` one subscription id (never the id-less form, which drops every listener)."""
+    return {"op": "unsubscribe", "id": id, "topic": topic}
+
+
+def call_service(
+    service: str,
+    args: dict[str, Any] | list[Any] | None,
+    *,
+    id: str,
+    timeout: float | None = None,
+) -> dict[str, Any]:
+    """``call_service``; *timeout* (seconds) is the ROS 2 field (Humble 2.0.1+, Jazzy 2.2.0+)."""
+    op: dict[str, Any] = {"op": "call_service", "id": id, "service": service}
+    if args is not None:
+        op["args"] = args
+    if timeout is not None and timeout > 0:
+        op["timeout"] = float(timeout)
+    return op
+
+
+def send_action_goal(
+    action: str,
+    action_type: str,
+    args: dict[str, Any] | list[Any] | None,
+    *,
+    id: str,
+    feedback: bool = True,
+) -> dict[str, Any]:
+    """``send_action_goal`` (ROS 2 only); the field is ``action_type``, not ``type``."""
+    op: dict[str, Any] = {
+        "op": "send_action_goal",
+        "id": id,
+        "action": action,
+        "action_type": action_type,
+        "feedback": bool(feedback),
+    }
+    if args is not None:
+        op["args"] = args
+    return op
+
+
+def cancel_action_goal(action: str, *, id: str) -> dict[str, Any]:
+    """``cancel_action_goal``: *id* is the goal's id; the server sends no direct reply."""
+    return {"op": "cancel_action_goal", "id": id, "action": action}
+
+
+# --- ids --------------------------------------------------------------------------------------------
+
+
+class IdMinter:
+    """Readable, unique request ids such as ``call_service:/add_two_ints:7``.
+
+    Goal ids also carry a random per-client token: rosbridge keeps its goal table per *process*
+    (a class attribute in ``send_action_goal.py``, every ROS 2 release), so two clients using the
+    same goal id would cancel each other's goals.
+    """
+
+    __slots__ = ("_counter", "token")
+
+    def __init__(self, token: str | None = None) -> None:
+        self.token = token if token is not None else secrets.token_hex(4)
+        self._counter = itertools.count(1)
+
+    def mint(self, op: str, name: str) -> str:
+        """A fresh id for *op* on *name* (topic, service or action)."""
+        return f"{op}:{name}:{next(self._counter)}"
+
+    def goal_id(self, action: str) -> str:
+        """A goal id unique across every client of the bridge."""
+        return f"goal:{action}:{self.token}-{next(self._counter)}"
+
+
+# --- fragments --------------------------------------------------------------------------------------
+
+
+@dataclass
+class _FragmentBuffer:
+    total: int
+    parts: list[str]
+    size: int
+    updated: float
+
+
+class FragmentAssembler:
+    """Rebuilds messages that arrive as ``fragment`` ops.
+
+    Servers send the fragments of one message in order, numbered from 0. A buffer restarts when
+    ``num == 0`` arrives (two id-less messages share the id ``"0"``/``0``); a gap, a changed
+    ``total`` or a bad field drops the buffer and raises :class:`ProtocolError`. Memory is bounded:
+    at most *max_buffers* partial messages and *max_chars* characters in all, oldest dropped
+    first; buffers untouched for *ttl* seconds expire.
+    """
+
+    def __init__(
+        self,
+        *,
+        max_chars: int = 64 * 1024 * 1024,
+        max_buffers: int = 32,
+        ttl: float = 30.0,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.max_chars = max_chars
+        self.max_buffers = max_buffers
+        self.ttl = ttl
+        self._clock = clock
+        self._buffers: dict[str, _FragmentBuffer] = {}
+        self._chars = 0
+
+    @property
+    def pending(self) -> int:
+        """Number of partial messages held."""
+        return len(self._buffers)
+
+    @property
+    def held_chars(self) -> int:
+        """Characters held in partial messages."""
+        return self._chars
+
+    def _drop(self, key: str) -> None:
+        buf = self._buffers.pop(key, None)
+        if buf is not None:
+            self._chars -= buf.size
+
+    def expire(self, now: float | None = None) -> list[str]:
+        """Drop buffers idle for longer than the ttl; returns their ids."""
+        now = self._clock() if now is None else now
+        stale = [key for key, buf in self._buffers.items() if now - buf.updated > self.ttl]
+        for key in stale:
+            self._drop(key)
+        return stale
+
+    def add(self, frame: dict[str, Any]) -> str | None:
+        """Take one ``fragment`` op; returns the whole message text once its last part arrived."""
+        fid = frame.get("id")
+        data = frame.get("data")
+        num = frame.get("num")
+        total = frame.get("total")
+        if (
+            not isinstance(data, str)
+            or isinstance(num, bool)
+            or isinstance(total, bool)
+            or not isinstance(num, int)
+            or not isinstance(total, int)
+            or fid is None
+            or isinstance(fid, dict | list)
+        ):
+            raise ProtocolError(f"malformed fragment (id={fid!r}, num={num!r}, total={total!r})")
+        key = str(fid)
+        if total < 1 or not 0 <= num < total:
+            self._drop(key)
+            raise ProtocolError(f"fragment {key} has num={num} outside total={total}")
+        now = self._clock()
+        if self._buffers:
+            self.expire(now)
+        if num == 0:
+            self._drop(key)
+            if total == 1:
+                return data
+            buf = _FragmentBuffer(total=total, parts=[data], size=len(data), updated=now)
+            self._buffers[key] = buf
+            self._chars += buf.size
+        else:
+            existing = self._buffers.get(key)
+            if existing is None:
+                raise ProtocolError(f"fragment {key} part {num} arrived without part 0; dropped")
+            if existing.total != total:
+                self._drop(key)
+                raise ProtocolError(f"fragment {key} changed total from {existing.total} to {total}; dropped")
+            if num != len(existing.parts):
+                self._drop(key)
+                raise ProtocolError(
+                    f"fragment {key} part {num} arrived when part {len(existing.parts)} was due; dropped"
+                )
+            existing.parts.append(data)
+            existing.size += len(data)
+            existing.updated = now
+            self._chars += len(data)
+            if len(existing.parts) == existing.total:
+                self._drop(key)
+                return "".join(existing.parts)
+        self._enforce_bounds(keep=key)
+        return None
+
+    def _enforce_bounds(self, keep: str) -> None:
+        # dicts keep insertion order and a restarted buffer is re-inserted, so the first key is the oldest.
+        while len(self._buffers) > self.max_buffers or self._chars > self.max_chars:
+            victim = next((key for key in self._buffers if key != keep), None)
+            if victim is None:
+                self._drop(keep)
+                raise ProtocolError(f"fragmented message {keep} exceeds {self.max_chars} characters; dropped")
+            self._drop(victim)
+
+
+# --- inbound ----------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class PublishEvent:
+    """A message on a topic we subscribed to (rosbridge sends it without an id)."""
+
+    topic: str
+    msg: dict[str, Any]
+
+
+@dataclass(frozen=True, slots=True)
+class ReplyEvent:
+    """``service_response``, ``action_feedback`` or ``action_result`` for request *id*."""
+
+    op: str
+    id: str
+    frame: dict[str, Any]
+
+
+@dataclass(frozen=True, slots=True)
+class Notice:
+    """A frame we do not act on, with the reason; the client logs it and moves on."""
+
+    level: Literal["debug", "info", "warning"]
+    text: str
+    frame: dict[str, Any] | None = field(default=None)
+
+
+InboundEvent = PublishEvent | ReplyEvent | Notice
+
+_PREVIEW = 200
+
+
+def _preview(data: str | bytes) -> str:
+    text = data if isinstance(data, str) else repr(data[:_PREVIEW])
+    return text[:_PREVIEW] + ("…" if len(text) > _PREVIEW else "")
+
+
+class InboundDecoder:
+    """Turns received frames into events; never raises.
+
+    One decoder per connection, because fragment buffers belong to the connection.
+    """
+
+    def __init__(self, assembler: FragmentAssembler | None = None) -> None:
+        self.assembler = assembler if assembler is not None else FragmentAssembler()
+
+    def feed(self, data: str | bytes) -> InboundEvent:
+        """Decode one WebSocket frame."""
+        if isinstance(data, bytes | bytearray | memoryview):
+            # Binary frames are CBOR/BSON answers to subscriptions asking for compression, which we
+            # never do; nothing to route.
+            return Notice(
+                "warning", f"binary frame of {len(data)} bytes ignored (we never ask for CBOR/BSON)"
+            )
+        try:
+            frame = _decoder.decode(data)
+        except ValueError as exc:
+            return Notice("warning", f"malformed JSON frame ignored ({exc}): {_preview(data)}")
+        if not isinstance(frame, dict):
+            return Notice("warning", f"frame that is not a JSON object ignored: {_preview(data)}")
+        return self.route(frame)
+
+    def route(self, frame: dict[str, Any]) -> InboundEvent:
+        """Classify one decoded frame."""
+        op = frame.get("op")
+        if op == "publish":
+            topic = frame.get("topic")
+            msg = frame.get("msg")
+            if isinstance(topic, str) and isinstance(msg, dict):
+                return PublishEvent(topic, msg)
+            return Notice("warning", "publish frame without topic or msg object ignored", frame)
+        if op in REPLY_OPS:
+            rid = frame.get("id")
+            if isinstance(rid, str):
+                return ReplyEvent(op, rid, frame)
+            if rid is not None:
+                return ReplyEvent(op, str(rid), frame)
+            return Notice("warning", f"{op} without an id ignored (we always send one)", frame)
+        if op == "fragment":
+            try:
+                text = self.assembler.add(frame)
+            except ProtocolError as exc:
+                return Notice("warning", str(exc))
+            if text is None:
+                return Notice("debug", "fragment buffered")
+            try:
+                whole = _decoder.decode(text)
+            except ValueError as exc:
+                return Notice("warning", f"reassembled fragments are not JSON ({exc}); dropped")
+            if not isinstance(whole, dict) or whole.get("op") == "fragment":
+                return Notice("warning", "reassembled fragments are not a rosbridge op; dropped")
+            return self.route(whole)
+        if op == "status":
+            # rosbridge_suite never sends status (ROS 1 0.11.x, ROS 2 all); other bridges
+            # (ros2-web-bridge) do. Logged, never waited for.
+            level = frame.get("level")
+            return Notice("info", f"bridge status ({level}): {frame.get('msg')}", frame)
+        if op == "png":
+            return Notice("warning", "png frame ignored (we never ask for png compression)", frame)
+        if not isinstance(op, str):
+            return Notice("warning", "frame without an op ignored", frame)
+        return Notice("warning", f"unsupported op {op!r} ignored", frame)
