@@ -187,7 +187,7 @@ class RosbridgeClient:
         if self._background:
             await asyncio.gather(*list(self._background), return_exceptions=True)
 
-    async def wait_connected(self, timeout: float) -> None:
+    async def wait_connected(self, timeout: float) -> None:  # noqa: ASYNC109
         """Wait until connected; raises :class:`NotConnectedError` naming the URL and last reason."""
         if self.connected:
             return
@@ -199,7 +199,7 @@ class RosbridgeClient:
                 self.url, f"no connection within {timeout:g} s; last error: {self._last_reason}"
             ) from None
 
-    async def wait_disconnected(self, timeout: float) -> None:
+    async def wait_disconnected(self, timeout: float) -> None:  # noqa: ASYNC109
         """Wait until the main connection is down (diagnostics and tests); raises TimeoutError."""
         async with asyncio.timeout(timeout):
             await self._disconnected_event.wait()
@@ -391,7 +391,7 @@ class RosbridgeClient:
             return False
         return True
 
-    async def _open_lane(self, timeout: float) -> Connection:
+    async def _open_lane(self, timeout: float) -> Connection:  # noqa: ASYNC109
         return await open_connection(
             self.url, f"lane {self._ids.mint('lane', '')}", min(timeout, self.connect_timeout)
         )
@@ -403,7 +403,7 @@ class RosbridgeClient:
         conn: Connection,
         service: str,
         args: dict[str, Any] | list[Any] | None,
-        timeout: float,
+        timeout: float,  # noqa: ASYNC109
         *,
         send_timeout: bool,
     ) -> Any:
@@ -417,7 +417,7 @@ class RosbridgeClient:
         service: str,
         args: dict[str, Any] | list[Any] | None = None,
         *,
-        timeout: float | None = None,
+        timeout: float | None = None,  # noqa: ASYNC109
         isolated: bool | None = None,
     ) -> Any:
         """Call a ROS service and return its response fields (``values``).
@@ -586,12 +586,16 @@ class RosbridgeClient:
             for sub in subs.values():
                 sub._push(event.msg)
 
-    async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:
+    async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:  # noqa: ASYNC109
         """The next message on *topic*, within *timeout* seconds."""
         async with self.subscribe(topic, msg_type, max_queue=1) as sub:
             return await sub.get(timeout)
 
     # --- ROS 2 actions ------------------------------------------------------------------------------
+
+    def new_goal_id(self, action: str) -> str:
+        """A goal id unique across every client of the bridge (rosbridge's goal table is process-wide)."""
+        return self._ids.goal_id(action)
 
     def running_goals(self, action: str | None = None) -> list[GoalHandle]:
         """Goals this client has in flight (all, or those of *action*)."""
@@ -616,7 +620,7 @@ class RosbridgeClient:
         goal: dict[str, Any],
         *,
         on_feedback: Callable[[dict[str, Any]], Awaitable[None]] | None = None,
-        timeout: float,
+        timeout: float,  # noqa: ASYNC109
         goal_id: str | None = None,
     ) -> ActionResult:
         """Send a ROS 2 goal on a lane of its own and wait for its result.

@@ -145,7 +145,7 @@ class Connection:
         except ConnectionClosed:
             raise NotConnectedError(self.url, "the connection closed") from None
 
-    async def request(self, rid: str, op: dict[str, Any], what: str, timeout: float) -> dict[str, Any]:
+    async def request(self, rid: str, op: dict[str, Any], what: str, timeout: float) -> dict[str, Any]:  # noqa: ASYNC109
         """Send *op* and wait up to *timeout* seconds for the reply with id *rid*."""
         future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
         self.pending[rid] = ReplyWaiter(future, what)
@@ -185,7 +185,7 @@ def _close_text(ws: ClientConnection) -> str:
 async def open_connection(
     url: str,
     name: str,
-    timeout: float,
+    timeout: float,  # noqa: ASYNC109
     on_publish: Callable[[protocol.PublishEvent], None] | None = None,
 ) -> Connection:
     """Open a WebSocket to *url* within *timeout* seconds; raises :class:`NotConnectedError`."""
