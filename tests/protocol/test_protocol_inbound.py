@@ -1,0 +1,173 @@
+"""Classifying inbound frames and reassembling fragments, fed as text without a socket."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from rosbridge_mcp_server import protocol
+from rosbridge_mcp_server.errors import ProtocolError
+
+
+def fragments(message: dict[str, object], size: int, fid: object) -> list[dict[str, object]]:
+    """Split a message the way rosbridge does: by characters of its JSON text."""
+    text = json.dumps(message)
+    chunks = [text[i : i + size] for i in range(0, len(text), size)]
+    return [
+        {"op": "fragment", "id": fid, "data": chunk, "num": num, "total": len(chunks)}
+        for num, chunk in enumerate(chunks)
+    ]
+
+
+def test_publish_frames_are_routed_by_topic() -> None:
+    """A publish frame (no id) becomes a PublishEvent with its topic and message."""
+    event = protocol.InboundDecoder().feed('{"op":"publish","topic":"/chatter","msg":{"data":"hi"}}')
+    assert event == protocol.PublishEvent("/chatter", {"data": "hi"})
+
+
+@pytest.mark.parametrize("op", ["service_response", "action_feedback", "action_result"])
+def test_replies_are_routed_by_id(op: str) -> None:
+    """service_response / action_feedback / action_result become ReplyEvents keyed by id."""
+    frame = {"op": op, "id": "call_service:/x:1", "result": True, "values": {}}
+    event = protocol.InboundDecoder().feed(json.dumps(frame))
+    assert isinstance(event, protocol.ReplyEvent)
+    assert event.op == op
+    assert event.id == "call_service:/x:1"
+    assert event.frame == frame
+
+
+@pytest.mark.parametrize(
+    ("data", "expected"),
+    [
+        ('{"op":"status","level":"error","msg":"boom"}', "bridge status (error): boom"),
+        ('{"op":"set_level","level":"info"}', "unsupported op 'set_level'"),
+        ('{"op":"service_response","result":true}', "without an id"),
+        ('{"level":"x"}', "without an op"),
+        ("[1, 2]", "not a JSON object"),
+        ("{not json", "malformed JSON"),
+        (b"\xa2\x62op", "binary frame"),
+        ('{"op":"png","data":"AAAA"}', "png frame"),
+        ('{"op":"publish","topic":"/x"}', "without topic or msg"),
+    ],
+)
+def test_frames_we_do_not_act_on_become_notices(data: str | bytes, expected: str) -> None:
+    """status, unknown ops, malformed JSON and binary frames are reported, never raised."""
+    event = protocol.InboundDecoder().feed(data)
+    assert isinstance(event, protocol.Notice)
+    assert expected in event.text
+
+
+def test_fragmented_publish_is_reassembled_and_routed() -> None:
+    """The fragments of a publish (id "0", as ROS 2 sends them) come out as one PublishEvent."""
+    message = {"op": "publish", "topic": "/map", "msg": {"data": list(range(200))}}
+    decoder = protocol.InboundDecoder()
+    events = [decoder.feed(json.dumps(f)) for f in fragments(message, 97, "0")]
+    assert all(isinstance(e, protocol.Notice) and e.level == "debug" for e in events[:-1])
+    assert events[-1] == protocol.PublishEvent("/map", message["msg"])  # type: ignore[arg-type]
+    assert decoder.assembler.pending == 0
+
+
+def test_fragment_ids_may_be_the_integer_zero() -> None:
+    """ROS 1 sends id 0 (an int) for fragments of id-less messages."""
+    message = {"op": "service_response", "id": "c:1", "result": True, "values": {"x": "y" * 300}}
+    decoder = protocol.InboundDecoder()
+    events = [decoder.feed(json.dumps(f)) for f in fragments(message, 50, 0)]
+    assert isinstance(events[-1], protocol.ReplyEvent)
+    assert events[-1].id == "c:1"
+
+
+def test_fragment_buffer_restarts_when_part_zero_arrives_again() -> None:
+    """Two messages sharing id "0": the second part 0 discards the first, unfinished message."""
+    first = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 100}}, 40, "0")
+    second = fragments({"op": "publish", "topic": "/b", "msg": {"d": "b" * 100}}, 40, "0")
+    assembler = protocol.FragmentAssembler()
+    assert assembler.add(first[0]) is None
+    results = [assembler.add(f) for f in second]
+    assert json.loads(results[-1] or "")["topic"] == "/b"
+    assert assembler.pending == 0
+
+
+def test_fragment_with_a_changed_total_is_dropped() -> None:
+    """A part whose total differs from part 0's raises and drops the buffer."""
+    parts = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 100}}, 40, "m")
+    assembler = protocol.FragmentAssembler()
+    assembler.add(parts[0])
+    bad = dict(parts[1], total=parts[1]["total"] + 1)  # type: ignore[operator]
+    with pytest.raises(ProtocolError, match="changed total"):
+        assembler.add(bad)
+    assert assembler.pending == 0
+
+
+def test_fragment_out_of_order_is_dropped() -> None:
+    """A gap in the numbering drops the message rather than joining it wrongly."""
+    parts = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 200}}, 40, "m")
+    assembler = protocol.FragmentAssembler()
+    assembler.add(parts[0])
+    with pytest.raises(ProtocolError, match="was due"):
+        assembler.add(parts[2])
+    assert assembler.pending == 0
+
+
+def test_fragment_without_part_zero_is_rejected() -> None:
+    """A middle part with nothing buffered is reported, not kept."""
+    parts = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 200}}, 40, "m")
+    with pytest.raises(ProtocolError, match="without part 0"):
+        protocol.FragmentAssembler().add(parts[1])
+
+
+@pytest.mark.parametrize(
+    "frame",
+    [
+        {"op": "fragment", "id": "x", "data": 5, "num": 0, "total": 2},
+        {"op": "fragment", "id": "x", "data": "a", "num": "0", "total": 2},
+        {"op": "fragment", "id": "x", "data": "a", "num": 0, "total": True},
+        {"op": "fragment", "data": "a", "num": 0, "total": 2},
+        {"op": "fragment", "id": "x", "data": "a", "num": 3, "total": 2},
+    ],
+)
+def test_malformed_fragments_raise_protocol_errors(frame: dict[str, object]) -> None:
+    """Fragments with missing or mistyped fields are rejected with a ProtocolError."""
+    with pytest.raises(ProtocolError):
+        protocol.FragmentAssembler().add(frame)
+
+
+def test_fragment_memory_is_bounded_by_dropping_the_oldest() -> None:
+    """Beyond max_buffers partial messages, the oldest partial message is dropped."""
+    assembler = protocol.FragmentAssembler(max_buffers=3)
+    for n in range(10):
+        assembler.add({"op": "fragment", "id": f"m{n}", "data": "x", "num": 0, "total": 2})
+    assert assembler.pending == 3
+    with pytest.raises(ProtocolError):
+        assembler.add({"op": "fragment", "id": "m0", "data": "y", "num": 1, "total": 2})
+    assert assembler.add({"op": "fragment", "id": "m9", "data": "y", "num": 1, "total": 2}) == "xy"
+
+
+def test_a_fragmented_message_larger_than_the_character_bound_is_dropped() -> None:
+    """One message bigger than max_chars is dropped with a ProtocolError."""
+    assembler = protocol.FragmentAssembler(max_chars=100)
+    assembler.add({"op": "fragment", "id": "big", "data": "x" * 60, "num": 0, "total": 3})
+    with pytest.raises(ProtocolError, match="exceeds"):
+        assembler.add({"op": "fragment", "id": "big", "data": "x" * 60, "num": 1, "total": 3})
+    assert assembler.held_chars == 0
+
+
+def test_stale_fragment_buffers_expire() -> None:
+    """A partial message untouched for longer than the ttl is forgotten."""
+    now = [100.0]
+    assembler = protocol.FragmentAssembler(ttl=5.0, clock=lambda: now[0])
+    assembler.add({"op": "fragment", "id": "old", "data": "x", "num": 0, "total": 2})
+    now[0] += 6.0
+    assembler.add({"op": "fragment", "id": "new", "data": "x", "num": 0, "total": 2})
+    assert assembler.pending == 1
+    with pytest.raises(ProtocolError):
+        assembler.add({"op": "fragment", "id": "old", "data": "y", "num": 1, "total": 2})
+
+
+def test_reassembled_garbage_is_a_notice() -> None:
+    """Fragments that join into something that is not a rosbridge op are reported and dropped."""
+    decoder = protocol.InboundDecoder()
+    decoder.feed('{"op":"fragment","id":"g","data":"{\\"a\\":","num":0,"total":2}')
+    event = decoder.feed('{"op":"fragment","id":"g","data":"oops","num":1,"total":2}')
+    assert isinstance(event, protocol.Notice)
+    assert "not JSON" in event.text
