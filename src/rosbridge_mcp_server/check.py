@@ -1,0 +1,114 @@
+"""``rosbridge-mcp-server check``: a diagnosis of the connection to rosbridge, for a person at a terminal.
+
+It is not the MCP server, so it writes to stdout. It says whether the bridge is reachable (and if not, what to
+try), which ROS and distro it runs, what this rosbridge can do, whether rosapi answers, and how many topics,
+services and actions it sees. Exit code 0 when healthy, 1 when not.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import TextIO
+from urllib.parse import urlsplit
+
+from rosbridge_mcp_server import __version__
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
+from rosbridge_mcp_server.ros import RosGraph
+
+__all__ = ["run_check", "unreachable_advice"]
+
+_OK = "ok  "
+_BAD = "FAIL"
+_NOTE = "note"
+
+
+def unreachable_advice(url: str, reason: str | None) -> list[str]:
+    """What to try when nothing answers at ``url``, most likely cause first."""
+    parts = urlsplit(url)
+    host = parts.hostname or "?"
+    secure = parts.scheme == "wss"
+    port = parts.port or (443 if secure else 80)
+    text = (reason or "").lower()
+    advice: list[str] = []
+    if "refused" in text or "connect call failed" in text:
+        advice.append(f"Nothing listens on {host}:{port}: is rosbridge running, and on this port?")
+    elif "name" in text and ("resolution" in text or "not known" in text or "resolve" in text):
+        advice.append(f"The host name {host!r} does not resolve: check the spelling, or use the IP address.")
+    elif "timed out" in text or "timeout" in text:
+        advice.append(
+            f"{host}:{port} did not answer in time: check the address, that the robot is on this network, "
+            "and that no firewall blocks the port."
+        )
+    if "ssl" in text or "tls" in text or "certificate" in text or "http" in text:
+        other = "ws://" if secure else "wss://"
+        advice.append(f"The server may speak the other protocol: try {other} instead of {parts.scheme}://.")
+    advice += [
+        "Start rosbridge on the robot: `ros2 launch rosbridge_server rosbridge_websocket_launch.xml` (ROS 2) "
+        "or `roslaunch rosbridge_server rosbridge_websocket.launch` (ROS 1).",
+        f"Check host and port: ROSBRIDGE_HOST / ROSBRIDGE_PORT (or ROSBRIDGE_URL); now {url}. rosbridge's "
+        "default port is 9090.",
+        f"Check that a firewall lets TCP port {port} through (e.g. `nc -vz {host} {port}`).",
+        "Check ws:// versus wss://: rosbridge speaks plain ws:// unless it was started with TLS.",
+    ]
+    return advice
+
+
+async def run_check(config: Config, out: TextIO) -> int:
+    """Run the diagnosis against ``config.url``, writing to ``out``; 0 when healthy, 1 when not."""
+
+    def say(mark: str, text: str) -> None:
+        out.write(f"[{mark}] {text}\n")
+
+    out.write(f"rosbridge-mcp-server {__version__}: checking {config.url}\n")
+    if config.demo:
+        say(_NOTE, f"demo mode: this is the built-in simulated {config.demo_dialect.upper()} robot")
+
+    async with RosbridgeClient(
+        config.url, connect_timeout=config.connect_timeout, request_timeout=config.request_timeout
+    ) as client:
+        try:
+            # ros_info() waits for the first connection attempt only, so a refused connection shows at once.
+            info = await client.ros_info()
+        except NotConnectedError as exc:
+            say(_BAD, f"cannot reach rosbridge at {config.url}: {exc.reason or 'no connection'}")
+            out.write("What to try:\n")
+            for line in unreachable_advice(config.url, exc.reason):
+                out.write(f"  - {line}\n")
+            return 1
+        say(_OK, f"rosbridge reachable at {config.url}")
+        distro = info.distro or ("unknown distro" if info.version == 2 else "Melodic/Noetic line")
+        say(_OK, f"ROS {info.version} ({distro})")
+
+        if info.version == 1:
+            say(_NOTE, "actions: over actionlib topics (ROS 1 rosbridge has no action ops)")
+            say(_NOTE, "service calls: no timeout field on ROS 1; this server applies its own deadline")
+        else:
+            say(_OK, "actions: native action ops (rosbridge 2.0 / Humble and later)")
+            say(_OK, "service calls: the timeout field is sent (read by Humble 2.0.1+, Jazzy 2.2.0+)")
+        if info.may_be_in_order:
+            say(
+                _NOTE,
+                "this bridge may handle one connection strictly in order (Humble defaults): goals and "
+                "service "
+                "calls run on extra connections so they do not block each other",
+            )
+        else:
+            say(_OK, "calls on one connection run side by side")
+
+        graph = RosGraph(client)
+        healthy = True
+        try:
+            topics, services, actions = await asyncio.gather(
+                graph.topics(), graph.service_names(), graph.action_names()
+            )
+        except RosbridgeError as exc:
+            say(_BAD, f"rosapi does not answer: {exc}")
+            healthy = False
+        else:
+            say(_OK, "rosapi answers")
+            say(_OK, f"{len(topics)} topics, {len(services)} services, {len(actions)} action servers")
+        if healthy:
+            out.write("Healthy: the MCP server can use this bridge.\n")
+        return 0 if healthy else 1

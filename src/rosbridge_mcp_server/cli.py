@@ -1,0 +1,157 @@
+"""Command line: ``rosbridge-mcp-server [serve] [flags]`` (the MCP server on stdio) and ``... check [flags]``.
+
+Exit codes: 0 done (or healthy, for ``check``), 1 ``check`` found a problem, 2 bad command line or
+configuration
+(one line on stderr, never a traceback), 130 interrupted.
+
+In ``serve`` mode stdout belongs to JSON-RPC: everything else goes to stderr through ``logging``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import os
+import sys
+from collections.abc import AsyncIterator, Mapping, Sequence
+from dataclasses import replace
+from typing import NoReturn, TextIO
+
+from rosbridge_mcp_server import __version__
+from rosbridge_mcp_server.check import run_check
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config
+from rosbridge_mcp_server.server import build_server
+
+__all__ = ["PROG", "check", "configure_logging", "demo_robot", "run", "serve"]
+
+PROG = "rosbridge-mcp-server"
+_log = logging.getLogger(__name__)
+
+
+class _UsageError(Exception):
+    """argparse found a bad command line."""
+
+
+class _Parser(argparse.ArgumentParser):
+    # argparse prints usage plus the message and exits; we want one line and our own exit code.
+    def error(self, message: str) -> NoReturn:
+        raise _UsageError(message)
+
+
+def _parser(command: str) -> _Parser:
+    if command == "check":
+        description = (
+            "Diagnose the connection to rosbridge: is it reachable, which ROS it runs, what rosbridge "
+            "can do, "
+            "whether rosapi answers. Exit code 0 when healthy, 1 when not."
+        )
+    else:
+        description = (
+            "MCP server (stdio) that lets an AI assistant watch and drive a ROS robot through rosbridge. "
+            "Use `check` to diagnose the connection."
+        )
+    parser = _Parser(prog=PROG if command == "serve" else f"{PROG} check", description=description)
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    connection = parser.add_argument_group("connection (flags win over the environment)")
+    connection.add_argument("--host", help="rosbridge host (env ROSBRIDGE_HOST, default localhost)")
+    connection.add_argument("--port", help="rosbridge port (env ROSBRIDGE_PORT, default 9090)")
+    connection.add_argument(
+        "--url", help="full ws:// or wss:// URL, path included; wins over host/port (env ROSBRIDGE_URL)"
+    )
+    connection.add_argument(
+        "--timeout", help="default request timeout in seconds (env ROSBRIDGE_TIMEOUT, default 10)"
+    )
+    parser.add_argument(
+        "--log-level",
+        help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
+    )
+    demo = parser.add_argument_group("demo")
+    demo.add_argument(
+        "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
+    )
+    demo.add_argument(
+        "--demo-dialect",
+        choices=("ros1", "ros2"),
+        default="ros2",
+        help="which rosbridge the simulated robot imitates (default ros2)",
+    )
+    return parser
+
+
+def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = None) -> int:
+    """Parse the command line and the environment, then serve MCP or run ``check``; returns the exit code."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    env = os.environ if environ is None else environ
+    command = "serve"
+    if args and args[0] in ("serve", "check"):
+        command = args.pop(0)
+    try:
+        options = _parser(command).parse_args(args)
+        config = load_config(
+            env,
+            host=options.host,
+            port=options.port,
+            url=options.url,
+            timeout=options.timeout,
+            log_level=options.log_level,
+            demo=options.demo,
+            demo_dialect=options.demo_dialect,
+        )
+    except (_UsageError, ConfigError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+
+    # `check` prints its own findings; the client's warnings would only repeat them.
+    configure_logging(config.log_level if command == "serve" or config.log_level == "DEBUG" else "ERROR")
+    try:
+        if command == "check":
+            return asyncio.run(check(config, sys.stdout))
+        asyncio.run(serve(config))
+    except KeyboardInterrupt:
+        return 130
+    return 0
+
+
+def configure_logging(level: str, stream: TextIO | None = None) -> None:
+    """Log to stderr: our own loggers at ``level``, everyone else's at WARNING (or DEBUG when asked)."""
+    handler = logging.StreamHandler(stream if stream is not None else sys.stderr)
+    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+    root = logging.getLogger()
+    root.handlers[:] = [handler]
+    root.setLevel(logging.DEBUG if level == "DEBUG" else logging.WARNING)
+    logging.getLogger("rosbridge_mcp_server").setLevel(level)
+
+
+@contextlib.asynccontextmanager
+async def demo_robot(config: Config) -> AsyncIterator[Config]:
+    """With ``--demo``: a simulated robot on a free local port, and ``config`` pointed at it."""
+    if not config.demo:
+        yield config
+        return
+    # Imported here: the simulated robot is only needed with --demo.
+    from rosbridge_mcp_server.sim import SimulatedRobot  # noqa: PLC0415
+
+    async with SimulatedRobot(dialect=config.demo_dialect, port=0) as robot:
+        _log.info("demo mode: simulated %s robot at %s", config.demo_dialect.upper(), robot.url)
+        yield replace(config, url=robot.url)
+
+
+async def check(config: Config, out: TextIO) -> int:
+    """The ``check`` command: diagnose the bridge (or the demo robot); 0 when healthy, 1 when not."""
+    async with demo_robot(config) as effective:
+        return await run_check(effective, out)
+
+
+async def serve(config: Config) -> None:
+    """Serve MCP on stdin/stdout until the client closes stdin."""
+    async with demo_robot(config) as effective:
+        client = RosbridgeClient(
+            effective.url,
+            connect_timeout=effective.connect_timeout,
+            request_timeout=effective.request_timeout,
+        )
+        server = build_server(client, effective)
+        await server.run_stdio_async()

@@ -1,0 +1,338 @@
+"""Graph look-ups through rosapi, with the dialect quirks handled, for the tools.
+
+Everything here is an ordinary ``call_service`` to a ``/rosapi/...`` service on the shared client. What
+differs
+between bridges:
+
+* ROS 1 (rosapi 0.11) has no ``get_ros_version``, ``action_type`` or ``interfaces``; ``action_servers`` may
+list a
+  namespace twice; the type of an action is only visible as the type of its ``<ns>/goal`` topic
+  (``pkg/NameActionGoal``).
+* ROS 2 ``action_type`` exists from Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0; before that we fall back to the
+  hidden ``<ns>/_action/feedback`` topic, whose type is ``pkg/action/Name_FeedbackMessage``.
+* ``message_details`` answers an unknown type with an empty ``typedefs`` list (both lines); on ROS 2 it may
+also
+  never answer if the handler raises, so such a failure is reported as an unknown type as well.
+
+Type definitions are cached per connection: a reconnect may be to a robot with other packages installed.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Awaitable, Callable, Iterable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from rosbridge_mcp_server.dialect import RosInfo, action_type_names, normalize_type
+from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
+from rosbridge_mcp_server.typecheck import TypeDef, typedefs_from_rosapi
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+
+__all__ = [
+    "ROSAPI_HINT",
+    "ActionEntry",
+    "RosGraph",
+    "ServiceEntry",
+    "TopicDetails",
+    "TopicEntry",
+    "is_missing_service",
+]
+
+_log = logging.getLogger(__name__)
+
+ROSAPI_HINT = (
+    "rosapi must be running next to rosbridge: the launch files start it "
+    "(`ros2 launch rosbridge_server rosbridge_websocket_launch.xml`, "
+    "`roslaunch rosbridge_server rosbridge_websocket.launch`); `rosbridge_websocket` run alone does not."
+)
+
+# Type look-ups for many names at once (service types, action types) run side by side, but not hundreds at
+# a time:
+# each is a request on the bridge, and an in-order bridge serialises them anyway.
+_LOOKUP_CONCURRENCY = 16
+
+_T = TypeVar("_T")
+_R = TypeVar("_R")
+
+
+@dataclass(frozen=True)
+class TopicEntry:
+    """A topic and its type (``""`` when the graph does not know it)."""
+
+    name: str
+    type: str
+
+
+@dataclass(frozen=True)
+class TopicDetails:
+    """A topic's type and the nodes that publish and subscribe it."""
+
+    name: str
+    type: str
+    publishers: tuple[str, ...]
+    subscribers: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class ServiceEntry:
+    """A service and its type (``""`` when rosapi could not tell)."""
+
+    name: str
+    type: str
+
+
+@dataclass(frozen=True)
+class ActionEntry:
+    """An action server and its type (``None`` when it cannot be known on this bridge)."""
+
+    name: str
+    type: str | None
+
+
+def is_missing_service(error: ServiceError) -> bool:
+    """The bridge said the service is not in the graph (its text since rosbridge 0.11 and in every ROS 2 "
+    "line)."""
+    return "does not exist" in error.message
+
+
+class RosGraph:
+    """rosapi look-ups on one client, with type definitions cached per connection."""
+
+    def __init__(self, client: RosbridgeClient) -> None:
+        self._client = client
+        self._cache_owner: RosInfo | None = None
+        self._typedef_cache: dict[tuple[str, str], dict[str, TypeDef]] = {}
+        self._interfaces: frozenset[str] | None = None
+        self._interfaces_known = False
+
+    async def ros_info(self) -> RosInfo:
+        """The bridge's ROS version and distro (detected by the client once per connection)."""
+        info = await self._client.ros_info()
+        # The client makes one RosInfo per connection, so a new object means a new connection.
+        if info is not self._cache_owner:
+            self._cache_owner = info
+            self._typedef_cache.clear()
+            self._interfaces = None
+            self._interfaces_known = False
+        return info
+
+    async def rosapi(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Call ``/rosapi/<name>``; a missing rosapi becomes a :class:`ServiceError` that says how to "
+        "start it."""
+        service = f"/rosapi/{name}"
+        try:
+            values = await self._client.call_service(service, args or {})
+        except ServiceError as exc:
+            if is_missing_service(exc):
+                raise ServiceError(service, f"{exc.message}. {ROSAPI_HINT}") from exc
+            raise
+        return values if isinstance(values, dict) else {}
+
+    # --- topics -----------------------------------------------------------------------------------
+
+    async def topics(self) -> list[TopicEntry]:
+        """Every topic the graph knows, sorted by name, with its type."""
+        values = await self.rosapi("topics")
+        names = _strings(values.get("topics"))
+        types = _strings(values.get("types"))
+        entries = {name: (types[i] if i < len(types) else "") for i, name in enumerate(names)}
+        return [TopicEntry(name, entries[name]) for name in sorted(entries)]
+
+    async def topic_type(self, topic: str) -> str:
+        """The type of ``topic``, or ``""`` when it is not in the graph."""
+        values = await self.rosapi("topic_type", {"topic": topic})
+        found = values.get("type")
+        return found if isinstance(found, str) else ""
+
+    async def topic_details(self, topic: str) -> TopicDetails:
+        """Type, publishers and subscribers of ``topic`` (all empty when it is not in the graph)."""
+        topic_type, publishers, subscribers = await asyncio.gather(
+            self.topic_type(topic),
+            self.rosapi("publishers", {"topic": topic}),
+            self.rosapi("subscribers", {"topic": topic}),
+        )
+        return TopicDetails(
+            name=topic,
+            type=topic_type,
+            publishers=tuple(_strings(publishers.get("publishers"))),
+            subscribers=tuple(_strings(subscribers.get("subscribers"))),
+        )
+
+    # --- services ---------------------------------------------------------------------------------
+
+    async def service_names(self) -> list[str]:
+        """Every service name, sorted."""
+        values = await self.rosapi("services")
+        return sorted(set(_strings(values.get("services"))))
+
+    async def service_type(self, service: str) -> str:
+        """The type of ``service``, or ``""`` when rosapi does not know it."""
+        values = await self.rosapi("service_type", {"service": service})
+        found = values.get("type")
+        return found if isinstance(found, str) else ""
+
+    async def _service_type_or_blank(self, service: str) -> str:
+        try:
+            return await self.service_type(service)
+        except (ServiceError, RequestTimeoutError) as exc:
+            _log.info("no type for service %s: %s", service, exc)
+            return ""
+
+    async def services(self) -> list[ServiceEntry]:
+        """Every service with its type (types looked up side by side; ``""`` where a look-up failed)."""
+        names = await self.service_names()
+        types = await _bounded_map(self._service_type_or_blank, names)
+        return [ServiceEntry(name, found) for name, found in zip(names, types, strict=True)]
+
+    # --- actions ----------------------------------------------------------------------------------
+
+    async def action_names(self) -> list[str]:
+        """Every action server name, once each, sorted."""
+        values = await self.rosapi("action_servers")
+        # ROS 1 rosapi 0.11 lists a namespace twice when other topics sort after `status` in it.
+        return sorted({_absolute(name) for name in _strings(values.get("action_servers"))})
+
+    async def action_type(self, action: str) -> str | None:
+        """The action's type in the bridge's own spelling, or ``None`` when the bridge cannot tell."""
+        info = await self.ros_info()
+        if info.version == 1:
+            return await self._ros1_action_type(action)
+        return await self._ros2_action_type(action)
+
+    async def _action_type_or_none(self, action: str) -> str | None:
+        try:
+            return await self.action_type(action)
+        except (ServiceError, RequestTimeoutError) as exc:
+            _log.info("no type for action %s: %s", action, exc)
+            return None
+
+    async def actions(self) -> list[ActionEntry]:
+        """Every action server once, with its type where it can be known."""
+        names = await self.action_names()
+        types = await _bounded_map(self._action_type_or_none, names)
+        return [ActionEntry(name, found) for name, found in zip(names, types, strict=True)]
+
+    async def _ros1_action_type(self, action: str) -> str | None:
+        goal_type = await self.topic_type(f"{action.rstrip('/')}/goal")
+        # actionlib: `<ns>/goal` carries `pkg/NameActionGoal`; the action is `pkg/NameAction`.
+        if goal_type.endswith("ActionGoal"):
+            return goal_type[: -len("Goal")]
+        return None
+
+    async def _ros2_action_type(self, action: str) -> str | None:
+        try:
+            values = await self.rosapi("action_type", {"action": action})
+        except ServiceError as exc:
+            # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0.
+            if not is_missing_service(exc):
+                raise
+        else:
+            found = values.get("type")
+            if isinstance(found, str) and found:
+                return found
+        feedback_type = await self.topic_type(f"{action.rstrip('/')}/_action/feedback")
+        if feedback_type.endswith("_FeedbackMessage"):
+            return feedback_type[: -len("_FeedbackMessage")]
+        return None
+
+    # --- type definitions -------------------------------------------------------------------------
+
+    async def message_typedefs(self, type_name: str) -> dict[str, TypeDef]:
+        """The definitions of a message type and of every type nested in it; :class:`UnknownTypeError` "
+        "if none."""
+        info = await self.ros_info()
+        bridge_name = normalize_type(type_name, info.version, "msg")
+        await self._check_installed(type_name, bridge_name, info)
+        typedefs = await self._details("message_details", bridge_name)
+        if typedefs is None or not typedefs:
+            raise UnknownTypeError(type_name, _type_hint(info))
+        return typedefs
+
+    async def service_request_typedefs(self, type_name: str) -> dict[str, TypeDef] | None:
+        """The request definition of a service type, or ``None`` when rosapi cannot tell."""
+        info = await self.ros_info()
+        bridge_name = normalize_type(type_name, info.version, "srv")
+        return await self._details("service_request_details", bridge_name) or None
+
+    async def action_goal_typedefs(self, type_name: str) -> dict[str, TypeDef] | None:
+        """The goal definition of an action type, or ``None`` when rosapi cannot tell.
+
+        ROS 2: ``action_goal_details`` (Humble 2.0.2 / Jazzy 2.3.0 on). ROS 1: ``message_details`` of
+        ``pkg/NameGoal`` (the goal message inside ``pkg/NameActionGoal``).
+        """
+        info = await self.ros_info()
+        names = action_type_names(type_name)
+        if info.version == 1:
+            return await self._details("message_details", f"{names.package}/{names.name}Goal") or None
+        return await self._details("action_goal_details", names.ros2) or None
+
+    async def _details(self, service: str, bridge_name: str) -> dict[str, TypeDef] | None:
+        key = (service, bridge_name)
+        cached = self._typedef_cache.get(key)
+        if cached is not None:
+            return cached
+        try:
+            values = await self.rosapi(service, {"type": bridge_name})
+        except ServiceError as exc:
+            if is_missing_service(exc):
+                return None
+            # rosapi raised while loading the type (ROS 1 reports the exception text).
+            return {}
+        except RequestTimeoutError:
+            # A ROS 2 service whose handler raised never answers; rosapi does that for types it cannot load.
+            _log.info("rosapi %s gave no answer for %s; treating the type as unknown", service, bridge_name)
+            return {}
+        typedefs = typedefs_from_rosapi(values)
+        if typedefs:
+            self._typedef_cache[key] = typedefs
+        return typedefs
+
+    async def _check_installed(self, type_name: str, bridge_name: str, info: RosInfo) -> None:
+        """On ROS 2, ask ``/rosapi/interfaces`` (Humble 2.0.1+) first: it knows every installed type at "
+        "once."""
+        if info.version != 2:
+            return
+        if not self._interfaces_known:
+            self._interfaces_known = True
+            try:
+                values = await self.rosapi("interfaces")
+            except (ServiceError, RequestTimeoutError):
+                self._interfaces = None
+            else:
+                listed = _strings(values.get("interfaces"))
+                self._interfaces = frozenset(listed) if listed else None
+        if self._interfaces is not None and bridge_name not in self._interfaces:
+            raise UnknownTypeError(type_name, _type_hint(info))
+
+
+def _type_hint(info: RosInfo) -> str:
+    if info.version == 1:
+        return "ROS 1 type names look like `geometry_msgs/Twist`; list_topics shows the types in use."
+    return "ROS 2 type names look like `geometry_msgs/msg/Twist`; list_topics shows the types in use."
+
+
+def _absolute(name: str) -> str:
+    return name if name.startswith("/") else "/" + name
+
+
+def _strings(value: Any) -> list[str]:
+    if not isinstance(value, list):
+        return []
+    return [item for item in value if isinstance(item, str)]
+
+
+async def _bounded_map(func: Callable[[_T], Awaitable[_R]], items: Iterable[_T]) -> list[_R]:
+    semaphore = asyncio.Semaphore(_LOOKUP_CONCURRENCY)
+
+    async def one(item: _T) -> _R:
+        async with semaphore:
+            return await func(item)
+
+    # A TaskGroup, not gather: when one look-up fails (the connection dropped) the others are cancelled.
+    async with asyncio.TaskGroup() as group:
+        tasks = [group.create_task(one(item)) for item in items]
+    return [task.result() for task in tasks]

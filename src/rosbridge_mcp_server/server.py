@@ -1,0 +1,227 @@
+"""The MCP server: every tool module registered on an ``MCPServer``, with errors and progress translated.
+
+This is the only module that imports ``mcp``. Tool modules know nothing of MCP: each gives a ``SPEC`` and a
+``run(ctx, ...)``; here each becomes an MCP tool whose parameters are the ``run`` parameters (plus the
+SDK's own
+``Context``), whose output schema is the spec's model, and whose failures become ``isError`` results:
+
+* a :class:`~rosbridge_mcp_server.errors.RosbridgeError` or a
+  :class:`~rosbridge_mcp_server.tools.base.ToolFailure` → its sentence (plus what to try, for the client
+  errors);
+* arguments that do not fit the parameters → one line per wrong argument, instead of pydantic's dump;
+* anything else is a bug: logged with its traceback on stderr, and the model gets a generic error.
+
+The rosbridge client connects in the background from the server's lifespan, so ``initialize`` and
+``tools/list``
+work while the robot is down; tools then fail fast with the not-connected text naming the URL.
+"""
+
+from __future__ import annotations
+
+import inspect
+import logging
+import typing
+from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import asynccontextmanager
+from types import ModuleType
+from typing import Annotated, Any
+
+from mcp.server.mcpserver import Context, MCPServer
+from mcp.server.mcpserver.exceptions import ToolError
+from mcp.server.mcpserver.tools import Tool
+from mcp.types import CallToolResult, TextContent, ToolAnnotations
+from pydantic import ValidationError
+
+from rosbridge_mcp_server import __version__
+from rosbridge_mcp_server.errors import (
+    ActionError,
+    ConnectionLostError,
+    InvalidMessageError,
+    ProtocolError,
+    RequestTimeoutError,
+    RosbridgeError,
+    ServiceError,
+)
+from rosbridge_mcp_server.ros import RosGraph
+from rosbridge_mcp_server.tools import TOOL_MODULES
+from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
+
+if typing.TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.config import Config
+
+__all__ = ["INSTRUCTIONS", "SERVER_NAME", "build_server", "error_text"]
+
+_log = logging.getLogger(__name__)
+
+SERVER_NAME = "rosbridge"
+
+INSTRUCTIONS = """\
+This server connects to a real (or simulated) ROS robot through rosbridge. Some tools only read the robot's \
+state; publish_topic, publish_service, publish_action and cancel_action act on the robot and can make it move.
+
+Work like this:
+1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
+names and types; get_topic_info shows who publishes and subscribes a topic.
+2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are zero
+or \
+empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
+3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; send \
+zeros to stop. Prefer small, safe values and say what you are about to do.
+4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
+
+A failed call comes back as an error whose text says what went wrong and what to try (a field that does not \
+fit the type, an unknown name, the robot being unreachable). Nothing sent while the robot is unreachable is \
+delivered later.\
+"""
+
+_HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
+    (
+        ConnectionLostError,
+        "Whether it took effect on the robot is unknown: check the robot's state (e.g. with list_topics) "
+        "once the "
+        "connection is back, before trying again.",
+    ),
+    (
+        RequestTimeoutError,
+        "The robot may be busy or the node may not be answering: check it is running (list_services / "
+        "list_actions), or try again with a longer timeout.",
+    ),
+    (
+        ServiceError,
+        "Check the service name and type with list_services and the request fields, then try again.",
+    ),
+    (ActionError, "Check the action name and type with list_actions and the goal fields, then try again."),
+    (InvalidMessageError, "Fix the fields named above and call again; nothing was sent."),
+    (
+        ProtocolError,
+        "The bridge sent something this server does not understand; check the rosbridge version on the "
+        "robot.",
+    ),
+)
+
+
+def error_text(exc: RosbridgeError | ToolFailure) -> str:
+    """The sentence a model sees for a failed tool call: the error's own text, plus what to try."""
+    text = str(exc)
+    if isinstance(exc, RosbridgeError):
+        for kind, hint in _HINTS:
+            if isinstance(exc, kind):
+                return f"{text} {hint}"
+    return text
+
+
+def build_server(client: RosbridgeClient, config: Config) -> MCPServer[None]:
+    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan)."""
+    graph = RosGraph(client)
+
+    @asynccontextmanager
+    async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
+        await client.start()
+        _log.info("rosbridge-mcp-server %s: connecting to %s in the background", __version__, client.url)
+        try:
+            yield None
+        finally:
+            await client.close()
+
+    tools = [_tool_from_module(module, client, config, graph) for module in TOOL_MODULES]
+    return MCPServer(
+        SERVER_NAME,
+        title="rosbridge MCP server",
+        description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
+        instructions=INSTRUCTIONS,
+        version=__version__,
+        tools=tools,
+        lifespan=lifespan,
+        log_level=config.log_level,
+    )
+
+
+class _RosTool(Tool):
+    """A ``Tool`` whose argument errors read as one line per wrong argument."""
+
+    async def run(
+        self, arguments: dict[str, Any], context: Context[Any, Any], convert_result: bool = False
+    ) -> Any:
+        try:
+            return await super().run(arguments, context, convert_result)
+        except ToolError as exc:
+            cause = exc.__cause__
+            if isinstance(cause, ValidationError):
+                raise ToolError(_arguments_text(self.name, cause, self.parameters)) from cause
+            raise
+
+
+def _arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
+    problems: list[str] = []
+    for item in error.errors(include_url=False):
+        where = ".".join(str(part) for part in item["loc"]) or "(arguments)"
+        if item["type"] == "missing":
+            problems.append(f"{where}: required but missing")
+        else:
+            problems.append(f"{where}: {item['msg'].lower()} (got {_short(item.get('input'))})")
+    properties = schema.get("properties", {})
+    required = set(schema.get("required", []))
+    expected = ", ".join(f"{name}{'' if name in required else ' (optional)'}" for name in properties)
+    return (
+        f"Invalid arguments for {tool}: {'; '.join(problems)}. It takes: {expected or 'no arguments ({})'}."
+    )
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _tool_from_module(module: ModuleType, client: RosbridgeClient, config: Config, graph: RosGraph) -> Tool:
+    spec: ToolSpec = module.SPEC
+    run: Callable[..., Awaitable[ToolAnswer]] = module.run
+
+    # The tool's parameters are run()'s, minus its ToolContext, plus the SDK's Context (which the SDK fills in
+    # and leaves out of the input schema). Annotations are resolved here: the modules use postponed
+    # annotations.
+    hints = typing.get_type_hints(run, include_extras=True)
+    run_parameters = list(inspect.signature(run).parameters.values())[1:]
+    parameters = [p.replace(annotation=hints[p.name]) for p in run_parameters]
+    parameters.append(inspect.Parameter("mcp_context", inspect.Parameter.KEYWORD_ONLY, annotation=Context))
+    returns = Annotated[CallToolResult, spec.output]
+
+    async def call_tool(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
+        async def report_progress(progress: float, total: float | None, message: str | None) -> None:
+            try:
+                await mcp_context.report_progress(progress, total, message)
+            except Exception:
+                # Progress is a courtesy; a client that went away must not fail the goal.
+                _log.debug("could not send a progress notification", exc_info=True)
+
+        ctx = ToolContext(client=client, config=config, graph=graph, report_progress=report_progress)
+        try:
+            answer = await run(ctx, **arguments)
+        except (RosbridgeError, ToolFailure) as exc:
+            _log.info("%s failed: %s", spec.name, exc)
+            return CallToolResult(content=[TextContent(type="text", text=error_text(exc))], is_error=True)
+        return CallToolResult(
+            content=[TextContent(type="text", text=answer.text)],
+            structured_content=answer.data.model_dump(mode="json"),
+        )
+
+    call_tool.__name__ = spec.name
+    call_tool.__qualname__ = spec.name
+    call_tool.__doc__ = spec.description
+    setattr(call_tool, "__signature__", inspect.Signature(parameters, return_annotation=returns))  # noqa: B010
+    call_tool.__annotations__ = {p.name: p.annotation for p in parameters} | {"return": returns}
+
+    return _RosTool.from_function(
+        call_tool,
+        name=spec.name,
+        title=spec.title,
+        description=spec.description,
+        annotations=ToolAnnotations(
+            title=spec.title,
+            read_only_hint=spec.hints.read_only,
+            destructive_hint=spec.hints.destructive,
+            idempotent_hint=spec.hints.idempotent,
+            open_world_hint=spec.hints.open_world,
+        ),
+        structured_output=True,
+    )

@@ -1,0 +1,117 @@
+"""``cancel_action``: cancel one goal, or every goal of an action, on ROS 1 and ROS 2."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Annotated
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.actions import CancelReport, cancel_goals
+from rosbridge_mcp_server.errors import ServiceError
+from rosbridge_mcp_server.tools.base import (
+    ACTS_ON_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolSpec,
+    absolute_name,
+)
+
+__all__ = ["SPEC", "CancelAnswer", "run"]
+
+
+class CancelAnswer(BaseModel):
+    """What was cancelled."""
+
+    action: str
+    goal_id: str | None = Field(description="The goal asked for, or null for every goal of the action")
+    canceled_goals: list[str] = Field(
+        description="Ids of goals started by publish_action that were cancelled"
+    )
+    goals_canceling: list[str] | None = Field(
+        description=(
+            "ROS 2, cancel-all: ids (hex UUIDs) the action server says it is canceling, from any client"
+        )
+    )
+    unknown_goal_id: bool = Field(
+        description="The goal id is not one of publish_action's running goals (a cancel was still sent)"
+    )
+    note: str | None = None
+
+
+SPEC = ToolSpec(
+    name="cancel_action",
+    title="Cancel action goals",
+    description=(
+        "Cancel a running action goal, or every goal of an action when no goal_id is given; the robot stops "
+        'what the goal was doing. Example: {"action_name": "/fibonacci"} cancels all its goals; '
+        '{"action_name": "/fibonacci", "goal_id": "<id from publish_action>"} cancels one. Works while '
+        "publish_action is still waiting for that goal (it then reports the goal as cancelled)."
+    ),
+    hints=ACTS_ON_ROBOT,
+    output=CancelAnswer,
+)
+
+
+async def run(
+    ctx: ToolContext,
+    action_name: Annotated[str, Field(description="Action server name, e.g. /fibonacci")],
+    goal_id: Annotated[
+        str | None,
+        Field(description="Id of one goal to cancel (publish_action reports it); omit to cancel every goal"),
+    ] = None,
+) -> ToolAnswer:
+    """Send the cancel and report what it reached."""
+    name = absolute_name(action_name, "action")
+    wanted = goal_id.strip() if goal_id is not None and goal_id.strip() else None
+    await _check_action(ctx, name)
+    report = await cancel_goals(ctx.client, name, wanted)
+    return _answer(report)
+
+
+async def _check_action(ctx: ToolContext, name: str) -> None:
+    try:
+        known = await ctx.graph.action_names()
+    except ServiceError:
+        return  # no usable rosapi action_servers: send the cancel anyway
+    if name not in known:
+        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
+        hint = f" Did you mean {' or '.join(close)}?" if close else ""
+        raise ToolFailure(
+            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} "
+            "Call list_actions to see the actions."
+        )
+
+
+def _answer(report: CancelReport) -> ToolAnswer:
+    data = CancelAnswer(
+        action=report.action,
+        goal_id=report.goal_id,
+        canceled_goals=list(report.canceled_ours),
+        goals_canceling=report.goals_canceling,
+        unknown_goal_id=report.unknown_goal_id,
+        note=report.note,
+    )
+    if report.goal_id is not None:
+        text = f"Sent a cancel for goal {report.goal_id} on {report.action}."
+        if report.unknown_goal_id:
+            text += (
+                " That id is not a goal publish_action is running now (it may have finished already, or "
+                "belong "
+                "to another client); the action server ignores a cancel for a goal it does not know."
+            )
+        else:
+            text += " publish_action will report the goal's final status."
+    else:
+        text = f"Sent a cancel for every goal of {report.action}."
+        if report.canceled_ours:
+            text += f" Goals started by publish_action: {', '.join(report.canceled_ours)}."
+        if report.goals_canceling is not None:
+            count = len(report.goals_canceling)
+            text += f" The action server is canceling {count} goal{'s' if count != 1 else ''}."
+        elif not report.canceled_ours:
+            text += " None of them was started by publish_action."
+    if report.note:
+        text += f" Note: {report.note}."
+    return ToolAnswer(text=text, data=data)

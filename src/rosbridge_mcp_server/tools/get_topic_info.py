@@ -1,0 +1,69 @@
+"""``get_topic_info``: a topic's type, publishers and subscribers."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Annotated
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.tools.base import (
+    READS_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolSpec,
+    absolute_name,
+)
+
+__all__ = ["SPEC", "TopicInfoAnswer", "run"]
+
+
+class TopicInfoAnswer(BaseModel):
+    """What the graph knows about one topic."""
+
+    topic: str
+    type: str
+    publishers: list[str] = Field(description="Nodes that publish the topic")
+    subscribers: list[str] = Field(description="Nodes that subscribe to the topic")
+
+
+SPEC = ToolSpec(
+    name="get_topic_info",
+    title="Topic details",
+    description=(
+        "Show a topic's message type and which nodes publish and subscribe to it. Read-only. "
+        'Example: {"topic": "/turtle1/pose"}. An unknown topic is an error; list_topics shows the topics.'
+    ),
+    hints=READS_ROBOT,
+    output=TopicInfoAnswer,
+)
+
+
+async def run(
+    ctx: ToolContext,
+    topic: Annotated[str, Field(description="Topic name, e.g. /turtle1/pose")],
+) -> ToolAnswer:
+    """Ask rosapi for the topic's type, publishers and subscribers."""
+    name = absolute_name(topic, "topic")
+    details = await ctx.graph.topic_details(name)
+    if not details.type and not details.publishers and not details.subscribers:
+        known = [entry.name for entry in await ctx.graph.topics()]
+        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
+        hint = f" Did you mean {' or '.join(close)}?" if close else ""
+        raise ToolFailure(
+            f"Topic {name} is not in the ROS graph (nothing publishes or subscribes to it).{hint} "
+            "Call list_topics to see the topics that exist."
+        )
+    answer = TopicInfoAnswer(
+        topic=name,
+        type=details.type,
+        publishers=list(details.publishers),
+        subscribers=list(details.subscribers),
+    )
+    text = (
+        f"{name}\ntype: {details.type or 'unknown'}\n"
+        f"publishers ({len(answer.publishers)}): {', '.join(answer.publishers) or 'none'}\n"
+        f"subscribers ({len(answer.subscribers)}): {', '.join(answer.subscribers) or 'none'}"
+    )
+    return ToolAnswer(text=text, data=answer)

@@ -1,0 +1,192 @@
+"""``publish_action``: send an action goal, stream its feedback as progress, wait for its result."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Annotated, Any
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.actions import GoalOutcome, run_goal
+from rosbridge_mcp_server.dialect import action_type_names, goal_status_name
+from rosbridge_mcp_server.errors import GoalTimeoutError, InvalidMessageError, ServiceError
+from rosbridge_mcp_server.tools.base import (
+    ACTS_ON_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolSpec,
+    absolute_name,
+    compact_json,
+    parse_json_object,
+)
+from rosbridge_mcp_server.typecheck import check_message, example_message
+
+__all__ = ["MAX_GOAL_TIMEOUT", "SPEC", "GoalAnswer", "run"]
+
+MAX_GOAL_TIMEOUT = 3600.0
+_EXAMPLE = '{"order": 5}'
+
+_CANCELLED_BY = {
+    "timeout": "it was cancelled because it did not finish within the timeout",
+    "request_cancelled": "it was cancelled because the tool call was cancelled",
+    "cancel_action": "it was cancelled by cancel_action",
+}
+
+
+class GoalAnswer(BaseModel):
+    """How a goal ended."""
+
+    goal_id: str = Field(description="The goal's id; pass it to cancel_action to cancel this goal")
+    action: str
+    action_type: str
+    status: str = Field(description="Final status in words: succeeded, canceled, aborted, ...")
+    status_code: int = Field(description="Final status number in the bridge's own numbering")
+    succeeded: bool
+    result: Any = Field(description="The action's result message")
+    feedback_count: int = Field(description="How many feedback messages arrived")
+    last_feedback: list[Any] = Field(description="The last few feedback messages, oldest first")
+    canceled_by: str | None = Field(description='"timeout", "request_cancelled", "cancel_action" or null')
+
+
+SPEC = ToolSpec(
+    name="publish_action",
+    title="Run an action goal",
+    description=(
+        "Send a goal to a ROS action server and wait until it finishes; this can move the robot (navigation, "
+        "rotation, arm motion). Example: action_name /fibonacci, action_type "
+        "example_interfaces/action/Fibonacci "
+        "(also written example_interfaces/Fibonacci or, on ROS 1, actionlib_tutorials/FibonacciAction), "
+        "goal "
+        f"{_EXAMPLE}, timeout 30. Feedback is sent as progress notifications while the goal runs. If it "
+        "does not "
+        "finish within timeout seconds, or the call is cancelled, the goal is cancelled on the robot. "
+        "The answer "
+        "has the goal id, the final status, the result and the last feedback. Use list_actions to find "
+        "actions."
+    ),
+    hints=ACTS_ON_ROBOT,
+    output=GoalAnswer,
+)
+
+
+async def run(
+    ctx: ToolContext,
+    action_name: Annotated[str, Field(description="Action server name, e.g. /fibonacci")],
+    action_type: Annotated[
+        str,
+        Field(
+            description=(
+                "Action type: pkg/action/Name, pkg/Name or pkg/NameAction, e.g. "
+                "example_interfaces/action/Fibonacci"
+            )
+        ),
+    ],
+    goal: Annotated[
+        dict[str, Any] | str,
+        Field(description=f"Goal fields as a JSON object, e.g. {_EXAMPLE}; {{}} for an empty goal"),
+    ] = "{}",
+    # The name is the tool's parameter name, kept from the project this one replaces.
+    timeout: Annotated[  # noqa: ASYNC109
+        float,
+        Field(
+            gt=0,
+            le=MAX_GOAL_TIMEOUT,
+            description=(
+                f"Seconds to wait for the result before cancelling the goal (more than 0, at most "
+                f"{MAX_GOAL_TIMEOUT:g}), e.g. 30"
+            ),
+        ),
+    ] = 30.0,
+) -> ToolAnswer:
+    """Check the goal, run it (feedback → progress), and describe how it ended."""
+    name = absolute_name(action_name, "action")
+    body = parse_json_object(goal, "goal", _EXAMPLE)
+    names = action_type_names(action_type)
+    info = await ctx.graph.ros_info()
+    wire_type = names.for_version(info.version)
+
+    await _check_action(ctx, name, action_type)
+    typedefs = await ctx.graph.action_goal_typedefs(action_type)
+    if typedefs:
+        goal_type = next(iter(typedefs))
+        try:
+            check_message(body, goal_type, typedefs, ros_version=info.version)
+        except InvalidMessageError as exc:
+            shape = compact_json(example_message(goal_type, typedefs, ros_version=info.version))
+            raise ToolFailure(f"{exc}. No goal was sent. A goal looks like {shape}.") from exc
+
+    async def on_feedback(index: int, feedback: Any) -> None:
+        await ctx.report_progress(float(index), None, f"feedback {index}: {compact_json(feedback, 300)}")
+
+    try:
+        outcome = await run_goal(
+            ctx.client, name, action_type, body, timeout=timeout, on_feedback=on_feedback
+        )
+    except GoalTimeoutError as exc:
+        raise ToolFailure(_timeout_text(exc, name, timeout, info.version)) from exc
+    return _answer(outcome, wire_type)
+
+
+async def _check_action(ctx: ToolContext, name: str, action_type: str) -> None:
+    """Fail fast on an action nobody serves, or on a type that is not the server's."""
+    try:
+        known = await ctx.graph.action_names()
+    except ServiceError:
+        return  # no usable rosapi action_servers: let the goal itself find out
+    if name not in known:
+        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
+        hint = f" Did you mean {' or '.join(close)}?" if close else ""
+        raise ToolFailure(
+            f"No action server {name} is running on the robot.{hint} Call list_actions to see the actions."
+        )
+    found = await ctx.graph.action_type(name)
+    if found is None:
+        return
+    expected = action_type_names(found)
+    given = action_type_names(action_type)
+    if (expected.package, expected.name) != (given.package, given.name):
+        raise ToolFailure(
+            f"Action {name} has type {found}, not {action_type}. Send a goal of type {found} instead."
+        )
+
+
+def _timeout_text(exc: GoalTimeoutError, name: str, timeout: float, version: int) -> str:
+    ending = (
+        f"it then ended as {goal_status_name(exc.status, version)}"
+        if exc.status is not None
+        else "no final result arrived after the cancel, so it may still be running"
+    )
+    feedback = f" Last feedback: {compact_json(exc.feedback, 300)}." if exc.feedback is not None else ""
+    return (
+        f"Goal {exc.goal_id} on {name} did not finish within {timeout:g} s, so it was cancelled on the "
+        "robot; "
+        f"{ending}.{feedback} Call publish_action again with a longer timeout if the goal needs more time."
+    )
+
+
+def _answer(outcome: GoalOutcome, wire_type: str) -> ToolAnswer:
+    last = list(outcome.last_feedback)
+    data = GoalAnswer(
+        goal_id=outcome.goal_id,
+        action=outcome.action,
+        action_type=wire_type,
+        status=outcome.status,
+        status_code=outcome.status_code,
+        succeeded=outcome.succeeded,
+        result=outcome.result,
+        feedback_count=outcome.feedback_count,
+        last_feedback=last,
+        canceled_by=outcome.canceled_by,
+    )
+    lines = [f"Goal {outcome.goal_id} on {outcome.action} ({wire_type}): {outcome.status}."]
+    if outcome.canceled_by is not None:
+        lines[0] = lines[0][:-1] + f"; {_CANCELLED_BY.get(outcome.canceled_by, outcome.canceled_by)}."
+    lines.append(f"Result: {compact_json(outcome.result)}")
+    if outcome.feedback_count:
+        lines.append(
+            f"Feedback: {outcome.feedback_count} messages; last {len(last)}: {compact_json(last, 400)}"
+        )
+    else:
+        lines.append("Feedback: none.")
+    return ToolAnswer(text="\n".join(lines), data=data)
