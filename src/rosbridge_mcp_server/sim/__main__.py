@@ -1,0 +1,133 @@
+"""``rosbridge-sim-robot`` / ``python -m rosbridge_mcp_server.sim``: serve the simulated robot standalone."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import signal
+import sys
+from typing import NoReturn
+
+from rosbridge_mcp_server.sim.robot import SimulatedRobot
+
+__all__ = ["build_parser", "main", "run"]
+
+PROG = "rosbridge-sim-robot"
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        """A bad flag is one line on stderr and exit code 2 (no usage dump)."""
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0: {text!r}")
+    return value
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"port out of range 0-65535: {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line of the simulated robot."""
+    parser = _Parser(
+        prog=PROG,
+        description="A simulated robot behind a rosbridge v2 WebSocket server (no ROS needed).",
+    )
+    parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    parser.add_argument("--port", type=_port, default=9090, help="port to listen on (default 9090; 0 = any)")
+    parser.add_argument(
+        "--dialect",
+        choices=["ros2", "ros1"],
+        default="ros2",
+        help="ros2 (Jazzy-like, default) or ros1 (Noetic)",
+    )
+    parser.add_argument(
+        "--in-order",
+        action="store_true",
+        help="ros2 only: Humble's defaults, each connection's operations strictly in order",
+    )
+    parser.add_argument("--fast-topic", action="store_true", help="publish /fast_counter at 1 kHz")
+    parser.add_argument(
+        "--action-step", type=_positive_float, default=0.2, help="seconds per /fibonacci step (default 0.2)"
+    )
+    parser.add_argument(
+        "--slow-service-seconds", type=float, default=3.0, help="how long /slow_service takes (default 3)"
+    )
+    parser.add_argument(
+        "--camera-size", default="160x120", help="camera frame WIDTHxHEIGHT (default 160x120)"
+    )
+    parser.add_argument(
+        "--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"], help="stderr log level"
+    )
+    return parser
+
+
+async def _serve(robot: SimulatedRobot) -> None:
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, stop.set)
+    await robot.start()
+    try:
+        await stop.wait()
+    finally:
+        await robot.stop()
+
+
+def run(argv: list[str] | None = None) -> int:
+    """Parse ``argv``, serve until Ctrl-C / SIGTERM; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.in_order and args.dialect != "ros2":
+        parser.error("--in-order models Humble's rosbridge and needs --dialect ros2")
+    try:
+        width_text, height_text = args.camera_size.lower().split("x")
+        width, height = int(width_text), int(height_text)
+        if width <= 0 or height <= 0:
+            raise ValueError
+    except ValueError:
+        parser.error(f"--camera-size must look like 160x120, not {args.camera_size!r}")
+    logging.basicConfig(
+        level=args.log_level, stream=sys.stderr, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
+    robot = SimulatedRobot(
+        dialect=args.dialect,
+        in_order=args.in_order,
+        host=args.host,
+        port=args.port,
+        fast_topic=args.fast_topic,
+        action_step=args.action_step,
+        slow_service_seconds=args.slow_service_seconds,
+        camera_width=width,
+        camera_height=height,
+    )
+    try:
+        asyncio.run(_serve(robot))
+    except OSError as exc:
+        print(f"{PROG}: cannot serve on {args.host}:{args.port}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def main() -> None:
+    """Console-script entry point."""
+    raise SystemExit(run())
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,478 @@
+"""The ``/fibonacci`` action server: ROS 2 (``example_interfaces/action/Fibonacci``) and ROS 1 actionlib.
+
+Both follow the example servers: the sequence starts ``[0, 1]``; each step appends the next number,
+publishes one feedback and waits ``action_step`` seconds; the result is the whole sequence. A cancel ends
+the goal at its next step with the partial sequence (ROS 2 CANCELED, ROS 1 PREEMPTED), as the rclcpp
+minimal action server does.
+
+Goals we refuse (our documented choice; the example servers differ on this): ``order < 0`` is rejected,
+and so is ``order > 9000`` (the rclcpp example's own limit). A goal whose next number no longer fits an
+``int32`` is aborted with the sequence so far (that happens from ``order = 47`` on).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import base64
+import contextlib
+import itertools
+import logging
+import os
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.sim.graph import ServiceEntry
+from rosbridge_mcp_server.sim.world import GoalRecord
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.sim.bridge import Bridge
+
+__all__ = [
+    "FIBONACCI_NODE",
+    "ROS1_STATUS",
+    "ROS2_STATUS",
+    "ActionlibFibonacciServer",
+    "FibonacciServer",
+    "GoalHandle",
+]
+
+log = logging.getLogger("rosbridge_mcp_server.sim")
+
+FIBONACCI_NODE = "/fibonacci_server"
+INT32_MAX = 2**31 - 1
+MAX_ORDER = 9000
+
+#: ``action_msgs/msg/GoalStatus``
+ROS2_STATUS = {
+    "UNKNOWN": 0,
+    "ACCEPTED": 1,
+    "EXECUTING": 2,
+    "CANCELING": 3,
+    "SUCCEEDED": 4,
+    "CANCELED": 5,
+    "ABORTED": 6,
+}
+#: ``actionlib_msgs/GoalStatus`` — the numbers differ from ROS 2.
+ROS1_STATUS = {
+    "PENDING": 0,
+    "ACTIVE": 1,
+    "PREEMPTED": 2,
+    "SUCCEEDED": 3,
+    "ABORTED": 4,
+    "REJECTED": 5,
+    "PREEMPTING": 6,
+    "RECALLING": 7,
+    "RECALLED": 8,
+    "LOST": 9,
+}
+#: How many finished goals stay in the status list.
+KEEP_FINISHED = 20
+
+
+def _order_ok(order: int) -> bool:
+    return 0 <= order <= MAX_ORDER
+
+
+def _uuid_bytes(value: Any) -> bytes:
+    """A UUID field in whatever form the converter gives it (bytes, list of ints, base64 text)."""
+    if isinstance(value, str):
+        return base64.b64decode(value)
+    return bytes(value)
+
+
+def _stamp_seconds(stamp: Any) -> float:
+    if not isinstance(stamp, dict):
+        return 0.0
+    sec = stamp.get("sec", stamp.get("secs", 0)) or 0
+    nsec = stamp.get("nanosec", stamp.get("nsecs", 0)) or 0
+    return float(sec) + float(nsec) / 1e9
+
+
+def _stamp(seconds: float, dialect: str) -> dict[str, int]:
+    sec = int(seconds)
+    nsec = round((seconds - sec) * 1e9)
+    return {"sec": sec, "nanosec": nsec} if dialect == "ros2" else {"secs": sec, "nsecs": nsec}
+
+
+class _Run:
+    """The execution loop shared by both dialects."""
+
+    def __init__(self, record: GoalRecord, step: float, notify: Callable[[], None]) -> None:
+        self.record = record
+        self.step = step
+        self.notify = notify
+        self.cancel = asyncio.Event()
+
+    async def execute(self, on_feedback: Callable[[list[int]], None]) -> str:
+        """Run to the end; returns ``succeeded``, ``canceled`` or ``aborted``."""
+        sequence = [0, 1]
+        self.record.sequence = list(sequence)
+        for i in range(1, self.record.order):
+            if self.cancel.is_set():
+                return "canceled"
+            following = sequence[i] + sequence[i - 1]
+            if following > INT32_MAX:
+                return "aborted"
+            sequence.append(following)
+            self.record.sequence = list(sequence)
+            self.record.feedback_count += 1
+            on_feedback(list(sequence))
+            self.notify()
+            # Wakes early on a cancel so it takes effect at the next step without waiting it out.
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self.cancel.wait(), self.step)
+        return "succeeded"
+
+
+class GoalHandle:
+    """A ROS 2 goal of the Fibonacci server."""
+
+    def __init__(self, server: FibonacciServer, uuid: bytes, record: GoalRecord) -> None:
+        self.server = server
+        self.uuid = uuid
+        self.record = record
+        self.run = _Run(record, server.step, server.bridge.world.notify)
+        self.done: asyncio.Future[tuple[int, dict[str, Any]]] = asyncio.get_running_loop().create_future()
+
+    def request_cancel(self) -> bool:
+        """Ask the goal to stop (accepted while it runs); returns whether it was accepted."""
+        if self.record.finished:
+            return False
+        if not self.record.cancel_requested:
+            self.record.cancel_requested = True
+            self.record.status = ROS2_STATUS["CANCELING"]
+            self.run.cancel.set()
+            self.server.publish_status()
+        return True
+
+    async def outcome(self) -> tuple[int, dict[str, Any]]:
+        """Terminal status and the result (JSON form)."""
+        return await asyncio.shield(self.done)
+
+
+class FibonacciServer:
+    """ROS 2 action server ``/fibonacci`` with its hidden topics and services."""
+
+    def __init__(self, bridge: Bridge, name: str, action_type: str, step: float) -> None:
+        self.bridge = bridge
+        self.name = name
+        self.type = action_type
+        self.step = step
+        self.goals: dict[bytes, GoalHandle] = {}
+        self._tasks: set[asyncio.Task[None]] = set()
+        pkg, _, leaf = action_type.split("/")
+        self.status_topic = f"{name}/_action/status"
+        self.feedback_topic = f"{name}/_action/feedback"
+        self.feedback_type = f"{pkg}/action/{leaf}_FeedbackMessage"
+        graph = bridge.graph
+        graph.add_publisher(FIBONACCI_NODE, self.status_topic, "action_msgs/msg/GoalStatusArray")
+        graph.add_publisher(FIBONACCI_NODE, self.feedback_topic, self.feedback_type)
+        services = [
+            ("send_goal", f"{pkg}/action/{leaf}_SendGoal", self._send_goal_service),
+            ("get_result", f"{pkg}/action/{leaf}_GetResult", self._get_result_service),
+            ("cancel_goal", "action_msgs/srv/CancelGoal", self._cancel_goal_service),
+        ]
+        for leaf_name, service_type, handler in services:
+            graph.add_service(
+                ServiceEntry(f"{name}/_action/{leaf_name}", service_type, FIBONACCI_NODE, handler)
+            )
+        graph.actions[name] = self
+
+    def submit(
+        self,
+        goal: dict[str, Any],
+        *,
+        key: Any,
+        on_feedback: Callable[[dict[str, Any]], None] | None,
+        uuid: bytes | None = None,
+    ) -> GoalHandle | None:
+        """Accept (and start) or reject a goal; ``None`` means rejected."""
+        order = int(goal.get("order", 0))
+        uuid = uuid or os.urandom(16)
+        goal_key = str(key) if key is not None else uuid.hex()
+        if not _order_ok(order):
+            log.info("%s: goal %s with order %d rejected", self.name, goal_key, order)
+            return None
+        record = GoalRecord(goal_key, order, ROS2_STATUS["ACCEPTED"])
+        world = self.bridge.world
+        world.goals[goal_key] = record
+        handle = GoalHandle(self, uuid, record)
+        self.goals[uuid] = handle
+        self.publish_status()
+        world.notify()
+        task = asyncio.create_task(self._execute(handle, on_feedback))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+        return handle
+
+    async def _execute(
+        self, handle: GoalHandle, on_feedback: Callable[[dict[str, Any]], None] | None
+    ) -> None:
+        record = handle.record
+        if not record.cancel_requested:
+            record.status = ROS2_STATUS["EXECUTING"]
+            self.publish_status()
+
+        def feedback(sequence: list[int]) -> None:
+            if on_feedback is not None:
+                on_feedback({"sequence": sequence})
+            if self.bridge.has_subscribers(self.feedback_topic):
+                self._publish_quietly(
+                    self.feedback_topic,
+                    self.feedback_type,
+                    {"goal_id": {"uuid": list(handle.uuid)}, "feedback": {"sequence": sequence}},
+                )
+
+        try:
+            outcome = await handle.run.execute(feedback)
+        except asyncio.CancelledError:
+            outcome = "aborted"
+            raise
+        finally:
+            status = ROS2_STATUS[outcome.upper()]
+            record.status = status
+            record.finished = True
+            if not handle.done.done():
+                handle.done.set_result((status, {"sequence": list(record.sequence)}))
+            self._forget_old()
+            self.publish_status()
+            self.bridge.world.notify()
+
+    def _forget_old(self) -> None:
+        finished = [u for u, h in self.goals.items() if h.record.finished]
+        for uuid in finished[:-KEEP_FINISHED]:
+            del self.goals[uuid]
+
+    def _publish_quietly(self, topic: str, msg_type: str, partial: dict[str, Any]) -> None:
+        try:
+            self.bridge.publish_json(topic, msg_type, partial)
+        except Exception as exc:
+            log.debug("cannot publish %s: %s", topic, exc)
+
+    def publish_status(self) -> None:
+        """``GoalStatusArray`` on the hidden status topic, sent on every change of a goal's state."""
+        if not self.bridge.has_subscribers(self.status_topic):
+            return
+        status_list = [
+            {
+                "goal_info": {
+                    "goal_id": {"uuid": list(h.uuid)},
+                    "stamp": _stamp(h.record.accepted_at, "ros2"),
+                },
+                "status": h.record.status,
+            }
+            for h in self.goals.values()
+        ]
+        self._publish_quietly(
+            self.status_topic, "action_msgs/msg/GoalStatusArray", {"status_list": status_list}
+        )
+
+    async def _send_goal_service(self, request: dict[str, Any]) -> dict[str, Any]:
+        uuid = _uuid_bytes(request["goal_id"]["uuid"])
+        handle = self.submit(request["goal"], key=None, on_feedback=None, uuid=uuid)
+        if handle is None:
+            return {"accepted": False}
+        return {"accepted": True, "stamp": _stamp(handle.record.accepted_at, "ros2")}
+
+    async def _get_result_service(self, request: dict[str, Any]) -> dict[str, Any]:
+        handle = self.goals.get(_uuid_bytes(request["goal_id"]["uuid"]))
+        if handle is None:
+            return {"status": ROS2_STATUS["UNKNOWN"]}
+        status, result = await handle.outcome()
+        return {"status": status, "result": result}
+
+    async def _cancel_goal_service(self, request: dict[str, Any]) -> dict[str, Any]:
+        """``action_msgs/srv/CancelGoal``: zero id and stamp cancel all; a stamp, those accepted before."""
+        info = request.get("goal_info", {})
+        uuid = _uuid_bytes(info.get("goal_id", {}).get("uuid", bytes(16)))
+        stamp = _stamp_seconds(info.get("stamp"))
+        running = [h for h in self.goals.values() if not h.record.finished]
+        if uuid == bytes(16):
+            chosen = running if stamp == 0 else [h for h in running if h.record.accepted_at <= stamp]
+        else:
+            target = self.goals.get(uuid)
+            if target is None:
+                return {"return_code": 2}  # ERROR_UNKNOWN_GOAL_ID
+            if target.record.finished:
+                return {"return_code": 3}  # ERROR_GOAL_TERMINATED
+            chosen = [target] + (
+                [h for h in running if h.record.accepted_at <= stamp and h is not target] if stamp else []
+            )
+        canceling = [h for h in chosen if h.request_cancel()]
+        return {
+            "return_code": 0,
+            "goals_canceling": [
+                {"goal_id": {"uuid": list(h.uuid)}, "stamp": _stamp(h.record.accepted_at, "ros2")}
+                for h in canceling
+            ],
+        }
+
+    async def close(self) -> None:
+        """Stop every goal (the robot is shutting down)."""
+        for task in list(self._tasks):
+            task.cancel()
+
+
+class ActionlibFibonacciServer:
+    """ROS 1 actionlib ``SimpleActionServer`` for ``/fibonacci``, over its five topics.
+
+    Like ``SimpleActionServer``, one goal runs at a time: a new goal preempts the running one, and a goal
+    still waiting is recalled when another arrives.
+    """
+
+    STATUS_PERIOD = 0.2  # actionlib's status_frequency of 5 Hz
+    STATUS_LIST_TIMEOUT = 5.0  # finished goals stay in the status list this long
+
+    def __init__(self, bridge: Bridge, name: str, package: str, step: float) -> None:
+        self.bridge = bridge
+        self.name = name
+        self.step = step
+        self.package = package
+        self.goal_type = f"{package}/FibonacciActionGoal"
+        self.feedback_type = f"{package}/FibonacciActionFeedback"
+        self.result_type = f"{package}/FibonacciActionResult"
+        self._ids = itertools.count(1)
+        self._seq = itertools.count(1)
+        self._tracked: dict[str, tuple[GoalRecord, dict[str, Any], float]] = {}
+        self._runs: dict[str, _Run] = {}
+        self._current: str | None = None
+        self._next: str | None = None
+        self._wakeup = asyncio.Event()
+        graph = bridge.graph
+        graph.add_subscriber(FIBONACCI_NODE, f"{name}/goal", self.goal_type, self._on_goal)
+        graph.add_subscriber(FIBONACCI_NODE, f"{name}/cancel", "actionlib_msgs/GoalID", self._on_cancel)
+        graph.add_publisher(FIBONACCI_NODE, f"{name}/status", "actionlib_msgs/GoalStatusArray")
+        graph.add_publisher(FIBONACCI_NODE, f"{name}/feedback", self.feedback_type)
+        graph.add_publisher(FIBONACCI_NODE, f"{name}/result", self.result_type)
+
+    def _header(self) -> dict[str, Any]:
+        return {"seq": next(self._seq), "stamp": _stamp(time.time(), "ros1"), "frame_id": ""}
+
+    def _status(self, goal_id: str) -> dict[str, Any]:
+        record, goal_id_msg, _ = self._tracked[goal_id]
+        return {"goal_id": goal_id_msg, "status": record.status, "text": ""}
+
+    def _on_goal(self, msg: dict[str, Any], _source: int) -> None:
+        goal_id_msg = dict(msg.get("goal_id", {}))
+        goal_id = goal_id_msg.get("id") or f"{FIBONACCI_NODE}-{next(self._ids)}-{time.time():.3f}"
+        stamp = _stamp_seconds(goal_id_msg.get("stamp"))
+        if stamp == 0:
+            stamp = time.time()  # actionlib stamps a goal sent with a zero stamp on arrival
+        goal_id_msg = {"id": goal_id, "stamp": _stamp(stamp, "ros1")}
+        order = int(msg.get("goal", {}).get("order", 0))
+        record = GoalRecord(goal_id, order, ROS1_STATUS["PENDING"], accepted_at=stamp)
+        self._tracked[goal_id] = (record, goal_id_msg, 0.0)
+        self.bridge.world.goals[goal_id] = record
+        if not _order_ok(order):
+            self._finish(goal_id, "REJECTED")
+            return
+        if self._next is not None:
+            # SimpleActionServer: a newer goal replaces the one still waiting.
+            self._finish(self._next, "RECALLED")
+        self._next = goal_id
+        if self._current is not None:
+            self._runs[self._current].record.cancel_requested = True
+            self._runs[self._current].cancel.set()
+        self._wakeup.set()
+        self.publish_status()
+
+    def _on_cancel(self, msg: dict[str, Any], _source: int) -> None:
+        cancel_id = msg.get("id", "")
+        stamp = _stamp_seconds(msg.get("stamp"))
+        for goal_id, (record, _, _) in list(self._tracked.items()):
+            if record.finished:
+                continue
+            hit = (
+                (not cancel_id and stamp == 0)
+                or goal_id == cancel_id
+                or (stamp != 0 and record.accepted_at <= stamp)
+            )
+            if not hit:
+                continue
+            record.cancel_requested = True
+            if goal_id == self._next:
+                self._next = None
+                self._finish(goal_id, "RECALLED")
+            elif goal_id == self._current:
+                record.status = ROS1_STATUS["PREEMPTING"]
+                self._runs[goal_id].cancel.set()
+        self.publish_status()
+        self.bridge.world.notify()
+
+    def _finish(self, goal_id: str, state: str) -> None:
+        record, goal_id_msg, _ = self._tracked[goal_id]
+        record.status = ROS1_STATUS[state]
+        record.finished = True
+        self._tracked[goal_id] = (record, goal_id_msg, time.monotonic())
+        self._publish(
+            f"{self.name}/result",
+            self.result_type,
+            {
+                "header": self._header(),
+                "status": self._status(goal_id),
+                "result": {"sequence": record.sequence},
+            },
+        )
+        self.publish_status()
+        self.bridge.world.notify()
+
+    def _publish(self, topic: str, msg_type: str, partial: dict[str, Any]) -> None:
+        try:
+            self.bridge.publish_json(topic, msg_type, partial)
+        except Exception as exc:
+            log.debug("cannot publish %s: %s", topic, exc)
+
+    def publish_status(self) -> None:
+        """The status list: goals running or waiting, and goals finished less than 5 s ago."""
+        now = time.monotonic()
+        for goal_id, (record, _, finished_at) in list(self._tracked.items()):
+            if record.finished and now - finished_at > self.STATUS_LIST_TIMEOUT:
+                del self._tracked[goal_id]
+        status_list = [self._status(goal_id) for goal_id in self._tracked]
+        self._publish(
+            f"{self.name}/status",
+            "actionlib_msgs/GoalStatusArray",
+            {"header": self._header(), "status_list": status_list},
+        )
+
+    async def run(self) -> None:
+        """Execute goals one at a time and publish the status list at 5 Hz."""
+        status_task = asyncio.create_task(self._status_loop())
+        try:
+            while True:
+                while self._next is None:
+                    self._wakeup.clear()
+                    await self._wakeup.wait()
+                goal_id, self._next = self._next, None
+                self._current = goal_id
+                record = self._tracked[goal_id][0]
+                run = self._runs[goal_id] = _Run(record, self.step, self.bridge.world.notify)
+                record.status = ROS1_STATUS["ACTIVE"]
+                self.publish_status()
+
+                def feedback(sequence: list[int], goal_id: str = goal_id) -> None:
+                    self._publish(
+                        f"{self.name}/feedback",
+                        self.feedback_type,
+                        {
+                            "header": self._header(),
+                            "status": self._status(goal_id),
+                            "feedback": {"sequence": sequence},
+                        },
+                    )
+
+                outcome = await run.execute(feedback)
+                self._current = None
+                del self._runs[goal_id]
+                self._finish(
+                    goal_id,
+                    {"succeeded": "SUCCEEDED", "canceled": "PREEMPTED", "aborted": "ABORTED"}[outcome],
+                )
+        finally:
+            status_task.cancel()
+
+    async def _status_loop(self) -> None:
+        while True:
+            self.publish_status()
+            await asyncio.sleep(self.STATUS_PERIOD)

@@ -1,0 +1,703 @@
+"""The rosbridge side of the simulated robot: every op a client may send, handled as rosbridge_suite does.
+
+Each handler follows the capability of the same name in rosbridge_suite (``rosbridge_library/capabilities``):
+the same field checks, the same replies, and the same silences. Errors that the real server only logs are
+logged here too (to stderr, logger ``rosbridge_mcp_server.sim``) and nothing is sent back; the only failures
+a client ever sees on the wire are ``service_response``/``action_result`` with ``result: false``
+(protocol file §3).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import time
+from collections import OrderedDict
+from collections.abc import Awaitable, Callable, Coroutine
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from websockets.asyncio.server import ServerConnection
+from websockets.exceptions import ConnectionClosed
+
+from rosbridge_mcp_server.sim.actions import GoalHandle
+from rosbridge_mcp_server.sim.connection import (
+    Connection,
+    OutgoingMessage,
+    SubscriptionOptions,
+    TopicSubscription,
+)
+from rosbridge_mcp_server.sim.graph import ROSBRIDGE_NODE, Graph, ServiceEntry, ServiceFailure, resolve_name
+from rosbridge_mcp_server.sim.interfaces import ConversionError, InterfaceError, InterfaceRegistry
+from rosbridge_mcp_server.sim.world import PublishedMessage, World
+
+__all__ = ["Bridge", "BridgeConfig", "CallFailed", "OpError"]
+
+log = logging.getLogger("rosbridge_mcp_server.sim")
+
+Dialect = Literal["ros1", "ros2"]
+
+#: rosbridge keeps incomplete fragment lists this long (``fragment_timeout``, 600 s).
+FRAGMENT_TIMEOUT = 600.0
+#: Our own bounds on incoming fragments, so that one client cannot grow the server without limit.
+MAX_FRAGMENT_BUFFERS = 256
+MAX_FRAGMENT_BYTES = 64 * 1024 * 1024
+#: rosbridge (ROS 2, 2.0.5+/2.5.0+) waits this long for an action server before giving up.
+ACTION_SERVER_WAIT = 1.0
+
+_FieldSpec = tuple[bool, str, tuple[type, ...]]
+
+
+class OpError(Exception):
+    """An op the real server rejects with a log line only (text as the server logs it)."""
+
+
+class CallFailed(Exception):
+    """A service call that ends in ``service_response`` with ``result: false``; ``str()`` is the wire text."""
+
+
+@dataclass(frozen=True)
+class BridgeConfig:
+    """How this rosbridge behaves."""
+
+    dialect: Dialect
+    #: Humble 2.0.x defaults: every op of a connection in order, service calls and goals inline.
+    in_order: bool
+    #: Initial connection fragment size: ROS 2 ``max_message_size``; ROS 1 none.
+    max_message_size: int | None
+    #: Service timeout when the request has no ``timeout`` field; 0 = wait forever.
+    default_service_timeout: float
+    distro: str
+
+
+@dataclass
+class _FragmentBuffer:
+    total: int
+    parts: list[str] = field(default_factory=list)
+    size: int = 0
+    started: float = field(default_factory=time.monotonic)
+
+
+def _check(msg: dict[str, Any], fields: list[_FieldSpec]) -> None:
+    """rosbridge's ``basic_type_check``: mandatory fields present, present fields of the right JSON type."""
+    for mandatory, name, types in fields:
+        if name not in msg:
+            if mandatory:
+                raise OpError(f"Expected a {name} field but none was found.")
+            continue
+        if not isinstance(msg[name], types):
+            names = tuple(t.__name__ for t in types)
+            raise OpError(f"Expected field {name} to be one of {names}. Invalid value: {msg[name]}")
+
+
+def _extract_id(name: str, cid: Any) -> tuple[str, Any]:
+    """Legacy ids: ``/rosapi/topics#33`` means id ``33`` when no ``id`` is given."""
+    if "#" in name:
+        trimmed = name[: name.find("#")]
+        return trimmed, cid if cid is not None else name[name.find("#") + 1 :]
+    return name, cid
+
+
+class Bridge:
+    """The rosbridge server process: connections, ops, and the routing of topic messages."""
+
+    def __init__(self, config: BridgeConfig, registry: InterfaceRegistry, world: World, graph: Graph) -> None:
+        self.config = config
+        self.registry = registry
+        self.world = world
+        self.graph = graph
+        self.connections: dict[int, Connection] = {}
+        self.connection_count = 0
+        #: rosbridge's ``client_handler_list``: a class attribute, so shared by every connection (§7.2).
+        self.goal_table: dict[Any, GoalHandle] = {}
+        self._next_cid = 0
+        self._fragments: OrderedDict[Any, _FragmentBuffer] = OrderedDict()
+        self._fragment_bytes = 0
+        self._service_requests: dict[str, tuple[asyncio.Future[dict[str, Any]], str, str]] = {}
+        self._request_counter = 0
+        self._tasks: set[asyncio.Task[Any]] = set()
+        self._fragment_id: Any = "0" if config.dialect == "ros2" else 0
+        self._ops: dict[str, Callable[[Connection, dict[str, Any]], Awaitable[None] | None]] = {
+            "fragment": self._op_fragment,
+            "advertise": self._op_advertise,
+            "unadvertise": self._op_unadvertise,
+            "publish": self._op_publish,
+            "subscribe": self._op_subscribe,
+            "unsubscribe": self._op_unsubscribe,
+            "call_service": self._op_call_service,
+            "advertise_service": self._op_advertise_service,
+            "unadvertise_service": self._op_unadvertise_service,
+            "service_response": self._op_service_response,
+        }
+        if config.dialect == "ros2":
+            self._ops.update(
+                {
+                    "send_action_goal": self._op_send_action_goal,
+                    "cancel_action_goal": self._op_cancel_action_goal,
+                    "advertise_action": self._op_unsupported,
+                    "unadvertise_action": self._op_unsupported,
+                    "action_feedback": self._op_unsupported,
+                    "action_result": self._op_unsupported,
+                }
+            )
+
+    # --- conversions --------------------------------------------------------------------------------------
+
+    def json_form(self, msg_type: str, partial: dict[str, Any]) -> dict[str, Any]:
+        """The wire form of a message given as (partial) JSON: defaults filled in, the dialect's spellings."""
+        return self.registry.to_json(msg_type, self.registry.from_json(msg_type, partial))
+
+    def _args_dict(self, msg_type: str, args: Any) -> Any:
+        """``args`` may be a list of values in field order (rosbridge accepts both)."""
+        if isinstance(args, list):
+            names = self.registry.message_typedefs(msg_type)[0]["fieldnames"]
+            return dict(zip(names, args, strict=False))
+        return args
+
+    # --- topic traffic ------------------------------------------------------------------------------------
+
+    def publish(self, topic: str, msg_type: str, msg: dict[str, Any], *, source: int = 0) -> None:
+        """Route a converted message to the world's subscribers and every subscribed client."""
+        for callback in list(self.graph.local_subscribers.get(topic, ())):
+            try:
+                callback(msg, source)
+            except Exception:
+                log.exception("subscriber of %s failed", topic)
+        if topic in self.graph.latched:
+            self.graph.latched[topic] = msg
+        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json)
+        for conn in list(self.connections.values()):
+            if topic in conn.subscriptions:
+                try:
+                    conn.deliver(outgoing, self._fragment_id)
+                except (ConversionError, InterfaceError) as exc:
+                    log.error("cannot send %s on %s: %s", msg_type, topic, exc)
+                    return
+
+    def publish_json(self, topic: str, msg_type: str, partial: dict[str, Any]) -> None:
+        """Publish a world message given in JSON form (missing fields take defaults)."""
+        self.publish(topic, msg_type, self.registry.from_json(msg_type, partial))
+
+    def has_subscribers(self, topic: str) -> bool:
+        """Whether any client or world node listens to ``topic`` (lets expensive publishers idle)."""
+        return bool(self.graph.local_subscribers.get(topic)) or any(
+            topic in c.subscriptions for c in self.connections.values()
+        )
+
+    # --- services (used by the op and by the world) -------------------------------------------------------
+
+    async def call(self, name: str, args: Any, timeout_seconds: float) -> dict[str, Any]:
+        """Call a service like rosbridge's ``ServiceCaller``; returns the response's wire form.
+
+        ``timeout_seconds`` ≤ 0 waits forever. Raises :class:`CallFailed` with the real server's text.
+        """
+        entry = self.graph.services.get(resolve_name(name))
+        if entry is None:
+            raise CallFailed(f"Service {name} does not exist")
+        try:
+            request_type, response_type = self.registry.service_parts(entry.type)
+            request = self.registry.from_json(request_type, self._args_dict(request_type, args))
+        except (InterfaceError, ConversionError) as exc:
+            raise CallFailed(str(exc)) from exc
+        self.world.count_call(entry.name)
+        try:
+            async with asyncio.timeout(timeout_seconds if timeout_seconds > 0 else None):
+                try:
+                    partial = await entry.handler(request)
+                except ServiceFailure as exc:
+                    if self.config.dialect == "ros1":
+                        raise CallFailed(
+                            f"service [{entry.name}] responded with an error: error processing request: {exc}"
+                        ) from exc
+                    # A ROS 2 service has no error channel: the caller just never hears back.
+                    log.error("service %s failed: %s (the caller gets no response)", entry.name, exc)
+                    await asyncio.Event().wait()
+                    raise AssertionError("unreachable") from exc
+        except TimeoutError as exc:
+            raise CallFailed("Timeout exceeded while waiting for service response") from exc
+        try:
+            return self.json_form(response_type, partial)
+        except ConversionError as exc:
+            log.error("service %s returned a bad response: %s", entry.name, exc)
+            raise CallFailed(str(exc)) from exc
+
+    def _forwarding_handler(
+        self, owner: int, service: str, service_type: str
+    ) -> Callable[[dict[str, Any]], Coroutine[Any, Any, dict[str, Any]]]:
+        """A service hosted by a client: forward each call as a server-initiated ``call_service``."""
+
+        async def forward(request: dict[str, Any]) -> dict[str, Any]:
+            request_type, response_type = self.registry.service_parts(service_type)
+            self._request_counter += 1
+            request_id = f"service_request:{service}:{self._request_counter}"
+            future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
+            self._service_requests[request_id] = (future, response_type, service)
+            try:
+                conn = self.connections.get(owner)
+                if conn is None:
+                    # rosbridge keeps advertised services after their client left; nobody will ever answer.
+                    log.warning("service %s: its client has gone; the call will never be answered", service)
+                else:
+                    args = self.registry.to_json(request_type, request)
+                    conn.send({"op": "call_service", "id": request_id, "service": service, "args": args})
+                return await future
+            finally:
+                self._service_requests.pop(request_id, None)
+
+        return forward
+
+    # --- connections --------------------------------------------------------------------------------------
+
+    async def serve_connection(self, ws: ServerConnection) -> None:
+        """Run one client connection until it closes, then clean up after it like rosbridge does."""
+        self._next_cid += 1
+        conn = Connection(ws, self._next_cid, fragment_size=self.config.max_message_size)
+        self.connections[conn.id] = conn
+        self.connection_count = len(self.connections)
+        self.world.notify()
+        log.info("client %d connected from %s", conn.id, ws.remote_address)
+        writer = asyncio.create_task(conn.writer())
+        try:
+            async for raw in ws:
+                await self.incoming(conn, raw)
+        except ConnectionClosed:
+            pass
+        finally:
+            conn.closed = True
+            writer.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await writer
+            self._cleanup(conn)
+            del self.connections[conn.id]
+            self.connection_count = len(self.connections)
+            self.world.notify()
+            log.info("client %d disconnected", conn.id)
+
+    def _cleanup(self, conn: Connection) -> None:
+        """What rosbridge's ``finish()`` does: drop the client's subscriptions and advertisements.
+
+        Advertised services are kept (rosbridge 0.11 and 2.x do not remove them on disconnect), and goals
+        the client sent keep running.
+        """
+        for topic in list(conn.subscriptions):
+            conn.drop_subscription(topic)
+            self.graph.remove_subscriber(ROSBRIDGE_NODE, topic)
+        for topic in list(conn.advertisements):
+            del conn.advertisements[topic]
+            self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
+
+    async def close_all(self) -> None:
+        """Close every client socket and stop the work running for them."""
+        for conn in list(self.connections.values()):
+            await conn.ws.close()
+        for task in list(self._tasks):
+            task.cancel()
+        for future, _, _ in list(self._service_requests.values()):
+            future.cancel()
+
+    async def incoming(self, conn: Connection, raw: str | bytes) -> None:
+        """One frame from a client."""
+        if isinstance(raw, bytes):
+            try:
+                raw = raw.decode("utf-8")
+            except UnicodeDecodeError:
+                log.error("client %d: a binary frame that is not UTF-8 text; ignored", conn.id)
+                return
+        try:
+            msg = json.loads(raw)
+        except ValueError:
+            # The real server keeps unparsable text in a buffer hoping for the rest; we log and drop it.
+            log.error("client %d: frame is not JSON; ignored: %.200s", conn.id, raw)
+            return
+        if not isinstance(msg, dict):
+            # Kills the connection's incoming thread on the real server (§1); we only drop the frame.
+            log.error("client %d: frame is not a JSON object; ignored: %.200s", conn.id, raw)
+            return
+        await self.dispatch(conn, msg)
+
+    async def dispatch(self, conn: Connection, msg: dict[str, Any]) -> None:
+        """Run one op (in order, or detached for calls and goals unless the bridge is in-order)."""
+        mid = msg.get("id")
+        if "fragment_size" in msg and not self._set_fragment_size(conn, msg["fragment_size"]):
+            return
+        op = msg.get("op")
+        if op is None:
+            log.error(
+                "client %d: Received a message without an op.  All messages require 'op' field with value "
+                "one of: %s.  Original message was: %.200s",
+                conn.id,
+                list(self._ops),
+                json.dumps(msg),
+            )
+            return
+        handler = self._ops.get(op) if isinstance(op, str) else None
+        if handler is None:
+            log.error(
+                "client %d: Unknown operation: %s.  Allowed operations: %s", conn.id, op, list(self._ops)
+            )
+            return
+        detached = op in ("call_service", "send_action_goal") and not self.config.in_order
+        try:
+            result = handler(conn, msg)
+            if result is None:
+                return
+            if detached:
+                self._spawn(self._guarded(conn, op, mid, result))
+            else:
+                await result
+        except OpError as exc:
+            log.error("client %d: %s: %s (id %s)", conn.id, op, exc, mid)
+
+    async def _guarded(self, conn: Connection, op: str, mid: Any, work: Awaitable[None]) -> None:
+        try:
+            await work
+        except OpError as exc:
+            log.error("client %d: %s: %s (id %s)", conn.id, op, exc, mid)
+
+    def _spawn(self, coro: Coroutine[Any, Any, Any]) -> None:
+        task = asyncio.create_task(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    def _set_fragment_size(self, conn: Connection, value: Any) -> bool:
+        """Any message carrying ``fragment_size`` sets it for the whole connection (§4.2)."""
+        if self.config.dialect == "ros1":
+            # rosbridge 0.11 takes the value as it is; None switches fragmenting off.
+            if value is None or (isinstance(value, int) and not isinstance(value, bool)):
+                conn.fragment_size = value
+            return True
+        if not isinstance(value, int) or isinstance(value, bool):
+            # ROS 2 ≥ 2.0.2 compares it with max_message_size, which fails for null/non-numbers.
+            log.error("client %d: fragment_size must be an integer, got %r; message ignored", conn.id, value)
+            return False
+        limit = self.config.max_message_size
+        conn.fragment_size = min(value, limit) if limit is not None else value
+        return True
+
+    def _resolve(self, name: str, kind: Literal["msg", "srv", "action"]) -> str:
+        try:
+            return self.registry.resolve(name, kind)
+        except InterfaceError as exc:
+            raise OpError(str(exc)) from exc
+
+    # --- ops ------------------------------------------------------------------------------------------------
+
+    def _op_unsupported(self, conn: Connection, msg: dict[str, Any]) -> None:
+        log.warning("client %d: %s is not supported by the simulated robot; ignored", conn.id, msg.get("op"))
+
+    def _op_fragment(self, conn: Connection, msg: dict[str, Any]) -> Awaitable[None] | None:
+        _check(
+            msg,
+            [
+                (True, "id", (str, int)),
+                (True, "data", (str,)),
+                (True, "num", (int,)),
+                (True, "total", (int,)),
+            ],
+        )
+        now = time.monotonic()
+        while self._fragments:
+            oldest = next(iter(self._fragments.values()))
+            if now - oldest.started < FRAGMENT_TIMEOUT and len(self._fragments) < MAX_FRAGMENT_BUFFERS:
+                break
+            _, dropped = self._fragments.popitem(last=False)
+            self._fragment_bytes -= dropped.size
+            log.warning("fragments of an incomplete message dropped (expired or too many)")
+        fid = msg["id"]
+        buffer = self._fragments.get(fid)
+        if buffer is None or msg["num"] == 0:
+            if buffer is not None:
+                self._fragment_bytes -= buffer.size
+            buffer = self._fragments[fid] = _FragmentBuffer(total=msg["total"])
+        data: str = msg["data"]
+        if self._fragment_bytes + len(data) > MAX_FRAGMENT_BYTES:
+            raise OpError("too much fragment data pending; fragment dropped")
+        buffer.parts.append(data)
+        buffer.size += len(data)
+        self._fragment_bytes += len(data)
+        if len(buffer.parts) < buffer.total:
+            return None
+        del self._fragments[fid]
+        self._fragment_bytes -= buffer.size
+        # Joined in arrival order, as the real server does.
+        return self.incoming(conn, "".join(buffer.parts))
+
+    def _op_advertise(self, conn: Connection, msg: dict[str, Any]) -> None:
+        fields: list[_FieldSpec] = [
+            (True, "topic", (str,)),
+            (True, "type", (str,)),
+            (False, "latch", (bool,)),
+            (False, "queue_size", (int,)),
+        ]
+        if self.config.dialect == "ros2":
+            fields.append((False, "qos", (dict,)))
+        _check(msg, fields)
+        topic = resolve_name(msg["topic"])
+        msg_type = self._resolve(msg["type"], "msg")
+        self._register_publisher(conn, topic, msg_type, msg.get("id"), latch=bool(msg.get("latch", False)))
+
+    def _register_publisher(
+        self, conn: Connection, topic: str, msg_type: str, aid: Any, *, latch: bool
+    ) -> None:
+        existing = self.graph.topic_types.get(topic)
+        if existing is not None and existing != msg_type:
+            raise OpError(
+                f"Tried to register topic {topic} with type {msg_type} but it is already established with "
+                f"type {existing}"
+            )
+        ids = conn.advertisements.get(topic)
+        if ids is None:
+            ids = conn.advertisements[topic] = []
+            self.graph.add_publisher(ROSBRIDGE_NODE, topic, msg_type)
+        if aid not in ids:
+            ids.append(aid)
+        conn.advertised_types[topic] = msg_type
+        if latch:
+            self.graph.latched.setdefault(topic, None)
+
+    def _op_unadvertise(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "topic", (str,))])
+        topic = resolve_name(msg["topic"])
+        ids = conn.advertisements.get(topic)
+        if ids is None:
+            return
+        if "id" in msg:
+            if msg["id"] in ids:
+                ids.remove(msg["id"])
+        else:
+            ids.clear()
+        if not ids:
+            del conn.advertisements[topic]
+            self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
+
+    def _op_publish(self, conn: Connection, msg: dict[str, Any]) -> None:
+        fields: list[_FieldSpec] = [
+            (True, "topic", (str,)),
+            (False, "latch", (bool,)),
+            (False, "queue_size", (int,)),
+        ]
+        if self.config.dialect == "ros2":
+            fields += [(False, "type", (str,)), (False, "qos", (dict,))]
+        _check(msg, fields)
+        topic = resolve_name(msg["topic"])
+        if topic in conn.advertisements:
+            msg_type = conn.advertised_types[topic]
+        else:
+            graph_type = self.graph.topic_types.get(topic)
+            if graph_type is not None:
+                msg_type = graph_type
+            elif self.config.dialect == "ros2" and "type" in msg:
+                # ROS 2 2.0.6/2.6.0/3.2.0/4.1.0+ register the topic from the publish's own type.
+                msg_type = self._resolve(msg["type"], "msg")
+            else:
+                raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
+            self._register_publisher(
+                conn, topic, msg_type, msg.get("id"), latch=bool(msg.get("latch", False))
+            )
+        values = msg.get("msg", {})
+        try:
+            converted = self.registry.from_json(msg_type, values)
+        except ConversionError as exc:
+            raise OpError(str(exc)) from exc
+        self.world.record_published(PublishedMessage(topic, msg_type, converted, time.monotonic(), conn.id))
+        self.publish(topic, msg_type, converted, source=conn.id)
+
+    def _op_subscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
+        fields: list[_FieldSpec] = [
+            (True, "topic", (str,)),
+            (False, "type", (str,)),
+            (False, "throttle_rate", (int,)),
+            (False, "fragment_size", (int,)),
+            (False, "queue_length", (int,)),
+            (False, "compression", (str,)),
+        ]
+        if self.config.dialect == "ros2":
+            fields.append((False, "qos", (dict,)))
+        _check(msg, fields)
+        topic = resolve_name(msg["topic"])
+        graph_type = self.graph.topic_types.get(topic)
+        if "type" in msg:
+            msg_type = self._resolve(msg["type"], "msg")
+            if graph_type is not None and graph_type != msg_type:
+                raise OpError(
+                    f"Tried to register topic {topic} with type {msg_type} but it is already established "
+                    f"with type {graph_type}"
+                )
+        elif graph_type is not None:
+            msg_type = graph_type
+        else:
+            raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
+        compression = msg.get("compression", "none")
+        if compression in ("png", "cbor", "cbor-raw"):
+            log.warning(
+                "client %d: compression %r is not simulated; sending JSON on %s", conn.id, compression, topic
+            )
+        sub = conn.subscriptions.get(topic)
+        if sub is None:
+            sub = conn.subscriptions[topic] = TopicSubscription(topic, msg["topic"], msg_type)
+            self.graph.add_subscriber(ROSBRIDGE_NODE, topic, msg_type)
+        sub.by_id[msg.get("id")] = SubscriptionOptions(
+            msg.get("throttle_rate", 0), msg.get("queue_length", 0)
+        )
+        latched = self.graph.latched.get(topic)
+        if latched is not None:
+            conn.deliver(OutgoingMessage(topic, msg_type, latched, self.registry.to_json), self._fragment_id)
+
+    def _op_unsubscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "topic", (str,))])
+        topic = resolve_name(msg["topic"])
+        sub = conn.subscriptions.get(topic)
+        if sub is None:
+            return
+        if "id" in msg:
+            sub.by_id.pop(msg["id"], None)
+        else:
+            sub.by_id.clear()
+        if not sub.by_id:
+            conn.drop_subscription(topic)
+            self.graph.remove_subscriber(ROSBRIDGE_NODE, topic)
+
+    async def _op_call_service(self, conn: Connection, msg: dict[str, Any]) -> None:
+        fields: list[_FieldSpec] = [
+            (True, "service", (str,)),
+            (False, "fragment_size", (int, type(None))),
+            (False, "compression", (str,)),
+        ]
+        if self.config.dialect == "ros2":
+            fields.append((False, "timeout", (int, float)))
+        _check(msg, fields)
+        service = msg["service"]
+        name, cid = _extract_id(service, msg.get("id"))
+        timeout = self.config.default_service_timeout
+        if self.config.dialect == "ros2" and "timeout" in msg:
+            timeout = float(msg["timeout"])
+        reply: dict[str, Any] = {"op": "service_response", "service": service}
+        try:
+            reply["values"] = await self.call(name, msg.get("args", {}), timeout)
+            reply["result"] = True
+        except CallFailed as exc:
+            log.error("client %d: call_service %s failed: %s", conn.id, service, exc)
+            reply["values"] = str(exc)
+            reply["result"] = False
+        if cid is not None:
+            reply["id"] = cid
+        conn.send(reply)
+
+    def _op_advertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "service", (str,)), (True, "type", (str,))])
+        name = resolve_name(msg["service"])
+        service_type = self._resolve(msg["type"], "srv")
+        self.graph.add_service(
+            ServiceEntry(
+                name,
+                service_type,
+                ROSBRIDGE_NODE,
+                self._forwarding_handler(conn.id, name, service_type),
+                conn.id,
+            )
+        )
+        self.world.notify()
+
+    def _op_unadvertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "service", (str,))])
+        name = resolve_name(msg["service"])
+        entry = self.graph.services.get(name)
+        if entry is None or entry.owner != conn.id:
+            raise OpError(f"Service {msg['service']} has not been advertised via rosbridge.")
+        self.graph.remove_service(name)
+        # ROS 2 aborts the calls in flight: their callers get an empty (default) response.
+        for request_id, (future, _, service) in list(self._service_requests.items()):
+            if service == name and not future.done():
+                future.set_result({})
+                del self._service_requests[request_id]
+        self.world.notify()
+
+    def _op_service_response(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "service", (str,)), (False, "id", (str,)), (True, "result", (bool,))])
+        pending = self._service_requests.get(msg.get("id", ""))
+        if pending is None:
+            log.warning(
+                "client %d: service_response for an unknown request %r; ignored", conn.id, msg.get("id")
+            )
+            return
+        future, response_type, _ = pending
+        values = msg.get("values")
+        if not isinstance(values, dict):
+            # rosbridge ignores `result` and builds the response from `values`; without them the caller waits.
+            raise OpError(f"service_response without a values object; the caller of {msg['service']} waits")
+        try:
+            self.registry.from_json(response_type, values)
+        except ConversionError as exc:
+            raise OpError(str(exc)) from exc
+        if not future.done():
+            future.set_result(values)
+
+    async def _op_send_action_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(
+            msg,
+            [
+                (True, "action", (str,)),
+                (True, "action_type", (str,)),
+                (False, "fragment_size", (int, type(None))),
+                (False, "compression", (str,)),
+            ],
+        )
+        action = msg["action"]
+        name, cid = _extract_id(action, msg.get("id"))
+
+        def finish(values: Any, status: int, result: bool) -> None:
+            reply: dict[str, Any] = {
+                "op": "action_result",
+                "action": action,
+                "values": values,
+                "status": status,
+                "result": result,
+            }
+            if cid is not None:
+                reply["id"] = cid
+            conn.send(reply)
+
+        try:
+            action_type = self.registry.resolve(msg["action_type"], "action")
+            goal_type, result_type, feedback_type = self.registry.action_parts(action_type)
+            goal = self.registry.from_json(goal_type, self._args_dict(goal_type, msg.get("args", {})))
+        except (InterfaceError, ConversionError) as exc:
+            log.error("client %d: send_action_goal %s: %s", conn.id, action, exc)
+            finish(str(exc), 0, False)
+            return
+        server = self.graph.actions.get(resolve_name(name))
+        if server is None or server.type != action_type:
+            await asyncio.sleep(ACTION_SERVER_WAIT)
+            finish("No action server available", 0, False)
+            return
+
+        def on_feedback(partial: dict[str, Any]) -> None:
+            reply = {
+                "op": "action_feedback",
+                "action": action,
+                "values": self.json_form(feedback_type, partial),
+            }
+            if cid is not None:
+                reply["id"] = cid
+            conn.send(reply)
+
+        handle = server.submit(goal, key=cid, on_feedback=on_feedback if msg.get("feedback", False) else None)
+        if handle is None:
+            finish("Action goal was rejected", 0, False)
+            return
+        self.goal_table[cid] = handle
+        try:
+            status, partial_result = await handle.outcome()
+        finally:
+            if self.goal_table.get(cid) is handle:
+                del self.goal_table[cid]
+        finish(self.json_form(result_type, partial_result), status, True)
+
+    def _op_cancel_action_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "action", (str,))])
+        _, cid = _extract_id(msg["action"], msg.get("id"))
+        handle = self.goal_table.get(cid)
+        if handle is not None:
+            handle.request_cancel()

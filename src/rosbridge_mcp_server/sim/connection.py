@@ -1,0 +1,224 @@
+"""One client connection of the simulated rosbridge: its outgoing queue, fragments and subscriptions.
+
+Memory per connection is bounded: data frames (``publish``) wait in a queue of at most
+:data:`MAX_QUEUED_MESSAGES` messages / :data:`MAX_QUEUED_BYTES` bytes and a slow reader loses the oldest
+first. Replies (``service_response``, ``action_result``...) are never dropped; there is at most one per
+request, so they are bounded by what the client asked for.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from websockets.asyncio.server import ServerConnection
+from websockets.exceptions import ConnectionClosed
+
+__all__ = [
+    "MAX_QUEUED_BYTES",
+    "MAX_QUEUED_MESSAGES",
+    "Connection",
+    "OutgoingMessage",
+    "SubscriptionOptions",
+    "TopicSubscription",
+]
+
+log = logging.getLogger("rosbridge_mcp_server.sim")
+
+MAX_QUEUED_MESSAGES = 1000
+MAX_QUEUED_BYTES = 32 * 1024 * 1024
+
+
+@dataclass
+class OutgoingMessage:
+    """A message published on a topic, shared by every connection that receives it.
+
+    ``json_form`` is computed once (lazily) by the bridge's converter, and the ``publish`` frame text once per
+    topic spelling, so many subscribers cost one serialisation.
+    """
+
+    topic: str
+    type: str
+    msg: dict[str, Any]
+    to_json: Callable[[str, dict[str, Any]], dict[str, Any]]
+    _json_form: dict[str, Any] | None = None
+    _texts: dict[str, str] = field(default_factory=dict)
+
+    def frame_text(self, echo_topic: str) -> str:
+        """The ``publish`` frame for a subscription whose topic was spelled ``echo_topic``."""
+        text = self._texts.get(echo_topic)
+        if text is None:
+            if self._json_form is None:
+                self._json_form = self.to_json(self.type, self.msg)
+            text = json.dumps({"op": "publish", "topic": echo_topic, "msg": self._json_form})
+            self._texts[echo_topic] = text
+        return text
+
+
+@dataclass
+class SubscriptionOptions:
+    """One ``subscribe`` request's options."""
+
+    throttle_rate: int = 0
+    queue_length: int = 0
+
+
+@dataclass
+class TopicSubscription:
+    """All of one connection's ``subscribe`` requests for one topic (rosbridge keeps one ROS subscription)."""
+
+    topic: str
+    echo_topic: str
+    type: str
+    by_id: dict[Any, SubscriptionOptions] = field(default_factory=dict)
+    last_sent: float = 0.0
+    queue: deque[OutgoingMessage] = field(default_factory=deque)
+    release: asyncio.TimerHandle | None = None
+
+    @property
+    def throttle_rate(self) -> int:
+        """rosbridge uses the smallest throttle of all requests (§4.6)."""
+        return min((o.throttle_rate for o in self.by_id.values()), default=0)
+
+    @property
+    def queue_length(self) -> int:
+        """...and the smallest queue length."""
+        return min((o.queue_length for o in self.by_id.values()), default=0)
+
+
+@dataclass
+class _Queued:
+    droppable: bool
+    frames: list[str]
+    size: int
+
+
+class Connection:
+    """The server side of one client's WebSocket."""
+
+    def __init__(self, ws: ServerConnection, cid: int, *, fragment_size: int | None) -> None:
+        self.ws = ws
+        self.id = cid
+        #: Connection-wide outgoing fragment size (§4.2); ``None`` = never fragment.
+        self.fragment_size = fragment_size
+        self.subscriptions: dict[str, TopicSubscription] = {}
+        #: topic -> advertisement ids of this client (``None`` for an id-less advertise).
+        self.advertisements: dict[str, list[Any]] = {}
+        self.advertised_types: dict[str, str] = {}
+        self.closed = False
+        self.dropped = 0
+        self._queue: deque[_Queued] = deque()
+        self._queued_bytes = 0
+        self._droppable_count = 0
+        self._wakeup = asyncio.Event()
+
+    # --- outgoing -------------------------------------------------------------------------------------
+
+    def send(self, message: dict[str, Any], *, fragment_id: Any = "0") -> None:
+        """Queue a reply frame (never dropped)."""
+        self._enqueue(json.dumps(message), droppable=False, fragment_id=message.get("id", fragment_id))
+
+    def _enqueue(self, text: str, *, droppable: bool, fragment_id: Any) -> None:
+        if self.closed:
+            return
+        size = self.fragment_size
+        if size is not None and size > 0 and len(text) > size:
+            chunks = [text[i : i + size] for i in range(0, len(text), size)]
+            frames = [
+                json.dumps({"op": "fragment", "id": fragment_id, "data": c, "num": n, "total": len(chunks)})
+                for n, c in enumerate(chunks)
+            ]
+        else:
+            frames = [text]
+        item = _Queued(droppable, frames, len(text))
+        self._queue.append(item)
+        self._queued_bytes += item.size
+        if droppable:
+            self._droppable_count += 1
+            self._shed()
+        self._wakeup.set()
+
+    def _shed(self) -> None:
+        """Drop the oldest data frames while the queue is over its bounds."""
+        while self._droppable_count and (
+            len(self._queue) > MAX_QUEUED_MESSAGES or self._queued_bytes > MAX_QUEUED_BYTES
+        ):
+            for index, item in enumerate(self._queue):
+                if item.droppable:
+                    del self._queue[index]
+                    self._queued_bytes -= item.size
+                    self._droppable_count -= 1
+                    self.dropped += 1
+                    if self.dropped in (1, 10, 100) or self.dropped % 1000 == 0:
+                        log.warning(
+                            "client %d reads too slowly: %d messages dropped so far", self.id, self.dropped
+                        )
+                    break
+
+    async def writer(self) -> None:
+        """Send queued frames until the connection closes."""
+        try:
+            while True:
+                while not self._queue:
+                    self._wakeup.clear()
+                    await self._wakeup.wait()
+                item = self._queue.popleft()
+                self._queued_bytes -= item.size
+                if item.droppable:
+                    self._droppable_count -= 1
+                for frame in item.frames:
+                    await self.ws.send(frame)
+        except ConnectionClosed:
+            pass
+        finally:
+            self.closed = True
+
+    # --- subscriptions --------------------------------------------------------------------------------
+
+    def deliver(self, message: OutgoingMessage, fragment_id: Any) -> None:
+        """Hand a topic message to this client, honouring throttle_rate and queue_length."""
+        sub = self.subscriptions.get(message.topic)
+        if sub is None or self.closed:
+            return
+        throttle = sub.throttle_rate / 1000.0
+        if throttle <= 0:
+            self._send_publish(sub, message, fragment_id)
+            return
+        now = time.monotonic()
+        if sub.queue_length <= 0:
+            # Throttled without a queue: a message arriving too soon after the last one is dropped.
+            if now - sub.last_sent >= throttle:
+                self._send_publish(sub, message, fragment_id)
+            return
+        sub.queue.append(message)
+        while len(sub.queue) > sub.queue_length:
+            sub.queue.popleft()
+        if sub.release is None:
+            delay = max(0.0, sub.last_sent + throttle - now)
+            loop = asyncio.get_running_loop()
+            sub.release = loop.call_later(delay, self._release, sub, fragment_id)
+
+    def _release(self, sub: TopicSubscription, fragment_id: Any) -> None:
+        sub.release = None
+        if not sub.queue or self.subscriptions.get(sub.topic) is not sub:
+            return
+        self._send_publish(sub, sub.queue.popleft(), fragment_id)
+        if sub.queue:
+            loop = asyncio.get_running_loop()
+            sub.release = loop.call_later(sub.throttle_rate / 1000.0, self._release, sub, fragment_id)
+
+    def _send_publish(self, sub: TopicSubscription, message: OutgoingMessage, fragment_id: Any) -> None:
+        sub.last_sent = time.monotonic()
+        self._enqueue(message.frame_text(sub.echo_topic), droppable=True, fragment_id=fragment_id)
+
+    def drop_subscription(self, topic: str) -> None:
+        """Forget every subscription to ``topic`` (its queued messages too)."""
+        sub = self.subscriptions.pop(topic, None)
+        if sub is not None and sub.release is not None:
+            sub.release.cancel()

@@ -1,0 +1,29 @@
+"""A minimal PNG encoder (8-bit RGB, no filtering) for the simulated camera's compressed topic."""
+
+from __future__ import annotations
+
+import struct
+import zlib
+
+__all__ = ["encode_png"]
+
+_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _chunk(kind: bytes, data: bytes) -> bytes:
+    return (
+        struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    )
+
+
+def encode_png(width: int, height: int, rgb: bytes) -> bytes:
+    """Encode ``width`` × ``height`` RGB pixels (row-major, 3 bytes each) as a PNG file."""
+    stride = width * 3
+    if len(rgb) != stride * height:
+        raise ValueError(f"expected {stride * height} bytes of RGB data, got {len(rgb)}")
+    # Filter type 0 (None) in front of every row.
+    raw = b"".join(b"\x00" + rgb[row * stride : (row + 1) * stride] for row in range(height))
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return (
+        _SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", zlib.compress(raw, 6)) + _chunk(b"IEND", b"")
+    )

@@ -1,0 +1,174 @@
+"""``SimulatedRobot``: the simulated world behind a rosbridge v2 WebSocket server, for tests and demos."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from types import TracebackType
+from typing import Literal, Self
+
+from websockets.asyncio.server import Server, ServerConnection, serve
+
+from rosbridge_mcp_server.sim.bridge import Bridge, BridgeConfig
+from rosbridge_mcp_server.sim.graph import Graph
+from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
+from rosbridge_mcp_server.sim.nodes import CameraSettings, WorldNodes
+from rosbridge_mcp_server.sim.world import World
+
+__all__ = ["DEFAULT_MAX_MESSAGE_SIZE", "SimulatedRobot"]
+
+log = logging.getLogger("rosbridge_mcp_server.sim")
+
+#: ROS 2 rosbridge's ``max_message_size`` as its launch file sets it (also the initial fragment size).
+DEFAULT_MAX_MESSAGE_SIZE = 10_000_000
+#: Tornado's default limit for one incoming frame, which rosbridge does not change.
+MAX_INCOMING_FRAME = 10 * 1024 * 1024
+
+
+class SimulatedRobot:
+    """A rosbridge v2 server with a small simulated world behind it.
+
+    ``dialect="ros2"`` behaves like a current Jazzy rosbridge (or Humble 2.0.x with ``in_order=True``);
+    ``dialect="ros1"`` like rosbridge_suite 0.11.17 on Noetic. Use it as an async context manager; it serves
+    on ``host:port`` (port 0 picks a free port, kept across :meth:`stop`/:meth:`start`).
+    """
+
+    def __init__(
+        self,
+        dialect: Literal["ros2", "ros1"] = "ros2",
+        *,
+        in_order: bool = False,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        fast_topic: bool = False,
+        action_step: float = 0.2,
+        slow_service_seconds: float = 3.0,
+        camera_width: int = 160,
+        camera_height: int = 120,
+        max_message_size: int | None = None,
+    ) -> None:
+        if dialect not in ("ros1", "ros2"):
+            raise ValueError(f"dialect must be 'ros1' or 'ros2', not {dialect!r}")
+        if in_order and dialect != "ros2":
+            raise ValueError("in_order models Humble's rosbridge, so it needs dialect='ros2'")
+        if action_step <= 0 or slow_service_seconds < 0:
+            raise ValueError("action_step must be > 0 and slow_service_seconds >= 0")
+        if dialect == "ros2":
+            config = BridgeConfig(
+                dialect="ros2",
+                in_order=in_order,
+                max_message_size=max_message_size or DEFAULT_MAX_MESSAGE_SIZE,
+                # Humble 2.0.x: default_call_service_timeout 0 (forever); Jazzy 2.2.0+: 5 s.
+                default_service_timeout=0.0 if in_order else 5.0,
+                distro="humble" if in_order else "jazzy",
+            )
+        else:
+            config = BridgeConfig(
+                dialect="ros1",
+                in_order=False,
+                max_message_size=max_message_size,
+                default_service_timeout=0.0,
+                distro="noetic",
+            )
+        self.dialect = dialect
+        self.in_order = in_order
+        self.host = host
+        self.port = port
+        self.world = World(dialect)
+        self.graph = Graph()
+        self.registry = InterfaceRegistry(dialect)
+        self.bridge = Bridge(config, self.registry, self.world, self.graph)
+        self._nodes = WorldNodes(
+            self.bridge,
+            fast_topic=fast_topic,
+            action_step=action_step,
+            slow_service_seconds=slow_service_seconds,
+            camera=CameraSettings(camera_width, camera_height),
+            port=port,
+        )
+        self._nodes.build()
+        self._server: Server | None = None
+
+    @property
+    def url(self) -> str:
+        """``ws://host:port`` of the running server."""
+        return f"ws://{self.host}:{self.port}"
+
+    @property
+    def connection_count(self) -> int:
+        """Clients connected right now."""
+        return self.bridge.connection_count
+
+    @property
+    def running(self) -> bool:
+        """Whether the server is accepting connections."""
+        return self._server is not None
+
+    async def start(self) -> None:
+        """Start serving (again, on the same port after :meth:`stop`)."""
+        if self._server is not None:
+            return
+        self._server = await serve(
+            self._handle,
+            self.host,
+            self.port,
+            max_size=MAX_INCOMING_FRAME,
+            # rosbridge never pings unless websocket_ping_interval is set, and does not compress.
+            ping_interval=None,
+            compression=None,
+        )
+        self.port = self._server.sockets[0].getsockname()[1]
+        params = self.world.params
+        for key in ("/rosbridge_websocket:port", "/rosbridge_websocket/port"):
+            if key in params:
+                params[key] = self.port
+        self._nodes.start()
+        log.info(
+            "simulated robot (%s, %s%s) serving rosbridge v2 on %s",
+            self.dialect,
+            self.bridge.config.distro,
+            ", in-order" if self.in_order else "",
+            self.url,
+        )
+
+    async def stop(self) -> None:
+        """Stop serving: every client is disconnected and the world's publishers pause.
+
+        Like a rosbridge process that exits, client-advertised services vanish and running goals end.
+        """
+        server, self._server = self._server, None
+        if server is None:
+            return
+        server.close(close_connections=True)
+        await self.bridge.close_all()
+        await server.wait_closed()
+        await self._nodes.stop()
+        for name in [n for n, e in self.graph.services.items() if e.owner]:
+            self.graph.remove_service(name)
+        self.world.notify()
+        log.info("simulated robot on %s stopped", self.url)
+
+    async def drop_connections(self) -> None:
+        """Close every client socket; the server keeps running, so clients can reconnect."""
+        for conn in list(self.bridge.connections.values()):
+            await conn.ws.close(1001, "simulated connection drop")
+
+    async def wait_for(
+        self,
+        predicate: Callable[[World], object],
+        timeout: float = 5.0,  # noqa: ASYNC109 - part of the documented API
+    ) -> None:
+        """Wait until ``predicate(world)`` holds (checked on each change); TimeoutError after ``timeout``."""
+        await self.world.wait_for(predicate, timeout)
+
+    async def _handle(self, ws: ServerConnection) -> None:
+        await self.bridge.serve_connection(ws)
+
+    async def __aenter__(self) -> Self:
+        await self.start()
+        return self
+
+    async def __aexit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.stop()

@@ -1,0 +1,332 @@
+"""The rosapi node of each dialect (``rosapi/scripts/rosapi_node`` and ``proxy.py`` of rosbridge_suite).
+
+Answers come from the simulated graph. The quirks of the real services are kept on purpose, each marked
+with the version that has it (protocol file §12).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Coroutine
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.sim.graph import ServiceEntry, ServiceFailure, is_hidden
+from rosbridge_mcp_server.sim.interfaces import InterfaceError
+from rosbridge_mcp_server.sim.params import Ros1Params, Ros2Params
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.sim.bridge import Bridge
+
+__all__ = ["ROSAPI_NODE", "Rosapi", "ros1_action_servers", "ros2_action_servers"]
+
+log = logging.getLogger("rosbridge_mcp_server.sim")
+
+ROSAPI_NODE = "/rosapi"
+
+_Handler = Callable[[dict[str, Any]], Coroutine[Any, Any, dict[str, Any]]]
+
+
+def ros1_action_servers(topics: list[str]) -> list[str]:
+    """ROS 1 rosapi 0.11.17 ``filter_action_servers``, quirk included.
+
+    The "all five leaves seen" check runs after every topic, not only when a namespace changes, so a
+    namespace is reported again for each later topic until another namespace with ≥ 2 components starts
+    (e.g. ``/fibonacci`` is listed again for ``/rosout`` and ``/rosout_agg``).
+    """
+    leaves = ["cancel", "feedback", "goal", "result", "status"]
+    servers: list[str] = []
+    current = ""
+    seen = [0, 0, 0, 0, 0]
+    for topic in sorted(topics):
+        parts = topic.split("/")
+        if len(parts) >= 3:
+            leaf = parts.pop()
+            namespace = "/".join(parts)
+            if current != namespace:
+                current = namespace
+                seen = [0, 0, 0, 0, 0]
+            if leaf in leaves:
+                seen[leaves.index(leaf)] = 1
+        if all(seen):
+            servers.append(current)
+    return servers
+
+
+def ros2_action_servers(topics: list[str]) -> list[str]:
+    """ROS 2 rosapi ``filter_action_servers``: ``<ns>/_action/{feedback,status}`` both present."""
+    servers: list[str] = []
+    current = ""
+    seen = [0, 0]
+    for topic in sorted(topics):
+        parts = topic.split("/")
+        if len(parts) < 4:
+            continue
+        leaf = parts.pop()
+        if parts.pop() != "_action":
+            continue
+        namespace = "/".join(parts)
+        if current != namespace:
+            current = namespace
+            seen = [0, 0]
+        if leaf in ("feedback", "status"):
+            seen[("feedback", "status").index(leaf)] = 1
+        if all(seen):
+            servers.append(current)
+            seen = [0, 0]
+    return servers
+
+
+class Rosapi:
+    """Registers every rosapi service of the dialect on the graph."""
+
+    def __init__(self, bridge: Bridge) -> None:
+        self.bridge = bridge
+        self.ros2 = bridge.config.dialect == "ros2"
+        store = bridge.world.params
+        self.params2 = Ros2Params(store, lambda node: node in bridge.graph.nodes)
+        self.params1 = Ros1Params(store)
+        handlers: dict[str, tuple[str, _Handler]] = {
+            "topics": ("Topics", self.topics),
+            "topics_for_type": ("TopicsForType", self.topics_for_type),
+            "topics_and_raw_types": ("TopicsAndRawTypes", self.topics_and_raw_types),
+            "topic_type": ("TopicType", self.topic_type),
+            "publishers": ("Publishers", self.publishers),
+            "subscribers": ("Subscribers", self.subscribers),
+            "services": ("Services", self.services),
+            "services_for_type": ("ServicesForType", self.services_for_type),
+            "service_type": ("ServiceType", self.service_type),
+            "service_providers": ("ServiceProviders", self.service_providers),
+            "service_node": ("ServiceNode", self.service_node),
+            "nodes": ("Nodes", self.nodes),
+            "node_details": ("NodeDetails", self.node_details),
+            "action_servers": ("GetActionServers", self.action_servers),
+            "message_details": ("MessageDetails", self.message_details),
+            "service_request_details": ("ServiceRequestDetails", self.service_request_details),
+            "service_response_details": ("ServiceResponseDetails", self.service_response_details),
+            "get_param": ("GetParam", self.get_param),
+            "set_param": ("SetParam", self.set_param),
+            "has_param": ("HasParam", self.has_param),
+            "delete_param": ("DeleteParam", self.delete_param),
+            "get_param_names": ("GetParamNames", self.get_param_names),
+            "get_time": ("GetTime", self.get_time),
+        }
+        if self.ros2:
+            handlers |= {
+                "get_ros_version": ("GetROSVersion", self.get_ros_version),
+                "interfaces": ("Interfaces", self.interfaces),
+                "action_goal_details": ("ActionGoalDetails", self.action_goal_details),
+                "action_result_details": ("ActionResultDetails", self.action_result_details),
+                "action_feedback_details": ("ActionFeedbackDetails", self.action_feedback_details),
+                "action_type": ("ActionType", self.action_type),
+            }
+        else:
+            handlers |= {
+                "search_param": ("SearchParam", self.search_param),
+                "service_host": ("ServiceHost", self.service_host),
+            }
+        package = "rosapi_msgs" if self.ros2 else "rosapi"
+        registry = bridge.registry
+        for name, (type_name, handler) in handlers.items():
+            try:
+                service_type = registry.resolve(f"{package}/{type_name}", "srv")
+                _, response_type = registry.service_parts(service_type)
+                fields = set(registry.message_typedefs(response_type)[0]["fieldnames"])
+            except InterfaceError as exc:
+                log.warning("rosapi %s left out: %s", name, exc)
+                continue
+            bridge.graph.add_service(
+                ServiceEntry(f"/rosapi/{name}", service_type, ROSAPI_NODE, self._fitted(handler, fields))
+            )
+
+    @staticmethod
+    def _fitted(handler: _Handler, fields: set[str]) -> _Handler:
+        """Keep only the response fields this rosapi version has (e.g. ``successful`` is Jazzy's)."""
+
+        async def call(request: dict[str, Any]) -> dict[str, Any]:
+            response = await handler(request)
+            return {k: v for k, v in response.items() if k in fields}
+
+        return call
+
+    # --- graph ----------------------------------------------------------------------------------------------
+
+    def _topics(self) -> list[tuple[str, str]]:
+        # ROS 2 leaves hidden topics out; ROS 1 has no such notion.
+        return self.bridge.graph.topics(include_hidden=not self.ros2)
+
+    def _services(self) -> list[ServiceEntry]:
+        entries = sorted(self.bridge.graph.services.values(), key=lambda e: e.name)
+        return [e for e in entries if not (self.ros2 and is_hidden(e.name))]
+
+    async def topics(self, request: dict[str, Any]) -> dict[str, Any]:
+        pairs = self._topics()
+        return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs]}
+
+    async def topics_for_type(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"topics": [t for t, ty in self._topics() if ty == request.get("type")]}
+
+    async def topics_and_raw_types(self, request: dict[str, Any]) -> dict[str, Any]:
+        pairs = self._topics()
+        texts = []
+        for _, msg_type in pairs:
+            try:
+                texts.append(self.bridge.registry.full_text(msg_type))
+            except InterfaceError:
+                texts.append("")
+        return {
+            "topics": [t for t, _ in pairs],
+            "types": [ty for _, ty in pairs],
+            "typedefs_full_text": texts,
+        }
+
+    async def topic_type(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"type": dict(self._topics()).get(request.get("topic", ""), "")}
+
+    async def publishers(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"publishers": self.bridge.graph.publishers_of(request.get("topic", ""))}
+
+    async def subscribers(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"subscribers": self.bridge.graph.subscribers_of(request.get("topic", ""))}
+
+    async def services(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"services": [e.name for e in self._services()]}
+
+    async def services_for_type(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"services": [e.name for e in self._services() if e.type == request.get("type")]}
+
+    async def service_type(self, request: dict[str, Any]) -> dict[str, Any]:
+        by_name = {e.name: e.type for e in self._services()}
+        return {"type": by_name.get(request.get("service", ""), "")}
+
+    async def service_providers(self, request: dict[str, Any]) -> dict[str, Any]:
+        # Quirk of every version: the `service` field is compared with service *types*, not names.
+        wanted = request.get("service", "")
+        nodes = {e.node for e in self.bridge.graph.services.values() if e.type == wanted}
+        return {"providers": sorted(nodes)}
+
+    async def service_node(self, request: dict[str, Any]) -> dict[str, Any]:
+        entry = self.bridge.graph.services.get(request.get("service", ""))
+        return {"node": entry.node if entry is not None else ""}
+
+    async def service_host(self, request: dict[str, Any]) -> dict[str, Any]:
+        # ROS 1: the host part of the service's URI; every simulated node runs on this machine.
+        return {"host": "localhost" if request.get("service", "") in self.bridge.graph.services else ""}
+
+    async def nodes(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"nodes": self.bridge.graph.node_names()}
+
+    async def node_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        node = self.bridge.graph.nodes.get(request.get("node", ""))
+        if node is None:
+            if self.ros2:
+                # ROS 2 rosapi unpacks None for an unknown node; the service callback fails (no response).
+                raise ServiceFailure(
+                    f"cannot unpack non-iterable NoneType object (unknown node {request.get('node')})"
+                )
+            return {"subscribing": [], "publishing": [], "services": []}
+        return {
+            "subscribing": sorted(node.subscribes),
+            "publishing": sorted(node.publishes),
+            "services": sorted(node.services),
+        }
+
+    async def action_servers(self, request: dict[str, Any]) -> dict[str, Any]:
+        # Both lines compute it from topic names; ROS 2 includes hidden topics for it.
+        names = [t for t, _ in self.bridge.graph.topics(include_hidden=True)]
+        return {"action_servers": ros2_action_servers(names) if self.ros2 else ros1_action_servers(names)}
+
+    async def action_type(self, request: dict[str, Any]) -> dict[str, Any]:
+        server = self.bridge.graph.actions.get(request.get("action", ""))
+        return {"type": server.type if server is not None else ""}
+
+    # --- types ----------------------------------------------------------------------------------------------
+
+    async def message_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        try:
+            return {"typedefs": self.bridge.registry.message_typedefs(request.get("type", ""))}
+        except InterfaceError as exc:
+            if self.ros2:
+                # ROS 2 objectutils logs the import error and answers with no typedefs.
+                log.error(
+                    "An error occurred trying to get the type definition for %s: %s", request.get("type"), exc
+                )
+                return {"typedefs": []}
+            raise ServiceFailure(str(exc)) from exc
+
+    async def _details(
+        self, getter: Callable[[str], list[dict[str, Any]]], request: dict[str, Any]
+    ) -> dict[str, Any]:
+        try:
+            return {"typedefs": getter(request.get("type", ""))}
+        except InterfaceError as exc:
+            raise ServiceFailure(str(exc)) from exc
+
+    async def service_request_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        return await self._details(self.bridge.registry.service_request_typedefs, request)
+
+    async def service_response_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        return await self._details(self.bridge.registry.service_response_typedefs, request)
+
+    async def action_goal_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        return await self._details(self.bridge.registry.action_goal_typedefs, request)
+
+    async def action_result_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        return await self._details(self.bridge.registry.action_result_typedefs, request)
+
+    async def action_feedback_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        return await self._details(self.bridge.registry.action_feedback_typedefs, request)
+
+    async def interfaces(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"interfaces": self.bridge.registry.all_interfaces()}
+
+    async def get_ros_version(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"version": 2, "distro": self.bridge.config.distro}
+
+    async def get_time(self, request: dict[str, Any]) -> dict[str, Any]:
+        now = time.time()
+        sec = int(now)
+        nsec = int((now - sec) * 1e9)
+        return {"time": {"sec": sec, "nanosec": nsec} if self.ros2 else {"secs": sec, "nsecs": nsec}}
+
+    # --- parameters -----------------------------------------------------------------------------------------
+
+    async def get_param(self, request: dict[str, Any]) -> dict[str, Any]:
+        name = request.get("name", "")
+        if self.ros2:
+            value, ok, reason = self.params2.get(name, request.get("default_value", ""))
+            return {"value": value, "successful": ok, "reason": reason}
+        return {"value": self.params1.get(name, request.get("default", ""))}
+
+    async def set_param(self, request: dict[str, Any]) -> dict[str, Any]:
+        name, value = request.get("name", ""), request.get("value", "")
+        if self.ros2:
+            ok, reason = self.params2.set(name, value)
+            self.bridge.world.notify()
+            return {"successful": ok, "reason": reason}
+        self.params1.set(name, value)
+        self.bridge.world.notify()
+        return {}
+
+    async def has_param(self, request: dict[str, Any]) -> dict[str, Any]:
+        name = request.get("name", "")
+        return {"exists": self.params2.has(name) if self.ros2 else self.params1.has(name)}
+
+    async def delete_param(self, request: dict[str, Any]) -> dict[str, Any]:
+        name = request.get("name", "")
+        if self.ros2:
+            if self.bridge.config.in_order:
+                # Humble 2.0.x rosapi reads `request.node_name`, which DeleteParam does not have.
+                raise ServiceFailure("'DeleteParam_Request' object has no attribute 'node_name'")
+            ok, reason = self.params2.delete(name)
+            self.bridge.world.notify()
+            return {"successful": ok, "reason": reason}
+        self.params1.delete(name)
+        self.bridge.world.notify()
+        return {}
+
+    async def get_param_names(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"names": self.params2.names() if self.ros2 else self.params1.names()}
+
+    async def search_param(self, request: dict[str, Any]) -> dict[str, Any]:
+        return {"global_name": self.params1.search(request.get("name", ""))}

@@ -1,0 +1,63 @@
+"""Shared fixtures: simulated robots on port 0 (127.0.0.1), started on the test's own event loop.
+
+``sim_ros2`` (Jazzy-like), ``sim_ros1`` (Noetic-like), ``sim_humble`` (ROS 2 with Humble's in-order
+connections), ``sim`` (parametrized over both dialects) and ``make_sim(**kwargs)`` for anything else
+(e.g. ``await make_sim(action_step=0.5)``). Goals step every 50 ms and ``/slow_service`` takes 1 s here so the
+suite stays fast; pass other values to ``make_sim`` when a test needs them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
+
+import pytest
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+#: Defaults for robots in tests (faster than the standalone command's).
+TEST_ROBOT_DEFAULTS: dict[str, Any] = {"action_step": 0.05, "slow_service_seconds": 1.0}
+
+MakeSim = Callable[..., Awaitable[SimulatedRobot]]
+
+
+@pytest.fixture
+async def make_sim() -> AsyncIterator[MakeSim]:
+    """Factory: ``await make_sim(dialect="ros1", in_order=False, action_step=0.2, ...)`` → a started robot."""
+    robots: list[SimulatedRobot] = []
+
+    async def make(**kwargs: Any) -> SimulatedRobot:
+        robot = SimulatedRobot(**{**TEST_ROBOT_DEFAULTS, **kwargs})
+        await robot.start()
+        robots.append(robot)
+        return robot
+
+    try:
+        yield make
+    finally:
+        for robot in robots:
+            await robot.stop()
+
+
+@pytest.fixture
+async def sim_ros2(make_sim: MakeSim) -> SimulatedRobot:
+    """A started ROS 2 (Jazzy-like) simulated robot."""
+    return await make_sim(dialect="ros2")
+
+
+@pytest.fixture
+async def sim_ros1(make_sim: MakeSim) -> SimulatedRobot:
+    """A started ROS 1 (Noetic, rosbridge 0.11.17-like) simulated robot."""
+    return await make_sim(dialect="ros1")
+
+
+@pytest.fixture
+async def sim_humble(make_sim: MakeSim) -> SimulatedRobot:
+    """A started ROS 2 robot with Humble 2.0.x defaults: each connection's ops strictly in order."""
+    return await make_sim(dialect="ros2", in_order=True)
+
+
+@pytest.fixture(params=["ros2", "ros1"])
+async def sim(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
+    """A started simulated robot of each dialect (the test runs once per dialect)."""
+    return await make_sim(dialect=request.param)
