@@ -1,0 +1,1038 @@
+"""Benchmark rosbridge-mcp-server against the raw rosbridge floor, every figure a ratio taken in one run.
+
+    uv run python scripts/bench.py                       # against a simulated robot in its own process
+    uv run python scripts/bench.py --url ws://robot:9090 # against any rosbridge (sim-only rows become n/a)
+    uv run python scripts/bench.py --quick               # a few seconds, tiny counts (the smoke test)
+    uv run python scripts/bench.py --json bench-$(date -u +%Y%m%d-%H%M).json
+
+The machines we run on are shared and noisy, so nothing is compared with a number from another run: each
+subject is measured next to its reference in the same run, in interleaved blocks (A B C A B C ..., with the
+order rotated every round) after warm-up rounds, and reported as median, p90 and the ratio of the medians.
+
+What is measured (issue #4):
+
+1. the floor: ``call_service /rosapi/topics`` over one raw ``websockets`` connection;
+2. the same call through our ``RosbridgeClient`` and through roslibpy;
+3. ``list_topics`` and ``publish_service /add_two_ints`` through a real MCP stdio session with the console
+   script, next to the same SDK's cost for a tool that does nothing (``scripts/bench/bare_server.py``);
+4. 100 tool calls at once in one session against a 50 ms service, against 100 in a row;
+5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
+6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
+7. RSS after startup and its growth over 10 000 tool calls, against the same bare server.
+
+The table goes to stdout (Markdown, so it can be pasted into docs/performance.md), progress to stderr.
+The exit status is 0 when every measurement ran, whatever the figures; 1 when something errored.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import dataclasses
+import datetime as dt
+import importlib.metadata
+import itertools
+import json
+import logging
+import math
+import os
+import platform
+import shutil
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+from collections.abc import AsyncIterator, Awaitable, Callable, Sequence
+from pathlib import Path
+from typing import IO, Any
+from urllib.parse import urlsplit
+
+import mcp_types
+import psutil
+import roslibpy
+from mcp.client.session import ClientSession
+from mcp.client.stdio import StdioServerParameters, stdio_client
+from websockets.asyncio.client import ClientConnection, connect
+
+from rosbridge_mcp_server.client import RosbridgeClient
+
+__all__ = ["main"]
+
+log = logging.getLogger("bench")
+
+REPO = Path(__file__).resolve().parent.parent
+BARE_SERVER = Path(__file__).resolve().parent / "bench" / "bare_server.py"
+CONSOLE_SCRIPT = "rosbridge-mcp-server"
+
+#: What the simulated robot offers for items 3-5 (and a rosbridge given with --url may not).
+ADD_TWO_INTS = "/add_two_ints"
+SLOW_SERVICE = "/slow_service"
+SLOW_SERVICE_SECONDS = 0.05
+FAST_TOPIC = "/fast_counter"
+#: The camera frame of item 5; the tool that would turn it into an MCP image does not exist yet.
+CAMERA_TOPIC = "/camera/image_raw"
+CAMERA_SIZE = "640x480"
+
+MIB = 1024 * 1024
+
+
+# ----------------------------------------------------------------------------------------------- the plan
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """How many repetitions of everything; ``FULL`` stays under ~2 minutes on a 2-core machine."""
+
+    name: str
+    warmup: int  # calls per latency subject before any is timed
+    rounds: int  # interleaved rounds of the latency subjects
+    block: int  # calls per subject per round
+    parallel_calls: int  # item 4
+    concurrency_rounds: int
+    messages: int  # item 5
+    startup_warmup: int  # item 6: untimed spawns of each server first (page cache, .pyc files)
+    startup_rounds: int  # item 6: timed spawns of each server
+    memory_calls: int  # item 7
+    memory_batch: int  # tool calls in flight at once while churning through memory_calls
+
+
+FULL = Plan(
+    name="full",
+    warmup=50,
+    rounds=20,
+    block=20,
+    parallel_calls=100,
+    concurrency_rounds=2,
+    messages=1000,
+    startup_warmup=1,
+    startup_rounds=8,
+    memory_calls=10_000,
+    memory_batch=50,
+)
+QUICK = Plan(
+    name="quick",
+    warmup=3,
+    rounds=2,
+    block=5,
+    parallel_calls=10,
+    concurrency_rounds=1,
+    messages=100,
+    startup_warmup=0,
+    startup_rounds=1,
+    memory_calls=200,
+    memory_batch=20,
+)
+
+
+# -------------------------------------------------------------------------------------- figures and rows
+
+
+@dataclasses.dataclass(frozen=True)
+class Stats:
+    """Median and p90 (nearest rank) of a set of samples, in the samples' unit."""
+
+    n: int
+    median: float
+    p90: float
+
+    @classmethod
+    def of(cls, samples: Sequence[float]) -> Stats:
+        if not samples:
+            raise ValueError("no samples")
+        ordered = sorted(samples)
+        rank = max(1, math.ceil(0.9 * len(ordered)))
+        return cls(n=len(ordered), median=statistics.median(ordered), p90=ordered[rank - 1])
+
+
+@dataclasses.dataclass
+class Row:
+    """One line of the table; ``figures`` holds the raw numbers for --json."""
+
+    item: str
+    what: str
+    n: int | None = None
+    median: str = ""
+    p90: str = ""
+    versus: str = ""
+    target: str = ""
+    verdict: str = ""
+    figures: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+
+def ms(seconds: float) -> str:
+    """A duration for the table: ms below 10 s, else s."""
+    if seconds >= 10:
+        return f"{seconds:.1f} s"
+    if seconds >= 1:
+        return f"{seconds:.2f} s"
+    if seconds >= 0.01:
+        return f"{seconds * 1e3:.1f} ms"
+    return f"{seconds * 1e3:.2f} ms"
+
+
+def mib(size: float) -> str:
+    return f"{size / MIB:.1f} MiB"
+
+
+def verdict(met: bool) -> str:
+    return "met" if met else "**MISSED**"
+
+
+def timing_row(item: str, what: str, stats: Stats, **extra: Any) -> Row:
+    row = Row(item=item, what=what, n=stats.n, median=ms(stats.median), p90=ms(stats.p90), **extra)
+    row.figures.update(median_s=stats.median, p90_s=stats.p90, n=stats.n)
+    return row
+
+
+# ------------------------------------------------------------------------------------------- the machine
+
+
+def describe_machine() -> dict[str, Any]:
+    """CPU model, cores, memory, OS, Python and the versions of what is being measured."""
+    cpu = platform.processor()
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    versions = {}
+    for package in ("mcp", "websockets", "roslibpy", "pydantic", "rosbridge-mcp-server"):
+        try:
+            versions[package] = importlib.metadata.version(package)
+        except importlib.metadata.PackageNotFoundError:
+            versions[package] = "not installed"
+    commit = "unknown"
+    with contextlib.suppress(OSError, subprocess.SubprocessError):
+        found = subprocess.run(
+            ["git", "-C", str(REPO), "describe", "--always", "--dirty"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        )
+        commit = found.stdout.strip()
+    return {
+        "cpu": cpu or "unknown",
+        "cores": os.cpu_count(),
+        "memory_gib": round(psutil.virtual_memory().total / 2**30, 1),
+        "os": platform.platform(),
+        "python": f"{platform.python_implementation()} {platform.python_version()}",
+        "load_average_at_start": [round(load, 2) for load in os.getloadavg()],
+        "versions": versions,
+        "commit": commit,
+    }
+
+
+# ------------------------------------------------------------------------------------- the rosbridge side
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+async def wait_for_port(host: str, port: int, process: asyncio.subprocess.Process, deadline: float) -> None:
+    """Poll until something accepts TCP connections on host:port (the sim prints nothing we rely on)."""
+    loop = asyncio.get_running_loop()
+    while True:
+        if process.returncode is not None:
+            raise RuntimeError(
+                f"the simulated robot exited with status {process.returncode} before listening"
+            )
+        try:
+            _, writer = await asyncio.open_connection(host, port)
+        except OSError:
+            if loop.time() > deadline:
+                raise TimeoutError(f"the simulated robot did not listen on {host}:{port} in time") from None
+            await asyncio.sleep(0.05)
+            continue
+        writer.close()
+        with contextlib.suppress(OSError):
+            await writer.wait_closed()
+        return
+
+
+def tail(errlog: IO[str], lines: int = 15) -> str:
+    """The last lines written to the shared stderr log of the servers and the simulated robot."""
+    errlog.flush()
+    try:
+        return "\n".join(Path(errlog.name).read_text(errors="replace").splitlines()[-lines:])
+    except OSError:
+        return "(unreadable)"
+
+
+@contextlib.asynccontextmanager
+async def simulated_robot(errlog: IO[str]) -> AsyncIterator[str]:
+    """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL."""
+    port = free_port()
+    command = [
+        sys.executable,
+        "-m",
+        "rosbridge_mcp_server.sim",
+        "--port",
+        str(port),
+        "--fast-topic",
+        "--slow-service-seconds",
+        str(SLOW_SERVICE_SECONDS),
+        "--camera-size",
+        CAMERA_SIZE,
+        "--log-level",
+        "WARNING",
+    ]
+    log.info("starting the simulated robot: %s", " ".join(command[1:]))
+    process = await asyncio.create_subprocess_exec(
+        *command, stdin=asyncio.subprocess.DEVNULL, stdout=errlog, stderr=errlog, cwd=REPO
+    )
+    try:
+        try:
+            await wait_for_port("127.0.0.1", port, process, asyncio.get_running_loop().time() + 30)
+        except (RuntimeError, TimeoutError) as error:
+            raise RuntimeError(f"{error}; the end of its stderr:\n{tail(errlog)}") from None
+        yield f"ws://127.0.0.1:{port}"
+    finally:
+        if process.returncode is None:
+            process.terminate()
+            try:
+                await asyncio.wait_for(process.wait(), 5)
+            except TimeoutError:
+                process.kill()
+                await process.wait()
+
+
+class RawBridge:
+    """The floor: one raw websockets connection, one JSON object per frame, nothing else in the way."""
+
+    def __init__(self, ws: ClientConnection) -> None:
+        self.ws = ws
+        self._ids = 0
+
+    def _next_id(self) -> str:
+        self._ids += 1
+        return f"bench:{self._ids}"
+
+    async def call(self, service: str, args: dict[str, Any] | None = None) -> Any:
+        request_id = self._next_id()
+        await self.ws.send(
+            json.dumps({"op": "call_service", "id": request_id, "service": service, "args": args or {}})
+        )
+        while True:
+            reply = json.loads(await self.ws.recv())
+            if reply.get("op") == "service_response" and reply.get("id") == request_id:
+                if reply.get("result") is False:
+                    raise RuntimeError(f"{service} failed: {reply.get('values')}")
+                return reply.get("values")
+
+    async def call_parallel(self, service: str, count: int, args: dict[str, Any] | None = None) -> None:
+        """Send ``count`` calls back to back, then wait for every reply."""
+        pending = set()
+        for _ in range(count):
+            request_id = self._next_id()
+            pending.add(request_id)
+            await self.ws.send(
+                json.dumps({"op": "call_service", "id": request_id, "service": service, "args": args or {}})
+            )
+        while pending:
+            reply = json.loads(await self.ws.recv())
+            if reply.get("op") == "service_response" and reply.get("id") in pending:
+                if reply.get("result") is False:
+                    raise RuntimeError(f"{service} failed: {reply.get('values')}")
+                pending.discard(reply["id"])
+
+    async def collect(self, topic: str, msg_type: str, count: int) -> list[dict[str, Any]]:
+        subscription = self._next_id()
+        await self.ws.send(
+            json.dumps({"op": "subscribe", "id": subscription, "topic": topic, "type": msg_type})
+        )
+        messages: list[dict[str, Any]] = []
+        try:
+            while len(messages) < count:
+                frame = json.loads(await self.ws.recv())
+                if frame.get("op") == "publish" and frame.get("topic") == topic:
+                    messages.append(frame["msg"])
+        finally:
+            await self.ws.send(json.dumps({"op": "unsubscribe", "id": subscription, "topic": topic}))
+        return messages
+
+
+@dataclasses.dataclass
+class Bridge:
+    """What the bridge under test offers, looked up once through rosapi over the raw connection."""
+
+    url: str
+    simulated: bool
+    services: dict[str, str]  # name -> type, for the services the benchmark uses
+    topics: dict[str, str]  # name -> type
+
+    @classmethod
+    async def probe(cls, raw: RawBridge, url: str, *, simulated: bool) -> Bridge:
+        listed = await raw.call("/rosapi/topics")
+        topics = dict(zip(listed.get("topics", []), listed.get("types", []), strict=False))
+        services: dict[str, str] = {}
+        offered = set((await raw.call("/rosapi/services")).get("services", []))
+        for name in (ADD_TWO_INTS, SLOW_SERVICE):
+            if name in offered:
+                services[name] = (await raw.call("/rosapi/service_type", {"service": name})).get("type", "")
+        return cls(url=url, simulated=simulated, services=services, topics=topics)
+
+
+# ------------------------------------------------------------------------------------------- MCP sessions
+
+
+@dataclasses.dataclass
+class Served:
+    """An MCP server process on stdio with an initialized session."""
+
+    session: ClientSession
+    process: psutil.Process
+    initialize_s: float  # spawn -> initialize answered
+    tools_list_s: float  # spawn -> tools/list answered
+    tools: dict[str, mcp_types.Tool]
+
+    def rss(self) -> int:
+        rss: int = self.process.memory_info().rss
+        return rss
+
+    async def tool(self, name: str, arguments: dict[str, Any]) -> mcp_types.CallToolResult:
+        result = await self.session.call_tool(name, arguments)
+        if result.is_error:
+            text = " ".join(getattr(block, "text", "") for block in result.content)
+            raise RuntimeError(f"tool {name} answered with an error: {text}")
+        return result
+
+
+def our_server_command(url: str) -> list[str]:
+    """The console script, as an MCP client such as Claude Desktop starts it."""
+    script = Path(sys.executable).parent / CONSOLE_SCRIPT
+    found = str(script) if script.exists() else shutil.which(CONSOLE_SCRIPT)
+    if found is None:
+        raise FileNotFoundError(f"the console script {CONSOLE_SCRIPT} is not installed (run `uv sync`)")
+    return [found, "--url", url]
+
+
+def bare_server_command(*, reference_tools: bool = False) -> list[str]:
+    return [sys.executable, str(BARE_SERVER), *(["--reference-tools"] if reference_tools else [])]
+
+
+@contextlib.asynccontextmanager
+async def serve_mcp(command: list[str], errlog: IO[str]) -> AsyncIterator[Served]:
+    """Spawn an MCP server, run ``initialize`` and ``tools/list``, and time both from the spawn."""
+    me = psutil.Process()
+    before = {child.pid for child in me.children()}
+    params = StdioServerParameters(command=command[0], args=command[1:], cwd=str(REPO))
+    started = time.perf_counter()
+    async with stdio_client(params, errlog=errlog) as (read, write), ClientSession(read, write) as session:
+        try:
+            async with asyncio.timeout(60):
+                await session.initialize()
+                initialized = time.perf_counter()
+                listed = await session.list_tools()
+                tools_listed = time.perf_counter()
+        except Exception as error:
+            raise RuntimeError(
+                f"{' '.join(command)} did not start ({type(error).__name__}: {error}); "
+                f"the end of its stderr:\n{tail(errlog)}"
+            ) from error
+        spawned = [child for child in me.children() if child.pid not in before]
+        if len(spawned) != 1:
+            raise RuntimeError(f"expected one new server process, found {[p.pid for p in spawned]}")
+        yield Served(
+            session=session,
+            process=spawned[0],
+            initialize_s=initialized - started,
+            tools_list_s=tools_listed - started,
+            tools={tool.name: tool for tool in listed.tools},
+        )
+
+
+def publish_service_arguments(
+    served: Served, service: str, service_type: str, request: dict[str, Any]
+) -> dict[str, Any]:
+    """Arguments for the ``publish_service`` tool; optional fields are left to the tool's defaults."""
+    arguments: dict[str, Any] = {"service": service, "service_type": service_type, "request": request}
+    schema = served.tools["publish_service"].input_schema
+    return {key: value for key, value in arguments.items() if key in schema.get("properties", arguments)}
+
+
+# ------------------------------------------------------------------------------- item 1-3: call latency
+
+
+@dataclasses.dataclass
+class Subject:
+    """One thing whose latency is sampled, call by call."""
+
+    key: str
+    call: Callable[[], Awaitable[object]]
+    samples: list[float] = dataclasses.field(default_factory=list)
+
+    @property
+    def stats(self) -> Stats:
+        return Stats.of(self.samples)
+
+
+async def interleave(subjects: Sequence[Subject], plan: Plan) -> None:
+    """Warm every subject up, then time them in rotated A/B/C blocks so drift hits all of them alike."""
+    for subject in subjects:
+        for _ in range(plan.warmup):
+            await subject.call()
+    clock = time.perf_counter
+    for round_number in range(plan.rounds):
+        shift = round_number % len(subjects)
+        for subject in [*subjects[shift:], *subjects[:shift]]:
+            call, samples = subject.call, subject.samples
+            for _ in range(plan.block):
+                began = clock()
+                await call()
+                samples.append(clock() - began)
+
+
+class Roslibpy:
+    """roslibpy's own blocking service call (its usual use); its Twisted reactor runs in a thread."""
+
+    def __init__(self, url: str) -> None:
+        parts = urlsplit(url)
+        self.ros = roslibpy.Ros(host=parts.hostname, port=parts.port or 9090, is_secure=parts.scheme == "wss")
+        self.topics = roslibpy.Service(self.ros, "/rosapi/topics", "rosapi/Topics")
+
+    def connect(self) -> None:
+        self.ros.run(timeout=10)
+
+    async def call_topics(self) -> None:
+        # Blocking on purpose: this is how roslibpy is used, and nothing else runs meanwhile.
+        self.topics.call(roslibpy.ServiceRequest({}), timeout=10)
+
+    def close(self) -> None:
+        # close() only queues the close frame; let the handshake finish before the reactor stops.
+        with contextlib.suppress(Exception):
+            self.ros.close()
+            deadline = time.monotonic() + 2
+            while self.ros.is_connected and time.monotonic() < deadline:
+                time.sleep(0.01)
+        with contextlib.suppress(Exception):
+            self.ros.terminate()
+
+
+async def measure_latency(ctx: Context) -> list[Row]:
+    """Items 1-3: the same request through each layer, interleaved."""
+    raw, client, ours, plan = ctx.raw, ctx.client, ctx.ours, ctx.plan
+    bridge = ctx.bridge
+    sdk = ctx.reference
+    subjects = [
+        Subject("floor", lambda: raw.call("/rosapi/topics")),
+        Subject("client", lambda: client.call_service("/rosapi/topics")),
+    ]
+    pyros = Roslibpy(bridge.url)
+    pyros.connect()
+    subjects.append(Subject("roslibpy", pyros.call_topics))
+    subjects.append(Subject("sdk_noop", lambda: sdk.tool("noop", {})))
+    subjects.append(Subject("list_topics", lambda: ours.tool("list_topics", {})))
+    add_type = bridge.services.get(ADD_TWO_INTS)
+    if add_type is not None:
+        add_arguments = publish_service_arguments(ours, ADD_TWO_INTS, add_type, {"a": 2, "b": 3})
+        subjects.append(Subject("floor_add", lambda: raw.call(ADD_TWO_INTS, {"a": 2, "b": 3})))
+        subjects.append(Subject("publish_service", lambda: ours.tool("publish_service", add_arguments)))
+    try:
+        await interleave(subjects, plan)
+    finally:
+        pyros.close()
+    by_key = {subject.key: subject.stats for subject in subjects}
+    ctx.samples.update({subject.key: subject.samples for subject in subjects})
+    floor = by_key["floor"]
+
+    def times(stats: Stats, reference: Stats, name: str) -> str:
+        return f"{stats.median / reference.median:.2f}× {name}"
+
+    def over(stats: Stats, reference: Stats, name: str) -> str:
+        return f"{(stats.median - reference.median) * 1e3:+.2f} ms over {name}"
+
+    client, roslib = by_key["client"], by_key["roslibpy"]
+    rows = [
+        timing_row("1", "floor: raw websockets `call_service /rosapi/topics`", floor, versus="reference"),
+        timing_row(
+            "2a",
+            "our `RosbridgeClient.call_service('/rosapi/topics')`",
+            client,
+            versus=times(client, floor, "floor"),
+            target="≤ 1.10× floor",
+            verdict=verdict(client.median <= 1.10 * floor.median),
+        ),
+        timing_row(
+            "2b",
+            "roslibpy `Service.call` (blocking), same call",
+            roslib,
+            versus=f"{times(roslib, floor, 'floor')}; ours is {roslib.median / client.median:.2f}× faster",
+            target="ours faster",
+            verdict=verdict(client.median < roslib.median),
+        ),
+        timing_row(
+            "3·",
+            "SDK reference: no-op tool on a bare `MCPServer` (stdio)",
+            by_key["sdk_noop"],
+            versus=over(by_key["sdk_noop"], floor, "floor"),
+            verdict="info",
+        ),
+        timing_row(
+            "3a",
+            "tool `list_topics` (MCP stdio, console script)",
+            by_key["list_topics"],
+            versus=f"{over(by_key['list_topics'], floor, 'floor')}; "
+            f"{over(by_key['list_topics'], by_key['sdk_noop'], 'no-op')}",
+            target="≤ +1.5 ms over floor",
+            verdict=verdict(by_key["list_topics"].median - floor.median <= 1.5e-3),
+        ),
+    ]
+    if add_type is not None:
+        floor_add, tool = by_key["floor_add"], by_key["publish_service"]
+        rows.append(
+            timing_row("3·", f"floor: raw `call_service {ADD_TWO_INTS}`", floor_add, versus="reference")
+        )
+        rows.append(
+            timing_row(
+                "3b",
+                f"tool `publish_service` {ADD_TWO_INTS}",
+                tool,
+                versus=f"{over(tool, floor_add, 'its floor')}; {over(tool, by_key['sdk_noop'], 'no-op')}",
+                target="≤ +1.5 ms over floor",
+                verdict=verdict(tool.median - floor_add.median <= 1.5e-3),
+            )
+        )
+    else:
+        rows.append(Row("3b", f"tool `publish_service` {ADD_TWO_INTS}", verdict=f"n/a (no {ADD_TWO_INTS})"))
+    return rows
+
+
+# ------------------------------------------------------------------------------------ item 4: concurrency
+
+
+async def wall_time(action: Callable[[], Awaitable[object]]) -> float:
+    began = time.perf_counter()
+    await action()
+    return time.perf_counter() - began
+
+
+async def measure_concurrency(ctx: Context) -> list[Row]:
+    """Item 4: N slow tool calls at once in one session vs N in a row, with the layers below as references."""
+    slow_type = ctx.bridge.services.get(SLOW_SERVICE)
+    if slow_type is None:
+        return [Row("4", f"{ctx.plan.parallel_calls} tool calls at once", verdict=f"n/a (no {SLOW_SERVICE})")]
+    n, ours, raw, client, sdk = ctx.plan.parallel_calls, ctx.ours, ctx.raw, ctx.client, ctx.reference
+    arguments = publish_service_arguments(ours, SLOW_SERVICE, slow_type, {})
+    sleep_arguments = {"seconds": SLOW_SERVICE_SECONDS}
+
+    async def tools_at_once() -> None:
+        await asyncio.gather(*(ours.tool("publish_service", arguments) for _ in range(n)))
+
+    async def tools_in_a_row() -> None:
+        for _ in range(n):
+            await ours.tool("publish_service", arguments)
+
+    async def client_at_once() -> None:
+        await asyncio.gather(*(client.call_service(SLOW_SERVICE) for _ in range(n)))
+
+    async def sdk_at_once() -> None:
+        await asyncio.gather(*(sdk.tool("sleep", sleep_arguments) for _ in range(n)))
+
+    # One of each first, so lanes, imports and caches are warm.
+    await ours.tool("publish_service", arguments)
+    await client.call_service(SLOW_SERVICE)
+    await sdk.tool("sleep", sleep_arguments)
+    samples: dict[str, list[float]] = {"raw": [], "client": [], "sdk": [], "parallel": [], "sequential": []}
+    for _ in range(ctx.plan.concurrency_rounds):
+        samples["raw"].append(await wall_time(lambda: raw.call_parallel(SLOW_SERVICE, n)))
+        samples["client"].append(await wall_time(client_at_once))
+        samples["sdk"].append(await wall_time(sdk_at_once))
+        samples["parallel"].append(await wall_time(tools_at_once))
+        samples["sequential"].append(await wall_time(tools_in_a_row))
+    ctx.samples.update({f"concurrency_{key}": values for key, values in samples.items()})
+    stats = {key: Stats.of(values) for key, values in samples.items()}
+    ideal = SLOW_SERVICE_SECONDS
+    parallel, sequential = stats["parallel"], stats["sequential"]
+    speedup = sequential.median / parallel.median
+    sdk_speedup = n * ideal / stats["sdk"].median
+    row = timing_row(
+        "4a",
+        f"{n} × `publish_service {SLOW_SERVICE}` ({ideal * 1e3:.0f} ms) at once, one session",
+        parallel,
+        versus=f"{speedup:.1f}× faster than in a row",
+        target="≥ 20× faster",
+        verdict=verdict(speedup >= 20),
+    )
+    row.figures["speedup"] = speedup
+    return [
+        row,
+        timing_row("4b", f"{n} × the same, in a row", sequential, versus=f"ideal {ms(n * ideal)}"),
+        timing_row(
+            "4·",
+            f"floor: {n} raw `call_service {SLOW_SERVICE}` at once, one socket",
+            stats["raw"],
+            verdict="info",
+        ),
+        timing_row(
+            "4·", f"our client: {n} `call_service {SLOW_SERVICE}` at once", stats["client"], verdict="info"
+        ),
+        timing_row(
+            "4·",
+            f"SDK reference: {n} × `sleep({ideal:g})` tool at once on a bare `MCPServer`",
+            stats["sdk"],
+            versus=f"{sdk_speedup:.1f}× faster than {n}×{ideal * 1e3:.0f} ms",
+            verdict="info",
+        ),
+    ]
+
+
+# ------------------------------------------------------------------------------------- item 5: throughput
+
+
+def lost_messages(messages: Sequence[dict[str, Any]]) -> int:
+    """Gaps in the fast topic's counter (``data`` counts up by one per message)."""
+    counters = [int(message["data"]) for message in messages]
+    return sum(max(0, later - earlier - 1) for earlier, later in itertools.pairwise(counters))
+
+
+async def measure_throughput(ctx: Context) -> list[Row]:
+    """Item 5: collect N messages of the 1 kHz topic raw and through our client; count the gaps."""
+    count = ctx.plan.messages
+    fast_type = ctx.bridge.topics.get(FAST_TOPIC)
+    if fast_type is None:
+        rows = [Row("5a", f"{count} messages of {FAST_TOPIC} (1 kHz)", verdict=f"n/a (no {FAST_TOPIC})")]
+    else:
+        began = time.perf_counter()
+        raw_messages = await ctx.raw.collect(FAST_TOPIC, fast_type, count)
+        raw_elapsed = time.perf_counter() - began
+        began = time.perf_counter()
+        client_messages: list[dict[str, Any]] = []
+        async with ctx.client.subscribe(FAST_TOPIC, fast_type) as subscription:
+            async for message in subscription:
+                client_messages.append(message)
+                if len(client_messages) >= count:
+                    break
+        client_elapsed = time.perf_counter() - began
+        raw_lost, client_lost = lost_messages(raw_messages), lost_messages(client_messages)
+        rows = [
+            Row(
+                "5·",
+                f"floor: raw websockets, {count} messages of {FAST_TOPIC} (1 kHz)",
+                n=count,
+                versus=f"{raw_lost} lost, {count / raw_elapsed:.0f} msg/s",
+                verdict="info",
+                figures={"lost": raw_lost, "elapsed_s": raw_elapsed},
+            ),
+            Row(
+                "5a",
+                f"our client `subscribe`, {count} messages of {FAST_TOPIC} (1 kHz)",
+                n=count,
+                versus=f"{client_lost} lost, {count / client_elapsed:.0f} msg/s",
+                target="0 lost",
+                verdict=verdict(client_lost == 0),
+                figures={"lost": client_lost, "elapsed_s": client_elapsed},
+            ),
+        ]
+    rows.append(await measure_camera_image(ctx))
+    return rows
+
+
+async def measure_camera_image(ctx: Context) -> Row:
+    """One 640×480 camera frame turned into an MCP image, timed against ≤ 100 ms.
+
+    No tool returns images yet. When one exists, time ``ctx.ours.tool(<name>, {"topic": CAMERA_TOPIC, ...})``
+    here (a few warm-up calls, then ``Stats.of`` over ~20) and check the answer holds an ``ImageContent``.
+    """
+    images = sorted(name for name in ctx.ours.tools if "image" in name or "camera" in name)
+    what = f"one 640×480 frame of {CAMERA_TOPIC} as an MCP image"
+    if not images:
+        return Row("5b", what, target="≤ 100 ms", verdict="n/a (no image tool)")
+    return Row("5b", what, target="≤ 100 ms", verdict=f"n/a (not measured yet: {', '.join(images)})")
+
+
+# --------------------------------------------------------------------------------- items 6-7: startup, memory
+
+
+async def measure_startup(ctx: Context) -> list[Row]:
+    """Item 6 (and the RSS half of item 7): spawn each server in turn, alternating which goes first."""
+    commands = {"bare": bare_server_command(), "ours": our_server_command(ctx.bridge.url)}
+    timings: dict[str, list[float]] = {"bare": [], "ours": []}
+    initialize: dict[str, list[float]] = {"bare": [], "ours": []}
+    rss: dict[str, list[float]] = {"bare": [], "ours": []}
+    closing: dict[str, list[float]] = {"bare": [], "ours": []}
+    # Untimed spawns first, so both find the interpreter and the packages in the page cache.
+    for _ in range(ctx.plan.startup_warmup):
+        for command in commands.values():
+            async with serve_mcp(command, ctx.errlog):
+                pass
+    for round_number in range(ctx.plan.startup_rounds):
+        order = ["bare", "ours"] if round_number % 2 == 0 else ["ours", "bare"]
+        for which in order:
+            async with serve_mcp(commands[which], ctx.errlog) as served:
+                timings[which].append(served.tools_list_s)
+                initialize[which].append(served.initialize_s)
+                rss[which].append(served.rss())
+                closed_from = time.perf_counter()
+            closing[which].append(time.perf_counter() - closed_from)
+    ctx.samples.update({f"startup_{key}": values for key, values in timings.items()})
+    ctx.samples.update({f"startup_rss_{key}": values for key, values in rss.items()})
+    ctx.samples.update({f"shutdown_{key}": values for key, values in closing.items()})
+    bare, ours = Stats.of(timings["bare"]), Stats.of(timings["ours"])
+    bare_rss, ours_rss = Stats.of(rss["bare"]), Stats.of(rss["ours"])
+    ctx.startup_rss = {"bare": bare_rss, "ours": ours_rss}
+    startup_ratio = ours.median / bare.median
+    rss_ratio = ours_rss.median / bare_rss.median
+    ours_close, bare_close = Stats.of(closing["ours"]), Stats.of(closing["bare"])
+    return [
+        timing_row(
+            "6·",
+            "bare `MCPServer`: spawn → `initialize` → `tools/list`",
+            bare,
+            versus=f"reference (initialize {ms(Stats.of(initialize['bare']).median)})",
+        ),
+        timing_row(
+            "6a",
+            "`rosbridge-mcp-server`: spawn → `initialize` → `tools/list`",
+            ours,
+            versus=f"{startup_ratio:.2f}× bare (initialize {ms(Stats.of(initialize['ours']).median)})",
+            target="≤ 1.3× bare",
+            verdict=verdict(startup_ratio <= 1.3),
+        ),
+        timing_row(
+            "6·",
+            "exit after stdin closes (ours / bare)",
+            ours_close,
+            versus=f"bare {ms(bare_close.median)}",
+            verdict="info",
+        ),
+        Row(
+            "7·",
+            "bare `MCPServer`: RSS after startup",
+            n=bare_rss.n,
+            median=mib(bare_rss.median),
+            p90=mib(bare_rss.p90),
+            versus="reference",
+            figures={"median_bytes": bare_rss.median},
+        ),
+        Row(
+            "7a",
+            "`rosbridge-mcp-server`: RSS after startup",
+            n=ours_rss.n,
+            median=mib(ours_rss.median),
+            p90=mib(ours_rss.p90),
+            versus=f"{rss_ratio:.2f}× bare",
+            target="≤ 1.3× bare",
+            verdict=verdict(rss_ratio <= 1.3),
+            figures={"median_bytes": ours_rss.median, "ratio": rss_ratio},
+        ),
+    ]
+
+
+async def churn(served: Served, calls: int, batch: int, call: Callable[[], Awaitable[object]]) -> list[int]:
+    """Make ``calls`` requests, ``batch`` at a time; RSS at the start, halfway and at the end."""
+    marks = [served.rss()]
+    done = 0
+    for checkpoint in (calls // 2, calls):
+        while done < checkpoint:
+            size = min(batch, checkpoint - done)
+            await asyncio.gather(*(call() for _ in range(size)))
+            done += size
+        marks.append(served.rss())
+    return marks
+
+
+async def measure_memory(ctx: Context) -> list[Row]:
+    """Item 7: RSS growth over N cheap requests: ours (``list_topics``), the bare server (``tools/list``)."""
+    calls, batch = ctx.plan.memory_calls, ctx.plan.memory_batch
+    async with serve_mcp(bare_server_command(), ctx.errlog) as bare:
+        began = time.perf_counter()
+        bare_marks = await churn(bare, calls, batch, bare.session.list_tools)
+        bare_elapsed = time.perf_counter() - began
+    async with serve_mcp(our_server_command(ctx.bridge.url), ctx.errlog) as ours:
+        began = time.perf_counter()
+        our_marks = await churn(ours, calls, batch, lambda: ours.tool("list_topics", {}))
+        our_elapsed = time.perf_counter() - began
+    ctx.samples["memory_rss_bare"] = [float(mark) for mark in bare_marks]
+    ctx.samples["memory_rss_ours"] = [float(mark) for mark in our_marks]
+    # Growth in the second half is the leak signal; the first half also holds one-off warm-up (caches).
+    noise = max(bare_marks[2] - bare_marks[1], 0) + 1 * MIB
+    late_growth = our_marks[2] - our_marks[1]
+
+    def growth(marks: list[int]) -> str:
+        return f"{(marks[2] - marks[0]) / MIB:+.1f} MiB (second half {(marks[2] - marks[1]) / MIB:+.1f})"
+
+    return [
+        Row(
+            "7·",
+            f"bare `MCPServer`: RSS after {calls} `tools/list`, {batch} at a time",
+            n=calls,
+            median=mib(bare_marks[2]),
+            versus=f"{growth(bare_marks)}; {calls / bare_elapsed:.0f} calls/s",
+            verdict="info",
+            figures={"rss_bytes": bare_marks, "elapsed_s": bare_elapsed},
+        ),
+        Row(
+            "7b",
+            f"`rosbridge-mcp-server`: RSS after {calls} `list_topics`, {batch} at a time",
+            n=calls,
+            median=mib(our_marks[2]),
+            versus=f"{growth(our_marks)}; {calls / our_elapsed:.0f} calls/s",
+            target="second-half growth ≤ bare's + 1 MiB",
+            verdict=verdict(late_growth <= noise),
+            figures={"rss_bytes": our_marks, "elapsed_s": our_elapsed},
+        ),
+    ]
+
+
+# ------------------------------------------------------------------------------------------------ the run
+
+
+@dataclasses.dataclass
+class Context:
+    """Everything the items share: the plan, the bridge, the open connections and the raw samples."""
+
+    plan: Plan
+    bridge: Bridge
+    raw: RawBridge
+    client: RosbridgeClient
+    ours: Served
+    reference: Served
+    errlog: IO[str]
+    samples: dict[str, list[float]] = dataclasses.field(default_factory=dict)
+    startup_rss: dict[str, Stats] = dataclasses.field(default_factory=dict)
+
+
+Item = Callable[[Context], Awaitable[list[Row]]]
+ITEMS: list[tuple[str, str, Item, float]] = [
+    ("1-3", "call latency", measure_latency, 240.0),
+    ("4", "concurrency", measure_concurrency, 120.0),
+    ("5", "throughput", measure_throughput, 60.0),
+    ("6-7", "startup and RSS", measure_startup, 180.0),
+    ("7", "memory growth", measure_memory, 300.0),
+]
+
+
+async def run_items(ctx: Context) -> tuple[list[Row], bool]:
+    rows: list[Row] = []
+    failed = False
+    for item, title, measure, deadline in ITEMS:
+        log.info("item %s: %s", item, title)
+        began = time.perf_counter()
+        try:
+            async with asyncio.timeout(deadline):
+                rows.extend(await measure(ctx))
+        except Exception as error:  # one item failing must not hide the others' figures
+            failed = True
+            log.error("item %s (%s) failed:\n%s", item, title, traceback.format_exc())
+            rows.append(Row(item, title, verdict=f"**error**: {type(error).__name__}: {error}"))
+        log.info("item %s took %.1f s", item, time.perf_counter() - began)
+    return rows, failed
+
+
+async def run(arguments: argparse.Namespace) -> tuple[dict[str, Any], list[Row], bool]:
+    plan = QUICK if arguments.quick else FULL
+    machine = describe_machine()
+    report: dict[str, Any] = {
+        "date": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "machine": machine,
+        "plan": dataclasses.asdict(plan),
+    }
+    errlog_path = Path(tempfile.gettempdir()) / f"bench-servers-{os.getpid()}.log"
+    log.info("server and simulated-robot stderr goes to %s", errlog_path)
+    with errlog_path.open("w") as errlog:
+        async with contextlib.AsyncExitStack() as stack:
+            if arguments.url:
+                url, simulated = arguments.url, False
+            else:
+                url, simulated = await stack.enter_async_context(simulated_robot(errlog)), True
+            ws = await stack.enter_async_context(connect(url, max_size=None, compression=None))
+            raw = RawBridge(ws)
+            bridge = await Bridge.probe(raw, url, simulated=simulated)
+            report["bridge"] = {"url": url, "simulated": simulated, **dataclasses.asdict(bridge)}
+            log.info("bridge at %s offers %s", url, ", ".join(bridge.services) or "none of our services")
+            client = await stack.enter_async_context(RosbridgeClient(url))
+            await client.wait_connected(10)
+            ours = await stack.enter_async_context(serve_mcp(our_server_command(url), errlog))
+            reference = await stack.enter_async_context(
+                serve_mcp(bare_server_command(reference_tools=True), errlog)
+            )
+            ctx = Context(
+                plan=plan,
+                bridge=bridge,
+                raw=raw,
+                client=client,
+                ours=ours,
+                reference=reference,
+                errlog=errlog,
+            )
+            rows, failed = await run_items(ctx)
+            report["samples"] = ctx.samples
+    report["rows"] = [dataclasses.asdict(row) for row in rows]
+    return report, rows, failed
+
+
+def render(report: dict[str, Any], rows: Sequence[Row]) -> str:
+    machine = report["machine"]
+    versions = machine["versions"]
+    bridge = report.get("bridge", {})
+    where = (
+        "simulated robot in its own process"
+        if bridge.get("simulated")
+        else f"rosbridge at {bridge.get('url')}"
+    )
+    lines = [
+        f"rosbridge-mcp-server benchmark — {report['date']} — plan `{report['plan']['name']}`",
+        "",
+        f"- Machine: {machine['cpu']}, {machine['cores']} cores, {machine['memory_gib']} GiB; "
+        f"{machine['os']}; {machine['python']}; load average at start {machine['load_average_at_start'][0]}",
+        f"- Code: commit {machine['commit']}; mcp {versions['mcp']}, websockets {versions['websockets']}, "
+        f"roslibpy {versions['roslibpy']}",
+        f"- Bridge: {where}",
+        "",
+        "| # | measurement | n | median | p90 | vs reference | target | verdict |",
+        "|---|---|--:|--:|--:|---|---|---|",
+    ]
+    for row in rows:
+        cells = [row.item, row.what, "" if row.n is None else str(row.n), row.median, row.p90, row.versus]
+        cells += [row.target, row.verdict]
+        lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
+    return "\n".join(lines)
+
+
+def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
+    parser.add_argument(
+        "--url", help="measure against this rosbridge (ws://host:port) instead of a simulated robot"
+    )
+    parser.add_argument(
+        "--json", type=Path, metavar="FILE", help="also write every figure and sample to FILE"
+    )
+    parser.add_argument(
+        "--quick", action="store_true", help="tiny repetition counts: a few seconds, for smoke tests"
+    )
+    parser.add_argument("-v", "--verbose", action="store_true", help="log more to stderr")
+    return parser.parse_args(argv)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    arguments = parse_arguments(argv)
+    logging.basicConfig(
+        level=logging.DEBUG if arguments.verbose else logging.INFO,
+        format="bench %(relativeCreated)7.0f ms %(levelname)s %(message)s",
+        stream=sys.stderr,
+    )
+    # The MCP SDK and our client log every request at INFO; that is noise here.
+    for noisy in ("mcp", "httpx", "websockets", "roslibpy", "rosbridge_mcp_server"):
+        logging.getLogger(noisy).setLevel(logging.WARNING)
+    began = time.perf_counter()
+    report, rows, failed = asyncio.run(run(arguments))
+    report["duration_s"] = time.perf_counter() - began
+    print(render(report, rows))
+    if arguments.json:
+        arguments.json.write_text(json.dumps(report, indent=2, default=str) + "\n")
+        log.info("wrote %s", arguments.json)
+    log.info("done in %.0f s%s", report["duration_s"], "; some items errored" if failed else "")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
