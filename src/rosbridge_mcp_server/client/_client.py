@@ -104,6 +104,9 @@ class RosbridgeClient:
         self._ids = protocol.IdMinter()
         self._main: Connection | None = None
         self._info: RosInfo | None = None
+        # Derived from _info once per connection, so the hot path does not recompute them.
+        self._lanes_by_default = False
+        self._send_service_timeout = False
         self._last_reason: str | None = "not started"
         self._runner: asyncio.Task[None] | None = None
         self._closing = False
@@ -238,6 +241,8 @@ class RosbridgeClient:
                 logger.warning("Setting up the connection to %s failed: %s", self.url, self._last_reason)
             else:
                 self._info = info
+                self._lanes_by_default = info.may_be_in_order
+                self._send_service_timeout = info.honours_service_timeout
                 self._main = conn
                 self._last_reason = None
                 self.connections_made += 1
@@ -428,17 +433,23 @@ class RosbridgeClient:
         :class:`NotConnectedError`.
         """
         t = self.request_timeout if timeout is None else timeout
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + t
         conn = self._main
         if conn is None or not conn.is_open:
-            conn = await self._main_connection(deadline)
-        info = self._info
-        if info is None:
-            raise NotConnectedError(self.url, self._last_reason)
-        use_lane = info.may_be_in_order if isolated is None else isolated
-        if not use_lane:
-            return await self._call_on(conn, service, args, t, send_timeout=info.honours_service_timeout)
+            conn = await self._main_connection(asyncio.get_running_loop().time() + t)
+        if isolated or (isolated is None and self._lanes_by_default):
+            return await self._call_on_lane(service, args, t)
+        # The hot path: kept flat (one coroutine frame below this one) because a benchmark holds
+        # it to a raw websockets round trip.
+        rid = self._ids.mint("call_service", service)
+        op = protocol.call_service(service, args, id=rid, timeout=t if self._send_service_timeout else None)
+        reply = await conn.request(rid, op, "service " + service, t)
+        if reply.get("result") is False:
+            raise _service_error(service, reply)
+        return reply.get("values")
+
+    async def _call_on_lane(self, service: str, args: dict[str, Any] | list[Any] | None, t: float) -> Any:
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + t
         what = f"service {service}"
         lane = await self._lanes.acquire(deadline, what, t)
         reusable = False
@@ -446,7 +457,7 @@ class RosbridgeClient:
             remaining = max(deadline - loop.time(), 0.001)
             rid = self._ids.mint("call_service", service)
             op = protocol.call_service(
-                service, args, id=rid, timeout=remaining if info.honours_service_timeout else None
+                service, args, id=rid, timeout=remaining if self._send_service_timeout else None
             )
             try:
                 reply = await lane.request(rid, op, what, remaining)
@@ -455,7 +466,9 @@ class RosbridgeClient:
             reusable = True
         finally:
             self._lanes.release(lane, reusable)
-        return _service_values(service, reply)
+        if reply.get("result") is False:
+            raise _service_error(service, reply)
+        return reply.get("values")
 
     # --- topics -------------------------------------------------------------------------------------
 
@@ -716,11 +729,15 @@ class RosbridgeClient:
             )
 
 
-def _service_values(service: str, reply: dict[str, Any]) -> Any:
+def _service_error(service: str, reply: dict[str, Any]) -> ServiceError:
     values = reply.get("values")
+    return ServiceError(service, values if isinstance(values, str) else repr(values))
+
+
+def _service_values(service: str, reply: dict[str, Any]) -> Any:
     if reply.get("result") is False:
-        raise ServiceError(service, values if isinstance(values, str) else repr(values))
-    return values
+        raise _service_error(service, reply)
+    return reply.get("values")
 
 
 def _goal_result(action: str, frame: dict[str, Any]) -> tuple[int, Any]:
