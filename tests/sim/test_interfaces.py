@@ -376,6 +376,40 @@ def test_full_text_follows_the_stamp_only_on_ros2(ros2: InterfaceRegistry, ros1:
     assert "builtin_interfaces" not in ros1_text
 
 
+def test_ros2_full_text_takes_nested_types_last_pushed_first(ros2: InterfaceRegistry) -> None:
+    """rosapi's stringify_field_types pops a stack: the last field's type of the root comes next."""
+    text = ros2.full_text("geometry_msgs/msg/PoseStamped")
+    order = [line[len("MSG: ") :] for line in text.split("\n") if line.startswith("MSG: ")]
+    assert order == [
+        "geometry_msgs/Pose",
+        "geometry_msgs/Quaternion",
+        "geometry_msgs/Point",
+        "std_msgs/Header",
+        "builtin_interfaces/Time",
+    ]
+
+
+def test_ros1_full_text_takes_dependencies_depth_first(ros1: InterfaceRegistry) -> None:
+    """genpy's _full_text lists dependencies depth first in field order."""
+    text = ros1.full_text("geometry_msgs/PoseStamped")
+    order = [line[len("MSG: ") :] for line in text.split("\n") if line.startswith("MSG: ")]
+    assert order == [
+        "std_msgs/Header",
+        "geometry_msgs/Pose",
+        "geometry_msgs/Point",
+        "geometry_msgs/Quaternion",
+    ]
+
+
+def test_registry_clock_stamps_when_no_time_is_given() -> None:
+    """Without an explicit now, header stamps come from the registry's clock."""
+    registry = InterfaceRegistry("ros2", clock=lambda: 7.25)
+    assert registry.from_json("geometry_msgs/PoseStamped", {})["header"]["stamp"] == {
+        "sec": 7,
+        "nanosec": 250_000_000,
+    }
+
+
 # --------------------------------------------------------------------------- inbound conversion
 
 

@@ -89,7 +89,11 @@ def _finite_or_none(value: float) -> float | None:
 
 
 class InterfaceRegistry:
-    """Every interface type the simulated robot knows, in one dialect."""
+    """Every interface type the simulated robot knows, in one dialect.
+
+    ``clock`` gives "now" in seconds for header stamps and ``"now"`` times (default: wall clock); the parsed
+    definitions are shared by every registry of a dialect, the per-registry caches are small dicts.
+    """
 
     def __init__(self, dialect: Dialect, *, clock: Callable[[], float] | None = None) -> None:
         if dialect not in ("ros1", "ros2"):
