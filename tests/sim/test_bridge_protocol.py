@@ -1,0 +1,377 @@
+"""The simulated rosbridge speaks the protocol as the real servers do: replies, error texts, silences."""
+
+from __future__ import annotations
+
+import json
+import uuid
+
+import pytest
+from rawclient import RawClient
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.sim.connection import MAX_QUEUED_MESSAGES
+
+
+async def test_service_call_answers_with_values_and_echoes_id_and_service(sim: SimulatedRobot) -> None:
+    """A call_service gets one service_response with the request's id, service name and values."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send(
+            {"op": "call_service", "id": "c1", "service": "/add_two_ints", "args": {"a": 2, "b": 40}}
+        )
+        reply = await client.reply("c1")
+    assert reply == {
+        "op": "service_response",
+        "id": "c1",
+        "service": "/add_two_ints",
+        "result": True,
+        "values": {"sum": 42},
+    }
+
+
+async def test_service_args_may_be_a_list_in_field_order(sim: SimulatedRobot) -> None:
+    """rosbridge accepts args as a list of values in the request's field order."""
+    async with await RawClient.open(sim.url) as client:
+        assert (await client.values("/add_two_ints", [5, 6])) == {"sum": 11}
+
+
+async def test_service_call_with_an_empty_request_succeeds(sim: SimulatedRobot) -> None:
+    """A service with an empty request (std_srvs Empty) is called without args."""
+    sim.world.turtle.x = 1.0
+    async with await RawClient.open(sim.url) as client:
+        reply = await client.call("/reset")
+    assert reply["result"] is True
+    assert reply["values"] == {}
+    assert sim.world.turtle.x == pytest.approx(5.544444561004639)
+
+
+async def test_call_to_a_missing_service_fails_with_the_real_servers_text(sim: SimulatedRobot) -> None:
+    """service_response result false, values 'Service /x does not exist' (both lines)."""
+    async with await RawClient.open(sim.url) as client:
+        reply = await client.call("/no_such_service")
+    assert reply["result"] is False
+    assert reply["values"] == "Service /no_such_service does not exist"
+
+
+async def test_bad_service_args_fail_with_a_conversion_text(sim: SimulatedRobot) -> None:
+    """Args that do not fit the request type end in result false with rosbridge's conversion error text."""
+    async with await RawClient.open(sim.url) as client:
+        unknown_field = await client.call("/add_two_ints", {"a": 1, "b": 2, "c": 3})
+        float_for_int = await client.call("/add_two_ints", {"a": 1.5, "b": 2})
+    assert unknown_field["result"] is False
+    assert "c" in unknown_field["values"]
+    assert float_for_int["result"] is False
+    assert isinstance(float_for_int["values"], str)
+    assert "a" in float_for_int["values"]
+
+
+async def test_ros2_timeout_field_ends_a_slow_call_with_the_timeout_text(sim_ros2: SimulatedRobot) -> None:
+    """On ROS 2 the call_service timeout field gives 'Timeout exceeded while waiting for service response'."""
+    async with await RawClient.open(sim_ros2.url) as client:
+        reply = await client.call("/slow_service", timeout=0.1)
+    assert reply == {
+        "op": "service_response",
+        "id": reply["id"],
+        "service": "/slow_service",
+        "result": False,
+        "values": "Timeout exceeded while waiting for service response",
+    }
+
+
+async def test_ros1_ignores_the_timeout_field(make_sim) -> None:  # type: ignore[no-untyped-def]
+    """ROS 1 has no service timeout: the slow service completes even with a short timeout field."""
+    robot = await make_sim(dialect="ros1", slow_service_seconds=0.3)
+    async with await RawClient.open(robot.url) as client:
+        reply = await client.call("/slow_service", timeout=0.05)
+    assert reply["result"] is True
+    assert reply["values"]["success"] is True
+
+
+async def test_legacy_hash_id_in_the_service_name_becomes_the_id(sim: SimulatedRobot) -> None:
+    """Without an id, '/rosapi/get_time#33' calls /rosapi/get_time and answers with id '33'."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "call_service", "service": "/rosapi/get_time#33"})
+        reply = await client.reply("33")
+    assert reply["result"] is True
+
+
+@pytest.mark.parametrize(
+    "frame",
+    [
+        "this is not json",
+        "42",
+        '["a", "list"]',
+        '{"no_op": true}',
+        '{"op": "set_level", "level": "info", "id": "lvl"}',
+        '{"op": "status", "level": "error", "msg": "hi"}',
+        '{"op": "no_such_op", "id": "x"}',
+        '{"op": "subscribe"}',
+        '{"op": "subscribe", "topic": "/chatter", "throttle_rate": 100.0}',
+        '{"op": "publish", "topic": "/turtle1/cmd_vel", "msg": {"linear": {"x": 1}, "bogus": 1}}',
+        '{"op": "call_service", "id": "bad", "service": 7}',
+        '{"op": "unsubscribe", "topic": "/never_subscribed"}',
+        '{"op": "unadvertise", "topic": "/never_advertised"}',
+    ],
+)
+async def test_frames_the_real_server_only_logs_get_no_reply(sim: SimulatedRobot, frame: str) -> None:
+    """Unknown ops, bad JSON, missing or mistyped fields and bad messages: no frame comes back, ever."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send(frame)
+        assert await client.frames_before_barrier() == []
+
+
+async def test_set_level_is_an_unknown_op_and_never_produces_status_frames(sim: SimulatedRobot) -> None:
+    """No status op exists on real servers: a failing op after set_level still gets no status frame."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "set_level", "level": "info"})
+        await client.send({"op": "subscribe", "topic": "/not_there"})
+        frames = await client.frames_before_barrier()
+    assert [f for f in frames if f.get("op") == "status"] == []
+
+
+async def test_subscribe_without_type_to_an_unknown_topic_makes_no_subscription(sim: SimulatedRobot) -> None:
+    """'Cannot infer topic type' is only logged, and a later publisher does not reach that client."""
+    async with await RawClient.open(sim.url) as subscriber, await RawClient.open(sim.url) as publisher:
+        await subscriber.send({"op": "subscribe", "topic": "/later"})
+        assert await subscriber.frames_before_barrier() == []
+        await publisher.send({"op": "advertise", "topic": "/later", "type": "std_msgs/String"})
+        await publisher.send({"op": "publish", "topic": "/later", "msg": {"data": "x"}})
+        await publisher.frames_before_barrier()
+        assert await subscriber.frames_before_barrier() == []
+
+
+async def test_subscribe_with_type_before_a_publisher_exists_receives_later_messages(
+    sim: SimulatedRobot,
+) -> None:
+    """With a type, the subscription is made at once and data flows when someone publishes."""
+    async with await RawClient.open(sim.url) as subscriber, await RawClient.open(sim.url) as publisher:
+        await subscriber.send({"op": "subscribe", "topic": "/later", "type": "std_msgs/String", "id": "s"})
+        await subscriber.frames_before_barrier()
+        await publisher.send({"op": "advertise", "topic": "/later", "type": "std_msgs/String"})
+        await publisher.send({"op": "publish", "topic": "/later", "msg": {"data": "hello"}})
+        message = await subscriber.next_publish("/later")
+    assert message == {"op": "publish", "topic": "/later", "msg": {"data": "hello"}}
+
+
+async def test_publish_without_advertise_uses_the_graphs_type(sim: SimulatedRobot) -> None:
+    """A publish to an existing topic needs no advertise: the publisher is created with the graph's type."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "publish", "topic": "/turtle1/cmd_vel", "msg": {"linear": {"x": 0.5}}})
+        await sim.wait_for(lambda w: "/turtle1/cmd_vel" in w.published)
+    record = sim.world.published["/turtle1/cmd_vel"][-1]
+    assert record.msg["linear"]["x"] == 0.5
+    assert record.msg["angular"]["z"] == 0.0
+
+
+async def test_publish_to_an_unknown_topic_without_type_is_dropped(sim: SimulatedRobot) -> None:
+    """Publishing to a topic nobody knows, with no type, is logged and dropped."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "publish", "topic": "/nobody", "msg": {"data": "x"}})
+        await client.frames_before_barrier()
+    assert "/nobody" not in sim.world.published
+
+
+async def test_ros2_publish_with_a_type_registers_the_topic(sim_ros2: SimulatedRobot) -> None:
+    """ROS 2 (2.0.6/2.6.0+) accepts a type on publish to create the registration."""
+    async with await RawClient.open(sim_ros2.url) as client:
+        await client.send(
+            {"op": "publish", "topic": "/new", "type": "std_msgs/msg/String", "msg": {"data": "x"}}
+        )
+        await client.frames_before_barrier()
+        topics = await client.values("/rosapi/topics")
+    assert sim_ros2.world.published["/new"][-1].msg["data"] == "x"
+    assert "/new" in topics["topics"]
+
+
+async def test_type_conflict_on_advertise_is_only_logged(sim: SimulatedRobot) -> None:
+    """Advertising an existing topic with another type is refused silently; the graph keeps the first type."""
+    async with await RawClient.open(sim.url) as client:
+        wrong = "std_msgs/msg/String" if sim.dialect == "ros2" else "std_msgs/String"
+        await client.send({"op": "advertise", "topic": "/turtle1/pose", "type": wrong})
+        assert await client.frames_before_barrier() == []
+        topic_type = await client.values("/rosapi/topic_type", {"topic": "/turtle1/pose"})
+    assert topic_type["type"].endswith("Pose")
+
+
+async def test_incoming_fragments_are_reassembled_into_one_op(sim: SimulatedRobot) -> None:
+    """A call_service split into fragment ops is joined and answered once."""
+    text = json.dumps(
+        {"op": "call_service", "id": "frag-call", "service": "/add_two_ints", "args": {"a": 3, "b": 4}}
+    )
+    chunks = [text[i : i + 10] for i in range(0, len(text), 10)]
+    fragment_id = str(uuid.uuid4())
+    async with await RawClient.open(sim.url) as client:
+        for num, chunk in enumerate(chunks):
+            await client.send(
+                {"op": "fragment", "id": fragment_id, "data": chunk, "num": num, "total": len(chunks)}
+            )
+        reply = await client.reply("frag-call")
+    assert reply["values"] == {"sum": 7}
+
+
+async def test_fragment_size_splits_outgoing_frames_for_the_whole_connection(sim: SimulatedRobot) -> None:
+    """A fragment_size on any op makes every larger outgoing frame arrive as fragment ops that join back."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "fragment_size": 16, "id": "s"})
+        first = await client.recv_until(lambda f: f.get("op") == "fragment")
+        parts = [first]
+        while len(parts) < first["total"]:
+            parts.append(await client.recv_until(lambda f: f.get("op") == "fragment"))
+    assert [p["num"] for p in parts] == list(range(first["total"]))
+    assert all(len(p["data"]) <= 16 for p in parts)
+    joined = json.loads("".join(p["data"] for p in parts))
+    assert joined["op"] == "publish"
+    assert joined["topic"] == "/chatter"
+    assert joined["msg"]["data"].startswith("Hello World: ")
+    # Fragments of an id-less publish carry id "0" (ROS 2) or 0 (ROS 1).
+    assert first["id"] == ("0" if sim.dialect == "ros2" else 0)
+
+
+async def test_ros2_fragment_size_is_capped_at_max_message_size(make_sim) -> None:  # type: ignore[no-untyped-def]
+    """ROS 2 (2.0.2/2.4.0+) caps a client's fragment_size at the server's max_message_size."""
+    robot = await make_sim(dialect="ros2", max_message_size=40)
+    async with await RawClient.open(robot.url) as client:
+        await client.send(
+            {"op": "call_service", "id": "big", "service": "/rosapi/nodes", "fragment_size": 10**9}
+        )
+        first = await client.recv()
+    assert first["op"] == "fragment"
+    assert len(first["data"]) == 40
+
+
+async def test_ros1_sends_whole_frames_unless_asked_to_fragment(sim_ros1: SimulatedRobot) -> None:
+    """ROS 1 has no fragment size until a client sends one."""
+    async with await RawClient.open(sim_ros1.url) as client:
+        reply = await client.call("/rosapi/services")
+    assert reply["op"] == "service_response"
+    assert len(json.dumps(reply)) > 1000
+
+
+async def test_throttle_rate_limits_how_often_a_topic_is_delivered(sim: SimulatedRobot) -> None:
+    """With throttle_rate 300 ms, /chatter (10 Hz) arrives at most every 300 ms."""
+    import time
+
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "throttle_rate": 300})
+        stamps = []
+        for _ in range(3):
+            await client.next_publish("/chatter")
+            stamps.append(time.monotonic())
+    assert stamps[1] - stamps[0] >= 0.25
+    assert stamps[2] - stamps[1] >= 0.25
+
+
+async def test_unsubscribe_by_id_keeps_the_other_subscription(sim: SimulatedRobot) -> None:
+    """Two subscriptions with different ids: removing one keeps data flowing for the other."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "id": "a"})
+        await client.send({"op": "subscribe", "topic": "/chatter", "id": "b"})
+        await client.send({"op": "unsubscribe", "topic": "/chatter", "id": "a"})
+        await client.frames_before_barrier()
+        message = await client.next_publish("/chatter")
+        await client.send({"op": "unsubscribe", "topic": "/chatter", "id": "b"})
+        await client.frames_before_barrier()
+        subscribers = await client.values("/rosapi/subscribers", {"topic": "/chatter"})
+    assert message["msg"]["data"].startswith("Hello World")
+    assert subscribers["subscribers"] == []
+
+
+async def test_a_bad_frame_from_one_client_does_not_disturb_another(sim: SimulatedRobot) -> None:
+    """Garbage on one socket; the other client's subscription and calls go on."""
+    async with await RawClient.open(sim.url) as good, await RawClient.open(sim.url) as bad:
+        await good.send({"op": "subscribe", "topic": "/chatter", "id": "s"})
+        await good.next_publish("/chatter")
+        for frame in ["{", "[]", "null", '{"op": 5}', '{"op": "publish", "topic": 3}', "\x00\xff"]:
+            await bad.send(frame)
+        await bad.ws.send(b"\xff\xfe not utf-8")
+        await good.next_publish("/chatter")
+        assert (await good.values("/add_two_ints", {"a": 1, "b": 1})) == {"sum": 2}
+        assert (await bad.values("/add_two_ints", {"a": 2, "b": 2})) == {"sum": 4}
+
+
+async def test_disconnect_cleans_up_subscriptions_and_advertisements_but_not_services(
+    sim: SimulatedRobot,
+) -> None:
+    """Like rosbridge's finish(): topics are released; advertised services stay, as on the real server."""
+    string = "std_msgs/msg/String" if sim.dialect == "ros2" else "std_msgs/String"
+    trigger = "std_srvs/srv/Trigger" if sim.dialect == "ros2" else "std_srvs/Trigger"
+    leaving = await RawClient.open(sim.url)
+    await leaving.send({"op": "advertise", "topic": "/mine", "type": string})
+    await leaving.send({"op": "subscribe", "topic": "/chatter"})
+    await leaving.send({"op": "advertise_service", "service": "/my_service", "type": trigger})
+    await leaving.frames_before_barrier()
+    async with await RawClient.open(sim.url) as observer:
+        before = await observer.values("/rosapi/topics")
+        assert "/mine" in before["topics"]
+        await leaving.close()
+        await sim.wait_for(lambda w: sim.connection_count == 1)
+        after = await observer.values("/rosapi/topics")
+        subscribers = await observer.values("/rosapi/subscribers", {"topic": "/chatter"})
+        services = await observer.values("/rosapi/services")
+    assert "/mine" not in after["topics"]
+    assert "/rosbridge_websocket" not in subscribers["subscribers"]
+    assert "/my_service" in services["services"]
+
+
+async def test_a_client_hosted_service_is_forwarded_to_it_and_answered(sim: SimulatedRobot) -> None:
+    """advertise_service: the bridge forwards call_service with a service_request id; the values return."""
+    add = "example_interfaces/srv/AddTwoInts" if sim.dialect == "ros2" else "rospy_tutorials/AddTwoInts"
+    async with await RawClient.open(sim.url) as host, await RawClient.open(sim.url) as caller:
+        await host.send({"op": "advertise_service", "service": "/hosted_add", "type": add})
+        await host.frames_before_barrier()
+        await caller.send(
+            {"op": "call_service", "id": "via-host", "service": "/hosted_add", "args": {"a": 1, "b": 2}}
+        )
+        request = await host.recv_until(lambda f: f.get("op") == "call_service")
+        assert request["id"].startswith("service_request:/hosted_add:")
+        assert request["args"] == {"a": 1, "b": 2}
+        await host.send(
+            {
+                "op": "service_response",
+                "id": request["id"],
+                "service": "/hosted_add",
+                "result": True,
+                "values": {"sum": 99},
+            }
+        )
+        reply = await caller.reply("via-host")
+    assert reply["result"] is True
+    assert reply["values"] == {"sum": 99}
+
+
+async def test_a_slow_reader_loses_the_oldest_messages_not_memory(sim: SimulatedRobot) -> None:
+    """A client that does not read gets at most MAX_QUEUED_MESSAGES queued; older data is dropped."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "id": "s"})
+        await client.frames_before_barrier()
+        string = "std_msgs/msg/String" if sim.dialect == "ros2" else "std_msgs/String"
+        for n in range(MAX_QUEUED_MESSAGES * 3):
+            sim.bridge.publish_json("/chatter", string, {"data": f"flood {n}"})
+        (conn,) = sim.bridge.connections.values()
+        assert conn.dropped >= MAX_QUEUED_MESSAGES
+        delivered = [f for f in await client.frames_before_barrier() if f.get("op") == "publish"]
+    assert len(delivered) <= MAX_QUEUED_MESSAGES + 1
+    assert delivered[-1]["msg"]["data"] == f"flood {MAX_QUEUED_MESSAGES * 3 - 1}"
+    assert "flood 0" not in [f["msg"]["data"] for f in delivered]
+
+
+async def test_drop_connections_closes_sockets_and_clients_can_reconnect(sim: SimulatedRobot) -> None:
+    """drop_connections() closes every socket; the server keeps serving."""
+    client = await RawClient.open(sim.url)
+    await client.values("/rosapi/get_time")
+    await sim.drop_connections()
+    await client.ws.wait_closed()
+    await sim.wait_for(lambda w: sim.connection_count == 0)
+    async with await RawClient.open(sim.url) as again:
+        assert "time" in await again.values("/rosapi/get_time")
+
+
+async def test_stop_and_start_serve_again_on_the_same_port(sim: SimulatedRobot) -> None:
+    """stop() ends the server; start() serves on the same port (the restart our client must survive)."""
+    port = sim.port
+    await sim.stop()
+    with pytest.raises(OSError, match=r"Connect call failed|refused"):
+        await RawClient.open(sim.url)
+    await sim.start()
+    assert sim.port == port
+    async with await RawClient.open(sim.url) as client:
+        assert (await client.values("/add_two_ints", {"a": 1, "b": 2})) == {"sum": 3}
