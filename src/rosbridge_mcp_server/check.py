@@ -45,8 +45,8 @@ def unreachable_advice(url: str, reason: str | None) -> list[str]:
         other = "ws://" if secure else "wss://"
         advice.append(f"The server may speak the other protocol: try {other} instead of {parts.scheme}://.")
     advice += [
-        "Start rosbridge on the robot: `ros2 launch rosbridge_server rosbridge_websocket_launch.xml` (ROS 2) "
-        "or `roslaunch rosbridge_server rosbridge_websocket.launch` (ROS 1).",
+        "Start rosbridge on the robot: `ros2 launch rosbridge_server rosbridge_websocket_launch.xml` (ROS "
+        "2) or `roslaunch rosbridge_server rosbridge_websocket.launch` (ROS 1).",
         f"Check host and port: ROSBRIDGE_HOST / ROSBRIDGE_PORT (or ROSBRIDGE_URL); now {url}. rosbridge's "
         "default port is 9090.",
         f"Check that a firewall lets TCP port {port} through (e.g. `nc -vz {host} {port}`).",
@@ -91,8 +91,7 @@ async def run_check(config: Config, out: TextIO) -> int:
             say(
                 _NOTE,
                 "this bridge may handle one connection strictly in order (Humble defaults): goals and "
-                "service "
-                "calls run on extra connections so they do not block each other",
+                "service calls run on extra connections so they do not block each other",
             )
         else:
             say(_OK, "calls on one connection run side by side")

@@ -44,9 +44,8 @@ class _Parser(argparse.ArgumentParser):
 def _parser(command: str) -> _Parser:
     if command == "check":
         description = (
-            "Diagnose the connection to rosbridge: is it reachable, which ROS it runs, what rosbridge "
-            "can do, "
-            "whether rosapi answers. Exit code 0 when healthy, 1 when not."
+            "Diagnose the connection to rosbridge: is it reachable, which ROS it runs, what rosbridge can "
+            "do, whether rosapi answers. Exit code 0 when healthy, 1 when not."
         )
     else:
         description = (
@@ -118,9 +117,14 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
 def configure_logging(level: str, stream: TextIO | None = None) -> None:
     """Log to stderr: our own loggers at ``level``, everyone else's at WARNING (or DEBUG when asked)."""
     handler = logging.StreamHandler(stream if stream is not None else sys.stderr)
+    handler.set_name(PROG)
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
     root = logging.getLogger()
-    root.handlers[:] = [handler]
+    # Replace only our own handler (run() may be called more than once in one process, e.g. in tests). Having
+    # a handler on the root also keeps MCPServer's logging.basicConfig from adding its own.
+    for old in [h for h in root.handlers if h.get_name() == PROG]:
+        root.removeHandler(old)
+    root.addHandler(handler)
     root.setLevel(logging.DEBUG if level == "DEBUG" else logging.WARNING)
     logging.getLogger("rosbridge_mcp_server").setLevel(level)
 

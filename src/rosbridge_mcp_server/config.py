@@ -145,8 +145,8 @@ def parse_host(value: str, *, source: str) -> str:
         raise ConfigError(f"{source} is empty; give a host name or IP address such as 192.168.1.100")
     if "://" in text:
         raise ConfigError(
-            f"{source} must be a bare host name or IP address, not a URL ({text!r}); "
-            "use --url / ROSBRIDGE_URL for a full ws:// or wss:// URL"
+            f"{source} must be a bare host name or IP address, not a URL ({text!r}); use --url / "
+            "ROSBRIDGE_URL for a full ws:// or wss:// URL"
         )
     if text.startswith("[") and text.endswith("]"):
         text = text[1:-1]

@@ -45,9 +45,9 @@ __all__ = [
 _log = logging.getLogger(__name__)
 
 ROSAPI_HINT = (
-    "rosapi must be running next to rosbridge: the launch files start it "
-    "(`ros2 launch rosbridge_server rosbridge_websocket_launch.xml`, "
-    "`roslaunch rosbridge_server rosbridge_websocket.launch`); `rosbridge_websocket` run alone does not."
+    "rosapi must be running next to rosbridge: the launch files start it (`ros2 launch rosbridge_server "
+    "rosbridge_websocket_launch.xml`, `roslaunch rosbridge_server rosbridge_websocket.launch`); "
+    "`rosbridge_websocket` run alone does not."
 )
 
 # Type look-ups for many names at once (service types, action types) run side by side, but not hundreds at

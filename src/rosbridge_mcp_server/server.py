@@ -79,8 +79,7 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
     (
         ConnectionLostError,
         "Whether it took effect on the robot is unknown: check the robot's state (e.g. with list_topics) "
-        "once the "
-        "connection is back, before trying again.",
+        "once the connection is back, before trying again.",
     ),
     (
         RequestTimeoutError,

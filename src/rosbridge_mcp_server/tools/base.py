@@ -7,6 +7,7 @@ client, the configuration, a graph helper and a progress callback) and returns a
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 from collections.abc import Awaitable, Callable
@@ -31,6 +32,7 @@ __all__ = [
     "ToolSpec",
     "absolute_name",
     "compact_json",
+    "did_you_mean",
     "parse_json_object",
 ]
 
@@ -111,8 +113,8 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
         parsed = json.loads(text)
     except json.JSONDecodeError as exc:
         raise ToolFailure(
-            f"The {what} is not valid JSON ({exc.msg} at character {exc.pos}). "
-            f"Send a JSON object, e.g. {example}."
+            f"The {what} is not valid JSON ({exc.msg} at character {exc.pos}). Send a JSON object, e.g. "
+            f"{example}."
         ) from None
     if not isinstance(parsed, dict):
         raise ToolFailure(f"The {what} must be a JSON object, e.g. {example}; got {compact_json(parsed)}.")
@@ -144,3 +146,9 @@ def _finite(value: Any) -> Any:
     if isinstance(value, list):
         return [_finite(v) for v in value]
     return value
+
+
+def did_you_mean(name: str, known: list[str]) -> str:
+    """`` Did you mean /a or /b?`` for the names closest to a misspelt one, or ``""``."""
+    close = difflib.get_close_matches(name, known, n=3, cutoff=0.8)
+    return f" Did you mean {' or '.join(close)}?" if close else ""

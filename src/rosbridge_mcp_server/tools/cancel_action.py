@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from typing import Annotated
 
 from pydantic import BaseModel, Field
@@ -16,6 +15,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolSpec,
     absolute_name,
+    did_you_mean,
 )
 
 __all__ = ["SPEC", "CancelAnswer", "run"]
@@ -59,7 +59,12 @@ async def run(
     action_name: Annotated[str, Field(description="Action server name, e.g. /fibonacci")],
     goal_id: Annotated[
         str | None,
-        Field(description="Id of one goal to cancel (publish_action reports it); omit to cancel every goal"),
+        Field(
+            description=(
+                "Id of one goal to cancel, as publish_action reports it (e.g. goal:/fibonacci:0d95c87b-5); "
+                "omit to cancel every goal of the action"
+            )
+        ),
     ] = None,
 ) -> ToolAnswer:
     """Send the cancel and report what it reached."""
@@ -76,11 +81,10 @@ async def _check_action(ctx: ToolContext, name: str) -> None:
     except ServiceError:
         return  # no usable rosapi action_servers: send the cancel anyway
     if name not in known:
-        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
-        hint = f" Did you mean {' or '.join(close)}?" if close else ""
+        hint = did_you_mean(name, known)
         raise ToolFailure(
-            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} "
-            "Call list_actions to see the actions."
+            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} Call "
+            "list_actions to see the actions."
         )
 
 
@@ -98,8 +102,7 @@ def _answer(report: CancelReport) -> ToolAnswer:
         if report.unknown_goal_id:
             text += (
                 " That id is not a goal publish_action is running now (it may have finished already, or "
-                "belong "
-                "to another client); the action server ignores a cancel for a goal it does not know."
+                "belong to another client); the action server ignores a cancel for a goal it does not know."
             )
         else:
             text += " publish_action will report the goal's final status."

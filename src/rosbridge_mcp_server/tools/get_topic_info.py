@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from typing import Annotated
 
 from pydantic import BaseModel, Field
@@ -14,6 +13,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolSpec,
     absolute_name,
+    did_you_mean,
 )
 
 __all__ = ["SPEC", "TopicInfoAnswer", "run"]
@@ -49,11 +49,10 @@ async def run(
     details = await ctx.graph.topic_details(name)
     if not details.type and not details.publishers and not details.subscribers:
         known = [entry.name for entry in await ctx.graph.topics()]
-        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
-        hint = f" Did you mean {' or '.join(close)}?" if close else ""
+        hint = did_you_mean(name, known)
         raise ToolFailure(
-            f"Topic {name} is not in the ROS graph (nothing publishes or subscribes to it).{hint} "
-            "Call list_topics to see the topics that exist."
+            f"Topic {name} is not in the ROS graph (nothing publishes or subscribes to it).{hint} Call "
+            "list_topics to see the topics that exist."
         )
     answer = TopicInfoAnswer(
         topic=name,
@@ -62,8 +61,8 @@ async def run(
         subscribers=list(details.subscribers),
     )
     text = (
-        f"{name}\ntype: {details.type or 'unknown'}\n"
-        f"publishers ({len(answer.publishers)}): {', '.join(answer.publishers) or 'none'}\n"
-        f"subscribers ({len(answer.subscribers)}): {', '.join(answer.subscribers) or 'none'}"
+        f"{name}\ntype: {details.type or 'unknown'}\npublishers ({len(answer.publishers)}): "
+        f"{', '.join(answer.publishers) or 'none'}\nsubscribers ({len(answer.subscribers)}): "
+        f"{', '.join(answer.subscribers) or 'none'}"
     )
     return ToolAnswer(text=text, data=answer)

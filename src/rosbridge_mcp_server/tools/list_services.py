@@ -28,7 +28,8 @@ SPEC = ToolSpec(
     title="List services",
     description=(
         "List every ROS service the robot offers, with its service type (e.g. /reset of type "
-        "std_srvs/srv/Empty). Read-only; use it before publish_service. Takes no arguments: call it with {}."
+        "std_srvs/srv/Empty). Read-only; use it before publish_service. Takes no arguments: call it with "
+        "{}."
     ),
     hints=READS_ROBOT,
     output=ServicesAnswer,

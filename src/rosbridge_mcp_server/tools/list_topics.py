@@ -29,9 +29,9 @@ SPEC = ToolSpec(
     name="list_topics",
     title="List topics",
     description=(
-        "List every ROS topic the robot has, with its message type. Read-only; start here to learn what the "
-        "robot publishes (sensors, state) and what it listens to (commands such as /turtle1/cmd_vel of type "
-        "geometry_msgs/msg/Twist). Takes no arguments: call it with {}."
+        "List every ROS topic the robot has, with its message type. Read-only; start here to learn what "
+        "the robot publishes (sensors, state) and what it listens to (commands such as /turtle1/cmd_vel of "
+        "type geometry_msgs/msg/Twist). Takes no arguments: call it with {}."
     ),
     hints=READS_ROBOT,
     output=TopicsAnswer,

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
@@ -18,6 +17,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolSpec,
     absolute_name,
     compact_json,
+    did_you_mean,
     parse_json_object,
 )
 from rosbridge_mcp_server.typecheck import check_message, example_message
@@ -53,17 +53,13 @@ SPEC = ToolSpec(
     name="publish_action",
     title="Run an action goal",
     description=(
-        "Send a goal to a ROS action server and wait until it finishes; this can move the robot (navigation, "
-        "rotation, arm motion). Example: action_name /fibonacci, action_type "
-        "example_interfaces/action/Fibonacci "
-        "(also written example_interfaces/Fibonacci or, on ROS 1, actionlib_tutorials/FibonacciAction), "
-        "goal "
-        f"{_EXAMPLE}, timeout 30. Feedback is sent as progress notifications while the goal runs. If it "
-        "does not "
-        "finish within timeout seconds, or the call is cancelled, the goal is cancelled on the robot. "
-        "The answer "
-        "has the goal id, the final status, the result and the last feedback. Use list_actions to find "
-        "actions."
+        "Send a goal to a ROS action server and wait until it finishes; this can move the robot "
+        "(navigation, rotation, arm motion). Example: action_name /fibonacci, action_type "
+        "example_interfaces/action/Fibonacci (also written example_interfaces/Fibonacci or, on ROS 1, "
+        f"actionlib_tutorials/FibonacciAction), goal {_EXAMPLE}, timeout 30. Feedback is sent as progress "
+        "notifications (naming the goal id) while the goal runs. If it does not finish within timeout "
+        "seconds, or the call is cancelled, the goal is cancelled on the robot. The answer has the goal "
+        "id, the final status, the result and the last feedback. Use list_actions to find actions."
     ),
     hints=ACTS_ON_ROBOT,
     output=GoalAnswer,
@@ -93,7 +89,7 @@ async def run(
             gt=0,
             le=MAX_GOAL_TIMEOUT,
             description=(
-                f"Seconds to wait for the result before cancelling the goal (more than 0, at most "
+                "Seconds to wait for the result before cancelling the goal (more than 0, at most "
                 f"{MAX_GOAL_TIMEOUT:g}), e.g. 30"
             ),
         ),
@@ -116,12 +112,17 @@ async def run(
             shape = compact_json(example_message(goal_type, typedefs, ros_version=info.version))
             raise ToolFailure(f"{exc}. No goal was sent. A goal looks like {shape}.") from exc
 
+    # Minted here so that every progress message can name the goal: a client can cancel it by id while this
+    # call is still waiting for the result.
+    goal_id = ctx.client.new_goal_id(name)
+
     async def on_feedback(index: int, feedback: Any) -> None:
-        await ctx.report_progress(float(index), None, f"feedback {index}: {compact_json(feedback, 300)}")
+        message = f"goal {goal_id} feedback {index}: {compact_json(feedback, 300)}"
+        await ctx.report_progress(float(index), None, message)
 
     try:
         outcome = await run_goal(
-            ctx.client, name, action_type, body, timeout=timeout, on_feedback=on_feedback
+            ctx.client, name, action_type, body, timeout=timeout, on_feedback=on_feedback, goal_id=goal_id
         )
     except GoalTimeoutError as exc:
         raise ToolFailure(_timeout_text(exc, name, timeout, info.version)) from exc
@@ -135,8 +136,7 @@ async def _check_action(ctx: ToolContext, name: str, action_type: str) -> None:
     except ServiceError:
         return  # no usable rosapi action_servers: let the goal itself find out
     if name not in known:
-        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
-        hint = f" Did you mean {' or '.join(close)}?" if close else ""
+        hint = did_you_mean(name, known)
         raise ToolFailure(
             f"No action server {name} is running on the robot.{hint} Call list_actions to see the actions."
         )
@@ -160,8 +160,8 @@ def _timeout_text(exc: GoalTimeoutError, name: str, timeout: float, version: int
     feedback = f" Last feedback: {compact_json(exc.feedback, 300)}." if exc.feedback is not None else ""
     return (
         f"Goal {exc.goal_id} on {name} did not finish within {timeout:g} s, so it was cancelled on the "
-        "robot; "
-        f"{ending}.{feedback} Call publish_action again with a longer timeout if the goal needs more time."
+        f"robot; {ending}.{feedback} Call publish_action again with a longer timeout if the goal needs more "
+        "time."
     )
 
 

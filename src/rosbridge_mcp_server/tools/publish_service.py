@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
@@ -17,6 +16,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolSpec,
     absolute_name,
     compact_json,
+    did_you_mean,
     parse_json_object,
 )
 from rosbridge_mcp_server.typecheck import check_message, example_message, short_type_name
@@ -41,11 +41,9 @@ SPEC = ToolSpec(
     description=(
         "Call a ROS service and return its response. Services can change the robot (reset, spawn, set "
         "parameters). Example: service /add_two_ints, service_type example_interfaces/srv/AddTwoInts, "
-        "request "
-        f"{_EXAMPLE}; or service /reset, service_type std_srvs/srv/Empty, request {{}}. The request is "
-        "checked "
-        "against the type when rosapi can describe it; a failing service returns the bridge's error text. "
-        "Use list_services to find services and their types."
+        f"request {_EXAMPLE}; or service /reset, service_type std_srvs/srv/Empty, request {{}}. The request "
+        "is checked against the type when rosapi can describe it; a failing service returns the bridge's "
+        "error text. Use list_services to find services and their types."
     ),
     hints=ACTS_ON_ROBOT,
     output=ServiceAnswer,
@@ -85,15 +83,14 @@ async def run(
     if not graph_type:
         known = await ctx.graph.service_names()
         if name not in known:
-            close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
-            hint = f" Did you mean {' or '.join(close)}?" if close else ""
+            hint = did_you_mean(name, known)
             raise ToolFailure(
                 f"Service {name} is not offered by any node.{hint} Call list_services to see the services."
             )
     elif short_type_name(graph_type) != short_type_name(given_type):
         raise ToolFailure(
-            f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} and "
-            "call again with that service_type."
+            f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
+            "and call again with that service_type."
         )
     srv_type = graph_type or given_type
 

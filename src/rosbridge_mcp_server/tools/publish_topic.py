@@ -38,15 +38,12 @@ SPEC = ToolSpec(
     name="publish_topic",
     title="Publish a message",
     description=(
-        "Publish one message on a ROS topic. This can move the robot: e.g. topic /turtle1/cmd_vel, "
-        f"message_type geometry_msgs/msg/Twist, message {_EXAMPLE} drives forward at 0.5 m/s while "
-        "turning at "
-        "0.3 rad/s (velocity commands usually act only briefly; publish again to keep moving, publish "
-        "zeros to "
-        "stop). The message is checked against the type first; a field that does not fit is an error "
-        "naming it. "
-        "Omitted fields are zero/empty; {} is a valid message for std_msgs/msg/Empty. Use list_topics and "
-        "get_topic_info to find topics and types."
+        "Publish one message on a ROS topic. This can move the robot. Example: topic /turtle1/cmd_vel, "
+        f"message_type geometry_msgs/msg/Twist, message {_EXAMPLE} drives forward at 0.5 m/s while turning "
+        "at 0.3 rad/s (velocity commands usually act only briefly; publish again to keep moving, publish "
+        "zeros to stop). The message is checked against the type first; a field that does not fit is an "
+        "error naming it. Omitted fields are zero/empty; {} is a valid message for std_msgs/msg/Empty. "
+        "Use list_topics and get_topic_info to find topics and types."
     ),
     hints=ACTS_ON_ROBOT,
     output=PublishAnswer,
@@ -64,8 +61,8 @@ async def run(
         dict[str, Any] | str,
         Field(
             description=(
-                f"The message as a JSON object, e.g. {_EXAMPLE} for a Twist (units: m/s and rad/s); "
-                "omitted fields are 0/empty; {} for std_msgs/msg/Empty"
+                f"The message as a JSON object, e.g. {_EXAMPLE} for a Twist (units: m/s and rad/s); omitted "
+                "fields are 0/empty; {} for std_msgs/msg/Empty"
             )
         ),
     ] = "{}",

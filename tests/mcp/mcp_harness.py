@@ -1,0 +1,122 @@
+"""MCP sessions for the tests: the SDK's in-memory client against ``build_server(...)`` on a simulated robot.
+
+The client connects with the initialize handshake (``mode="legacy"``), as Claude Desktop and MCP Inspector
+do, so requests, progress and cancellation travel as JSON-RPC messages over in-memory streams.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+from mcp.types import CallToolResult, TextContent
+
+from mcp import Client
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.server import build_server
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+CONNECT_WAIT = 5.0
+
+
+@dataclass
+class Session:
+    """One MCP client session, the rosbridge client behind the server, and progress notifications seen."""
+
+    mcp: Client
+    ros: RosbridgeClient
+    progress: list[tuple[float, float | None, str | None]] = field(default_factory=list)
+
+    async def call(self, name: str, arguments: dict[str, Any] | None = None) -> CallToolResult:
+        """Call a tool, recording its progress notifications."""
+
+        async def on_progress(progress: float, total: float | None, message: str | None) -> None:
+            self.progress.append((progress, total, message))
+
+        return await self.mcp.call_tool(name, arguments or {}, progress_callback=on_progress)
+
+    async def ok(self, name: str, arguments: dict[str, Any] | None = None) -> CallToolResult:
+        """Call a tool that must succeed."""
+        result = await self.call(name, arguments)
+        assert not result.is_error, text_of(result)
+        assert result.structured_content is not None
+        return result
+
+    async def error(self, name: str, arguments: dict[str, Any] | None = None) -> str:
+        """Call a tool that must fail; returns its error text."""
+        result = await self.call(name, arguments)
+        assert result.is_error, text_of(result)
+        return text_of(result)
+
+
+def text_of(result: CallToolResult) -> str:
+    """The text content of a tool result."""
+    return "\n".join(block.text for block in result.content if isinstance(block, TextContent))
+
+
+@asynccontextmanager
+async def open_session(
+    url: str, *, request_timeout: float = 5.0, wait: bool = True
+) -> AsyncIterator[Session]:
+    """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
+
+    The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
+    pytest-asyncio sets a fixture up and tears it down in different tasks.
+    """
+    config = Config(url=url, request_timeout=request_timeout, connect_timeout=2.0)
+    ros = RosbridgeClient(
+        url,
+        connect_timeout=config.connect_timeout,
+        request_timeout=request_timeout,
+        reconnect_min=0.05,
+        reconnect_max=0.2,
+    )
+    ready: asyncio.Future[Session] = asyncio.get_running_loop().create_future()
+    stop = asyncio.Event()
+
+    async def host() -> None:
+        try:
+            async with Client(build_server(ros, config), mode="legacy") as mcp:
+                ready.set_result(Session(mcp, ros))
+                await stop.wait()
+        except BaseException as exc:
+            if not ready.done():
+                ready.set_exception(exc)
+            raise
+
+    hosting = asyncio.create_task(host())
+    try:
+        session = await ready
+        if wait:
+            await ros.wait_connected(CONNECT_WAIT)
+        yield session
+    finally:
+        stop.set()
+        await hosting
+
+
+def types_for(robot: SimulatedRobot) -> dict[str, str]:
+    """Type names of the simulated world in the robot's own dialect."""
+    if robot.dialect == "ros2":
+        return {
+            "twist": "geometry_msgs/msg/Twist",
+            "string": "std_msgs/msg/String",
+            "add_two_ints": "example_interfaces/srv/AddTwoInts",
+            "trigger": "std_srvs/srv/Trigger",
+            "empty_srv": "std_srvs/srv/Empty",
+            "set_bool": "std_srvs/srv/SetBool",
+            "fibonacci": "example_interfaces/action/Fibonacci",
+        }
+    return {
+        "twist": "geometry_msgs/Twist",
+        "string": "std_msgs/String",
+        "add_two_ints": "rospy_tutorials/AddTwoInts",
+        "trigger": "std_srvs/Trigger",
+        "empty_srv": "std_srvs/Empty",
+        "set_bool": "std_srvs/SetBool",
+        "fibonacci": "actionlib_tutorials/FibonacciAction",
+    }

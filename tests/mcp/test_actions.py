@@ -1,0 +1,191 @@
+"""publish_action and cancel_action: results, feedback as progress, and cancellation of every kind."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+from collections.abc import AsyncIterator, Awaitable, Callable
+
+import pytest
+from mcp_harness import Session, open_session, text_of, types_for
+
+from rosbridge_mcp_server.sim import GoalRecord, SimulatedRobot
+
+FIB = "/fibonacci"
+WAIT = 10.0
+
+
+def _running(robot: SimulatedRobot) -> list[GoalRecord]:
+    return [goal for goal in robot.world.goals.values() if not goal.finished and goal.feedback_count > 0]
+
+
+async def test_a_goal_succeeds_with_result_feedback_and_progress(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """Fibonacci order 5 succeeds with the sequence; every feedback arrived as a progress notification."""
+    result = await session.ok(
+        "publish_action",
+        {"action_name": FIB, "action_type": types_for(sim)["fibonacci"], "goal": {"order": 5}},
+    )
+    data = result.structured_content
+    assert data is not None
+    assert data["succeeded"] is True
+    assert data["status"] == "succeeded"
+    assert data["result"] == {"sequence": [0, 1, 1, 2, 3, 5]}
+    assert data["feedback_count"] >= 1
+    assert data["last_feedback"][-1] == {"sequence": [0, 1, 1, 2, 3, 5]}
+    assert data["canceled_by"] is None
+    assert len(session.progress) == data["feedback_count"]
+    assert [p for p, _, _ in session.progress] == list(range(1, data["feedback_count"] + 1))
+    assert all(message and message.startswith("goal ") for _, _, message in session.progress)
+    assert f"Goal {data['goal_id']} on {FIB}" in text_of(result)
+    assert "succeeded" in text_of(result)
+
+
+@pytest.mark.parametrize("spelling", ["example_interfaces/Fibonacci", "example_interfaces/FibonacciAction"])
+async def test_short_action_type_spellings_are_accepted_on_ros2(session_ros2: Session, spelling: str) -> None:
+    """pkg/Fibonacci and pkg/FibonacciAction name the same ROS 2 action type."""
+    result = await session_ros2.ok(
+        "publish_action", {"action_name": FIB, "action_type": spelling, "goal": {"order": 2}}
+    )
+    assert result.structured_content is not None
+    assert result.structured_content["succeeded"] is True
+
+
+async def test_an_unknown_action_is_an_error_pointing_at_list_actions(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """A misspelt action server is named with the close match; no goal is sent."""
+    text = await session.error(
+        "publish_action",
+        {"action_name": "/fibonaci", "action_type": types_for(sim)["fibonacci"], "goal": {"order": 3}},
+    )
+    assert "No action server /fibonaci is running" in text
+    assert "Did you mean /fibonacci?" in text
+    assert not sim.world.goals
+
+
+async def test_a_wrong_action_type_is_refused_naming_the_real_one(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """Sending a goal of another action type says what type the server has."""
+    text = await session.error(
+        "publish_action", {"action_name": FIB, "action_type": "nav2_msgs/action/NavigateToPose", "goal": {}}
+    )
+    assert f"Action {FIB} has type {types_for(sim)['fibonacci']}" in text
+    assert not sim.world.goals
+
+
+async def test_a_goal_that_does_not_fit_names_the_field(session: Session, sim: SimulatedRobot) -> None:
+    """A string order is named before any goal is sent."""
+    text = await session.error(
+        "publish_action",
+        {"action_name": FIB, "action_type": types_for(sim)["fibonacci"], "goal": {"order": "five"}},
+    )
+    assert 'order: expected an integer (int32), got "five"' in text
+    assert not sim.world.goals
+
+
+@pytest.fixture(params=["ros2", "ros1"])
+async def slow_robot(
+    request: pytest.FixtureRequest, make_sim: Callable[..., Awaitable[SimulatedRobot]]
+) -> SimulatedRobot:
+    """A robot of each dialect whose Fibonacci goals take a while (one step every 0.2 s)."""
+    return await make_sim(dialect=request.param, action_step=0.2)
+
+
+@pytest.fixture
+async def slow_session(slow_robot: SimulatedRobot) -> AsyncIterator[Session]:
+    """A session on the slow robot."""
+    async with open_session(slow_robot.url) as opened:
+        yield opened
+
+
+def _long_goal(robot: SimulatedRobot, timeout: float = 60.0) -> dict[str, object]:
+    return {
+        "action_name": FIB,
+        "action_type": types_for(robot)["fibonacci"],
+        "goal": {"order": 40},
+        "timeout": timeout,
+    }
+
+
+def _goal_id_from_progress(session: Session) -> str:
+    """The goal id, as an MCP client learns it from the progress messages of a running publish_action."""
+    message = session.progress[0][2] or ""
+    match = re.match(r"goal (\S+) feedback 1: ", message)
+    assert match is not None, message
+    return match.group(1)
+
+
+async def _the_goal_ended_cancelled(robot: SimulatedRobot) -> GoalRecord:
+    await robot.world.wait_for(lambda w: bool(w.goals) and all(g.finished for g in w.goals.values()), WAIT)
+    (goal,) = robot.world.goals.values()
+    assert goal.cancel_requested
+    assert goal.status == (5 if robot.dialect == "ros2" else 2)  # ROS 2 CANCELED, ROS 1 PREEMPTED
+    return goal
+
+
+async def test_a_goal_that_times_out_is_cancelled_and_the_answer_says_so(
+    slow_session: Session, slow_robot: SimulatedRobot
+) -> None:
+    """After its timeout the goal is cancelled on the robot, and the answer says so."""
+    result = await slow_session.call("publish_action", _long_goal(slow_robot, timeout=0.5))
+    text = text_of(result)
+    assert "cancelled because it did not finish within the timeout" in text
+    assert result.structured_content is not None
+    assert result.structured_content["canceled_by"] == "timeout"
+    await _the_goal_ended_cancelled(slow_robot)
+
+
+@pytest.mark.parametrize("by_id", [True, False], ids=["one-goal", "all-goals"])
+async def test_cancel_action_stops_a_goal_while_publish_action_waits(
+    slow_session: Session, slow_robot: SimulatedRobot, by_id: bool
+) -> None:
+    """cancel_action, with the goal id from the progress messages or without one, ends the running goal."""
+    goal_call = asyncio.create_task(slow_session.call("publish_action", _long_goal(slow_robot)))
+    await slow_robot.world.wait_for(lambda w: bool(slow_session.progress), WAIT)
+    goal_id = _goal_id_from_progress(slow_session)
+    arguments = {"action_name": FIB, "goal_id": goal_id} if by_id else {"action_name": FIB}
+    cancel = await slow_session.ok("cancel_action", arguments)
+    result = await asyncio.wait_for(goal_call, WAIT)
+
+    assert cancel.structured_content is not None
+    assert cancel.structured_content["canceled_goals"] == [goal_id]
+    assert cancel.structured_content["unknown_goal_id"] is False
+    data = result.structured_content
+    assert data is not None, text_of(result)
+    assert data["goal_id"] == goal_id
+    assert data["canceled_by"] == "cancel_action"
+    assert data["succeeded"] is False
+    assert data["status"] == ("canceled" if slow_robot.dialect == "ros2" else "preempted")
+    assert "cancelled by cancel_action" in text_of(result)
+    await _the_goal_ended_cancelled(slow_robot)
+
+
+async def test_cancelling_the_mcp_request_cancels_the_goal_on_the_robot(
+    slow_session: Session, slow_robot: SimulatedRobot
+) -> None:
+    """When the MCP client cancels a running publish_action, the goal is cancelled on the robot."""
+    goal_call = asyncio.create_task(slow_session.call("publish_action", _long_goal(slow_robot)))
+    await slow_robot.world.wait_for(lambda w: bool(_running(slow_robot)), WAIT)
+    goal_call.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await goal_call
+    await _the_goal_ended_cancelled(slow_robot)
+    # The session is still usable afterwards.
+    await slow_session.ok("list_actions")
+
+
+async def test_cancel_action_with_an_unknown_goal_id_says_so(session: Session) -> None:
+    """A goal id that is not running is reported as unknown (the cancel is still sent, harmlessly)."""
+    result = await session.ok("cancel_action", {"action_name": FIB, "goal_id": "no-such-goal"})
+    assert result.structured_content is not None
+    assert result.structured_content["unknown_goal_id"] is True
+    assert "not a goal publish_action is running now" in text_of(result)
+
+
+async def test_cancel_action_on_an_unknown_action_is_an_error(session: Session) -> None:
+    """There is nothing to cancel on an action nobody serves."""
+    text = await session.error("cancel_action", {"action_name": "/navigate"})
+    assert "No action server /navigate is running" in text

@@ -1,0 +1,64 @@
+"""list_topics, get_topic_info, list_services, list_actions against the simulated robots of both dialects."""
+
+from __future__ import annotations
+
+from mcp_harness import Session, text_of, types_for
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+
+async def test_list_topics_shows_every_topic_with_its_type(session: Session, sim: SimulatedRobot) -> None:
+    """The turtle's topics are listed with their dialect's type names, in text and structured content."""
+    result = await session.ok("list_topics")
+    data = result.structured_content
+    assert data is not None
+    topics = {row["name"]: row["type"] for row in data["topics"]}
+    assert data["count"] == len(topics)
+    assert topics["/turtle1/cmd_vel"] == types_for(sim)["twist"]
+    assert topics["/chatter"] == types_for(sim)["string"]
+    assert f"/turtle1/cmd_vel ({types_for(sim)['twist']})" in text_of(result)
+    assert list(topics) == sorted(topics)
+
+
+async def test_get_topic_info_names_type_publishers_and_subscribers(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """/chatter is published by /talker; /turtle1/cmd_vel is subscribed by /turtlesim."""
+    chatter = (await session.ok("get_topic_info", {"topic": "/chatter"})).structured_content
+    assert chatter is not None
+    assert chatter["type"] == types_for(sim)["string"]
+    assert "/talker" in chatter["publishers"]
+    cmd_vel = (await session.ok("get_topic_info", {"topic": "turtle1/cmd_vel"})).structured_content
+    assert cmd_vel is not None
+    assert cmd_vel["topic"] == "/turtle1/cmd_vel"
+    assert "/turtlesim" in cmd_vel["subscribers"]
+
+
+async def test_get_topic_info_on_an_unknown_topic_says_so_and_suggests_list_topics(session: Session) -> None:
+    """A misspelt topic is an error naming it, with the close match and a pointer to list_topics."""
+    text = await session.error("get_topic_info", {"topic": "/turtle1/poses"})
+    assert "Topic /turtle1/poses is not in the ROS graph" in text
+    assert "Did you mean /turtle1/pose?" in text
+    assert "list_topics" in text
+
+
+async def test_list_services_shows_every_service_with_its_type(session: Session, sim: SimulatedRobot) -> None:
+    """/add_two_ints and /reset are listed with their types."""
+    data = (await session.ok("list_services")).structured_content
+    assert data is not None
+    services = {row["name"]: row["type"] for row in data["services"]}
+    assert services["/add_two_ints"] == types_for(sim)["add_two_ints"]
+    assert services["/reset"] == types_for(sim)["empty_srv"]
+    assert all(services.values()), "every simulated service has a known type"
+
+
+async def test_list_actions_lists_each_server_once_with_its_type(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """The Fibonacci server appears once, typed (ROS 2: rosapi action_type; ROS 1: the <ns>/goal type)."""
+    result = await session.ok("list_actions")
+    data = result.structured_content
+    assert data is not None
+    assert data["actions"] == [{"name": "/fibonacci", "type": types_for(sim)["fibonacci"]}]
+    assert data["count"] == 1
+    assert "/fibonacci" in text_of(result)

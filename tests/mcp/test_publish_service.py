@@ -1,0 +1,114 @@
+"""publish_service: a call's response, the bridge's failure text, and requests checked before the call."""
+
+from __future__ import annotations
+
+from mcp_harness import Session, types_for
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+
+async def test_a_service_call_returns_its_response(session: Session, sim: SimulatedRobot) -> None:
+    """/add_two_ints with a=2, b=3 answers sum 5, in text and structured content."""
+    result = await session.ok(
+        "publish_service",
+        {
+            "service": "/add_two_ints",
+            "service_type": types_for(sim)["add_two_ints"],
+            "request": {"a": 2, "b": 3},
+        },
+    )
+    assert result.structured_content == {
+        "service": "/add_two_ints",
+        "service_type": types_for(sim)["add_two_ints"],
+        "response": {"sum": 5},
+    }
+    assert sim.world.service_calls["/add_two_ints"] == 1
+
+
+async def test_an_empty_request_works_for_trigger_and_empty_services(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """std_srvs Empty and SetBool calls change the robot; {} and an omitted request are both fine."""
+    await session.ok(
+        "publish_service",
+        {"service": "/set_enabled", "service_type": types_for(sim)["set_bool"], "request": {"data": False}},
+    )
+    await sim.world.wait_for(lambda w: not w.enabled)
+    await session.ok(
+        "publish_service", {"service": "/reset", "service_type": types_for(sim)["empty_srv"], "request": {}}
+    )
+    await session.ok("publish_service", {"service": "/clear", "service_type": types_for(sim)["empty_srv"]})
+    assert sim.world.service_calls["/reset"] == 1
+    assert sim.world.service_calls["/clear"] == 1
+
+
+async def test_an_unknown_service_is_an_error_with_a_suggestion(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """A misspelt service is named, with the close match and a pointer to list_services; nothing is called."""
+    text = await session.error(
+        "publish_service",
+        {"service": "/add_two_int", "service_type": types_for(sim)["add_two_ints"], "request": {}},
+    )
+    assert "Service /add_two_int is not offered by any node" in text
+    assert "Did you mean /add_two_ints?" in text
+    assert "list_services" in text
+
+
+async def test_a_request_that_does_not_fit_is_refused_before_the_call(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """A float for an int64 field is named, and the service is not called."""
+    text = await session.error(
+        "publish_service",
+        {
+            "service": "/add_two_ints",
+            "service_type": types_for(sim)["add_two_ints"],
+            "request": {"a": 2.5, "c": 1},
+        },
+    )
+    assert "a: expected an integer (int64), got 2.5" in text
+    assert "c: no such field" in text
+    assert "The service was not called" in text
+    assert "/add_two_ints" not in sim.world.service_calls
+
+
+async def test_the_wrong_service_type_is_refused_naming_the_real_one(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """Calling /add_two_ints as a Trigger is an error that gives its real type."""
+    text = await session.error(
+        "publish_service",
+        {"service": "/add_two_ints", "service_type": types_for(sim)["trigger"], "request": {}},
+    )
+    assert f"Service /add_two_ints has type {types_for(sim)['add_two_ints']}" in text
+
+
+async def test_a_failing_ros1_service_returns_the_bridges_text(session_ros1: Session) -> None:
+    """A rospy service that raises is reported with rosbridge's own error text."""
+    text = await session_ros1.error(
+        "publish_service",
+        {
+            "service": "/rosapi/set_param",
+            "service_type": "rosapi/SetParam",
+            "request": {"name": "/x", "value": "not json"},
+        },
+    )
+    assert (
+        "Service call /rosapi/set_param failed: service [/rosapi/set_param] responded with an error" in text
+    )
+
+
+async def test_a_ros2_service_that_never_answers_fails_after_the_timeout(session_ros2: Session) -> None:
+    """A ROS 2 service whose handler raised never answers; the call ends at its timeout with a clear text."""
+    text = await session_ros2.error(
+        "publish_service",
+        {
+            "service": "/rosapi/set_param",
+            "service_type": "rosapi_msgs/srv/SetParam",
+            "request": {"name": "/turtlesim:background_r", "value": "not json"},
+            "timeout": 0.5,
+        },
+    )
+    assert "/rosapi/set_param" in text
+    assert "0.5" in text or "Timeout exceeded" in text

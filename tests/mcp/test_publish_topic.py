@@ -1,0 +1,116 @@
+"""publish_topic: checked against the type, published once, and never delivered late."""
+
+from __future__ import annotations
+
+import json
+
+from mcp_harness import Session, types_for
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+CMD_VEL = "/turtle1/cmd_vel"
+
+
+async def test_a_twist_reaches_the_robot_and_the_turtle_moves(session: Session, sim: SimulatedRobot) -> None:
+    """The message arrives on /turtle1/cmd_vel as sent and the simulated turtle starts moving."""
+    twist = {"linear": {"x": 0.5}, "angular": {"z": 0.3}}
+    result = await session.ok(
+        "publish_topic", {"topic": CMD_VEL, "message_type": types_for(sim)["twist"], "message": twist}
+    )
+    assert result.structured_content == {
+        "topic": CMD_VEL,
+        "message_type": types_for(sim)["twist"],
+        "message": twist,
+        "published": True,
+    }
+    await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)
+    received = sim.world.published[CMD_VEL][0].msg
+    assert received["linear"]["x"] == 0.5
+    assert received["angular"]["z"] == 0.3
+    await sim.world.wait_for(lambda w: w.turtle.commands >= 1)
+
+
+async def test_both_type_spellings_and_a_json_string_message_are_accepted(
+    sim_ros2: SimulatedRobot, session_ros2: Session
+) -> None:
+    """pkg/Type works on ROS 2, and a message sent as JSON text is parsed."""
+    await session_ros2.ok(
+        "publish_topic",
+        {
+            "topic": CMD_VEL,
+            "message_type": "geometry_msgs/Twist",
+            "message": json.dumps({"linear": {"x": 1.0}}),
+        },
+    )
+    await sim_ros2.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)
+    assert sim_ros2.world.published[CMD_VEL][0].msg["linear"]["x"] == 1.0
+
+
+async def test_a_message_that_does_not_fit_names_each_wrong_field_and_is_not_sent(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """A string for a float and a misspelt field are both named, with the valid fields; nothing is sent."""
+    text = await session.error(
+        "publish_topic",
+        {
+            "topic": CMD_VEL,
+            "message_type": types_for(sim)["twist"],
+            "message": {"linear": {"x": "fast"}, "angulr": {"z": 1}},
+        },
+    )
+    assert (
+        'linear.x: expected a number (float64), got "fast"' in text
+        or 'linear.x: expected a number (double), got "fast"' in text
+    )
+    assert "angulr: no such field" in text
+    assert "did you mean angular?" in text
+    assert "its fields are linear, angular" in text
+    assert "Nothing was published" in text
+    assert '{"linear": {"x": 0.0, "y": 0.0, "z": 0.0}' in text
+    await session.ok("list_topics")  # a round trip later, still nothing arrived
+    assert CMD_VEL not in sim.world.published
+
+
+async def test_an_unknown_message_type_is_an_error_naming_it(session: Session) -> None:
+    """A type the bridge does not know is reported as such."""
+    text = await session.error(
+        "publish_topic", {"topic": "/new_topic", "message_type": "geometry_msgs/Twistt", "message": {}}
+    )
+    assert "rosbridge does not know the type 'geometry_msgs/Twistt'" in text
+
+
+async def test_a_malformed_type_name_is_explained(session: Session) -> None:
+    """A type name without a package says what a type name looks like."""
+    text = await session.error("publish_topic", {"topic": "/x", "message_type": "Twist", "message": {}})
+    assert "pkg/Type" in text
+
+
+async def test_a_type_that_conflicts_with_the_topic_is_refused(session: Session, sim: SimulatedRobot) -> None:
+    """Publishing a String on the Twist topic is an error naming the topic's real type."""
+    text = await session.error(
+        "publish_topic",
+        {"topic": CMD_VEL, "message_type": types_for(sim)["string"], "message": {"data": "hi"}},
+    )
+    assert f"Topic {CMD_VEL} has type {types_for(sim)['twist']}" in text
+    assert CMD_VEL not in sim.world.published
+
+
+async def test_an_empty_message_and_a_new_topic_are_fine(session: Session, sim: SimulatedRobot) -> None:
+    """{} is a valid std_msgs String; a topic nobody uses yet is created by the publish."""
+    await session.ok(
+        "publish_topic", {"topic": "/notes", "message_type": types_for(sim)["string"], "message": {}}
+    )
+    await sim.world.wait_for(lambda w: len(w.published.get("/notes", ())) == 1)
+    await session.ok("publish_topic", {"topic": "/notes", "message_type": types_for(sim)["string"]})
+    await sim.world.wait_for(lambda w: len(w.published.get("/notes", ())) == 2)
+
+
+async def test_a_message_that_is_not_json_is_an_error_with_an_example(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """Broken JSON text is reported with the parser's complaint and an example."""
+    text = await session.error(
+        "publish_topic", {"topic": CMD_VEL, "message_type": types_for(sim)["twist"], "message": "{linear: 1"}
+    )
+    assert "The message is not valid JSON" in text
+    assert '"linear": {"x": 0.5}' in text

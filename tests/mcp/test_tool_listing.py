@@ -1,0 +1,110 @@
+"""tools/list: the eight tools with their annotations, described parameters and output schemas."""
+
+from __future__ import annotations
+
+import socket
+
+from mcp_harness import open_session, text_of
+
+from mcp import Client
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.server import build_server
+
+EXPECTED_PARAMETERS = {
+    "list_topics": [],
+    "get_topic_info": ["topic"],
+    "publish_topic": ["topic", "message_type", "message"],
+    "list_services": [],
+    "publish_service": ["service", "service_type", "request", "timeout"],
+    "list_actions": [],
+    "publish_action": ["action_name", "action_type", "goal", "timeout"],
+    "cancel_action": ["action_name", "goal_id"],
+}
+READ_ONLY = {"list_topics", "get_topic_info", "list_services", "list_actions"}
+
+
+def _closed_port_url() -> str:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    return f"ws://127.0.0.1:{port}"
+
+
+async def test_all_eight_tools_are_listed_with_annotations_and_described_parameters() -> None:
+    """Each tool keeps its original name and parameters, and has hints, an example and an output schema."""
+    async with open_session(_closed_port_url(), wait=False) as session:
+        listed = (await session.mcp.list_tools()).tools
+    assert [tool.name for tool in listed] == list(EXPECTED_PARAMETERS)
+    for tool in listed:
+        assert list(tool.input_schema.get("properties", {})) == EXPECTED_PARAMETERS[tool.name], tool.name
+        for name, schema in tool.input_schema.get("properties", {}).items():
+            assert "e.g." in schema.get("description", ""), f"{tool.name}.{name} has no example"
+        assert "Example" in tool.description or "call it with {}" in tool.description
+        assert tool.title
+        assert tool.output_schema is not None
+        assert tool.output_schema.get("type") == "object"
+        hints = tool.annotations
+        assert hints is not None
+        assert hints.open_world_hint is True
+        if tool.name in READ_ONLY:
+            assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
+                True,
+                False,
+                True,
+            )
+        else:
+            assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
+                False,
+                True,
+                False,
+            )
+
+
+async def test_required_parameters_are_the_ones_without_defaults() -> None:
+    """Messages, requests, goals and timeouts are optional; names and types are required."""
+    async with open_session(_closed_port_url(), wait=False) as session:
+        listed = {tool.name: tool for tool in (await session.mcp.list_tools()).tools}
+    assert listed["publish_topic"].input_schema["required"] == ["topic", "message_type"]
+    assert listed["publish_service"].input_schema["required"] == ["service", "service_type"]
+    assert listed["publish_action"].input_schema["required"] == ["action_name", "action_type"]
+    assert listed["cancel_action"].input_schema["required"] == ["action_name"]
+    assert "required" not in listed["list_topics"].input_schema
+
+
+async def test_with_no_bridge_the_server_starts_lists_tools_and_tools_fail_naming_the_url() -> None:
+    """With nothing listening, the session starts, and a tool fails with the not-connected text and URL."""
+    url = _closed_port_url()
+    config = Config(url=url)
+    ros = RosbridgeClient(url, connect_timeout=2.0)
+    async with Client(build_server(ros, config), mode="legacy") as mcp:
+        assert mcp.instructions is not None
+        assert "list_topics" in mcp.instructions
+        assert len((await mcp.list_tools()).tools) == 8
+        result = await mcp.call_tool("list_topics", {})
+        publish = await mcp.call_tool(
+            "publish_topic",
+            {"topic": "/turtle1/cmd_vel", "message_type": "geometry_msgs/msg/Twist", "message": {}},
+        )
+    assert result.is_error
+    assert f"Not connected to rosbridge at {url}" in text_of(result)
+    assert "ROSBRIDGE_HOST" in text_of(result)
+    assert publish.is_error
+    assert "nothing was sent" in text_of(publish)
+
+
+async def test_arguments_that_do_not_fit_are_one_readable_line_per_argument() -> None:
+    """A missing or out-of-range argument is an isError result naming it, not a pydantic dump."""
+    async with open_session(_closed_port_url(), wait=False) as session:
+        missing = await session.error("get_topic_info", {})
+        too_long = await session.error(
+            "publish_service", {"service": "/x", "service_type": "std_srvs/srv/Empty", "timeout": 301}
+        )
+        negative = await session.error(
+            "publish_action", {"action_name": "/x", "action_type": "a/B", "timeout": -1}
+        )
+    assert missing.startswith("Invalid arguments for get_topic_info: topic: required but missing.")
+    assert "timeout: input should be less than or equal to 300 (got 301)" in too_long
+    assert "It takes: service, service_type, request (optional), timeout (optional)." in too_long
+    assert "timeout: input should be greater than 0" in negative
+    assert "pydantic" not in missing + too_long + negative

@@ -1,0 +1,130 @@
+"""The command line: bad values exit 2 with one line; `check` diagnoses a bridge, or its absence."""
+
+from __future__ import annotations
+
+import io
+import logging
+import socket
+import subprocess
+import sys
+from collections.abc import Iterator
+
+import pytest
+
+from rosbridge_mcp_server.check import run_check
+from rosbridge_mcp_server.cli import PROG, run
+from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+
+@pytest.fixture(autouse=True)
+def _restore_logging() -> Iterator[None]:
+    """run() installs its stderr handler on the root logger; take it away again after each test."""
+    root = logging.getLogger()
+    handlers, level = list(root.handlers), root.level
+    package = logging.getLogger("rosbridge_mcp_server")
+    package_level = package.level
+    yield
+    root.handlers[:] = handlers
+    root.setLevel(level)
+    package.setLevel(package_level)
+
+
+def _free_port() -> int:
+    """A loopback port with nothing listening on it (bound, then released)."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port: int = sock.getsockname()[1]
+    return port
+
+
+@pytest.mark.parametrize(
+    ("argv", "env", "fragment"),
+    [
+        (["--port", "abc"], {}, "--port must be a port number between 1 and 65535, not 'abc'"),
+        (["--port", "0"], {}, "--port must be a port number between 1 and 65535, not 0"),
+        (["--port", "70000"], {}, "not 70000"),
+        (["--url", "http://x"], {}, "--url must start with ws:// or wss://"),
+        ([], {"ROSBRIDGE_PORT": "abc"}, "ROSBRIDGE_PORT must be a port number"),
+        (["--timeout", "-3"], {}, "--timeout must be more than 0"),
+        (["--no-such-flag"], {}, "unrecognized arguments: --no-such-flag"),
+        (["--demo-dialect", "ros3"], {}, "invalid choice: 'ros3'"),
+        (["check", "--port", "abc"], {}, "--port must be a port number"),
+    ],
+)
+def test_bad_command_lines_exit_2_with_one_line_on_stderr(
+    argv: list[str], env: dict[str, str], fragment: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A bad flag or environment value is one line on stderr, exit code 2, and nothing on stdout."""
+    assert run(argv, env) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith(f"{PROG}: error: ")
+    assert fragment in captured.err
+    assert captured.err.count("\n") == 1
+
+
+def test_the_console_module_reports_a_bad_port_without_a_traceback() -> None:
+    """`python -m rosbridge_mcp_server --port abc` exits 2 with one line, not a traceback."""
+    done = subprocess.run(
+        [sys.executable, "-m", "rosbridge_mcp_server", "--port", "abc"],
+        capture_output=True,
+        text=True,
+        timeout=30,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert done.stdout == ""
+    assert (
+        done.stderr.strip() == f"{PROG}: error: --port must be a port number between 1 and 65535, not 'abc'"
+    )
+
+
+def test_check_with_nothing_listening_says_what_to_try_and_exits_1(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """`check` against a closed port reports the failure, the fixes to try, and exit code 1."""
+    port = _free_port()
+    assert run(["check", "--host", "127.0.0.1", "--port", str(port)], {}) == 1
+    out = capsys.readouterr().out
+    assert f"cannot reach rosbridge at ws://127.0.0.1:{port}" in out
+    assert f"Nothing listens on 127.0.0.1:{port}" in out
+    assert "rosbridge_websocket_launch.xml" in out
+    assert "firewall" in out
+    assert "ws:// versus wss://" in out
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_check_against_a_robot_reports_version_features_and_counts(dialect: str) -> None:
+    """`check` names the ROS version and distro, rosapi's answer and the graph's size, and exits 0."""
+    async with SimulatedRobot(dialect=dialect, port=0) as robot:  # type: ignore[arg-type]
+        out = io.StringIO()
+        code = await run_check(Config(url=robot.url), out)
+    text = out.getvalue()
+    assert code == 0, text
+    assert f"rosbridge reachable at {robot.url}" in text
+    assert ("ROS 2 (jazzy)" if dialect == "ros2" else "ROS 1") in text
+    assert "rosapi answers" in text
+    assert "Healthy" in text
+    counts = next(line for line in text.splitlines() if "topics," in line)
+    topics = int(counts.split("]", 1)[1].split()[0])
+    assert topics > 0
+    assert "1 action servers" in counts
+
+
+async def test_check_notes_an_in_order_humble_bridge() -> None:
+    """Against a Humble-like bridge, `check` says calls may block each other and how the server copes."""
+    async with SimulatedRobot(dialect="ros2", in_order=True, port=0) as robot:
+        out = io.StringIO()
+        code = await run_check(Config(url=robot.url), out)
+    assert code == 0
+    assert "ROS 2 (humble)" in out.getvalue()
+    assert "strictly in order" in out.getvalue()
+
+
+def test_check_demo_runs_against_the_built_in_robot(capsys: pytest.CaptureFixture[str]) -> None:
+    """`check --demo` starts the simulated robot and finds it healthy."""
+    assert run(["check", "--demo"], {}) == 0
+    out = capsys.readouterr().out
+    assert "demo mode" in out
+    assert "Healthy" in out
