@@ -441,7 +441,9 @@ class RosbridgeClient:
         # The hot path: kept flat (one coroutine frame below this one) because a benchmark holds
         # it to a raw websockets round trip.
         rid = self._ids.mint("call_service", service)
-        op = protocol.call_service(service, args, id=rid, timeout=t if self._send_service_timeout else None)
+        op = protocol.call_service(
+            service, args, id=rid, timeout=_bridge_timeout(t) if self._send_service_timeout else None
+        )
         reply = await conn.request(rid, op, "service " + service, t)
         if reply.get("result") is False:
             raise _service_error(service, reply)
@@ -457,7 +459,10 @@ class RosbridgeClient:
             remaining = max(deadline - loop.time(), 0.001)
             rid = self._ids.mint("call_service", service)
             op = protocol.call_service(
-                service, args, id=rid, timeout=remaining if self._send_service_timeout else None
+                service,
+                args,
+                id=rid,
+                timeout=_bridge_timeout(remaining) if self._send_service_timeout else None,
             )
             try:
                 reply = await lane.request(rid, op, what, remaining)
@@ -727,6 +732,16 @@ class RosbridgeClient:
             logger.warning(
                 "Could not send a cancel for goal %s on %s; it may still be running", goal_id, action
             )
+
+
+def _bridge_timeout(deadline_in: float) -> float:
+    """The ``timeout`` field for a call we give up on after *deadline_in* seconds.
+
+    Slightly shorter than our own deadline, so a ROS 2 bridge (Humble 2.0.1+, Jazzy 2.2.0+) gives up
+    first and its own text ("Timeout exceeded while waiting for service response") reaches the
+    user, telling them the bridge is alive and the service is what is slow.
+    """
+    return max(deadline_in - min(0.25, deadline_in * 0.1), 0.001)
 
 
 def _service_error(service: str, reply: dict[str, Any]) -> ServiceError:

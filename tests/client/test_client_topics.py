@@ -1,0 +1,168 @@
+"""Publishing and subscribing: separate listeners, bounded queues, and nothing stale after an outage."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable
+
+import pytest
+from conftest import MakeClient
+
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+MakeSim = Callable[..., Awaitable[SimulatedRobot]]
+
+
+async def test_a_subscription_receives_messages_of_its_topic(client: RosbridgeClient) -> None:
+    """subscribe('/chatter') yields the robot's String messages in order."""
+    async with client.subscribe("/chatter", "std_msgs/String") as sub:
+        first = await sub.get(3.0)
+        second = await sub.get(3.0)
+    assert first["data"].startswith("Hello World")
+    assert first != second
+
+
+async def test_async_iteration_yields_messages_until_closed(client: RosbridgeClient) -> None:
+    """``async for msg in sub`` yields messages; closing the subscription ends the loop."""
+    seen: list[dict[str, object]] = []
+    async with client.subscribe("/chatter") as sub:
+        async with asyncio.timeout(5.0):
+            async for msg in sub:
+                seen.append(msg)
+                if len(seen) == 3:
+                    await sub.close()
+    assert len(seen) == 3
+
+
+async def test_two_listeners_on_one_topic_never_remove_each_other(client: RosbridgeClient) -> None:
+    """Each listener has its own subscription id: closing one leaves the other receiving."""
+    first = await client.subscribe("/chatter", "std_msgs/String").open()
+    second = await client.subscribe("/chatter", "std_msgs/String").open()
+    assert first.id != second.id
+    try:
+        a = await first.get(3.0)
+        b = await second.get(3.0)
+        assert a == b, "both listeners see the same stream"
+        await first.close()
+        while second.get_nowait() is not None:
+            pass
+        later = await second.get(3.0)
+        assert later["data"] != b["data"]
+    finally:
+        await first.close()
+        await second.close()
+
+
+async def test_a_slow_consumer_loses_the_oldest_messages_and_counts_them(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """With max_queue=10 on a 1 kHz topic the queue keeps the newest 10 and counts the drops."""
+    robot = await make_sim(dialect="ros2", fast_topic=True)
+    client = await make_client(robot)
+    async with client.subscribe("/fast_counter", "std_msgs/UInt64", max_queue=10) as sub:
+        start = (await sub.get(3.0))["data"]
+        await robot.wait_for(lambda world: world.fast_count >= start + 300, 10.0)
+        await robot.wait_for(lambda _world: sub.received >= 100, 10.0)
+        assert sub.pending() == 10
+        assert sub.dropped == sub.received - 1 - 10
+        values = [(await sub.get(1.0))["data"] for _ in range(10)]
+    assert values == sorted(values)
+    assert values[0] > start + 1
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_publish_reaches_the_robot(make_sim: MakeSim, make_client: MakeClient, dialect: str) -> None:
+    """A Twist on /turtle1/cmd_vel arrives in the robot's world (type name in either spelling)."""
+    robot = await make_sim(dialect=dialect)
+    client = await make_client(robot)
+    await client.publish("/turtle1/cmd_vel", "geometry_msgs/msg/Twist", {"linear": {"x": 1.5}})
+    await client.publish("/turtle1/cmd_vel", "geometry_msgs/Twist", {"linear": {"x": 0.5}})
+    await robot.wait_for(lambda world: len(world.published.get("/turtle1/cmd_vel", ())) >= 2)
+    received = [m.msg["linear"]["x"] for m in robot.world.published["/turtle1/cmd_vel"]]
+    assert received == [1.5, 0.5]
+
+
+async def test_ros1_publish_respells_time_fields(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
+    """sec/nanosec become secs/nsecs for ROS 1, which would silently leave the stamp at zero."""
+    client = await make_client(sim_ros1)
+    stamped = {"header": {"stamp": {"sec": 12, "nanosec": 34}, "frame_id": "map"}, "pose": {}}
+    await client.publish("/goal_pose", "geometry_msgs/PoseStamped", stamped)
+    await sim_ros1.wait_for(lambda world: bool(world.published.get("/goal_pose")))
+    stamp = sim_ros1.world.published["/goal_pose"][-1].msg["header"]["stamp"]
+    assert stamp == {"secs": 12, "nsecs": 34}
+
+
+async def test_publish_advertises_once_and_reuses_the_advertisement(
+    sim_ros2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """Repeated publishes share one advertisement; unadvertise drops it."""
+    client = await make_client(sim_ros2)
+    for n in range(5):
+        await client.publish("/chatter_in", "std_msgs/String", {"data": f"m{n}"})
+    await sim_ros2.wait_for(lambda world: len(world.published.get("/chatter_in", ())) == 5)
+    advertisements = [c.advertisements.get("/chatter_in") for c in sim_ros2.bridge.connections.values()]
+    assert [ids for ids in advertisements if ids] == [[client._adverts["/chatter_in"].id]]
+    await client.unadvertise("/chatter_in")
+    await client.call_service("/rosapi/topics")  # the bridge handles our frames in order: a barrier
+    assert all("/chatter_in" not in c.advertisements for c in sim_ros2.bridge.connections.values())
+
+
+async def test_wait_for_message_returns_the_next_message(client: RosbridgeClient) -> None:
+    """wait_for_message subscribes, returns one message, and unsubscribes."""
+    msg = await client.wait_for_message("/chatter", "std_msgs/String", 3.0)
+    assert "data" in msg
+    assert client._subs == {}
+
+
+async def test_wait_for_message_times_out_on_a_silent_topic(client: RosbridgeClient) -> None:
+    """No message within the timeout raises RequestTimeoutError naming the topic."""
+    with pytest.raises(RequestTimeoutError, match="a message on /nobody_publishes_here"):
+        await client.wait_for_message("/nobody_publishes_here", "std_msgs/String", 0.2)
+
+
+async def test_a_drop_interrupts_a_waiting_consumer_and_the_subscription_comes_back(
+    sim: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """get() raises ConnectionLostError at a drop; after the reconnect the same subscription delivers again."""
+    client = await make_client(sim)
+    async with client.subscribe("/chatter", "std_msgs/String") as sub:
+        await sub.get(3.0)
+        while sub.get_nowait() is not None:
+            pass
+        # The consumer task starts waiting at the drop's first await, long before the close
+        # handshake reaches the client.
+        waiting = asyncio.create_task(sub.get(10.0))
+        await sim.drop_connections()
+        with pytest.raises(ConnectionLostError):
+            await asyncio.wait_for(waiting, 5.0)
+        await client.wait_connected(5.0)
+        before = sim.world.chatter_count
+        msg = await sub.get(5.0)
+        while msg is not None and int(msg["data"].rsplit(" ", 1)[-1]) <= before:
+            msg = await sub.get(5.0)
+        assert msg is not None
+
+
+async def test_nothing_published_during_an_outage_arrives_after_the_robot_restarts(
+    sim: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """Publishes during an outage raise and are never sent later; the advertisement is restored."""
+    client = await make_client(sim)
+    await client.publish("/turtle1/cmd_vel", "geometry_msgs/Twist", {"linear": {"x": 1.0}})
+    await sim.wait_for(lambda world: len(world.published.get("/turtle1/cmd_vel", ())) == 1)
+    await sim.stop()
+    await client.wait_disconnected(5.0)
+    for stale in (7.0, 8.0, 9.0):
+        with pytest.raises(NotConnectedError):
+            await client.publish("/turtle1/cmd_vel", "geometry_msgs/Twist", {"linear": {"x": stale}})
+    await sim.start()
+    await client.wait_connected(5.0)
+    await client.call_service("/rosapi/topics")  # the bridge handles our frames in order: a barrier
+    advertised = [c.advertisements.get("/turtle1/cmd_vel") for c in sim.bridge.connections.values()]
+    assert any(advertised), "the advertisement is restored on reconnect"
+    await client.publish("/turtle1/cmd_vel", "geometry_msgs/Twist", {"linear": {"x": 2.0}})
+    await sim.wait_for(lambda world: world.published["/turtle1/cmd_vel"][-1].msg["linear"]["x"] == 2.0)
+    received = [m.msg["linear"]["x"] for m in sim.world.published["/turtle1/cmd_vel"]]
+    assert received == [1.0, 2.0]
