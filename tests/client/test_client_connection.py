@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Awaitable, Callable
 import time
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
-from conftest import MakeClient, unused_port
 
+from conftest import MakeClient, unused_port
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -33,7 +33,7 @@ async def test_start_returns_at_once_without_a_bridge_and_calls_name_the_url(mak
 async def test_wait_connected_gives_up_after_its_timeout_with_the_last_error(make_client: MakeClient) -> None:
     """wait_connected raises NotConnectedError (with the reason) when no bridge appears in time."""
     client = await make_client(f"ws://127.0.0.1:{unused_port()}", connected=False)
-    with pytest.raises(NotConnectedError, match="no connection within 0.3 s"):
+    with pytest.raises(NotConnectedError, match=r"no connection within 0\.3 s"):
         await client.wait_connected(0.3)
 
 
@@ -98,6 +98,7 @@ async def test_during_a_connection_attempt_publish_fails_at_once_but_reads_wait_
 async def test_ros_info_detects_the_dialect_of_the_bridge(
     make_sim: MakeSim,
     make_client: MakeClient,
+    *,
     robot_kwargs: dict[str, Any],
     version: int,
     distro: str | None,

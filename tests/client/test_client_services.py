@@ -6,8 +6,8 @@ import asyncio
 from collections.abc import Awaitable, Callable
 
 import pytest
-from conftest import MakeClient
 
+from conftest import MakeClient
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -50,7 +50,7 @@ async def test_a_slow_service_times_out_on_ros1_with_request_timeout_error(
 ) -> None:
     """ROS 1 has no service timeout field: our own deadline ends the call with RequestTimeoutError."""
     client = await make_client(sim_ros1)
-    with pytest.raises(RequestTimeoutError, match="service /slow_service within 0.3 s"):
+    with pytest.raises(RequestTimeoutError, match=r"service /slow_service within 0\.3 s"):
         await client.call_service("/slow_service", timeout=0.3)
     assert client._main is not None
     assert client._main.pending == {}

@@ -6,8 +6,8 @@ import asyncio
 from collections.abc import Awaitable, Callable
 
 import pytest
-from conftest import MakeClient
 
+from conftest import MakeClient
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -125,7 +125,7 @@ async def test_wait_for_message_times_out_on_a_silent_topic(client: RosbridgeCli
 async def test_a_drop_interrupts_a_waiting_consumer_and_the_subscription_comes_back(
     sim: SimulatedRobot, make_client: MakeClient
 ) -> None:
-    """get() raises ConnectionLostError at a drop; after the reconnect the same subscription delivers again."""
+    """get() raises ConnectionLostError at a drop; after the reconnect the subscription delivers again."""
     client = await make_client(sim)
     async with client.subscribe("/chatter", "std_msgs/String") as sub:
         await sub.get(3.0)
