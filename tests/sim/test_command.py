@@ -1,0 +1,62 @@
+"""The standalone command: serves until SIGTERM / Ctrl-C and exits 0; a bad flag is one line and exit 2."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import signal
+import sys
+
+import pytest
+from rawclient import RawClient
+
+COMMAND = [sys.executable, "-m", "rosbridge_mcp_server.sim"]
+
+
+async def _start(*args: str) -> tuple[asyncio.subprocess.Process, str]:
+    process = await asyncio.create_subprocess_exec(
+        *COMMAND, *args, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE
+    )
+    assert process.stderr is not None
+    async with asyncio.timeout(20):
+        while True:
+            line = (await process.stderr.readline()).decode()
+            assert line, "the command ended before serving"
+            found = re.search(r"serving rosbridge v2 on (ws://\S+)", line)
+            if found:
+                return process, found.group(1)
+
+
+@pytest.mark.parametrize(("sig", "dialect"), [(signal.SIGTERM, "ros1"), (signal.SIGINT, "ros2")])
+async def test_command_serves_the_robot_and_stops_cleanly_on_a_signal(
+    sig: signal.Signals, dialect: str
+) -> None:
+    """python -m rosbridge_mcp_server.sim --port 0 serves; SIGTERM or SIGINT ends it with exit code 0."""
+    process, url = await _start("--port", "0", "--dialect", dialect, "--log-level", "INFO")
+    try:
+        async with await RawClient.open(url) as client:
+            assert (await client.values("/add_two_ints", {"a": 1, "b": 2})) == {"sum": 3}
+        process.send_signal(sig)
+        stdout, _ = await asyncio.wait_for(process.communicate(), 20)
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    assert process.returncode == 0
+    assert stdout == b""
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["--port", "99999"], ["--dialect", "ros3"], ["--no-such-flag"], ["--dialect", "ros1", "--in-order"]],
+)
+async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str]) -> None:
+    """Bad flags never start a server: one line of explanation, exit status 2."""
+    process = await asyncio.create_subprocess_exec(
+        *COMMAND, *args, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE
+    )
+    stdout, stderr = await asyncio.wait_for(process.communicate(), 20)
+    assert process.returncode == 2
+    assert stdout == b""
+    assert len(stderr.decode().strip().splitlines()) == 1
+    assert "error" in stderr.decode()
