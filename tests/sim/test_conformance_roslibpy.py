@@ -159,10 +159,10 @@ async def test_roslibpy_publish_reaches_another_connections_subscriber(target: T
             for n in range(50):
                 talker.publish(roslibpy.Message({"data": f"hello {n}"}))
                 try:
-                    return inbox.wait_for(lambda items: bool(items), timeout=0.2)
+                    return inbox.wait_for(bool, timeout=0.2)
                 except TimeoutError:
                     continue
-            return inbox.wait_for(lambda items: bool(items))
+            return inbox.wait_for(bool)
 
         received = await asyncio.to_thread(publish_until_heard)
         await asyncio.to_thread(talker.unadvertise)
@@ -181,7 +181,7 @@ async def test_roslibpy_subscribes_to_the_robots_topics(target: Target, ros: Any
     await asyncio.to_thread(chatter_topic.subscribe, chatter.put)
     await asyncio.to_thread(pose_topic.subscribe, poses.put)
     said = await asyncio.to_thread(chatter.wait_for, lambda items: len(items) >= 2)
-    pose = (await asyncio.to_thread(poses.wait_for, lambda items: bool(items)))[0]
+    pose = (await asyncio.to_thread(poses.wait_for, bool))[0]
     assert said[0]["data"].startswith("Hello World: ")
     assert set(pose) == {"x", "y", "theta", "linear_velocity", "angular_velocity"}
 
@@ -198,13 +198,13 @@ async def test_roslibpy_publishes_cmd_vel_and_the_turtle_moves(target: Target, r
     poses = Inbox()
     pose_topic = roslibpy.Topic(ros, "/turtle1/pose", target.type("turtlesim", "msg", "Pose"))
     await asyncio.to_thread(pose_topic.subscribe, poses.put)
-    seen = await asyncio.to_thread(poses.wait_for, lambda items: bool(items))
+    seen = await asyncio.to_thread(poses.wait_for, bool)
     assert seen[0]["x"] > start_x + 0.2
     assert robot.world.published["/turtle1/cmd_vel"][-1].msg["linear"]["x"] == 1.5
 
 
 async def test_roslibpy_calls_services_including_an_empty_request(target: Target, ros: Any) -> None:
-    """Service.call answers; an empty request works (get_param_names; on our robot /reset and /add_two_ints)."""
+    """Service.call answers, also with an empty request (get_param_names; here also /reset, /add_two_ints)."""
     names = roslibpy.Service(ros, "/rosapi/get_param_names", "rosapi/GetParamNames")
     response = await asyncio.to_thread(names.call, roslibpy.ServiceRequest(), None, None, WAIT)
     assert "names" in response
@@ -277,7 +277,7 @@ async def test_roslibpy_ros1_actionlib_cancel_preempts_the_goal(target: Target, 
     goal = Ros1Goal(client, roslibpy.Message({"order": 40}))
     goal.on("feedback", feedback.put)
     await asyncio.to_thread(goal.send)
-    await asyncio.to_thread(feedback.wait_for, lambda items: bool(items))
+    await asyncio.to_thread(feedback.wait_for, bool)
     await asyncio.to_thread(goal.cancel)
     await asyncio.to_thread(goal.wait, WAIT)
     statuses = Inbox()
@@ -316,7 +316,7 @@ async def test_roslibpy_ros2_action_cancel_ends_the_goal_canceled(target: Target
     goal_id = await asyncio.to_thread(
         client.send_goal, roslibpy.Goal({"order": 40}), results.put, feedback.put, errors.put
     )
-    await asyncio.to_thread(feedback.wait_for, lambda items: bool(items))
+    await asyncio.to_thread(feedback.wait_for, bool)
     await asyncio.to_thread(client.cancel_goal, goal_id)
     await asyncio.to_thread(client.wait_goal, goal_id, WAIT)
     (result,) = results.items
