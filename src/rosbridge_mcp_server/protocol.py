@@ -235,6 +235,8 @@ class FragmentAssembler:
         self._clock = clock
         self._buffers: dict[str, _FragmentBuffer] = {}
         self._chars = 0
+        #: Messages rebuilt so far (diagnostics).
+        self.completed = 0
 
     @property
     def pending(self) -> int:
@@ -285,6 +287,7 @@ class FragmentAssembler:
         if num == 0:
             self._drop(key)
             if total == 1:
+                self.completed += 1
                 return data
             buf = _FragmentBuffer(total=total, parts=[data], size=len(data), updated=now)
             self._buffers[key] = buf
@@ -307,6 +310,7 @@ class FragmentAssembler:
             self._chars += len(data)
             if len(existing.parts) == existing.total:
                 self._drop(key)
+                self.completed += 1
                 return "".join(existing.parts)
         self._enforce_bounds(keep=key)
         return None

@@ -71,8 +71,8 @@ async def test_ros2_calls_carry_a_timeout_so_the_bridge_gives_up_with_its_own_te
 async def test_a_slow_service_does_not_delay_a_concurrent_call(
     make_sim: MakeSim, make_client: MakeClient, in_order: bool
 ) -> None:
-    """While a 3 s service runs, /rosapi/topics answers at once (Humble: thanks to lanes)."""
-    robot = await make_sim(dialect="ros2", in_order=in_order, slow_service_seconds=3.0)
+    """While a 2 s service runs, /rosapi/topics answers at once (Humble: thanks to lanes)."""
+    robot = await make_sim(dialect="ros2", in_order=in_order, slow_service_seconds=2.0)
     client = await make_client(robot)
     slow = asyncio.create_task(client.call_service("/slow_service", timeout=10.0))
     await robot.wait_for(lambda world: world.service_calls.get("/slow_service", 0) >= 1)

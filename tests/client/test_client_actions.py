@@ -1,0 +1,314 @@
+"""Action goals: ROS 2 native ops on their own lane, ROS 1 actionlib topics, timeouts and cancels."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+import pytest
+
+from conftest import MakeClient
+from rosbridge_mcp_server import actions
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, GoalTimeoutError
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+MakeSim = Callable[..., Awaitable[SimulatedRobot]]
+
+ROS2_TYPE = "example_interfaces/action/Fibonacci"
+ROS1_TYPE = "actionlib_tutorials/FibonacciAction"
+#: Long enough to still be running when a test cancels it (40 steps of 50 ms), short of int32 overflow.
+LONG_ORDER = 40
+
+ROBOTS = {
+    "jazzy": {"dialect": "ros2"},
+    "humble": {"dialect": "ros2", "in_order": True},
+    "ros1": {"dialect": "ros1"},
+}
+
+
+def action_type_for(robot: SimulatedRobot) -> str:
+    """The action type in the form users of that dialect write."""
+    return ROS2_TYPE if robot.dialect == "ros2" else ROS1_TYPE
+
+
+def running_goal_with_feedback(world: Any) -> bool:
+    """Some /fibonacci goal is running and has sent feedback."""
+    return any(not g.finished and g.feedback_count >= 1 for g in world.goals.values())
+
+
+@pytest.fixture(params=list(ROBOTS))
+async def robot(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
+    """A robot of each flavour: Jazzy, Humble (in-order) and ROS 1."""
+    return await make_sim(**ROBOTS[request.param])
+
+
+@pytest.fixture(params=["jazzy", "humble"])
+async def robot2(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
+    """A ROS 2 robot, threaded (Jazzy) and in-order (Humble)."""
+    return await make_sim(**ROBOTS[request.param])
+
+
+# --- RosbridgeClient.send_action_goal (ROS 2) ----------------------------------------------------------
+
+
+async def test_send_action_goal_returns_the_result_and_streams_feedback(
+    robot2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """A goal runs on its own lane, feedback reaches the callback, the result has status 4."""
+    client = await make_client(robot2)
+    feedback: list[dict[str, Any]] = []
+
+    async def on_feedback(values: dict[str, Any]) -> None:
+        feedback.append(values)
+
+    result = await client.send_action_goal(
+        "/fibonacci", "example_interfaces/Fibonacci", {"order": 5}, on_feedback=on_feedback, timeout=5.0
+    )
+    assert result.status == 4
+    assert result.status_name == "succeeded"
+    assert result.values["sequence"] == [0, 1, 1, 2, 3, 5]
+    assert feedback
+    assert feedback[-1]["sequence"] == [0, 1, 1, 2, 3, 5]
+    assert client.running_goals() == []
+
+
+async def test_a_running_goal_can_be_cancelled_from_the_main_connection(
+    robot2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """cancel_action_goal reaches a goal running on its lane, even on an in-order (Humble) bridge."""
+    client = await make_client(robot2)
+    goal = asyncio.create_task(
+        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
+    )
+    await robot2.wait_for(running_goal_with_feedback)
+    [handle] = client.running_goals("/fibonacci")
+    await client.cancel_action_goal("/fibonacci", handle.goal_id)
+    result = await asyncio.wait_for(goal, 5.0)
+    assert result.status == 5
+    assert len(result.values["sequence"]) < LONG_ORDER + 1
+
+
+async def test_a_goal_past_its_timeout_is_cancelled_and_reports_the_partial_result(
+    robot2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """At the deadline a cancel is sent; GoalTimeoutError carries the canceled status and result."""
+    client = await make_client(robot2)
+    with pytest.raises(GoalTimeoutError) as caught:
+        await client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=0.3)
+    assert caught.value.status == 5
+    assert isinstance(caught.value.result, dict)
+    assert 2 <= len(caught.value.result["sequence"]) < LONG_ORDER + 1
+    await robot2.wait_for(lambda world: all(g.finished for g in world.goals.values()))
+
+
+async def test_cancelling_the_awaiting_task_cancels_the_goal_on_the_robot(
+    robot2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """If the caller is cancelled (the MCP request was cancelled), the goal is cancelled too."""
+    client = await make_client(robot2)
+    goal = asyncio.create_task(
+        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
+    )
+    await robot2.wait_for(running_goal_with_feedback)
+    goal.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await goal
+    await robot2.wait_for(lambda world: all(g.finished and g.cancel_requested for g in world.goals.values()))
+    assert client.running_goals() == []
+
+
+async def test_a_goal_for_a_missing_action_server_raises_action_error(
+    sim_ros2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """The bridge's "No action server available" surfaces as ActionError."""
+    client = await make_client(sim_ros2)
+    with pytest.raises(ActionError, match="No action server available"):
+        await client.send_action_goal("/no_such_action", ROS2_TYPE, {"order": 1}, timeout=5.0)
+
+
+async def test_a_rejected_goal_raises_action_error(sim_ros2: SimulatedRobot, make_client: MakeClient) -> None:
+    """A goal the server rejects raises ActionError with the bridge's text."""
+    client = await make_client(sim_ros2)
+    with pytest.raises(ActionError, match="rejected"):
+        await client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": -1}, timeout=5.0)
+
+
+async def test_a_drop_fails_a_running_goal_with_connection_lost(
+    sim_ros2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """When the bridge drops every connection, a goal waiting on its lane fails at once."""
+    client = await make_client(sim_ros2)
+    goal = asyncio.create_task(
+        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=20.0)
+    )
+    await sim_ros2.wait_for(running_goal_with_feedback)
+    await sim_ros2.drop_connections()
+    with pytest.raises(ConnectionLostError):
+        await asyncio.wait_for(goal, 5.0)
+    assert client.running_goals() == []
+
+
+async def test_send_action_goal_refuses_ros1(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
+    """ROS 1 has no action ops: send_action_goal says to use actionlib topics."""
+    client = await make_client(sim_ros1)
+    with pytest.raises(ActionError, match="actionlib"):
+        await client.send_action_goal("/fibonacci", ROS1_TYPE, {"order": 3}, timeout=2.0)
+
+
+# --- actions.run_goal / cancel_goals (both dialects) ---------------------------------------------------
+
+
+async def test_run_goal_succeeds_with_feedback_on_every_dialect(
+    robot: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """run_goal returns a succeeded outcome with the result and the last feedback."""
+    client = await make_client(robot)
+    seen: list[int] = []
+
+    async def on_feedback(count: int, values: dict[str, Any]) -> None:
+        seen.append(count)
+
+    outcome = await actions.run_goal(
+        client, "/fibonacci", action_type_for(robot), {"order": 6}, timeout=5.0, on_feedback=on_feedback
+    )
+    assert outcome.succeeded
+    assert outcome.status == "succeeded"
+    assert outcome.status_code == (4 if robot.dialect == "ros2" else 3)
+    assert outcome.result == {"sequence": [0, 1, 1, 2, 3, 5, 8]}
+    assert outcome.feedback_count == len(seen) >= 1
+    assert seen == list(range(1, len(seen) + 1))
+    assert 1 <= len(outcome.last_feedback) <= 5
+    assert outcome.canceled_by is None
+    assert outcome.dialect == (2 if robot.dialect == "ros2" else 1)
+    assert actions.running_goals(client) == []
+
+
+@pytest.mark.parametrize(
+    ("dialect", "written"),
+    [
+        ("ros2", "example_interfaces/Fibonacci"),
+        ("ros2", "example_interfaces/FibonacciAction"),
+        ("ros1", "actionlib_tutorials/Fibonacci"),
+        ("ros1", "actionlib_tutorials/action/Fibonacci"),
+    ],
+)
+async def test_run_goal_accepts_the_action_type_as_users_write_it(
+    make_sim: MakeSim, make_client: MakeClient, dialect: str, written: str
+) -> None:
+    """pkg/Fibonacci, pkg/action/Fibonacci and pkg/FibonacciAction all work on both dialects."""
+    robot = await make_sim(dialect=dialect)
+    client = await make_client(robot)
+    outcome = await actions.run_goal(client, "fibonacci", written, {"order": 2}, timeout=5.0)
+    assert outcome.succeeded
+    assert outcome.action == "/fibonacci"
+
+
+async def test_run_goal_past_its_timeout_cancels_and_says_so(
+    robot: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """A goal past its timeout is cancelled; the outcome names the dialect's canceled status."""
+    client = await make_client(robot)
+    outcome = await actions.run_goal(
+        client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=0.3
+    )
+    assert not outcome.succeeded
+    assert outcome.canceled_by == "timeout"
+    assert outcome.status == ("canceled" if robot.dialect == "ros2" else "preempted")
+    assert outcome.result is not None
+    await robot.wait_for(lambda world: all(g.finished for g in world.goals.values()))
+
+
+async def test_cancel_goals_stops_a_goal_while_run_goal_is_waiting(
+    robot: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """cancel_goals by our goal id works during run_goal, on Humble too; the outcome says who cancelled."""
+    client = await make_client(robot)
+    run = asyncio.create_task(
+        actions.run_goal(client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
+    )
+    await robot.wait_for(running_goal_with_feedback)
+    [running] = actions.running_goals(client, "/fibonacci")
+    report = await actions.cancel_goals(client, "/fibonacci", running.goal_id)
+    assert report.canceled_ours == [running.goal_id]
+    assert not report.unknown_goal_id
+    outcome = await asyncio.wait_for(run, 5.0)
+    assert outcome.canceled_by == "cancel_action"
+    assert outcome.status == ("canceled" if robot.dialect == "ros2" else "preempted")
+
+
+async def test_cancel_goals_without_an_id_also_cancels_goals_of_other_clients(
+    robot: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """Cancel-all reaches a goal another client started (ROS 2: hidden cancel_goal service)."""
+    ours = await make_client(robot)
+    theirs = await make_client(robot)
+    run = asyncio.create_task(
+        actions.run_goal(theirs, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
+    )
+    await robot.wait_for(running_goal_with_feedback)
+    report = await actions.cancel_goals(ours, "/fibonacci")
+    assert report.canceled_ours == []
+    if robot.dialect == "ros2":
+        assert report.goals_canceling is not None
+        assert len(report.goals_canceling) == 1
+    outcome = await asyncio.wait_for(run, 5.0)
+    assert not outcome.succeeded
+    assert outcome.status == ("canceled" if robot.dialect == "ros2" else "preempted")
+
+
+async def test_cancel_goals_reports_an_unknown_goal_id(
+    robot: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """A goal id that is not one of our running goals is reported as unknown."""
+    client = await make_client(robot)
+    report = await actions.cancel_goals(client, "/fibonacci", "not-a-goal-of-ours")
+    assert report.unknown_goal_id
+    assert report.canceled_ours == []
+
+
+async def test_a_ros1_goal_without_an_action_server_fails_with_a_clear_error(
+    sim_ros1: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """No status messages on <ns>/status within the wait means no action server there."""
+    client = await make_client(sim_ros1)
+    with pytest.raises(
+        ActionError, match="no action server at /nowhere: no status messages on /nowhere/status"
+    ):
+        await actions.run_goal(client, "/nowhere", ROS1_TYPE, {"order": 1}, timeout=0.3)
+
+
+async def test_a_rejected_ros1_goal_ends_rejected(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
+    """A goal the actionlib server rejects ends with status "rejected" (5)."""
+    client = await make_client(sim_ros1)
+    outcome = await actions.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": -1}, timeout=5.0)
+    assert outcome.status == "rejected"
+    assert outcome.status_code == 5
+    assert not outcome.succeeded
+
+
+async def test_cancelling_run_goal_cancels_the_ros1_goal(
+    sim_ros1: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """Cancelling the task running a ROS 1 goal publishes a cancel for it before giving up."""
+    client = await make_client(sim_ros1)
+    run = asyncio.create_task(
+        actions.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=10.0)
+    )
+    await sim_ros1.wait_for(running_goal_with_feedback)
+    run.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await run
+    await sim_ros1.wait_for(lambda world: all(g.finished for g in world.goals.values()))
+    assert all(g.cancel_requested for g in sim_ros1.world.goals.values())
+    assert actions.running_goals(client) == []
+
+
+async def test_two_clients_never_mint_the_same_goal_id(
+    sim_ros2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """Goal ids carry a per-client token, because the bridge's goal table is shared by all clients."""
+    first: RosbridgeClient = await make_client(sim_ros2)
+    second: RosbridgeClient = await make_client(sim_ros2)
+    assert first.new_goal_id("/fibonacci") != second.new_goal_id("/fibonacci")

@@ -1,0 +1,92 @@
+"""Frames off the happy path: fragments reassembled; status, unknown, binary and malformed frames survived."""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
+
+import pytest
+from websockets.asyncio.server import ServerConnection, serve
+
+from conftest import MakeClient
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+MakeSim = Callable[..., Awaitable[SimulatedRobot]]
+
+
+async def test_fragmented_replies_and_messages_are_reassembled(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """A bridge with a tiny fragment size splits every frame; calls and subscriptions still work."""
+    robot = await make_sim(dialect="ros2", max_message_size=64)
+    client = await make_client(robot)
+    topics = await client.call_service("/rosapi/topics")
+    assert "/chatter" in topics["topics"]
+    assert (await client.wait_for_message("/chatter", "std_msgs/String", 3.0))["data"].startswith("Hello")
+    assert client._main is not None
+    assembler = client._main._decoder.assembler
+    assert assembler.completed >= 2
+    assert assembler.pending == 0
+
+
+GARBAGE: list[str | bytes] = [
+    b"\x00\x01binary",
+    "{not json at all",
+    "[1, 2, 3]",
+    json.dumps({"op": "status", "level": "error", "msg": "a bridge that does send status"}),
+    json.dumps({"op": "set_level", "level": "info"}),
+    json.dumps({"op": "service_response", "id": "call_service:/nobody:999", "result": True, "values": {}}),
+    json.dumps({"op": "publish", "topic": "/nobody_listens", "msg": {"data": 1}}),
+    json.dumps({"op": "fragment", "id": "z", "data": "{", "num": 5, "total": 2}),
+]
+
+
+@pytest.fixture
+async def noisy_bridge() -> AsyncIterator[str]:
+    """A scripted bridge that answers every call_service with garbage first, then the real reply."""
+
+    async def handle(ws: ServerConnection) -> None:
+        async for raw in ws:
+            request: dict[str, Any] = json.loads(raw)
+            if request.get("op") != "call_service":
+                continue
+            for frame in GARBAGE:
+                await ws.send(frame)
+            values: dict[str, Any] = {"version": 2, "distro": "jazzy"}
+            if request["service"] == "/echo":
+                values = {"echo": request.get("args")}
+            await ws.send(
+                json.dumps(
+                    {
+                        "op": "service_response",
+                        "service": request["service"],
+                        "id": request["id"],
+                        "result": True,
+                        "values": values,
+                    }
+                )
+            )
+
+    async with serve(handle, "127.0.0.1", 0, compression=None) as server:
+        port = server.sockets[0].getsockname()[1]
+        yield f"ws://127.0.0.1:{port}"
+
+
+async def test_unknown_status_binary_and_malformed_frames_are_logged_and_survived(
+    noisy_bridge: str, make_client: MakeClient, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Garbage frames never kill the reader: the reply after them still arrives, and they are logged."""
+    caplog.set_level(logging.DEBUG, logger="rosbridge_mcp_server.client")
+    client = await make_client(noisy_bridge)
+    assert (await client.call_service("/echo", {"x": 1}))["echo"] == {"x": 1}
+    assert (await client.call_service("/echo", {"x": 2}))["echo"] == {"x": 2}
+    assert client.connections_made == 1
+    logged = "\n".join(record.getMessage() for record in caplog.records)
+    assert "binary frame" in logged
+    assert "malformed JSON" in logged
+    assert "not a JSON object" in logged
+    assert "bridge status (error)" in logged
+    assert "unsupported op 'set_level'" in logged
+    assert "nobody awaits" in logged
