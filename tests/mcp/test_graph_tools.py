@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from mcp_harness import Session, text_of, types_for
+from mcp_harness import Session, open_session, text_of, types_for
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -62,3 +62,31 @@ async def test_list_actions_lists_each_server_once_with_its_type(
     assert data["actions"] == [{"name": "/fibonacci", "type": types_for(sim)["fibonacci"]}]
     assert data["count"] == 1
     assert "/fibonacci" in text_of(result)
+
+
+async def test_listings_and_a_service_call_work_on_a_humble_in_order_bridge(
+    sim_humble: SimulatedRobot,
+) -> None:
+    """On Humble's one-connection-in-order bridge, the listings and a service call answer as on Jazzy."""
+    async with open_session(sim_humble.url) as session:
+        topics = (await session.ok("list_topics")).structured_content
+        services = (await session.ok("list_services")).structured_content
+        actions = (await session.ok("list_actions")).structured_content
+        added = (
+            await session.ok(
+                "publish_service",
+                {
+                    "service": "/add_two_ints",
+                    "service_type": "example_interfaces/srv/AddTwoInts",
+                    "request": {"a": 40, "b": 2},
+                },
+            )
+        ).structured_content
+    assert topics is not None
+    assert services is not None
+    assert actions is not None
+    assert added is not None
+    assert {"name": "/turtle1/cmd_vel", "type": "geometry_msgs/msg/Twist"} in topics["topics"]
+    assert {"name": "/add_two_ints", "type": "example_interfaces/srv/AddTwoInts"} in services["services"]
+    assert actions["actions"] == [{"name": "/fibonacci", "type": "example_interfaces/action/Fibonacci"}]
+    assert added["response"] == {"sum": 42}

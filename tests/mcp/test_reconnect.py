@@ -1,0 +1,83 @@
+"""A bridge that drops or restarts: in-flight calls fail at once, nothing is sent late, later calls work."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator, Awaitable, Callable
+
+import pytest
+from mcp_harness import Session, open_session, types_for
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+CMD_VEL = "/turtle1/cmd_vel"
+WAIT = 10.0
+
+
+@pytest.fixture(params=["ros2", "ros1"])
+async def robot(
+    request: pytest.FixtureRequest, make_sim: Callable[..., Awaitable[SimulatedRobot]]
+) -> SimulatedRobot:
+    """A robot of each dialect with a service slow enough to be in flight when the bridge goes away."""
+    return await make_sim(dialect=request.param, slow_service_seconds=30.0)
+
+
+@pytest.fixture
+async def robot_session(robot: SimulatedRobot) -> AsyncIterator[Session]:
+    """A session on that robot."""
+    async with open_session(robot.url, request_timeout=60.0) as opened:
+        yield opened
+
+
+def _twist(robot: SimulatedRobot, x: float) -> dict[str, object]:
+    return {"topic": CMD_VEL, "message_type": types_for(robot)["twist"], "message": {"linear": {"x": x}}}
+
+
+async def test_a_call_in_flight_fails_at_once_when_the_connection_drops(
+    robot_session: Session, robot: SimulatedRobot
+) -> None:
+    """A pending service call ends with the connection-lost text; the next call works after reconnecting."""
+    slow = asyncio.create_task(
+        robot_session.call(
+            "publish_service",
+            {
+                "service": "/slow_service",
+                "service_type": types_for(robot)["trigger"],
+                "request": {},
+                "timeout": 60,
+            },
+        )
+    )
+    await robot.world.wait_for(lambda w: w.service_calls.get("/slow_service") == 1, WAIT)
+    await robot.drop_connections()
+    result = await asyncio.wait_for(slow, WAIT)
+    assert result.is_error
+    text = result.content[0].text  # type: ignore[union-attr]
+    assert f"The connection to rosbridge at {robot.url} dropped while waiting" in text
+    assert "Nothing will be re-sent automatically" in text
+
+    await robot_session.ros.wait_connected(WAIT)
+    await robot_session.ok("list_topics")
+
+
+async def test_a_publish_during_an_outage_fails_and_is_never_delivered_later(
+    robot_session: Session, robot: SimulatedRobot
+) -> None:
+    """With the bridge down, publish_topic is an error; after the restart only later messages arrive."""
+    await robot_session.ok("publish_topic", _twist(robot, 0.1))
+    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
+
+    await robot.stop()
+    await robot_session.ros.wait_disconnected(WAIT)
+    outage = await robot_session.error("publish_topic", _twist(robot, 0.9))
+    assert f"Not connected to rosbridge at {robot.url}" in outage
+    assert "nothing was sent" in outage
+    listing = await robot_session.error("list_topics")
+    assert "Not connected" in listing
+
+    await robot.start()
+    await robot_session.ros.wait_connected(WAIT)
+    await robot_session.ok("publish_topic", _twist(robot, 0.2))
+    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 2, WAIT)
+    await robot_session.ok("list_topics")  # one more round trip for anything queued to show up
+    assert [m.msg["linear"]["x"] for m in robot.world.published[CMD_VEL]] == [0.1, 0.2]
