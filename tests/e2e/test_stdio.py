@@ -1,0 +1,167 @@
+"""End to end: the real command on stdio with --demo; stdout carries JSON-RPC and nothing else."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import socket
+import sys
+from typing import Any
+
+WAIT = 30.0
+
+
+class StdioServer:
+    """The server process, spoken to by hand: one JSON-RPC message per line on stdin and stdout."""
+
+    def __init__(self, process: asyncio.subprocess.Process) -> None:
+        self.process = process
+        self.stdout_lines: list[str] = []
+        self._next_id = 0
+
+    async def send(self, message: dict[str, Any]) -> None:
+        assert self.process.stdin is not None
+        self.process.stdin.write((json.dumps(message) + "\n").encode())
+        await self.process.stdin.drain()
+
+    async def request(self, method: str, params: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Send a request and read lines until its response; every line read must be JSON-RPC."""
+        self._next_id += 1
+        request_id = self._next_id
+        await self.send({"jsonrpc": "2.0", "id": request_id, "method": method, "params": params or {}})
+        while True:
+            message = await self.read_message()
+            if message.get("id") == request_id and ("result" in message or "error" in message):
+                return message
+
+    async def read_message(self) -> dict[str, Any]:
+        assert self.process.stdout is not None
+        raw = await asyncio.wait_for(self.process.stdout.readline(), WAIT)
+        assert raw, "the server closed stdout"
+        line = raw.decode()
+        self.stdout_lines.append(line)
+        message = json.loads(line)
+        assert isinstance(message, dict)
+        assert message.get("jsonrpc") == "2.0", line
+        return message
+
+
+async def _start(*args: str) -> StdioServer:
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        "-m",
+        "rosbridge_mcp_server",
+        *args,
+        stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    return StdioServer(process)
+
+
+async def _finish(server: StdioServer) -> tuple[bytes, bytes, int]:
+    """Close stdin (the client going away) and collect the rest of the output and the exit code."""
+    assert server.process.stdin is not None
+    server.process.stdin.close()
+    stdout, stderr = await asyncio.wait_for(server.process.communicate(), WAIT)
+    code = await server.process.wait()
+    return stdout, stderr, code
+
+
+async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
+    """initialize, tools/list and tools/call against --demo; every stdout line is JSON-RPC; exit code 0."""
+    server = await _start("--demo", "--log-level", "DEBUG")
+    try:
+        init = await server.request(
+            "initialize",
+            {
+                "protocolVersion": "2025-06-18",
+                "capabilities": {},
+                "clientInfo": {"name": "e2e-test", "version": "0"},
+            },
+        )
+        assert init["result"]["serverInfo"]["name"] == "rosbridge"
+        assert "list_topics" in init["result"]["instructions"]
+        await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
+
+        tools = await server.request("tools/list")
+        assert len(tools["result"]["tools"]) == 8
+
+        topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
+        assert topics["result"]["isError"] is False
+        names = [row["name"] for row in topics["result"]["structuredContent"]["topics"]]
+        assert "/turtle1/pose" in names
+
+        published = await server.request(
+            "tools/call",
+            {
+                "name": "publish_topic",
+                "arguments": {
+                    "topic": "/turtle1/cmd_vel",
+                    "message_type": "geometry_msgs/msg/Twist",
+                    "message": {"linear": {"x": 0.5}, "angular": {"z": 0.3}},
+                },
+            },
+        )
+        assert published["result"]["isError"] is False
+
+        goal = await server.request(
+            "tools/call",
+            {
+                "name": "publish_action",
+                "arguments": {
+                    "action_name": "/fibonacci",
+                    "action_type": "example_interfaces/action/Fibonacci",
+                    "goal": {"order": 3},
+                },
+                "_meta": {"progressToken": "goal-1"},
+            },
+        )
+        assert goal["result"]["structuredContent"]["succeeded"] is True
+        progress = [json.loads(line) for line in server.stdout_lines if '"notifications/progress"' in line]
+        assert progress, "feedback should arrive as progress notifications"
+        assert all(p["params"]["progressToken"] == "goal-1" for p in progress)
+
+        failed = await server.request(
+            "tools/call", {"name": "get_topic_info", "arguments": {"topic": "/no_such_topic"}}
+        )
+        assert failed["result"]["isError"] is True
+    finally:
+        rest, stderr, code = await _finish(server)
+
+    for line in rest.decode().splitlines():
+        assert json.loads(line)["jsonrpc"] == "2.0", line
+    assert code == 0, stderr.decode()
+    assert b"demo mode" in stderr
+    assert b"Connected to rosbridge" in stderr
+
+
+def _closed_port_url() -> str:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    return f"ws://127.0.0.1:{port}"
+
+
+async def test_a_server_with_no_bridge_still_answers_and_reports_the_url() -> None:
+    """Pointed at a closed port, the process lists its tools and a tool call fails naming the URL."""
+    url = _closed_port_url()
+    server = await _start("--url", url)
+    try:
+        await server.request(
+            "initialize",
+            {
+                "protocolVersion": "2025-06-18",
+                "capabilities": {},
+                "clientInfo": {"name": "e2e-test", "version": "0"},
+            },
+        )
+        await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
+        assert len((await server.request("tools/list"))["result"]["tools"]) == 8
+        answer = await server.request("tools/call", {"name": "list_actions", "arguments": {}})
+        assert answer["result"]["isError"] is True
+        assert f"Not connected to rosbridge at {url}" in answer["result"]["content"][0]["text"]
+    finally:
+        rest, stderr, code = await _finish(server)
+    assert rest.strip() == b""
+    assert code == 0, stderr.decode()
