@@ -142,7 +142,7 @@ async def run_goal(
     goal: dict[str, Any],
     *,
     timeout: float,  # noqa: ASYNC109
-    on_feedback: Callable[[int, dict[str, Any]], Awaitable[None]] | None = None,
+    on_feedback: Callable[[int, dict[str, Any]], Awaitable[None] | None] | None = None,
     goal_id: str | None = None,
 ) -> GoalOutcome:
     """Send a goal and wait (up to *timeout* seconds) for it to end.
@@ -169,7 +169,7 @@ async def run_goal(
 
 class _FeedbackLog:
     def __init__(
-        self, entry: RunningGoal, on_feedback: Callable[[int, dict[str, Any]], Awaitable[None]] | None
+        self, entry: RunningGoal, on_feedback: Callable[[int, dict[str, Any]], Awaitable[None] | None] | None
     ):
         self.entry = entry
         self.last: deque[dict[str, Any]] = deque(maxlen=_LAST_FEEDBACK)
@@ -179,7 +179,9 @@ class _FeedbackLog:
         self.entry.feedback_count += 1
         self.last.append(values)
         if self.on_feedback is not None:
-            await self.on_feedback(self.entry.feedback_count, values)
+            maybe = self.on_feedback(self.entry.feedback_count, values)
+            if maybe is not None:
+                await maybe
 
 
 def _outcome(
@@ -218,7 +220,7 @@ async def _run_ros2(
     entry: RunningGoal,
     goal: dict[str, Any],
     timeout: float,  # noqa: ASYNC109
-    on_feedback: Callable[[int, dict[str, Any]], Awaitable[None]] | None,
+    on_feedback: Callable[[int, dict[str, Any]], Awaitable[None] | None] | None,
 ) -> GoalOutcome:
     log = _FeedbackLog(entry, on_feedback)
     try:
@@ -254,7 +256,7 @@ async def _run_ros1(
     entry: RunningGoal,
     goal: dict[str, Any],
     timeout: float,  # noqa: ASYNC109
-    on_feedback: Callable[[int, dict[str, Any]], Awaitable[None]] | None,
+    on_feedback: Callable[[int, dict[str, Any]], Awaitable[None] | None] | None,
 ) -> GoalOutcome:
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout

@@ -141,3 +141,14 @@ async def test_ros1_service_failures_carry_the_bridge_text(
     with pytest.raises(ServiceError) as caught:
         await client.call_service("/add_two_ints", {"a": "one", "b": 2})
     assert caught.value.message
+
+
+async def test_idle_lanes_are_closed_after_a_while(
+    sim_humble: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """A lane left idle longer than lane_idle_seconds is closed; the robot sees only the main connection."""
+    client = await make_client(sim_humble, lane_idle_seconds=0.1)
+    await asyncio.gather(*(client.call_service("/add_two_ints", {"a": i, "b": 0}) for i in range(3)))
+    assert client.lanes.opened >= 1
+    await sim_humble.wait_for(lambda _world: sim_humble.connection_count == 1, 5.0)
+    assert client.lanes.idle_count == 0

@@ -70,6 +70,7 @@ class GoalHandle:
 @dataclass(slots=True)
 class _Advert:
     id: str
+    msg_type: str
     wire_type: str
     latch: bool
     queue_size: int
@@ -221,7 +222,7 @@ class RosbridgeClient:
             try:
                 conn = await open_connection(self.url, "main", self.connect_timeout, self._route_publish)
                 info = await self._detect(conn)
-                await self._restore(conn)
+                await self._restore(conn, info)
             except NotConnectedError as exc:
                 self._last_reason = exc.reason
                 if conn is not None:
@@ -314,17 +315,23 @@ class RosbridgeClient:
             return RosInfo(2, None)
         return RosInfo(1, None)
 
-    async def _restore(self, conn: Connection) -> None:
-        """Re-advertise and re-subscribe what is still wanted. Never re-sends a publish."""
-        for topic, advert in self._adverts.items():
+    async def _restore(self, conn: Connection, info: RosInfo) -> None:
+        """Re-advertise and re-subscribe what is still wanted. Never re-sends a publish.
+
+        Type names are spelled again for this connection's bridge: the robot may have come back
+        with another ROS version behind the same address.
+        """
+        for topic, advert in list(self._adverts.items()):
+            advert.wire_type = normalize_type(advert.msg_type, info.version, "msg")
             await conn.send(
                 protocol.advertise(
                     topic, advert.wire_type, id=advert.id, latch=advert.latch, queue_size=advert.queue_size
                 )
             )
             conn.advertised.add(topic)
-        for topic, subs in self._subs.items():
-            for sub in subs.values():
+        for topic, subs in list(self._subs.items()):
+            for sub in list(subs.values()):
+                sub.wire_type = normalize_type(sub.msg_type, info.version, "msg") if sub.msg_type else None
                 await conn.send(
                     protocol.subscribe(
                         topic,
@@ -495,7 +502,7 @@ class RosbridgeClient:
             await conn.send(protocol.unadvertise(topic, id=advert.id))
             advert = None
         if advert is None:
-            advert = _Advert(self._ids.mint("advertise", topic), wire_type, latch, queue_size)
+            advert = _Advert(self._ids.mint("advertise", topic), msg_type, wire_type, latch, queue_size)
             self._adverts[topic] = advert
         if topic not in conn.advertised:
             conn.advertised.add(topic)
@@ -637,7 +644,7 @@ class RosbridgeClient:
         action_type: str,
         goal: dict[str, Any],
         *,
-        on_feedback: Callable[[dict[str, Any]], Awaitable[None]] | None = None,
+        on_feedback: Callable[[dict[str, Any]], Awaitable[None] | None] | None = None,
         timeout: float,  # noqa: ASYNC109
         goal_id: str | None = None,
     ) -> ActionResult:
@@ -709,7 +716,7 @@ class RosbridgeClient:
         self,
         stream: GoalStream,
         handle: GoalHandle,
-        on_feedback: Callable[[dict[str, Any]], Awaitable[None]] | None,
+        on_feedback: Callable[[dict[str, Any]], Awaitable[None] | None] | None,
     ) -> dict[str, Any]:
         while True:
             item = await stream.queue.get()
@@ -723,12 +730,16 @@ class RosbridgeClient:
                 handle.feedback_count += 1
                 handle.last_feedback = values
                 if on_feedback is not None and isinstance(values, dict):
-                    await on_feedback(values)
+                    maybe = on_feedback(values)
+                    if maybe is not None:
+                        await maybe
 
     async def _cancel_quietly(self, action: str, goal_id: str, lane: Connection | None) -> None:
         op = protocol.cancel_action_goal(action, id=goal_id)
         # The main connection first: on an in-order bridge the goal's own lane is blocked by the goal.
-        if not await self._send_quietly(self._main, op) and not await self._send_quietly(lane, op):
+        sent = await self._send_quietly(self._main, op) or await self._send_quietly(lane, op)
+        # close() has already sent cancels for every running goal on the main connection.
+        if not sent and not self._closed:
             logger.warning(
                 "Could not send a cancel for goal %s on %s; it may still be running", goal_id, action
             )
