@@ -375,3 +375,81 @@ async def test_stop_and_start_serve_again_on_the_same_port(sim: SimulatedRobot) 
     assert sim.port == port
     async with await RawClient.open(sim.url) as client:
         assert (await client.values("/add_two_ints", {"a": 1, "b": 2})) == {"sum": 3}
+
+
+async def test_a_latched_advertisement_hands_the_last_message_to_later_subscribers(
+    sim: SimulatedRobot,
+) -> None:
+    """advertise with latch: a subscriber arriving after the publish still gets the last message."""
+    string = "std_msgs/msg/String" if sim.dialect == "ros2" else "std_msgs/String"
+    async with await RawClient.open(sim.url) as talker, await RawClient.open(sim.url) as late:
+        await talker.send({"op": "advertise", "topic": "/latched", "type": string, "latch": True})
+        await talker.send({"op": "publish", "topic": "/latched", "msg": {"data": "first"}})
+        await talker.send({"op": "publish", "topic": "/latched", "msg": {"data": "last"}})
+        await talker.frames_before_barrier()
+        await late.send({"op": "subscribe", "topic": "/latched"})
+        message = await late.next_publish("/latched")
+    assert message["msg"] == {"data": "last"}
+
+
+async def test_ros2_accepts_a_qos_object_on_subscribe(sim_ros2: SimulatedRobot) -> None:
+    """The qos object of protocol v2.1.0 is accepted; data flows."""
+    qos = {"history": "keep_last", "depth": 5, "reliability": "best_available", "durability": "volatile"}
+    async with await RawClient.open(sim_ros2.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "qos": qos})
+        message = await client.next_publish("/chatter")
+    assert message["msg"]["data"].startswith("Hello World")
+
+
+async def test_humble_refuses_best_available_qos_silently(sim_humble: SimulatedRobot) -> None:
+    """Humble has no best_available policies: the subscribe is only logged, nothing arrives."""
+    async with await RawClient.open(sim_humble.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "qos": {"reliability": "best_available"}})
+        assert await client.frames_before_barrier() == []
+        subscribers = await client.values("/rosapi/subscribers", {"topic": "/chatter"})
+    assert subscribers["subscribers"] == []
+
+
+async def test_ros1_rejects_three_part_type_names_silently(sim_ros1: SimulatedRobot) -> None:
+    """ROS 1 only knows pkg/Type: advertising 'std_msgs/msg/String' is logged, nothing is registered."""
+    async with await RawClient.open(sim_ros1.url) as client:
+        await client.send({"op": "advertise", "topic": "/three_part", "type": "std_msgs/msg/String"})
+        assert await client.frames_before_barrier() == []
+        topics = await client.values("/rosapi/topics")
+    assert "/three_part" not in topics["topics"]
+
+
+async def test_stopping_mid_goal_and_restarting_leaves_a_working_action_server(sim: SimulatedRobot) -> None:
+    """A goal cut short by stop() ends aborted; after start() a new goal succeeds."""
+    async with await RawClient.open(sim.url) as client:
+        await _send_fibonacci(client, sim, "before-stop", 40)
+        await sim.wait_for(lambda w: "before-stop" in w.goals and w.goals["before-stop"].feedback_count >= 1)
+    await sim.stop()
+    await sim.start()
+    assert sim.world.goals["before-stop"].finished
+    async with await RawClient.open(sim.url) as client:
+        await _send_fibonacci(client, sim, "after-restart", 3)
+        await sim.wait_for(lambda w: "after-restart" in w.goals and w.goals["after-restart"].finished)
+    assert sim.world.goals["after-restart"].sequence == [0, 1, 1, 2]
+
+
+async def _send_fibonacci(client: RawClient, robot: SimulatedRobot, goal_id: str, order: int) -> None:
+    if robot.dialect == "ros2":
+        await client.send(
+            {
+                "op": "send_action_goal",
+                "id": goal_id,
+                "action": "/fibonacci",
+                "action_type": "example_interfaces/action/Fibonacci",
+                "args": {"order": order},
+            }
+        )
+    else:
+        goal = {"goal_id": {"id": goal_id}, "goal": {"order": order}}
+        await client.send({"op": "publish", "topic": "/fibonacci/goal", "msg": goal})
+
+
+async def test_wait_for_raises_timeout_error_when_the_world_never_gets_there(sim: SimulatedRobot) -> None:
+    """robot.wait_for is bounded: an impossible condition ends in TimeoutError."""
+    with pytest.raises(TimeoutError):
+        await sim.wait_for(lambda w: w.turtle.x > 100, timeout=0.2)

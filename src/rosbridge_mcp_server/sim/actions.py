@@ -462,13 +462,16 @@ class ActionlibFibonacciServer:
                         },
                     )
 
-                outcome = await run.execute(feedback)
-                self._current = None
-                del self._runs[goal_id]
-                self._finish(
-                    goal_id,
-                    {"succeeded": "SUCCEEDED", "canceled": "PREEMPTED", "aborted": "ABORTED"}[outcome],
-                )
+                outcome = "aborted"  # if the robot stops mid-goal
+                try:
+                    outcome = await run.execute(feedback)
+                finally:
+                    self._current = None
+                    del self._runs[goal_id]
+                    self._finish(
+                        goal_id,
+                        {"succeeded": "SUCCEEDED", "canceled": "PREEMPTED", "aborted": "ABORTED"}[outcome],
+                    )
         finally:
             status_task.cancel()
 

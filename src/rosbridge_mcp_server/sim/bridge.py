@@ -376,6 +376,25 @@ class Bridge:
         conn.fragment_size = min(value, limit) if limit is not None else value
         return True
 
+    def _check_qos(self, msg: dict[str, Any]) -> None:
+        """The ROS 2 ``qos`` object (protocol v2.1.0, §5.6): checked, not modelled."""
+        qos = msg.get("qos")
+        if qos is None:
+            return
+        choices = {
+            "history": ("keep_last", "keep_all"),
+            "reliability": ("reliable", "best_effort", "best_available"),
+            "durability": ("transient_local", "volatile", "best_available"),
+        }
+        for key, value in qos.items():
+            if key in choices and value not in choices[key]:
+                raise OpError(f"Invalid QoS {key}: {value!r}")
+            if key == "depth" and (not isinstance(value, int) or isinstance(value, bool) or value < 0):
+                raise OpError(f"Invalid QoS depth: {value!r}")
+            if value == "best_available" and self.config.in_order:
+                # Humble's rmw has no best_available policies.
+                raise OpError(f"QoS {key} 'best_available' is not supported on Humble")
+
     def _resolve(self, name: str, kind: Literal["msg", "srv", "action"]) -> str:
         try:
             return self.registry.resolve(name, kind)
@@ -434,6 +453,7 @@ class Bridge:
         if self.config.dialect == "ros2":
             fields.append((False, "qos", (dict,)))
         _check(msg, fields)
+        self._check_qos(msg)
         topic = resolve_name(msg["topic"])
         msg_type = self._resolve(msg["type"], "msg")
         self._register_publisher(conn, topic, msg_type, msg.get("id"), latch=bool(msg.get("latch", False)))
@@ -516,6 +536,7 @@ class Bridge:
         if self.config.dialect == "ros2":
             fields.append((False, "qos", (dict,)))
         _check(msg, fields)
+        self._check_qos(msg)
         topic = resolve_name(msg["topic"])
         graph_type = self.graph.topic_types.get(topic)
         if "type" in msg:
