@@ -105,11 +105,18 @@ async def test_check_against_a_robot_reports_version_features_and_counts(dialect
     assert f"rosbridge reachable at {robot.url}" in text
     assert ("ROS 2 (jazzy)" if dialect == "ros2" else "ROS 1") in text
     assert "rosapi answers" in text
+    if dialect == "ros2":
+        assert "actions: native action ops" in text
+        assert "the bridge reads the timeout field" in text
+        assert "calls on one connection run side by side" in text
+    else:
+        assert "actions: over actionlib topics" in text
+        assert "no timeout field" in text
     assert "Healthy" in text
     counts = next(line for line in text.splitlines() if "topics," in line)
     topics = int(counts.split("]", 1)[1].split()[0])
     assert topics > 0
-    assert "1 action servers" in counts
+    assert counts.endswith(", 1 action server")
 
 
 async def test_check_notes_an_in_order_humble_bridge() -> None:
@@ -126,5 +133,5 @@ def test_check_demo_runs_against_the_built_in_robot(capsys: pytest.CaptureFixtur
     """`check --demo` starts the simulated robot and finds it healthy."""
     assert run(["check", "--demo"], {}) == 0
     out = capsys.readouterr().out
-    assert "demo mode" in out
+    assert "demo mode: this is the built-in simulated ROS 2 robot" in out
     assert "Healthy" in out

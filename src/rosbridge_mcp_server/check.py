@@ -14,6 +14,7 @@ from urllib.parse import urlsplit
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.dialect import RosInfo
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.ros import RosGraph
 
@@ -55,6 +56,53 @@ def unreachable_advice(url: str, reason: str | None) -> list[str]:
     return advice
 
 
+def _count(number: int, noun: str) -> str:
+    return f"{number} {noun}{'' if number == 1 else 's'}"
+
+
+def _features(info: RosInfo, services: set[str]) -> list[tuple[str, str]]:
+    """What this rosbridge can do, told from its ROS version and from which rosapi services it offers."""
+    if info.version == 1:
+        return [
+            (_NOTE, "actions: over actionlib topics (ROS 1 rosbridge has no action ops)"),
+            (
+                _NOTE,
+                "service calls: ROS 1 rosbridge has no timeout field; this server applies its own deadline",
+            ),
+        ]
+    # rosapi grew with rosbridge: `interfaces` came with Humble 2.0.1 / Jazzy 2.2.0 (as did the call_service
+    # timeout field), `action_type` with Humble 2.0.2 / Jazzy 2.4.0. Action ops exist from 2.0.0 on.
+    recent = "/rosapi/interfaces" in services
+    features = [
+        (
+            (_OK, "actions: native action ops (rosbridge 2.0.0 and later)")
+            if recent
+            else (
+                _NOTE,
+                "actions: native action ops from rosbridge 2.0.0 on; this bridge may be older (1.3.x)",
+            )
+        ),
+        (
+            (_OK, "service calls: the bridge reads the timeout field")
+            if recent
+            else (_NOTE, "service calls: this bridge may ignore the timeout field; this server keeps its own")
+        ),
+    ]
+    if "/rosapi/action_type" not in services:
+        features.append((_NOTE, "action types: no /rosapi/action_type here; read from the action's topics"))
+    if info.may_be_in_order:
+        features.append(
+            (
+                _NOTE,
+                "this bridge may handle one connection strictly in order (Humble defaults): goals and "
+                "service calls run on extra connections so they do not block each other",
+            )
+        )
+    else:
+        features.append((_OK, "calls on one connection run side by side"))
+    return features
+
+
 async def run_check(config: Config, out: TextIO) -> int:
     """Run the diagnosis against ``config.url``, writing to ``out``; 0 when healthy, 1 when not."""
 
@@ -63,7 +111,7 @@ async def run_check(config: Config, out: TextIO) -> int:
 
     out.write(f"rosbridge-mcp-server {__version__}: checking {config.url}\n")
     if config.demo:
-        say(_NOTE, f"demo mode: this is the built-in simulated {config.demo_dialect.upper()} robot")
+        say(_NOTE, f"demo mode: this is the built-in simulated ROS {config.demo_dialect[-1]} robot")
 
     async with RosbridgeClient(
         config.url, connect_timeout=config.connect_timeout, request_timeout=config.request_timeout
@@ -81,33 +129,22 @@ async def run_check(config: Config, out: TextIO) -> int:
         distro = info.distro or ("unknown distro" if info.version == 2 else "Melodic/Noetic line")
         say(_OK, f"ROS {info.version} ({distro})")
 
-        if info.version == 1:
-            say(_NOTE, "actions: over actionlib topics (ROS 1 rosbridge has no action ops)")
-            say(_NOTE, "service calls: no timeout field on ROS 1; this server applies its own deadline")
-        else:
-            say(_OK, "actions: native action ops (rosbridge 2.0 / Humble and later)")
-            say(_OK, "service calls: the timeout field is sent (read by Humble 2.0.1+, Jazzy 2.2.0+)")
-        if info.may_be_in_order:
-            say(
-                _NOTE,
-                "this bridge may handle one connection strictly in order (Humble defaults): goals and "
-                "service calls run on extra connections so they do not block each other",
-            )
-        else:
-            say(_OK, "calls on one connection run side by side")
-
         graph = RosGraph(client)
-        healthy = True
         try:
             topics, services, actions = await asyncio.gather(
                 graph.topics(), graph.service_names(), graph.action_names()
             )
         except RosbridgeError as exc:
             say(_BAD, f"rosapi does not answer: {exc}")
-            healthy = False
-        else:
-            say(_OK, "rosapi answers")
-            say(_OK, f"{len(topics)} topics, {len(services)} services, {len(actions)} action servers")
-        if healthy:
-            out.write("Healthy: the MCP server can use this bridge.\n")
-        return 0 if healthy else 1
+            return 1
+        say(_OK, "rosapi answers")
+        for mark, text in _features(info, set(services)):
+            say(mark, text)
+        counts = [
+            _count(len(topics), "topic"),
+            _count(len(services), "service"),
+            _count(len(actions), "action server"),
+        ]
+        say(_OK, ", ".join(counts))
+        out.write("Healthy: the MCP server can use this bridge.\n")
+        return 0

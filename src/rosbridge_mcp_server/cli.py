@@ -138,8 +138,12 @@ async def demo_robot(config: Config) -> AsyncIterator[Config]:
     # Imported here: the simulated robot is only needed with --demo.
     from rosbridge_mcp_server.sim import SimulatedRobot  # noqa: PLC0415
 
+    # The simulated robot logs like a rosbridge server, errors for expected misses included (e.g. ROS 1 has no
+    # /rosapi/get_ros_version); that log belongs to the robot, so it is shown only when debugging.
+    if config.log_level != "DEBUG":
+        logging.getLogger("rosbridge_mcp_server.sim").setLevel(logging.CRITICAL)
     async with SimulatedRobot(dialect=config.demo_dialect, port=0) as robot:
-        _log.info("demo mode: simulated %s robot at %s", config.demo_dialect.upper(), robot.url)
+        _log.info("demo mode: simulated ROS %s robot at %s", config.demo_dialect[-1], robot.url)
         yield replace(config, url=robot.url)
 
 

@@ -153,18 +153,34 @@ class _RosTool(Tool):
 
 def _arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
     problems: list[str] = []
+    union_kinds: dict[str, list[str]] = {}
+    union_inputs: dict[str, Any] = {}
     for item in error.errors(include_url=False):
-        where = ".".join(str(part) for part in item["loc"]) or "(arguments)"
+        loc = [str(part) for part in item["loc"]]
+        where = loc[0] if loc else "(arguments)"
         if item["type"] == "missing":
             problems.append(f"{where}: required but missing")
+        elif len(loc) == 2 and loc[1] in _UNION_KINDS:
+            # pydantic reports each arm of `dict | str` separately, named by its type; say it once.
+            if where not in union_kinds:
+                problems.append(where)
+            union_kinds.setdefault(where, []).append(_UNION_KINDS[loc[1]])
+            union_inputs[where] = item.get("input")
         else:
-            problems.append(f"{where}: {item['msg'].lower()} (got {_short(item.get('input'))})")
+            problems.append(
+                f"{'.'.join(loc) or where}: {item['msg'].lower()} (got {_short(item.get('input'))})"
+            )
+    for where, kinds in union_kinds.items():
+        index = problems.index(where)
+        problems[index] = f"{where}: expected {' or '.join(kinds)} (got {_short(union_inputs[where])})"
     properties = schema.get("properties", {})
     required = set(schema.get("required", []))
     expected = ", ".join(f"{name}{'' if name in required else ' (optional)'}" for name in properties)
-    return (
-        f"Invalid arguments for {tool}: {'; '.join(problems)}. It takes: {expected or 'no arguments ({})'}."
-    )
+    listing = expected or "no arguments ({})"
+    return f"Invalid arguments for {tool}: {'; '.join(problems)}. It takes: {listing}."
+
+
+_UNION_KINDS = {"dict[str,any]": "a JSON object", "str": "a string", "float": "a number", "int": "an integer"}
 
 
 def _short(value: Any) -> str:
