@@ -60,9 +60,11 @@ def text_of(result: CallToolResult) -> str:
 
 @asynccontextmanager
 async def open_session(
-    url: str, *, request_timeout: float = 5.0, wait: bool = True
+    url: str, *, request_timeout: float = 5.0, wait: bool = True, mode: str = "legacy"
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
+
+    ``mode="auto"`` speaks the 2026-07-28 protocol instead (in-process: direct dispatch, no JSON-RPC framing).
 
     The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
     pytest-asyncio sets a fixture up and tears it down in different tasks.
@@ -80,7 +82,7 @@ async def open_session(
 
     async def host() -> None:
         try:
-            async with Client(build_server(ros, config), mode="legacy") as mcp:
+            async with Client(build_server(ros, config), mode=mode) as mcp:
                 ready.set_result(Session(mcp, ros))
                 await stop.wait()
         except BaseException as exc:

@@ -191,3 +191,27 @@ async def test_cancel_action_on_an_unknown_action_is_an_error(session: Session) 
     """There is nothing to cancel on an action nobody serves."""
     text = await session.error("cancel_action", {"action_name": "/navigate"})
     assert "No action server /navigate is running" in text
+
+
+async def test_the_2026_protocol_carries_progress_and_cancellation_too(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]],
+) -> None:
+    """With the newest protocol revision, feedback is progress and a cancelled call cancels its goal."""
+    robot = await make_sim(dialect="ros2", action_step=0.2)
+    async with open_session(robot.url, mode="auto") as session:
+        assert session.mcp.protocol_version == "2026-07-28"
+        done = await session.ok(
+            "publish_action",
+            {"action_name": FIB, "action_type": types_for(robot)["fibonacci"], "goal": {"order": 2}},
+        )
+        assert done.structured_content is not None
+        assert session.progress, "feedback should arrive as progress"
+        goal_call = asyncio.create_task(session.call("publish_action", _long_goal(robot)))
+        await robot.world.wait_for(lambda w: bool(_running(robot)), WAIT)
+        goal_call.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await goal_call
+        await robot.world.wait_for(lambda w: all(g.finished for g in w.goals.values()), WAIT)
+    cancelled = [g for g in robot.world.goals.values() if g.cancel_requested]
+    assert len(cancelled) == 1
+    assert cancelled[0].status == 5
