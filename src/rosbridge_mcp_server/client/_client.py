@@ -195,6 +195,8 @@ class RosbridgeClient:
         """Wait until connected; raises :class:`NotConnectedError` naming the URL and last reason."""
         if self.connected:
             return
+        if self._closed:
+            raise NotConnectedError(self.url, "the client is closed")
         try:
             async with asyncio.timeout(timeout):
                 await self._connected_event.wait()
@@ -223,6 +225,12 @@ class RosbridgeClient:
                 conn = await open_connection(self.url, "main", self.connect_timeout, self._route_publish)
                 info = await self._detect(conn)
                 await self._restore(conn, info)
+            except asyncio.CancelledError:
+                # close() cancelled us mid-setup: the half-set-up socket is not self._main, so
+                # nobody else would close it.
+                if conn is not None:
+                    await conn.aclose()
+                raise
             except NotConnectedError as exc:
                 self._last_reason = exc.reason
                 if conn is not None:
