@@ -247,8 +247,8 @@ class RosGraph:
         info = await self.ros_info()
         bridge_name = normalize_type(type_name, info.version, "msg")
         await self._check_installed(type_name, bridge_name, info)
-        typedefs = await self._details("message_details", bridge_name)
-        if typedefs is None or not typedefs:
+        typedefs = await self._details("message_details", bridge_name, required=True)
+        if not typedefs:
             raise UnknownTypeError(type_name, _type_hint(info))
         return typedefs
 
@@ -270,7 +270,14 @@ class RosGraph:
             return await self._details("message_details", f"{names.package}/{names.name}Goal") or None
         return await self._details("action_goal_details", names.ros2) or None
 
-    async def _details(self, service: str, bridge_name: str) -> dict[str, TypeDef] | None:
+    async def _details(
+        self, service: str, bridge_name: str, *, required: bool = False
+    ) -> dict[str, TypeDef] | None:
+        """TypeDefs from ``/rosapi/<service>``.
+
+        ``{}`` for a type rosapi cannot load; ``None`` when the service does not exist (an older rosapi), or,
+        when ``required``, the missing-rosapi error is raised instead.
+        """
         key = (service, bridge_name)
         cached = self._typedef_cache.get(key)
         if cached is not None:
@@ -279,6 +286,8 @@ class RosGraph:
             values = await self.rosapi(service, {"type": bridge_name})
         except ServiceError as exc:
             if is_missing_service(exc):
+                if required:
+                    raise
                 return None
             # rosapi raised while loading the type (ROS 1 reports the exception text).
             return {}
