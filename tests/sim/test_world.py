@@ -295,3 +295,16 @@ async def test_ros2_interfaces_and_action_details_describe_fibonacci(sim_ros2: S
         )
     assert "example_interfaces/action/Fibonacci" in interfaces["interfaces"]
     assert goal["typedefs"][0]["fieldnames"] == ["order"]
+
+
+async def test_camera_messages_are_complete_and_in_wire_form(sim: SimulatedRobot) -> None:
+    """The camera skips inbound conversion for speed, so its messages must already be complete wire form."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/camera/image_raw"})
+        await client.send({"op": "subscribe", "topic": "/camera/image_raw/compressed"})
+        raw = (await client.next_publish("/camera/image_raw"))["msg"]
+        compressed = (await client.next_publish("/camera/image_raw/compressed"))["msg"]
+    registry = sim.registry
+    for name, message in (("Image", raw), ("CompressedImage", compressed)):
+        msg_type = ros_type(sim, "sensor_msgs", "msg", name)
+        assert registry.to_json(msg_type, registry.from_json(msg_type, message)) == message
