@@ -312,3 +312,26 @@ async def test_two_clients_never_mint_the_same_goal_id(
     first: RosbridgeClient = await make_client(sim_ros2)
     second: RosbridgeClient = await make_client(sim_ros2)
     assert first.new_goal_id("/fibonacci") != second.new_goal_id("/fibonacci")
+
+
+async def test_every_goal_runs_on_a_connection_of_its_own_closed_afterwards(
+    robot2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """While a goal runs the robot sees a second connection (its lane); it goes away with the goal."""
+    client = await make_client(robot2)
+    goal = asyncio.create_task(client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": 8}, timeout=10.0))
+    await robot2.wait_for(running_goal_with_feedback)
+    assert robot2.connection_count == 2
+    assert (await goal).status == 4
+    await robot2.wait_for(lambda _world: robot2.connection_count == 1)
+
+
+async def test_a_plain_function_can_take_feedback(sim_ros2: SimulatedRobot, make_client: MakeClient) -> None:
+    """on_feedback may be a plain function as well as a coroutine function."""
+    client = await make_client(sim_ros2)
+    seen: list[dict[str, Any]] = []
+    result = await client.send_action_goal(
+        "/fibonacci", ROS2_TYPE, {"order": 3}, on_feedback=seen.append, timeout=5.0
+    )
+    assert result.status == 4
+    assert seen

@@ -713,12 +713,15 @@ class RosbridgeClient:
             return ActionResult(gid, status, values)
         finally:
             self._goals.pop(gid, None)
-            if sent and not finished:
-                await asyncio.shield(self._cancel_quietly(action, gid, lane))
-            if lane is not None:
-                lane.pending.pop(gid, None)
-                self._goal_lanes.discard(lane)
-                self._close_in_background(lane)
+            try:
+                if sent and not finished:
+                    await asyncio.shield(self._cancel_quietly(action, gid, lane))
+            finally:
+                # Even if we are cancelled again while the cancel is being sent.
+                if lane is not None:
+                    lane.pending.pop(gid, None)
+                    self._goal_lanes.discard(lane)
+                    self._close_in_background(lane)
 
     async def _follow_goal(
         self,
