@@ -77,7 +77,7 @@ def test_a_fitting_message_passes_and_missing_fields_are_fine() -> None:
 def test_a_string_where_a_number_belongs_is_named_by_path() -> None:
     """linear.x: "fast" is reported with the expected type and the value given."""
     problems = find_problems({"linear": {"x": "fast"}}, "geometry_msgs/Twist", TWIST, ros_version=2)
-    assert problems == ['linear.x: expected a number (double), got "fast"']
+    assert problems == ['linear.x: expected a number (float64), got "fast"']
 
 
 def test_an_unknown_field_gets_a_suggestion_and_the_valid_fields() -> None:
@@ -93,7 +93,7 @@ def test_every_wrong_field_is_reported_at_once() -> None:
     message = {"linear": {"x": None, "w": 1}, "angular": 3}
     problems = find_problems(message, "geometry_msgs/Twist", TWIST, ros_version=2)
     assert problems == [
-        "linear.x: expected a number (double), got null",
+        "linear.x: expected a number (float64), got null",
         "linear.w: no such field in geometry_msgs/Vector3; its fields are x, y, z",
         "angular: expected an object (geometry_msgs/Vector3), got 3",
     ]
@@ -138,7 +138,7 @@ def test_check_message_raises_invalid_message_error_with_every_problem() -> None
     """The error names the type and carries the problems for the tool's answer."""
     with pytest.raises(InvalidMessageError) as caught:
         check_message({"linear": {"x": "fast"}}, "geometry_msgs/msg/Twist", TWIST, ros_version=2)
-    assert caught.value.problems == ['linear.x: expected a number (double), got "fast"']
+    assert caught.value.problems == ['linear.x: expected a number (float64), got "fast"']
     assert "geometry_msgs/msg/Twist" in str(caught.value)
 
 
@@ -161,7 +161,7 @@ def test_ros2_sequence_spellings_are_understood() -> None:
         "a[0]: expected an integer (int32), got 1.5"
     ]
     assert find_problems({"b": [0.0]}, "demo/Seq", typedefs, ros_version=2) == [
-        "b: expected exactly 3 elements (double[3]), got 1"
+        "b: expected exactly 3 elements (float64[3]), got 1"
     ]
 
 

@@ -193,27 +193,27 @@ class _Checker:
             self.add(path, f"expected an array of {size}{_expected(base)}, got {_describe(value)}")
             return
         if length > 0 and len(value) != length:
-            self.add(path, f"expected exactly {length} elements ({base}[{length}]), got {len(value)}")
+            self.add(path, f"expected exactly {length} elements ({_shown(base)}[{length}]), got {len(value)}")
         for index, item in enumerate(value):
             self.check_scalar(item, base, f"{path}[{index}]")
 
     def check_scalar(self, value: Any, base: str, path: str) -> None:
         if base in _BOOLS:
             if not isinstance(value, bool):
-                self.add(path, f"expected true or false ({base}), got {_describe(value)}")
+                self.add(path, f"expected true or false ({_shown(base)}), got {_describe(value)}")
         elif base in _INT_RANGES:
             if isinstance(value, bool) or not isinstance(value, int):
-                self.add(path, f"expected an integer ({base}), got {_describe(value)}")
+                self.add(path, f"expected an integer ({_shown(base)}), got {_describe(value)}")
             else:
                 low, high = _INT_RANGES[base]
                 if not low <= value <= high:
-                    self.add(path, f"{value} is out of range for {base} ({low}..{high})")
+                    self.add(path, f"{value} is out of range for {_shown(base)} ({low}..{high})")
         elif base in _FLOATS:
             if isinstance(value, bool) or not isinstance(value, int | float):
-                self.add(path, f"expected a number ({base}), got {_describe(value)}")
+                self.add(path, f"expected a number ({_shown(base)}), got {_describe(value)}")
         elif base in _STRINGS:
             if not isinstance(value, str):
-                self.add(path, f"expected a string ({base}), got {_describe(value)}")
+                self.add(path, f"expected a string ({_shown(base)}), got {_describe(value)}")
         elif base in _ROS1_TIMES and base not in self.typedefs:
             self.check_time(value, base, path)
         elif isinstance(value, Mapping):
@@ -221,7 +221,7 @@ class _Checker:
         elif base in _ROS2_TIMES and value == "now":
             return
         else:
-            self.add(path, f"expected an object ({base}), got {_describe(value)}")
+            self.add(path, f"expected an object ({_shown(base)}), got {_describe(value)}")
 
     def check_time(self, value: Any, type_name: str, path: str) -> None:
         is_time = type_name in ("time", "builtin_interfaces/Time")
@@ -248,6 +248,14 @@ class _Checker:
         return '{"secs": 0, "nsecs": 0}' if self.ros_version == 1 else '{"sec": 0, "nanosec": 0}'
 
 
+# ROS 2 rosapi names primitives by their IDL names; the .msg names are the ones people write.
+_MSG_NAMES = {"double": "float64", "float": "float32", "boolean": "bool", "octet": "byte"}
+
+
+def _shown(base: str) -> str:
+    return _MSG_NAMES.get(base, base)
+
+
 def _unknown_field(name: str, type_name: str, valid: Sequence[str]) -> str:
     close = difflib.get_close_matches(name, valid, n=3, cutoff=0.6)
     hint = f" (did you mean {' or '.join(close)}?)" if close else ""
@@ -257,14 +265,14 @@ def _unknown_field(name: str, type_name: str, valid: Sequence[str]) -> str:
 
 def _expected(base: str) -> str:
     if base in _BOOLS:
-        return f"booleans ({base})"
+        return f"booleans ({_shown(base)})"
     if base in _INT_RANGES:
-        return f"integers ({base})"
+        return f"integers ({_shown(base)})"
     if base in _FLOATS:
-        return f"numbers ({base})"
+        return f"numbers ({_shown(base)})"
     if base in _STRINGS:
-        return f"strings ({base})"
-    return f"objects ({base})"
+        return f"strings ({_shown(base)})"
+    return f"objects ({_shown(base)})"
 
 
 def _describe(value: Any) -> str:

@@ -58,10 +58,7 @@ async def test_a_message_that_does_not_fit_names_each_wrong_field_and_is_not_sen
             "message": {"linear": {"x": "fast"}, "angulr": {"z": 1}},
         },
     )
-    assert (
-        'linear.x: expected a number (float64), got "fast"' in text
-        or 'linear.x: expected a number (double), got "fast"' in text
-    )
+    assert 'linear.x: expected a number (float64), got "fast"' in text
     assert "angulr: no such field" in text
     assert "did you mean angular?" in text
     assert "its fields are linear, angular" in text
