@@ -112,3 +112,22 @@ async def test_a_ros2_service_that_never_answers_fails_after_the_timeout(session
     )
     assert "/rosapi/set_param" in text
     assert "0.5" in text or "Timeout exceeded" in text
+
+
+async def test_a_hidden_ros2_service_that_rosapi_does_not_list_can_still_be_called(
+    session_ros2: Session,
+) -> None:
+    """/fibonacci/_action/cancel_goal is hidden from list_services, yet publish_service reaches it."""
+    listed = (await session_ros2.ok("list_services")).structured_content
+    assert listed is not None
+    assert "/fibonacci/_action/cancel_goal" not in [row["name"] for row in listed["services"]]
+    result = await session_ros2.ok(
+        "publish_service",
+        {
+            "service": "/fibonacci/_action/cancel_goal",
+            "service_type": "action_msgs/srv/CancelGoal",
+            "request": {},
+        },
+    )
+    assert result.structured_content is not None
+    assert "return_code" in result.structured_content["response"]

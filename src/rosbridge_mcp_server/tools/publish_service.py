@@ -7,7 +7,8 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.dialect import adapt_message, normalize_type
-from rosbridge_mcp_server.errors import InvalidMessageError
+from rosbridge_mcp_server.errors import InvalidMessageError, ServiceError
+from rosbridge_mcp_server.ros import is_missing_service
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
@@ -80,30 +81,39 @@ async def run(
     given_type = normalize_type(service_type, info.version, "srv")
 
     graph_type = await ctx.graph.service_type(name)
-    if not graph_type:
-        known = await ctx.graph.service_names()
-        if name not in known:
-            hint = did_you_mean(name, known)
-            raise ToolFailure(
-                f"Service {name} is not offered by any node.{hint} Call list_services to see the services."
-            )
-    elif short_type_name(graph_type) != short_type_name(given_type):
+    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
         raise ToolFailure(
             f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
             "and call again with that service_type."
         )
     srv_type = graph_type or given_type
-
     body = adapt_message(body, info.version)
-    typedefs = await ctx.graph.service_request_typedefs(srv_type)
-    if typedefs:
-        request_type = next(iter(typedefs))
-        try:
-            check_message(body, request_type, typedefs, ros_version=info.version)
-        except InvalidMessageError as exc:
-            shape = compact_json(example_message(request_type, typedefs, ros_version=info.version))
-            raise ToolFailure(f"{exc}. The service was not called. A request looks like {shape}.") from exc
+    if graph_type:
+        await _check_request(ctx, body, srv_type, info.version)
 
-    response = await ctx.client.call_service(name, body, timeout=timeout)
+    try:
+        response = await ctx.client.call_service(name, body, timeout=timeout)
+    except ServiceError as exc:
+        # rosapi does not list hidden services (ROS 2 `_action/...`), so an unlisted name is still tried;
+        # the bridge answers at once when nothing offers it.
+        if not is_missing_service(exc):
+            raise
+        hint = did_you_mean(name, await ctx.graph.service_names())
+        raise ToolFailure(
+            f"Service {name} is not offered by any node.{hint} Call list_services to see the services."
+        ) from exc
     text = f"Service {name} ({srv_type}) answered: {compact_json(response)}"
     return ToolAnswer(text=text, data=ServiceAnswer(service=name, service_type=srv_type, response=response))
+
+
+async def _check_request(ctx: ToolContext, body: dict[str, Any], srv_type: str, ros_version: int) -> None:
+    """Refuse a request that does not fit, when rosapi can describe the service type."""
+    typedefs = await ctx.graph.service_request_typedefs(srv_type)
+    if not typedefs:
+        return
+    request_type = next(iter(typedefs))
+    try:
+        check_message(body, request_type, typedefs, ros_version=ros_version)
+    except InvalidMessageError as exc:
+        shape = compact_json(example_message(request_type, typedefs, ros_version=ros_version))
+        raise ToolFailure(f"{exc}. The service was not called. A request looks like {shape}.") from exc
