@@ -109,8 +109,12 @@ class Connection:
     async def _read(self) -> None:
         decoder = self._decoder
         pending = self.pending
+        # recv() in a loop rather than `async for`: the iterator is an async generator, one more
+        # layer per frame on the hot path. ConnectionClosed (OK or not) ends the loop either way.
+        recv = self.ws.recv
         try:
-            async for data in self.ws:
+            while True:
+                data = await recv()
                 try:
                     event = decoder.feed(data)
                     if type(event) is protocol.ReplyEvent:
@@ -131,7 +135,6 @@ class Connection:
                 except Exception:
                     # One bad frame (or a bug in a listener) must not end the connection's reader.
                     logger.exception("%s: error while handling a frame; frame dropped", self.name)
-            self.close_reason = _close_text(self.ws)
         except ConnectionClosed:
             self.close_reason = _close_text(self.ws)
         except Exception as exc:  # a transport error: treat as a drop
