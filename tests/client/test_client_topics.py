@@ -7,7 +7,7 @@ from collections.abc import Awaitable, Callable
 
 import pytest
 
-from conftest import MakeClient
+from conftest import MakeClient, unused_port
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -166,3 +166,30 @@ async def test_nothing_published_during_an_outage_arrives_after_the_robot_restar
     await sim.wait_for(lambda world: world.published["/turtle1/cmd_vel"][-1].msg["linear"]["x"] == 2.0)
     received = [m.msg["linear"]["x"] for m in sim.world.published["/turtle1/cmd_vel"]]
     assert received == [1.0, 2.0]
+
+
+async def test_closing_a_subscription_unsubscribes_only_its_own_id(
+    sim_ros2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """The bridge keeps the other listener's subscription id; closing the last removes the topic."""
+    client = await make_client(sim_ros2)
+    first = await client.subscribe("/chatter", "std_msgs/String").open()
+    second = await client.subscribe("/chatter", "std_msgs/String").open()
+    await client.call_service("/rosapi/topics")  # the bridge handles our frames in order: a barrier
+    [bridge_side] = sim_ros2.bridge.connections.values()
+    assert set(bridge_side.subscriptions["/chatter"].by_id) == {first.id, second.id}
+    await first.close()
+    await client.call_service("/rosapi/topics")
+    assert set(bridge_side.subscriptions["/chatter"].by_id) == {second.id}
+    await second.close()
+    await client.call_service("/rosapi/topics")
+    assert "/chatter" not in bridge_side.subscriptions
+
+
+async def test_subscribing_while_disconnected_raises_not_connected(make_client: MakeClient) -> None:
+    """Opening a subscription with no bridge raises NotConnectedError instead of waiting forever."""
+    client = await make_client(f"ws://127.0.0.1:{unused_port()}", connected=False, connect_timeout=0.3)
+    with pytest.raises(NotConnectedError):
+        async with client.subscribe("/chatter", "std_msgs/String"):
+            pass
+    assert client._subs == {}
