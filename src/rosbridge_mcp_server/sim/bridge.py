@@ -253,7 +253,9 @@ class Bridge:
     async def serve_connection(self, ws: ServerConnection) -> None:
         """Run one client connection until it closes, then clean up after it like rosbridge does."""
         self._next_cid += 1
-        conn = Connection(ws, self._next_cid, fragment_size=self.config.max_message_size)
+        conn = Connection(
+            ws, self._next_cid, fragment_size=self.config.max_message_size, fragment_id=self._fragment_id
+        )
         self.connections[conn.id] = conn
         self.connection_count = len(self.connections)
         self.world.notify()

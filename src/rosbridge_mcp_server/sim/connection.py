@@ -102,9 +102,13 @@ class _Queued:
 class Connection:
     """The server side of one client's WebSocket."""
 
-    def __init__(self, ws: ServerConnection, cid: int, *, fragment_size: int | None) -> None:
+    def __init__(
+        self, ws: ServerConnection, cid: int, *, fragment_size: int | None, fragment_id: Any
+    ) -> None:
         self.ws = ws
         self.id = cid
+        #: Fragment id of an id-less message: ``"0"`` on ROS 2, ``0`` on ROS 1.
+        self.fragment_id = fragment_id
         #: Connection-wide outgoing fragment size (§4.2); ``None`` = never fragment.
         self.fragment_size = fragment_size
         self.subscriptions: dict[str, TopicSubscription] = {}
@@ -120,9 +124,9 @@ class Connection:
 
     # --- outgoing -------------------------------------------------------------------------------------
 
-    def send(self, message: dict[str, Any], *, fragment_id: Any = "0") -> None:
+    def send(self, message: dict[str, Any]) -> None:
         """Queue a reply frame (never dropped)."""
-        self._enqueue(json.dumps(message), droppable=False, fragment_id=message.get("id", fragment_id))
+        self._enqueue(json.dumps(message), droppable=False, fragment_id=message.get("id", self.fragment_id))
 
     def _enqueue(self, text: str, *, droppable: bool, fragment_id: Any) -> None:
         if self.closed:
