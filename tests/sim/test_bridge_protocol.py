@@ -457,3 +457,41 @@ async def test_wait_for_raises_timeout_error_when_the_world_never_gets_there(sim
     """robot.wait_for is bounded: an impossible condition ends in TimeoutError."""
     with pytest.raises(TimeoutError):
         await sim.wait_for(lambda w: w.turtle.x > 100, timeout=0.2)
+
+
+async def test_a_service_whose_client_left_is_never_answered(sim_ros2: SimulatedRobot) -> None:
+    """rosbridge keeps a client's advertised service after it disconnects; calls then run into the timeout."""
+    host = await RawClient.open(sim_ros2.url)
+    await host.send({"op": "advertise_service", "service": "/orphan", "type": "std_srvs/srv/Trigger"})
+    await host.frames_before_barrier()
+    await host.close()
+    await sim_ros2.wait_for(lambda w: sim_ros2.connection_count == 0)
+    async with await RawClient.open(sim_ros2.url) as caller:
+        reply = await caller.call("/orphan", {}, timeout=0.2)
+    assert reply["result"] is False
+    assert reply["values"] == "Timeout exceeded while waiting for service response"
+
+
+async def test_unadvertise_service_answers_calls_in_flight_with_an_empty_response(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """ROS 2 aborts in-flight calls when a service is unadvertised: callers get a default response."""
+    async with await RawClient.open(sim_ros2.url) as host, await RawClient.open(sim_ros2.url) as caller:
+        await host.send({"op": "advertise_service", "service": "/going", "type": "std_srvs/srv/Trigger"})
+        await host.frames_before_barrier()
+        await caller.send({"op": "call_service", "id": "in-flight", "service": "/going"})
+        await host.recv_until(lambda f: f.get("op") == "call_service")
+        await host.send({"op": "unadvertise_service", "service": "/going"})
+        reply = await caller.reply("in-flight")
+        services = await caller.values("/rosapi/services")
+    assert reply["result"] is True
+    assert reply["values"] == {"success": False, "message": ""}
+    assert "/going" not in services["services"]
+
+
+async def test_unadvertise_service_of_someone_elses_service_is_only_logged(sim: SimulatedRobot) -> None:
+    """Only the advertising client can unadvertise; anything else is logged and changes nothing."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "unadvertise_service", "service": "/add_two_ints"})
+        assert await client.frames_before_barrier() == []
+        assert (await client.values("/add_two_ints", {"a": 1, "b": 1})) == {"sum": 2}
