@@ -353,3 +353,34 @@ async def test_goals_keep_running_after_their_client_disconnects(sim_ros2: Simul
     await client.close()
     await sim_ros2.wait_for(lambda w: w.goals["orphan"].finished)
     assert sim_ros2.world.goals["orphan"].status == 4
+
+
+async def test_ros1_cancel_with_a_stamp_cancels_goals_stamped_at_or_before_it(
+    sim_ros1: SimulatedRobot,
+) -> None:
+    """A GoalID with an empty id and a stamp preempts goals stamped no later than it."""
+    goal = {"goal_id": {"id": "stamped", "stamp": {"secs": 1000, "nsecs": 0}}, "goal": {"order": 40}}
+    async with await RawClient.open(sim_ros1.url) as client:
+        await client.send({"op": "publish", "topic": "/fibonacci/goal", "msg": goal})
+        await sim_ros1.wait_for(lambda w: "stamped" in w.goals and w.goals["stamped"].feedback_count >= 1)
+        await client.send(
+            {"op": "publish", "topic": "/fibonacci/cancel", "msg": {"stamp": {"secs": 999, "nsecs": 0}}}
+        )
+        await client.frames_before_barrier()
+        assert not sim_ros1.world.goals["stamped"].cancel_requested
+        await client.send(
+            {"op": "publish", "topic": "/fibonacci/cancel", "msg": {"stamp": {"secs": 1000, "nsecs": 0}}}
+        )
+        await sim_ros1.wait_for(lambda w: w.goals["stamped"].finished)
+    assert sim_ros1.world.goals["stamped"].status == 2
+
+
+async def test_ros1_a_new_goal_preempts_the_running_one(sim_ros1: SimulatedRobot) -> None:
+    """SimpleActionServer runs one goal at a time: a newer goal preempts the running goal, then runs."""
+    async with await RawClient.open(sim_ros1.url) as client:
+        await _ros1_send_goal(client, "first", 40)
+        await sim_ros1.wait_for(lambda w: "first" in w.goals and w.goals["first"].feedback_count >= 1)
+        await _ros1_send_goal(client, "second", 3)
+        await sim_ros1.wait_for(lambda w: "second" in w.goals and w.goals["second"].finished)
+    assert sim_ros1.world.goals["first"].status == 2
+    assert sim_ros1.world.goals["second"].status == 3
