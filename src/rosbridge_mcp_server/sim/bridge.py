@@ -349,14 +349,21 @@ class Bridge:
                 self._spawn(self._guarded(conn, op, mid, result))
             else:
                 await result
-        except OpError as exc:
-            log.error("client %d: %s: %s (id %s)", conn.id, op, exc, mid)
+        except Exception as exc:
+            self._log_failure(conn, op, mid, exc)
 
     async def _guarded(self, conn: Connection, op: str, mid: Any, work: Awaitable[None]) -> None:
         try:
             await work
-        except OpError as exc:
-            log.error("client %d: %s: %s (id %s)", conn.id, op, exc, mid)
+        except Exception as exc:
+            self._log_failure(conn, op, mid, exc)
+
+    @staticmethod
+    def _log_failure(conn: Connection, op: str, mid: Any, exc: Exception) -> None:
+        """rosbridge's protocol catches every exception of an op and only logs ``"<op>: <error>"``."""
+        log.error("client %d: %s: %s (id %s)", conn.id, op, exc, mid)
+        if not isinstance(exc, OpError):
+            log.debug("traceback of that failure", exc_info=exc)
 
     def _spawn(self, coro: Coroutine[Any, Any, Any]) -> None:
         task = asyncio.create_task(coro)
@@ -381,8 +388,8 @@ class Bridge:
     def _check_qos(self, msg: dict[str, Any]) -> None:
         """The ROS 2 ``qos`` object (protocol v2.1.0, §5.6): checked, not modelled."""
         qos = msg.get("qos")
-        if qos is None:
-            return
+        if qos is None or self.config.dialect != "ros2":
+            return  # ROS 1 has no qos field: it is ignored like any unknown key
         choices = {
             "history": ("keep_last", "keep_all"),
             "reliability": ("reliable", "best_effort", "best_available"),
