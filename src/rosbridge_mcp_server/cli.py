@@ -14,6 +14,7 @@ import asyncio
 import contextlib
 import logging
 import os
+import signal
 import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from dataclasses import replace
@@ -28,6 +29,8 @@ from rosbridge_mcp_server.server import build_server
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "run", "serve"]
 
 PROG = "rosbridge-mcp-server"
+#: After SIGTERM: how long tool calls get to cancel their goals, and then the client to close.
+SIGTERM_GRACE = 1.0
 _log = logging.getLogger(__name__)
 
 
@@ -111,6 +114,9 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         asyncio.run(serve(config))
     except KeyboardInterrupt:
         return 130
+    except asyncio.CancelledError:
+        # SIGTERM after stdin was closed: the server unwound and cleaned up by itself.
+        return 0
     return 0
 
 
@@ -127,6 +133,40 @@ def configure_logging(level: str, stream: TextIO | None = None) -> None:
     root.addHandler(handler)
     root.setLevel(logging.DEBUG if level == "DEBUG" else logging.WARNING)
     logging.getLogger("rosbridge_mcp_server").setLevel(level)
+
+
+def _stop_on_sigterm(client: RosbridgeClient) -> None:
+    """Make SIGTERM (how MCP clients stop a server that ignores EOF) clean up before the process ends.
+
+    Cancelling the server cancels every tool call in flight, and each running goal is cancelled on the robot
+    as its call unwinds (rosbridge does not do that by itself when a client goes away). The SDK reads stdin in
+    a thread that cancellation cannot interrupt, though, so the server may never finish unwinding on its own:
+    after a short grace the client is closed (its goals cancelled, advertisements withdrawn) and the process
+    exits.
+    """
+    main = asyncio.current_task()
+    if main is None:
+        return
+    loop = asyncio.get_running_loop()
+    pending: set[asyncio.Task[None]] = set()
+
+    def on_sigterm() -> None:
+        _log.info("SIGTERM: cancelling tool calls and goals, then exiting")
+        main.cancel()
+        task = loop.create_task(_exit_after_cleanup(client))
+        pending.add(task)
+
+    # Windows event loops have no add_signal_handler; there the process just ends.
+    with contextlib.suppress(NotImplementedError, RuntimeError):
+        loop.add_signal_handler(signal.SIGTERM, on_sigterm)
+
+
+async def _exit_after_cleanup(client: RosbridgeClient) -> None:
+    await asyncio.sleep(SIGTERM_GRACE)
+    with contextlib.suppress(Exception):
+        await asyncio.wait_for(client.close(), SIGTERM_GRACE)
+    logging.shutdown()
+    os._exit(0)
 
 
 @contextlib.asynccontextmanager
@@ -154,7 +194,7 @@ async def check(config: Config, out: TextIO) -> int:
 
 
 async def serve(config: Config) -> None:
-    """Serve MCP on stdin/stdout until the client closes stdin."""
+    """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM)."""
     async with demo_robot(config) as effective:
         client = RosbridgeClient(
             effective.url,
@@ -162,4 +202,5 @@ async def serve(config: Config) -> None:
             request_timeout=effective.request_timeout,
         )
         server = build_server(client, effective)
+        _stop_on_sigterm(client)
         await server.run_stdio_async()

@@ -63,9 +63,8 @@ state; publish_topic, publish_service, publish_action and cancel_action act on t
 Work like this:
 1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
 names and types; get_topic_info shows who publishes and subscribes a topic.
-2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are zero
-or \
-empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
+2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
+zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
 3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; send \
 zeros to stop. Prefer small, safe values and say what you are about to do.
 4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.

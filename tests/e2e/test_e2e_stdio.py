@@ -4,9 +4,15 @@ from __future__ import annotations
 
 import asyncio
 import json
+import signal
 import socket
 import sys
+from collections.abc import Awaitable, Callable
 from typing import Any
+
+import pytest
+
+from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 30.0
 
@@ -165,3 +171,62 @@ async def test_a_server_with_no_bridge_still_answers_and_reports_the_url() -> No
         rest, stderr, code = await _finish(server)
     assert rest.strip() == b""
     assert code == 0, stderr.decode()
+
+
+async def _initialized(server: StdioServer) -> None:
+    await server.request(
+        "initialize",
+        {
+            "protocolVersion": "2025-06-18",
+            "capabilities": {},
+            "clientInfo": {"name": "e2e-test", "version": "0"},
+        },
+    )
+    await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
+
+
+async def _start_long_goal(server: StdioServer) -> None:
+    """Send a long publish_action and read until its first progress notification."""
+    await server.send(
+        {
+            "jsonrpc": "2.0",
+            "id": 99,
+            "method": "tools/call",
+            "params": {
+                "name": "publish_action",
+                "arguments": {
+                    "action_name": "/fibonacci",
+                    "action_type": "example_interfaces/action/Fibonacci",
+                    "goal": {"order": 45},
+                    "timeout": 120,
+                },
+                "_meta": {"progressToken": "long-goal"},
+            },
+        }
+    )
+    while (await server.read_message()).get("method") != "notifications/progress":
+        pass
+
+
+@pytest.mark.parametrize("how", ["eof", "sigterm"])
+async def test_a_running_goal_is_cancelled_when_the_server_is_stopped(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]], how: str
+) -> None:
+    """Closing stdin, or SIGTERM with stdin still open, cancels the goal on the robot and exits 0."""
+    robot = await make_sim(dialect="ros2", action_step=0.2)
+    server = await _start("--url", robot.url)
+    try:
+        await _initialized(server)
+        await _start_long_goal(server)
+        (goal,) = robot.world.goals.values()
+        assert not goal.finished
+        if how == "sigterm":
+            server.process.send_signal(signal.SIGTERM)
+            # stdin stays open: the process must end by itself.
+            await asyncio.wait_for(server.process.wait(), WAIT)
+    finally:
+        _rest, stderr, code = await _finish(server)
+    assert code == 0, stderr.decode()
+    await robot.wait_for(lambda w: goal.finished, WAIT)
+    assert goal.cancel_requested
+    assert goal.status == 5  # CANCELED
