@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -11,6 +12,7 @@ import pytest
 from websockets.asyncio.server import ServerConnection, serve
 
 from conftest import MakeClient
+from rosbridge_mcp_server.errors import RequestTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
@@ -90,3 +92,41 @@ async def test_unknown_status_binary_and_malformed_frames_are_logged_and_survive
     assert "bridge status (error)" in logged
     assert "unsupported op 'set_level'" in logged
     assert "nobody awaits" in logged
+
+
+@pytest.fixture
+async def stalled_bridge() -> AsyncIterator[str]:
+    """A bridge that answers the version query and then never reads another frame."""
+
+    async def handle(ws: ServerConnection) -> None:
+        request = json.loads(await ws.recv())
+        reply = {
+            "op": "service_response",
+            "id": request["id"],
+            "result": True,
+            "values": {"version": 2, "distro": "jazzy"},
+        }
+        await ws.send(json.dumps(reply))
+        await ws.wait_closed()
+
+    async with serve(
+        handle, "127.0.0.1", 0, compression=None, max_queue=1, max_size=None, close_timeout=0.2
+    ) as server:
+        port = server.sockets[0].getsockname()[1]
+        yield f"ws://127.0.0.1:{port}"
+
+
+async def test_publishing_to_a_bridge_that_stopped_reading_gives_up_at_the_deadline(
+    stalled_bridge: str, make_client: MakeClient
+) -> None:
+    """When the socket is full, a publish waits on flow control only until its deadline."""
+    client = await make_client(stalled_bridge, request_timeout=0.3)
+    blob = {"data": "x" * 512 * 1024}
+
+    async def flood() -> None:
+        async with asyncio.timeout(30.0):
+            for _ in range(500):
+                await client.publish("/big", "std_msgs/String", blob)
+
+    with pytest.raises(RequestTimeoutError, match="stopped reading"):
+        await flood()

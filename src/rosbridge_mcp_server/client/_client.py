@@ -222,7 +222,9 @@ class RosbridgeClient:
             attempt_done = self._attempt_done
             conn: Connection | None = None
             try:
-                conn = await open_connection(self.url, "main", self.connect_timeout, self._route_publish)
+                conn = await open_connection(
+                    self.url, "main", self.connect_timeout, self._route_publish, self.request_timeout
+                )
                 info = await self._detect(conn)
                 await self._restore(conn, info)
             except asyncio.CancelledError:
@@ -413,7 +415,10 @@ class RosbridgeClient:
 
     async def _open_lane(self, timeout: float) -> Connection:  # noqa: ASYNC109
         return await open_connection(
-            self.url, f"lane {self._ids.mint('lane', '')}", min(timeout, self.connect_timeout)
+            self.url,
+            f"lane {self._ids.mint('lane', '')}",
+            min(timeout, self.connect_timeout),
+            send_timeout=self.request_timeout,
         )
 
     # --- services -----------------------------------------------------------------------------------

@@ -22,6 +22,11 @@ _LEVELS: Final = {"debug": logging.DEBUG, "info": logging.INFO, "warning": loggi
 # Large maps and point clouds exceed websockets' 1 MiB default; ROS 2 fragments only above 10 MB
 # (launch file default), so the limit sits above that.
 MAX_FRAME_BYTES: Final = 64 * 1024 * 1024
+#: Longest wait for a polite close before the socket is aborted.
+_CLOSE_SECONDS: Final = 1.0
+#: Frames shorter than this, written into an empty socket buffer, cannot wait on flow control
+#: (websockets' default write high-water mark is 32 KiB).
+_NEVER_BLOCKS: Final = 16 * 1024
 
 
 class ReplyWaiter:
@@ -90,6 +95,7 @@ class Connection:
         url: str,
         name: str,
         on_publish: Callable[[protocol.PublishEvent], None] | None = None,
+        send_timeout: float = 10.0,
     ) -> None:
         self.ws = ws
         self.url = url
@@ -98,6 +104,7 @@ class Connection:
         self.advertised: set[str] = set()
         self.is_open = True
         self.close_reason: str | None = None
+        self.send_timeout = send_timeout
         self._on_publish = on_publish
         self._decoder = protocol.InboundDecoder()
         self.closed = asyncio.Event()
@@ -156,11 +163,32 @@ class Connection:
             item.lost(ConnectionLostError(self.url, item.what))
 
     async def send(self, op: dict[str, Any]) -> None:
-        """Send one op now; raises :class:`NotConnectedError` if the socket is closed (nothing sent)."""
+        """Send one op now; raises :class:`NotConnectedError` if the socket is closed (nothing sent).
+
+        Waiting on flow control (only when the bridge stops reading) is bounded by ``send_timeout``.
+        """
         if not self.is_open:
             raise NotConnectedError(self.url, self.close_reason or "the connection closed")
+        await self._write(
+            protocol.encode(op), f"{op.get('op')} {op.get('topic', '')}".rstrip(), self.send_timeout
+        )
+
+    async def _write(self, text: str, what: str, timeout: float) -> None:  # noqa: ASYNC109
         try:
-            await self.ws.send(protocol.encode(op))
+            # ws.send() waits for the socket buffer to drain below its high-water mark (32 KiB) after
+            # writing. A small frame into an empty buffer can never wait, so it skips the timer.
+            if len(text) < _NEVER_BLOCKS and not self.ws.transport.get_write_buffer_size():
+                await self.ws.send(text)
+                return
+            try:
+                async with asyncio.timeout(timeout):
+                    await self.ws.send(text)
+            except TimeoutError:
+                raise RequestTimeoutError(
+                    f"sending {what}",
+                    timeout,
+                    "The bridge has stopped reading from the connection; the frame may still be delivered.",
+                ) from None
         except ConnectionClosed:
             raise NotConnectedError(self.url, "the connection closed") from None
 
@@ -175,10 +203,7 @@ class Connection:
         try:
             if not self.is_open:
                 raise NotConnectedError(self.url, self.close_reason or "the connection closed")
-            try:
-                await self.ws.send(protocol.encode(op))
-            except ConnectionClosed:
-                raise NotConnectedError(self.url, "the connection closed") from None
+            await self._write(protocol.encode(op), what, timeout)
             return await future
         finally:
             self.pending.pop(rid, None)
@@ -211,7 +236,13 @@ class Connection:
         """Close the socket and wait for the reader to finish (fails whatever is pending)."""
         self.is_open = False
         try:
-            await self.ws.close()
+            # websockets bounds the closing handshake by close_timeout, but not the wait for the
+            # socket buffer to drain before the close frame goes out: a bridge that stopped reading
+            # would hold close() until keepalive gives up (~20 s). So the whole close is bounded.
+            async with asyncio.timeout(_CLOSE_SECONDS):
+                await self.ws.close()
+        except TimeoutError:
+            self.ws.transport.abort()
         except Exception:
             logger.debug("%s: error while closing", self.name, exc_info=True)
         if not self.reader.done():
@@ -236,6 +267,7 @@ async def open_connection(
     name: str,
     timeout: float,  # noqa: ASYNC109
     on_publish: Callable[[protocol.PublishEvent], None] | None = None,
+    send_timeout: float = 10.0,
 ) -> Connection:
     """Open a WebSocket to *url* within *timeout* seconds; raises :class:`NotConnectedError`."""
     try:
@@ -257,4 +289,4 @@ async def open_connection(
         raise NotConnectedError(url, exc.strerror or str(exc)) from None
     except Exception as exc:
         raise NotConnectedError(url, f"{type(exc).__name__}: {exc}") from None
-    return Connection(ws, url, name, on_publish)
+    return Connection(ws, url, name, on_publish, send_timeout)
