@@ -431,11 +431,13 @@ def our_server_over_asyncio_pipes_command(url: str) -> list[str]:
 
 
 @contextlib.asynccontextmanager
-async def serve_mcp(command: list[str], errlog: IO[str]) -> AsyncIterator[Served]:
+async def serve_mcp(
+    command: list[str], errlog: IO[str], env: dict[str, str] | None = None
+) -> AsyncIterator[Served]:
     """Spawn an MCP server, run ``initialize`` and ``tools/list``, and time both from the spawn."""
     me = psutil.Process()
     before = {child.pid for child in me.children()}
-    params = StdioServerParameters(command=command[0], args=command[1:], cwd=str(REPO))
+    params = StdioServerParameters(command=command[0], args=command[1:], cwd=str(REPO), env=env)
     started = time.perf_counter()
     async with stdio_client(params, errlog=errlog) as (read, write), ClientSession(read, write) as session:
         try:

@@ -1,0 +1,156 @@
+"""Where the time of one tool call goes: a profiling aid for the misses in docs/performance.md.
+
+    uv run python scripts/bench/decompose.py                  # the SDK's default stdio
+    uv run python scripts/bench/decompose.py --asyncio-stdio  # stdio through asyncio pipes
+
+It starts a simulated robot and ``timed_server.py`` (our unchanged server with stopwatches around
+``MCPServer._handle_call_tool`` and ``RosbridgeClient.call_service``), then makes the same tool call
+many times, in blocks alternating with the raw-websockets floor, and splits each call's median:
+
+* the floor: one ``call_service`` over a raw websocket from this process;
+* rosbridge round trips made inside the server for the call (how many, and their time);
+* our code: the server's tool handler minus those round trips (argument validation, the tool module,
+  building and serializing the answer);
+* the rest: the MCP SDK's request and response path on both sides and the stdio pipes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import importlib.util
+import json
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from websockets.asyncio.client import connect
+
+__all__ = ["main"]
+
+_spec = importlib.util.spec_from_file_location(
+    "bench_script", Path(__file__).resolve().parent.parent / "bench.py"
+)
+if _spec is None or _spec.loader is None:
+    raise ImportError("scripts/bench.py not found next to scripts/bench/")
+bench = importlib.util.module_from_spec(_spec)
+sys.modules["bench_script"] = bench  # dataclasses look their module up while the class is built
+_spec.loader.exec_module(bench)
+
+TIMED_SERVER = Path(__file__).resolve().parent / "timed_server.py"
+
+
+def median_ms(samples: list[float]) -> float:
+    return statistics.median(samples) * 1e3
+
+
+async def decompose(
+    tool: str,
+    arguments: dict[str, Any],
+    floor_service: str,
+    floor_args: dict[str, Any],
+    *,
+    calls: int,
+    block: int,
+    asyncio_stdio: bool,
+    url: str,
+    errlog: Any,
+) -> dict[str, Any]:
+    timings = Path(tempfile.gettempdir()) / f"bench-timings-{tool}-{time.time_ns()}.json"
+    command = [
+        sys.executable,
+        str(TIMED_SERVER),
+        "--url",
+        url,
+        *(["--asyncio-stdio"] if asyncio_stdio else []),
+    ]
+    observed: list[float] = []
+    floor: list[float] = []
+    async with connect(url, compression=None) as ws:
+        raw = bench.RawBridge(ws)
+        async with bench.serve_mcp(command, errlog, env={"BENCH_TIMINGS": str(timings)}) as served:
+            for _ in range(100):  # warm-up, dropped below by keeping only the last `calls` server samples
+                await served.tool(tool, arguments)
+                await raw.call(floor_service, floor_args)
+            while len(observed) < calls:
+                for _ in range(block):
+                    began = time.perf_counter()
+                    await raw.call(floor_service, floor_args)
+                    floor.append(time.perf_counter() - began)
+                for _ in range(block):
+                    began = time.perf_counter()
+                    await served.tool(tool, arguments)
+                    observed.append(time.perf_counter() - began)
+    recorded = json.loads(timings.read_text())
+    timings.unlink()
+    handler = recorded["handler"][-len(observed) :]
+    per_call = round(len(recorded["rosbridge"]) / len(recorded["handler"]))
+    trips = recorded["rosbridge"][-len(observed) * per_call :]
+    trips_per_call = [sum(trips[i * per_call : (i + 1) * per_call]) for i in range(len(observed))]
+    ours = [h - t for h, t in zip(handler, trips_per_call, strict=True)]
+    rest = [o - h for o, h in zip(observed, handler, strict=True)]
+    return {
+        "tool": tool,
+        "calls": len(observed),
+        "observed_ms": median_ms(observed),
+        "floor_ms": median_ms(floor),
+        "round_trips_per_call": per_call,
+        "round_trips_ms": median_ms(trips_per_call),
+        "one_round_trip_ms": median_ms(trips),
+        "our_code_ms": median_ms(ours),
+        "sdk_and_stdio_ms": median_ms(rest),
+    }
+
+
+async def run(arguments: argparse.Namespace, errlog: Any) -> list[dict[str, Any]]:
+    async with bench.simulated_robot(errlog) as url:
+        async with connect(url, compression=None) as ws:
+            found = await bench.RawBridge(ws).call("/rosapi/service_type", {"service": bench.ADD_TWO_INTS})
+        add = {"a": 2, "b": 3}
+        cases = [
+            ("list_topics", {}, "/rosapi/topics", {}),
+            (
+                "publish_service",
+                {"service": bench.ADD_TWO_INTS, "service_type": found["type"], "request": add},
+                bench.ADD_TWO_INTS,
+                add,
+            ),
+        ]
+        return [
+            await decompose(
+                *case,
+                calls=arguments.calls,
+                block=50,
+                asyncio_stdio=arguments.asyncio_stdio,
+                url=url,
+                errlog=errlog,
+            )
+            for case in cases
+        ]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--calls", type=int, default=1000, help="timed calls per tool (default 1000)")
+    parser.add_argument("--asyncio-stdio", action="store_true", help="serve stdio through asyncio pipes")
+    arguments = parser.parse_args()
+    with open(Path(tempfile.gettempdir()) / "bench-decompose.log", "w") as errlog:
+        results = asyncio.run(run(arguments, errlog))
+    transport = "asyncio pipes" if arguments.asyncio_stdio else "the SDK's stdio (worker threads)"
+    print(f"medians over {arguments.calls} calls per tool; our server on {transport}")
+    print("| tool | observed | floor | rosbridge round trips in the server | our code | MCP SDK + stdio |")
+    print("|---|--:|--:|--:|--:|--:|")
+    for r in results:
+        print(
+            f"| `{r['tool']}` | {r['observed_ms']:.2f} ms | {r['floor_ms']:.2f} ms | "
+            f"{r['round_trips_per_call']} × {r['one_round_trip_ms']:.2f} ms = {r['round_trips_ms']:.2f} ms | "
+            f"{r['our_code_ms']:.2f} ms | {r['sdk_and_stdio_ms']:.2f} ms |"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

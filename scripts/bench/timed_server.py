@@ -1,0 +1,63 @@
+"""``rosbridge-mcp-server`` with stopwatches around its layers: a profiling aid for ``decompose.py``.
+
+It runs the unchanged server (the console script's ``main``) after wrapping three coroutines with timers:
+
+* ``MCPServer._handle_call_tool`` — everything the server does for one tool call after the SDK has read
+  and parsed the request, up to the result it hands back to the SDK;
+* ``RosbridgeClient.call_service`` — each rosbridge round trip made inside that;
+* ``MCPServer.run_stdio_async`` is left alone (or swapped for asyncio pipes with ``--asyncio-stdio``).
+
+At exit it writes the samples, in seconds, as JSON to the file named by ``BENCH_TIMINGS``.
+"""
+
+from __future__ import annotations
+
+import atexit
+import collections
+import functools
+import json
+import os
+import sys
+import time
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from mcp.server.mcpserver import MCPServer
+
+from rosbridge_mcp_server import main
+from rosbridge_mcp_server.client import RosbridgeClient
+
+__all__: list[str] = []
+
+_samples: dict[str, list[float]] = collections.defaultdict(list)
+
+
+def _timed(key: str, method: Callable[..., Awaitable[Any]]) -> Callable[..., Awaitable[Any]]:
+    @functools.wraps(method)
+    async def timed(*args: Any, **kwargs: Any) -> Any:
+        began = time.perf_counter()
+        try:
+            return await method(*args, **kwargs)
+        finally:
+            _samples[key].append(time.perf_counter() - began)
+
+    return timed
+
+
+def _dump() -> None:
+    target = os.environ.get("BENCH_TIMINGS")
+    if target:
+        with open(target, "w") as out:
+            json.dump(_samples, out)
+
+
+if __name__ == "__main__":
+    MCPServer._handle_call_tool = _timed("handler", MCPServer._handle_call_tool)  # type: ignore[method-assign]
+    RosbridgeClient.call_service = _timed("rosbridge", RosbridgeClient.call_service)  # type: ignore[method-assign]
+    if "--asyncio-stdio" in sys.argv:
+        sys.argv.remove("--asyncio-stdio")
+        from bare_server import serve_over_asyncio_pipes  # this script's own folder is first on sys.path
+
+        MCPServer.run_stdio_async = serve_over_asyncio_pipes  # type: ignore[method-assign]
+    atexit.register(_dump)
+    main()
