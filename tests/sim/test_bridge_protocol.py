@@ -110,6 +110,9 @@ async def test_legacy_hash_id_in_the_service_name_becomes_the_id(sim: SimulatedR
         '{"op": "call_service", "id": "bad", "service": 7}',
         '{"op": "unsubscribe", "topic": "/never_subscribed"}',
         '{"op": "unadvertise", "topic": "/never_advertised"}',
+        '{"op": "cancel_action_goal", "action": "/fibonacci", "id": [1]}',
+        '{"op": "subscribe", "topic": "/chatter", "id": {"unhashable": true}}',
+        '{"op": "fragment", "id": "f", "data": "{", "num": 0, "total": 1}',
     ],
 )
 async def test_frames_the_real_server_only_logs_get_no_reply(sim: SimulatedRobot, frame: str) -> None:
@@ -495,3 +498,12 @@ async def test_unadvertise_service_of_someone_elses_service_is_only_logged(sim: 
         await client.send({"op": "unadvertise_service", "service": "/add_two_ints"})
         assert await client.frames_before_barrier() == []
         assert (await client.values("/add_two_ints", {"a": 1, "b": 1})) == {"sum": 2}
+
+
+async def test_a_subscribe_with_an_unhashable_id_registers_nothing(sim: SimulatedRobot) -> None:
+    """rosbridge fails on an id it cannot use as a key; no subscription is left behind."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "id": {"not": "hashable"}})
+        await client.frames_before_barrier()
+        subscribers = await client.values("/rosapi/subscribers", {"topic": "/chatter"})
+    assert subscribers["subscribers"] == []

@@ -564,13 +564,13 @@ class Bridge:
             log.warning(
                 "client %d: compression %r is not simulated; sending JSON on %s", conn.id, compression, topic
             )
+        sid = msg.get("id")
+        hash(sid)  # an unhashable id fails here, before anything is registered
         sub = conn.subscriptions.get(topic)
         if sub is None:
             sub = conn.subscriptions[topic] = TopicSubscription(topic, msg["topic"], msg_type)
             self.graph.add_subscriber(ROSBRIDGE_NODE, topic, msg_type)
-        sub.by_id[msg.get("id")] = SubscriptionOptions(
-            msg.get("throttle_rate", 0), msg.get("queue_length", 0)
-        )
+        sub.by_id[sid] = SubscriptionOptions(msg.get("throttle_rate", 0), msg.get("queue_length", 0))
         latched = self.graph.latched.get(topic)
         if latched is not None:
             conn.deliver(OutgoingMessage(topic, msg_type, latched, self.registry.to_json), self._fragment_id)
@@ -578,6 +578,8 @@ class Bridge:
     def _op_unsubscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
         _check(msg, [(True, "topic", (str,))])
         topic = resolve_name(msg["topic"])
+        sid = msg.get("id")
+        hash(sid)  # an unhashable id fails here, before anything is registered
         sub = conn.subscriptions.get(topic)
         if sub is None:
             return
@@ -676,6 +678,7 @@ class Bridge:
         )
         action = msg["action"]
         name, cid = _extract_id(action, msg.get("id"))
+        hash(cid)  # the goal table is keyed by id: an unhashable id fails before anything starts
 
         def finish(values: Any, status: int, result: bool) -> None:
             reply: dict[str, Any] = {
