@@ -90,13 +90,13 @@ class Ros2Params:
     def set(self, name: str, value: str) -> tuple[bool, str]:
         """rosapi ``set_param``; a value of a new type for an existing parameter is refused."""
         try:
-            decoded = json.loads(value)
-        except ValueError as exc:
-            raise ServiceFailure(JSON_REQUIRED) from exc
-        try:
             node, param = self.split(name)
         except ValueError as exc:
             return False, str(exc)
+        try:
+            decoded = json.loads(value)
+        except ValueError as exc:
+            raise ServiceFailure(JSON_REQUIRED) from exc
         new = parameter_value(decoded) if isinstance(decoded, str) else parameter_value(value)
         if isinstance(decoded, dict):
             new = value
