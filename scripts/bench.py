@@ -14,7 +14,8 @@ What is measured (issue #4):
 1. the floor: ``call_service /rosapi/topics`` over one raw ``websockets`` connection;
 2. the same call through our ``RosbridgeClient`` and through roslibpy;
 3. ``list_topics`` and ``publish_service /add_two_ints`` through a real MCP stdio session with the console
-   script, next to the same SDK's cost for a tool that does nothing (``scripts/bench/bare_server.py``);
+   script, next to the same SDK's cost for a tool that does nothing (``scripts/bench/bare_server.py``),
+   and, as an experiment, both again with the SDK's threaded stdio swapped for asyncio pipes;
 4. 100 tool calls at once in one session against a 50 ms service, against 100 in a row;
 5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
 6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
@@ -165,7 +166,7 @@ class Row:
 
 
 def ms(seconds: float) -> str:
-    """A duration for the table: ms below 10 s, else s."""
+    """A duration for the table: two decimals of ms below 10 ms, one below 1 s, then seconds."""
     if seconds >= 10:
         return f"{seconds:.1f} s"
     if seconds >= 1:
@@ -232,6 +233,8 @@ def describe_machine() -> dict[str, Any]:
 
 
 def free_port() -> int:
+    # The sim takes a fixed --port; a port the kernel just handed out is free for the moment it takes to
+    # start, and a clash shows up as the sim exiting before it listens (reported with its stderr).
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
         probe.bind(("127.0.0.1", 0))
         port: int = probe.getsockname()[1]
@@ -994,36 +997,45 @@ async def run(arguments: argparse.Namespace) -> tuple[dict[str, Any], list[Row],
     }
     errlog_path = Path(tempfile.gettempdir()) / f"bench-servers-{os.getpid()}.log"
     log.info("server and simulated-robot stderr goes to %s", errlog_path)
-    with errlog_path.open("w") as errlog:
-        async with contextlib.AsyncExitStack() as stack:
-            if arguments.url:
-                url, simulated = arguments.url, False
-            else:
-                url, simulated = await stack.enter_async_context(simulated_robot(errlog)), True
-            ws = await stack.enter_async_context(connect(url, max_size=None, compression=None))
-            raw = RawBridge(ws)
-            bridge = await Bridge.probe(raw, url, simulated=simulated)
-            report["bridge"] = {"url": url, "simulated": simulated, **dataclasses.asdict(bridge)}
-            log.info("bridge at %s offers %s", url, ", ".join(bridge.services) or "none of our services")
-            client = await stack.enter_async_context(RosbridgeClient(url))
-            await client.wait_connected(10)
+    failed = True
+    try:
+        with errlog_path.open("w") as errlog:
+            async with contextlib.AsyncExitStack() as stack:
+                if arguments.url:
+                    url, simulated = arguments.url, False
+                else:
+                    url, simulated = await stack.enter_async_context(simulated_robot(errlog)), True
+                ws = await stack.enter_async_context(connect(url, max_size=None, compression=None))
+                raw = RawBridge(ws)
+                bridge = await Bridge.probe(raw, url, simulated=simulated)
+                report["bridge"] = {"url": url, "simulated": simulated, **dataclasses.asdict(bridge)}
+                log.info("bridge at %s offers %s", url, ", ".join(bridge.services) or "none of our services")
+                client = await stack.enter_async_context(RosbridgeClient(url))
+                await client.wait_connected(10)
 
-            async def served(command: list[str]) -> Served:
-                return await stack.enter_async_context(serve_mcp(command, errlog))
+                async def served(command: list[str]) -> Served:
+                    return await stack.enter_async_context(serve_mcp(command, errlog))
 
-            ctx = Context(
-                plan=plan,
-                bridge=bridge,
-                raw=raw,
-                client=client,
-                ours=await served(our_server_command(url)),
-                reference=await served(bare_server_command(reference_tools=True)),
-                reference_pipes=await served(bare_server_command(reference_tools=True, asyncio_stdio=True)),
-                ours_pipes=await served(our_server_over_asyncio_pipes_command(url)),
-                errlog=errlog,
-            )
-            rows, failed = await run_items(ctx)
-            report["samples"] = ctx.samples
+                ctx = Context(
+                    plan=plan,
+                    bridge=bridge,
+                    raw=raw,
+                    client=client,
+                    ours=await served(our_server_command(url)),
+                    reference=await served(bare_server_command(reference_tools=True)),
+                    reference_pipes=await served(
+                        bare_server_command(reference_tools=True, asyncio_stdio=True)
+                    ),
+                    ours_pipes=await served(our_server_over_asyncio_pipes_command(url)),
+                    errlog=errlog,
+                )
+                rows, failed = await run_items(ctx)
+                report["samples"] = ctx.samples
+    finally:
+        if failed:
+            log.warning("kept the servers' and the simulated robot's stderr in %s", errlog_path)
+        else:
+            errlog_path.unlink(missing_ok=True)
     report["rows"] = [dataclasses.asdict(row) for row in rows]
     return report, rows, failed
 
@@ -1041,10 +1053,11 @@ def render(report: dict[str, Any], rows: Sequence[Row]) -> str:
         f"rosbridge-mcp-server benchmark — {report['date']} — plan `{report['plan']['name']}`",
         "",
         f"- Machine: {machine['cpu']}, {machine['cores']} cores, {machine['memory_gib']} GiB; "
-        f"{machine['os']}; {machine['python']}; load average at start {machine['load_average_at_start'][0]}",
+        f"{machine['os']}; {machine['python']}; load average (1 min) {machine['load_average_at_start'][0]} "
+        f"at start, {machine.get('load_average_at_end', ['?'])[0]} at the end",
         f"- Code: commit {machine['commit']}; mcp {versions['mcp']}, websockets {versions['websockets']}, "
         f"roslibpy {versions['roslibpy']}",
-        f"- Bridge: {where}",
+        f"- Bridge: {where}; the run took {report.get('duration_s', 0):.0f} s",
         "",
         "| # | measurement | n | median | p90 | vs reference | target | verdict |",
         "|---|---|--:|--:|--:|---|---|---|",
@@ -1083,6 +1096,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     began = time.perf_counter()
     report, rows, failed = asyncio.run(run(arguments))
     report["duration_s"] = time.perf_counter() - began
+    report["machine"]["load_average_at_end"] = [round(load, 2) for load in os.getloadavg()]
     print(render(report, rows))
     if arguments.json:
         arguments.json.write_text(json.dumps(report, indent=2, default=str) + "\n")
