@@ -203,7 +203,16 @@ class Connection:
         try:
             if not self.is_open:
                 raise NotConnectedError(self.url, self.close_reason or "the connection closed")
-            await self._write(protocol.encode(op), what, timeout)
+            text = protocol.encode(op)
+            ws = self.ws
+            if len(text) < _NEVER_BLOCKS and not ws.transport.get_write_buffer_size():
+                # _write()'s fast path, inlined: one coroutine frame less per call.
+                try:
+                    await ws.send(text)
+                except ConnectionClosed:
+                    raise NotConnectedError(self.url, "the connection closed") from None
+            else:
+                await self._write(text, what, timeout)
             return await future
         finally:
             self.pending.pop(rid, None)
