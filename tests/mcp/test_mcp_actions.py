@@ -42,14 +42,29 @@ async def test_a_goal_succeeds_with_result_feedback_and_progress(
     assert "succeeded" in text_of(result)
 
 
-@pytest.mark.parametrize("spelling", ["example_interfaces/Fibonacci", "example_interfaces/FibonacciAction"])
-async def test_short_action_type_spellings_are_accepted_on_ros2(session_ros2: Session, spelling: str) -> None:
-    """pkg/Fibonacci and pkg/FibonacciAction name the same ROS 2 action type."""
-    result = await session_ros2.ok(
-        "publish_action", {"action_name": FIB, "action_type": spelling, "goal": {"order": 2}}
-    )
+@pytest.mark.parametrize(
+    ("dialect", "spelling"),
+    [
+        ("ros2", "example_interfaces/Fibonacci"),
+        ("ros2", "example_interfaces/FibonacciAction"),
+        ("ros1", "actionlib_tutorials/Fibonacci"),
+        ("ros1", "actionlib_tutorials/action/Fibonacci"),
+    ],
+)
+async def test_every_action_type_spelling_names_the_same_action(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]], dialect: str, spelling: str
+) -> None:
+    """pkg/Name, pkg/action/Name and pkg/NameAction all reach the Fibonacci server, on ROS 2 and ROS 1."""
+    robot = await make_sim(dialect=dialect)
+    async with open_session(robot.url) as session:
+        result = await session.ok(
+            "publish_action", {"action_name": FIB, "action_type": spelling, "goal": {"order": 2}}
+        )
     assert result.structured_content is not None
     assert result.structured_content["succeeded"] is True
+    assert result.structured_content["action_type"] == (
+        "example_interfaces/action/Fibonacci" if dialect == "ros2" else "actionlib_tutorials/FibonacciAction"
+    )
 
 
 async def test_an_unknown_action_is_an_error_pointing_at_list_actions(
