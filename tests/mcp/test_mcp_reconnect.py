@@ -81,3 +81,25 @@ async def test_a_publish_during_an_outage_fails_and_is_never_delivered_later(
     await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 2, WAIT)
     await robot_session.ok("list_topics")  # one more round trip for anything queued to show up
     assert [m.msg["linear"]["x"] for m in robot.world.published[CMD_VEL]] == [0.1, 0.2]
+
+
+async def test_after_a_reconnect_to_another_kind_of_robot_the_tools_follow_it(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]],
+) -> None:
+    """When a ROS 1 bridge replaces the ROS 2 one at the same address, types and checks follow it."""
+    ros2 = await make_sim(dialect="ros2")
+    async with open_session(ros2.url) as session:
+        await session.ok("publish_topic", _twist(ros2, 0.3))
+        port = ros2.port
+        await ros2.stop()
+        await session.ros.wait_disconnected(WAIT)
+        ros1 = await make_sim(dialect="ros1", port=port)
+        await session.ros.wait_connected(WAIT)
+        listed = (await session.ok("list_topics")).structured_content
+        assert listed is not None
+        assert {"name": CMD_VEL, "type": "geometry_msgs/Twist"} in listed["topics"]
+        text = await session.error("publish_topic", {**_twist(ros1, 0.0), "message": {"linear": {"x": "x"}}})
+        assert "geometry_msgs/Twist" in text
+        await session.ok("publish_topic", _twist(ros1, 0.4))
+        await ros1.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
+    assert ros1.world.published[CMD_VEL][0].msg["linear"]["x"] == 0.4
