@@ -384,3 +384,19 @@ async def test_ros1_a_new_goal_preempts_the_running_one(sim_ros1: SimulatedRobot
         await sim_ros1.wait_for(lambda w: "second" in w.goals and w.goals["second"].finished)
     assert sim_ros1.world.goals["first"].status == 2
     assert sim_ros1.world.goals["second"].status == 3
+
+
+async def test_ros2_hidden_send_goal_service_is_listed_but_rosbridge_cannot_load_its_type(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """As on a real bridge: *_SendGoal does not import as a service type; the call fails with that text."""
+    async with await RawClient.open(sim_ros2.url) as client:
+        node = await client.values("/rosapi/node_details", {"node": "/fibonacci_server"})
+        reply = await client.call("/fibonacci/_action/send_goal", {"goal": {"order": 3}})
+        unknown = await client.values(
+            "/fibonacci/_action/cancel_goal", {"goal_info": {"goal_id": {"uuid": [9] * 16}}}
+        )
+    assert "/fibonacci/_action/send_goal" in node["services"]
+    assert reply["result"] is False
+    assert "Fibonacci_SendGoal" in reply["values"]
+    assert unknown["return_code"] == 2  # ERROR_UNKNOWN_GOAL_ID

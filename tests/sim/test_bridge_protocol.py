@@ -507,3 +507,21 @@ async def test_a_subscribe_with_an_unhashable_id_registers_nothing(sim: Simulate
         await client.frames_before_barrier()
         subscribers = await client.values("/rosapi/subscribers", {"topic": "/chatter"})
     assert subscribers["subscribers"] == []
+
+
+async def test_throttle_with_a_queue_releases_the_newest_messages_at_the_throttle_rate(
+    sim: SimulatedRobot,
+) -> None:
+    """throttle_rate 250 ms with queue_length 1: messages keep coming, spaced by the throttle, newest kept."""
+    import time
+
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "throttle_rate": 250, "queue_length": 1})
+        received = []
+        for _ in range(3):
+            message = await client.next_publish("/chatter")
+            received.append((time.monotonic(), int(message["msg"]["data"].split(": ")[1])))
+    (t0, n0), (t1, n1), (t2, n2) = received
+    assert t1 - t0 >= 0.2
+    assert t2 - t1 >= 0.2
+    assert n0 < n1 < n2

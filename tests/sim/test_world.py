@@ -308,3 +308,37 @@ async def test_camera_messages_are_complete_and_in_wire_form(sim: SimulatedRobot
     for name, message in (("Image", raw), ("CompressedImage", compressed)):
         msg_type = ros_type(sim, "sensor_msgs", "msg", name)
         assert registry.to_json(msg_type, registry.from_json(msg_type, message)) == message
+
+
+async def test_topics_and_raw_types_gives_full_definition_texts(sim: SimulatedRobot) -> None:
+    """topics_and_raw_types: parallel lists, each topic's full definition text (nested types included)."""
+    async with await RawClient.open(sim.url) as client:
+        raw = await client.values("/rosapi/topics_and_raw_types")
+    texts = dict(zip(raw["topics"], raw["typedefs_full_text"], strict=True))
+    assert "Vector3" in texts["/turtle1/cmd_vel"]
+    assert "float64 x" in texts["/turtle1/cmd_vel"]
+
+
+async def test_service_details_describe_request_and_response(sim: SimulatedRobot) -> None:
+    """service_request_details / service_response_details of AddTwoInts name a, b and sum."""
+    add = "example_interfaces/srv/AddTwoInts" if sim.dialect == "ros2" else "rospy_tutorials/AddTwoInts"
+    async with await RawClient.open(sim.url) as client:
+        request = await client.values("/rosapi/service_request_details", {"type": add})
+        response = await client.values("/rosapi/service_response_details", {"type": add})
+    assert request["typedefs"][0]["fieldnames"] == ["a", "b"]
+    assert response["typedefs"][0]["fieldnames"] == ["sum"]
+
+
+async def test_ros1_details_of_an_unknown_type_fail_with_an_error_text(sim_ros1: SimulatedRobot) -> None:
+    """ROS 1 rosapi raises for a type it cannot load; rospy reports it (result false)."""
+    async with await RawClient.open(sim_ros1.url) as client:
+        reply = await client.call("/rosapi/message_details", {"type": "no_pkg/Nothing"})
+    assert reply["result"] is False
+    assert reply["values"].startswith("service [/rosapi/message_details] responded with an error")
+
+
+async def test_ros2_message_details_of_an_unknown_type_is_empty(sim_ros2: SimulatedRobot) -> None:
+    """ROS 2 rosapi logs the import error and answers no typedefs."""
+    async with await RawClient.open(sim_ros2.url) as client:
+        details = await client.values("/rosapi/message_details", {"type": "no_pkg/msg/Nothing"})
+    assert details["typedefs"] == []
