@@ -11,7 +11,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from rosbridge_mcp_server.check import run_check
+from rosbridge_mcp_server.check import run_check, unreachable_advice
 from rosbridge_mcp_server.cli import PROG, run
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -135,3 +135,36 @@ def test_check_demo_runs_against_the_built_in_robot(capsys: pytest.CaptureFixtur
     out = capsys.readouterr().out
     assert "demo mode: this is the built-in simulated ROS 2 robot" in out
     assert "Healthy" in out
+
+
+@pytest.mark.parametrize(
+    ("url", "reason", "first"),
+    [
+        (
+            "ws://robot:9090",
+            "[Errno 111] Connect call failed ('10.0.0.2', 9090)",
+            "Nothing listens on robot:9090",
+        ),
+        ("ws://robt:9090", "[Errno -2] Name or service not known", "The host name 'robt' does not resolve"),
+        ("ws://robot:9090", "timed out during opening handshake", "robot:9090 did not answer in time"),
+        ("wss://robot:9090", "", "The TLS handshake failed: if rosbridge runs without TLS, use ws://"),
+        (
+            "ws://robot:9090/bridge",
+            "InvalidStatus: server rejected WebSocket connection: HTTP 404",
+            "Something at robot:9090 answers HTTP but refused the WebSocket upgrade",
+        ),
+    ],
+)
+def test_unreachable_advice_puts_the_likely_cause_first(url: str, reason: str, first: str) -> None:
+    """The first suggestion matches the failure; the general checklist follows."""
+    advice = unreachable_advice(url, reason)
+    assert advice[0].startswith(first)
+    assert any("firewall" in line for line in advice)
+
+
+async def test_check_of_a_plain_bridge_over_wss_suggests_ws(sim_ros2: SimulatedRobot) -> None:
+    """Asking a plain ws:// bridge for TLS fails, and check says to use ws:// instead."""
+    out = io.StringIO()
+    code = await run_check(Config(url=sim_ros2.url.replace("ws://", "wss://"), connect_timeout=3.0), out)
+    assert code == 1
+    assert "use ws:// instead of wss://" in out.getvalue()

@@ -42,9 +42,15 @@ def unreachable_advice(url: str, reason: str | None) -> list[str]:
             f"{host}:{port} did not answer in time: check the address, that the robot is on this network, "
             "and that no firewall blocks the port."
         )
-    if "ssl" in text or "tls" in text or "certificate" in text or "http" in text:
-        other = "ws://" if secure else "wss://"
-        advice.append(f"The server may speak the other protocol: try {other} instead of {parts.scheme}://.")
+    if "invalidstatus" in text or "rejected websocket" in text:
+        advice.append(
+            f"Something at {host}:{port} answers HTTP but refused the WebSocket upgrade: is this rosbridge's "
+            "port, and is the URL path right? rosbridge serves at / unless its url_path is set."
+        )
+    elif secure and (not text or any(word in text for word in ("ssl", "tls", "certificate", "handshake"))):
+        advice.append("The TLS handshake failed: if rosbridge runs without TLS, use ws:// instead of wss://.")
+    elif not secure and any(word in text for word in ("invalid http", "valid http", "handshake")):
+        advice.append("The server did not answer like a WebSocket server: if it uses TLS, try wss://.")
     advice += [
         "Start rosbridge on the robot: `ros2 launch rosbridge_server rosbridge_websocket_launch.xml` (ROS "
         "2) or `roslaunch rosbridge_server rosbridge_websocket.launch` (ROS 1).",
