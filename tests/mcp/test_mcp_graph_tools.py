@@ -23,12 +23,12 @@ async def test_list_topics_shows_every_topic_with_its_type(session: Session, sim
 async def test_get_topic_info_names_type_publishers_and_subscribers(
     session: Session, sim: SimulatedRobot
 ) -> None:
-    """/chatter is published by /talker; /turtle1/cmd_vel is subscribed by /turtlesim."""
+    """/chatter is published by /talker; turtle1/cmd_vel/ (sloppily written) is subscribed by /turtlesim."""
     chatter = (await session.ok("get_topic_info", {"topic": "/chatter"})).structured_content
     assert chatter is not None
     assert chatter["type"] == types_for(sim)["string"]
     assert "/talker" in chatter["publishers"]
-    cmd_vel = (await session.ok("get_topic_info", {"topic": "turtle1/cmd_vel"})).structured_content
+    cmd_vel = (await session.ok("get_topic_info", {"topic": "turtle1/cmd_vel/"})).structured_content
     assert cmd_vel is not None
     assert cmd_vel["topic"] == "/turtle1/cmd_vel"
     assert "/turtlesim" in cmd_vel["subscribers"]

@@ -123,8 +123,9 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
 
 def absolute_name(name: str, what: str) -> str:
     """A ROS graph name with its leading slash (rosapi and rosbridge match names exactly)."""
-    text = name.strip()
-    if not text or text == "/":
+    # ROS names never end in "/"; a trailing one would make rosapi's exact-name look-ups miss.
+    text = name.strip().rstrip("/")
+    if not text:
         raise ToolFailure(f"The {what} name is empty; give a name such as /turtle1/cmd_vel.")
     if any(ch.isspace() for ch in text):
         raise ToolFailure(f"The {what} name {name!r} contains whitespace; ROS names never do.")
