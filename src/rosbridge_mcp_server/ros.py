@@ -94,8 +94,7 @@ class ActionEntry:
 
 
 def is_missing_service(error: ServiceError) -> bool:
-    """The bridge said the service is not in the graph (its text since rosbridge 0.11 and in every ROS 2 "
-    "line)."""
+    """The bridge said the service is not in the graph (its wording in 0.11 and every ROS 2 line)."""
     return "does not exist" in error.message
 
 
@@ -121,8 +120,7 @@ class RosGraph:
         return info
 
     async def rosapi(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
-        """Call ``/rosapi/<name>``; a missing rosapi becomes a :class:`ServiceError` that says how to "
-        "start it."""
+        """Call ``/rosapi/<name>``; a missing rosapi is a :class:`ServiceError` saying how to start it."""
         service = f"/rosapi/{name}"
         try:
             values = await self._client.call_service(service, args or {})
@@ -242,8 +240,7 @@ class RosGraph:
     # --- type definitions -------------------------------------------------------------------------
 
     async def message_typedefs(self, type_name: str) -> dict[str, TypeDef]:
-        """The definitions of a message type and of every type nested in it; :class:`UnknownTypeError` "
-        "if none."""
+        """A message type's definition and those of its nested types; :class:`UnknownTypeError` if none."""
         info = await self.ros_info()
         bridge_name = normalize_type(type_name, info.version, "msg")
         await self._check_installed(type_name, bridge_name, info)
@@ -301,8 +298,7 @@ class RosGraph:
         return typedefs
 
     async def _check_installed(self, type_name: str, bridge_name: str, info: RosInfo) -> None:
-        """On ROS 2, ask ``/rosapi/interfaces`` (Humble 2.0.1+) first: it knows every installed type at "
-        "once."""
+        """On ROS 2, ask ``/rosapi/interfaces`` (Humble 2.0.1+) first: it lists every installed type."""
         if info.version != 2:
             return
         if not self._interfaces_known:

@@ -95,8 +95,7 @@ def short_type_name(name: str) -> str:
 
 
 def _split_array(raw: str) -> tuple[str, int | None]:
-    """Strip ROS 2 ``sequence<T>``/``T[N]``/bounds spellings; return the base type and a length if one "
-    "shows."""
+    """Strip ROS 2 ``sequence<T>``/``T[N]``/bounds spellings; return the base type and any length shown."""
     text = raw.strip()
     match = _SEQUENCE.match(text)
     if match:
