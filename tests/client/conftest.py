@@ -2,27 +2,14 @@
 
 from __future__ import annotations
 
-import socket
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator
 from typing import Any
 
 import pytest
+from client_harness import FAST_RECONNECT, MakeClient
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
-
-MakeClient = Callable[..., Awaitable[RosbridgeClient]]
-
-#: Short backoff so reconnect tests stay fast.
-FAST_RECONNECT: dict[str, Any] = {"reconnect_min": 0.05, "reconnect_max": 0.2, "connect_timeout": 2.0}
-
-
-def unused_port() -> int:
-    """A loopback port nothing listens on (bound, then released)."""
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port: int = sock.getsockname()[1]
-    return port
 
 
 @pytest.fixture

@@ -3,18 +3,15 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
+from client_harness import MakeClient, MakeSim
 
-from conftest import MakeClient
 from rosbridge_mcp_server import actions
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, GoalTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
-
-MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 ROS2_TYPE = "example_interfaces/action/Fibonacci"
 ROS1_TYPE = "actionlib_tutorials/FibonacciAction"

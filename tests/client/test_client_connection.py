@@ -5,17 +5,14 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
+from client_harness import MakeClient, MakeSim, unused_port
 
-from conftest import MakeClient, unused_port
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.sim import SimulatedRobot
-
-MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 
 async def test_start_returns_at_once_without_a_bridge_and_calls_name_the_url(make_client: MakeClient) -> None:

@@ -5,17 +5,14 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator
 from typing import Any
 
 import pytest
+from client_harness import MakeClient, MakeSim
 from websockets.asyncio.server import ServerConnection, serve
 
-from conftest import MakeClient
 from rosbridge_mcp_server.errors import RequestTimeoutError
-from rosbridge_mcp_server.sim import SimulatedRobot
-
-MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 
 async def test_fragmented_replies_and_messages_are_reassembled(

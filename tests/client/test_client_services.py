@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Callable
 
 import pytest
+from client_harness import MakeClient, MakeSim
 
-from conftest import MakeClient
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.sim import SimulatedRobot
-
-MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 
 async def test_a_hundred_concurrent_calls_each_get_their_own_reply(client: RosbridgeClient) -> None:

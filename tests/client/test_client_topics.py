@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Callable
 
 import pytest
+from client_harness import MakeClient, MakeSim, unused_port
 
-from conftest import MakeClient, unused_port
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
-
-MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 
 async def test_a_subscription_receives_messages_of_its_topic(client: RosbridgeClient) -> None:
