@@ -12,7 +12,7 @@ import pytest
 from client_harness import MakeClient, MakeSim
 from websockets.asyncio.server import ServerConnection, serve
 
-from rosbridge_mcp_server.errors import RequestTimeoutError
+from rosbridge_mcp_server.errors import GoalTimeoutError, RequestTimeoutError, ServiceError
 
 
 async def test_fragmented_replies_and_messages_are_reassembled(
@@ -127,3 +127,92 @@ async def test_publishing_to_a_bridge_that_stopped_reading_gives_up_at_the_deadl
 
     with pytest.raises(RequestTimeoutError, match="stopped reading"):
         await flood()
+
+
+class RecordingBridge:
+    """A scripted bridge that records every op per connection and answers only what it is told to."""
+
+    def __init__(self, *, ros_version: bool = True) -> None:
+        self.ops: list[tuple[int, dict[str, Any]]] = []
+        self.ros_version = ros_version
+        self.changed = asyncio.Event()
+        self._connections = 0
+
+    async def handle(self, ws: ServerConnection) -> None:
+        self._connections += 1
+        number = self._connections
+        async for raw in ws:
+            op: dict[str, Any] = json.loads(raw)
+            self.ops.append((number, op))
+            self.changed.set()
+            if op.get("op") != "call_service":
+                continue
+            if op["service"] == "/rosapi/get_ros_version" and self.ros_version:
+                values: Any = {"version": 2, "distro": "jazzy"}
+                result = True
+            else:
+                values, result = f"Service {op['service']} does not exist", False
+            reply = {"op": "service_response", "id": op["id"], "result": result, "values": values}
+            await ws.send(json.dumps(reply))
+
+    async def wait_for_op(self, name: str) -> tuple[int, dict[str, Any]]:
+        """The first recorded op called *name*, waiting for it if need be."""
+        async with asyncio.timeout(5.0):
+            while True:
+                for entry in self.ops:
+                    if entry[1].get("op") == name:
+                        return entry
+                self.changed.clear()
+                await self.changed.wait()
+
+
+@pytest.fixture
+async def recording_bridge() -> AsyncIterator[tuple[RecordingBridge, str]]:
+    """A RecordingBridge on a loopback port, with its URL."""
+    bridge = RecordingBridge()
+    async with serve(bridge.handle, "127.0.0.1", 0, compression=None) as server:
+        port = server.sockets[0].getsockname()[1]
+        yield bridge, f"ws://127.0.0.1:{port}"
+
+
+async def test_a_silent_goal_is_cancelled_on_the_main_connection_at_its_deadline(
+    recording_bridge: tuple[RecordingBridge, str], make_client: MakeClient
+) -> None:
+    """A bridge that never answers a goal (Humble before 2.0.5): the cancel goes on the main connection."""
+    bridge, url = recording_bridge
+    client = await make_client(url)
+    with pytest.raises(GoalTimeoutError) as caught:
+        await client.send_action_goal("/fibonacci", "example_interfaces/Fibonacci", {"order": 3}, timeout=0.2)
+    assert caught.value.status is None
+    goal_connection, goal = await bridge.wait_for_op("send_action_goal")
+    cancel_connection, cancel = await bridge.wait_for_op("cancel_action_goal")
+    assert goal_connection != 1, "the goal runs on a lane of its own"
+    assert cancel_connection == 1, "the cancel goes on the main connection"
+    assert cancel["id"] == goal["id"]
+    assert goal["action_type"] == "example_interfaces/action/Fibonacci"
+
+
+async def test_ros2_calls_carry_a_timeout_field_below_the_deadline(
+    recording_bridge: tuple[RecordingBridge, str], make_client: MakeClient
+) -> None:
+    """call_service on ROS 2 sends `timeout`, a little under our deadline so the bridge answers first."""
+    bridge, url = recording_bridge
+    client = await make_client(url)
+    with pytest.raises(ServiceError):
+        await client.call_service("/anything", {"x": 1}, timeout=4.0)
+    calls = [op for _, op in bridge.ops if op.get("service") == "/anything"]
+    assert len(calls) == 1
+    assert 3.0 < calls[0]["timeout"] < 4.0
+    assert calls[0]["id"].startswith("call_service:/anything:")
+
+
+async def test_without_rosapi_the_bridge_is_assumed_to_be_ros2_of_unknown_distro(
+    make_client: MakeClient,
+) -> None:
+    """No get_ros_version and no /rosapi/topics: assume ROS 2 with Humble-era caution (in-order)."""
+    bridge = RecordingBridge(ros_version=False)
+    async with serve(bridge.handle, "127.0.0.1", 0, compression=None) as server:
+        client = await make_client(f"ws://127.0.0.1:{server.sockets[0].getsockname()[1]}")
+        info = await client.ros_info()
+        await client.close()
+    assert (info.version, info.distro, info.may_be_in_order) == (2, None, True)
