@@ -332,3 +332,19 @@ async def test_a_plain_function_can_take_feedback(sim_ros2: SimulatedRobot, make
     )
     assert result.status == 4
     assert seen
+
+
+async def test_a_drop_fails_a_running_ros1_goal_with_connection_lost(
+    sim_ros1: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """A ROS 1 goal followed over topics fails with ConnectionLostError when the connection drops."""
+    client = await make_client(sim_ros1)
+    run = asyncio.create_task(
+        actions.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=20.0)
+    )
+    await sim_ros1.wait_for(running_goal_with_feedback)
+    await sim_ros1.drop_connections()
+    with pytest.raises(ConnectionLostError):
+        await asyncio.wait_for(run, 5.0)
+    assert actions.running_goals(client) == []
+    assert client._subs == {}
