@@ -29,8 +29,8 @@ from rosbridge_mcp_server.server import build_server
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "run", "serve"]
 
 PROG = "rosbridge-mcp-server"
-#: After SIGTERM: how long tool calls get to cancel their goals, and then the client to close.
-SIGTERM_GRACE = 1.0
+#: After SIGTERM or Ctrl-C: how long tool calls get to cancel their goals, and then the client to close.
+SIGNAL_GRACE = 1.0
 _log = logging.getLogger(__name__)
 
 
@@ -115,7 +115,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     except KeyboardInterrupt:
         return 130
     except asyncio.CancelledError:
-        # SIGTERM after stdin was closed: the server unwound and cleaned up by itself.
+        # A signal after stdin was closed: the server unwound and cleaned up by itself.
         return 0
     return 0
 
@@ -135,8 +135,8 @@ def configure_logging(level: str, stream: TextIO | None = None) -> None:
     logging.getLogger("rosbridge_mcp_server").setLevel(level)
 
 
-def _stop_on_sigterm(client: RosbridgeClient) -> None:
-    """Make SIGTERM (how MCP clients stop a server that ignores EOF) clean up before the process ends.
+def _stop_on_signals(client: RosbridgeClient) -> None:
+    """Make SIGTERM (how MCP clients stop a server that ignores EOF) and Ctrl-C clean up, then exit.
 
     Cancelling the server cancels every tool call in flight, and each running goal is cancelled on the robot
     as its call unwinds (rosbridge does not do that by itself when a client goes away). The SDK reads stdin in
@@ -150,23 +150,25 @@ def _stop_on_sigterm(client: RosbridgeClient) -> None:
     loop = asyncio.get_running_loop()
     pending: set[asyncio.Task[None]] = set()
 
-    def on_sigterm() -> None:
-        _log.info("SIGTERM: cancelling tool calls and goals, then exiting")
+    def stop(name: str, exit_code: int) -> None:
+        if pending:
+            return
+        _log.info("%s: cancelling tool calls and goals, then exiting", name)
         main.cancel()
-        task = loop.create_task(_exit_after_cleanup(client))
-        pending.add(task)
+        pending.add(loop.create_task(_exit_after_cleanup(client, exit_code)))
 
-    # Windows event loops have no add_signal_handler; there the process just ends.
+    # Windows event loops have no add_signal_handler; there the default handling applies.
     with contextlib.suppress(NotImplementedError, RuntimeError):
-        loop.add_signal_handler(signal.SIGTERM, on_sigterm)
+        loop.add_signal_handler(signal.SIGTERM, stop, "SIGTERM", 0)
+        loop.add_signal_handler(signal.SIGINT, stop, "SIGINT", 130)
 
 
-async def _exit_after_cleanup(client: RosbridgeClient) -> None:
-    await asyncio.sleep(SIGTERM_GRACE)
+async def _exit_after_cleanup(client: RosbridgeClient, exit_code: int) -> None:
+    await asyncio.sleep(SIGNAL_GRACE)
     with contextlib.suppress(Exception):
-        await asyncio.wait_for(client.close(), SIGTERM_GRACE)
+        await asyncio.wait_for(client.close(), SIGNAL_GRACE)
     logging.shutdown()
-    os._exit(0)
+    os._exit(exit_code)
 
 
 @contextlib.asynccontextmanager
@@ -194,7 +196,7 @@ async def check(config: Config, out: TextIO) -> int:
 
 
 async def serve(config: Config) -> None:
-    """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM)."""
+    """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM / Ctrl-C)."""
     async with demo_robot(config) as effective:
         client = RosbridgeClient(
             effective.url,
@@ -202,5 +204,5 @@ async def serve(config: Config) -> None:
             request_timeout=effective.request_timeout,
         )
         server = build_server(client, effective)
-        _stop_on_sigterm(client)
+        _stop_on_signals(client)
         await server.run_stdio_async()
