@@ -291,7 +291,7 @@ async def _run_ros1(
             asyncio.create_task(_pump("result", result_sub, queue)),
         ]
         queue.put_nowait(("status", first_status))
-        last_code = 0
+        seen = _Ros1Progress()
         try:
             await client.publish(
                 f"{ns}/goal",
@@ -301,7 +301,7 @@ async def _run_ros1(
             sent = True
             try:
                 async with asyncio.timeout_at(deadline):
-                    code, result, last_code = await _follow_ros1(queue, gid, log, last_code)
+                    code, result = await _follow_ros1(queue, gid, log, seen)
                 finished = True
                 return _outcome(entry, code, result, log)
             except TimeoutError:
@@ -309,12 +309,12 @@ async def _run_ros1(
             await asyncio.shield(_cancel_ros1(client, ns, gid))
             try:
                 async with asyncio.timeout(CANCEL_GRACE):
-                    code, result, last_code = await _follow_ros1(queue, gid, log, last_code)
+                    code, result = await _follow_ros1(queue, gid, log, seen)
                 finished = True
                 return _outcome(entry, code, result, log, timed_out=True)
             except (TimeoutError, ConnectionLostError):
                 finished = True
-                return _outcome(entry, last_code, None, log, timed_out=True, finished=False)
+                return _outcome(entry, seen.code, None, log, timed_out=True, finished=False)
         finally:
             for pump in pumps:
                 pump.cancel()
@@ -322,23 +322,32 @@ async def _run_ros1(
                 await asyncio.shield(_cancel_ros1(client, ns, gid))
 
 
+class _Ros1Progress:
+    """What the status topic has told us about our goal (kept across timeouts)."""
+
+    __slots__ = ("code", "ended_at")
+
+    def __init__(self) -> None:
+        self.code = 0  # pending
+        self.ended_at: float | None = None
+
+
 async def _follow_ros1(
-    queue: asyncio.Queue[tuple[str, Any]], gid: str, log: _FeedbackLog, last_code: int
-) -> tuple[int, Any, int]:
-    """Wait for our goal's result; returns (status, result, last status seen)."""
+    queue: asyncio.Queue[tuple[str, Any]], gid: str, log: _FeedbackLog, seen: _Ros1Progress
+) -> tuple[int, Any]:
+    """Wait for our goal's result; returns (status, result)."""
     loop = asyncio.get_running_loop()
-    ended_at: float | None = None
     while True:
-        if ended_at is None:
+        if seen.ended_at is None:
             kind, msg = await queue.get()
         else:
             try:
-                async with asyncio.timeout_at(ended_at + RESULT_AFTER_STATUS_GRACE):
+                async with asyncio.timeout_at(seen.ended_at + RESULT_AFTER_STATUS_GRACE):
                     kind, msg = await queue.get()
             except TimeoutError:
                 # The status array says the goal ended but its result never came (published
                 # before our subscription was set up, or lost): end with what we know.
-                return last_code, None, last_code
+                return seen.code, None
         if kind == "error":
             raise msg
         if not isinstance(msg, dict):
@@ -347,8 +356,8 @@ async def _follow_ros1(
             status = msg.get("status")
             if _goal_id_of(status) == gid:
                 code = status.get("status") if isinstance(status, dict) else None
-                code = code if isinstance(code, int) else last_code
-                return code, msg.get("result"), code
+                seen.code = code if isinstance(code, int) else seen.code
+                return seen.code, msg.get("result")
         elif kind == "feedback":
             if _goal_id_of(msg.get("status")) == gid:
                 values = msg.get("feedback")
@@ -356,9 +365,9 @@ async def _follow_ros1(
         elif kind == "status":
             for status in msg.get("status_list") or []:
                 if _goal_id_of(status) == gid and isinstance(status.get("status"), int):
-                    last_code = status["status"]
-                    if is_terminal_status(last_code, 1) and ended_at is None:
-                        ended_at = loop.time()
+                    seen.code = status["status"]
+                    if is_terminal_status(seen.code, 1) and seen.ended_at is None:
+                        seen.ended_at = loop.time()
 
 
 async def _cancel_ros1(client: RosbridgeClient, ns: str, goal_id: str) -> bool:
