@@ -111,3 +111,17 @@ async def test_a_message_that_is_not_json_is_an_error_with_an_example(
     )
     assert "The message is not valid JSON" in text
     assert '"linear": {"x": 0.5}' in text
+
+
+async def test_a_ros2_style_type_name_works_on_a_ros1_bridge(
+    sim_ros1: SimulatedRobot, session_ros1: Session
+) -> None:
+    """geometry_msgs/msg/Twist is sent to ROS 1 as geometry_msgs/Twist (0.11 rejects three-part names)."""
+    result = await session_ros1.ok(
+        "publish_topic",
+        {"topic": CMD_VEL, "message_type": "geometry_msgs/msg/Twist", "message": {"angular": {"z": -0.5}}},
+    )
+    assert result.structured_content is not None
+    assert result.structured_content["message_type"] == "geometry_msgs/Twist"
+    await sim_ros1.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)
+    assert sim_ros1.world.published[CMD_VEL][0].msg["angular"]["z"] == -0.5
