@@ -10,11 +10,18 @@ from __future__ import annotations
 import asyncio
 import itertools
 import json
-from typing import Any
+from collections.abc import Awaitable, Callable
+from typing import TYPE_CHECKING, Any
 
 from websockets.asyncio.client import ClientConnection, connect
 
-__all__ = ["RawClient"]
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.sim import SimulatedRobot
+
+__all__ = ["MakeSim", "RawClient"]
+
+#: The ``make_sim`` fixture of ``tests/conftest.py``.
+MakeSim = Callable[..., Awaitable["SimulatedRobot"]]
 
 _ids = itertools.count(1)
 WAIT = 5.0

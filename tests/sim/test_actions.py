@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import time
 from typing import Any
 
-from rawclient import RawClient
+from rawclient import MakeSim, RawClient
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -107,7 +108,7 @@ async def test_ros2_negative_order_goal_is_rejected(sim_ros2: SimulatedRobot) ->
     }
 
 
-async def test_ros2_goal_whose_numbers_overflow_int32_is_aborted(make_sim) -> None:  # type: ignore[no-untyped-def]
+async def test_ros2_goal_whose_numbers_overflow_int32_is_aborted(make_sim: MakeSim) -> None:
     """From order 47 the next number does not fit int32: ABORTED (6) with the sequence so far."""
     robot = await make_sim(dialect="ros2", action_step=0.001)
     async with await RawClient.open(robot.url) as client:
@@ -307,7 +308,7 @@ async def test_humble_slow_service_on_one_connection_does_not_block_another(
         assert (await busy.reply("slow"))["result"] is True
 
 
-async def test_humble_cancel_on_the_goals_own_connection_waits_until_the_goal_ends(make_sim) -> None:  # type: ignore[no-untyped-def]
+async def test_humble_cancel_on_the_goals_own_connection_waits_until_the_goal_ends(make_sim: MakeSim) -> None:
     """In-order: the cancel queued behind the goal is read only after the goal finished (roslibjs#716)."""
     robot = await make_sim(dialect="ros2", in_order=True, action_step=0.02)
     async with await RawClient.open(robot.url) as client:
@@ -330,7 +331,7 @@ async def test_humble_cancel_from_another_connection_stops_the_blocking_goal(
     assert result["status"] == 5
 
 
-async def test_ros_version_reports_the_modelled_distro(make_sim) -> None:  # type: ignore[no-untyped-def]
+async def test_ros_version_reports_the_modelled_distro(make_sim: MakeSim) -> None:
     """get_ros_version says jazzy by default and humble with in_order; ROS 1 has no such service."""
     jazzy = await make_sim(dialect="ros2")
     humble = await make_sim(dialect="ros2", in_order=True)
@@ -400,3 +401,27 @@ async def test_ros2_hidden_send_goal_service_is_listed_but_rosbridge_cannot_load
     assert reply["result"] is False
     assert "Fibonacci_SendGoal" in reply["values"]
     assert unknown["return_code"] == 2  # ERROR_UNKNOWN_GOAL_ID
+
+
+async def test_humble_client_leaving_during_a_blocking_call_is_cleaned_up_at_once(make_sim: MakeSim) -> None:
+    """The socket's close is noticed while the in-order call still runs (like Tornado's on_close)."""
+    robot = await make_sim(dialect="ros2", in_order=True, slow_service_seconds=30.0)
+    client = await RawClient.open(robot.url)
+    await client.send({"op": "subscribe", "topic": "/chatter"})
+    await client.next_publish("/chatter")
+    await client.send({"op": "call_service", "id": "stuck", "service": "/slow_service"})
+    await robot.wait_for(lambda w: w.service_calls.get("/slow_service") == 1)
+    await client.close()
+    await robot.wait_for(lambda w: robot.connection_count == 0)
+    assert "/rosbridge_websocket" not in robot.graph.subscribers_of("/chatter")
+
+
+async def test_stop_does_not_wait_for_a_call_blocking_an_in_order_connection(make_sim: MakeSim) -> None:
+    """stop() returns promptly even while a Humble connection sits inside a 30 s service call."""
+    robot = await make_sim(dialect="ros2", in_order=True, slow_service_seconds=30.0)
+    client = await RawClient.open(robot.url)
+    await client.send({"op": "call_service", "id": "stuck", "service": "/slow_service"})
+    await robot.wait_for(lambda w: w.service_calls.get("/slow_service") == 1)
+    await asyncio.wait_for(robot.stop(), 5)
+    await client.ws.wait_closed()
+    assert not robot.running

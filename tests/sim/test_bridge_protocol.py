@@ -6,7 +6,7 @@ import json
 import uuid
 
 import pytest
-from rawclient import RawClient
+from rawclient import MakeSim, RawClient
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.connection import MAX_QUEUED_MESSAGES
@@ -77,7 +77,7 @@ async def test_ros2_timeout_field_ends_a_slow_call_with_the_timeout_text(sim_ros
     }
 
 
-async def test_ros1_ignores_the_timeout_field(make_sim) -> None:  # type: ignore[no-untyped-def]
+async def test_ros1_ignores_the_timeout_field(make_sim: MakeSim) -> None:
     """ROS 1 has no service timeout: the slow service completes even with a short timeout field."""
     robot = await make_sim(dialect="ros1", slow_service_seconds=0.3)
     async with await RawClient.open(robot.url) as client:
@@ -229,7 +229,7 @@ async def test_fragment_size_splits_outgoing_frames_for_the_whole_connection(sim
     assert first["id"] == ("0" if sim.dialect == "ros2" else 0)
 
 
-async def test_ros2_fragment_size_is_capped_at_max_message_size(make_sim) -> None:  # type: ignore[no-untyped-def]
+async def test_ros2_fragment_size_is_capped_at_max_message_size(make_sim: MakeSim) -> None:
     """ROS 2 (2.0.2/2.4.0+) caps a client's fragment_size at the server's max_message_size."""
     robot = await make_sim(dialect="ros2", max_message_size=40)
     async with await RawClient.open(robot.url) as client:

@@ -8,7 +8,7 @@ import struct
 import zlib
 
 import pytest
-from rawclient import RawClient
+from rawclient import MakeSim, RawClient
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.png import encode_png
@@ -72,7 +72,7 @@ async def test_chatter_says_hello_world_with_a_counter(sim: SimulatedRobot) -> N
     assert int(second.split(": ")[1]) == int(first.split(": ")[1]) + 1
 
 
-async def test_fast_counter_counts_up_by_one_per_message(make_sim) -> None:  # type: ignore[no-untyped-def]
+async def test_fast_counter_counts_up_by_one_per_message(make_sim: MakeSim) -> None:
     """/fast_counter (only with fast_topic) numbers its messages consecutively, so losses can be counted."""
     robot = await make_sim(dialect="ros2", fast_topic=True)
     async with await RawClient.open(robot.url) as client:
@@ -243,7 +243,7 @@ async def test_ros2_set_param_refuses_a_value_of_another_type(sim_ros2: Simulate
     assert value["value"] == "69"
 
 
-async def test_humble_delete_param_is_broken_and_never_answers(make_sim) -> None:  # type: ignore[no-untyped-def]
+async def test_humble_delete_param_is_broken_and_never_answers(make_sim: MakeSim) -> None:
     """Humble 2.0.x rosapi delete_param fails inside the service: with a timeout field the call times out."""
     robot = await make_sim(dialect="ros2", in_order=True)
     async with await RawClient.open(robot.url) as client:

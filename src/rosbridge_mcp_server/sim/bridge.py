@@ -118,6 +118,7 @@ class Bridge:
         self._service_requests: dict[str, tuple[asyncio.Future[dict[str, Any]], str, str]] = {}
         self._request_counter = 0
         self._tasks: set[asyncio.Task[Any]] = set()
+        self._readers: set[asyncio.Task[None]] = set()
         self._fragment_id: Any = "0" if config.dialect == "ros2" else 0
         self._ops: dict[str, Callable[[Connection, dict[str, Any]], Awaitable[None] | None]] = {
             "fragment": self._op_fragment,
@@ -261,16 +262,21 @@ class Bridge:
         self.world.notify()
         log.info("client %d connected from %s", conn.id, ws.remote_address)
         writer = asyncio.create_task(conn.writer())
+        # The reader is a task of its own: like rosbridge's incoming thread it may sit inside an in-order
+        # service call or goal, while the socket's close is noticed (and cleaned up after) at once, as
+        # Tornado's on_close does. A reader still blocked finishes its call later; its reply goes nowhere.
+        reader = asyncio.create_task(self._read(conn))
+        self._readers.add(reader)
+        reader.add_done_callback(self._readers.discard)
+        closed = asyncio.create_task(ws.wait_closed())
         try:
-            async for raw in ws:
-                await self.incoming(conn, raw)
-        except ConnectionClosed:
-            pass
+            await asyncio.wait([reader, closed], return_when=asyncio.FIRST_COMPLETED)
         finally:
             conn.closed = True
-            writer.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await writer
+            for task in (closed, writer):
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
             self._cleanup(conn)
             del self.connections[conn.id]
             self.connection_count = len(self.connections)
@@ -290,11 +296,18 @@ class Bridge:
             del conn.advertisements[topic]
             self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
 
-    async def close_all(self) -> None:
-        """Close every client socket and stop the work running for them."""
-        for conn in list(self.connections.values()):
-            await conn.ws.close()
-        for task in list(self._tasks):
+    async def _read(self, conn: Connection) -> None:
+        try:
+            async for raw in conn.ws:
+                if conn.closed:
+                    break  # cleaned up already: frames still buffered would register things nobody removes
+                await self.incoming(conn, raw)
+        except ConnectionClosed:
+            pass
+
+    def cancel_all(self) -> None:
+        """Stop everything running for clients: readers (also those blocked in-order), calls, goals' waits."""
+        for task in [*self._readers, *self._tasks]:
             task.cancel()
         for future, _, _ in list(self._service_requests.values()):
             future.cancel()

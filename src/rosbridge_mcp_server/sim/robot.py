@@ -140,7 +140,7 @@ class SimulatedRobot:
         if server is None:
             return
         server.close(close_connections=True)
-        await self.bridge.close_all()
+        self.bridge.cancel_all()
         await server.wait_closed()
         await self._nodes.stop()
         for name in [n for n, e in self.graph.services.items() if e.owner]:
