@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from collections.abc import Callable
 from types import TracebackType
@@ -150,8 +151,9 @@ class SimulatedRobot:
 
     async def drop_connections(self) -> None:
         """Close every client socket; the server keeps running, so clients can reconnect."""
-        for conn in list(self.bridge.connections.values()):
-            await conn.ws.close(1001, "simulated connection drop")
+        await asyncio.gather(
+            *(conn.ws.close(1001, "simulated connection drop") for conn in self.bridge.connections.values())
+        )
 
     async def wait_for(
         self,
