@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import itertools
 import logging
 import random
 import time
@@ -125,6 +126,7 @@ class RosbridgeClient:
             self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
         )
         self.connections_made = 0
+        self._lane_numbers = itertools.count(1)
 
     # --- lifecycle --------------------------------------------------------------------------------
 
@@ -416,7 +418,7 @@ class RosbridgeClient:
     async def _open_lane(self, timeout: float) -> Connection:  # noqa: ASYNC109
         return await open_connection(
             self.url,
-            f"lane {self._ids.mint('lane', '')}",
+            f"lane {next(self._lane_numbers)}",
             min(timeout, self.connect_timeout),
             send_timeout=self.request_timeout,
         )
@@ -549,7 +551,10 @@ class RosbridgeClient:
             advert is None
             or topic not in conn.advertised
             or advert.latch != latch
-            or advert.wire_type != normalize_type(msg_type, info.version, "msg")
+            or (
+                advert.msg_type != msg_type
+                and advert.wire_type != normalize_type(msg_type, info.version, "msg")
+            )
         ):
             await self._ensure_advertised(conn, info, topic, msg_type, latch=latch, queue_size=queue_size)
         payload = adapt_message(msg, info.version) if info.version == 1 else msg
