@@ -107,6 +107,7 @@ class RosGraph:
         self._typedef_cache: dict[tuple[str, str], dict[str, TypeDef]] = {}
         self._interfaces: frozenset[str] | None = None
         self._interfaces_known = False
+        self._publishing: dict[str, str] = {}
 
     async def ros_info(self) -> RosInfo:
         """The bridge's ROS version and distro (detected by the client once per connection)."""
@@ -117,6 +118,7 @@ class RosGraph:
             self._typedef_cache.clear()
             self._interfaces = None
             self._interfaces_known = False
+            self._publishing.clear()
         return info
 
     async def rosapi(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -145,6 +147,20 @@ class RosGraph:
         values = await self.rosapi("topic_type", {"topic": topic})
         found = values.get("type")
         return found if isinstance(found, str) else ""
+
+    async def publishing_type(self, topic: str) -> str:
+        """The type of a topic about to be published on: ``topic_type``, skipped for a topic we publish.
+
+        Once this connection has advertised a topic, rosbridge keeps the publisher (and so the topic's type)
+        for as long as the connection lives, so the answer cannot have changed.
+        """
+        await self.ros_info()  # forgets what an earlier connection published
+        known = self._publishing.get(topic)
+        return known if known is not None else await self.topic_type(topic)
+
+    def remember_publishing(self, topic: str, msg_type: str) -> None:
+        """Note that this connection now publishes ``topic`` as ``msg_type``."""
+        self._publishing[topic] = msg_type
 
     async def topic_details(self, topic: str) -> TopicDetails:
         """Type, publishers and subscribers of ``topic`` (all empty when it is not in the graph)."""

@@ -125,3 +125,16 @@ async def test_a_ros2_style_type_name_works_on_a_ros1_bridge(
     assert result.structured_content["message_type"] == "geometry_msgs/Twist"
     await sim_ros1.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)
     assert sim_ros1.world.published[CMD_VEL][0].msg["angular"]["z"] == -0.5
+
+
+async def test_a_topic_we_publish_keeps_its_type(session: Session, sim: SimulatedRobot) -> None:
+    """After publishing a String on /notes, a Twist there is refused, and Strings still go through."""
+    strings = {"topic": "/notes", "message_type": types_for(sim)["string"], "message": {"data": "a"}}
+    await session.ok("publish_topic", strings)
+    text = await session.error(
+        "publish_topic", {"topic": "/notes", "message_type": types_for(sim)["twist"], "message": {}}
+    )
+    assert f"Topic /notes has type {types_for(sim)['string']}" in text
+    await session.ok("publish_topic", {**strings, "message": {"data": "b"}})
+    await sim.world.wait_for(lambda w: len(w.published.get("/notes", ())) == 2)
+    assert [m.msg["data"] for m in sim.world.published["/notes"]] == ["a", "b"]

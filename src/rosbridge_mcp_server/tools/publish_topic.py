@@ -74,7 +74,7 @@ async def run(
     bridge_type = normalize_type(message_type, info.version, "msg")
     typedefs = await ctx.graph.message_typedefs(message_type)
 
-    graph_type = await ctx.graph.topic_type(name)
+    graph_type = await ctx.graph.publishing_type(name)
     if graph_type and short_type_name(graph_type) != short_type_name(bridge_type):
         raise ToolFailure(
             f"Topic {name} has type {graph_type}, not {bridge_type}; rosbridge would drop the message. "
@@ -91,6 +91,7 @@ async def run(
         ) from exc
 
     await ctx.client.publish(name, bridge_type, body)
+    ctx.graph.remember_publishing(name, bridge_type)
     text = f"Published one {bridge_type} message on {name}: {compact_json(body)}"
     return ToolAnswer(
         text=text, data=PublishAnswer(topic=name, message_type=bridge_type, message=body, published=True)
