@@ -52,7 +52,13 @@ class ActionResult:
 
     @property
     def status_name(self) -> str:
+        """``succeeded``, ``canceled``, ``aborted``, ..."""
         return goal_status_name(self.status, 2)
+
+    @property
+    def result(self) -> Any:
+        """The Result message (the same as :attr:`values`)."""
+        return self.values
 
 
 @dataclass(slots=True)
