@@ -190,3 +190,15 @@ async def test_subscribing_while_disconnected_raises_not_connected(make_client: 
         async with client.subscribe("/chatter", "std_msgs/String"):
             pass
     assert client._subs == {}
+
+
+async def test_a_second_concurrent_consumer_of_one_subscription_is_refused(client: RosbridgeClient) -> None:
+    """Two tasks waiting on one subscription would starve one of them, so the second is refused."""
+    async with client.subscribe("/nobody_publishes_here", "std_msgs/String") as sub:
+        first = asyncio.create_task(sub.get(5.0))
+        await asyncio.sleep(0)  # a yield, not a timed wait: lets the first consumer start waiting
+        with pytest.raises(RuntimeError, match="another task"):
+            await sub.get(0.1)
+        first.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await first

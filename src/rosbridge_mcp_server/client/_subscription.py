@@ -22,7 +22,8 @@ class Subscription:
     ``async for msg in sub``. Each subscription has its own rosbridge id, so closing it never
     removes another listener of the same topic. When the consumer is slow the oldest messages are
     dropped (counted in :attr:`dropped`). It is restored after a reconnect while open; a drop while
-    a consumer waits in :meth:`get` raises :class:`ConnectionLostError` there.
+    a consumer waits in :meth:`get` raises :class:`ConnectionLostError` there. One task consumes a
+    subscription; open another subscription for another consumer.
     """
 
     def __init__(
@@ -114,6 +115,9 @@ class Subscription:
             return self._queue.popleft()
         if self.is_closed:
             raise NotConnectedError(self._client.url, f"the subscription to {self.topic} was closed")
+        if self._waiter is not None and not self._waiter.done():
+            # One consumer per subscription: a second waiter would silently starve the first.
+            raise RuntimeError(f"another task is already waiting on this subscription to {self.topic}")
         loop = asyncio.get_running_loop()
         waiter: asyncio.Future[None] = loop.create_future()
         self._waiter = waiter
