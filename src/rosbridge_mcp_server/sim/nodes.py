@@ -169,6 +169,11 @@ class WorldNodes:
                 ("set_parameters", "rcl_interfaces/srv/SetParameters"),
                 ("set_parameters_atomically", "rcl_interfaces/srv/SetParametersAtomically"),
             ]
+            if not self.bridge.config.in_order:
+                # Since Iron every node also offers ~/get_type_description (Humble's do not).
+                parameter_services.append(
+                    ("get_type_description", "type_description_interfaces/srv/GetTypeDescription")
+                )
             for node in nodes:
                 graph.node(node)
                 if log_type:
