@@ -525,3 +525,14 @@ async def test_throttle_with_a_queue_releases_the_newest_messages_at_the_throttl
     assert t1 - t0 >= 0.2
     assert t2 - t1 >= 0.2
     assert n0 < n1 < n2
+
+
+async def test_type_inference_needs_the_fully_qualified_name(sim: SimulatedRobot) -> None:
+    """'chatter' does not find '/chatter' without a type; with a type it subscribes and echoes 'chatter'."""
+    string = "std_msgs/msg/String" if sim.dialect == "ros2" else "std_msgs/String"
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "chatter", "id": "relative"})
+        assert await client.frames_before_barrier() == []
+        await client.send({"op": "subscribe", "topic": "chatter", "type": string, "id": "typed"})
+        message = await client.next_publish("chatter")
+    assert message["msg"]["data"].startswith("Hello World")

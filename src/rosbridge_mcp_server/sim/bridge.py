@@ -194,7 +194,8 @@ class Bridge:
 
         ``timeout_seconds`` ≤ 0 waits forever. Raises :class:`CallFailed` with the real server's text.
         """
-        entry = self.graph.services.get(resolve_name(name))
+        # ROS 2 rosbridge compares the name with the graph's as spelled; rospy resolves relative names.
+        entry = self.graph.services.get(resolve_name(name) if self.config.dialect == "ros1" else name)
         if entry is None:
             raise CallFailed(f"Service {name} does not exist")
         try:
@@ -527,7 +528,8 @@ class Bridge:
         if topic in conn.advertisements:
             msg_type = conn.advertised_types[topic]
         else:
-            graph_type = self.graph.topic_types.get(topic)
+            # Type inference looks the name up exactly as spelled: 'chatter' does not find '/chatter'.
+            graph_type = self.graph.topic_types.get(msg["topic"])
             if graph_type is not None:
                 msg_type = graph_type
             elif self.config.dialect == "ros2" and "type" in msg:
@@ -568,8 +570,9 @@ class Bridge:
                     f"Tried to register topic {topic} with type {msg_type} but it is already established "
                     f"with type {graph_type}"
                 )
-        elif graph_type is not None:
-            msg_type = graph_type
+        elif msg["topic"] in self.graph.topic_types:
+            # Inference uses the name exactly as spelled: 'chatter' does not find '/chatter'.
+            msg_type = self.graph.topic_types[msg["topic"]]
         else:
             raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
         compression = msg.get("compression", "none")
