@@ -322,3 +322,25 @@ async def test_roslibpy_ros2_action_cancel_ends_the_goal_canceled(target: Target
     (result,) = results.items
     assert result["status"].value == 5
     assert 3 <= len(result["values"]["sequence"]) < 41
+
+
+async def test_roslibpy_cancel_on_a_humble_bridge_waits_behind_its_own_goal(
+    make_sim: Callable[..., Any],
+) -> None:
+    """roslibjs#716 with roslibpy: on Humble defaults the cancel queues behind its goal, which then succeeds."""
+    robot: SimulatedRobot = await make_sim(dialect="ros2", in_order=True, action_step=0.02)
+    ros = await asyncio.to_thread(_connect, "127.0.0.1", robot.port)
+    try:
+        client = roslibpy.ActionClient(ros, "/fibonacci", "example_interfaces/action/Fibonacci")
+        results, feedback, errors = Inbox(), Inbox(), Inbox()
+        goal_id = await asyncio.to_thread(
+            client.send_goal, roslibpy.Goal({"order": 10}), results.put, feedback.put, errors.put
+        )
+        await asyncio.to_thread(feedback.wait_for, bool)
+        await asyncio.to_thread(client.cancel_goal, goal_id)
+        await asyncio.to_thread(client.wait_goal, goal_id, WAIT)
+    finally:
+        await asyncio.to_thread(ros.close)
+    (result,) = results.items
+    assert result["status"].value == 4
+    assert result["values"]["sequence"][-1] == 55
