@@ -327,7 +327,7 @@ async def test_roslibpy_ros2_action_cancel_ends_the_goal_canceled(target: Target
 async def test_roslibpy_cancel_on_a_humble_bridge_waits_behind_its_own_goal(
     make_sim: Callable[..., Any],
 ) -> None:
-    """roslibjs#716 with roslibpy: on Humble defaults the cancel queues behind its goal, which then succeeds."""
+    """roslibjs#716 via roslibpy: on Humble defaults the cancel queues behind its goal, which succeeds."""
     robot: SimulatedRobot = await make_sim(dialect="ros2", in_order=True, action_step=0.02)
     ros = await asyncio.to_thread(_connect, "127.0.0.1", robot.port)
     try:
