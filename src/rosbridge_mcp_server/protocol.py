@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import secrets
 import time
 from collections.abc import Callable
@@ -267,6 +268,10 @@ class FragmentAssembler:
         data = frame.get("data")
         num = frame.get("num")
         total = frame.get("total")
+        # rosbridge 0.11.17 on Python 3 (Noetic) computes ``total`` with true division, so it arrives as a float
+        # such as 5.5 for five fragments; the real count is its integer part.
+        if isinstance(total, float) and math.isfinite(total):
+            total = int(total)
         if (
             not isinstance(data, str)
             or isinstance(num, bool)

@@ -77,6 +77,29 @@ def test_fragment_ids_may_be_the_integer_zero() -> None:
     assert events[-1].id == "c:1"
 
 
+def test_fragments_with_a_fractional_total_from_noetic_are_reassembled() -> None:
+    """rosbridge 0.11.17 on Python 3 sends total as a float (5.5 for five parts); the message still arrives."""
+    message = {"op": "service_response", "id": "c:2", "result": True, "values": {"x": "y" * 230}}
+    text = json.dumps(message)
+    size = 50
+    count = len(range(0, len(text), size))
+    # The server's own arithmetic: ((len - 1) / size) + 1 with true division.
+    noetic_total = ((len(text) - 1) / size) + 1
+    assert int(noetic_total) == count
+    assert noetic_total != count
+    decoder = protocol.InboundDecoder()
+    events = [
+        decoder.feed(
+            json.dumps(
+                {"op": "fragment", "id": 0, "data": text[i : i + size], "num": n, "total": noetic_total}
+            )
+        )
+        for n, i in enumerate(range(0, len(text), size))
+    ]
+    assert isinstance(events[-1], protocol.ReplyEvent)
+    assert events[-1].id == "c:2"
+
+
 def test_fragment_buffer_restarts_when_part_zero_arrives_again() -> None:
     """Two messages sharing id "0": the second part 0 discards the first, unfinished message."""
     first = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 100}}, 40, "0")
