@@ -48,7 +48,15 @@ async def test_command_serves_the_robot_and_stops_cleanly_on_a_signal(
 
 @pytest.mark.parametrize(
     "args",
-    [["--port", "99999"], ["--dialect", "ros3"], ["--no-such-flag"], ["--dialect", "ros1", "--in-order"]],
+    [
+        ["--port", "99999"],
+        ["--dialect", "ros3"],
+        ["--no-such-flag"],
+        ["--dialect", "ros1", "--in-order"],
+        ["--action-step", "0"],
+        ["--slow-service-seconds", "-1"],
+        ["--camera-size", "big"],
+    ],
 )
 async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str]) -> None:
     """Bad flags never start a server: one line of explanation, exit status 2."""

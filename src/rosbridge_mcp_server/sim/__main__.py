@@ -32,6 +32,16 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _non_negative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0: {text!r}")
+    return value
+
+
 def _port(text: str) -> int:
     try:
         value = int(text)
@@ -66,7 +76,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--action-step", type=_positive_float, default=0.2, help="seconds per /fibonacci step (default 0.2)"
     )
     parser.add_argument(
-        "--slow-service-seconds", type=float, default=3.0, help="how long /slow_service takes (default 3)"
+        "--slow-service-seconds",
+        type=_non_negative_float,
+        default=3.0,
+        help="how long /slow_service takes (default 3)",
     )
     parser.add_argument(
         "--camera-size", default="160x120", help="camera frame WIDTHxHEIGHT (default 160x120)"

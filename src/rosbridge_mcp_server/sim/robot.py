@@ -158,7 +158,7 @@ class SimulatedRobot:
     async def wait_for(
         self,
         predicate: Callable[[World], object],
-        timeout: float = 5.0,  # noqa: ASYNC109 - part of the documented API
+        timeout: float = 5.0,
     ) -> None:
         """Wait until ``predicate(world)`` holds (checked on each change); TimeoutError after ``timeout``."""
         await self.world.wait_for(predicate, timeout)

@@ -134,7 +134,7 @@ class World:
     async def wait_for(
         self,
         predicate: Callable[[World], object],
-        timeout: float = 5.0,  # noqa: ASYNC109 - part of the documented API
+        timeout: float = 5.0,
     ) -> None:
         """Return once ``predicate(world)`` is true; raise :class:`TimeoutError` after ``timeout`` seconds."""
         async with asyncio.timeout(timeout):
