@@ -141,7 +141,7 @@ async def run_goal(
     action_type: str,
     goal: dict[str, Any],
     *,
-    timeout: float,  # noqa: ASYNC109
+    timeout: float,
     on_feedback: Callable[[int, dict[str, Any]], Awaitable[None] | None] | None = None,
     goal_id: str | None = None,
 ) -> GoalOutcome:
@@ -219,7 +219,7 @@ async def _run_ros2(
     client: RosbridgeClient,
     entry: RunningGoal,
     goal: dict[str, Any],
-    timeout: float,  # noqa: ASYNC109
+    timeout: float,
     on_feedback: Callable[[int, dict[str, Any]], Awaitable[None] | None] | None,
 ) -> GoalOutcome:
     log = _FeedbackLog(entry, on_feedback)
@@ -255,7 +255,7 @@ async def _run_ros1(
     client: RosbridgeClient,
     entry: RunningGoal,
     goal: dict[str, Any],
-    timeout: float,  # noqa: ASYNC109
+    timeout: float,
     on_feedback: Callable[[int, dict[str, Any]], Awaitable[None] | None] | None,
 ) -> GoalOutcome:
     loop = asyncio.get_running_loop()

@@ -268,7 +268,7 @@ class FragmentAssembler:
         data = frame.get("data")
         num = frame.get("num")
         total = frame.get("total")
-        # rosbridge 0.11.17 on Python 3 (Noetic) computes ``total`` with true division, so it arrives as a float
+        # rosbridge 0.11.17 on Python 3 (Noetic) computes ``total`` with true division, so it is a float
         # such as 5.5 for five fragments; the real count is its integer part.
         if isinstance(total, float) and math.isfinite(total):
             total = int(total)

@@ -78,7 +78,7 @@ def test_fragment_ids_may_be_the_integer_zero() -> None:
 
 
 def test_fragments_with_a_fractional_total_from_noetic_are_reassembled() -> None:
-    """rosbridge 0.11.17 on Python 3 sends total as a float (5.5 for five parts); the message still arrives."""
+    """Noetic (0.11.17) sends total as a float (5.5 for five parts); the message still arrives."""
     message = {"op": "service_response", "id": "c:2", "result": True, "values": {"x": "y" * 230}}
     text = json.dumps(message)
     size = 50

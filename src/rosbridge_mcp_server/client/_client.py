@@ -199,7 +199,7 @@ class RosbridgeClient:
         if self._background:
             await asyncio.gather(*list(self._background), return_exceptions=True)
 
-    async def wait_connected(self, timeout: float) -> None:  # noqa: ASYNC109
+    async def wait_connected(self, timeout: float) -> None:
         """Wait until connected; raises :class:`NotConnectedError` naming the URL and last reason."""
         if self.connected:
             return
@@ -213,7 +213,7 @@ class RosbridgeClient:
                 self.url, f"no connection within {timeout:g} s; last error: {self._last_reason}"
             ) from None
 
-    async def wait_disconnected(self, timeout: float) -> None:  # noqa: ASYNC109
+    async def wait_disconnected(self, timeout: float) -> None:
         """Wait until the main connection is down (diagnostics and tests); raises TimeoutError."""
         async with asyncio.timeout(timeout):
             await self._disconnected_event.wait()
@@ -421,7 +421,7 @@ class RosbridgeClient:
             return False
         return True
 
-    async def _open_lane(self, timeout: float) -> Connection:  # noqa: ASYNC109
+    async def _open_lane(self, timeout: float) -> Connection:
         return await open_connection(
             self.url,
             f"lane {next(self._lane_numbers)}",
@@ -436,7 +436,7 @@ class RosbridgeClient:
         conn: Connection,
         service: str,
         args: dict[str, Any] | list[Any] | None,
-        timeout: float,  # noqa: ASYNC109
+        timeout: float,
         *,
         send_timeout: bool,
     ) -> Any:
@@ -450,7 +450,7 @@ class RosbridgeClient:
         service: str,
         args: dict[str, Any] | list[Any] | None = None,
         *,
-        timeout: float | None = None,  # noqa: ASYNC109
+        timeout: float | None = None,
         isolated: bool | None = None,
     ) -> Any:
         """Call a ROS service and return its response fields (``values``).
@@ -635,7 +635,7 @@ class RosbridgeClient:
             for sub in subs.values():
                 sub._push(event.msg)
 
-    async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:  # noqa: ASYNC109
+    async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:
         """The next message on *topic*, within *timeout* seconds."""
         async with self.subscribe(topic, msg_type, max_queue=1) as sub:
             return await sub.get(timeout)
@@ -669,7 +669,7 @@ class RosbridgeClient:
         goal: dict[str, Any],
         *,
         on_feedback: Callable[[dict[str, Any]], Awaitable[None] | None] | None = None,
-        timeout: float,  # noqa: ASYNC109
+        timeout: float,
         goal_id: str | None = None,
     ) -> ActionResult:
         """Send a ROS 2 goal on a lane of its own and wait for its result.

@@ -173,7 +173,7 @@ class Connection:
             protocol.encode(op), f"{op.get('op')} {op.get('topic', '')}".rstrip(), self.send_timeout
         )
 
-    async def _write(self, text: str, what: str, timeout: float) -> None:  # noqa: ASYNC109
+    async def _write(self, text: str, what: str, timeout: float) -> None:
         try:
             # ws.send() waits for the socket buffer to drain below its high-water mark (32 KiB) after
             # writing. A small frame into an empty buffer can never wait, so it skips the timer.
@@ -192,7 +192,7 @@ class Connection:
         except ConnectionClosed:
             raise NotConnectedError(self.url, "the connection closed") from None
 
-    async def request(self, rid: str, op: dict[str, Any], what: str, timeout: float) -> dict[str, Any]:  # noqa: ASYNC109
+    async def request(self, rid: str, op: dict[str, Any], what: str, timeout: float) -> dict[str, Any]:
         """Send *op* and wait up to *timeout* seconds for the reply with id *rid*."""
         loop = self._loop
         future: asyncio.Future[dict[str, Any]] = loop.create_future()
@@ -274,7 +274,7 @@ def _close_text(ws: ClientConnection) -> str:
 async def open_connection(
     url: str,
     name: str,
-    timeout: float,  # noqa: ASYNC109
+    timeout: float,
     on_publish: Callable[[protocol.PublishEvent], None] | None = None,
     send_timeout: float = 10.0,
 ) -> Connection:

@@ -109,7 +109,7 @@ class Subscription:
         """The oldest queued message, or None."""
         return self._queue.popleft() if self._queue else None
 
-    async def get(self, timeout: float | None = None) -> dict[str, Any]:  # noqa: ASYNC109
+    async def get(self, timeout: float | None = None) -> dict[str, Any]:
         """The next message; waits up to *timeout* seconds (forever if None)."""
         if self._queue:
             return self._queue.popleft()

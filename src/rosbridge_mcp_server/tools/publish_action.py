@@ -83,7 +83,7 @@ async def run(
         Field(description=f"Goal fields as a JSON object, e.g. {_EXAMPLE}; {{}} for an empty goal"),
     ] = "{}",
     # The name is the tool's parameter name, kept from the project this one replaces.
-    timeout: Annotated[  # noqa: ASYNC109
+    timeout: Annotated[
         float,
         Field(
             gt=0,

@@ -63,7 +63,7 @@ async def run(
         Field(description=f"Request fields as a JSON object, e.g. {_EXAMPLE}; {{}} for std_srvs/srv/Trigger"),
     ] = "{}",
     # The name is the tool's parameter name, kept from the project this one replaces.
-    timeout: Annotated[  # noqa: ASYNC109
+    timeout: Annotated[
         float,
         Field(
             gt=0,
