@@ -1,19 +1,17 @@
 """The MCP server: every tool module registered on an ``MCPServer``, with errors and progress translated.
 
-This is the only module that imports ``mcp``. Tool modules know nothing of MCP: each gives a ``SPEC`` and a
-``run(ctx, ...)``; here each becomes an MCP tool whose parameters are the ``run`` parameters (plus the
-SDK's own
-``Context``), whose output schema is the spec's model, and whose failures become ``isError`` results:
+This is the only module that imports ``mcp``. Tool modules know nothing of MCP: each gives a ``SPEC`` and
+a ``run(ctx, ...)``; here each becomes an MCP tool whose parameters are the ``run`` parameters (plus the
+SDK's own ``Context``), whose output schema is the spec's model, and whose failures become ``isError``
+results:
 
 * a :class:`~rosbridge_mcp_server.errors.RosbridgeError` or a
-  :class:`~rosbridge_mcp_server.tools.base.ToolFailure` → its sentence (plus what to try, for the client
-  errors);
+  :class:`~rosbridge_mcp_server.tools.base.ToolFailure` → its sentence (plus what to try, for client errors);
 * arguments that do not fit the parameters → one line per wrong argument, instead of pydantic's dump;
 * anything else is a bug: logged with its traceback on stderr, and the model gets a generic error.
 
 The rosbridge client connects in the background from the server's lifespan, so ``initialize`` and
-``tools/list``
-work while the robot is down; tools then fail fast with the not-connected text naming the URL.
+``tools/list`` work while the robot is down; tools then fail fast with the not-connected text naming the URL.
 """
 
 from __future__ import annotations
