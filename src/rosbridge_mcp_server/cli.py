@@ -1,8 +1,7 @@
 """Command line: ``rosbridge-mcp-server [serve] [flags]`` (the MCP server on stdio) and ``... check [flags]``.
 
 Exit codes: 0 done (or healthy, for ``check``), 1 ``check`` found a problem, 2 bad command line or
-configuration
-(one line on stderr, never a traceback), 130 interrupted.
+configuration (one line on stderr, never a traceback), 130 interrupted.
 
 In ``serve`` mode stdout belongs to JSON-RPC: everything else goes to stderr through ``logging``.
 """
@@ -205,4 +204,13 @@ async def serve(config: Config) -> None:
         )
         server = build_server(client, effective)
         _stop_on_signals(client)
+        if sys.stdin.isatty():
+            # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
+            _log.warning(
+                "This is an MCP server: it speaks JSON-RPC on stdin/stdout and is meant to be started by an "
+                "MCP client (Claude Desktop, MCP Inspector). To test the connection from a terminal, run "
+                "`%s check%s`. Ctrl-C stops it.",
+                PROG,
+                " --demo" if config.demo else "",
+            )
         await server.run_stdio_async()
