@@ -425,3 +425,14 @@ async def test_stop_does_not_wait_for_a_call_blocking_an_in_order_connection(mak
     await asyncio.wait_for(robot.stop(), 5)
     await client.ws.wait_closed()
     assert not robot.running
+
+
+async def test_goal_records_count_each_feedback_once(sim: SimulatedRobot) -> None:
+    """world.goals[id].feedback_count equals the feedback messages of the goal (order 5: four)."""
+    async with await RawClient.open(sim.url) as client:
+        if sim.dialect == "ros2":
+            await client.send(goal_op("counted", 5, feedback=False))
+        else:
+            await _ros1_send_goal(client, "counted", 5)
+        await sim.wait_for(lambda w: "counted" in w.goals and w.goals["counted"].finished)
+    assert sim.world.goals["counted"].feedback_count == 4

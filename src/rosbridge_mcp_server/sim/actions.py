@@ -32,9 +32,11 @@ __all__ = [
     "FIBONACCI_NODE",
     "ROS1_STATUS",
     "ROS2_STATUS",
+    "ActionServer",
     "ActionlibFibonacciServer",
     "FibonacciServer",
     "GoalHandle",
+    "HostedActionServer",
 ]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
@@ -98,11 +100,13 @@ def _stamp(seconds: float, dialect: str) -> dict[str, int]:
 class _Run:
     """The execution loop shared by both dialects."""
 
-    def __init__(self, record: GoalRecord, step: float, notify: Callable[[], None]) -> None:
+    def __init__(
+        self, record: GoalRecord, step: float, notify: Callable[[], None], cancel: asyncio.Event | None = None
+    ) -> None:
         self.record = record
         self.step = step
         self.notify = notify
-        self.cancel = asyncio.Event()
+        self.cancel = cancel or asyncio.Event()
 
     async def execute(self, on_feedback: Callable[[list[int]], None]) -> str:
         """Run to the end; returns ``succeeded``, ``canceled`` or ``aborted``."""
@@ -116,7 +120,6 @@ class _Run:
                 return "aborted"
             sequence.append(following)
             self.record.sequence = list(sequence)
-            self.record.feedback_count += 1
             on_feedback(list(sequence))
             self.notify()
             # Wakes early on a cancel so it takes effect at the next step without waiting it out.
@@ -126,13 +129,16 @@ class _Run:
 
 
 class GoalHandle:
-    """A ROS 2 goal of the Fibonacci server."""
+    """A goal of a ROS 2 action server (ours or one hosted by a client)."""
 
-    def __init__(self, server: FibonacciServer, uuid: bytes, record: GoalRecord) -> None:
+    def __init__(self, server: ActionServer, uuid: bytes, record: GoalRecord, goal: dict[str, Any]) -> None:
         self.server = server
         self.uuid = uuid
         self.record = record
-        self.run = _Run(record, server.step, server.bridge.world.notify)
+        self.goal = goal
+        #: The id rosbridge gave the goal when forwarding it to a client-hosted server.
+        self.bridge_id: str | None = None
+        self.cancel = asyncio.Event()
         self.done: asyncio.Future[tuple[int, dict[str, Any]]] = asyncio.get_running_loop().create_future()
 
     def request_cancel(self) -> bool:
@@ -142,7 +148,8 @@ class GoalHandle:
         if not self.record.cancel_requested:
             self.record.cancel_requested = True
             self.record.status = ROS2_STATUS["CANCELING"]
-            self.run.cancel.set()
+            self.cancel.set()
+            self.server.on_cancel(self)
             self.server.publish_status()
         return True
 
@@ -151,53 +158,71 @@ class GoalHandle:
         return await asyncio.shield(self.done)
 
 
-class FibonacciServer:
-    """ROS 2 action server ``/fibonacci`` with its hidden topics and services."""
+FeedbackFn = Callable[[dict[str, Any]], None]
 
-    def __init__(self, bridge: Bridge, name: str, action_type: str, step: float) -> None:
+
+class ActionServer:
+    """A ROS 2 action server in the graph: goals by UUID, the hidden status/feedback topics and services."""
+
+    def __init__(self, bridge: Bridge, name: str, action_type: str, node: str) -> None:
         self.bridge = bridge
         self.name = name
         self.type = action_type
-        self.step = step
+        self.node = node
         self.goals: dict[bytes, GoalHandle] = {}
         self._tasks: set[asyncio.Task[None]] = set()
         pkg, _, leaf = action_type.split("/")
         self.status_topic = f"{name}/_action/status"
         self.feedback_topic = f"{name}/_action/feedback"
         self.feedback_type = f"{pkg}/action/{leaf}_FeedbackMessage"
-        graph = bridge.graph
-        graph.add_publisher(FIBONACCI_NODE, self.status_topic, "action_msgs/msg/GoalStatusArray")
-        graph.add_publisher(FIBONACCI_NODE, self.feedback_topic, self.feedback_type)
-        services = [
-            ("send_goal", f"{pkg}/action/{leaf}_SendGoal", self._send_goal_service),
-            ("get_result", f"{pkg}/action/{leaf}_GetResult", self._get_result_service),
-            ("cancel_goal", "action_msgs/srv/CancelGoal", self._cancel_goal_service),
+        self._services = [
+            (f"{name}/_action/send_goal", f"{pkg}/action/{leaf}_SendGoal", self._send_goal_service),
+            (f"{name}/_action/get_result", f"{pkg}/action/{leaf}_GetResult", self._get_result_service),
+            (f"{name}/_action/cancel_goal", "action_msgs/srv/CancelGoal", self._cancel_goal_service),
         ]
-        for leaf_name, service_type, handler in services:
-            graph.add_service(
-                ServiceEntry(f"{name}/_action/{leaf_name}", service_type, FIBONACCI_NODE, handler)
-            )
+        graph = bridge.graph
+        graph.add_publisher(node, self.status_topic, "action_msgs/msg/GoalStatusArray")
+        graph.add_publisher(node, self.feedback_topic, self.feedback_type)
+        for service, service_type, handler in self._services:
+            graph.add_service(ServiceEntry(service, service_type, node, handler))
         graph.actions[name] = self
+
+    # --- what a concrete server decides --------------------------------------------------------------
+
+    def accepts(self, goal: dict[str, Any], goal_key: str) -> bool:
+        """Whether a goal is accepted (``False`` = rejected)."""
+        return True
+
+    def goal_order(self, goal: dict[str, Any]) -> int:
+        """What :attr:`GoalRecord.order` records for this goal."""
+        return 0
+
+    async def run_goal(self, handle: GoalHandle, feedback: FeedbackFn) -> tuple[str, dict[str, Any]]:
+        """Execute a goal; returns (``succeeded``/``canceled``/``aborted``, result in JSON form)."""
+        raise NotImplementedError
+
+    def on_cancel(self, handle: GoalHandle) -> None:
+        """A cancel was accepted for ``handle`` (its ``cancel`` event is set)."""
+
+    # --- goal life cycle -----------------------------------------------------------------------------
 
     def submit(
         self,
         goal: dict[str, Any],
         *,
         key: Any,
-        on_feedback: Callable[[dict[str, Any]], None] | None,
+        on_feedback: FeedbackFn | None,
         uuid: bytes | None = None,
     ) -> GoalHandle | None:
         """Accept (and start) or reject a goal; ``None`` means rejected."""
-        order = int(goal.get("order", 0))
         uuid = uuid or os.urandom(16)
         goal_key = str(key) if key is not None else uuid.hex()
-        if not _order_ok(order):
-            log.info("%s: goal %s with order %d rejected", self.name, goal_key, order)
+        if not self.accepts(goal, goal_key):
             return None
-        record = GoalRecord(goal_key, order, ROS2_STATUS["ACCEPTED"])
+        record = GoalRecord(goal_key, self.goal_order(goal), ROS2_STATUS["ACCEPTED"])
         world = self.bridge.world
         world.goals[goal_key] = record
-        handle = GoalHandle(self, uuid, record)
+        handle = GoalHandle(self, uuid, record, goal)
         self.goals[uuid] = handle
         self.publish_status()
         world.notify()
@@ -206,35 +231,34 @@ class FibonacciServer:
         task.add_done_callback(self._tasks.discard)
         return handle
 
-    async def _execute(
-        self, handle: GoalHandle, on_feedback: Callable[[dict[str, Any]], None] | None
-    ) -> None:
+    async def _execute(self, handle: GoalHandle, on_feedback: FeedbackFn | None) -> None:
         record = handle.record
         if not record.cancel_requested:
             record.status = ROS2_STATUS["EXECUTING"]
             self.publish_status()
 
-        def feedback(sequence: list[int]) -> None:
+        def feedback(values: dict[str, Any]) -> None:
+            record.feedback_count += 1
             if on_feedback is not None:
-                on_feedback({"sequence": sequence})
+                on_feedback(values)
             if self.bridge.has_subscribers(self.feedback_topic):
                 self._publish_quietly(
                     self.feedback_topic,
                     self.feedback_type,
-                    {"goal_id": {"uuid": list(handle.uuid)}, "feedback": {"sequence": sequence}},
+                    {"goal_id": {"uuid": list(handle.uuid)}, "feedback": values},
                 )
+            self.bridge.world.notify()
 
+        outcome: str = "aborted"
+        result: dict[str, Any] = {}
         try:
-            outcome = await handle.run.execute(feedback)
-        except asyncio.CancelledError:
-            outcome = "aborted"
-            raise
+            outcome, result = await self.run_goal(handle, feedback)
         finally:
             status = ROS2_STATUS[outcome.upper()]
             record.status = status
             record.finished = True
             if not handle.done.done():
-                handle.done.set_result((status, {"sequence": list(record.sequence)}))
+                handle.done.set_result((status, result))
             self._forget_old()
             self.publish_status()
             self.bridge.world.notify()
@@ -308,10 +332,120 @@ class FibonacciServer:
             ],
         }
 
+    def remove(self) -> None:
+        """Take the server out of the graph; goals still running end ABORTED."""
+        graph = self.bridge.graph
+        if graph.actions.get(self.name) is self:
+            del graph.actions[self.name]
+        graph.remove_publisher(self.node, self.status_topic)
+        graph.remove_publisher(self.node, self.feedback_topic)
+        for service, _, _ in self._services:
+            entry = graph.services.get(service)
+            if entry is not None and entry.node == self.node:
+                graph.remove_service(service)
+        for task in list(self._tasks):
+            task.cancel()
+
     async def close(self) -> None:
         """Stop every goal (the robot is shutting down)."""
         for task in list(self._tasks):
             task.cancel()
+
+
+class FibonacciServer(ActionServer):
+    """ROS 2 action server ``/fibonacci`` (``example_interfaces/action/Fibonacci``)."""
+
+    def __init__(self, bridge: Bridge, name: str, action_type: str, step: float) -> None:
+        super().__init__(bridge, name, action_type, FIBONACCI_NODE)
+        self.step = step
+
+    def goal_order(self, goal: dict[str, Any]) -> int:
+        return int(goal.get("order", 0))
+
+    def accepts(self, goal: dict[str, Any], goal_key: str) -> bool:
+        order = self.goal_order(goal)
+        if not _order_ok(order):
+            log.info("%s: goal %s with order %d rejected", self.name, goal_key, order)
+            return False
+        return True
+
+    async def run_goal(self, handle: GoalHandle, feedback: FeedbackFn) -> tuple[str, dict[str, Any]]:
+        run = _Run(handle.record, self.step, self.bridge.world.notify, handle.cancel)
+        try:
+            outcome = await run.execute(lambda sequence: feedback({"sequence": sequence}))
+        finally:
+            result = {"sequence": list(handle.record.sequence)}
+        return outcome, result
+
+
+class HostedActionServer(ActionServer):
+    """An action server a client hosts with ``advertise_action`` (protocol §7.3).
+
+    Every goal is accepted (rosbridge auto-accepts) and forwarded to the client as a server-initiated
+    ``send_action_goal``; the client's ``action_feedback`` and ``action_result`` come back through
+    :meth:`feedback_from_client` / :meth:`result_from_client`. A ROS-side cancel is forwarded as
+    ``cancel_action_goal``; the goal stays open until the client sends its result.
+    """
+
+    def __init__(self, bridge: Bridge, name: str, action_type: str, owner: int, node: str) -> None:
+        super().__init__(bridge, name, action_type, node)
+        self.owner = owner
+        self._counter = itertools.count(1)
+        #: bridge goal id -> (handle, feedback function, result future)
+        self.pending: dict[
+            str, tuple[GoalHandle, FeedbackFn, asyncio.Future[tuple[str, dict[str, Any]]]]
+        ] = {}
+
+    async def run_goal(self, handle: GoalHandle, feedback: FeedbackFn) -> tuple[str, dict[str, Any]]:
+        goal_type, _, _ = self.bridge.registry.action_parts(self.type)
+        goal_id = f"action_goal:{self.name}:{next(self._counter)}"
+        handle.bridge_id = goal_id
+        future: asyncio.Future[tuple[str, dict[str, Any]]] = asyncio.get_running_loop().create_future()
+        self.pending[goal_id] = (handle, feedback, future)
+        try:
+            conn = self.bridge.connections.get(self.owner)
+            if conn is None:
+                log.warning("action %s: its client has gone; the goal will never end", self.name)
+            else:
+                args = self.bridge.registry.to_json(goal_type, handle.goal)
+                conn.send(
+                    {
+                        "op": "send_action_goal",
+                        "id": goal_id,
+                        "action": self.name,
+                        "action_type": self.type,
+                        "args": args,
+                        "feedback": True,
+                    }
+                )
+            return await future
+        finally:
+            self.pending.pop(goal_id, None)
+
+    def on_cancel(self, handle: GoalHandle) -> None:
+        goal_id = handle.bridge_id
+        conn = self.bridge.connections.get(self.owner)
+        if goal_id is not None and conn is not None:
+            conn.send({"op": "cancel_action_goal", "id": goal_id, "action": self.name})
+
+    def feedback_from_client(self, goal_id: str, values: dict[str, Any]) -> bool:
+        """The client's ``action_feedback``; ``False`` if the goal is unknown."""
+        pending = self.pending.get(goal_id)
+        if pending is None:
+            return False
+        pending[1](values)
+        return True
+
+    def result_from_client(self, goal_id: str, status: int, ok: bool, values: Any) -> bool:
+        """The client's ``action_result``: 4 succeeds, 5 cancels, else (or ``result: false``) aborts."""
+        pending = self.pending.get(goal_id)
+        if pending is None:
+            return False
+        outcome = {4: "succeeded", 5: "canceled"}.get(status, "aborted") if ok else "aborted"
+        result = values if ok and isinstance(values, dict) else {}
+        if not pending[2].done():
+            pending[2].set_result((outcome, result))
+        return True
 
 
 class ActionlibFibonacciServer:
@@ -451,7 +585,10 @@ class ActionlibFibonacciServer:
                 record.status = ROS1_STATUS["ACTIVE"]
                 self.publish_status()
 
-                def feedback(sequence: list[int], goal_id: str = goal_id) -> None:
+                def feedback(
+                    sequence: list[int], goal_id: str = goal_id, record: GoalRecord = record
+                ) -> None:
+                    record.feedback_count += 1
                     self._publish(
                         f"{self.name}/feedback",
                         self.feedback_type,

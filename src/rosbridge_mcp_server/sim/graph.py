@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.sim.actions import FibonacciServer
+    from rosbridge_mcp_server.sim.actions import ActionServer
 
 __all__ = [
     "ROSBRIDGE_NODE",
@@ -86,7 +86,7 @@ class Graph:
     topic_types: dict[str, str] = field(default_factory=dict)
     services: dict[str, ServiceEntry] = field(default_factory=dict)
     #: ROS 2 action servers by action name (ROS 1 actions are plain topics).
-    actions: dict[str, FibonacciServer] = field(default_factory=dict)
+    actions: dict[str, ActionServer] = field(default_factory=dict)
     local_subscribers: dict[str, list[LocalSubscriber]] = field(default_factory=dict)
     #: Topics whose last message is kept for late subscribers (latched / transient local).
     latched: dict[str, Any] = field(default_factory=dict)
