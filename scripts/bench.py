@@ -961,19 +961,22 @@ class Context:
 
 
 Item = Callable[[Context], Awaitable[list[Row]]]
-ITEMS: list[tuple[str, str, Item, float]] = [
-    ("1-3", "call latency", measure_latency, 240.0),
-    ("4", "concurrency", measure_concurrency, 120.0),
-    ("5", "throughput", measure_throughput, 60.0),
-    ("6-7", "startup and RSS", measure_startup, 180.0),
-    ("7", "memory growth", measure_memory, 300.0),
+#: name for --only, item numbers, title, the measuring function, its deadline in seconds.
+ITEMS: list[tuple[str, str, str, Item, float]] = [
+    ("latency", "1-3", "call latency", measure_latency, 240.0),
+    ("concurrency", "4", "concurrency", measure_concurrency, 120.0),
+    ("throughput", "5", "throughput", measure_throughput, 60.0),
+    ("startup", "6-7", "startup and RSS", measure_startup, 180.0),
+    ("memory", "7", "memory growth", measure_memory, 300.0),
 ]
 
 
-async def run_items(ctx: Context) -> tuple[list[Row], bool]:
+async def run_items(ctx: Context, only: set[str]) -> tuple[list[Row], bool]:
     rows: list[Row] = []
     failed = False
-    for item, title, measure, deadline in ITEMS:
+    for name, item, title, measure, deadline in ITEMS:
+        if only and name not in only:
+            continue
         log.info("item %s: %s", item, title)
         began = time.perf_counter()
         try:
@@ -1029,7 +1032,7 @@ async def run(arguments: argparse.Namespace) -> tuple[dict[str, Any], list[Row],
                     ours_pipes=await served(our_server_over_asyncio_pipes_command(url)),
                     errlog=errlog,
                 )
-                rows, failed = await run_items(ctx)
+                rows, failed = await run_items(ctx, set(arguments.only or ()))
                 report["samples"] = ctx.samples
     finally:
         if failed:
@@ -1069,6 +1072,17 @@ def render(report: dict[str, Any], rows: Sequence[Row]) -> str:
     return "\n".join(lines)
 
 
+def item_names(text: str) -> list[str]:
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    known = [name for name, *_ in ITEMS]
+    unknown = [name for name in names if name not in known]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(
+            f"unknown item {', '.join(unknown) or text!r}; known: {', '.join(known)}"
+        )
+    return names
+
+
 def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
     parser.add_argument(
@@ -1079,6 +1093,12 @@ def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
     )
     parser.add_argument(
         "--quick", action="store_true", help="tiny repetition counts: a few seconds, for smoke tests"
+    )
+    parser.add_argument(
+        "--only",
+        type=item_names,
+        metavar="ITEMS",
+        help=f"run only these, comma-separated: {','.join(name for name, *_ in ITEMS)} (default all)",
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log more to stderr")
     return parser.parse_args(argv)
