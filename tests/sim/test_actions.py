@@ -436,3 +436,85 @@ async def test_goal_records_count_each_feedback_once(sim: SimulatedRobot) -> Non
             await _ros1_send_goal(client, "counted", 5)
         await sim.wait_for(lambda w: "counted" in w.goals and w.goals["counted"].finished)
     assert sim.world.goals["counted"].feedback_count == 4
+
+
+async def _host_action(host: RawClient, name: str = "/hosted") -> None:
+    await host.send({"op": "advertise_action", "action": name, "type": FIBONACCI})
+    await host.frames_before_barrier()
+
+
+async def test_a_client_hosted_action_gets_goals_and_its_feedback_and_result_reach_the_caller(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """advertise_action: goals arrive as send_action_goal (action_goal id); feedback and result flow back."""
+    async with await RawClient.open(sim_ros2.url) as host, await RawClient.open(sim_ros2.url) as caller:
+        await _host_action(host)
+        servers = await caller.values("/rosapi/action_servers")
+        await caller.send({**goal_op("to-host", 7), "action": "/hosted"})
+        goal = await host.recv_until(lambda f: f.get("op") == "send_action_goal")
+        await host.send(
+            {"op": "action_feedback", "id": goal["id"], "action": "/hosted", "values": {"sequence": [0, 1]}}
+        )
+        feedback = await caller.reply("to-host", op="action_feedback")
+        await host.send(
+            {
+                "op": "action_result",
+                "id": goal["id"],
+                "action": "/hosted",
+                "status": 4,
+                "result": True,
+                "values": {"sequence": [0, 1, 1]},
+            }
+        )
+        result = await caller.reply("to-host", op="action_result")
+    assert "/hosted" in servers["action_servers"]
+    assert goal["id"].startswith("action_goal:/hosted:")
+    assert goal["args"] == {"order": 7}
+    assert goal["action_type"] == FIBONACCI
+    assert feedback["values"] == {"sequence": [0, 1]}
+    assert (result["status"], result["values"]) == (4, {"sequence": [0, 1, 1]})
+
+
+async def test_cancel_of_a_hosted_goal_is_forwarded_and_the_host_decides_the_end(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """A cancel reaches the host as cancel_action_goal; the goal ends when the host answers status 5."""
+    async with await RawClient.open(sim_ros2.url) as host, await RawClient.open(sim_ros2.url) as caller:
+        await _host_action(host)
+        await caller.send({**goal_op("cancel-me", 7), "action": "/hosted"})
+        goal = await host.recv_until(lambda f: f.get("op") == "send_action_goal")
+        await caller.send({"op": "cancel_action_goal", "id": "cancel-me", "action": "/hosted"})
+        cancel = await host.recv_until(lambda f: f.get("op") == "cancel_action_goal")
+        await host.send(
+            {"op": "action_result", "id": goal["id"], "action": "/hosted", "status": 5, "result": True}
+        )
+        result = await caller.reply("cancel-me", op="action_result")
+    assert cancel == {"op": "cancel_action_goal", "id": goal["id"], "action": "/hosted"}
+    assert result["status"] == 5
+
+
+async def test_unadvertise_action_aborts_goals_in_flight(sim_ros2: SimulatedRobot) -> None:
+    """Goals of an unadvertised action end ABORTED (6); the action leaves the graph."""
+    async with await RawClient.open(sim_ros2.url) as host, await RawClient.open(sim_ros2.url) as caller:
+        await _host_action(host)
+        await caller.send({**goal_op("dropped", 7), "action": "/hosted"})
+        await host.recv_until(lambda f: f.get("op") == "send_action_goal")
+        await host.send({"op": "unadvertise_action", "action": "/hosted"})
+        result = await caller.reply("dropped", op="action_result")
+        servers = await caller.values("/rosapi/action_servers")
+    assert result["status"] == 6
+    assert "/hosted" not in servers["action_servers"]
+
+
+async def test_action_result_with_result_false_aborts_the_goal(sim_ros2: SimulatedRobot) -> None:
+    """result false from the host means ABORTED whatever the status says."""
+    async with await RawClient.open(sim_ros2.url) as host, await RawClient.open(sim_ros2.url) as caller:
+        await _host_action(host)
+        await caller.send({**goal_op("failed", 7), "action": "/hosted"})
+        goal = await host.recv_until(lambda f: f.get("op") == "send_action_goal")
+        await host.send(
+            {"op": "action_result", "id": goal["id"], "action": "/hosted", "status": 4, "result": False}
+        )
+        result = await caller.reply("failed", op="action_result")
+    assert result["status"] == 6
+    assert result["result"] is True

@@ -22,7 +22,7 @@ from typing import Any, Literal
 from websockets.asyncio.server import ServerConnection
 from websockets.exceptions import ConnectionClosed
 
-from rosbridge_mcp_server.sim.actions import GoalHandle
+from rosbridge_mcp_server.sim.actions import GoalHandle, HostedActionServer
 from rosbridge_mcp_server.sim.connection import (
     Connection,
     OutgoingMessage,
@@ -137,10 +137,10 @@ class Bridge:
                 {
                     "send_action_goal": self._op_send_action_goal,
                     "cancel_action_goal": self._op_cancel_action_goal,
-                    "advertise_action": self._op_unsupported,
-                    "unadvertise_action": self._op_unsupported,
-                    "action_feedback": self._op_unsupported,
-                    "action_result": self._op_unsupported,
+                    "advertise_action": self._op_advertise_action,
+                    "unadvertise_action": self._op_unadvertise_action,
+                    "action_feedback": self._op_action_feedback,
+                    "action_result": self._op_action_result,
                 }
             )
 
@@ -426,8 +426,59 @@ class Bridge:
 
     # --- ops ------------------------------------------------------------------------------------------------
 
-    def _op_unsupported(self, conn: Connection, msg: dict[str, Any]) -> None:
-        log.warning("client %d: %s is not supported by the simulated robot; ignored", conn.id, msg.get("op"))
+    def _hosted(self, conn: Connection, action: str) -> HostedActionServer:
+        server = self.graph.actions.get(resolve_name(action))
+        if not isinstance(server, HostedActionServer) or server.owner != conn.id:
+            raise OpError(f"Action {action} has not been advertised via rosbridge.")
+        return server
+
+    def _op_advertise_action(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "action", (str,)), (True, "type", (str,))])
+        name = resolve_name(msg["action"])
+        action_type = self._resolve(msg["type"], "action")
+        old = self.graph.actions.get(name)
+        if old is not None:
+            old.remove()
+        HostedActionServer(self, name, action_type, conn.id, ROSBRIDGE_NODE)
+        self.world.notify()
+
+    def _op_unadvertise_action(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "action", (str,))])
+        # Goals still running end ABORTED, as rosbridge's unadvertise_action does.
+        self._hosted(conn, msg["action"]).remove()
+        self.world.notify()
+
+    def _op_action_feedback(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(msg, [(True, "action", (str,)), (True, "id", (str,)), (True, "values", (dict,))])
+        server = self._hosted(conn, msg["action"])
+        _, _, feedback_type = self.registry.action_parts(server.type)
+        try:
+            self.registry.from_json(feedback_type, msg["values"])
+        except ConversionError as exc:
+            raise OpError(str(exc)) from exc
+        if not server.feedback_from_client(msg["id"], msg["values"]):
+            raise OpError(f"Action goal {msg['id']} not found")
+
+    def _op_action_result(self, conn: Connection, msg: dict[str, Any]) -> None:
+        _check(
+            msg,
+            [
+                (True, "action", (str,)),
+                (True, "id", (str,)),
+                (True, "status", (int,)),
+                (True, "result", (bool,)),
+            ],
+        )
+        server = self._hosted(conn, msg["action"])
+        values = msg.get("values", {})
+        if msg["result"]:
+            _, result_type, _ = self.registry.action_parts(server.type)
+            try:
+                self.registry.from_json(result_type, values)
+            except ConversionError as exc:
+                raise OpError(str(exc)) from exc
+        if not server.result_from_client(msg["id"], msg["status"], msg["result"], values):
+            raise OpError(f"Action goal {msg['id']} not found")
 
     def _op_fragment(self, conn: Connection, msg: dict[str, Any]) -> Awaitable[None] | None:
         _check(

@@ -10,6 +10,7 @@ from typing import Literal, Self
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 
+from rosbridge_mcp_server.sim.actions import HostedActionServer
 from rosbridge_mcp_server.sim.bridge import Bridge, BridgeConfig
 from rosbridge_mcp_server.sim.graph import Graph
 from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
@@ -135,7 +136,8 @@ class SimulatedRobot:
     async def stop(self) -> None:
         """Stop serving: every client is disconnected and the world's publishers pause.
 
-        Like a rosbridge process that exits, client-advertised services vanish and running goals end.
+        Like a rosbridge process that exits, client-advertised services and actions vanish and running goals
+        end.
         """
         server, self._server = self._server, None
         if server is None:
@@ -146,6 +148,9 @@ class SimulatedRobot:
         await self._nodes.stop()
         for name in [n for n, e in self.graph.services.items() if e.owner]:
             self.graph.remove_service(name)
+        for action_server in list(self.graph.actions.values()):
+            if isinstance(action_server, HostedActionServer):
+                action_server.remove()
         self.world.notify()
         log.info("simulated robot on %s stopped", self.url)
 
