@@ -10,6 +10,8 @@ import sys
 import pytest
 from rawclient import RawClient
 
+from rosbridge_mcp_server.sim import SimulatedRobot
+
 COMMAND = [sys.executable, "-m", "rosbridge_mcp_server.sim"]
 
 
@@ -68,3 +70,15 @@ async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str])
     assert stdout == b""
     assert len(stderr.decode().strip().splitlines()) == 1
     assert "error" in stderr.decode()
+
+
+async def test_a_port_in_use_is_one_line_and_exit_code_1(sim_ros2: SimulatedRobot) -> None:
+    """Serving on a port that is taken fails with one line naming the address, not a traceback."""
+    process = await asyncio.create_subprocess_exec(
+        *COMMAND, "--port", str(sim_ros2.port), stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE
+    )
+    stdout, stderr = await asyncio.wait_for(process.communicate(), 20)
+    assert process.returncode == 1
+    assert stdout == b""
+    assert f"cannot serve on 127.0.0.1:{sim_ros2.port}" in stderr.decode()
+    assert "Traceback" not in stderr.decode()
