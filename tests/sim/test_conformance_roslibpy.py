@@ -344,3 +344,35 @@ async def test_roslibpy_cancel_on_a_humble_bridge_waits_behind_its_own_goal(
     (result,) = results.items
     assert result["status"].value == 4
     assert result["values"]["sequence"][-1] == 55
+
+
+async def test_roslibpy_hosts_a_service_that_another_client_calls(target: Target, ros: Any) -> None:
+    """Service.advertise: the bridge forwards a call from another connection and returns the host's values."""
+    name = f"/conformance_{uuid.uuid4().hex[:8]}"
+    set_bool = target.type("std_srvs", "srv", "SetBool")
+    requests = Inbox()
+
+    def handle(request: dict[str, Any], response: dict[str, Any]) -> bool:
+        requests.put(dict(request))
+        response["success"] = True
+        response["message"] = f"got {request['data']}"
+        return True
+
+    hosted = roslibpy.Service(ros, name, set_bool)
+    await asyncio.to_thread(hosted.advertise, handle)
+    other = await asyncio.to_thread(_connect, target.host, target.port)
+    try:
+
+        def call_when_listed() -> Any:
+            for _ in range(100):  # each round is a rosapi round trip, not a sleep
+                if name in other.get_services():
+                    caller = roslibpy.Service(other, name, set_bool)
+                    return caller.call(roslibpy.ServiceRequest({"data": True}), None, None, WAIT)
+            raise TimeoutError(f"{name} never appeared in /rosapi/services")
+
+        response = await asyncio.to_thread(call_when_listed)
+    finally:
+        await asyncio.to_thread(hosted.unadvertise)
+        await asyncio.to_thread(other.close)
+    assert dict(response) == {"success": True, "message": "got True"}
+    assert requests.items == [{"data": True}]
