@@ -272,8 +272,12 @@ def tail(errlog: IO[str], lines: int = 15) -> str:
 
 
 @contextlib.asynccontextmanager
-async def simulated_robot(errlog: IO[str]) -> AsyncIterator[str]:
-    """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL."""
+async def simulated_robot(errlog: IO[str], *, fast_topic: bool = False) -> AsyncIterator[str]:
+    """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL.
+
+    The 1 kHz topic is a separate robot's (``fast_topic``): its publishing loop costs the sim ~6 % of a core
+    even with nobody subscribed, which would blur the CPU figures of everything else.
+    """
     port = free_port()
     command = [
         sys.executable,
@@ -281,7 +285,7 @@ async def simulated_robot(errlog: IO[str]) -> AsyncIterator[str]:
         "rosbridge_mcp_server.sim",
         "--port",
         str(port),
-        "--fast-topic",
+        *(["--fast-topic"] if fast_topic else []),
         "--slow-service-seconds",
         str(SLOW_SERVICE_SECONDS),
         "--camera-size",
@@ -307,6 +311,17 @@ async def simulated_robot(errlog: IO[str]) -> AsyncIterator[str]:
             except TimeoutError:
                 process.kill()
                 await process.wait()
+
+
+def simulated_robot_process(url: str) -> psutil.Process | None:
+    """Our child process serving ``url``, to read its CPU time."""
+    port = str(urlsplit(url).port)
+    for child in psutil.Process().children():
+        with contextlib.suppress(psutil.Error):
+            command = child.cmdline()
+            if "rosbridge_mcp_server.sim" in command and port in command:
+                return child
+    return None
 
 
 class RawBridge:
@@ -478,33 +493,68 @@ def publish_service_arguments(
 # ------------------------------------------------------------------------------- item 1-3: call latency
 
 
+def cpu_seconds(process: psutil.Process | None) -> float:
+    """CPU time a process has had so far, every thread summed (0 for one we cannot see, e.g. a remote bridge).
+
+    Linux's per-thread schedstat counts nanoseconds; elsewhere psutil's user + system time, which the kernel
+    counts in 10 ms ticks (good enough over many blocks for the slow subjects, not for the floor).
+    """
+    if process is None:
+        return 0.0
+    try:
+        nanoseconds = 0
+        for task in os.scandir(f"/proc/{process.pid}/task"):
+            with open(f"{task.path}/schedstat") as stat:
+                nanoseconds += int(stat.read().split()[0])
+        return nanoseconds / 1e9
+    except (OSError, ValueError, IndexError):
+        times = process.cpu_times()
+        return float(times.user + times.system)
+
+
 @dataclasses.dataclass
 class Subject:
-    """One thing whose latency is sampled, call by call."""
+    """One thing whose latency is sampled, call by call, with the CPU each process spent on it."""
 
     key: str
     call: Callable[[], Awaitable[object]]
+    server: psutil.Process | None = None  # the MCP server process the calls go through, if any
     samples: list[float] = dataclasses.field(default_factory=list)
+    cpu: dict[str, float] = dataclasses.field(
+        default_factory=lambda: {"bench": 0.0, "server": 0.0, "bridge": 0.0}
+    )
 
     @property
     def stats(self) -> Stats:
         return Stats.of(self.samples)
 
+    def cpu_per_call(self) -> dict[str, float | None]:
+        spent = {where: total / len(self.samples) for where, total in self.cpu.items()}
+        return spent | ({} if self.server else {"server": None})
 
-async def interleave(subjects: Sequence[Subject], plan: Plan) -> None:
-    """Warm every subject up, then time them in rotated A/B/C blocks so drift hits all of them alike."""
+
+async def interleave(subjects: Sequence[Subject], plan: Plan, bridge: psutil.Process | None = None) -> None:
+    """Warm every subject up, then time them in rotated A/B/C blocks so drift hits all of them alike.
+
+    CPU time is read around each block: where the work of a call is done, as well as how long it takes.
+    """
     for subject in subjects:
         for _ in range(plan.warmup):
             await subject.call()
+    me = psutil.Process()
     clock = time.perf_counter
     for round_number in range(plan.rounds):
         shift = round_number % len(subjects)
         for subject in [*subjects[shift:], *subjects[:shift]]:
             call, samples = subject.call, subject.samples
+            before = (cpu_seconds(me), cpu_seconds(subject.server), cpu_seconds(bridge))
             for _ in range(plan.block):
                 began = clock()
                 await call()
                 samples.append(clock() - began)
+            after = (cpu_seconds(me), cpu_seconds(subject.server), cpu_seconds(bridge))
+            for where, start, end in zip(("bench", "server", "bridge"), before, after, strict=True):
+                subject.cpu[where] += end - start
 
 
 class Roslibpy:
@@ -543,26 +593,29 @@ async def measure_latency(ctx: Context) -> list[Row]:
         Subject("floor", lambda: raw.call("/rosapi/topics")),
         Subject("client", lambda: client.call_service("/rosapi/topics")),
         Subject("roslibpy", pyros.call_topics),
-        Subject("sdk_noop", lambda: sdk.tool("noop", {})),
-        Subject("sdk_noop_asyncio_stdio", lambda: sdk_pipes.tool("noop", {})),
-        Subject("list_topics", lambda: ours.tool("list_topics", {})),
-        Subject("list_topics_asyncio_stdio", lambda: ours_pipes.tool("list_topics", {})),
+        Subject("sdk_noop", lambda: sdk.tool("noop", {}), sdk.process),
+        Subject("sdk_noop_asyncio_stdio", lambda: sdk_pipes.tool("noop", {}), sdk_pipes.process),
+        Subject("list_topics", lambda: ours.tool("list_topics", {}), ours.process),
+        Subject("list_topics_asyncio_stdio", lambda: ours_pipes.tool("list_topics", {}), ours_pipes.process),
     ]
     add_type = bridge.services.get(ADD_TWO_INTS)
     if add_type is not None:
         add_arguments = publish_service_arguments(ours, ADD_TWO_INTS, add_type, {"a": 2, "b": 3})
         subjects += [
             Subject("floor_add", lambda: raw.call(ADD_TWO_INTS, {"a": 2, "b": 3})),
-            Subject("publish_service", lambda: ours.tool("publish_service", add_arguments)),
+            Subject("publish_service", lambda: ours.tool("publish_service", add_arguments), ours.process),
             Subject(
-                "publish_service_asyncio_stdio", lambda: ours_pipes.tool("publish_service", add_arguments)
+                "publish_service_asyncio_stdio",
+                lambda: ours_pipes.tool("publish_service", add_arguments),
+                ours_pipes.process,
             ),
         ]
     try:
-        await interleave(subjects, plan)
+        await interleave(subjects, plan, ctx.bridge_process)
     finally:
         pyros.close()
     ctx.samples.update({subject.key: subject.samples for subject in subjects})
+    ctx.cpu_per_call.update({subject.key: subject.cpu_per_call() for subject in subjects})
     by_key = {subject.key: subject.stats for subject in subjects}
     floor, client_stats, roslib = by_key["floor"], by_key["client"], by_key["roslibpy"]
     noop = by_key["sdk_noop"]
@@ -752,23 +805,34 @@ def lost_messages(messages: Sequence[dict[str, Any]]) -> int:
 
 
 async def measure_throughput(ctx: Context) -> list[Row]:
-    """Item 5: collect N messages of the 1 kHz topic raw and through our client; count the gaps."""
+    """Item 5: collect N messages of the 1 kHz topic raw and through our client; count the gaps.
+
+    Against the simulated robot this starts a second one with the 1 kHz topic, and connects to it afresh.
+    """
     count = ctx.plan.messages
-    fast_type = ctx.bridge.topics.get(FAST_TOPIC)
+    async with contextlib.AsyncExitStack() as stack:
+        raw, client, fast_type = ctx.raw, ctx.client, ctx.bridge.topics.get(FAST_TOPIC)
+        if ctx.bridge.simulated:
+            url = await stack.enter_async_context(simulated_robot(ctx.errlog, fast_topic=True))
+            raw = RawBridge(await stack.enter_async_context(connect(url, max_size=None, compression=None)))
+            client = await stack.enter_async_context(RosbridgeClient(url))
+            await client.wait_connected(10)
+            fast_type = (await raw.call("/rosapi/topic_type", {"topic": FAST_TOPIC})).get("type") or None
+        if fast_type is not None:
+            began = time.perf_counter()
+            raw_messages = await raw.collect(FAST_TOPIC, fast_type, count)
+            raw_elapsed = time.perf_counter() - began
+            began = time.perf_counter()
+            client_messages: list[dict[str, Any]] = []
+            async with client.subscribe(FAST_TOPIC, fast_type) as subscription:
+                async for message in subscription:
+                    client_messages.append(message)
+                    if len(client_messages) >= count:
+                        break
+            client_elapsed = time.perf_counter() - began
     if fast_type is None:
         rows = [Row("5a", f"{count} messages of {FAST_TOPIC} (1 kHz)", verdict=f"n/a (no {FAST_TOPIC})")]
     else:
-        began = time.perf_counter()
-        raw_messages = await ctx.raw.collect(FAST_TOPIC, fast_type, count)
-        raw_elapsed = time.perf_counter() - began
-        began = time.perf_counter()
-        client_messages: list[dict[str, Any]] = []
-        async with ctx.client.subscribe(FAST_TOPIC, fast_type) as subscription:
-            async for message in subscription:
-                client_messages.append(message)
-                if len(client_messages) >= count:
-                    break
-        client_elapsed = time.perf_counter() - began
         raw_lost, client_lost = lost_messages(raw_messages), lost_messages(client_messages)
         rows = [
             Row(
@@ -956,7 +1020,9 @@ class Context:
     reference_pipes: Served  # the same over asyncio pipes
     ours_pipes: Served  # our server over asyncio pipes
     errlog: IO[str]
+    bridge_process: psutil.Process | None = None  # the simulated robot, when we started it
     samples: dict[str, list[float]] = dataclasses.field(default_factory=dict)
+    cpu_per_call: dict[str, dict[str, float | None]] = dataclasses.field(default_factory=dict)
     startup_rss: dict[str, Stats] = dataclasses.field(default_factory=dict)
 
 
@@ -1031,9 +1097,11 @@ async def run(arguments: argparse.Namespace) -> tuple[dict[str, Any], list[Row],
                     ),
                     ours_pipes=await served(our_server_over_asyncio_pipes_command(url)),
                     errlog=errlog,
+                    bridge_process=simulated_robot_process(url) if simulated else None,
                 )
                 rows, failed = await run_items(ctx, set(arguments.only or ()))
                 report["samples"] = ctx.samples
+                report["cpu_per_call_s"] = ctx.cpu_per_call
     finally:
         if failed:
             log.warning("kept the servers' and the simulated robot's stderr in %s", errlog_path)
@@ -1069,6 +1137,19 @@ def render(report: dict[str, Any], rows: Sequence[Row]) -> str:
         cells = [row.item, row.what, "" if row.n is None else str(row.n), row.median, row.p90, row.versus]
         cells += [row.target, row.verdict]
         lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
+    cpu = report.get("cpu_per_call_s", {})
+    if cpu:
+        lines += [
+            "",
+            "CPU time per call of items 1-3, by process (ms; where the work is done, not how long it takes):",
+            "",
+            "| subject | bench process (client side) | MCP server | rosbridge |",
+            "|---|--:|--:|--:|",
+        ]
+        for key, spent in cpu.items():
+            server = "—" if spent["server"] is None else f"{spent['server'] * 1e3:.2f}"
+            bridge_cpu = f"{spent['bridge'] * 1e3:.2f}" if bridge.get("simulated") else "n/a"
+            lines.append(f"| {key} | {spent['bench'] * 1e3:.2f} | {server} | {bridge_cpu} |")
     return "\n".join(lines)
 
 
