@@ -1,6 +1,10 @@
-"""The ``/fibonacci`` action server: ROS 2 (``example_interfaces/action/Fibonacci``) and ROS 1 actionlib.
+"""Action servers: ``/fibonacci`` for ROS 2 (``example_interfaces/action/Fibonacci``) and ROS 1 actionlib,
+and the ROS 2 servers clients host through rosbridge (``advertise_action``).
 
-Both follow the example servers: the sequence starts ``[0, 1]``; each step appends the next number,
+Every ROS 2 server (:class:`ActionServer`) keeps its goals by UUID and offers what a real one shows in the
+graph: the hidden ``_action/status`` and ``_action/feedback`` topics and ``_action/*`` services.
+
+Both Fibonacci servers follow the example servers: the sequence starts ``[0, 1]``; each step appends the next number,
 publishes one feedback and waits ``action_step`` seconds; the result is the whole sequence. A cancel ends
 the goal at its next step with the partial sequence (ROS 2 CANCELED, ROS 1 PREEMPTED), as the rclcpp
 minimal action server does.
@@ -371,11 +375,8 @@ class FibonacciServer(ActionServer):
 
     async def run_goal(self, handle: GoalHandle, feedback: FeedbackFn) -> tuple[str, dict[str, Any]]:
         run = _Run(handle.record, self.step, self.bridge.world.notify, handle.cancel)
-        try:
-            outcome = await run.execute(lambda sequence: feedback({"sequence": sequence}))
-        finally:
-            result = {"sequence": list(handle.record.sequence)}
-        return outcome, result
+        outcome = await run.execute(lambda sequence: feedback({"sequence": sequence}))
+        return outcome, {"sequence": list(handle.record.sequence)}
 
 
 class HostedActionServer(ActionServer):
