@@ -4,8 +4,9 @@ and the ROS 2 servers clients host through rosbridge (``advertise_action``).
 Every ROS 2 server (:class:`ActionServer`) keeps its goals by UUID and offers what a real one shows in the
 graph: the hidden ``_action/status`` and ``_action/feedback`` topics and ``_action/*`` services.
 
-Both Fibonacci servers follow the example servers: the sequence starts ``[0, 1]``; each step appends the next number,
-publishes one feedback and waits ``action_step`` seconds; the result is the whole sequence. A cancel ends
+Both Fibonacci servers follow the example servers: the sequence starts ``[0, 1]``; each step appends the
+next number, publishes one feedback and waits ``action_step`` seconds; the result is the whole sequence. A
+cancel ends
 the goal at its next step with the partial sequence (ROS 2 CANCELED, ROS 1 PREEMPTED), as the rclcpp
 minimal action server does.
 
