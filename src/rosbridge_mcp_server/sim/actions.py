@@ -6,9 +6,8 @@ graph: the hidden ``_action/status`` and ``_action/feedback`` topics and ``_acti
 
 Both Fibonacci servers follow the example servers: the sequence starts ``[0, 1]``; each step appends the
 next number, publishes one feedback and waits ``action_step`` seconds; the result is the whole sequence. A
-cancel ends
-the goal at its next step with the partial sequence (ROS 2 CANCELED, ROS 1 PREEMPTED), as the rclcpp
-minimal action server does.
+cancel ends the goal at its next step with the partial sequence (ROS 2 CANCELED, ROS 1 PREEMPTED), as the
+rclcpp minimal action server does.
 
 Goals we refuse (our documented choice; the example servers differ on this): ``order < 0`` is rejected,
 and so is ``order > 9000`` (the rclcpp example's own limit). A goal whose next number no longer fits an
