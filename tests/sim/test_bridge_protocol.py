@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import base64
 import json
+import struct
 import uuid
+import zlib
+from typing import Any
 
 import pytest
 from rawclient import MakeSim, RawClient
@@ -536,3 +540,25 @@ async def test_type_inference_needs_the_fully_qualified_name(sim: SimulatedRobot
         await client.send({"op": "subscribe", "topic": "chatter", "type": string, "id": "typed"})
         message = await client.next_publish("chatter")
     assert message["msg"]["data"].startswith("Hello World")
+
+
+def _decode_png_op(frame: dict[str, Any]) -> dict[str, Any]:
+    """§4.3: base64 → PNG → RGB bytes → text without the newline padding → the publish message."""
+    png = base64.b64decode(frame["data"])
+    width, height = struct.unpack(">II", png[16:24])
+    idat_len = struct.unpack(">I", png[33:37])[0]
+    raw = zlib.decompress(png[41 : 41 + idat_len])
+    stride = width * 3 + 1
+    pixels = b"".join(raw[row * stride + 1 : (row + 1) * stride] for row in range(height))
+    return dict(json.loads(pixels.decode("utf-8").rstrip("\n")))
+
+
+async def test_png_compression_sends_png_ops_that_decode_to_the_publish(sim: SimulatedRobot) -> None:
+    """subscribe with compression png: each message arrives as {op: png} holding the publish frame's text."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "subscribe", "topic": "/chatter", "compression": "png"})
+        frame = await client.recv_until(lambda f: f.get("op") == "png")
+    message = _decode_png_op(frame)
+    assert message["op"] == "publish"
+    assert message["topic"] == "/chatter"
+    assert message["msg"]["data"].startswith("Hello World: ")

@@ -627,7 +627,7 @@ class Bridge:
         else:
             raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
         compression = msg.get("compression", "none")
-        if compression in ("png", "cbor", "cbor-raw"):
+        if compression in ("cbor", "cbor-raw"):
             log.warning(
                 "client %d: compression %r is not simulated; sending JSON on %s", conn.id, compression, topic
             )
@@ -637,7 +637,9 @@ class Bridge:
         if sub is None:
             sub = conn.subscriptions[topic] = TopicSubscription(topic, msg["topic"], msg_type)
             self.graph.add_subscriber(ROSBRIDGE_NODE, topic, msg_type)
-        sub.by_id[sid] = SubscriptionOptions(msg.get("throttle_rate", 0), msg.get("queue_length", 0))
+        sub.by_id[sid] = SubscriptionOptions(
+            msg.get("throttle_rate", 0), msg.get("queue_length", 0), compression
+        )
         latched = self.graph.latched.get(topic)
         if latched is not None:
             conn.deliver(OutgoingMessage(topic, msg_type, latched, self.registry.to_json), self._fragment_id)

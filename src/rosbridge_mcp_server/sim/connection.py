@@ -9,8 +9,10 @@ request, so they are bounded by what the client asked for.
 from __future__ import annotations
 
 import asyncio
+import base64
 import json
 import logging
+import math
 import time
 from collections import deque
 from collections.abc import Callable
@@ -20,6 +22,8 @@ from typing import Any
 from websockets.asyncio.server import ServerConnection
 from websockets.exceptions import ConnectionClosed
 
+from rosbridge_mcp_server.sim.png import encode_png
+
 __all__ = [
     "MAX_QUEUED_BYTES",
     "MAX_QUEUED_MESSAGES",
@@ -27,6 +31,7 @@ __all__ = [
     "OutgoingMessage",
     "SubscriptionOptions",
     "TopicSubscription",
+    "png_frame_data",
 ]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
@@ -50,15 +55,28 @@ class OutgoingMessage:
     _json_form: dict[str, Any] | None = None
     _texts: dict[str, str] = field(default_factory=dict)
 
-    def frame_text(self, echo_topic: str) -> str:
-        """The ``publish`` frame for a subscription whose topic was spelled ``echo_topic``."""
-        text = self._texts.get(echo_topic)
+    def frame_text(self, echo_topic: str, *, png: bool = False) -> str:
+        """The ``publish`` frame for a subscription to ``echo_topic`` as spelled (or its ``png`` op)."""
+        key = ("png:" if png else "") + echo_topic
+        text = self._texts.get(key)
         if text is None:
             if self._json_form is None:
                 self._json_form = self.to_json(self.type, self.msg)
             text = json.dumps({"op": "publish", "topic": echo_topic, "msg": self._json_form})
-            self._texts[echo_topic] = text
+            if png:
+                text = json.dumps({"op": "png", "data": png_frame_data(text)})
+            self._texts[key] = text
         return text
+
+
+def png_frame_data(text: str) -> str:
+    """rosbridge's ``pngcompression.encode``: the text as the RGB pixels of a near-square PNG, padded with
+    newlines, base64-encoded (§4.3)."""
+    data = text.encode("utf-8")
+    width = max(1, math.floor(math.sqrt(len(data) / 3.0)))
+    height = math.ceil(len(data) / 3.0 / width)
+    data += b"\n" * (width * height * 3 - len(data))
+    return base64.b64encode(encode_png(width, height, data)).decode("ascii")
 
 
 @dataclass
@@ -67,6 +85,7 @@ class SubscriptionOptions:
 
     throttle_rate: int = 0
     queue_length: int = 0
+    compression: str = "none"
 
 
 @dataclass
@@ -90,6 +109,11 @@ class TopicSubscription:
     def queue_length(self) -> int:
         """...and the smallest queue length."""
         return min((o.queue_length for o in self.by_id.values()), default=0)
+
+    @property
+    def png(self) -> bool:
+        """...and the strongest compression: ``png`` if any request asked for it (CBOR is not simulated)."""
+        return any(o.compression == "png" for o in self.by_id.values())
 
 
 @dataclass
@@ -219,7 +243,9 @@ class Connection:
 
     def _send_publish(self, sub: TopicSubscription, message: OutgoingMessage, fragment_id: Any) -> None:
         sub.last_sent = time.monotonic()
-        self._enqueue(message.frame_text(sub.echo_topic), droppable=True, fragment_id=fragment_id)
+        self._enqueue(
+            message.frame_text(sub.echo_topic, png=sub.png), droppable=True, fragment_id=fragment_id
+        )
 
     def drop_subscription(self, topic: str) -> None:
         """Forget every subscription to ``topic`` (its queued messages too)."""
