@@ -562,3 +562,47 @@ async def test_png_compression_sends_png_ops_that_decode_to_the_publish(sim: Sim
     assert message["op"] == "publish"
     assert message["topic"] == "/chatter"
     assert message["msg"]["data"].startswith("Hello World: ")
+
+
+async def test_interleaved_fragments_of_two_messages_are_joined_by_id(sim: SimulatedRobot) -> None:
+    """Fragments of two calls, interleaved (and from two clients), each join into their own op."""
+    texts = {
+        f"frag-{n}": json.dumps(
+            {"op": "call_service", "id": f"frag-{n}", "service": "/add_two_ints", "args": {"a": n, "b": 100}}
+        )
+        for n in (1, 2)
+    }
+    async with await RawClient.open(sim.url) as first, await RawClient.open(sim.url) as second:
+        chunked = {key: [text[i : i + 7] for i in range(0, len(text), 7)] for key, text in texts.items()}
+        for num in range(max(len(c) for c in chunked.values())):
+            for client, (key, chunks) in zip((first, second), chunked.items(), strict=True):
+                if num < len(chunks):
+                    await client.send(
+                        {"op": "fragment", "id": key, "data": chunks[num], "num": num, "total": len(chunks)}
+                    )
+        replies = [await first.reply("frag-1"), await second.reply("frag-2")]
+    assert [r["values"]["sum"] for r in replies] == [101, 102]
+
+
+async def test_many_clients_at_once_each_get_their_own_answers(sim: SimulatedRobot) -> None:
+    """Twenty connections calling and subscribing at the same time: every reply goes to its own caller."""
+    clients = [await RawClient.open(sim.url) for _ in range(20)]
+    try:
+        for n, client in enumerate(clients):
+            await client.send({"op": "subscribe", "topic": "/chatter"})
+            await client.send(
+                {
+                    "op": "call_service",
+                    "id": f"many-{n}",
+                    "service": "/add_two_ints",
+                    "args": {"a": n, "b": n},
+                }
+            )
+        sums = [(await client.reply(f"many-{n}"))["values"]["sum"] for n, client in enumerate(clients)]
+        heard = [await client.next_publish("/chatter") for client in clients]
+        assert sim.connection_count == 20
+    finally:
+        for client in clients:
+            await client.close()
+    assert sums == [2 * n for n in range(20)]
+    assert all(h["msg"]["data"].startswith("Hello World") for h in heard)
