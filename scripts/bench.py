@@ -2,7 +2,8 @@
 
     uv run python scripts/bench.py                       # against a simulated robot in its own process
     uv run python scripts/bench.py --url ws://robot:9090 # against any rosbridge (sim-only rows become n/a)
-    uv run python scripts/bench.py --quick               # a few seconds, tiny counts (the smoke test)
+    uv run python scripts/bench.py --quick               # tiny counts, ~10 s (the smoke test)
+    uv run python scripts/bench.py --only latency        # some items: latency, concurrency, throughput, ...
     uv run python scripts/bench.py --json bench-$(date -u +%Y%m%d-%H%M).json
 
 The machines we run on are shared and noisy, so nothing is compared with a number from another run: each
