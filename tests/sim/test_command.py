@@ -20,13 +20,20 @@ async def _start(*args: str) -> tuple[asyncio.subprocess.Process, str]:
         *COMMAND, *args, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE
     )
     assert process.stderr is not None
-    async with asyncio.timeout(20):
-        while True:
-            line = (await process.stderr.readline()).decode()
-            assert line, "the command ended before serving"
-            found = re.search(r"serving rosbridge v2 on (ws://\S+)", line)
-            if found:
-                return process, found.group(1)
+    try:
+        async with asyncio.timeout(20):
+            while True:
+                line = (await process.stderr.readline()).decode()
+                assert line, "the command ended before serving"
+                found = re.search(r"serving rosbridge v2 on (ws://\S+)", line)
+                if found:
+                    return process, found.group(1)
+    except BaseException:
+        # Never leave a server running behind a failed test.
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+        raise
 
 
 @pytest.mark.parametrize(("sig", "dialect"), [(signal.SIGTERM, "ros1"), (signal.SIGINT, "ros2")])
