@@ -102,7 +102,6 @@ async def test_legacy_hash_id_in_the_service_name_becomes_the_id(sim: SimulatedR
     "frame",
     [
         "this is not json",
-        "42",
         '["a", "list"]',
         '{"no_op": true}',
         '{"op": "set_level", "level": "info", "id": "lvl"}',
@@ -221,11 +220,16 @@ async def test_fragment_size_splits_outgoing_frames_for_the_whole_connection(sim
         await client.send({"op": "subscribe", "topic": "/chatter", "fragment_size": 16, "id": "s"})
         first = await client.recv_until(lambda f: f.get("op") == "fragment")
         parts = [first]
-        while len(parts) < first["total"]:
+        count = int(first["total"])
+        while len(parts) < count:
             parts.append(await client.recv_until(lambda f: f.get("op") == "fragment"))
-    assert [p["num"] for p in parts] == list(range(first["total"]))
+    assert [p["num"] for p in parts] == list(range(count))
     assert all(len(p["data"]) <= 16 for p in parts)
-    joined = json.loads("".join(p["data"] for p in parts))
+    text = "".join(p["data"] for p in parts)
+    # Both lines compute total = ((len - 1) / size) + 1 with true division: a float, never an int.
+    assert isinstance(first["total"], float)
+    assert first["total"] == (len(text) - 1) / 16 + 1
+    joined = json.loads(text)
     assert joined["op"] == "publish"
     assert joined["topic"] == "/chatter"
     assert joined["msg"]["data"].startswith("Hello World: ")
@@ -606,3 +610,31 @@ async def test_many_clients_at_once_each_get_their_own_answers(sim: SimulatedRob
             await client.close()
     assert sums == [2 * n for n in range(20)]
     assert all(h["msg"]["data"].startswith("Hello World") for h in heard)
+
+
+async def test_both_lines_buffer_input_several_objects_per_frame_and_split_objects(
+    sim: SimulatedRobot,
+) -> None:
+    """protocol.incoming is the same on both branches: objects are taken out of a per-connection buffer."""
+    first = json.dumps(
+        {"op": "call_service", "id": "x1", "service": "/add_two_ints", "args": {"a": 1, "b": 1}}
+    )
+    second = json.dumps(
+        {"op": "call_service", "id": "x2", "service": "/add_two_ints", "args": {"a": 2, "b": 2}}
+    )
+    async with await RawClient.open(sim.url) as client:
+        await client.send(first + second[:10])
+        await client.send(second[10:])
+        replies = [await client.reply("x1"), await client.reply("x2")]
+    assert [r["values"] for r in replies] == [{"sum": 2}, {"sum": 4}]
+
+
+async def test_a_bare_number_ends_the_connections_reading_on_both_lines(sim: SimulatedRobot) -> None:
+    """'"id" in 5' raises outside the per-op error handling: the connection ignores everything after."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send("5")
+        await client.send({"op": "call_service", "id": "late", "service": "/rosapi/get_time"})
+        conn = max(sim.bridge.connections.values(), key=lambda c: c.id)
+        await sim.wait_for(lambda _: conn.frames_ignored >= 1)
+    assert conn.dead
+    assert conn.frames_queued == 0

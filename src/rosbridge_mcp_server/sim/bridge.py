@@ -29,7 +29,15 @@ from rosbridge_mcp_server.sim.connection import (
     SubscriptionOptions,
     TopicSubscription,
 )
-from rosbridge_mcp_server.sim.graph import ROSBRIDGE_NODE, Graph, ServiceEntry, ServiceFailure, resolve_name
+from rosbridge_mcp_server.sim.graph import (
+    ROSBRIDGE_NODE,
+    Graph,
+    ServiceEntry,
+    ServiceFailure,
+    canonical_name,
+    resolve_name,
+    rostopic_type,
+)
 from rosbridge_mcp_server.sim.interfaces import ConversionError, InterfaceError, InterfaceRegistry
 from rosbridge_mcp_server.sim.world import PublishedMessage, World
 
@@ -47,11 +55,18 @@ MAX_FRAGMENT_BYTES = 64 * 1024 * 1024
 #: rosbridge (ROS 2, 2.0.5+/2.5.0+) waits this long for an action server before giving up.
 ACTION_SERVER_WAIT = 1.0
 
+#: Our bound on a connection's unparsable input (the real buffer is unbounded); Tornado's frame limit.
+MAX_INPUT_BUFFER = 10 * 1024 * 1024
+
 _FieldSpec = tuple[bool, str, tuple[type, ...]]
 
 
 class OpError(Exception):
     """An op the real server rejects with a log line only (text as the server logs it)."""
+
+
+class _ReadingDied(Exception):
+    """An input that raises outside rosbridge's per-op error handling: the connection's reading ends."""
 
 
 class CallFailed(Exception):
@@ -150,12 +165,34 @@ class Bridge:
         """The wire form of a message given as (partial) JSON: defaults filled in, the dialect's spellings."""
         return self.registry.to_json(msg_type, self.registry.from_json(msg_type, partial))
 
-    def _args_dict(self, msg_type: str, args: Any) -> Any:
-        """``args`` may be a list of values in field order (rosbridge accepts both)."""
+    def name(self, raw: str) -> str:
+        """A topic/service/action name as the dialect's client library resolves it.
+
+        ROS 1: rospy's canonical form (``/add_two_ints/`` and ``//add_two_ints`` are ``/add_two_ints``).
+        ROS 2: relative names go under ``/``; names rclpy would reject are kept as spelled (simplified).
+        """
+        return canonical_name(raw) if self.config.dialect == "ros1" else resolve_name(raw)
+
+    def infer_type(self, spelled: str) -> str | None:
+        """The graph's type for a topic as rosbridge infers it from the name as spelled.
+
+        ROS 2 looks the name up exactly ('chatter' does not find '/chatter'); ROS 1 uses rostopic's rule,
+        which also takes a field path ('/chatter/' finds '/chatter').
+        """
+        if self.config.dialect == "ros1":
+            return rostopic_type(self.graph.topic_types, spelled)
+        return self.graph.topic_types.get(spelled)
+
+    def _args_dict(self, msg_type: str, args: Any) -> dict[str, Any]:
+        """rosbridge's ``args_to_service_request_instance``: a list is values in field order, an object is
+        used as it is, and anything else (null, a string, a number) is ignored, an empty request (both
+        lines)."""
         if isinstance(args, list):
             names = self.registry.message_typedefs(msg_type)[0]["fieldnames"]
             return dict(zip(names, args, strict=False))
-        return args
+        if isinstance(args, dict):
+            return args
+        return {}
 
     # --- topic traffic ------------------------------------------------------------------------------------
 
@@ -194,10 +231,12 @@ class Bridge:
 
         ``timeout_seconds`` ≤ 0 waits forever. Raises :class:`CallFailed` with the real server's text.
         """
-        # ROS 2 rosbridge compares the name with the graph's as spelled; rospy resolves relative names.
-        entry = self.graph.services.get(resolve_name(name) if self.config.dialect == "ros1" else name)
+        # Both lines resolve the name first (rospy's resolve_name; rclpy's expand_topic_name), and the
+        # error names the resolved service: 'nope' -> 'Service /nope does not exist'.
+        resolved = self.name(name)
+        entry = self.graph.services.get(resolved)
         if entry is None:
-            raise CallFailed(f"Service {name} does not exist")
+            raise CallFailed(f"Service {resolved} does not exist")
         try:
             request_type, response_type = self.registry.service_parts(entry.type)
             request = self.registry.from_json(request_type, self._args_dict(request_type, args))
@@ -210,9 +249,10 @@ class Bridge:
                     partial = await entry.handler(request)
                 except ServiceFailure as exc:
                     if self.config.dialect == "ros1":
-                        raise CallFailed(
-                            f"service [{entry.name}] responded with an error: error processing request: {exc}"
-                        ) from exc
+                        # Noetic's rospy formats the error bytes with %s, so the text shows b'...' (or
+                        # b"..." when it holds a quote): Python's repr of the UTF-8 bytes.
+                        text = f"error processing request: {exc}".encode()
+                        raise CallFailed(f"service [{entry.name}] responded with an error: {text!r}") from exc
                     # A ROS 2 service has no error channel: the caller just never hears back.
                     log.error("service %s failed: %s (the caller gets no response)", entry.name, exc)
                     await asyncio.Event().wait()
@@ -313,33 +353,98 @@ class Bridge:
         for future, _, _ in list(self._service_requests.values()):
             future.cancel()
 
-    async def incoming(self, conn: Connection, raw: str | bytes) -> None:
-        """One frame from a client."""
-        if isinstance(raw, bytes):
-            try:
-                raw = raw.decode("utf-8")
-            except UnicodeDecodeError:
-                log.error("client %d: a binary frame that is not UTF-8 text; ignored", conn.id)
-                return
-        try:
-            msg = json.loads(raw)
-        except ValueError:
-            # The real server keeps unparsable text in a buffer hoping for the rest; we log and drop it.
-            log.error("client %d: frame is not JSON; ignored: %.200s", conn.id, raw)
-            return
-        if not isinstance(msg, dict):
-            # Kills the connection's incoming thread on the real server (§1); we only drop the frame.
-            log.error("client %d: frame is not a JSON object; ignored: %.200s", conn.id, raw)
-            return
-        await self.dispatch(conn, msg)
+    async def incoming(self, conn: Connection, raw: str | bytes = "") -> None:
+        """One frame (or a joined fragment message) from a client, through rosbridge's input buffer.
 
-    async def dispatch(self, conn: Connection, msg: dict[str, Any]) -> None:
-        """Run one op (in order, or detached for calls and goals unless the bridge is in-order)."""
-        mid = msg.get("id")
-        if "fragment_size" in msg and not self._set_fragment_size(conn, msg["fragment_size"]):
+        ``protocol.incoming`` (identical in 0.11.17 and on the ros2 branch) appends the frame to a
+        per-connection buffer, takes the whole buffer if it parses as JSON, else the first ``{...}`` in it
+        that parses and has an ``op`` (the text before it is thrown away, the rest kept), and calls itself
+        again while something is left that differs from what was left last time. So several objects in one
+        frame are all handled, one object split over frames is handled once complete, and garbage waits in
+        the buffer until a later frame completes something.
+        """
+        if conn.dead:
+            log.debug("client %d: frame ignored (this connection's reading died earlier)", conn.id)
+            conn.frames_ignored += 1
+            self.world.notify()
             return
-        op = msg.get("op")
-        if op is None:
+        if isinstance(raw, bytes):
+            if self.config.dialect == "ros1":
+                # 0.11.17 appends str(payload) of a binary frame, "b'{...}'"; the brace scan finds the object.
+                raw = str(raw)
+            else:
+                try:
+                    raw = raw.decode("utf-8")
+                except UnicodeDecodeError:
+                    log.error("client %d: a binary frame that is not UTF-8 text; ignored", conn.id)
+                    return
+        conn.buffer += raw
+        if len(conn.buffer) > MAX_INPUT_BUFFER:
+            # Our own bound: the real buffer grows without limit (and its scan gets slower and slower).
+            log.error("client %d: %d characters of unparsable input dropped", conn.id, len(conn.buffer))
+            conn.buffer = ""
+            return
+        while True:
+            found, msg = self._take_message(conn)
+            if not found:
+                return
+            try:
+                handled = await self.dispatch(conn, msg)
+            except _ReadingDied as exc:
+                conn.dead = True
+                log.error(
+                    "client %d: %s - the real server's reading thread dies here; every later frame of this "
+                    "connection is ignored (the socket stays open)",
+                    conn.id,
+                    exc,
+                )
+                return
+            if conn.dead or not handled or not conn.buffer or conn.buffer == conn.old_buffer:
+                return
+            conn.old_buffer = conn.buffer
+
+    @staticmethod
+    def _take_message(conn: Connection) -> tuple[bool, Any]:
+        """rosbridge's buffer parse: (whether a message was taken, the message)."""
+        text = conn.buffer
+        try:
+            msg = json.loads(text)
+        except ValueError:
+            pass
+        else:
+            conn.buffer = ""
+            return msg is not None, msg
+        decoder = json.JSONDecoder()
+        start = text.find("{")
+        while start >= 0:
+            # The real server tries every '{' with every '}' after it; the only slice that can parse is the
+            # one ending where the object that starts here ends, which is what raw_decode finds.
+            try:
+                obj, end = decoder.raw_decode(text, start)
+            except ValueError:
+                start = text.find("{", start + 1)
+                continue
+            if obj.get("op") is not None:
+                conn.buffer = text[end:]
+            # An object without an op is handled (and logged) but stays in the buffer, as on the real server.
+            return True, obj
+        return False, None
+
+    async def dispatch(self, conn: Connection, msg: Any) -> bool:
+        """rosbridge's ``protocol.incoming`` after parsing: returns False where it returns early.
+
+        The checks before the op runs are outside the server's error handling: what raises there (a JSON
+        value that is not an object, ``png`` without ``msg``, ``message_intervall: null``...) ends the
+        connection's reading, modelled by :class:`_ReadingDied`.
+        """
+        if not isinstance(msg, str | list | dict):
+            raise _ReadingDied(f"argument of type {type(msg).__name__!r} is not iterable: {msg!r}")
+        mid = None
+        if "id" in msg:
+            if not isinstance(msg, dict):
+                raise _ReadingDied(f"{type(msg).__name__} indices must be integers, got 'id' in {msg!r:.200}")
+            mid = msg["id"]
+        if "op" not in msg:
             log.error(
                 "client %d: Received a message without an op.  All messages require 'op' field with value "
                 "one of: %s.  Original message was: %.200s",
@@ -347,24 +452,40 @@ class Bridge:
                 list(self._ops),
                 json.dumps(msg),
             )
-            return
-        handler = self._ops.get(op) if isinstance(op, str) else None
+            return False
+        if not isinstance(msg, dict):
+            raise _ReadingDied(f"{type(msg).__name__} indices must be integers, got 'op' in {msg!r:.200}")
+        op = msg["op"]
+        try:
+            handler = self._ops.get(op)
+        except TypeError as exc:
+            raise _ReadingDied(f"unhashable op {op!r:.200}") from exc
         if handler is None:
             log.error(
                 "client %d: Unknown operation: %s.  Allowed operations: %s", conn.id, op, list(self._ops)
             )
-            return
+            return False
+        if "fragment_size" in msg:
+            self._set_fragment_size(conn, msg["fragment_size"])
+        if "message_intervall" in msg:
+            value = msg["message_intervall"]
+            # is_number() is float() catching only ValueError: None, lists and objects raise TypeError.
+            if value is None or isinstance(value, list | dict):
+                raise _ReadingDied(f"float() argument must be a string or a real number: {value!r}")
+        if "png" in msg and "msg" not in msg:
+            raise _ReadingDied("KeyError: 'msg' (a 'png' key without 'msg')")
         detached = op in ("call_service", "send_action_goal") and not self.config.in_order
         try:
             result = handler(conn, msg)
             if result is None:
-                return
+                return True
             if detached:
                 self._spawn(self._guarded(conn, op, mid, result))
             else:
                 await result
         except Exception as exc:
             self._log_failure(conn, op, mid, exc)
+        return True
 
     async def _guarded(self, conn: Connection, op: str, mid: Any, work: Awaitable[None]) -> None:
         try:
@@ -384,20 +505,20 @@ class Bridge:
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
-    def _set_fragment_size(self, conn: Connection, value: Any) -> bool:
-        """Any message carrying ``fragment_size`` sets it for the whole connection (§4.2)."""
+    def _set_fragment_size(self, conn: Connection, value: Any) -> None:
+        """Any message carrying ``fragment_size`` sets it for the whole connection (§4.2).
+
+        The value is kept as sent; :meth:`Connection._fragments` gives it Python's semantics (a string
+        breaks every later send on 0.11.17).
+        """
         if self.config.dialect == "ros1":
-            # rosbridge 0.11 takes the value as it is; None switches fragmenting off.
-            if value is None or (isinstance(value, int) and not isinstance(value, bool)):
-                conn.fragment_size = value
-            return True
-        if not isinstance(value, int) or isinstance(value, bool):
-            # ROS 2 ≥ 2.0.2 compares it with max_message_size, which fails for null/non-numbers.
-            log.error("client %d: fragment_size must be an integer, got %r; message ignored", conn.id, value)
-            return False
+            conn.fragment_size = value
+            return
+        if value is None or not isinstance(value, int | float):
+            # ROS 2 ≥ 2.0.2 / 2.4.0 / 3.0.0 compare it with max_message_size outside the error handling.
+            raise _ReadingDied(f"fragment_size must be a number, got {value!r}")
         limit = self.config.max_message_size
         conn.fragment_size = min(value, limit) if limit is not None else value
-        return True
 
     def _check_qos(self, msg: dict[str, Any]) -> None:
         """The ROS 2 ``qos`` object (protocol v2.1.0, §5.6): checked, not modelled."""
@@ -434,7 +555,7 @@ class Bridge:
 
     def _op_advertise_action(self, conn: Connection, msg: dict[str, Any]) -> None:
         _check(msg, [(True, "action", (str,)), (True, "type", (str,))])
-        name = resolve_name(msg["action"])
+        name = self.name(msg["action"])
         action_type = self._resolve(msg["type"], "action")
         old = self.graph.actions.get(name)
         if old is not None:
@@ -528,7 +649,7 @@ class Bridge:
             fields.append((False, "qos", (dict,)))
         _check(msg, fields)
         self._check_qos(msg)
-        topic = resolve_name(msg["topic"])
+        topic = self.name(msg["topic"])
         msg_type = self._resolve(msg["type"], "msg")
         self._register_publisher(conn, topic, msg_type, msg.get("id"), latch=bool(msg.get("latch", False)))
 
@@ -553,7 +674,7 @@ class Bridge:
 
     def _op_unadvertise(self, conn: Connection, msg: dict[str, Any]) -> None:
         _check(msg, [(True, "topic", (str,))])
-        topic = resolve_name(msg["topic"])
+        topic = self.name(msg["topic"])
         ids = conn.advertisements.get(topic)
         if ids is None:
             return
@@ -575,12 +696,11 @@ class Bridge:
         if self.config.dialect == "ros2":
             fields += [(False, "type", (str,)), (False, "qos", (dict,))]
         _check(msg, fields)
-        topic = resolve_name(msg["topic"])
+        topic = self.name(msg["topic"])
         if topic in conn.advertisements:
             msg_type = conn.advertised_types[topic]
         else:
-            # Type inference looks the name up exactly as spelled: 'chatter' does not find '/chatter'.
-            graph_type = self.graph.topic_types.get(msg["topic"])
+            graph_type = self.infer_type(msg["topic"])
             if graph_type is not None:
                 msg_type = graph_type
             elif self.config.dialect == "ros2" and "type" in msg:
@@ -612,7 +732,7 @@ class Bridge:
             fields.append((False, "qos", (dict,)))
         _check(msg, fields)
         self._check_qos(msg)
-        topic = resolve_name(msg["topic"])
+        topic = self.name(msg["topic"])
         graph_type = self.graph.topic_types.get(topic)
         if "type" in msg:
             msg_type = self._resolve(msg["type"], "msg")
@@ -621,9 +741,8 @@ class Bridge:
                     f"Tried to register topic {topic} with type {msg_type} but it is already established "
                     f"with type {graph_type}"
                 )
-        elif msg["topic"] in self.graph.topic_types:
-            # Inference uses the name exactly as spelled: 'chatter' does not find '/chatter'.
-            msg_type = self.graph.topic_types[msg["topic"]]
+        elif (inferred := self.infer_type(msg["topic"])) is not None:
+            msg_type = inferred
         else:
             raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
         compression = msg.get("compression", "none")
@@ -646,7 +765,7 @@ class Bridge:
 
     def _op_unsubscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
         _check(msg, [(True, "topic", (str,))])
-        topic = resolve_name(msg["topic"])
+        topic = self.name(msg["topic"])
         sid = msg.get("id")
         hash(sid)  # an unhashable id fails here, before anything is registered
         sub = conn.subscriptions.get(topic)
@@ -688,7 +807,7 @@ class Bridge:
 
     def _op_advertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
         _check(msg, [(True, "service", (str,)), (True, "type", (str,))])
-        name = resolve_name(msg["service"])
+        name = self.name(msg["service"])
         service_type = self._resolve(msg["type"], "srv")
         self.graph.add_service(
             ServiceEntry(
@@ -703,7 +822,7 @@ class Bridge:
 
     def _op_unadvertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
         _check(msg, [(True, "service", (str,))])
-        name = resolve_name(msg["service"])
+        name = self.name(msg["service"])
         entry = self.graph.services.get(name)
         if entry is None or entry.owner != conn.id:
             raise OpError(f"Service {msg['service']} has not been advertised via rosbridge.")

@@ -127,14 +127,27 @@ class Connection:
     """The server side of one client's WebSocket."""
 
     def __init__(
-        self, ws: ServerConnection, cid: int, *, fragment_size: int | None, fragment_id: Any
+        self,
+        ws: ServerConnection,
+        cid: int,
+        *,
+        fragment_size: int | None,
+        fragment_id: Any,
     ) -> None:
         self.ws = ws
         self.id = cid
         #: Fragment id of an id-less message: ``"0"`` on ROS 2, ``0`` on ROS 1.
         self.fragment_id = fragment_id
-        #: Connection-wide outgoing fragment size (§4.2); ``None`` = never fragment.
-        self.fragment_size = fragment_size
+        #: Connection-wide outgoing fragment size (§4.2) as the client sent it; ``None`` = never fragment.
+        self.fragment_size: Any = fragment_size
+        #: rosbridge's per-connection input buffer (``protocol.incoming``) and its loop guard.
+        self.buffer = ""
+        self.old_buffer = ""
+        #: The real server's incoming thread died on an input: every later frame is ignored (§1).
+        self.dead = False
+        #: Frames dropped because the reading died, and frames ever queued for sending (for tests).
+        self.frames_ignored = 0
+        self.frames_queued = 0
         self.subscriptions: dict[str, TopicSubscription] = {}
         #: topic -> advertisement ids of this client (``None`` for an id-less advertise).
         self.advertisements: dict[str, list[Any]] = {}
@@ -155,15 +168,10 @@ class Connection:
     def _enqueue(self, text: str, *, droppable: bool, fragment_id: Any) -> None:
         if self.closed:
             return
-        size = self.fragment_size
-        if size is not None and size > 0 and len(text) > size:
-            chunks = [text[i : i + size] for i in range(0, len(text), size)]
-            frames = [
-                json.dumps({"op": "fragment", "id": fragment_id, "data": c, "num": n, "total": len(chunks)})
-                for n, c in enumerate(chunks)
-            ]
-        else:
-            frames = [text]
+        frames = self._fragments(text, fragment_id)
+        if frames is None:
+            return
+        self.frames_queued += len(frames)
         item = _Queued(droppable, frames, len(text))
         self._queue.append(item)
         self._queued_bytes += item.size
@@ -171,6 +179,35 @@ class Connection:
             self._droppable_count += 1
             self._shed()
         self._wakeup.set()
+
+    def _fragments(self, text: str, fragment_id: Any) -> list[str] | None:
+        """The frames for ``text`` as rosbridge's ``send`` cuts them; ``None`` when that send fails.
+
+        The size is used as the client sent it, with Python's semantics: a string or other non-number
+        fails every send (``len(...) > "big"`` raises), 0 fails (``range`` step 0), a float fails once a
+        message is longer than it (``range`` wants ints), a negative size sends nothing at all.
+        """
+        size = self.fragment_size
+        if size is None:
+            return [text]
+        if not isinstance(size, int | float):
+            log.error("client %d: send failed: fragment_size %r is not a number", self.id, size)
+            return None
+        if len(text) <= size:
+            return [text]
+        if isinstance(size, float) or size == 0:
+            log.error("client %d: send failed: cannot fragment with fragment_size %r", self.id, size)
+            return None
+        step = int(size)
+        # Both lines compute ``total`` with Python 3's true division, so it is a float (5.5 for 5 parts;
+        # 0.11.17 on Noetic, and the ros2 branch's fragmentation.py alike): the count is int(total).
+        total = ((len(text) - 1) / step) + 1
+        return [
+            json.dumps(
+                {"op": "fragment", "id": fragment_id, "data": text[i : i + step], "num": n, "total": total}
+            )
+            for n, i in enumerate(range(0, len(text), step))
+        ]
 
     def _shed(self) -> None:
         """Drop the oldest data frames while the queue is over its bounds."""

@@ -23,8 +23,10 @@ __all__ = [
     "ServiceEntry",
     "ServiceFailure",
     "ServiceHandler",
+    "canonical_name",
     "is_hidden",
     "resolve_name",
+    "rostopic_type",
 ]
 
 #: The node that owns every client's advertisements and subscriptions.
@@ -49,6 +51,34 @@ class ServiceFailure(Exception):
 def resolve_name(name: str) -> str:
     """The graph name of a topic/service name as a node in the root namespace resolves it."""
     return name if name.startswith("/") else "/" + name
+
+
+def canonical_name(name: str, node: str = "/rosbridge_websocket") -> str:
+    """rospy's ``resolve_name`` for a node in the root namespace (ROS 1).
+
+    ``""`` is the node's namespace (``/``), ``~x`` is private (``/<node>/x``), a relative name goes under
+    ``/``, and the result is canonical: repeated and trailing slashes removed (``//a/`` → ``/a``).
+    """
+    if not name:
+        return "/"
+    if name.startswith("~"):
+        name = f"{node}/{name[1:]}"
+    return "/" + "/".join(part for part in name.split("/") if part)
+
+
+def rostopic_type(topic_types: dict[str, str], topic: str) -> str | None:
+    """rostopic's ``get_topic_type`` (ROS 1): the exact name, else a topic the name is a field path of.
+
+    rosbridge 0.11.17 infers types with it and rosapi answers ``topic_type`` with it, so ``/chatter/`` and
+    ``/chatter/data`` both find ``/chatter``; ``chatter`` (relative) finds nothing.
+    """
+    found = topic_types.get(topic)
+    if found is not None:
+        return found
+    for name, msg_type in topic_types.items():
+        if topic.startswith(name + "/"):
+            return msg_type
+    return None
 
 
 def is_hidden(name: str) -> bool:

@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable, Coroutine
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.sim.graph import ServiceEntry, ServiceFailure, is_hidden
+from rosbridge_mcp_server.sim.graph import ServiceEntry, ServiceFailure, is_hidden, rostopic_type
 from rosbridge_mcp_server.sim.interfaces import InterfaceError
 from rosbridge_mcp_server.sim.params import Ros1Params, Ros2Params
 
@@ -181,7 +181,11 @@ class Rosapi:
         }
 
     async def topic_type(self, request: dict[str, Any]) -> dict[str, Any]:
-        return {"type": dict(self._topics()).get(request.get("topic", ""), "")}
+        topic = request.get("topic", "")
+        if self.ros2:
+            return {"type": dict(self._topics()).get(topic, "")}
+        # 0.11.17 asks rostopic, which also matches a field path: '/chatter/' is /chatter's type.
+        return {"type": rostopic_type(dict(self._topics()), topic) or ""}
 
     async def publishers(self, request: dict[str, Any]) -> dict[str, Any]:
         return {"publishers": self.bridge.graph.publishers_of(request.get("topic", ""))}
@@ -243,8 +247,12 @@ class Rosapi:
     # --- types ----------------------------------------------------------------------------------------------
 
     async def message_details(self, request: dict[str, Any]) -> dict[str, Any]:
+        msg_type = request.get("type", "")
         try:
-            return {"typedefs": self.bridge.registry.message_typedefs(request.get("type", ""))}
+            if not self.ros2 and msg_type not in ("time", "duration"):
+                # roslib's loader takes pkg/Type only: 'std_msgs/msg/String' is not a valid type string.
+                msg_type = self.bridge.registry.resolve(msg_type, "msg")
+            return {"typedefs": self.bridge.registry.message_typedefs(msg_type)}
         except InterfaceError as exc:
             if self.ros2:
                 # ROS 2 objectutils logs the import error and answers with no typedefs.

@@ -1,0 +1,294 @@
+"""The ROS 1 dialect behaves as the real rosbridge_suite 0.11.17 on Noetic did, frame by frame.
+
+Each case was first run against a real 0.11.17 bridge. Set ``ROSBRIDGE_TEST_URL`` to a real ROS 1 rosbridge
+(with the same world nodes: turtlesim, /add_two_ints, /fibonacci...) to run them against it too; cases about
+our world's internals only run against the simulated robot. Silence is checked with a barrier request.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import AsyncIterator
+from dataclasses import dataclass
+from typing import Any
+
+import pytest
+from rawclient import MakeSim, RawClient
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
+
+
+@dataclass
+class Target:
+    """The bridge under test: its URL, and our robot (None for a real bridge)."""
+
+    url: str
+    robot: SimulatedRobot | None
+
+
+async def _is_ros1(url: str) -> bool:
+    async with await RawClient.open(url) as client:
+        reply = await client.call("/rosapi/get_ros_version")
+    return reply["result"] is False
+
+
+@pytest.fixture(params=["sim", pytest.param("real", marks=pytest.mark.real_bridge)])
+async def target(request: pytest.FixtureRequest, make_sim: MakeSim) -> AsyncIterator[Target]:
+    """A ROS 1 simulated robot, or the real ROS 1 bridge named by ROSBRIDGE_TEST_URL."""
+    if request.param == "real":
+        if not REAL_URL:
+            pytest.skip("set ROSBRIDGE_TEST_URL=ws://host:port to run these against a real ROS 1 rosbridge")
+        if not await _is_ros1(REAL_URL):
+            pytest.skip("the real bridge is not ROS 1")
+        yield Target(REAL_URL, None)
+        return
+    robot = await make_sim(dialect="ros1")
+    yield Target(robot.url, robot)
+
+
+@pytest.fixture
+def url(target: Target) -> str:
+    """The URL of the bridge under test."""
+    return target.url
+
+
+async def assert_reading_died(target: Target, client: RawClient, request_id: str) -> None:
+    """``request_id`` (sent after the fatal frame) is never answered.
+
+    Our robot says when it has dropped the frame (no timer needed); a real bridge gives no sign at all, so
+    there the proof is a bounded wait.
+    """
+    robot = target.robot
+    if robot is None:
+        with pytest.raises(TimeoutError):
+            await client.reply(request_id, wait=1.0)
+        return
+    conn = max(robot.bridge.connections.values(), key=lambda c: c.id)
+    await robot.wait_for(lambda _: conn.frames_ignored >= 1)
+    assert conn.dead
+    assert conn.frames_queued == 0
+
+
+async def _fragments(client: RawClient, request_id: Any) -> list[dict[str, Any]]:
+    first = await client.recv_until(lambda f: f.get("op") == "fragment" and f.get("id") == request_id)
+    parts = [first]
+    while len(parts) < int(first["total"]):
+        parts.append(
+            await client.recv_until(lambda f: f.get("op") == "fragment" and f.get("id") == request_id)
+        )
+    return parts
+
+
+# --- 1. fragments ----------------------------------------------------------------------------------
+
+
+async def test_fragment_total_is_a_float_from_true_division(url: str) -> None:
+    """0.11.17 on Python 3 sends total = ((len - 1) / size) + 1, a float; int(total) is the count."""
+    async with await RawClient.open(url) as client:
+        await client.send(
+            {"op": "call_service", "id": "f1", "service": "/rosapi/get_time", "fragment_size": 30}
+        )
+        parts = await _fragments(client, "f1")
+    text = "".join(p["data"] for p in parts)
+    assert isinstance(parts[0]["total"], float)
+    assert parts[0]["total"] == (len(text) - 1) / 30 + 1
+    assert len(parts) == int(parts[0]["total"])
+    assert json.loads(text)["values"]["time"]["secs"] > 0
+
+
+async def test_fragments_of_an_idless_service_response_carry_the_integer_0(url: str) -> None:
+    """A call without id answers without id; its fragments carry id 0 (an int) on ROS 1."""
+    async with await RawClient.open(url) as client:
+        await client.send({"op": "call_service", "service": "/rosapi/get_time", "fragment_size": 30})
+        parts = await _fragments(client, 0)
+    assert all(p["id"] == 0 and isinstance(p["id"], int) for p in parts)
+    assert "id" not in json.loads("".join(p["data"] for p in parts))
+
+
+# --- 2. rospy's error texts ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("type_name", "detail"),
+    [
+        ("std_msgs/msg/String", "std_msgs/msg/String is not a valid type string"),
+        ("", " is not a valid type string"),
+    ],
+)
+async def test_rosapi_errors_carry_noetic_bytes_wrapper(url: str, type_name: str, detail: str) -> None:
+    """Noetic's rospy formats the error bytes with %s: "... responded with an error: b'error ...'"."""
+    async with await RawClient.open(url) as client:
+        reply = await client.call("/rosapi/message_details", {"type": type_name})
+    assert reply["result"] is False
+    assert reply["values"] == (
+        f"service [/rosapi/message_details] responded with an error: b'error processing request: {detail}'"
+    )
+
+
+async def test_an_error_text_with_a_quote_is_wrapped_in_double_quotes(url: str) -> None:
+    """Python's bytes repr switches to b"..." when the text holds a single quote."""
+    async with await RawClient.open(url) as client:
+        reply = await client.call("/rosapi/message_details", {"type": "std_msgs/string"})
+    assert reply["result"] is False
+    assert reply["values"] == (
+        'service [/rosapi/message_details] responded with an error: b"error processing request: Unable to '
+        "import msg class string from package std_msgs. Caused by module 'std_msgs.msg' has no attribute "
+        "'string'\""
+    )
+
+
+# --- 3. args that are neither an object nor a list -------------------------------------------------
+
+
+@pytest.mark.parametrize("args", [None, "hello", 5, True])
+async def test_args_that_are_not_an_object_or_list_are_an_empty_request(url: str, args: Any) -> None:
+    """services.py only handles lists and dicts: anything else leaves the request at its defaults."""
+    async with await RawClient.open(url) as client:
+        await client.send({"op": "call_service", "id": "a", "service": "/add_two_ints", "args": args})
+        reply = await client.reply("a")
+    assert reply == {
+        "op": "service_response",
+        "service": "/add_two_ints",
+        "values": {"sum": 0},
+        "result": True,
+        "id": "a",
+    }
+
+
+# --- 4. names are resolved the rospy way -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("spelling", ["/add_two_ints/", "//add_two_ints", "add_two_ints"])
+async def test_service_names_are_canonicalised(url: str, spelling: str) -> None:
+    """rospy resolves the name: trailing and doubled slashes go, relative names go under /."""
+    async with await RawClient.open(url) as client:
+        reply = await client.call(spelling, {"a": 1, "b": 1})
+    assert reply["result"] is True
+    assert reply["values"] == {"sum": 2}
+    assert reply["service"] == spelling  # echoed as sent
+
+
+@pytest.mark.parametrize(("spelling", "resolved"), [("nope", "/nope"), ("", "/"), ("/nope//", "/nope")])
+async def test_missing_service_error_names_the_resolved_name(url: str, spelling: str, resolved: str) -> None:
+    """'Service /nope does not exist' for 'nope'; the empty name resolves to '/'."""
+    async with await RawClient.open(url) as client:
+        reply = await client.call(spelling)
+    assert reply["result"] is False
+    assert reply["values"] == f"Service {resolved} does not exist"
+
+
+async def test_topic_type_and_subscribe_accept_a_trailing_slash(url: str) -> None:
+    """rostopic matches '/chatter/' to /chatter, and rospy subscribes the canonical name."""
+    async with await RawClient.open(url) as client:
+        topic_type = await client.values("/rosapi/topic_type", {"topic": "/chatter/"})
+        await client.send({"op": "subscribe", "topic": "/chatter/"})
+        frame = await client.next_publish("/chatter/")
+    assert topic_type == {"type": "std_msgs/String"}
+    assert frame["msg"]["data"].startswith("Hello World")
+
+
+# --- 5. the input buffer and the inputs that end a connection's reading ----------------------------
+
+
+async def test_several_objects_in_one_frame_are_all_handled(url: str) -> None:
+    """The buffer parser takes one object after the other out of the same frame."""
+    calls = [
+        {"op": "call_service", "id": f"m{n}", "service": "/add_two_ints", "args": {"a": n, "b": 1}}
+        for n in range(3)
+    ]
+    async with await RawClient.open(url) as client:
+        await client.send("".join(json.dumps(c) for c in calls))
+        replies = [await client.reply(f"m{n}") for n in range(3)]
+    assert [r["values"] for r in replies] == [{"sum": 1}, {"sum": 2}, {"sum": 3}]
+
+
+async def test_an_object_split_over_frames_is_handled_once_complete(url: str) -> None:
+    """The first half waits in the buffer; the second completes it."""
+    text = json.dumps(
+        {"op": "call_service", "id": "split", "service": "/add_two_ints", "args": {"a": 4, "b": 5}}
+    )
+    async with await RawClient.open(url) as client:
+        await client.send(text[:20])
+        await client.send(text[20:])
+        reply = await client.reply("split")
+    assert reply["values"] == {"sum": 9}
+
+
+async def test_garbage_before_an_object_is_thrown_away(url: str) -> None:
+    """'garbage{' stays in the buffer; the next frame's object is found after it."""
+    async with await RawClient.open(url) as client:
+        await client.send("garbage{")
+        assert (await client.values("/add_two_ints", {"a": 2, "b": 2})) == {"sum": 4}
+
+
+@pytest.mark.parametrize(
+    "frame",
+    [
+        "5",
+        "true",
+        '{"op": "call_service", "id": "p", "service": "/rosapi/get_time", "png": "x"}',
+        '{"op": "call_service", "id": "p", "service": "/rosapi/get_time", "message_intervall": null}',
+    ],
+)
+async def test_inputs_that_end_the_connections_reading_silence_it_for_good(
+    target: Target, frame: str
+) -> None:
+    """After such a frame every later frame is ignored (the socket stays open); others are unaffected."""
+    async with await RawClient.open(target.url) as bystander, await RawClient.open(target.url) as victim:
+        await victim.send(frame)
+        await victim.send({"op": "call_service", "id": "after", "service": "/rosapi/get_time"})
+        await assert_reading_died(target, victim, "after")
+        assert (await bystander.call("/add_two_ints", {"a": 1, "b": 1}))["result"] is True
+        pong = await victim.ws.ping()  # the socket is still open
+        await pong
+
+
+@pytest.mark.parametrize(
+    "frame",
+    [
+        "[1, 2]",
+        '"str"',
+        "null",
+        '{"op": "call_service", "id": "p", "service": "/rosapi/get_time", "message_intervall": "abc"}',
+    ],
+)
+async def test_inputs_that_only_cost_their_own_frame(url: str, frame: str) -> None:
+    """A list, a string, null or a non-numeric message_intervall string do not end the reading."""
+    async with await RawClient.open(url) as client:
+        await client.send(frame)
+        assert (await client.values("/add_two_ints", {"a": 1, "b": 2})) == {"sum": 3}
+
+
+async def test_a_non_numeric_fragment_size_breaks_every_later_reply(target: Target) -> None:
+    """0.11.17 keeps fragment_size as sent; comparing a length with 'big' fails every later send."""
+    async with await RawClient.open(target.url) as client:
+        await client.send(
+            {"op": "call_service", "id": "b1", "service": "/rosapi/get_time", "fragment_size": "big"}
+        )
+        await client.send({"op": "call_service", "id": "b2", "service": "/add_two_ints", "args": {"a": 1}})
+        if target.robot is not None:
+            # Our calls run as tasks: wait until /add_two_ints has answered (into the broken send).
+            await target.robot.wait_for(lambda w: w.service_calls.get("/add_two_ints", 0) >= 1)
+        # Incoming ops still work: fragment_size null switches fragmenting off and replies flow again, so
+        # this reply is a barrier: b1 and b2 were answered (and lost) before it.
+        await client.send(
+            {"op": "call_service", "id": "b3", "service": "/rosapi/get_time", "fragment_size": None}
+        )
+        first = await client.recv()
+    assert first["id"] == "b3"
+    assert first["result"] is True
+
+
+async def test_a_binary_frame_is_read_through_its_bytes_repr(url: str) -> None:
+    """0.11.17 appends str(payload) ("b'{...}'"); the brace scan still finds the object inside."""
+    async with await RawClient.open(url) as client:
+        await client.ws.send(
+            json.dumps({"op": "call_service", "id": "bin", "service": "/rosapi/get_time"}).encode()
+        )
+        reply = await client.reply("bin")
+        # The trailing quote left in the buffer does not disturb the next frame.
+        assert (await client.values("/add_two_ints", {"a": 3, "b": 3})) == {"sum": 6}
+    assert reply["result"] is True
