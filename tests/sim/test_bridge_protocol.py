@@ -638,3 +638,15 @@ async def test_a_bare_number_ends_the_connections_reading_on_both_lines(sim: Sim
         await sim.wait_for(lambda _: conn.frames_ignored >= 1)
     assert conn.dead
     assert conn.frames_queued == 0
+
+
+async def test_ros2_rosbridge_also_publishes_its_client_topics(sim_ros2: SimulatedRobot) -> None:
+    """The ros2 branch's ClientManager publishes /client_count and /connected_clients (transient local)."""
+    async with await RawClient.open(sim_ros2.url) as client:
+        await client.send({"op": "subscribe", "topic": "/client_count"})
+        count = await client.next_publish("/client_count")
+        topics = await client.values("/rosapi/topics")
+    assert count["msg"] == {"data": 1}
+    types = dict(zip(topics["topics"], topics["types"], strict=True))
+    assert types["/client_count"] == "std_msgs/msg/Int32"
+    assert types["/connected_clients"] == "rosbridge_msgs/msg/ConnectedClients"

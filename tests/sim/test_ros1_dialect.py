@@ -292,3 +292,34 @@ async def test_a_binary_frame_is_read_through_its_bytes_repr(url: str) -> None:
         # The trailing quote left in the buffer does not disturb the next frame.
         assert (await client.values("/add_two_ints", {"a": 3, "b": 3})) == {"sum": 6}
     assert reply["result"] is True
+
+
+# --- 6. rosbridge's own topics ------------------------------------------------------------------------
+
+
+async def test_client_count_is_latched_and_follows_connects_and_disconnects(url: str) -> None:
+    """/client_count (std_msgs/Int32, latched) is republished on every connect and disconnect."""
+    async with await RawClient.open(url) as watcher:
+        await watcher.send({"op": "subscribe", "topic": "/client_count"})
+        now = (await watcher.next_publish("/client_count"))["msg"]["data"]
+        other = await RawClient.open(url)
+        assert (await watcher.next_publish("/client_count"))["msg"]["data"] == now + 1
+        await other.close()
+        assert (await watcher.next_publish("/client_count"))["msg"]["data"] == now
+
+
+async def test_connected_clients_names_each_clients_address_and_time(url: str) -> None:
+    """/connected_clients (rosbridge_msgs/ConnectedClients, latched) lists ip_address and connection_time."""
+    async with await RawClient.open(url) as client:
+        await client.send({"op": "subscribe", "topic": "/connected_clients"})
+        clients = (await client.next_publish("/connected_clients"))["msg"]["clients"]
+        topics = await client.values("/rosapi/topics")
+        details = await client.values("/rosapi/node_details", {"node": "/rosbridge_websocket"})
+    assert clients
+    assert clients[-1]["ip_address"] == "127.0.0.1"
+    assert set(clients[-1]["connection_time"]) == {"secs", "nsecs"}
+    assert clients[-1]["connection_time"]["secs"] > 0
+    types = dict(zip(topics["topics"], topics["types"], strict=True))
+    assert types["/client_count"] == "std_msgs/Int32"
+    assert types["/connected_clients"] == "rosbridge_msgs/ConnectedClients"
+    assert {"/client_count", "/connected_clients"} <= set(details["publishing"])

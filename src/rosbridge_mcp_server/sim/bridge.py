@@ -135,6 +135,9 @@ class Bridge:
         self._tasks: set[asyncio.Task[Any]] = set()
         self._readers: set[asyncio.Task[None]] = set()
         self._fragment_id: Any = "0" if config.dialect == "ros2" else 0
+        #: rosbridge's ClientManager: (ip address, connection time) per connected client, in connect order.
+        self._clients: dict[int, tuple[str, float]] = {}
+        self._client_types: tuple[str, str] | None = None
         self._ops: dict[str, Callable[[Connection, dict[str, Any]], Awaitable[None] | None]] = {
             "fragment": self._op_fragment,
             "advertise": self._op_advertise,
@@ -193,6 +196,43 @@ class Bridge:
         if isinstance(args, dict):
             return args
         return {}
+
+    # --- rosbridge's own topics --------------------------------------------------------------------------
+
+    def add_client_topics(self) -> None:
+        """rosbridge's ClientManager: latched ``/client_count`` and ``/connected_clients`` (both lines).
+
+        0.11.17 publishes them latched, the ros2 branch with transient-local QoS; both republish on every
+        connect and disconnect.
+        """
+        ros2 = self.config.dialect == "ros2"
+        try:
+            count_type = self.registry.resolve("std_msgs/msg/Int32" if ros2 else "std_msgs/Int32", "msg")
+            clients_type = self.registry.resolve(
+                "rosbridge_msgs/msg/ConnectedClients" if ros2 else "rosbridge_msgs/ConnectedClients", "msg"
+            )
+        except InterfaceError as exc:
+            log.warning("rosbridge's client topics left out: %s", exc)
+            return
+        self._client_types = (count_type, clients_type)
+        for topic, msg_type in (("/client_count", count_type), ("/connected_clients", clients_type)):
+            self.graph.add_publisher(ROSBRIDGE_NODE, topic, msg_type)
+            self.graph.latched.setdefault(topic, None)
+        self._publish_clients()
+
+    def _publish_clients(self) -> None:
+        if self._client_types is None:
+            return
+        count_type, clients_type = self._client_types
+        ros2 = self.config.dialect == "ros2"
+        clients = []
+        for address, since in self._clients.values():
+            sec = int(since)
+            nsec = int((since - sec) * 1e9)
+            stamp = {"sec": sec, "nanosec": nsec} if ros2 else {"secs": sec, "nsecs": nsec}
+            clients.append({"ip_address": address, "connection_time": stamp})
+        self.publish_json("/connected_clients", clients_type, {"clients": clients})
+        self.publish_json("/client_count", count_type, {"data": len(clients)})
 
     # --- topic traffic ------------------------------------------------------------------------------------
 
@@ -300,6 +340,9 @@ class Bridge:
         )
         self.connections[conn.id] = conn
         self.connection_count = len(self.connections)
+        address = ws.remote_address[0] if ws.remote_address else ""
+        self._clients[conn.id] = (str(address), time.time())
+        self._publish_clients()
         self.world.notify()
         log.info("client %d connected from %s", conn.id, ws.remote_address)
         writer = asyncio.create_task(conn.writer())
@@ -321,6 +364,8 @@ class Bridge:
             self._cleanup(conn)
             del self.connections[conn.id]
             self.connection_count = len(self.connections)
+            self._clients.pop(conn.id, None)
+            self._publish_clients()
             self.world.notify()
             log.info("client %d disconnected", conn.id)
 

@@ -132,6 +132,7 @@ class WorldNodes:
     def build(self) -> None:
         """Register every node, topic, service, action and parameter of the world."""
         self._plumbing()
+        self.bridge.add_client_topics()
         self._turtlesim()
         self._talker()
         self._services()

@@ -190,6 +190,9 @@ COMMON: dict[str, str] = {
     "turtlesim/srv/TeleportRelative": "float32 linear\nfloat32 angular\n---\n",
     "turtlesim/srv/SetPen": "uint8 r\nuint8 g\nuint8 b\nuint8 width\nuint8 off\n---\n",
     "rosgraph_msgs/msg/Clock": "builtin_interfaces/Time clock\n",
+    # rosbridge's own topics (/client_count is std_msgs Int32)
+    "rosbridge_msgs/msg/ConnectedClient": "string ip_address\nbuiltin_interfaces/Time connection_time\n",
+    "rosbridge_msgs/msg/ConnectedClients": "ConnectedClient[] clients\n",
 }
 
 ROS2_ONLY: dict[str, str] = {
