@@ -82,7 +82,7 @@ async def _fragments(client: RawClient, request_id: Any) -> list[dict[str, Any]]
     return parts
 
 
-# --- 1. fragments ----------------------------------------------------------------------------------
+# --- 1. fragments ---------------------------------------------------------------------------------------
 
 
 async def test_fragment_total_is_a_float_from_true_division(url: str) -> None:
@@ -108,7 +108,7 @@ async def test_fragments_of_an_idless_service_response_carry_the_integer_0(url: 
     assert "id" not in json.loads("".join(p["data"] for p in parts))
 
 
-# --- 2. rospy's error texts ------------------------------------------------------------------------
+# --- 2. rospy's error texts -----------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize(
@@ -140,7 +140,7 @@ async def test_an_error_text_with_a_quote_is_wrapped_in_double_quotes(url: str) 
     )
 
 
-# --- 3. args that are neither an object nor a list -------------------------------------------------
+# --- 3. args that are neither an object nor a list ------------------------------------------------------
 
 
 @pytest.mark.parametrize("args", [None, "hello", 5, True])
@@ -158,7 +158,7 @@ async def test_args_that_are_not_an_object_or_list_are_an_empty_request(url: str
     }
 
 
-# --- 4. names are resolved the rospy way -----------------------------------------------------------
+# --- 4. names are resolved the rospy way ----------------------------------------------------------------
 
 
 @pytest.mark.parametrize("spelling", ["/add_two_ints/", "//add_two_ints", "add_two_ints"])
@@ -190,7 +190,7 @@ async def test_topic_type_and_subscribe_accept_a_trailing_slash(url: str) -> Non
     assert frame["msg"]["data"].startswith("Hello World")
 
 
-# --- 5. the input buffer and the inputs that end a connection's reading ----------------------------
+# --- 5. the input buffer and the inputs that end a connection's reading ---------------------------------
 
 
 async def test_several_objects_in_one_frame_are_all_handled(url: str) -> None:
@@ -272,6 +272,10 @@ async def test_a_non_numeric_fragment_size_breaks_every_later_reply(target: Targ
         if target.robot is not None:
             # Our calls run as tasks: wait until /add_two_ints has answered (into the broken send).
             await target.robot.wait_for(lambda w: w.service_calls.get("/add_two_ints", 0) >= 1)
+        else:
+            # A real bridge answers in threads and gives no sign: a bounded wait is the only proof there.
+            with pytest.raises(TimeoutError):
+                await client.recv(wait=1.0)
         # Incoming ops still work: fragment_size null switches fragmenting off and replies flow again, so
         # this reply is a barrier: b1 and b2 were answered (and lost) before it.
         await client.send(
@@ -294,7 +298,7 @@ async def test_a_binary_frame_is_read_through_its_bytes_repr(url: str) -> None:
     assert reply["result"] is True
 
 
-# --- 6. rosbridge's own topics ------------------------------------------------------------------------
+# --- 6. rosbridge's own topics --------------------------------------------------------------------------
 
 
 async def test_client_count_is_latched_and_follows_connects_and_disconnects(url: str) -> None:
@@ -323,3 +327,46 @@ async def test_connected_clients_names_each_clients_address_and_time(url: str) -
     assert types["/client_count"] == "std_msgs/Int32"
     assert types["/connected_clients"] == "rosbridge_msgs/ConnectedClients"
     assert {"/client_count", "/connected_clients"} <= set(details["publishing"])
+
+
+# --- 7. rosapi details ----------------------------------------------------------------------------------
+
+
+async def test_service_providers_names_a_node_once_per_matching_service(url: str) -> None:
+    """/reset and /clear are both std_srvs/Empty on /turtlesim: it is listed twice."""
+    async with await RawClient.open(url) as client:
+        providers = await client.values("/rosapi/service_providers", {"service": "std_srvs/Empty"})
+    assert providers == {"providers": ["/turtlesim", "/turtlesim"]}
+
+
+@pytest.mark.parametrize("value", ["null", '{"a": null}'])
+async def test_set_param_with_null_fails_with_xmlrpcs_text(url: str, value: str) -> None:
+    """XML-RPC cannot marshal None: rospy's error, and the parameter is left alone."""
+    async with await RawClient.open(url) as client:
+        await client.values("/rosapi/set_param", {"name": "/probe_null", "value": "1"})
+        reply = await client.call("/rosapi/set_param", {"name": "/probe_null", "value": value})
+        after = await client.values("/rosapi/get_param", {"name": "/probe_null"})
+        await client.values("/rosapi/delete_param", {"name": "/probe_null"})
+    assert reply["result"] is False
+    assert reply["values"] == (
+        "service [/rosapi/set_param] responded with an error: "
+        "b'error processing request: cannot marshal None unless allow_none is enabled'"
+    )
+    assert after == {"value": "1"}
+
+
+async def test_the_master_remembers_the_type_of_a_topic_nobody_uses_any_more(url: str) -> None:
+    """After unsubscribe, topic_type and topics_for_type still know it; topics no longer lists it."""
+    async with await RawClient.open(url) as client:
+        await client.send({"op": "subscribe", "topic": "/probe_memory", "type": "std_msgs/Float64"})
+        await client.send({"op": "unsubscribe", "topic": "/probe_memory"})
+        topic_type = await client.values("/rosapi/topic_type", {"topic": "/probe_memory"})
+        for_type = await client.values("/rosapi/topics_for_type", {"type": "std_msgs/Float64"})
+        topics = await client.values("/rosapi/topics")
+        # A subscribe without type infers the remembered type.
+        await client.send({"op": "subscribe", "topic": "/probe_memory"})
+        subscribers = await client.values("/rosapi/subscribers", {"topic": "/probe_memory"})
+    assert topic_type == {"type": "std_msgs/Float64"}
+    assert "/probe_memory" in for_type["topics"]
+    assert "/probe_memory" not in topics["topics"]
+    assert subscribers == {"subscribers": ["/rosbridge_websocket"]}

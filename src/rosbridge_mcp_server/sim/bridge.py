@@ -183,8 +183,13 @@ class Bridge:
         which also takes a field path ('/chatter/' finds '/chatter').
         """
         if self.config.dialect == "ros1":
-            return rostopic_type(self.graph.topic_types, spelled)
+            return rostopic_type(self.graph.known_types, spelled)
         return self.graph.topic_types.get(spelled)
+
+    def established_type(self, topic: str) -> str | None:
+        """The type a new publisher/subscriber of ``topic`` must have (ROS 1: also of a dead topic)."""
+        types = self.graph.known_types if self.config.dialect == "ros1" else self.graph.topic_types
+        return types.get(topic)
 
     def _args_dict(self, msg_type: str, args: Any) -> dict[str, Any]:
         """rosbridge's ``args_to_service_request_instance``: a list is values in field order, an object is
@@ -701,7 +706,7 @@ class Bridge:
     def _register_publisher(
         self, conn: Connection, topic: str, msg_type: str, aid: Any, *, latch: bool
     ) -> None:
-        existing = self.graph.topic_types.get(topic)
+        existing = self.established_type(topic)
         if existing is not None and existing != msg_type:
             raise OpError(
                 f"Tried to register topic {topic} with type {msg_type} but it is already established with "
@@ -778,7 +783,7 @@ class Bridge:
         _check(msg, fields)
         self._check_qos(msg)
         topic = self.name(msg["topic"])
-        graph_type = self.graph.topic_types.get(topic)
+        graph_type = self.established_type(topic)
         if "type" in msg:
             msg_type = self._resolve(msg["type"], "msg")
             if graph_type is not None and graph_type != msg_type:

@@ -120,6 +120,9 @@ class Graph:
     local_subscribers: dict[str, list[LocalSubscriber]] = field(default_factory=dict)
     #: Topics whose last message is kept for late subscribers (latched / transient local).
     latched: dict[str, Any] = field(default_factory=dict)
+    #: Every topic type ever registered, in registration order: the ROS 1 master never forgets one
+    #: (rostopic type look-ups, rosapi ``topic_type``/``topics_for_type`` still find dead topics).
+    known_types: dict[str, str] = field(default_factory=dict)
 
     def node(self, name: str) -> NodeInfo:
         """The node called ``name``, created on first use."""
@@ -131,6 +134,7 @@ class Graph:
     def add_publisher(self, node: str, topic: str, msg_type: str) -> None:
         """Count one publisher of ``topic`` on ``node``; the caller has checked the type."""
         self.topic_types.setdefault(topic, msg_type)
+        self.known_types.setdefault(topic, msg_type)
         self.node(node).publishes[topic] += 1
 
     def remove_publisher(self, node: str, topic: str) -> None:
@@ -142,6 +146,7 @@ class Graph:
     ) -> None:
         """Count one subscriber of ``topic`` on ``node`` (a world node passes its callback)."""
         self.topic_types.setdefault(topic, msg_type)
+        self.known_types.setdefault(topic, msg_type)
         self.node(node).subscribes[topic] += 1
         if callback is not None:
             self.local_subscribers.setdefault(topic, []).append(callback)

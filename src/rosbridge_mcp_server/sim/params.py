@@ -176,6 +176,9 @@ class Ros1Params:
             decoded = json.loads(value)
         except ValueError as exc:
             raise ServiceFailure(JSON_REQUIRED) from exc
+        if _holds_none(decoded):
+            # rospy hands the value to the master over XML-RPC, which refuses None before anything changes.
+            raise ServiceFailure("cannot marshal None unless allow_none is enabled")
         key = self._norm(name)
         self.delete(key)
         self._store_value(key, decoded)
@@ -216,3 +219,14 @@ class Ros1Params:
     def names(self) -> list[str]:
         """rosapi ``get_param_names``: every leaf name."""
         return sorted(self.store)
+
+
+def _holds_none(value: Any) -> bool:
+    """Whether a JSON value is or contains ``null`` (XML-RPC cannot marshal it)."""
+    if value is None:
+        return True
+    if isinstance(value, dict):
+        return any(_holds_none(v) for v in value.values())
+    if isinstance(value, list):
+        return any(_holds_none(v) for v in value)
+    return False

@@ -164,7 +164,11 @@ class Rosapi:
         return {"topics": [t for t, _ in pairs], "types": [ty for _, ty in pairs]}
 
     async def topics_for_type(self, request: dict[str, Any]) -> dict[str, Any]:
-        return {"topics": [t for t, ty in self._topics() if ty == request.get("type")]}
+        wanted = request.get("type")
+        if self.ros2:
+            return {"topics": [t for t, ty in self._topics() if ty == wanted]}
+        # 0.11.17 asks the master's getTopicTypes, which remembers dead topics (in registration order).
+        return {"topics": [t for t, ty in self.bridge.graph.known_types.items() if ty == wanted]}
 
     async def topics_and_raw_types(self, request: dict[str, Any]) -> dict[str, Any]:
         pairs = self._topics()
@@ -184,8 +188,9 @@ class Rosapi:
         topic = request.get("topic", "")
         if self.ros2:
             return {"type": dict(self._topics()).get(topic, "")}
-        # 0.11.17 asks rostopic, which also matches a field path: '/chatter/' is /chatter's type.
-        return {"type": rostopic_type(dict(self._topics()), topic) or ""}
+        # 0.11.17 asks rostopic, which also matches a field path ('/chatter/' is /chatter's type) and
+        # uses the master's memory of every type ever registered.
+        return {"type": rostopic_type(self.bridge.graph.known_types, topic) or ""}
 
     async def publishers(self, request: dict[str, Any]) -> dict[str, Any]:
         return {"publishers": self.bridge.graph.publishers_of(request.get("topic", ""))}
@@ -206,8 +211,12 @@ class Rosapi:
     async def service_providers(self, request: dict[str, Any]) -> dict[str, Any]:
         # Quirk of every version: the `service` field is compared with service *types*, not names.
         wanted = request.get("service", "")
-        nodes = {e.node for e in self.bridge.graph.services.values() if e.type == wanted}
-        return {"providers": sorted(nodes)}
+        if self.ros2:
+            nodes = {e.node for e in self.bridge.graph.services.values() if e.type == wanted}
+            return {"providers": sorted(nodes)}
+        # 0.11.17 appends the node once per matching service, in registration order (/turtlesim twice
+        # for std_srvs/Empty: /reset and /clear).
+        return {"providers": [e.node for e in self.bridge.graph.services.values() if e.type == wanted]}
 
     async def service_node(self, request: dict[str, Any]) -> dict[str, Any]:
         entry = self.bridge.graph.services.get(request.get("service", ""))
