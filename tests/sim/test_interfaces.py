@@ -554,6 +554,28 @@ def test_bad_byte_arrays_are_rejected(ros2: InterfaceRegistry, ros1: InterfaceRe
     assert conversion_error(ros1, "sensor_msgs/Image", {"data": [1, 256]}) == "byte must be in range(0, 256)"
 
 
+@pytest.mark.parametrize("bad", [[1, 2.0], [1, None], [1, "2"], [-1], [2**70], [[1]]])
+def test_ros2_byte_array_fast_path_rejects_what_the_setter_rejects(ros2: InterfaceRegistry, bad: Any) -> None:
+    """Floats, None, strings, negative or huge numbers and nested lists in a uint8[] all fail alike."""
+    assert conversion_error(ros2, "sensor_msgs/Image", {"data": bad}) == (
+        "The 'data' field must be a set or sequence and each value of type 'int' "
+        "and each unsigned integer in [0, 255]"
+    )
+
+
+def test_a_full_size_image_converts_from_a_list_or_base64(
+    ros1: InterfaceRegistry, ros2: InterfaceRegistry
+) -> None:
+    """A 640x480 rgb8 image's data (921 600 bytes, bools count as ints) round-trips to the same base64."""
+    pixels = bytes(range(256)) * 3600
+    expected = base64.b64encode(pixels).decode()
+    for registry, msg_type in ((ros1, "sensor_msgs/Image"), (ros2, "sensor_msgs/msg/Image")):
+        from_list = registry.from_json(msg_type, {"data": list(pixels)})
+        from_text = registry.from_json(msg_type, {"data": expected})
+        assert from_list["data"] == from_text["data"] == expected
+    assert ros2.from_json("sensor_msgs/msg/Image", {"data": [True, False, 2]})["data"] == "AQAC"
+
+
 def test_ros1_reads_only_secs_and_nsecs(ros1: InterfaceRegistry) -> None:
     """ROS 1 ignores sec/nanosec silently, and a time that is not an object stays zero."""
     assert ros1.from_json("std_msgs/Time", {"data": {"sec": 5, "nanosec": 7}}) == {"data": ZERO_ROS1}
