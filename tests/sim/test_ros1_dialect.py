@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from typing import Any
@@ -370,3 +371,67 @@ async def test_the_master_remembers_the_type_of_a_topic_nobody_uses_any_more(url
     assert "/probe_memory" in for_type["topics"]
     assert "/probe_memory" not in topics["topics"]
     assert subscribers == {"subscribers": ["/rosbridge_websocket"]}
+
+
+# --- 10. what a message looks like after rospy carried it -----------------------------------------------
+
+
+async def _latched_publish(url: str, topic: str, msg_type: str, msg: dict[str, Any]) -> dict[str, Any]:
+    """Advertise without latch, publish with latch: true, and return what a later subscriber gets."""
+    async with await RawClient.open(url) as publisher, await RawClient.open(url) as subscriber:
+        await publisher.send({"op": "advertise", "topic": topic, "type": msg_type})
+        await publisher.send({"op": "publish", "topic": topic, "latch": True, "msg": msg})
+        await publisher.frames_before_barrier()
+        await subscriber.send({"op": "subscribe", "topic": topic})
+        return (await subscriber.next_publish(topic))["msg"]
+
+
+async def test_latch_on_a_publish_op_latches_the_topic(url: str) -> None:
+    """0.11.17 registers the publisher again with the publish's latch flag: a later subscriber gets it."""
+    msg = await _latched_publish(url, "/probe_latch_op", "std_msgs/String", {"data": "kept"})
+    assert msg == {"data": "kept"}
+
+
+async def test_root_header_seq_is_the_publishers_own_counter(url: str) -> None:
+    """rospy overwrites header.seq: the first message of a new publisher is seq 1, whatever was sent."""
+    msg = await _latched_publish(
+        url, "/probe_seq", "geometry_msgs/PointStamped", {"header": {"seq": 42, "frame_id": "f"}}
+    )
+    assert msg["header"]["seq"] == 1
+    assert msg["header"]["frame_id"] == "f"
+
+
+async def test_float32_values_arrive_rounded_to_float32(url: str) -> None:
+    """0.1 on a std_msgs/Float32 comes back as 0.10000000149011612 (packed as a C float on the way)."""
+    msg = await _latched_publish(url, "/probe_f32", "std_msgs/Float32", {"data": 0.1})
+    assert msg == {"data": 0.10000000149011612}
+
+
+async def test_times_arrive_canonical(url: str) -> None:
+    """genpy canonicalizes a time when unpacking: 1 s + 2e9 ns arrives as 3 s + 0 ns."""
+    msg = await _latched_publish(
+        url, "/probe_time", "std_msgs/Time", {"data": {"secs": 1, "nsecs": 2000000000}}
+    )
+    assert msg == {"data": {"secs": 3, "nsecs": 0}}
+
+
+@pytest.mark.parametrize(
+    "data",
+    [{"secs": -1, "nsecs": 0}, {"secs": 2**32, "nsecs": 0}, {"secs": 0, "nsecs": -5}],
+)
+async def test_a_time_that_does_not_pack_as_uint32_is_lost(sim_ros1: SimulatedRobot, data: Any) -> None:
+    """A negative or too large time fails genpy's '<2I' pack: only logged, nobody gets the message."""
+    async with await RawClient.open(sim_ros1.url) as client:
+        await client.send({"op": "advertise", "topic": "/probe_bad_time", "type": "std_msgs/Time"})
+        await client.send({"op": "subscribe", "topic": "/probe_bad_time"})
+        await client.send({"op": "publish", "topic": "/probe_bad_time", "msg": {"data": data}})
+        assert await client.frames_before_barrier() == []
+
+
+async def test_the_turtle_pose_is_float32(sim_ros1: SimulatedRobot) -> None:
+    """turtlesim's Pose is float32: the pose on the wire is the world's pose rounded to float32."""
+    sim_ros1.world.turtle.x = 1.1
+    async with await RawClient.open(sim_ros1.url) as client:
+        await client.send({"op": "subscribe", "topic": "/turtle1/pose"})
+        pose = (await client.next_publish("/turtle1/pose"))["msg"]
+    assert pose["x"] == struct.unpack("<f", struct.pack("<f", 1.1))[0]

@@ -138,6 +138,8 @@ class Bridge:
         #: rosbridge's ClientManager: (ip address, connection time) per connected client, in connect order.
         self._clients: dict[int, tuple[str, float]] = {}
         self._client_types: tuple[str, str] | None = None
+        #: rospy's per-publisher header seq counters: (published by rosbridge?, topic) -> last seq.
+        self._header_seq: dict[tuple[bool, str], int] = {}
         self._ops: dict[str, Callable[[Connection, dict[str, Any]], Awaitable[None] | None]] = {
             "fragment": self._op_fragment,
             "advertise": self._op_advertise,
@@ -242,7 +244,22 @@ class Bridge:
     # --- topic traffic ------------------------------------------------------------------------------------
 
     def publish(self, topic: str, msg_type: str, msg: dict[str, Any], *, source: int = 0) -> None:
-        """Route a converted message to the world's subscribers and every subscribed client."""
+        """Route a converted message to the world's subscribers and every subscribed client.
+
+        ROS 1: what subscribers get is what genpy packed and unpacked (see ``ros1_wire``), with the root
+        header's ``seq`` set from the publisher's own counter (rospy overwrites it; world publishers and
+        rosbridge's count apart, rosbridge's restarts when its publisher of the topic goes).
+        """
+        if self.config.dialect == "ros1":
+            try:
+                msg = self.registry.ros1_wire(msg_type, msg)
+            except ConversionError as exc:
+                log.error("publish on %s: %s (message lost)", topic, exc)
+                raise
+            if self.registry.has_header(msg_type):
+                key = (source != 0, topic)
+                seq = self._header_seq[key] = self._header_seq.get(key, 0) + 1
+                msg = {**msg, "header": {**msg["header"], "seq": seq}}
         for callback in list(self.graph.local_subscribers.get(topic, ())):
             try:
                 callback(msg, source)
@@ -285,6 +302,9 @@ class Bridge:
         try:
             request_type, response_type = self.registry.service_parts(entry.type)
             request = self.registry.from_json(request_type, self._args_dict(request_type, args))
+            if self.config.dialect == "ros1":
+                # The request travels over TCPROS too: float32 rounded, times canonical.
+                request = self.registry.ros1_wire(request_type, request)
         except (InterfaceError, ConversionError) as exc:
             raise CallFailed(str(exc)) from exc
         self.world.count_call(entry.name)
@@ -385,7 +405,13 @@ class Bridge:
             self.graph.remove_subscriber(ROSBRIDGE_NODE, topic)
         for topic in list(conn.advertisements):
             del conn.advertisements[topic]
-            self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
+            self._remove_rosbridge_publisher(topic)
+
+    def _remove_rosbridge_publisher(self, topic: str) -> None:
+        """One client's advertisement of ``topic`` is gone; rospy's publisher goes with the last one."""
+        self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
+        if topic not in self.graph.node(ROSBRIDGE_NODE).publishes:
+            self._header_seq.pop((True, topic), None)
 
     async def _read(self, conn: Connection) -> None:
         try:
@@ -735,7 +761,7 @@ class Bridge:
             ids.clear()
         if not ids:
             del conn.advertisements[topic]
-            self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
+            self._remove_rosbridge_publisher(topic)
 
     def _op_publish(self, conn: Connection, msg: dict[str, Any]) -> None:
         fields: list[_FieldSpec] = [
@@ -761,13 +787,19 @@ class Bridge:
             self._register_publisher(
                 conn, topic, msg_type, msg.get("id"), latch=bool(msg.get("latch", False))
             )
+        if msg.get("latch") is True and self.config.dialect == "ros1":
+            # 0.11.17 registers the publisher again with the publish's latch flag: the topic latches.
+            self.graph.latched.setdefault(topic, None)
         values = msg.get("msg", {})
         try:
             converted = self.registry.from_json(msg_type, values)
         except ConversionError as exc:
             raise OpError(str(exc)) from exc
         self.world.record_published(PublishedMessage(topic, msg_type, converted, time.monotonic(), conn.id))
-        self.publish(topic, msg_type, converted, source=conn.id)
+        try:
+            self.publish(topic, msg_type, converted, source=conn.id)
+        except ConversionError as exc:
+            raise OpError(str(exc)) from exc
 
     def _op_subscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
         fields: list[_FieldSpec] = [

@@ -14,6 +14,7 @@ import array
 import base64
 import binascii
 import math
+import struct
 import threading
 import time
 import zlib
@@ -84,6 +85,25 @@ def _b64(data: bytes) -> str:
     return base64.b64encode(data).decode("ascii")
 
 
+_FLOAT32 = struct.Struct("<f")
+
+
+def _wire_time(cat: Cat, value: Any, path: list[str]) -> JsonDict:
+    """genpy packs a time as '<2I' and a duration as '<2i', and canonicalizes both when unpacking."""
+    secs, nsecs = int(value["secs"]), int(value["nsecs"])
+    lo, hi, fmt = (0, 2**32 - 1, "I") if cat == Cat.TIME else (-(2**31), 2**31 - 1, "i")
+    for number in (secs, nsecs):
+        if not lo <= number <= hi:
+            detail = (
+                "argument out of range"
+                if number < 0 and fmt == "I"
+                else f"'{fmt}' format requires {lo} <= number <= {hi}"
+            )
+            raise ConversionError(f"<class 'struct.error'>: '{detail}' when writing '{'.'.join(path)}'")
+    carry = nsecs // 1_000_000_000
+    return {"secs": secs + carry, "nsecs": nsecs - carry * 1_000_000_000}
+
+
 def _finite_or_none(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
@@ -102,6 +122,7 @@ class InterfaceRegistry:
         self._clock = clock or time.time
         self._table = _table_for(dialect)
         self._packages: set[str] = set()
+        self._wire_cache: dict[str, bool] = {}
         self._modules: dict[tuple[str, str], dict[str, Kind]] = {}
         for key in self._table.msg_names:
             self._add_module(key, "msg")
@@ -652,6 +673,71 @@ class InterfaceRegistry:
                 "and each unsigned integer in [0, 255]"
             )
         return _b64(data)
+
+    # ------------------------------------------------------------------ ROS 1 serialization (genpy)
+
+    def ros1_wire(self, msg_type: str, value: dict[str, Any]) -> dict[str, Any]:
+        """A converted ROS 1 message as a subscriber receives it after genpy packed and unpacked it.
+
+        float32 values come back rounded to float32; times are packed as two uint32 and durations as two
+        int32, and unpacked canonical (``nsecs`` in [0, 1e9), the rest carried into ``secs``). A value
+        that does not pack raises :class:`ConversionError` with struct's text, as rospy's publish does
+        (the message is lost). Messages without such fields are returned as they are.
+        """
+        spec = self._spec(msg_type)
+        if not self._needs_wire(spec):
+            return value
+        return self._wire_msg(spec, value, [])
+
+    def has_header(self, msg_type: str) -> bool:
+        """genpy's ``_has_header``: the first field is ``std_msgs/Header header`` (rospy sets its seq)."""
+        fields = self._spec(msg_type).fields
+        return bool(fields) and fields[0].name == "header" and fields[0].prim in ("std_msgs/Header", "Header")
+
+    def _needs_wire(self, spec: MessageSpec) -> bool:
+        cached = self._wire_cache.get(spec.key)
+        if cached is None:
+            self._wire_cache[spec.key] = False  # breaks recursion; no ROS message nests itself
+            cached = any(
+                f.prim == "float32"
+                or f.cat in (Cat.TIME, Cat.DURATION)
+                or (f.msg is not None and self._needs_wire(f.msg))
+                for f in spec.fields
+                if not f.binary
+            )
+            self._wire_cache[spec.key] = cached
+        return cached
+
+    def _wire_msg(self, spec: MessageSpec, value: dict[str, Any], path: list[str]) -> dict[str, Any]:
+        out = dict(value)
+        for f in spec.fields:
+            if f.binary or f.name not in value:
+                continue
+            item = value[f.name]
+            if f.msg is not None:
+                if self._needs_wire(f.msg):
+                    where = [*path, f.name]
+                    out[f.name] = (
+                        [self._wire_msg(f.msg, v, where) for v in item]
+                        if f.is_array
+                        else self._wire_msg(f.msg, item, where)
+                    )
+            elif f.cat in (Cat.TIME, Cat.DURATION):
+                where = [*path, f.name]
+                if f.is_array:
+                    out[f.name] = [_wire_time(f.cat, v, where) for v in item]
+                else:
+                    out[f.name] = _wire_time(f.cat, item, where)
+            elif f.prim == "float32":
+                try:
+                    if f.is_array:
+                        layout = f"<{len(item)}f"
+                        out[f.name] = list(struct.unpack(layout, struct.pack(layout, *item)))
+                    else:
+                        out[f.name] = _FLOAT32.unpack(_FLOAT32.pack(item))[0]
+                except OverflowError:
+                    raise ConversionError("float too large to pack with f format") from None
+        return out
 
     # ------------------------------------------------------------------ outbound (message -> JSON)
 
