@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import struct
+import uuid
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from typing import Any
@@ -435,3 +437,104 @@ async def test_the_turtle_pose_is_float32(sim_ros1: SimulatedRobot) -> None:
         await client.send({"op": "subscribe", "topic": "/turtle1/pose"})
         pose = (await client.next_publish("/turtle1/pose"))["msg"]
     assert pose["x"] == struct.unpack("<f", struct.pack("<f", 1.1))[0]
+
+
+# --- 8. actionlib's SimpleActionServer ------------------------------------------------------------------
+
+ACCEPTED = "This goal has been accepted by the simple action server"
+
+
+async def _action_client(url: str) -> RawClient:
+    client = await RawClient.open(url)
+    for leaf in ("status", "feedback", "result"):
+        await client.send({"op": "subscribe", "topic": f"/fibonacci/{leaf}"})
+    await client.send(
+        {"op": "advertise", "topic": "/fibonacci/goal", "type": "actionlib_tutorials/FibonacciActionGoal"}
+    )
+    await client.send({"op": "advertise", "topic": "/fibonacci/cancel", "type": "actionlib_msgs/GoalID"})
+    await client.frames_before_barrier()
+    return client
+
+
+def _result_for(goal_id: str) -> Any:
+    return lambda f: f.get("topic") == "/fibonacci/result" and f["msg"]["status"]["goal_id"]["id"] == goal_id
+
+
+async def test_a_cancel_that_arrives_before_its_goal_recalls_it(url: str) -> None:
+    """ActionServer keeps the early cancel (RECALLING); the goal then ends RECALLED (8), empty, stamp 0."""
+    goal_id = f"early-{uuid.uuid4().hex}"
+    client = await _action_client(url)
+    try:
+        await client.send({"op": "publish", "topic": "/fibonacci/cancel", "msg": {"id": goal_id}})
+        # The early cancel shows in the status list as RECALLING (7) until its goal comes.
+        await client.recv_until(
+            lambda f: (
+                f.get("topic") == "/fibonacci/status"
+                and any(s["goal_id"]["id"] == goal_id and s["status"] == 7 for s in f["msg"]["status_list"])
+            ),
+            wait=10.0,
+        )
+        await client.send(
+            {
+                "op": "publish",
+                "topic": "/fibonacci/goal",
+                "msg": {"goal_id": {"id": goal_id}, "goal": {"order": 5}},
+            }
+        )
+        result = (await client.recv_until(_result_for(goal_id), wait=10.0))["msg"]
+    finally:
+        await client.close()
+    assert result["status"]["status"] == 8
+    assert result["status"]["goal_id"]["stamp"] == {"secs": 0, "nsecs": 0}
+    assert result["result"] == {"sequence": []}
+
+
+async def test_an_accepted_goal_goes_straight_to_active_with_the_simple_servers_text(url: str) -> None:
+    """No PENDING (0) before ACTIVE (1); status and feedback say the simple action server accepted it."""
+    goal_id = f"text-{uuid.uuid4().hex}"
+    client = await _action_client(url)
+    try:
+        await client.send(
+            {
+                "op": "publish",
+                "topic": "/fibonacci/goal",
+                "msg": {"goal_id": {"id": goal_id}, "goal": {"order": 3}},
+            }
+        )
+        statuses: list[dict[str, Any]] = []
+        feedback = await client.recv_until(
+            lambda f: (
+                f.get("topic") == "/fibonacci/feedback" and f["msg"]["status"]["goal_id"]["id"] == goal_id
+            ),
+            wait=10.0,
+        )
+        result = (await client.recv_until(_result_for(goal_id), wait=10.0))["msg"]
+        statuses = [
+            s
+            for f in client.backlog
+            if f.get("topic") == "/fibonacci/status"
+            for s in f["msg"]["status_list"]
+            if s["goal_id"]["id"] == goal_id
+        ]
+    finally:
+        await client.close()
+    assert statuses, "the goal showed up in the status list"
+    assert statuses[0]["status"] == 1
+    assert statuses[0]["text"] == ACCEPTED
+    assert feedback["msg"]["status"]["text"] == ACCEPTED
+    assert result["status"]["status"] == 3
+    assert result["status"]["text"] == ""
+
+
+async def test_a_goal_without_id_gets_actionlibs_generated_id(url: str) -> None:
+    """GoalIDGenerator: '/fibonacci_server-<n>-<secs>.<nsecs>', stamped when generated."""
+    client = await _action_client(url)
+    try:
+        await client.send({"op": "publish", "topic": "/fibonacci/goal", "msg": {"goal": {"order": 2}}})
+        result = await client.recv_until(lambda f: f.get("topic") == "/fibonacci/result", wait=10.0)
+    finally:
+        await client.close()
+    goal_id = result["msg"]["status"]["goal_id"]
+    match = re.fullmatch(r"/fibonacci_server-(\d+)-(\d+)\.(\d+)", goal_id["id"])
+    assert match is not None, goal_id
+    assert (int(match[2]), int(match[3])) == (goal_id["stamp"]["secs"], goal_id["stamp"]["nsecs"])

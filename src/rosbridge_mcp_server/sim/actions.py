@@ -87,6 +87,17 @@ def _uuid_bytes(value: Any) -> bytes:
     return bytes(value)
 
 
+#: SimpleActionServer's texts (actionlib 1.x).
+ACCEPTED_TEXT = "This goal has been accepted by the simple action server"
+REPLACED_BY_ANOTHER_GOAL = (
+    "This goal was canceled because another goal was received by the simple action server"
+)
+CANCELED_BEFORE_STAMP = (
+    "This goal handle was canceled by the action server because its timestamp is before the timestamp of the "
+    "last cancel request"
+)
+
+
 def _stamp_seconds(stamp: Any) -> float:
     if not isinstance(stamp, dict):
         return 0.0
@@ -474,6 +485,9 @@ class ActionlibFibonacciServer:
         self._current: str | None = None
         self._next: str | None = None
         self._wakeup = asyncio.Event()
+        self._texts: dict[str, str] = {}
+        #: The newest stamp of a cancel request (actionlib's last_cancel_), in seconds.
+        self._last_cancel = 0.0
         graph = bridge.graph
         graph.add_subscriber(FIBONACCI_NODE, f"{name}/goal", self.goal_type, self._on_goal)
         graph.add_subscriber(FIBONACCI_NODE, f"{name}/cancel", "actionlib_msgs/GoalID", self._on_cancel)
@@ -486,44 +500,76 @@ class ActionlibFibonacciServer:
 
     def _status(self, goal_id: str) -> dict[str, Any]:
         record, goal_id_msg, _ = self._tracked[goal_id]
-        return {"goal_id": goal_id_msg, "status": record.status, "text": ""}
+        return {"goal_id": goal_id_msg, "status": record.status, "text": self._texts.get(goal_id, "")}
+
+    def _generate_id(self) -> dict[str, Any]:
+        """actionlib's GoalIDGenerator: ``<node>-<n>-<secs>.<nsecs>`` (nsecs not zero-padded), stamped now."""
+        now = _stamp(time.time(), "ros1")
+        return {"id": f"{FIBONACCI_NODE}-{next(self._ids)}-{now['secs']}.{now['nsecs']}", "stamp": now}
 
     def _on_goal(self, msg: dict[str, Any], _source: int) -> None:
         goal_id_msg = dict(msg.get("goal_id", {}))
-        goal_id = goal_id_msg.get("id") or f"{FIBONACCI_NODE}-{next(self._ids)}-{time.time():.3f}"
+        order = int(msg.get("goal", {}).get("order", 0))
+        known = self._tracked.get(goal_id_msg.get("id", ""))
+        if goal_id_msg.get("id") and known is not None:
+            # ActionServer: a goal already in the status list is never run again; one whose cancel came
+            # first (RECALLING) ends RECALLED with an empty result and the cancel's goal id.
+            record = known[0]
+            if record.status == ROS1_STATUS["RECALLING"]:
+                record.order = order
+                self.bridge.world.goals[record.goal_id] = record
+                self._finish(record.goal_id, "RECALLED")
+            return
+        if not goal_id_msg.get("id"):
+            goal_id_msg = self._generate_id()
         stamp = _stamp_seconds(goal_id_msg.get("stamp"))
         if stamp == 0:
             stamp = time.time()  # actionlib stamps a goal sent with a zero stamp on arrival
+        goal_id = str(goal_id_msg["id"])
         goal_id_msg = {"id": goal_id, "stamp": _stamp(stamp, "ros1")}
-        order = int(msg.get("goal", {}).get("order", 0))
         record = GoalRecord(goal_id, order, ROS1_STATUS["PENDING"], accepted_at=stamp)
         self._tracked[goal_id] = (record, goal_id_msg, 0.0)
         self.bridge.world.goals[goal_id] = record
+        given_stamp = _stamp_seconds(msg.get("goal_id", {}).get("stamp"))
+        if given_stamp != 0 and given_stamp <= self._last_cancel:
+            self._finish(goal_id, "RECALLED", CANCELED_BEFORE_STAMP)
+            return
         if not _order_ok(order):
             self._finish(goal_id, "REJECTED")
             return
+        newest = max(
+            (self._tracked[g][0].accepted_at for g in (self._current, self._next) if g is not None),
+            default=0.0,
+        )
+        if stamp < newest:
+            # SimpleActionServer only takes goals stamped at or after the current and the next one.
+            self._finish(goal_id, "RECALLED", REPLACED_BY_ANOTHER_GOAL)
+            return
         if self._next is not None:
             # SimpleActionServer: a newer goal replaces the one still waiting.
-            self._finish(self._next, "RECALLED")
+            self._finish(self._next, "RECALLED", REPLACED_BY_ANOTHER_GOAL)
         self._next = goal_id
         if self._current is not None:
             self._runs[self._current].record.cancel_requested = True
             self._runs[self._current].cancel.set()
+        # No status is published here: the goal is accepted (ACTIVE) at once when the server is idle, and
+        # the first status a client sees says so; otherwise it waits PENDING until the 5 Hz status.
         self._wakeup.set()
-        self.publish_status()
 
     def _on_cancel(self, msg: dict[str, Any], _source: int) -> None:
         cancel_id = msg.get("id", "")
         stamp = _stamp_seconds(msg.get("stamp"))
+        found = False
         for goal_id, (record, _, _) in list(self._tracked.items()):
-            if record.finished:
-                continue
             hit = (
                 (not cancel_id and stamp == 0)
                 or goal_id == cancel_id
                 or (stamp != 0 and record.accepted_at <= stamp)
             )
             if not hit:
+                continue
+            found = found or goal_id == cancel_id
+            if record.finished:
                 continue
             record.cancel_requested = True
             if goal_id == self._next:
@@ -532,13 +578,21 @@ class ActionlibFibonacciServer:
             elif goal_id == self._current:
                 record.status = ROS1_STATUS["PREEMPTING"]
                 self._runs[goal_id].cancel.set()
+        if cancel_id and not found:
+            # A cancel for a goal not seen yet is kept (RECALLING, for the status list's 5 s) so that the
+            # goal, when it comes, is recalled at once (actionlib ActionServer).
+            record = GoalRecord(cancel_id, 0, ROS1_STATUS["RECALLING"], accepted_at=stamp)
+            goal_id_msg = {"id": cancel_id, "stamp": _stamp(stamp, "ros1")}
+            self._tracked[cancel_id] = (record, goal_id_msg, time.monotonic())
+        self._last_cancel = max(self._last_cancel, stamp)
         self.publish_status()
         self.bridge.world.notify()
 
-    def _finish(self, goal_id: str, state: str) -> None:
+    def _finish(self, goal_id: str, state: str, text: str = "") -> None:
         record, goal_id_msg, _ = self._tracked[goal_id]
         record.status = ROS1_STATUS[state]
         record.finished = True
+        self._texts[goal_id] = text
         self._tracked[goal_id] = (record, goal_id_msg, time.monotonic())
         self._publish(
             f"{self.name}/result",
@@ -562,8 +616,10 @@ class ActionlibFibonacciServer:
         """The status list: goals running or waiting, and goals finished less than 5 s ago."""
         now = time.monotonic()
         for goal_id, (record, _, finished_at) in list(self._tracked.items()):
-            if record.finished and now - finished_at > self.STATUS_LIST_TIMEOUT:
+            expires = record.finished or record.status == ROS1_STATUS["RECALLING"]
+            if expires and now - finished_at > self.STATUS_LIST_TIMEOUT:
                 del self._tracked[goal_id]
+                self._texts.pop(goal_id, None)
         status_list = [self._status(goal_id) for goal_id in self._tracked]
         self._publish(
             f"{self.name}/status",
@@ -584,6 +640,7 @@ class ActionlibFibonacciServer:
                 record = self._tracked[goal_id][0]
                 run = self._runs[goal_id] = _Run(record, self.step, self.bridge.world.notify)
                 record.status = ROS1_STATUS["ACTIVE"]
+                self._texts[goal_id] = ACCEPTED_TEXT
                 self.publish_status()
 
                 def feedback(
