@@ -24,6 +24,7 @@ from rosbridge_mcp_server.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config
 from rosbridge_mcp_server.server import build_server
+from rosbridge_mcp_server.stdio import serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "run", "serve"]
 
@@ -138,10 +139,10 @@ def _stop_on_signals(client: RosbridgeClient) -> None:
     """Make SIGTERM (how MCP clients stop a server that ignores EOF) and Ctrl-C clean up, then exit.
 
     Cancelling the server cancels every tool call in flight, and each running goal is cancelled on the robot
-    as its call unwinds (rosbridge does not do that by itself when a client goes away). The SDK reads stdin in
-    a thread that cancellation cannot interrupt, though, so the server may never finish unwinding on its own:
-    after a short grace the client is closed (its goals cancelled, advertisements withdrawn) and the process
-    exits.
+    as its call unwinds (rosbridge does not do that by itself when a client goes away). When stdin is a
+    terminal or a file, the SDK's transport reads it in a thread that cancellation cannot interrupt, so the
+    server may never finish unwinding on its own: after a short grace the client is closed (its goals
+    cancelled, advertisements withdrawn) and the process exits.
     """
     main = asyncio.current_task()
     if main is None:
@@ -213,4 +214,4 @@ async def serve(config: Config) -> None:
                 PROG,
                 " --demo" if config.demo else "",
             )
-        await server.run_stdio_async()
+        await serve_stdio(server)

@@ -8,6 +8,7 @@ import signal
 import socket
 import sys
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -171,6 +172,40 @@ async def test_a_server_with_no_bridge_still_answers_and_reports_the_url() -> No
         rest, stderr, code = await _finish(server)
     assert rest.strip() == b""
     assert code == 0, stderr.decode()
+
+
+async def test_a_request_read_from_a_file_is_answered_through_the_sdk_transport(tmp_path: Path) -> None:
+    """stdin a regular file, not a pipe: the SDK's own transport answers, then the server exits at EOF."""
+    # Only initialize: the SDK ends the session at EOF and cancels requests still being handled, so a file
+    # that ends right after a tools/list would race it.
+    initialize = {
+        "jsonrpc": "2.0",
+        "id": 1,
+        "method": "initialize",
+        "params": {
+            "protocolVersion": "2025-06-18",
+            "capabilities": {},
+            "clientInfo": {"name": "e2e-test", "version": "0"},
+        },
+    }
+    requests = tmp_path / "requests.jsonl"
+    requests.write_text(json.dumps(initialize) + "\n")
+    with requests.open("rb") as stdin:
+        process = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-m",
+            "rosbridge_mcp_server",
+            "--url",
+            _closed_port_url(),
+            stdin=stdin,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+        )
+        stdout, stderr = await asyncio.wait_for(process.communicate(), WAIT)
+    answers = [json.loads(line) for line in stdout.decode().splitlines()]
+    assert len(answers) == 1, stderr.decode()
+    assert answers[0]["result"]["serverInfo"]["name"] == "rosbridge"
+    assert process.returncode == 0, stderr.decode()
 
 
 async def _initialized(server: StdioServer) -> None:
