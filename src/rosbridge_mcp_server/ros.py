@@ -108,6 +108,7 @@ class RosGraph:
         self._interfaces: frozenset[str] | None = None
         self._interfaces_known = False
         self._publishing: dict[str, str] = {}
+        self._service_types: dict[str, str] = {}
 
     async def ros_info(self) -> RosInfo:
         """The bridge's ROS version and distro (detected by the client once per connection)."""
@@ -119,6 +120,7 @@ class RosGraph:
             self._interfaces = None
             self._interfaces_known = False
             self._publishing.clear()
+            self._service_types.clear()
         return info
 
     async def rosapi(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -183,11 +185,28 @@ class RosGraph:
         values = await self.rosapi("services")
         return sorted(set(_strings(values.get("services"))))
 
-    async def service_type(self, service: str) -> str:
-        """The type of ``service``, or ``""`` when rosapi does not know it."""
+    async def service_type(self, service: str, *, cached: bool = False) -> str:
+        """The type of ``service``, or ``""`` when rosapi does not know it.
+
+        With ``cached``, a type already seen on this connection is reused, saving a round trip per call;
+        callers forget it (:meth:`forget_service`) when the service turns out to be gone, and ask afresh
+        when the cached type disagrees with what they expect.
+        """
+        await self.ros_info()  # forgets what an earlier connection knew
+        if cached and (known := self._service_types.get(service)):
+            return known
         values = await self.rosapi("service_type", {"service": service})
         found = values.get("type")
-        return found if isinstance(found, str) else ""
+        found = found if isinstance(found, str) else ""
+        if found:
+            self._service_types[service] = found
+        else:
+            self._service_types.pop(service, None)
+        return found
+
+    def forget_service(self, service: str) -> None:
+        """Drop the cached type of ``service`` (it went away, or was offered anew)."""
+        self._service_types.pop(service, None)
 
     async def _service_type_or_blank(self, service: str) -> str:
         try:

@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import asyncio
+import json
+
+import websockets
 from mcp_harness import Session, types_for
 
+from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 
@@ -131,3 +136,57 @@ async def test_a_hidden_ros2_service_that_rosapi_does_not_list_can_still_be_call
     )
     assert result.structured_content is not None
     assert "return_code" in result.structured_content["response"]
+
+
+async def test_a_service_offered_anew_with_another_type_is_called_with_the_new_type(
+    session_ros2: Session, sim_ros2: SimulatedRobot
+) -> None:
+    """A remembered service type is only a shortcut: a service offered anew as SetBool is called as one."""
+    session = session_ros2
+    async with websockets.connect(sim_ros2.url) as provider:
+
+        async def offer(srv_type: str) -> None:
+            await provider.send(json.dumps({"op": "advertise_service", "service": "/dyn", "type": srv_type}))
+            # No acknowledgement exists in rosbridge: wait until rosapi lists the new type.
+            async with RosbridgeClient(sim_ros2.url) as probe:
+                await probe.wait_connected(5.0)
+                for _ in range(100):
+                    found = await probe.call_service("/rosapi/service_type", {"service": "/dyn"})
+                    if found["type"] == srv_type:
+                        return
+                    await asyncio.sleep(0)  # a bare yield: the next look-up is the barrier
+            raise AssertionError(f"/dyn never became {srv_type}")
+
+        async def answer(values: dict[str, object]) -> None:
+            request = json.loads(await asyncio.wait_for(provider.recv(), 5.0))
+            assert request["op"] == "call_service"
+            await provider.send(
+                json.dumps(
+                    {
+                        "op": "service_response",
+                        "id": request["id"],
+                        "service": "/dyn",
+                        "result": True,
+                        "values": values,
+                    }
+                )
+            )
+
+        await offer("std_srvs/srv/Trigger")
+        call = asyncio.ensure_future(
+            session.ok("publish_service", {"service": "/dyn", "service_type": "std_srvs/srv/Trigger"})
+        )
+        await answer({"success": True, "message": "first"})
+        assert (await call).structured_content["response"] == {"success": True, "message": "first"}
+
+        await offer("std_srvs/srv/SetBool")
+        call = asyncio.ensure_future(
+            session.ok(
+                "publish_service",
+                {"service": "/dyn", "service_type": "std_srvs/srv/SetBool", "request": {"data": True}},
+            )
+        )
+        await answer({"success": True, "message": "second"})
+        result = await call
+        assert result.structured_content["service_type"] == "std_srvs/srv/SetBool"
+        assert result.structured_content["response"] == {"success": True, "message": "second"}

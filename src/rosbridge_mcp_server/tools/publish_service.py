@@ -80,7 +80,10 @@ async def run(
     info = await ctx.graph.ros_info()
     given_type = normalize_type(service_type, info.version, "srv")
 
-    graph_type = await ctx.graph.service_type(name)
+    graph_type = await ctx.graph.service_type(name, cached=True)
+    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
+        # The cached type may be stale (the service was offered anew with another type): ask once more.
+        graph_type = await ctx.graph.service_type(name)
     if graph_type and short_type_name(graph_type) != short_type_name(given_type):
         raise ToolFailure(
             f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
@@ -98,6 +101,7 @@ async def run(
         # the bridge answers at once when nothing offers it.
         if not is_missing_service(exc):
             raise
+        ctx.graph.forget_service(name)
         hint = did_you_mean(name, await ctx.graph.service_names())
         raise ToolFailure(
             f"Service {name} is not offered by any node.{hint} Call list_services to see the services."
