@@ -538,3 +538,54 @@ async def test_a_goal_without_id_gets_actionlibs_generated_id(url: str) -> None:
     match = re.fullmatch(r"/fibonacci_server-(\d+)-(\d+)\.(\d+)", goal_id["id"])
     assert match is not None, goal_id
     assert (int(match[2]), int(match[3])) == (goal_id["stamp"]["secs"], goal_id["stamp"]["nsecs"])
+
+
+# --- 9. services hosted by a client ---------------------------------------------------------------------
+
+
+async def test_request_ids_count_per_advertised_service(url: str) -> None:
+    """Each advertisement counts its own requests from 1: service_request:/svc:1 for every service."""
+    names = [f"/probe_count_{uuid.uuid4().hex[:8]}" for _ in range(2)]
+    async with await RawClient.open(url) as host, await RawClient.open(url) as caller:
+        for name in names:
+            await host.send(
+                {"op": "advertise_service", "service": name, "type": "rospy_tutorials/AddTwoInts"}
+            )
+        await host.frames_before_barrier()
+        ids = []
+        for name in names:
+            await caller.send({"op": "call_service", "id": name, "service": name, "args": {"a": 1, "b": 2}})
+            request = await host.recv_until(lambda f: f.get("op") == "call_service")
+            ids.append(request["id"])
+            await host.send(
+                {
+                    "op": "service_response",
+                    "service": name,
+                    "id": request["id"],
+                    "values": {"sum": 3},
+                    "result": True,
+                }
+            )
+            assert (await caller.reply(name))["values"] == {"sum": 3}
+    assert ids == [f"service_request:{name}:1" for name in names]
+
+
+async def test_unadvertising_a_service_with_a_call_pending_fails_that_call(url: str) -> None:
+    """The pending caller gets rospy's 'service handler returned None'; after 1 s the service is gone."""
+    name = f"/probe_gone_{uuid.uuid4().hex[:8]}"
+    async with await RawClient.open(url) as host, await RawClient.open(url) as caller:
+        await host.send({"op": "advertise_service", "service": name, "type": "rospy_tutorials/AddTwoInts"})
+        await host.frames_before_barrier()
+        await caller.send({"op": "call_service", "id": "pending", "service": name, "args": {"a": 1, "b": 2}})
+        await host.recv_until(lambda f: f.get("op") == "call_service")
+        await host.send({"op": "unadvertise_service", "service": name})
+        failed = await caller.reply("pending")
+        # The host's reading busy-waits 1 s inside unadvertise_service; this barrier is answered after it.
+        await host.frames_before_barrier()
+        gone = await caller.call(name, {"a": 1, "b": 2})
+    assert failed["result"] is False
+    assert failed["values"] == (
+        f"service [{name}] responded with an error: "
+        "b'service cannot process request: service handler returned None'"
+    )
+    assert gone["values"] == f"Service {name} does not exist"

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import itertools
 import json
 import logging
 import time
@@ -32,6 +33,7 @@ from rosbridge_mcp_server.sim.connection import (
 from rosbridge_mcp_server.sim.graph import (
     ROSBRIDGE_NODE,
     Graph,
+    HandlerReturnedNone,
     ServiceEntry,
     ServiceFailure,
     canonical_name,
@@ -55,6 +57,8 @@ MAX_FRAGMENT_BYTES = 64 * 1024 * 1024
 #: rosbridge (ROS 2, 2.0.5+/2.5.0+) waits this long for an action server before giving up.
 ACTION_SERVER_WAIT = 1.0
 
+#: 0.11.17 unadvertise_service: graceful_shutdown(timeout=1.0) busy-waits this long before the service goes.
+UNADVERTISE_SERVICE_WAIT = 1.0
 #: Our bound on a connection's unparsable input (the real buffer is unbounded); Tornado's frame limit.
 MAX_INPUT_BUFFER = 10 * 1024 * 1024
 
@@ -85,6 +89,14 @@ class BridgeConfig:
     #: Service timeout when the request has no ``timeout`` field; 0 = wait forever.
     default_service_timeout: float
     distro: str
+
+
+@dataclass
+class _HostedService:
+    """One client advertisement of a service: its request counter and whether it is going away."""
+
+    ids: itertools.count[int] = field(default_factory=lambda: itertools.count(1))
+    closing: bool = False
 
 
 @dataclass
@@ -131,7 +143,7 @@ class Bridge:
         self._fragments: OrderedDict[Any, _FragmentBuffer] = OrderedDict()
         self._fragment_bytes = 0
         self._service_requests: dict[str, tuple[asyncio.Future[dict[str, Any]], str, str]] = {}
-        self._request_counter = 0
+        self._hosted_services: dict[str, _HostedService] = {}
         self._tasks: set[asyncio.Task[Any]] = set()
         self._readers: set[asyncio.Task[None]] = set()
         self._fragment_id: Any = "0" if config.dialect == "ros2" else 0
@@ -316,7 +328,10 @@ class Bridge:
                     if self.config.dialect == "ros1":
                         # Noetic's rospy formats the error bytes with %s, so the text shows b'...' (or
                         # b"..." when it holds a quote): Python's repr of the UTF-8 bytes.
-                        text = f"error processing request: {exc}".encode()
+                        if isinstance(exc, HandlerReturnedNone):
+                            text = b"service cannot process request: service handler returned None"
+                        else:
+                            text = f"error processing request: {exc}".encode()
                         raise CallFailed(f"service [{entry.name}] responded with an error: {text!r}") from exc
                     # A ROS 2 service has no error channel: the caller just never hears back.
                     log.error("service %s failed: %s (the caller gets no response)", entry.name, exc)
@@ -333,12 +348,18 @@ class Bridge:
     def _forwarding_handler(
         self, owner: int, service: str, service_type: str
     ) -> Callable[[dict[str, Any]], Coroutine[Any, Any, dict[str, Any]]]:
-        """A service hosted by a client: forward each call as a server-initiated ``call_service``."""
+        """A service hosted by a client: forward each call as a server-initiated ``call_service``.
+
+        Request ids count per advertisement (``service_request:/svc:1``, ...): rosbridge's handler class
+        starts its ``id_counter`` at 1 and each instance counts on its own (both lines).
+        """
+        state = self._hosted_services[service] = _HostedService()
 
         async def forward(request: dict[str, Any]) -> dict[str, Any]:
+            if state.closing:
+                raise HandlerReturnedNone("the service is being unadvertised")
             request_type, response_type = self.registry.service_parts(service_type)
-            self._request_counter += 1
-            request_id = f"service_request:{service}:{self._request_counter}"
+            request_id = f"service_request:{service}:{next(state.ids)}"
             future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
             self._service_requests[request_id] = (future, response_type, service)
             try:
@@ -902,18 +923,36 @@ class Bridge:
         )
         self.world.notify()
 
-    def _op_unadvertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
+    def _op_unadvertise_service(self, conn: Connection, msg: dict[str, Any]) -> Awaitable[None] | None:
         _check(msg, [(True, "service", (str,))])
         name = self.name(msg["service"])
         entry = self.graph.services.get(name)
         if entry is None or entry.owner != conn.id:
             raise OpError(f"Service {msg['service']} has not been advertised via rosbridge.")
+        if self.config.dialect == "ros1":
+            return self._unadvertise_service_ros1(name, entry)
         self.graph.remove_service(name)
         # ROS 2 aborts the calls in flight: their callers get an empty (default) response.
         for request_id, (future, _, service) in list(self._service_requests.items()):
             if service == name and not future.done():
                 future.set_result({})
                 del self._service_requests[request_id]
+        self.world.notify()
+        return None
+
+    async def _unadvertise_service_ros1(self, name: str, entry: ServiceEntry) -> None:
+        """0.11.17's graceful_shutdown: pending and new calls get no response (rospy's 'service handler
+        returned None') while the connection's reading busy-waits 1 s; then the service goes."""
+        state = self._hosted_services.get(name)
+        if state is not None:
+            state.closing = True
+        for request_id, (future, _, service) in list(self._service_requests.items()):
+            if service == name and not future.done():
+                future.set_exception(HandlerReturnedNone("the service was unadvertised"))
+                del self._service_requests[request_id]
+        await asyncio.sleep(UNADVERTISE_SERVICE_WAIT)
+        if self.graph.services.get(name) is entry:
+            self.graph.remove_service(name)
         self.world.notify()
 
     def _op_service_response(self, conn: Connection, msg: dict[str, Any]) -> None:

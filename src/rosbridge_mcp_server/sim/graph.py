@@ -18,6 +18,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ROSBRIDGE_NODE",
     "Graph",
+    "HandlerReturnedNone",
     "LocalSubscriber",
     "NodeInfo",
     "ServiceEntry",
@@ -51,6 +52,10 @@ class ServiceFailure(Exception):
 def resolve_name(name: str) -> str:
     """The graph name of a topic/service name as a node in the root namespace resolves it."""
     return name if name.startswith("/") else "/" + name
+
+
+class HandlerReturnedNone(ServiceFailure):
+    """rospy's handler gave no response: a client-hosted service unadvertised while a call was pending."""
 
 
 def canonical_name(name: str, node: str = "/rosbridge_websocket") -> str:
