@@ -589,3 +589,24 @@ async def test_unadvertising_a_service_with_a_call_pending_fails_that_call(url: 
         "b'service cannot process request: service handler returned None'"
     )
     assert gone["values"] == f"Service {name} does not exist"
+
+
+# --- 11. list order -------------------------------------------------------------------------------------
+
+
+async def test_rosapi_lists_come_in_registration_order(url: str) -> None:
+    """The ROS 1 master and parameter server list in registration order: what a client adds comes last."""
+    suffix = uuid.uuid4().hex[:8]
+    topic, service, param = f"/a_probe_{suffix}", f"/a_probe_srv_{suffix}", f"/a_probe_param_{suffix}"
+    async with await RawClient.open(url) as client:
+        await client.send({"op": "advertise", "topic": topic, "type": "std_msgs/String"})
+        await client.send({"op": "advertise_service", "service": service, "type": "std_srvs/Trigger"})
+        await client.values("/rosapi/set_param", {"name": param, "value": "1"})
+        topics = (await client.values("/rosapi/topics"))["topics"]
+        services = (await client.values("/rosapi/services"))["services"]
+        names = (await client.values("/rosapi/get_param_names"))["names"]
+        await client.values("/rosapi/delete_param", {"name": param})
+    assert topics[-1] == topic
+    assert services[-1] == service
+    assert names[-1] == param
+    assert topics != sorted(topics)

@@ -187,18 +187,25 @@ class Graph:
             self.node(entry.node).services.discard(name)
         return entry
 
-    def node_names(self) -> list[str]:
-        """Every node that exists (a node with nothing left still exists, like a running process)."""
-        return sorted(self.nodes)
+    def node_names(self, *, sort: bool = True) -> list[str]:
+        """Every node that exists (a node with nothing left still exists, like a running process).
 
-    def topics(self, *, include_hidden: bool = True) -> list[tuple[str, str]]:
-        """(topic, type) of every topic with a publisher or subscriber, sorted by name."""
-        return sorted((t, ty) for t, ty in self.topic_types.items() if include_hidden or not is_hidden(t))
+        ``sort=False`` gives registration order, as the ROS 1 master lists them.
+        """
+        return sorted(self.nodes) if sort else list(self.nodes)
 
-    def publishers_of(self, topic: str) -> list[str]:
+    def topics(self, *, include_hidden: bool = True, sort: bool = True) -> list[tuple[str, str]]:
+        """(topic, type) of every topic with a publisher or subscriber, sorted by name or (``sort=False``)
+        in registration order."""
+        pairs = [(t, ty) for t, ty in self.topic_types.items() if include_hidden or not is_hidden(t)]
+        return sorted(pairs) if sort else pairs
+
+    def publishers_of(self, topic: str, *, sort: bool = True) -> list[str]:
         """Nodes publishing ``topic``."""
-        return sorted(n.name for n in self.nodes.values() if topic in n.publishes)
+        names = [n.name for n in self.nodes.values() if topic in n.publishes]
+        return sorted(names) if sort else names
 
-    def subscribers_of(self, topic: str) -> list[str]:
+    def subscribers_of(self, topic: str, *, sort: bool = True) -> list[str]:
         """Nodes subscribing ``topic``."""
-        return sorted(n.name for n in self.nodes.values() if topic in n.subscribes)
+        names = [n.name for n in self.nodes.values() if topic in n.subscribes]
+        return sorted(names) if sort else names

@@ -316,18 +316,38 @@ class WorldNodes:
                 }
             )
         else:
+            # In the order the real parameter server lists them (roscore's, the world's, then what
+            # rosbridge_websocket.launch sets, with its values; get_param_names is not sorted on ROS 1).
             params.update(
                 {
-                    "/rosdistro": "noetic\n",
-                    "/rosversion": "1.16.0\n",
                     "/run_id": "5a1e5c8e-0000-4000-8000-000000000000",
+                    "/rosversion": "1.16.0\n",
+                    "/rosdistro": "noetic\n",
+                    "/robot_controller/slow_service_seconds": self.slow_service_seconds,
                     "/turtlesim/background_r": 69,
                     "/turtlesim/background_g": 86,
                     "/turtlesim/background_b": 255,
+                    "/fibonacci_server/step_seconds": self.action_step,
+                    "/rosbridge_websocket/authenticate": False,
                     "/rosbridge_websocket/port": self.port,
                     "/rosbridge_websocket/address": "127.0.0.1",
-                    "/robot_controller/slow_service_seconds": self.slow_service_seconds,
-                    "/fibonacci_server/step_seconds": self.action_step,
+                    "/rosbridge_websocket/retry_startup_delay": 5,
+                    "/rosbridge_websocket/fragment_timeout": 600,
+                    "/rosbridge_websocket/delay_between_messages": 0,
+                    "/rosbridge_websocket/max_message_size": "None",
+                    "/rosbridge_websocket/unregister_timeout": 10,
+                    "/rosbridge_websocket/use_compression": False,
+                    "/rosbridge_websocket/websocket_ping_interval": 0,
+                    "/rosbridge_websocket/websocket_ping_timeout": 30,
+                    "/rosbridge_websocket/websocket_external_port": "None",
+                    "/rosbridge_websocket/topics_glob": "[*]",
+                    "/rosbridge_websocket/services_glob": "[*]",
+                    "/rosbridge_websocket/params_glob": "[*]",
+                    "/rosbridge_websocket/bson_only_mode": False,
+                    "/rosbridge_websocket/actual_port": self.port,
+                    "/rosapi/topics_glob": "[*]",
+                    "/rosapi/services_glob": "[*]",
+                    "/rosapi/params_glob": "[*]",
                 }
             )
 

@@ -217,8 +217,8 @@ class Ros1Params:
             namespace = namespace.rsplit("/", 1)[0]
 
     def names(self) -> list[str]:
-        """rosapi ``get_param_names``: every leaf name."""
-        return sorted(self.store)
+        """rosapi ``get_param_names``: every leaf name, in the parameter server's order (not sorted)."""
+        return list(self.store)
 
 
 def _holds_none(value: Any) -> bool:

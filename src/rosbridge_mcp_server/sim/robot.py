@@ -121,7 +121,11 @@ class SimulatedRobot:
         )
         self.port = self._server.sockets[0].getsockname()[1]
         params = self.world.params
-        for key in ("/rosbridge_websocket:port", "/rosbridge_websocket/port"):
+        for key in (
+            "/rosbridge_websocket:port",
+            "/rosbridge_websocket/port",
+            "/rosbridge_websocket/actual_port",
+        ):
             if key in params:
                 params[key] = self.port
         self._nodes.start()

@@ -152,12 +152,15 @@ class Rosapi:
     # --- graph ----------------------------------------------------------------------------------------------
 
     def _topics(self) -> list[tuple[str, str]]:
-        # ROS 2 leaves hidden topics out; ROS 1 has no such notion.
-        return self.bridge.graph.topics(include_hidden=not self.ros2)
+        # ROS 2 leaves hidden topics out; ROS 1 has no such notion. The ROS 1 master lists in registration
+        # order (0.11.17 does not sort), ROS 2 rosapi sorted.
+        return self.bridge.graph.topics(include_hidden=not self.ros2, sort=self.ros2)
 
     def _services(self) -> list[ServiceEntry]:
-        entries = sorted(self.bridge.graph.services.values(), key=lambda e: e.name)
-        return [e for e in entries if not (self.ros2 and is_hidden(e.name))]
+        entries = list(self.bridge.graph.services.values())
+        if self.ros2:
+            return sorted((e for e in entries if not is_hidden(e.name)), key=lambda e: e.name)
+        return entries
 
     async def topics(self, request: dict[str, Any]) -> dict[str, Any]:
         pairs = self._topics()
@@ -193,10 +196,10 @@ class Rosapi:
         return {"type": rostopic_type(self.bridge.graph.known_types, topic) or ""}
 
     async def publishers(self, request: dict[str, Any]) -> dict[str, Any]:
-        return {"publishers": self.bridge.graph.publishers_of(request.get("topic", ""))}
+        return {"publishers": self.bridge.graph.publishers_of(request.get("topic", ""), sort=self.ros2)}
 
     async def subscribers(self, request: dict[str, Any]) -> dict[str, Any]:
-        return {"subscribers": self.bridge.graph.subscribers_of(request.get("topic", ""))}
+        return {"subscribers": self.bridge.graph.subscribers_of(request.get("topic", ""), sort=self.ros2)}
 
     async def services(self, request: dict[str, Any]) -> dict[str, Any]:
         return {"services": [e.name for e in self._services()]}
@@ -227,7 +230,7 @@ class Rosapi:
         return {"host": "localhost" if request.get("service", "") in self.bridge.graph.services else ""}
 
     async def nodes(self, request: dict[str, Any]) -> dict[str, Any]:
-        return {"nodes": self.bridge.graph.node_names()}
+        return {"nodes": self.bridge.graph.node_names(sort=self.ros2)}
 
     async def node_details(self, request: dict[str, Any]) -> dict[str, Any]:
         node = self.bridge.graph.nodes.get(request.get("node", ""))
