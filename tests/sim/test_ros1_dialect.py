@@ -610,3 +610,28 @@ async def test_rosapi_lists_come_in_registration_order(url: str) -> None:
     assert services[-1] == service
     assert names[-1] == param
     assert topics != sorted(topics)
+
+
+async def test_an_unadvertised_publisher_lingers_for_unregister_timeout(sim_ros1: SimulatedRobot) -> None:
+    """0.11.17 unregisters rosbridge's publisher 10 s after the last unadvertise (shortened here)."""
+    sim_ros1.bridge.unregister_timeout = 0.05
+    async with await RawClient.open(sim_ros1.url) as client:
+        await client.send({"op": "advertise", "topic": "/probe_linger", "type": "std_msgs/String"})
+        await client.send({"op": "unadvertise", "topic": "/probe_linger"})
+        lingering = await client.values("/rosapi/publishers", {"topic": "/probe_linger"})
+        await sim_ros1.wait_for(lambda _: "/probe_linger" not in sim_ros1.graph.topic_types)
+        gone = await client.values("/rosapi/publishers", {"topic": "/probe_linger"})
+        remembered = await client.values("/rosapi/topic_type", {"topic": "/probe_linger"})
+    assert lingering == {"publishers": ["/rosbridge_websocket"]}
+    assert gone == {"publishers": []}
+    assert remembered == {"type": "std_msgs/String"}
+
+
+async def test_advertising_again_while_lingering_takes_the_publisher_over(sim_ros1: SimulatedRobot) -> None:
+    """A client advertising the topic again within the timeout keeps the one publisher alive."""
+    async with await RawClient.open(sim_ros1.url) as client:
+        await client.send({"op": "advertise", "topic": "/probe_again", "type": "std_msgs/String"})
+        await client.send({"op": "unadvertise", "topic": "/probe_again"})
+        await client.send({"op": "advertise", "topic": "/probe_again", "type": "std_msgs/String"})
+        await client.frames_before_barrier()
+    assert sim_ros1.graph.node("/rosbridge_websocket").publishes["/probe_again"] == 1

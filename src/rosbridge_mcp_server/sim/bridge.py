@@ -57,6 +57,8 @@ MAX_FRAGMENT_BYTES = 64 * 1024 * 1024
 #: rosbridge (ROS 2, 2.0.5+/2.5.0+) waits this long for an action server before giving up.
 ACTION_SERVER_WAIT = 1.0
 
+#: 0.11.17 keeps a publisher this long after its last client unadvertised (``unregister_timeout``).
+UNREGISTER_TIMEOUT = 10.0
 #: 0.11.17 unadvertise_service: graceful_shutdown(timeout=1.0) busy-waits this long before the service goes.
 UNADVERTISE_SERVICE_WAIT = 1.0
 #: Our bound on a connection's unparsable input (the real buffer is unbounded); Tornado's frame limit.
@@ -144,6 +146,9 @@ class Bridge:
         self._fragment_bytes = 0
         self._service_requests: dict[str, tuple[asyncio.Future[dict[str, Any]], str, str]] = {}
         self._hosted_services: dict[str, _HostedService] = {}
+        #: ROS 1 publishers without clients, waiting out unregister_timeout.
+        self._lingering: dict[str, asyncio.TimerHandle] = {}
+        self.unregister_timeout = UNREGISTER_TIMEOUT
         self._tasks: set[asyncio.Task[Any]] = set()
         self._readers: set[asyncio.Task[None]] = set()
         self._fragment_id: Any = "0" if config.dialect == "ros2" else 0
@@ -429,10 +434,38 @@ class Bridge:
             self._remove_rosbridge_publisher(topic)
 
     def _remove_rosbridge_publisher(self, topic: str) -> None:
-        """One client's advertisement of ``topic`` is gone; rospy's publisher goes with the last one."""
+        """One client's advertisement of ``topic`` is gone; rospy's publisher goes with the last one.
+
+        0.11.17 unregisters that publisher only ``unregister_timeout`` (10 s) later, unless a client
+        advertises the topic again meanwhile: until then the master still lists it.
+        """
+        last = self.graph.node(ROSBRIDGE_NODE).publishes.get(topic, 0) <= 1
+        if last and self.config.dialect == "ros1":
+            old = self._lingering.pop(topic, None)
+            if old is not None:
+                old.cancel()
+            loop = asyncio.get_running_loop()
+            self._lingering[topic] = loop.call_later(
+                self.unregister_timeout, self._unregister_publisher, topic
+            )
+            return
         self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
         if topic not in self.graph.node(ROSBRIDGE_NODE).publishes:
             self._header_seq.pop((True, topic), None)
+
+    def _unregister_publisher(self, topic: str) -> None:
+        if self._lingering.pop(topic, None) is None:
+            return
+        self.graph.remove_publisher(ROSBRIDGE_NODE, topic)
+        self._header_seq.pop((True, topic), None)
+        self.world.notify()
+
+    def flush_lingering(self) -> None:
+        """Unregister every lingering publisher now (the rosbridge process is stopping)."""
+        for topic, handle in list(self._lingering.items()):
+            handle.cancel()
+            self._unregister_publisher(topic)
+            self._lingering.pop(topic, None)
 
     async def _read(self, conn: Connection) -> None:
         try:
@@ -449,6 +482,7 @@ class Bridge:
             task.cancel()
         for future, _, _ in list(self._service_requests.values()):
             future.cancel()
+        self.flush_lingering()
 
     async def incoming(self, conn: Connection, raw: str | bytes = "") -> None:
         """One frame (or a joined fragment message) from a client, through rosbridge's input buffer.
@@ -762,7 +796,11 @@ class Bridge:
         ids = conn.advertisements.get(topic)
         if ids is None:
             ids = conn.advertisements[topic] = []
-            self.graph.add_publisher(ROSBRIDGE_NODE, topic, msg_type)
+            lingering = self._lingering.pop(topic, None)
+            if lingering is not None:
+                lingering.cancel()  # the publisher still exists: this client takes it over
+            else:
+                self.graph.add_publisher(ROSBRIDGE_NODE, topic, msg_type)
         if aid not in ids:
             ids.append(aid)
         conn.advertised_types[topic] = msg_type
