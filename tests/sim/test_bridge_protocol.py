@@ -651,3 +651,24 @@ async def test_ros2_rosbridge_also_publishes_its_client_topics(sim_ros2: Simulat
     types = dict(zip(topics["topics"], topics["types"], strict=True))
     assert types["/client_count"] == "std_msgs/msg/Int32"
     assert types["/connected_clients"] == "rosbridge_msgs/msg/ConnectedClients"
+
+
+@pytest.mark.parametrize("args", [None, "hello", 5])
+async def test_args_that_are_not_an_object_or_list_are_ignored_on_both_lines(
+    sim: SimulatedRobot, args: Any
+) -> None:
+    """args_to_service_request_instance (ros1 and ros2 branches) only uses lists and dicts."""
+    async with await RawClient.open(sim.url) as client:
+        await client.send({"op": "call_service", "id": "n", "service": "/add_two_ints", "args": args})
+        reply = await client.reply("n")
+    assert reply["result"] is True
+    assert reply["values"] == {"sum": 0}
+
+
+async def test_ros2_resolves_a_relative_service_name_under_the_root(sim_ros2: SimulatedRobot) -> None:
+    """ROS 2 call_service runs expand_topic_name first: 'add_two_ints' is /add_two_ints, 'nope' is /nope."""
+    async with await RawClient.open(sim_ros2.url) as client:
+        found = await client.call("add_two_ints", {"a": 1, "b": 2})
+        missing = await client.call("nope")
+    assert found["values"] == {"sum": 3}
+    assert missing["values"] == "Service /nope does not exist"
