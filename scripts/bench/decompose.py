@@ -1,7 +1,7 @@
 """Where the time of one tool call goes: a profiling aid for the misses in docs/performance.md.
 
-    uv run python scripts/bench/decompose.py                  # the SDK's default stdio
-    uv run python scripts/bench/decompose.py --asyncio-stdio  # stdio through asyncio pipes
+    uv run python scripts/bench/decompose.py               # our stdio transport (asyncio pipes)
+    uv run python scripts/bench/decompose.py --sdk-stdio   # the MCP SDK's (worker threads), as before 9e675a4
 
 It starts a simulated robot and ``timed_server.py`` (our unchanged server with stopwatches around
 ``MCPServer._handle_call_tool`` and ``RosbridgeClient.call_service``), then makes the same tool call
@@ -55,7 +55,7 @@ async def decompose(
     *,
     calls: int,
     block: int,
-    asyncio_stdio: bool,
+    sdk_stdio: bool,
     url: str,
     errlog: Any,
 ) -> dict[str, Any]:
@@ -65,7 +65,7 @@ async def decompose(
         str(TIMED_SERVER),
         "--url",
         url,
-        *(["--asyncio-stdio"] if asyncio_stdio else []),
+        *(["--sdk-stdio"] if sdk_stdio else []),
     ]
     observed: list[float] = []
     floor: list[float] = []
@@ -124,7 +124,7 @@ async def run(arguments: argparse.Namespace, errlog: Any) -> list[dict[str, Any]
                 *case,
                 calls=arguments.calls,
                 block=50,
-                asyncio_stdio=arguments.asyncio_stdio,
+                sdk_stdio=arguments.sdk_stdio,
                 url=url,
                 errlog=errlog,
             )
@@ -135,11 +135,13 @@ async def run(arguments: argparse.Namespace, errlog: Any) -> list[dict[str, Any]
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--calls", type=int, default=1000, help="timed calls per tool (default 1000)")
-    parser.add_argument("--asyncio-stdio", action="store_true", help="serve stdio through asyncio pipes")
+    parser.add_argument(
+        "--sdk-stdio", action="store_true", help="serve stdio through the MCP SDK's transport"
+    )
     arguments = parser.parse_args()
     with open(Path(tempfile.gettempdir()) / "bench-decompose.log", "w") as errlog:
         results = asyncio.run(run(arguments, errlog))
-    transport = "asyncio pipes" if arguments.asyncio_stdio else "the SDK's stdio (worker threads)"
+    transport = "the SDK's stdio (worker threads)" if arguments.sdk_stdio else "our stdio (asyncio pipes)"
     print(f"medians over {arguments.calls} calls per tool; our server on {transport}")
     print("| tool | observed | floor | rosbridge round trips in the server | our code | MCP SDK + stdio |")
     print("|---|--:|--:|--:|--:|--:|")

@@ -5,7 +5,7 @@ It runs the unchanged server (the console script's ``main``) after wrapping thre
 * ``MCPServer._handle_call_tool`` — everything the server does for one tool call after the SDK has read
   and parsed the request, up to the result it hands back to the SDK;
 * ``RosbridgeClient.call_service`` — each rosbridge round trip made inside that;
-* ``MCPServer.run_stdio_async`` is left alone (or swapped for asyncio pipes with ``--asyncio-stdio``).
+* the stdio transport is our own (or, with ``--sdk-stdio``, the MCP SDK's, as before 9e675a4).
 
 At exit it writes the samples, in seconds, as JSON to the file named by ``BENCH_TIMINGS``.
 """
@@ -24,7 +24,7 @@ from typing import Any
 
 from mcp.server.mcpserver import MCPServer
 
-from rosbridge_mcp_server import main
+from rosbridge_mcp_server import cli, main
 from rosbridge_mcp_server.client import RosbridgeClient
 
 __all__: list[str] = []
@@ -54,10 +54,10 @@ def _dump() -> None:
 if __name__ == "__main__":
     MCPServer._handle_call_tool = _timed("handler", MCPServer._handle_call_tool)  # type: ignore[method-assign]
     RosbridgeClient.call_service = _timed("rosbridge", RosbridgeClient.call_service)  # type: ignore[method-assign]
-    if "--asyncio-stdio" in sys.argv:
-        sys.argv.remove("--asyncio-stdio")
-        from bare_server import serve_over_asyncio_pipes  # this script's own folder is first on sys.path
+    if "--sdk-stdio" in sys.argv:
+        sys.argv.remove("--sdk-stdio")
+        from ours_sdk_stdio import _serve_through_the_sdk  # this script's own folder is first on sys.path
 
-        MCPServer.run_stdio_async = serve_over_asyncio_pipes  # type: ignore[method-assign]
+        cli.serve_stdio = _serve_through_the_sdk  # type: ignore[assignment]
     atexit.register(_dump)
     main()
