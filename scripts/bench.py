@@ -16,7 +16,7 @@ What is measured (issue #4):
 2. the same call through our ``RosbridgeClient`` and through roslibpy;
 3. ``list_topics`` and ``publish_service /add_two_ints`` through a real MCP stdio session with the console
    script, next to the same SDK's cost for a tool that does nothing (``scripts/bench/bare_server.py``),
-   and, as an experiment, both again with the SDK's threaded stdio swapped for asyncio pipes;
+   and, for comparison, all three again on the MCP SDK's own stdio transport instead of ours;
 4. 100 tool calls at once in one session against a 50 ms service, against 100 in a row;
 5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
 6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
