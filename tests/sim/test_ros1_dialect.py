@@ -635,3 +635,15 @@ async def test_advertising_again_while_lingering_takes_the_publisher_over(sim_ro
         await client.send({"op": "advertise", "topic": "/probe_again", "type": "std_msgs/String"})
         await client.frames_before_barrier()
     assert sim_ros1.graph.node("/rosbridge_websocket").publishes["/probe_again"] == 1
+
+
+async def test_frames_are_written_the_way_ujson_writes_them(url: str) -> None:
+    """0.11.17 writes with ujson: compact separators, every '/' escaped as '\\/'."""
+    async with await RawClient.open(url) as client:
+        await client.send(
+            {"op": "call_service", "id": "u", "service": "/add_two_ints", "args": {"a": 1, "b": 1}}
+        )
+        text = await client.ws.recv()
+    assert text == (
+        '{"op":"service_response","service":"\\/add_two_ints","values":{"sum":2},"result":true,"id":"u"}'
+    )

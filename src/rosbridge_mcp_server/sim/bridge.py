@@ -29,6 +29,8 @@ from rosbridge_mcp_server.sim.connection import (
     OutgoingMessage,
     SubscriptionOptions,
     TopicSubscription,
+    dumps_standard,
+    dumps_ujson,
 )
 from rosbridge_mcp_server.sim.graph import (
     ROSBRIDGE_NODE,
@@ -387,7 +389,11 @@ class Bridge:
         """Run one client connection until it closes, then clean up after it like rosbridge does."""
         self._next_cid += 1
         conn = Connection(
-            ws, self._next_cid, fragment_size=self.config.max_message_size, fragment_id=self._fragment_id
+            ws,
+            self._next_cid,
+            fragment_size=self.config.max_message_size,
+            fragment_id=self._fragment_id,
+            dumps=dumps_ujson if self.config.dialect == "ros1" else dumps_standard,
         )
         self.connections[conn.id] = conn
         self.connection_count = len(self.connections)

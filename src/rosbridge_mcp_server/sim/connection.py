@@ -28,15 +28,32 @@ __all__ = [
     "MAX_QUEUED_BYTES",
     "MAX_QUEUED_MESSAGES",
     "Connection",
+    "Dumps",
     "OutgoingMessage",
     "SubscriptionOptions",
     "TopicSubscription",
+    "dumps_standard",
+    "dumps_ujson",
     "png_frame_data",
 ]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
 
 MAX_QUEUED_MESSAGES = 1000
+
+
+def dumps_standard(value: Any) -> str:
+    """Python's json, as a rosbridge without ujson writes its frames."""
+    return json.dumps(value)
+
+
+def dumps_ujson(value: Any) -> str:
+    """ujson's default output (rosbridge prefers ujson when installed, as on the 0.11.17 we ran): compact, and
+    every '/' escaped as '\\/' (a '/' can only occur inside a JSON string, so the replace is exact)."""
+    return json.dumps(value, separators=(",", ":")).replace("/", "\\/")
+
+
+Dumps = Callable[[Any], str]
 MAX_QUEUED_BYTES = 32 * 1024 * 1024
 
 
@@ -55,16 +72,16 @@ class OutgoingMessage:
     _json_form: dict[str, Any] | None = None
     _texts: dict[str, str] = field(default_factory=dict)
 
-    def frame_text(self, echo_topic: str, *, png: bool = False) -> str:
+    def frame_text(self, echo_topic: str, *, png: bool = False, dumps: Dumps = dumps_standard) -> str:
         """The ``publish`` frame for a subscription to ``echo_topic`` as spelled (or its ``png`` op)."""
-        key = ("png:" if png else "") + echo_topic
+        key = ("png:" if png else "") + ("u:" if dumps is dumps_ujson else "") + echo_topic
         text = self._texts.get(key)
         if text is None:
             if self._json_form is None:
                 self._json_form = self.to_json(self.type, self.msg)
-            text = json.dumps({"op": "publish", "topic": echo_topic, "msg": self._json_form})
+            text = dumps({"op": "publish", "topic": echo_topic, "msg": self._json_form})
             if png:
-                text = json.dumps({"op": "png", "data": png_frame_data(text)})
+                text = dumps({"op": "png", "data": png_frame_data(text)})
             self._texts[key] = text
         return text
 
@@ -133,8 +150,11 @@ class Connection:
         *,
         fragment_size: int | None,
         fragment_id: Any,
+        dumps: Dumps = dumps_standard,
     ) -> None:
         self.ws = ws
+        #: How this server writes JSON (ROS 1: ujson's compact form with '\\/').
+        self.dumps = dumps
         self.id = cid
         #: Fragment id of an id-less message: ``"0"`` on ROS 2, ``0`` on ROS 1.
         self.fragment_id = fragment_id
@@ -163,7 +183,7 @@ class Connection:
 
     def send(self, message: dict[str, Any]) -> None:
         """Queue a reply frame (never dropped)."""
-        self._enqueue(json.dumps(message), droppable=False, fragment_id=message.get("id", self.fragment_id))
+        self._enqueue(self.dumps(message), droppable=False, fragment_id=message.get("id", self.fragment_id))
 
     def _enqueue(self, text: str, *, droppable: bool, fragment_id: Any) -> None:
         if self.closed:
@@ -203,7 +223,7 @@ class Connection:
         # 0.11.17 on Noetic, and the ros2 branch's fragmentation.py alike): the count is int(total).
         total = ((len(text) - 1) / step) + 1
         return [
-            json.dumps(
+            self.dumps(
                 {"op": "fragment", "id": fragment_id, "data": text[i : i + step], "num": n, "total": total}
             )
             for n, i in enumerate(range(0, len(text), step))
@@ -281,7 +301,9 @@ class Connection:
     def _send_publish(self, sub: TopicSubscription, message: OutgoingMessage, fragment_id: Any) -> None:
         sub.last_sent = time.monotonic()
         self._enqueue(
-            message.frame_text(sub.echo_topic, png=sub.png), droppable=True, fragment_id=fragment_id
+            message.frame_text(sub.echo_topic, png=sub.png, dumps=self.dumps),
+            droppable=True,
+            fragment_id=fragment_id,
         )
 
     def drop_subscription(self, topic: str) -> None:
