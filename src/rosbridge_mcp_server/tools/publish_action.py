@@ -43,9 +43,9 @@ class GoalAnswer(BaseModel):
     status: str = Field(description="Final status in words: succeeded, canceled, aborted, ...")
     status_code: int = Field(description="Final status number in the bridge's own numbering")
     succeeded: bool
-    result: Any = Field(description="The action's result message")
+    result: dict[str, Any] | None = Field(description="The action's result message (null when none came)")
     feedback_count: int = Field(description="How many feedback messages arrived")
-    last_feedback: list[Any] = Field(description="The last few feedback messages, oldest first")
+    last_feedback: list[dict[str, Any]] = Field(description="The last few feedback messages, oldest first")
     canceled_by: str | None = Field(description='"timeout", "request_cancelled", "cancel_action" or null')
 
 

@@ -33,7 +33,7 @@ class ServiceAnswer(BaseModel):
 
     service: str
     service_type: str = Field(description="The service's type as the graph reports it")
-    response: Any = Field(description="The response fields")
+    response: dict[str, Any] = Field(description="The response fields")
 
 
 SPEC = ToolSpec(
@@ -107,7 +107,9 @@ async def run(
             f"Service {name} is not offered by any node.{hint} Call list_services to see the services."
         ) from exc
     text = f"Service {name} ({srv_type}) answered: {compact_json(response)}"
-    return ToolAnswer(text=text, data=ServiceAnswer(service=name, service_type=srv_type, response=response))
+    # rosbridge answers a successful call with the response message as an object; anything else is kept whole.
+    fields = response if isinstance(response, dict) else {"value": response}
+    return ToolAnswer(text=text, data=ServiceAnswer(service=name, service_type=srv_type, response=fields))
 
 
 async def _check_request(ctx: ToolContext, body: dict[str, Any], srv_type: str, ros_version: int) -> None:
