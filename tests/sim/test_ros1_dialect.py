@@ -143,6 +143,12 @@ async def test_an_error_text_with_a_quote_is_wrapped_in_double_quotes(url: str) 
     )
 
 
+async def test_message_details_of_a_primitive_answers_no_typedefs(url: str) -> None:
+    """'int32' is no message: rosapi answers an empty typedefs list rather than an error."""
+    async with await RawClient.open(url) as client:
+        assert (await client.values("/rosapi/message_details", {"type": "int32"})) == {"typedefs": []}
+
+
 # --- 3. args that are neither an object nor a list ------------------------------------------------------
 
 

@@ -261,7 +261,7 @@ class Rosapi:
     async def message_details(self, request: dict[str, Any]) -> dict[str, Any]:
         msg_type = request.get("type", "")
         try:
-            if not self.ros2 and msg_type not in ("time", "duration"):
+            if not self.ros2 and ("/" in msg_type or not msg_type):
                 # roslib's loader takes pkg/Type only: 'std_msgs/msg/String' is not a valid type string.
                 msg_type = self.bridge.registry.resolve(msg_type, "msg")
             return {"typedefs": self.bridge.registry.message_typedefs(msg_type)}
