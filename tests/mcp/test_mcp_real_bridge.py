@@ -1,0 +1,276 @@
+"""The eight tools through a real MCP session against a real rosbridge (ROS 1 or ROS 2, detected).
+
+Skipped unless ``ROSBRIDGE_TEST_URL`` names a bridge, e.g.::
+
+    ROSBRIDGE_TEST_URL=ws://robot:9090 uv run pytest tests/mcp/test_mcp_real_bridge.py -q
+
+Every assertion holds on any healthy robot with rosapi running. The goal tests also need an action server that
+runs a goal for a second or more and sends feedback while it runs::
+
+    ROSBRIDGE_TEST_ACTION=/fibonacci ROSBRIDGE_TEST_ACTION_TYPE=actionlib_tutorials/FibonacciAction \\
+    ROSBRIDGE_TEST_ACTION_GOAL='{"order": 20}' ...
+
+The tests publish only on topics under ``/mcp_test/`` and call only rosapi's read-only services.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import json
+import os
+import re
+from collections.abc import AsyncIterator
+from typing import Any
+
+import pytest
+from mcp.types import CallToolResult
+from mcp_harness import Session, open_session, text_of
+
+from rosbridge_mcp_server.check import run_check
+from rosbridge_mcp_server.config import Config
+
+REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
+ACTION = os.environ.get("ROSBRIDGE_TEST_ACTION")
+ACTION_TYPE = os.environ.get("ROSBRIDGE_TEST_ACTION_TYPE")
+ACTION_GOAL: dict[str, Any] = json.loads(os.environ.get("ROSBRIDGE_TEST_ACTION_GOAL") or "{}")
+
+pytestmark = [
+    pytest.mark.real_bridge,
+    pytest.mark.skipif(
+        REAL_URL is None, reason="set ROSBRIDGE_TEST_URL=ws://host:port to run against a real bridge"
+    ),
+]
+
+WAIT = 10.0
+# A goal id as publish_action names it in its progress messages.
+_GOAL_IN_PROGRESS = re.compile(r"^goal (\S+) feedback \d+:")
+
+
+@pytest.fixture
+async def real() -> AsyncIterator[Session]:
+    """An MCP session on the real bridge."""
+    assert REAL_URL is not None
+    async with open_session(REAL_URL, request_timeout=WAIT) as opened:
+        yield opened
+
+
+def _needs_action() -> tuple[str, str]:
+    if not ACTION or not ACTION_TYPE:
+        pytest.skip("set ROSBRIDGE_TEST_ACTION and ROSBRIDGE_TEST_ACTION_TYPE to run the goal tests")
+    return ACTION, ACTION_TYPE
+
+
+async def _version(session: Session) -> int:
+    return (await session.ros.ros_info()).version
+
+
+async def test_list_topics_finds_rosout_with_its_type(real: Session) -> None:
+    """list_topics answers a non-empty, sorted list that includes /rosout with a type."""
+    data = (await real.ok("list_topics")).structured_content
+    assert data is not None
+    names = [row["name"] for row in data["topics"]]
+    assert names == sorted(names)
+    assert "/rosout" in names
+    assert data["count"] == len(names)
+    rosout = next(row for row in data["topics"] if row["name"] == "/rosout")
+    assert rosout["type"] in ("rosgraph_msgs/Log", "rcl_interfaces/msg/Log")
+
+
+async def test_get_topic_info_of_a_listed_topic_matches_its_listed_type(real: Session) -> None:
+    """get_topic_info of /rosout names the type list_topics gave and at least one publisher."""
+    listed = (await real.ok("list_topics")).structured_content
+    assert listed is not None
+    rosout_type = next(row["type"] for row in listed["topics"] if row["name"] == "/rosout")
+    data = (await real.ok("get_topic_info", {"topic": "/rosout"})).structured_content
+    assert data is not None
+    assert data["topic"] == "/rosout"
+    assert data["type"] == rosout_type
+    assert data["publishers"], "every ROS node publishes its log on /rosout"
+
+
+async def test_get_topic_info_of_an_unknown_topic_is_an_error(real: Session) -> None:
+    """A topic nobody publishes or subscribes to is an error that points at list_topics."""
+    text = await real.error("get_topic_info", {"topic": "/mcp_test/nobody_uses_this"})
+    assert "/mcp_test/nobody_uses_this" in text
+    assert "list_topics" in text
+
+
+async def test_a_published_string_reaches_a_subscriber(real: Session) -> None:
+    """publish_topic on a fresh test topic delivers the message to our own client's subscription."""
+    string_type = "std_msgs/String" if await _version(real) == 1 else "std_msgs/msg/String"
+    topic = "/mcp_test/chatter"
+    text = f"hello from the real-bridge test {os.getpid()}"
+    async with real.ros.subscribe(topic, string_type) as sub:
+
+        async def delivered() -> dict[str, Any]:
+            # A new publisher's first messages can go out before the bridge's own subscriber is connected
+            # (ROS 1 TCPROS, ROS 2 discovery), so publish until one arrives.
+            while True:
+                await real.ok(
+                    "publish_topic", {"topic": topic, "message_type": string_type, "message": {"data": text}}
+                )
+                try:
+                    return await sub.get(timeout=0.5)
+                except TimeoutError:
+                    continue
+
+        message = await asyncio.wait_for(delivered(), WAIT)
+    assert message == {"data": text}
+
+
+async def test_a_message_that_does_not_fit_its_type_is_refused(real: Session) -> None:
+    """A string in a float field is refused before anything is published, naming the field."""
+    twist = "geometry_msgs/Twist" if await _version(real) == 1 else "geometry_msgs/msg/Twist"
+    text = await real.error(
+        "publish_topic",
+        {"topic": "/mcp_test/cmd_vel", "message_type": twist, "message": {"linear": {"x": "fast"}}},
+    )
+    assert "linear.x" in text
+    assert "Nothing was published" in text
+
+
+async def test_list_services_includes_rosapi_topics_with_its_type(real: Session) -> None:
+    """list_services lists /rosapi/topics, typed, each service once."""
+    data = (await real.ok("list_services")).structured_content
+    assert data is not None
+    names = [row["name"] for row in data["services"]]
+    assert len(names) == len(set(names))
+    assert "/rosapi/topics" in names
+    topics_type = next(row["type"] for row in data["services"] if row["name"] == "/rosapi/topics")
+    assert topics_type in ("rosapi/Topics", "rosapi_msgs/srv/Topics")
+
+
+async def test_publish_service_calls_rosapi_topics_and_returns_the_response(real: Session) -> None:
+    """Calling /rosapi/topics with its listed type answers the topics, /rosout among them."""
+    services = (await real.ok("list_services")).structured_content
+    assert services is not None
+    srv_type = next(row["type"] for row in services["services"] if row["name"] == "/rosapi/topics")
+    data = (
+        await real.ok(
+            "publish_service", {"service": "/rosapi/topics", "service_type": srv_type, "request": {}}
+        )
+    ).structured_content
+    assert data is not None
+    assert data["service"] == "/rosapi/topics"
+    assert "/rosout" in data["response"]["topics"]
+
+
+async def test_publish_service_refuses_a_request_field_the_type_lacks(real: Session) -> None:
+    """A request field /rosapi/topics does not have is refused before the call, naming the field."""
+    services = (await real.ok("list_services")).structured_content
+    assert services is not None
+    srv_type = next(row["type"] for row in services["services"] if row["name"] == "/rosapi/topics")
+    text = await real.error(
+        "publish_service",
+        {"service": "/rosapi/topics", "service_type": srv_type, "request": {"no_such_field": 1}},
+    )
+    assert "no_such_field" in text
+    assert "not called" in text
+
+
+async def test_a_missing_service_fails_naming_it(real: Session) -> None:
+    """Calling a service nobody offers fails at once, naming the service and pointing at list_services."""
+    std_empty = "std_srvs/Empty" if await _version(real) == 1 else "std_srvs/srv/Empty"
+    text = await real.error(
+        "publish_service", {"service": "/mcp_test/no_such_service", "service_type": std_empty, "request": {}}
+    )
+    assert "/mcp_test/no_such_service" in text
+    assert "not offered" in text
+    assert "list_services" in text
+
+
+async def test_list_actions_names_each_action_once(real: Session) -> None:
+    """list_actions answers each action server once, sorted (rosapi repeats some on ROS 1)."""
+    data = (await real.ok("list_actions")).structured_content
+    assert data is not None
+    names = [row["name"] for row in data["actions"]]
+    assert names == sorted(set(names))
+    assert data["count"] == len(names)
+    if ACTION:
+        assert ACTION in names
+
+
+def _start_goal(
+    session: Session, action: str, action_type: str
+) -> tuple[asyncio.Task[CallToolResult], asyncio.Future[str]]:
+    """publish_action running in a task, and the goal id its first feedback progress message names."""
+    first: asyncio.Future[str] = asyncio.get_running_loop().create_future()
+
+    async def on_progress(progress: float, total: float | None, message: str | None) -> None:
+        match = _GOAL_IN_PROGRESS.match(message or "")
+        if match and not first.done():
+            first.set_result(match.group(1))
+
+    arguments = {"action_name": action, "action_type": action_type, "goal": ACTION_GOAL, "timeout": 60}
+    running = asyncio.create_task(
+        session.mcp.call_tool("publish_action", arguments, progress_callback=on_progress)
+    )
+    return running, first
+
+
+async def test_a_goal_runs_with_feedback_and_is_cancelled_by_its_id(real: Session) -> None:
+    """A running goal reports feedback as progress; cancel_action by its id ends it as cancelled by it."""
+    action, action_type = _needs_action()
+    running, first_feedback = _start_goal(real, action, action_type)
+    try:
+        goal_id = await asyncio.wait_for(first_feedback, WAIT)
+        cancel = (
+            await real.ok("cancel_action", {"action_name": action, "goal_id": goal_id})
+        ).structured_content
+        assert cancel is not None
+        assert cancel["unknown_goal_id"] is False
+        result = await asyncio.wait_for(running, WAIT)
+    finally:
+        running.cancel()
+    assert not result.is_error, text_of(result)
+    data = result.structured_content
+    assert data is not None
+    assert data["goal_id"] == goal_id
+    assert data["succeeded"] is False
+    assert data["status"] in ("canceled", "preempted", "recalled")
+    assert data["canceled_by"] == "cancel_action"
+    assert data["feedback_count"] >= 1
+
+
+async def test_cancel_all_reaches_a_running_goal(real: Session) -> None:
+    """cancel_action without an id names publish_action's running goal and ends it."""
+    action, action_type = _needs_action()
+    running, first_feedback = _start_goal(real, action, action_type)
+    try:
+        goal_id = await asyncio.wait_for(first_feedback, WAIT)
+        cancel = (await real.ok("cancel_action", {"action_name": action})).structured_content
+        assert cancel is not None
+        assert goal_id in cancel["canceled_goals"]
+        result = await asyncio.wait_for(running, WAIT)
+    finally:
+        running.cancel()
+    data = result.structured_content
+    assert data is not None, text_of(result)
+    assert data["succeeded"] is False
+    assert data["canceled_by"] == "cancel_action"
+
+
+async def test_a_goal_past_its_timeout_is_cancelled_on_the_robot(real: Session) -> None:
+    """A goal that outlives publish_action's timeout is cancelled, and the answer says so."""
+    action, action_type = _needs_action()
+    result = await real.call(
+        "publish_action",
+        {"action_name": action, "action_type": action_type, "goal": ACTION_GOAL, "timeout": 0.5},
+    )
+    text = text_of(result)
+    assert "cancelled" in text
+    if not result.is_error:
+        data = result.structured_content
+        assert data is not None
+        assert data["succeeded"] is False
+        assert data["canceled_by"] == "timeout"
+
+
+async def test_check_finds_the_bridge_healthy() -> None:
+    """`check` against the bridge reports it reachable with rosapi answering, and exits 0."""
+    assert REAL_URL is not None
+    out = io.StringIO()
+    code = await run_check(Config(url=REAL_URL), out)
+    assert code == 0, out.getvalue()
+    assert "rosapi answers" in out.getvalue()
