@@ -120,6 +120,52 @@ def test_json_types_are_held_to_rosbridge_strictness(message: dict[str, Any], pr
     assert problems[0].startswith(problem)
 
 
+ROS1_TIMES = typedefs_from_rosapi(
+    {
+        "typedefs": [
+            _typedef(
+                "demo_msgs/Times", [("stamp", "time", -1), ("span", "duration", -1), ("f", "float32", -1)]
+            ),
+            # ROS 1 rosapi (0.11.17) describes both primitives as two int32.
+            _typedef("time", [("secs", "int32", -1), ("nsecs", "int32", -1)]),
+            _typedef("duration", [("secs", "int32", -1), ("nsecs", "int32", -1)]),
+        ]
+    }
+)
+
+
+@pytest.mark.parametrize(
+    ("message", "problem"),
+    [
+        ({"stamp": {"secs": -1}}, "stamp.secs: -1 is out of range for uint32 in time (0..4294967295)"),
+        ({"stamp": {"nsecs": -5}}, "stamp.nsecs: -5 is out of range for uint32 in time"),
+        ({"span": {"secs": 2**31}}, "span.secs: 2147483648 is out of range for int32 in duration"),
+        ({"f": 3.5e38}, "f: 3.5e+38 is out of range for float32 (-3.40282e+38..3.40282e+38)"),
+        ({"f": -1e39}, "f: -1e+39 is out of range for float32"),
+    ],
+)
+def test_ros1_times_and_float32_must_fit_their_wire_width(message: dict[str, Any], problem: str) -> None:
+    """A negative time, a duration past int32 or a float32 past its range is refused: genpy cannot pack it."""
+    problems = find_problems(message, "demo_msgs/Times", ROS1_TIMES, ros_version=1)
+    assert len(problems) == 1
+    assert problems[0].startswith(problem)
+
+
+def test_values_that_fit_the_wire_widths_pass() -> None:
+    """A negative duration, a time up to 2**32-1 and float32's largest value are fine on ROS 1."""
+    message = {"stamp": {"secs": 2**32 - 1, "nsecs": 2_000_000_000}, "span": {"secs": -1}, "f": -3.4e38}
+    assert find_problems(message, "demo_msgs/Times", ROS1_TIMES, ros_version=1) == []
+
+
+def test_ros2_time_fields_are_int32_seconds_and_uint32_nanoseconds() -> None:
+    """On ROS 2 a negative sec fits a Time; a negative nanosec does not."""
+    assert find_problems({"sec": -1}, "builtin_interfaces/Time", {}, ros_version=2) == []
+    problems = find_problems({"nanosec": -1}, "builtin_interfaces/Duration", {}, ros_version=2)
+    assert problems == [
+        "nanosec: -1 is out of range for uint32 in builtin_interfaces/Duration (0..4294967295)"
+    ]
+
+
 def test_byte_arrays_may_be_base64_and_time_may_be_now() -> None:
     """uint8[] as a base64 string and a time as "now" are what rosbridge accepts."""
     message = {"data": "AAEC", "stamp": "now", "count": 3, "covariance": [0] * 9, "flag": False}

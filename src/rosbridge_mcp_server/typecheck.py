@@ -2,18 +2,18 @@
 
 rosbridge drops a message that does not fit its type with a line in its own log and nothing on the wire
 (rosbridge_suite 0.11 and every ROS 2 release), so a model would never learn why the robot did not move. We
-check
-first, against the rosapi ``TypeDef``s of the type (``/rosapi/message_details``,
+check first, against the rosapi ``TypeDef``s of the type (``/rosapi/message_details``,
 ``/rosapi/service_request_details``), with rosbridge's own strictness:
 
 * unknown field names make the whole message fail (we suggest the close ones and list the valid fields);
 * ``bool`` fields want ``true``/``false``; integer fields reject ``1.5`` (and ``1.0``) and values out of
-range;
-  float fields take any number; strings only for ``string``; ``null`` is rejected for every primitive;
+  range; float fields take any number in their range (float32 up to about 3.4e38); strings only for
+  ``string``; ``null`` is rejected for every primitive;
 * fixed-size arrays must have the right length; ``uint8[]``/``char[]`` may also be a base64 string;
 * ROS 1 time/duration read only ``secs``/``nsecs`` (``sec``/``nanosec`` are silently ignored by rosbridge
-0.11,
-  so we flag them); ROS 2 accepts both spellings; the string ``"now"`` is accepted for a time.
+  0.11, so we flag them); ROS 2 accepts both spellings; the string ``"now"`` is accepted for a time. Each
+  time field must fit its wire width: ROS 1 time is two uint32, duration two int32; ROS 2 is int32 sec,
+  uint32 nanosec.
 
 Missing fields are fine: rosbridge fills them with defaults. This module is pure: no I/O.
 """
@@ -23,6 +23,7 @@ from __future__ import annotations
 import difflib
 import json
 import re
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -53,10 +54,26 @@ _INT_RANGES: dict[str, tuple[int, int]] = {
     "octet": (0, 2**8 - 1),
 }
 _FLOATS = frozenset({"float32", "float64", "float", "double", "long double"})
+# A number beyond a float field's range never arrives: genpy's struct.pack raises OverflowError (rosbridge
+# 0.11.17 logs it and drops the message) and ROS 2's generated setters reject it. ROS 2's float32 bound is the
+# one below, a hair under FLT_MAX, so we use it for both lines.
+_FLOAT_LIMITS: dict[str, float] = {
+    "float32": 3.402823466e38,
+    "float": 3.402823466e38,
+    "float64": sys.float_info.max,
+    "double": sys.float_info.max,
+}
 _BOOLS = frozenset({"bool", "boolean"})
 _STRINGS = frozenset({"string", "wstring"})
 _ROS1_TIMES = frozenset({"time", "duration"})
 _ROS2_TIMES = frozenset({"builtin_interfaces/Time", "builtin_interfaces/Duration"})
+# What each time field must fit on the wire. ROS 1 (0.11.17) sets secs/nsecs as given and genpy packs a time
+# as two uint32 and a duration as two int32: a negative time field, or a duration field past int32, is dropped
+# with a struct error in rosbridge's log (rosapi calls both int32, so its TypeDef is not used for them).
+# ROS 2's builtin_interfaces Time and Duration are int32 sec and uint32 nanosec.
+_ROS1_TIME_FIELDS: dict[str, str] = {"secs": "uint32", "nsecs": "uint32"}
+_ROS1_DURATION_FIELDS: dict[str, str] = {"secs": "int32", "nsecs": "int32"}
+_ROS2_TIME_FIELDS: dict[str, str] = {"sec": "int32", "nanosec": "uint32", "secs": "int32", "nsecs": "uint32"}
 # Arrays of these may be sent as a base64 string (rosbridge's JSON encoding of byte arrays).
 _BYTE_TYPES = frozenset({"uint8", "char", "octet", "byte"})
 
@@ -166,7 +183,7 @@ class _Checker:
 
     def check_object(self, value: Mapping[str, Any], type_name: str, path: str) -> None:
         typedef = self.typedefs.get(type_name)
-        if type_name in _ROS2_TIMES or (typedef is None and type_name in _ROS1_TIMES):
+        if type_name in _ROS2_TIMES or type_name in _ROS1_TIMES:
             self.check_time(value, type_name, path)
             return
         if typedef is None:
@@ -210,10 +227,15 @@ class _Checker:
         elif base in _FLOATS:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 self.add(path, f"expected a number ({_shown(base)}), got {_describe(value)}")
+            elif base in _FLOAT_LIMITS and abs(value) > _FLOAT_LIMITS[base]:
+                limit = _FLOAT_LIMITS[base]
+                self.add(
+                    path, f"{_describe(value)} is out of range for {_shown(base)} (-{limit:g}..{limit:g})"
+                )
         elif base in _STRINGS:
             if not isinstance(value, str):
                 self.add(path, f"expected a string ({_shown(base)}), got {_describe(value)}")
-        elif base in _ROS1_TIMES and base not in self.typedefs:
+        elif base in _ROS1_TIMES:
             self.check_time(value, base, path)
         elif isinstance(value, Mapping):
             self.check_object(value, base, path)
@@ -233,6 +255,10 @@ class _Checker:
         ros1_keys = ("secs", "nsecs")
         ros2_keys = ("sec", "nanosec")
         allowed = ros1_keys if self.ros_version == 1 else ros1_keys + ros2_keys
+        if self.ros_version == 1:
+            widths = _ROS1_TIME_FIELDS if type_name == "time" else _ROS1_DURATION_FIELDS
+        else:
+            widths = _ROS2_TIME_FIELDS
         for key, item in value.items():
             key_path = f"{path}.{key}" if path else str(key)
             if key not in allowed:
@@ -242,6 +268,11 @@ class _Checker:
                 self.add(key_path, f"no such field in {type_name}{hint}; its fields are {', '.join(allowed)}")
             elif isinstance(item, bool) or not isinstance(item, int):
                 self.add(key_path, f"expected an integer, got {_describe(item)}")
+            else:
+                width = widths[key]
+                low, high = _INT_RANGES[width]
+                if not low <= item <= high:
+                    self.add(key_path, f"{item} is out of range for {width} in {type_name} ({low}..{high})")
 
     def _time_example(self) -> str:
         return '{"secs": 0, "nsecs": 0}' if self.ros_version == 1 else '{"sec": 0, "nanosec": 0}'

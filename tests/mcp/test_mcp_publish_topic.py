@@ -138,3 +138,37 @@ async def test_a_topic_we_publish_keeps_its_type(session: Session, sim: Simulate
     await session.ok("publish_topic", {**strings, "message": {"data": "b"}})
     await sim.world.wait_for(lambda w: len(w.published.get("/notes", ())) == 2)
     assert [m.msg["data"] for m in sim.world.published["/notes"]] == ["a", "b"]
+
+
+async def test_a_float32_beyond_its_range_is_refused_and_not_sent(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """1e40 in a Float32 is refused, naming the field; a real bridge would drop it (struct.pack overflows)."""
+    float32 = "std_msgs/Float32" if sim.dialect == "ros1" else "std_msgs/msg/Float32"
+    text = await session.error(
+        "publish_topic", {"topic": "/mcp_test/f32", "message_type": float32, "message": {"data": 1e40}}
+    )
+    assert "data: 1e+40 is out of range for float32" in text
+    assert "Nothing was published" in text
+    assert "/mcp_test/f32" not in sim.world.published
+
+
+async def test_a_negative_ros1_time_is_refused_and_a_negative_duration_is_sent(
+    sim_ros1: SimulatedRobot, session_ros1: Session
+) -> None:
+    """ROS 1 packs a time as uint32s (rosbridge 0.11.17 drops a negative one), a duration as int32s."""
+    text = await session_ros1.error(
+        "publish_topic",
+        {"topic": "/mcp_test/time", "message_type": "std_msgs/Time", "message": {"data": {"secs": -1}}},
+    )
+    assert "data.secs: -1 is out of range for uint32 in time" in text
+    await session_ros1.ok(
+        "publish_topic",
+        {
+            "topic": "/mcp_test/duration",
+            "message_type": "std_msgs/Duration",
+            "message": {"data": {"secs": -1}},
+        },
+    )
+    await sim_ros1.world.wait_for(lambda w: len(w.published.get("/mcp_test/duration", ())) == 1)
+    assert "/mcp_test/time" not in sim_ros1.world.published
