@@ -280,6 +280,8 @@ class RosGraph:
         bridge_name = normalize_type(type_name, info.version, "msg")
         await self._check_installed(type_name, bridge_name, info)
         typedefs = await self._details("message_details", bridge_name, required=True)
+        if typedefs is None:
+            return {}  # rosapi loaded the type but could not describe it: rosbridge alone will judge
         if not typedefs:
             raise UnknownTypeError(type_name, _type_hint(info))
         return typedefs
@@ -308,7 +310,8 @@ class RosGraph:
         """TypeDefs from ``/rosapi/<service>``.
 
         ``{}`` for a type rosapi cannot load; ``None`` when the service does not exist (an older rosapi), or,
-        when ``required``, the missing-rosapi error is raised instead.
+        when ``required``, the missing-rosapi error is raised instead. ``None`` also when ROS 1 rosapi failed
+        for another reason than loading the type (it cannot describe every type it can load).
         """
         key = (service, bridge_name)
         cached = self._typedef_cache.get(key)
@@ -320,6 +323,11 @@ class RosGraph:
             if is_missing_service(exc):
                 if required:
                     raise
+                return None
+            if (await self.ros_info()).version == 1 and not _ros1_load_failure(exc.message):
+                # rosapi 0.11.17 loads std_msgs/Char but fails describing its char field ("'int' object has no
+                # attribute '__module__'"), though rosbridge publishes it fine: the type exists.
+                _log.info("rosapi %s could not describe %s: %s", service, bridge_name, exc.message)
                 return None
             # rosapi raised while loading the type (ROS 1 reports the exception text).
             return {}
@@ -347,6 +355,14 @@ class RosGraph:
                 self._interfaces = frozenset(listed) if listed else None
         if self._interfaces is not None and bridge_name not in self._interfaces:
             raise UnknownTypeError(type_name, _type_hint(info))
+
+
+# How rosbridge 0.11's ros_loader says a type cannot be loaded (rosapi passes the text on).
+_ROS1_LOAD_FAILURES = ("Unable to import", "Unable to load", "is not a valid type string")
+
+
+def _ros1_load_failure(message: str) -> bool:
+    return any(text in message for text in _ROS1_LOAD_FAILURES)
 
 
 def _type_hint(info: RosInfo) -> str:
