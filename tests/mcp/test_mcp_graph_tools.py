@@ -34,6 +34,26 @@ async def test_get_topic_info_names_type_publishers_and_subscribers(
     assert "/turtlesim" in cmd_vel["subscribers"]
 
 
+async def test_doubled_slashes_in_a_name_are_collapsed_as_ros_resolves_them(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """//turtle1//pose is /turtle1/pose (rospy resolves names so; a real 0.11.17 bridge answers for it)."""
+    pose = (await session.ok("get_topic_info", {"topic": "//turtle1//pose"})).structured_content
+    assert pose is not None
+    assert pose["topic"] == "/turtle1/pose"
+    assert "/turtlesim" in pose["publishers"]
+    answer = await session.ok(
+        "publish_service",
+        {
+            "service": "//add_two_ints",
+            "service_type": types_for(sim)["add_two_ints"],
+            "request": {"a": 1, "b": 2},
+        },
+    )
+    assert answer.structured_content is not None
+    assert answer.structured_content["service"] == "/add_two_ints"
+
+
 async def test_get_topic_info_on_an_unknown_topic_says_so_and_suggests_list_topics(session: Session) -> None:
     """A misspelt topic is an error naming it, with the close match and a pointer to list_topics."""
     text = await session.error("get_topic_info", {"topic": "/turtle1/poses"})

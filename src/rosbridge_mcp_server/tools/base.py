@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import json
 import math
+import re
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -75,6 +76,8 @@ class ToolAnswer:
     data: BaseModel
 
 
+_SLASHES = re.compile(r"/{2,}")
+
 ProgressReporter = Callable[[float, float | None, str | None], Awaitable[None]]
 
 
@@ -123,8 +126,9 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
 
 def absolute_name(name: str, what: str) -> str:
     """A ROS graph name with its leading slash (rosapi and rosbridge match names exactly)."""
-    # ROS names never end in "/"; a trailing one would make rosapi's exact-name look-ups miss.
-    text = name.strip().rstrip("/")
+    # ROS names never end in "/" nor hold "//"; either would make rosapi's exact-name look-ups miss. rospy
+    # resolves "//a//b/" to "/a/b" (a real 0.11.17 bridge answers for it), so we do the same on both lines.
+    text = _SLASHES.sub("/", name.strip()).rstrip("/")
     if not text:
         raise ToolFailure(f"The {what} name is empty; give a name such as /turtle1/cmd_vel.")
     if any(ch.isspace() for ch in text):
