@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import asyncio
+import signal
+import socket
+import sys
 from collections.abc import AsyncIterator, Awaitable, Callable
 
 import pytest
 from mcp_harness import Session, open_session, types_for
 
+from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"
@@ -103,3 +107,43 @@ async def test_after_a_reconnect_to_another_kind_of_robot_the_tools_follow_it(
         await session.ok("publish_topic", _twist(ros1, 0.4))
         await ros1.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
     assert ros1.world.published[CMD_VEL][0].msg["linear"]["x"] == 0.4
+
+
+async def test_a_frozen_bridge_is_sent_no_publish_that_it_would_deliver_late() -> None:
+    """While the bridge is stopped (SIGSTOP) publish_topic refuses; after SIGCONT only later ones arrive."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    # A process of its own, so that it can be frozen the way a hung bridge or a silently dead link behaves.
+    process = await asyncio.create_subprocess_exec(
+        sys.executable, "-m", "rosbridge_mcp_server.sim", "--port", str(port), "--log-level", "ERROR"
+    )
+    url = f"ws://127.0.0.1:{port}"
+    string = "std_msgs/msg/String"
+    topic = "/mcp_test/frozen"
+    try:
+        watcher = RosbridgeClient(url, reconnect_min=0.05, reconnect_max=0.2)
+        async with watcher, open_session(url, request_timeout=1.0, wait=False) as session:
+            await watcher.wait_connected(WAIT)
+            await session.ros.wait_connected(WAIT)
+            async with watcher.subscribe(topic, string) as sub:
+                await session.ok(
+                    "publish_topic", {"topic": topic, "message_type": string, "message": {"data": "a"}}
+                )
+                assert await sub.get(timeout=WAIT) == {"data": "a"}
+                process.send_signal(signal.SIGSTOP)
+                try:
+                    text = await session.error(
+                        "publish_topic", {"topic": topic, "message_type": string, "message": {"data": "late"}}
+                    )
+                finally:
+                    process.send_signal(signal.SIGCONT)
+                assert "did not answer a ping within 1 s" in text
+                assert "nothing was published" in text
+                await session.ok(
+                    "publish_topic", {"topic": topic, "message_type": string, "message": {"data": "b"}}
+                )
+                assert await sub.get(timeout=WAIT) == {"data": "b"}
+    finally:
+        process.terminate()
+        await process.wait()

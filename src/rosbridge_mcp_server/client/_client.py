@@ -566,6 +566,17 @@ class RosbridgeClient:
         payload = adapt_message(msg, info.version) if info.version == 1 else msg
         await conn.send(protocol.publish(topic, payload))
 
+    async def ping(self, timeout: float | None = None) -> float:
+        """Round-trip a WebSocket ping on the main connection; returns the seconds it took.
+
+        Proves the bridge reads the connection now: a frozen bridge, or a link that died without a close,
+        still takes frames into the socket buffer and would act on them whenever it wakes up.
+        :class:`RequestTimeoutError` if no pong within *timeout* (default ``request_timeout``),
+        :class:`NotConnectedError` when there is no connection.
+        """
+        conn, _ = self._require_main()
+        return await conn.ping(self.request_timeout if timeout is None else timeout)
+
     async def unadvertise(self, topic: str) -> None:
         """Stop advertising *topic* (our advertisement only)."""
         advert = self._adverts.pop(topic, None)

@@ -192,6 +192,26 @@ class Connection:
         except ConnectionClosed:
             raise NotConnectedError(self.url, "the connection closed") from None
 
+    async def ping(self, timeout: float) -> float:
+        """A WebSocket ping answered within *timeout* seconds: the bridge is reading this socket now.
+
+        Returns the round trip in seconds. :class:`RequestTimeoutError` if no pong came in time.
+        """
+        start = self._loop.time()
+        try:
+            async with asyncio.timeout(timeout):
+                pong = await self.ws.ping()
+                await pong
+        except TimeoutError:
+            raise RequestTimeoutError(
+                f"a ping to rosbridge at {self.url}",
+                timeout,
+                "The bridge is not reading this connection (frozen, or the network to it is down).",
+            ) from None
+        except ConnectionClosed:
+            raise NotConnectedError(self.url, self.close_reason or "the connection closed") from None
+        return self._loop.time() - start
+
     async def request(self, rid: str, op: dict[str, Any], what: str, timeout: float) -> dict[str, Any]:
         """Send *op* and wait up to *timeout* seconds for the reply with id *rid*."""
         loop = self._loop

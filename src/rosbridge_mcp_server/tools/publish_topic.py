@@ -7,7 +7,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.dialect import adapt_message, normalize_type
-from rosbridge_mcp_server.errors import InvalidMessageError
+from rosbridge_mcp_server.errors import InvalidMessageError, RequestTimeoutError
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
@@ -20,9 +20,11 @@ from rosbridge_mcp_server.tools.base import (
 )
 from rosbridge_mcp_server.typecheck import check_message, example_message, short_type_name
 
-__all__ = ["SPEC", "PublishAnswer", "run"]
+__all__ = ["PING_LIMIT", "SPEC", "PublishAnswer", "run"]
 
 _EXAMPLE = '{"linear": {"x": 0.5}, "angular": {"z": 0.3}}'
+#: Longest wait for the bridge's pong before a publish (less when the configured request timeout is shorter).
+PING_LIMIT = 3.0
 
 
 class PublishAnswer(BaseModel):
@@ -90,9 +92,29 @@ async def run(
             f"{exc}. Nothing was published. A {bridge_type} message looks like {shape}."
         ) from exc
 
+    await _bridge_is_reading(ctx)
     await ctx.client.publish(name, bridge_type, body)
     ctx.graph.remember_publishing(name, bridge_type)
     text = f"Published one {bridge_type} message on {name}: {compact_json(body)}"
     return ToolAnswer(
         text=text, data=PublishAnswer(topic=name, message_type=bridge_type, message=body, published=True)
     )
+
+
+async def _bridge_is_reading(ctx: ToolContext) -> None:
+    """Refuse to publish into a connection the bridge is not reading.
+
+    A frozen bridge (or a link that died without a close) still takes our frame into the socket buffer and
+    acts on it whenever it wakes up: a late velocity command. Seen against a real 0.11.17 bridge stopped with
+    SIGSTOP: the publish "succeeded" and the message arrived after SIGCONT. One ping round trip first proves
+    it reads the connection now.
+    """
+    limit = min(ctx.config.request_timeout, PING_LIMIT)
+    try:
+        await ctx.client.ping(limit)
+    except RequestTimeoutError as exc:
+        raise ToolFailure(
+            f"rosbridge at {ctx.client.url} did not answer a ping within {limit:g} s (the bridge is frozen, "
+            "or the network to the robot is down), so nothing was published: a message sent now could reach "
+            "the robot late and move it then. Check the robot and its network, then try again."
+        ) from exc
