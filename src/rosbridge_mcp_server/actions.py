@@ -282,7 +282,7 @@ async def _run_ros1(
         except RequestTimeoutError:
             raise ActionError(
                 ns,
-                f"no action server at {ns}: no status messages on {ns}/status within {wait:g} s "
+                f"no action server at {ns}: no status messages on {ns}/status within {round(wait, 1):g} s "
                 f"(is the action server running, and is the type {types.action} right?)",
             ) from None
         pumps = [
