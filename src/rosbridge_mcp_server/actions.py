@@ -43,6 +43,7 @@ from rosbridge_mcp_server.errors import (
 
 __all__ = [
     "ACTIONLIB_SERVER_WAIT",
+    "UNCONFIRMED_STATUS",
     "CancelReport",
     "CanceledBy",
     "GoalOutcome",
@@ -55,6 +56,8 @@ __all__ = [
 logger = logging.getLogger("rosbridge_mcp_server.actions")
 
 CanceledBy = Literal["timeout", "request_cancelled", "cancel_action"]
+#: ``GoalOutcome.status`` of a goal that timed out and whose end the server never confirmed after the cancel.
+UNCONFIRMED_STATUS: Final = "timed out"
 
 #: How long a ROS 1 goal waits for a first message on ``<ns>/status`` (actionlib servers publish it
 #: periodically; roslibpy waits 3 s too).
@@ -205,7 +208,7 @@ def _outcome(
         goal_id=entry.goal_id,
         action=entry.action,
         status_code=code,
-        status=goal_status_name(code, version) if finished else "timed out",
+        status=goal_status_name(code, version) if finished else UNCONFIRMED_STATUS,
         succeeded=succeeded,
         result=result if isinstance(result, dict) else None,
         feedback_count=entry.feedback_count,

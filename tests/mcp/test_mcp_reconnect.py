@@ -7,9 +7,10 @@ import signal
 import socket
 import sys
 from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import asynccontextmanager
 
 import pytest
-from mcp_harness import Session, open_session, types_for
+from mcp_harness import Session, open_session, text_of, types_for
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -109,19 +110,29 @@ async def test_after_a_reconnect_to_another_kind_of_robot_the_tools_follow_it(
     assert ros1.world.published[CMD_VEL][0].msg["linear"]["x"] == 0.4
 
 
-async def test_a_frozen_bridge_is_sent_no_publish_that_it_would_deliver_late() -> None:
-    """While the bridge is stopped (SIGSTOP) publish_topic refuses; after SIGCONT only later ones arrive."""
+@asynccontextmanager
+async def _robot_process() -> AsyncIterator[tuple[asyncio.subprocess.Process, str]]:
+    """The simulated robot in a process of its own (ROS 2), so a test can freeze it the way a hung bridge or a
+    silently dead link behaves; yields the process and its URL."""
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         port = sock.getsockname()[1]
-    # A process of its own, so that it can be frozen the way a hung bridge or a silently dead link behaves.
     process = await asyncio.create_subprocess_exec(
         sys.executable, "-m", "rosbridge_mcp_server.sim", "--port", str(port), "--log-level", "ERROR"
     )
-    url = f"ws://127.0.0.1:{port}"
+    try:
+        yield process, f"ws://127.0.0.1:{port}"
+    finally:
+        process.send_signal(signal.SIGCONT)
+        process.terminate()
+        await process.wait()
+
+
+async def test_a_frozen_bridge_is_sent_no_publish_that_it_would_deliver_late() -> None:
+    """While the bridge is stopped (SIGSTOP) publish_topic refuses; after SIGCONT only later ones arrive."""
     string = "std_msgs/msg/String"
     topic = "/mcp_test/frozen"
-    try:
+    async with _robot_process() as (process, url):
         watcher = RosbridgeClient(url, reconnect_min=0.05, reconnect_max=0.2)
         async with watcher, open_session(url, request_timeout=1.0, wait=False) as session:
             await watcher.wait_connected(WAIT)
@@ -144,6 +155,37 @@ async def test_a_frozen_bridge_is_sent_no_publish_that_it_would_deliver_late() -
                     "publish_topic", {"topic": topic, "message_type": string, "message": {"data": "b"}}
                 )
                 assert await sub.get(timeout=WAIT) == {"data": "b"}
-    finally:
-        process.terminate()
-        await process.wait()
+
+
+async def test_a_timed_out_goal_whose_cancel_is_not_confirmed_may_still_be_running() -> None:
+    """A goal past its timeout on a frozen bridge is not called cancelled: it may still be running."""
+    async with (
+        _robot_process() as (process, url),
+        open_session(url, request_timeout=5.0, wait=False) as session,
+    ):
+        await session.ros.wait_connected(WAIT)
+        first_feedback = asyncio.Event()
+
+        async def on_progress(progress: float, total: float | None, message: str | None) -> None:
+            first_feedback.set()
+
+        goal = {"action_name": "/fibonacci", "action_type": "example_interfaces/action/Fibonacci"}
+        call = asyncio.create_task(
+            session.mcp.call_tool(
+                "publish_action",
+                {**goal, "goal": {"order": 30}, "timeout": 1.0},
+                progress_callback=on_progress,
+            )
+        )
+        await asyncio.wait_for(first_feedback.wait(), WAIT)
+        process.send_signal(signal.SIGSTOP)
+        try:
+            result = await asyncio.wait_for(call, WAIT)
+        finally:
+            process.send_signal(signal.SIGCONT)
+    text = text_of(result)
+    assert result.structured_content is not None, text
+    assert result.structured_content["status"] == "timed out"
+    assert result.structured_content["canceled_by"] == "timeout"
+    assert "may still be running" in text
+    assert "it was cancelled because" not in text

@@ -6,7 +6,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.actions import GoalOutcome, run_goal
+from rosbridge_mcp_server.actions import UNCONFIRMED_STATUS, GoalOutcome, run_goal
 from rosbridge_mcp_server.dialect import action_type_names, goal_status_name
 from rosbridge_mcp_server.errors import GoalTimeoutError, InvalidMessageError, ServiceError
 from rosbridge_mcp_server.tools.base import (
@@ -40,7 +40,12 @@ class GoalAnswer(BaseModel):
     goal_id: str = Field(description="The goal's id; pass it to cancel_action to cancel this goal")
     action: str
     action_type: str
-    status: str = Field(description="Final status in words: succeeded, canceled, aborted, ...")
+    status: str = Field(
+        description=(
+            'Final status in words: succeeded, canceled, aborted, ...; "timed out" when the goal outlived '
+            "the timeout and the robot never confirmed its end after the cancel"
+        )
+    )
     status_code: int = Field(description="Final status number in the bridge's own numbering")
     succeeded: bool
     result: dict[str, Any] | None = Field(description="The action's result message (null when none came)")
@@ -180,7 +185,15 @@ def _answer(outcome: GoalOutcome, wire_type: str) -> ToolAnswer:
         canceled_by=outcome.canceled_by,
     )
     lines = [f"Goal {outcome.goal_id} on {outcome.action} ({wire_type}): {outcome.status}."]
-    if outcome.canceled_by is not None:
+    if outcome.status == UNCONFIRMED_STATUS:
+        # The cancel went out but no final status came back (a frozen action server or bridge): "it was
+        # cancelled" would be a guess. A real 0.11.17 bridge with its action server under SIGSTOP ended the
+        # goal only after SIGCONT.
+        lines[0] = lines[0][:-1] + (
+            "; it did not finish within the timeout, so a cancel was sent, but the robot has not confirmed "
+            "that the goal ended: it may still be running. Call cancel_action for it, or check the robot."
+        )
+    elif outcome.canceled_by is not None:
         lines[0] = lines[0][:-1] + f"; {_CANCELLED_BY.get(outcome.canceled_by, outcome.canceled_by)}."
     lines.append(f"Result: {compact_json(outcome.result)}")
     if outcome.feedback_count:
