@@ -157,6 +157,12 @@ def test_values_that_fit_the_wire_widths_pass() -> None:
     assert find_problems(message, "demo_msgs/Times", ROS1_TIMES, ros_version=1) == []
 
 
+@pytest.mark.parametrize("value", [float("inf"), float("-inf"), float("nan")])
+def test_infinities_and_nan_fit_a_float32(value: float) -> None:
+    """Infinity (a LaserScan's usual range_max) and NaN pack fine, so they are not out of range."""
+    assert find_problems({"f": value}, "demo_msgs/Times", ROS1_TIMES, ros_version=1) == []
+
+
 def test_ros2_time_fields_are_int32_seconds_and_uint32_nanoseconds() -> None:
     """On ROS 2 a negative sec fits a Time; a negative nanosec does not."""
     assert find_problems({"sec": -1}, "builtin_interfaces/Time", {}, ros_version=2) == []

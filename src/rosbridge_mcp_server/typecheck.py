@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import difflib
 import json
+import math
 import re
 import sys
 from collections.abc import Iterable, Mapping, Sequence
@@ -54,9 +55,9 @@ _INT_RANGES: dict[str, tuple[int, int]] = {
     "octet": (0, 2**8 - 1),
 }
 _FLOATS = frozenset({"float32", "float64", "float", "double", "long double"})
-# A number beyond a float field's range never arrives: genpy's struct.pack raises OverflowError (rosbridge
-# 0.11.17 logs it and drops the message) and ROS 2's generated setters reject it. ROS 2's float32 bound is the
-# one below, a hair under FLT_MAX, so we use it for both lines.
+# A finite number beyond a float field's range never arrives: genpy's struct.pack raises OverflowError
+# (rosbridge 0.11.17 logs it and drops the message) and ROS 2's generated setters reject it. ROS 2's float32
+# bound is the one below, a hair under FLT_MAX, so we use it for both lines.
 _FLOAT_LIMITS: dict[str, float] = {
     "float32": 3.402823466e38,
     "float": 3.402823466e38,
@@ -227,7 +228,7 @@ class _Checker:
         elif base in _FLOATS:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 self.add(path, f"expected a number ({_shown(base)}), got {_describe(value)}")
-            elif base in _FLOAT_LIMITS and abs(value) > _FLOAT_LIMITS[base]:
+            elif base in _FLOAT_LIMITS and not _infinite(value) and abs(value) > _FLOAT_LIMITS[base]:
                 limit = _FLOAT_LIMITS[base]
                 self.add(
                     path, f"{_describe(value)} is out of range for {_shown(base)} (-{limit:g}..{limit:g})"
@@ -280,6 +281,12 @@ class _Checker:
 
 # ROS 2 rosapi names primitives by their IDL names; the .msg names are the ones people write.
 _MSG_NAMES = {"double": "float64", "float": "float32", "boolean": "bool", "octet": "byte"}
+
+
+def _infinite(value: float) -> bool:
+    # Infinities pack fine (genpy's struct.pack; ROS 2's setters allow them) and are common, e.g. a
+    # LaserScan's range_max; only finite numbers past the type's range cannot be represented.
+    return isinstance(value, float) and math.isinf(value)
 
 
 def _shown(base: str) -> str:
