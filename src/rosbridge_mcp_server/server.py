@@ -81,7 +81,9 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
     (
         RequestTimeoutError,
         "The robot may be busy or the node may not be answering: check it is running (list_services / "
-        "list_actions), or try again with a longer timeout.",
+        "list_actions), or try again with a longer timeout. The request may still take effect on the robot "
+        "later (a busy node or a frozen bridge runs it when it gets to it): check the robot's state before "
+        "repeating one that moves it.",
     ),
     (
         ServiceError,

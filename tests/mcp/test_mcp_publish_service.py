@@ -190,3 +190,13 @@ async def test_a_service_offered_anew_with_another_type_is_called_with_the_new_t
         result = await call
         assert result.structured_content["service_type"] == "std_srvs/srv/SetBool"
         assert result.structured_content["response"] == {"success": True, "message": "second"}
+
+
+async def test_a_call_past_its_timeout_warns_it_may_still_take_effect(session_ros1: Session) -> None:
+    """A ROS 1 call that outlives its timeout may still run on the robot (as /slow_service does): say so."""
+    text = await session_ros1.error(
+        "publish_service",
+        {"service": "/slow_service", "service_type": "std_srvs/Trigger", "request": {}, "timeout": 0.2},
+    )
+    assert "No reply to service /slow_service within 0.2 s" in text
+    assert "may still take effect on the robot" in text
