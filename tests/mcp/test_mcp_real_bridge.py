@@ -259,7 +259,7 @@ async def test_a_goal_past_its_timeout_is_cancelled_on_the_robot(real: Session) 
         {"action_name": action, "action_type": action_type, "goal": ACTION_GOAL, "timeout": 0.5},
     )
     text = text_of(result)
-    assert "cancelled" in text
+    assert "cancel" in text
     if not result.is_error:
         data = result.structured_content
         assert data is not None
