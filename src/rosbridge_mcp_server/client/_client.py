@@ -40,6 +40,8 @@ logger = logging.getLogger("rosbridge_mcp_server.client")
 
 #: After a goal's deadline we send a cancel and wait this long for the canceled result.
 CANCEL_GRACE_SECONDS = 2.0
+#: rosbridge's node name in rosbridge_websocket.launch (ROS 1 0.11); used to tell ROS 1 without rosapi.
+ROS1_BRIDGE_NODE = "rosbridge_websocket"
 
 
 @dataclass(frozen=True, slots=True)
@@ -325,13 +327,30 @@ class RosbridgeClient:
             return RosInfo(2, str(distro) if distro else None)
         try:
             values = await self._call_on(conn, "/rosapi/topics", None, timeout, send_timeout=False)
-        except (ServiceError, RequestTimeoutError) as exc:
+        except ServiceError as exc:
+            # No rosapi. Every rospy node offers <node>/get_loggers; ROS 2 nodes never do. Without this, a
+            # real 0.11.17 bridge without rosapi was taken for ROS 2 and publish_action sent it action ops it
+            # ignores, waiting out the whole timeout.
+            if await self._answers(conn, f"/{ROS1_BRIDGE_NODE}/get_loggers", timeout):
+                logger.warning("No rosapi at %s; its rosbridge node is a ROS 1 (rospy) node", self.url)
+                return RosInfo(1, None)
+            logger.warning("Cannot tell the ROS version of %s (no rosapi? %s); assuming ROS 2", self.url, exc)
+            return RosInfo(2, None)
+        except RequestTimeoutError as exc:
             logger.warning("Cannot tell the ROS version of %s (no rosapi? %s); assuming ROS 2", self.url, exc)
             return RosInfo(2, None)
         types = values.get("types", []) if isinstance(values, dict) else []
         if any(isinstance(t, str) and "/msg/" in t for t in types):
             return RosInfo(2, None)
         return RosInfo(1, None)
+
+    async def _answers(self, conn: Connection, service: str, timeout: float) -> bool:
+        """Whether *service* answers a call with an empty request."""
+        try:
+            await self._call_on(conn, service, None, timeout, send_timeout=False)
+        except (ServiceError, RequestTimeoutError):
+            return False
+        return True
 
     async def _restore(self, conn: Connection, info: RosInfo) -> None:
         """Re-advertise and re-subscribe what is still wanted. Never re-sends a publish.
