@@ -68,8 +68,9 @@ zeros to stop. Prefer small, safe values and say what you are about to do.
 4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
 
 A failed call comes back as an error whose text says what went wrong and what to try (a field that does not \
-fit the type, an unknown name, the robot being unreachable). Nothing sent while the robot is unreachable is \
-delivered later.\
+fit the type, an unknown name, the robot being unreachable). Nothing is queued while the robot is \
+unreachable, and publish_topic first checks that the bridge answers, so a command is not delivered late. A \
+request that timed out may still take effect later: check the robot's state before repeating it.\
 """
 
 _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
