@@ -309,6 +309,13 @@ async def _run_ros1(
                 return _outcome(entry, code, result, log)
             except TimeoutError:
                 pass
+            except ConnectionLostError:
+                # The action server keeps running the goal after our connection dropped.
+                finished = True  # the cancel is taken care of here, not in `finally`
+                reached = await asyncio.shield(_cancel_ros1(client, ns, gid, remember=True))
+                raise ConnectionLostError(
+                    client.url, f"action goal {gid} on {ns}", goal_cancel="sent" if reached else "pending"
+                ) from None
             await asyncio.shield(_cancel_ros1(client, ns, gid))
             try:
                 async with asyncio.timeout(CANCEL_GRACE):
@@ -322,7 +329,7 @@ async def _run_ros1(
             for pump in pumps:
                 pump.cancel()
             if sent and not finished:
-                await asyncio.shield(_cancel_ros1(client, ns, gid))
+                await asyncio.shield(_cancel_ros1(client, ns, gid, remember=True))
 
 
 class _Ros1Progress:
@@ -373,14 +380,22 @@ async def _follow_ros1(
                         seen.ended_at = loop.time()
 
 
-async def _cancel_ros1(client: RosbridgeClient, ns: str, goal_id: str) -> bool:
-    """Publish a cancel on ``<ns>/cancel`` (empty id = every goal); False if it could not be sent."""
+async def _cancel_ros1(client: RosbridgeClient, ns: str, goal_id: str, *, remember: bool = False) -> bool:
+    """Publish a cancel on ``<ns>/cancel`` (empty id = every goal); False if it could not be sent.
+
+    With *remember*, a goal whose cancel could not be sent is left to the client, which cancels it as
+    soon as the connection is back.
+    """
     try:
         await client.publish(
             f"{ns}/cancel", "actionlib_msgs/GoalID", {"stamp": {"secs": 0, "nsecs": 0}, "id": goal_id}
         )
     except RosbridgeError as exc:
-        logger.warning("Could not send a cancel for goal %r on %s: %s", goal_id, ns, exc)
+        if remember and goal_id:
+            # Right after the failed send, with no await between: the client sees the same connection state.
+            client.remember_orphaned_goal(ns, goal_id, 1)
+        else:
+            logger.warning("Could not send a cancel for goal %r on %s: %s", goal_id, ns, exc)
         return False
     return True
 

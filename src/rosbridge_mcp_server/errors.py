@@ -22,6 +22,7 @@ and what to check. The MCP layer turns these into tool errors at one place (``se
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Literal
 
 __all__ = [
     "ActionError",
@@ -59,15 +60,30 @@ class NotConnectedError(RosbridgeError):
 
 
 class ConnectionLostError(RosbridgeError):
-    """The connection dropped while a request was waiting for its reply."""
+    """The connection dropped while a request was waiting for its reply.
 
-    def __init__(self, url: str, what: str) -> None:
+    ``goal_cancel`` is set when *what* is an action goal, which keeps running on the robot after a drop:
+    ``"sent"`` when a cancel already reached the bridge, ``"pending"`` when the client will send one as soon
+    as the connection is back.
+    """
+
+    def __init__(self, url: str, what: str, *, goal_cancel: Literal["sent", "pending"] | None = None) -> None:
         self.url = url
         self.what = what
-        super().__init__(
-            f"The connection to rosbridge at {url} dropped while waiting for {what}; "
-            "its outcome on the robot is unknown. Nothing will be re-sent automatically."
-        )
+        self.goal_cancel = goal_cancel
+        if goal_cancel == "pending":
+            outcome = (
+                "the goal may still be running on the robot, so a cancel for it will be sent as soon as the "
+                "connection is back. Nothing else will be re-sent automatically."
+            )
+        elif goal_cancel == "sent":
+            outcome = (
+                "a cancel for the goal was sent over the connection that is still up. "
+                "Nothing will be re-sent automatically."
+            )
+        else:
+            outcome = "its outcome on the robot is unknown. Nothing will be re-sent automatically."
+        super().__init__(f"The connection to rosbridge at {url} dropped while waiting for {what}; {outcome}")
 
 
 class RequestTimeoutError(RosbridgeError):

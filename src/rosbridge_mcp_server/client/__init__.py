@@ -7,8 +7,8 @@ calls. ``Subscription`` is one listener on a topic.
 
 from __future__ import annotations
 
-from rosbridge_mcp_server.client._client import ActionResult, GoalHandle, RosbridgeClient
+from rosbridge_mcp_server.client._client import ActionResult, GoalHandle, OrphanedGoal, RosbridgeClient
 from rosbridge_mcp_server.client._subscription import Subscription
 from rosbridge_mcp_server.dialect import RosInfo
 
-__all__ = ["ActionResult", "GoalHandle", "RosInfo", "RosbridgeClient", "Subscription"]
+__all__ = ["ActionResult", "GoalHandle", "OrphanedGoal", "RosInfo", "RosbridgeClient", "Subscription"]

@@ -34,7 +34,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 
-__all__ = ["ActionResult", "GoalHandle", "RosbridgeClient"]
+__all__ = ["ActionResult", "GoalHandle", "OrphanedGoal", "RosbridgeClient"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
@@ -42,6 +42,17 @@ logger = logging.getLogger("rosbridge_mcp_server.client")
 CANCEL_GRACE_SECONDS = 2.0
 #: rosbridge's node name in rosbridge_websocket.launch (ROS 1 0.11); used to tell ROS 1 without rosapi.
 ROS1_BRIDGE_NODE = "rosbridge_websocket"
+#: At most this many goals left running by a drop are remembered for a cancel (the oldest are forgotten).
+ORPHAN_LIMIT = 100
+#: A goal left running by a drop longer ago than this is not cancelled when the connection comes back: a
+#: surprise cancel of something that old would stop whatever the robot is doing now.
+ORPHAN_MAX_AGE_SECONDS = 300.0
+#: ROS 1: the orphans' cancels are published again this long after the first time. A message published right
+#: after a rospy publisher is (re)created is often lost before the action server's subscriber connects to it.
+ROS1_CANCEL_REPEAT_SECONDS = 1.0
+#: How long a cancel sent after a goal's lane dropped waits for the main connection to prove it is read.
+CANCEL_CONFIRM_SECONDS = 1.0
+ROS1_CANCEL_TYPE = "actionlib_msgs/GoalID"
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,6 +85,23 @@ class GoalHandle:
     feedback_count: int = 0
     last_feedback: Any = None
     cancel_requested: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class OrphanedGoal:
+    """A goal left running on the robot by a drop, to be cancelled once the connection is back.
+
+    ``ros_version`` is the dialect it was sent in: a ROS 2 goal is cancelled with ``cancel_action_goal``,
+    a ROS 1 actionlib goal by publishing its id on ``<action>/cancel``.
+    """
+
+    action: str
+    goal_id: str
+    ros_version: int
+    since: float = field(default_factory=time.monotonic)
+    #: The main connection that was open when the goal was orphaned; it may be dying, so the cancel waits
+    #: for another one.
+    stale: Connection | None = field(default=None, compare=False)
 
 
 @dataclass(slots=True)
@@ -129,6 +157,7 @@ class RosbridgeClient:
         self._adverts: dict[str, _Advert] = {}
         self._goals: dict[str, GoalHandle] = {}
         self._goal_lanes: set[Connection] = set()
+        self._orphans: dict[str, OrphanedGoal] = {}
         self._background: set[asyncio.Task[Any]] = set()
         self._lanes = LanePool(
             self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
@@ -198,6 +227,13 @@ class RosbridgeClient:
                 sub._interrupt(NotConnectedError(self.url, "the client was closed"))
         self._subs.clear()
         self._adverts.clear()
+        for orphan in self._orphans.values():
+            logger.warning(
+                "The client is closing; goal %s on %s, left running by a drop, was not cancelled",
+                orphan.goal_id,
+                orphan.action,
+            )
+        self._orphans.clear()
         if self._background:
             await asyncio.gather(*list(self._background), return_exceptions=True)
 
@@ -278,6 +314,8 @@ class RosbridgeClient:
                 )
                 ever_connected = True
                 failures = 0
+                if self._orphans:
+                    self._spawn(self._cancel_orphans(conn, info), "cancel goals orphaned by a drop")
                 delay = self.reconnect_min
                 await conn.closed.wait()
                 reason = conn.close_reason or "the connection closed"
@@ -680,6 +718,143 @@ class RosbridgeClient:
         """Goals this client has in flight (all, or those of *action*)."""
         return [g for g in self._goals.values() if action is None or g.action == action]
 
+    # --- goals orphaned by a drop -------------------------------------------------------------------
+    #
+    # A goal keeps running on the robot when our connection drops: ROS 2 goals outlive the WebSocket that
+    # sent them (the bridge's goal table is process-wide) and ROS 1 actionlib goals live in the action
+    # server. Nobody supervises them any more, so each is cancelled once as soon as a connection is back.
+    # This is not a replay: a cancel only stops motion, and nothing else asked for during the outage is sent.
+
+    def orphaned_goals(self) -> list[OrphanedGoal]:
+        """Goals left running by a drop, waiting for the connection to come back to be cancelled."""
+        return list(self._orphans.values())
+
+    def remember_orphaned_goal(
+        self, action: str, goal_id: str, ros_version: int, *, stale: Connection | None = None
+    ) -> None:
+        """Remember a goal that may still be running but could not be cancelled: the connection is down.
+
+        It is cancelled once as soon as a connection to the bridge is up again (at once if one already
+        is, other than *stale*, a connection known to be dying), then forgotten. At most
+        :data:`ORPHAN_LIMIT` are kept; one older than :data:`ORPHAN_MAX_AGE_SECONDS` is never cancelled.
+        """
+        if self._closed:
+            return
+        self._orphans.pop(goal_id, None)
+        self._orphans[goal_id] = OrphanedGoal(action, goal_id, ros_version, stale=stale)
+        logger.warning(
+            "Goal %s on %s may still be running on the robot; it will be cancelled as soon as the "
+            "connection to %s is back",
+            goal_id,
+            action,
+            self.url,
+        )
+        while len(self._orphans) > ORPHAN_LIMIT:
+            oldest = next(iter(self._orphans.values()))
+            del self._orphans[oldest.goal_id]
+            logger.warning(
+                "More than %d goals are waiting to be cancelled; forgetting goal %s on %s without a cancel",
+                ORPHAN_LIMIT,
+                oldest.goal_id,
+                oldest.action,
+            )
+        # The reconnect may already have happened (its own sweep ran before this goal was remembered).
+        conn, info = self._main, self._info
+        if conn is not None and conn.is_open and info is not None and conn is not stale:
+            self._spawn(self._cancel_orphans(conn, info), "cancel goals orphaned by a drop")
+
+    async def _cancel_orphans(self, conn: Connection, info: RosInfo) -> None:
+        """Cancel, once, every remembered goal that *conn* may reach; forget them once the bridge read it."""
+        now = time.monotonic()
+        sent: list[OrphanedGoal] = []
+        for orphan in list(self._orphans.values()):
+            if orphan.stale is conn or self._orphans.get(orphan.goal_id) is not orphan:
+                continue
+            # Taken out before any await, so a second sweep running at the same time never sends it again.
+            del self._orphans[orphan.goal_id]
+            age = now - orphan.since
+            if age > ORPHAN_MAX_AGE_SECONDS:
+                logger.warning(
+                    "Not cancelling goal %s on %s: it was left running by a drop %.0f s ago, "
+                    "too long ago for a surprise cancel",
+                    orphan.goal_id,
+                    orphan.action,
+                    age,
+                )
+                continue
+            if orphan.ros_version != info.version:
+                logger.warning(
+                    "Not cancelling goal %s on %s: it was sent to a ROS %d bridge and %s came back "
+                    "as ROS %d, so the goal is gone",
+                    orphan.goal_id,
+                    orphan.action,
+                    orphan.ros_version,
+                    self.url,
+                    info.version,
+                )
+                continue
+            try:
+                await self._send_orphan_cancel(conn, info, orphan)
+            except Exception as exc:
+                # The connection went again: the next one tries.
+                logger.debug("Could not cancel goal %s yet: %s", orphan.goal_id, exc)
+                self._keep_orphans([orphan, *sent], conn)
+                return
+            sent.append(orphan)
+        if not sent:
+            return
+        # A cancel written into a socket the bridge is closing is lost: only a pong proves it was read.
+        if not await self._confirmed(conn):
+            self._keep_orphans(sent, conn)
+            return
+        for orphan in sent:
+            logger.warning(
+                "Sent a cancel for goal %s on %s, left running on the robot when the connection dropped "
+                "%.1f s ago (nothing else asked for during the outage is sent)",
+                orphan.goal_id,
+                orphan.action,
+                time.monotonic() - orphan.since,
+            )
+        ros1 = [orphan for orphan in sent if orphan.ros_version == 1]
+        if ros1:
+            # Until the disconnect (close() too) or the repeat time, whichever comes first.
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(ROS1_CANCEL_REPEAT_SECONDS):
+                    await self._disconnected_event.wait()
+            if self._main is conn and conn.is_open:
+                for orphan in ros1:
+                    with contextlib.suppress(Exception):
+                        await self._send_orphan_cancel(conn, info, orphan)
+
+    def _keep_orphans(self, orphans: list[OrphanedGoal], conn: Connection) -> None:
+        for orphan in orphans:
+            if orphan.goal_id not in self._orphans:
+                self._orphans[orphan.goal_id] = OrphanedGoal(
+                    orphan.action, orphan.goal_id, orphan.ros_version, orphan.since, stale=conn
+                )
+
+    async def _send_orphan_cancel(self, conn: Connection, info: RosInfo, orphan: OrphanedGoal) -> None:
+        if orphan.ros_version == 2:
+            await conn.send(protocol.cancel_action_goal(orphan.action, id=orphan.goal_id))
+            return
+        topic = f"{orphan.action}/cancel"
+        await self._ensure_advertised(conn, info, topic, ROS1_CANCEL_TYPE, latch=False, queue_size=10)
+        msg = {"stamp": {"sec": 0, "nanosec": 0}, "id": orphan.goal_id}
+        await conn.send(protocol.publish(topic, adapt_message(msg, info.version)))
+
+    async def _confirmed(self, conn: Connection | None) -> bool:
+        """Whether the bridge has read everything sent on *conn* so far (a pong came back in time)."""
+        if conn is None or not conn.is_open:
+            return False
+        try:
+            await conn.ping(min(CANCEL_CONFIRM_SECONDS, self.request_timeout))
+        except RosbridgeError:
+            return False
+        except Exception:
+            logger.debug("ping on %s failed", conn.name, exc_info=True)
+            return False
+        return True
+
     async def cancel_action_goal(self, action: str, goal_id: str) -> None:
         """Ask the bridge to cancel goal *goal_id*, on the main connection.
 
@@ -754,6 +929,13 @@ class RosbridgeClient:
                 raise GoalTimeoutError(
                     action, gid, timeout, status=status, result=values, feedback=handle.last_feedback
                 ) from None
+            except ConnectionLostError:
+                # The goal's lane dropped; the goal itself keeps running on the robot.
+                finished = True  # the cancel is taken care of here, not in `finally`
+                reached = await asyncio.shield(self._cancel_after_drop(action, gid))
+                raise ConnectionLostError(
+                    self.url, what, goal_cancel="sent" if reached else "pending"
+                ) from None
             finished = True
             status, values = _goal_result(action, frame)
             return ActionResult(gid, status, values)
@@ -797,9 +979,22 @@ class RosbridgeClient:
         sent = await self._send_quietly(self._main, op) or await self._send_quietly(lane, op)
         # close() has already sent cancels for every running goal on the main connection.
         if not sent and not self._closed:
-            logger.warning(
-                "Could not send a cancel for goal %s on %s; it may still be running", goal_id, action
-            )
+            self.remember_orphaned_goal(action, goal_id, 2)
+
+    async def _cancel_after_drop(self, action: str, goal_id: str) -> bool:
+        """Cancel a goal whose lane dropped on the main connection; True if the bridge surely read it.
+
+        A drop of the whole bridge closes the main connection too, but its reader may not have noticed
+        yet: a cancel written then is lost, so it counts only once a ping on the same connection is answered.
+        Otherwise the goal is remembered and cancelled on the next connection.
+        """
+        main = self._main
+        op = protocol.cancel_action_goal(action, id=goal_id)
+        if await self._send_quietly(main, op) and await self._confirmed(main):
+            return True
+        if not self._closed:
+            self.remember_orphaned_goal(action, goal_id, 2, stale=main)
+        return False
 
 
 def _bridge_timeout(deadline_in: float) -> float:
