@@ -194,6 +194,23 @@ async def test_cancelling_the_mcp_request_cancels_the_goal_on_the_robot(
     await slow_session.ok("list_actions")
 
 
+async def test_a_goal_running_when_the_connection_drops_is_cancelled_once_it_is_back(
+    slow_session: Session, slow_robot: SimulatedRobot
+) -> None:
+    """publish_action fails at once, saying a cancel will follow; once reconnected the goal is cancelled."""
+    goal_call = asyncio.create_task(slow_session.call("publish_action", _long_goal(slow_robot)))
+    await slow_robot.world.wait_for(lambda w: bool(_running(slow_robot)), WAIT)
+    await slow_robot.drop_connections()
+    result = await asyncio.wait_for(goal_call, WAIT)
+    assert result.is_error
+    text = text_of(result)
+    assert f"The connection to rosbridge at {slow_robot.url} dropped while waiting for action goal" in text
+    assert "a cancel for it will be sent as soon as the connection is back" in text
+    await _the_goal_ended_cancelled(slow_robot)
+    # Nothing else is re-sent: the goal itself never reaches the robot a second time.
+    assert len(slow_robot.world.goals) == 1
+
+
 async def test_cancel_action_with_an_unknown_goal_id_says_so(session: Session) -> None:
     """A goal id that is not running is reported as unknown (the cancel is still sent, harmlessly)."""
     result = await session.ok("cancel_action", {"action_name": FIB, "goal_id": "no-such-goal"})
