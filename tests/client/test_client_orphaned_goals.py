@@ -12,7 +12,7 @@ from client_harness import MakeClient, MakeSim
 from rosbridge_mcp_server import actions
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.client import _client as client_module
-from rosbridge_mcp_server.errors import ConnectionLostError
+from rosbridge_mcp_server.errors import ConnectionLostError, GoalTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import World
 
@@ -201,3 +201,53 @@ async def test_at_most_a_bounded_number_of_orphaned_goals_are_remembered(
     for goal_id in ids:
         client.remember_orphaned_goal("/fibonacci", goal_id, 2)
     assert [orphan.goal_id for orphan in client.orphaned_goals()] == ids[1:]
+
+
+@pytest.fixture(params=["jazzy", "humble"])
+async def robot2(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
+    """A ROS 2 robot, threaded (Jazzy) and in-order (Humble), whose goals take a while."""
+    return await make_sim(action_step=SLOW_STEP, **ROBOTS[request.param])
+
+
+async def test_when_only_the_goals_lane_drops_the_cancel_goes_out_at_once_on_the_main_connection(
+    robot2: SimulatedRobot, make_client: MakeClient, cancel_log: _CancelLog
+) -> None:
+    """The main connection stays up: the goal is cancelled right away; the error says a cancel was sent."""
+    client = await make_client(robot2)
+    goal_id, task = await start_long_goal(client, robot2)
+    main_id, lane_id = sorted(robot2.bridge.connections)
+    await robot2.bridge.connections[lane_id].ws.close(1001, "only the lane drops")
+    with pytest.raises(ConnectionLostError, match="a cancel for the goal was sent") as caught:
+        await asyncio.wait_for(task, WAIT)
+    assert caught.value.goal_cancel == "sent"
+    await robot2.wait_for(lambda world: world.goals[goal_id].finished, WAIT)
+    assert robot2.world.goals[goal_id].status == CANCELED["ros2"]
+    assert client.orphaned_goals() == []
+    assert client.connections_made == 1
+    assert main_id in robot2.bridge.connections
+    assert cancel_log.lines == []
+
+
+async def test_a_goal_timing_out_while_only_its_lane_is_up_is_remembered_only_on_an_in_order_bridge(
+    robot2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """With the main connection down the timeout's cancel goes on the lane, which Humble reads too late."""
+    # A long backoff keeps the main connection down past the goal's deadline.
+    client = await make_client(robot2, reconnect_min=60.0, reconnect_max=60.0)
+    goal_id = client.new_goal_id("/fibonacci")
+    task = asyncio.create_task(
+        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=1.0, goal_id=goal_id)
+    )
+    await robot2.wait_for(running_with_feedback(goal_id), WAIT)
+    main_id, _lane_id = sorted(robot2.bridge.connections)
+    await robot2.bridge.connections[main_id].ws.close(1001, "only the main connection drops")
+    await client.wait_disconnected(WAIT)
+    with pytest.raises(GoalTimeoutError) as caught:
+        await asyncio.wait_for(task, WAIT)
+    if robot2.bridge.config.in_order:
+        assert caught.value.status is None
+        assert [orphan.goal_id for orphan in client.orphaned_goals()] == [goal_id]
+        assert not robot2.world.goals[goal_id].cancel_requested
+    else:
+        assert caught.value.status == CANCELED["ros2"]
+        assert client.orphaned_goals() == []

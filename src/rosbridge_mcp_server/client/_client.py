@@ -976,9 +976,14 @@ class RosbridgeClient:
     async def _cancel_quietly(self, action: str, goal_id: str, lane: Connection | None) -> None:
         op = protocol.cancel_action_goal(action, id=goal_id)
         # The main connection first: on an in-order bridge the goal's own lane is blocked by the goal.
-        sent = await self._send_quietly(self._main, op) or await self._send_quietly(lane, op)
+        if await self._send_quietly(self._main, op):
+            return
+        on_lane = await self._send_quietly(lane, op)
         # close() has already sent cancels for every running goal on the main connection.
-        if not sent and not self._closed:
+        if self._closed:
+            return
+        # An in-order bridge (Humble 2.0.x) reads a lane's cancel only after the goal it would stop has ended.
+        if not on_lane or self._lanes_by_default:
             self.remember_orphaned_goal(action, goal_id, 2)
 
     async def _cancel_after_drop(self, action: str, goal_id: str) -> bool:
