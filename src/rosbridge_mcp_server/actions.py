@@ -152,7 +152,9 @@ async def run_goal(
 
     On timeout the goal is cancelled and the outcome says ``canceled_by="timeout"``; if the task
     running this is cancelled, the goal is cancelled before the cancellation propagates. Raises
-    :class:`ActionError` when the goal cannot be sent (no action server, refused by the bridge).
+    :class:`ActionError` when the goal cannot be sent (no action server, refused by the bridge), and
+    :class:`ConnectionLostError` when the connection drops: the goal keeps running on the robot, so the
+    client cancels it as soon as a connection is back (``goal_cancel`` says whether that already happened).
     """
     info = await client.ros_info()
     action = _namespace(action)

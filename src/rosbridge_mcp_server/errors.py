@@ -78,7 +78,7 @@ class ConnectionLostError(RosbridgeError):
             )
         elif goal_cancel == "sent":
             outcome = (
-                "a cancel for the goal was sent over the connection that is still up. "
+                "a cancel for the goal was sent, so it stops if it is still running. "
                 "Nothing will be re-sent automatically."
             )
         else:

@@ -217,7 +217,7 @@ async def test_when_only_the_goals_lane_drops_the_cancel_goes_out_at_once_on_the
     goal_id, task = await start_long_goal(client, robot2)
     main_id, lane_id = sorted(robot2.bridge.connections)
     await robot2.bridge.connections[lane_id].ws.close(1001, "only the lane drops")
-    with pytest.raises(ConnectionLostError, match="a cancel for the goal was sent") as caught:
+    with pytest.raises(ConnectionLostError, match="a cancel for the goal was sent, so it stops") as caught:
         await asyncio.wait_for(task, WAIT)
     assert caught.value.goal_cancel == "sent"
     await robot2.wait_for(lambda world: world.goals[goal_id].finished, WAIT)

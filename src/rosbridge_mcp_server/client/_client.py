@@ -881,7 +881,9 @@ class RosbridgeClient:
 
         Raises :class:`ActionError` when the bridge refuses the goal ("No action server
         available", ...), :class:`GoalTimeoutError` after *timeout* (a cancel was sent; the error
-        carries the canceled result if it came within a short grace), :class:`ConnectionLostError`.
+        carries the canceled result if it came within a short grace), :class:`ConnectionLostError`
+        when the goal's lane drops (the goal keeps running on the robot, so it is cancelled on the main
+        connection, or as soon as a connection is back: see :meth:`remember_orphaned_goal`).
         If the awaiting task is cancelled, the goal is cancelled too before the task ends.
         """
         loop = asyncio.get_running_loop()
