@@ -14,7 +14,7 @@ from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.client import _client as client_module
 from rosbridge_mcp_server.errors import ConnectionLostError, GoalTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
-from rosbridge_mcp_server.sim.world import World
+from rosbridge_mcp_server.sim.world import PublishedMessage, World
 
 ROS2_TYPE = "example_interfaces/action/Fibonacci"
 ROS1_TYPE = "actionlib_tutorials/FibonacciAction"
@@ -131,6 +131,26 @@ async def test_a_goal_running_at_a_drop_is_cancelled_on_the_robot_once_the_conne
     assert len(record.sequence) < LONG_ORDER + 1
     await cancel_log.wait_for_goal(goal_id)
     assert client.orphaned_goals() == []
+
+
+async def test_a_ros1_cancel_after_a_reconnect_is_published_again_a_moment_later(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """rospy often loses a message published right after its publisher is recreated: the cancel goes twice."""
+    robot = await make_sim(dialect="ros1", action_step=SLOW_STEP)
+    client = await make_client(robot)
+    goal_id, task = await start_long_goal(client, robot)
+    await robot.drop_connections()
+    with pytest.raises(ConnectionLostError):
+        await asyncio.wait_for(task, WAIT)
+
+    def cancels(world: World) -> list[PublishedMessage]:
+        return [m for m in world.published.get("/fibonacci/cancel", []) if m.msg.get("id") == goal_id]
+
+    await robot.wait_for(lambda world: len(cancels(world)) >= 2, WAIT)
+    first, second = cancels(robot.world)[:2]
+    assert first.connection_id == second.connection_id
+    assert second.received_at - first.received_at >= client_module.ROS1_CANCEL_REPEAT_SECONDS * 0.9
 
 
 async def test_a_goal_that_finished_before_the_drop_is_not_cancelled(
