@@ -103,6 +103,8 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
 def error_text(exc: RosbridgeError | ToolFailure) -> str:
     """The sentence a model sees for a failed tool call: the error's own text, plus what to try."""
     text = str(exc)
+    if isinstance(exc, ConnectionLostError) and exc.goal_cancel is not None:
+        return f"{text} Check the robot's state (e.g. with list_actions) before sending the goal again."
     if isinstance(exc, RosbridgeError):
         for kind, hint in _HINTS:
             if isinstance(exc, kind):
