@@ -194,6 +194,22 @@ def timing_row(item: str, what: str, stats: Stats, **extra: Any) -> Row:
 # ------------------------------------------------------------------------------------------- the machine
 
 
+def cpu_speed_probe() -> float:
+    """Seconds for a fixed pure-Python loop (best of 5): how fast this shared machine runs right now.
+
+    The same machine runs everything up to ~1.5x slower at some moments than at others (neighbours on the
+    host); absolute figures from two runs compare only when their probes agree.
+    """
+    best = math.inf
+    for _ in range(5):
+        began = time.perf_counter()
+        total = 0
+        for number in range(1_000_000):
+            total += number & 7
+        best = min(best, time.perf_counter() - began)
+    return best
+
+
 def describe_machine() -> dict[str, Any]:
     """CPU model, cores, memory, OS, Python and the versions of what is being measured."""
     cpu = platform.processor()
@@ -225,6 +241,7 @@ def describe_machine() -> dict[str, Any]:
         "os": platform.platform(),
         "python": f"{platform.python_implementation()} {platform.python_version()}",
         "load_average_at_start": [round(load, 2) for load in os.getloadavg()],
+        "speed_probe_ms_at_start": round(cpu_speed_probe() * 1e3, 1),
         "versions": versions,
         "commit": commit,
     }
@@ -1133,8 +1150,11 @@ def render(report: dict[str, Any], rows: Sequence[Row]) -> str:
         f"rosbridge-mcp-server benchmark — {report['date']} — plan `{report['plan']['name']}`",
         "",
         f"- Machine: {machine['cpu']}, {machine['cores']} cores, {machine['memory_gib']} GiB; "
-        f"{machine['os']}; {machine['python']}; load average (1 min) {machine['load_average_at_start'][0]} "
-        f"at start, {machine.get('load_average_at_end', ['?'])[0]} at the end",
+        f"{machine['os']}; {machine['python']}",
+        f"- Conditions: load average (1 min) {machine['load_average_at_start'][0]} at start, "
+        f"{machine.get('load_average_at_end', ['?'])[0]} at the end; speed probe (a 10⁶-step Python loop, "
+        f"lower is faster) {machine['speed_probe_ms_at_start']} ms at start, "
+        f"{machine.get('speed_probe_ms_at_end', '?')} ms at the end",
         f"- Code: commit {machine['commit']}; mcp {versions['mcp']}, websockets {versions['websockets']}, "
         f"roslibpy {versions['roslibpy']}",
         f"- Bridge: {where}; the run took {report.get('duration_s', 0):.0f} s",
@@ -1207,6 +1227,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     report, rows, failed = asyncio.run(run(arguments))
     report["duration_s"] = time.perf_counter() - began
     report["machine"]["load_average_at_end"] = [round(load, 2) for load in os.getloadavg()]
+    report["machine"]["speed_probe_ms_at_end"] = round(cpu_speed_probe() * 1e3, 1)
     print(render(report, rows))
     if arguments.json:
         arguments.json.write_text(json.dumps(report, indent=2, default=str) + "\n")
