@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import socket
 
 from mcp_harness import open_session, text_of
@@ -59,6 +60,18 @@ async def test_all_eight_tools_are_listed_with_annotations_and_described_paramet
                 True,
                 False,
             )
+
+
+async def test_output_schemas_are_self_contained() -> None:
+    """No output schema sends clients chasing $ref into $defs: every nested model is written in place."""
+    async with open_session(_closed_port_url(), wait=False) as session:
+        listed = (await session.mcp.list_tools()).tools
+    nested = {tool.name for tool in listed if "items" in json.dumps(tool.output_schema)}
+    assert {"list_topics", "list_services", "list_actions"} <= nested
+    for tool in listed:
+        text = json.dumps(tool.output_schema)
+        assert "$ref" not in text, tool.name
+        assert "$defs" not in text, tool.name
 
 
 async def test_required_parameters_are_the_ones_without_defaults() -> None:
