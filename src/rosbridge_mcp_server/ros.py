@@ -22,7 +22,7 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Awaitable, Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from rosbridge_mcp_server.dialect import RosInfo, action_type_names, normalize_type
@@ -98,17 +98,24 @@ def is_missing_service(error: ServiceError) -> bool:
     return "does not exist" in error.message
 
 
+@dataclass
+class _ConnectionKnowledge:
+    """What one connection has learnt about the bridge; replaced whole when the connection changes."""
+
+    typedefs: dict[tuple[str, str], dict[str, TypeDef]] = field(default_factory=dict)
+    interfaces: frozenset[str] | None = None
+    interfaces_asked: bool = False
+    publishing: dict[str, str] = field(default_factory=dict)
+    service_types: dict[str, str] = field(default_factory=dict)
+
+
 class RosGraph:
     """rosapi look-ups on one client, with type definitions cached per connection."""
 
     def __init__(self, client: RosbridgeClient) -> None:
         self._client = client
         self._cache_owner: RosInfo | None = None
-        self._typedef_cache: dict[tuple[str, str], dict[str, TypeDef]] = {}
-        self._interfaces: frozenset[str] | None = None
-        self._interfaces_known = False
-        self._publishing: dict[str, str] = {}
-        self._service_types: dict[str, str] = {}
+        self._known = _ConnectionKnowledge()
 
     async def ros_info(self) -> RosInfo:
         """The bridge's ROS version and distro (detected by the client once per connection)."""
@@ -116,11 +123,7 @@ class RosGraph:
         # The client makes one RosInfo per connection, so a new object means a new connection.
         if info is not self._cache_owner:
             self._cache_owner = info
-            self._typedef_cache.clear()
-            self._interfaces = None
-            self._interfaces_known = False
-            self._publishing.clear()
-            self._service_types.clear()
+            self._known = _ConnectionKnowledge()
         return info
 
     async def rosapi(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -157,12 +160,12 @@ class RosGraph:
         for as long as the connection lives, so the answer cannot have changed.
         """
         await self.ros_info()  # forgets what an earlier connection published
-        known = self._publishing.get(topic)
+        known = self._known.publishing.get(topic)
         return known if known is not None else await self.topic_type(topic)
 
     def remember_publishing(self, topic: str, msg_type: str) -> None:
         """Note that this connection now publishes ``topic`` as ``msg_type``."""
-        self._publishing[topic] = msg_type
+        self._known.publishing[topic] = msg_type
 
     async def topic_details(self, topic: str) -> TopicDetails:
         """Type, publishers and subscribers of ``topic`` (all empty when it is not in the graph)."""
@@ -193,20 +196,20 @@ class RosGraph:
         when the cached type disagrees with what they expect.
         """
         await self.ros_info()  # forgets what an earlier connection knew
-        if cached and (known := self._service_types.get(service)):
+        if cached and (known := self._known.service_types.get(service)):
             return known
         values = await self.rosapi("service_type", {"service": service})
         found = values.get("type")
         found = found if isinstance(found, str) else ""
         if found:
-            self._service_types[service] = found
+            self._known.service_types[service] = found
         else:
-            self._service_types.pop(service, None)
+            self._known.service_types.pop(service, None)
         return found
 
     def forget_service(self, service: str) -> None:
         """Drop the cached type of ``service`` (it went away, or was offered anew)."""
-        self._service_types.pop(service, None)
+        self._known.service_types.pop(service, None)
 
     async def _service_type_or_blank(self, service: str) -> str:
         try:
@@ -314,7 +317,7 @@ class RosGraph:
         for another reason than loading the type (it cannot describe every type it can load).
         """
         key = (service, bridge_name)
-        cached = self._typedef_cache.get(key)
+        cached = self._known.typedefs.get(key)
         if cached is not None:
             return cached
         try:
@@ -337,23 +340,23 @@ class RosGraph:
             return {}
         typedefs = typedefs_from_rosapi(values)
         if typedefs:
-            self._typedef_cache[key] = typedefs
+            self._known.typedefs[key] = typedefs
         return typedefs
 
     async def _check_installed(self, type_name: str, bridge_name: str, info: RosInfo) -> None:
         """On ROS 2, ask ``/rosapi/interfaces`` (Humble 2.0.1+) first: it lists every installed type."""
         if info.version != 2:
             return
-        if not self._interfaces_known:
-            self._interfaces_known = True
+        if not self._known.interfaces_asked:
+            self._known.interfaces_asked = True
             try:
                 values = await self.rosapi("interfaces")
             except (ServiceError, RequestTimeoutError):
-                self._interfaces = None
+                self._known.interfaces = None
             else:
                 listed = _strings(values.get("interfaces"))
-                self._interfaces = frozenset(listed) if listed else None
-        if self._interfaces is not None and bridge_name not in self._interfaces:
+                self._known.interfaces = frozenset(listed) if listed else None
+        if self._known.interfaces is not None and bridge_name not in self._known.interfaces:
             raise UnknownTypeError(type_name, _type_hint(info))
 
 
