@@ -27,8 +27,11 @@ class StdioServer:
         self._next_id = 0
 
     async def send(self, message: dict[str, Any]) -> None:
+        await self.send_line(json.dumps(message))
+
+    async def send_line(self, text: str) -> None:
         assert self.process.stdin is not None
-        self.process.stdin.write((json.dumps(message) + "\n").encode())
+        self.process.stdin.write((text + "\n").encode())
         await self.process.stdin.drain()
 
     async def request(self, method: str, params: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -265,3 +268,32 @@ async def test_a_running_goal_is_cancelled_when_the_server_is_stopped(
     await robot.wait_for(lambda w: goal.finished, WAIT)
     assert goal.cancel_requested
     assert goal.status == 5  # CANCELED
+
+
+async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_on() -> None:
+    """Garbage, JSON nested 300 deep, non-JSON-RPC JSON: each answered (-32700/-32600, id when shown)."""
+    server = await _start("--demo")
+    deep = "[" * 300 + "]" * 300
+    try:
+        await _initialized(server)
+        await server.send_line("this is not json")
+        await server.send_line(
+            '{"jsonrpc": "2.0", "id": 41, "method": "tools/call", "params": {"name": "publish_service", '
+            f'"arguments": {{"service": "/add_two_ints", "service_type": "x/srv/Y", "request": {deep}}}}}}}'
+        )
+        await server.send_line('{"jsonrpc": "2.0", "id": "forty-two", "method": 3}')
+        await server.send_line("[1, 2]")
+        await server.send_line("")
+        answers = [await server.read_message() for _ in range(4)]
+        topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
+    finally:
+        _rest, stderr, code = await _finish(server)
+    assert [(a["id"], a["error"]["code"]) for a in answers] == [
+        (None, -32700),
+        (41, -32700),
+        ("forty-two", -32600),
+        (None, -32600),
+    ]
+    assert "nests deeper" in answers[1]["error"]["message"]
+    assert topics["result"]["isError"] is False
+    assert code == 0, stderr.decode()
