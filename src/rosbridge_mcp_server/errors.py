@@ -13,6 +13,8 @@ The tree::
     ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
     │                               because the bridge drops such messages without a word)
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
+    ├── FrameTooLargeError          a frame larger than the bridge accepts, refused before sending (the bridge
+    │                               would drop the connection)
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
@@ -27,6 +29,7 @@ from typing import Literal
 __all__ = [
     "ActionError",
     "ConnectionLostError",
+    "FrameTooLargeError",
     "GoalTimeoutError",
     "InvalidMessageError",
     "NotConnectedError",
@@ -167,6 +170,20 @@ class UnknownTypeError(RosbridgeError):
         super().__init__(
             f"rosbridge does not know the type {type_name!r} (its interface package is not installed "
             f"on the robot, or the name is misspelled).{extra}"
+        )
+
+
+class FrameTooLargeError(RosbridgeError):
+    """A frame over the bridge's size limit; it was not sent and the connection is untouched."""
+
+    def __init__(self, what: str, size: int, limit: int) -> None:
+        self.what = what
+        self.size = size
+        self.limit = limit
+        super().__init__(
+            f"The {what} frame would be {size / 1_000_000:.1f} MB, more than the "
+            f"{limit // (1024 * 1024)} MiB ({limit} bytes) rosbridge accepts in one frame (a larger one "
+            "makes it drop the connection), so nothing was sent. Send a smaller message."
         )
 
 

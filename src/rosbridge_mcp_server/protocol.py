@@ -30,6 +30,8 @@ from typing import Any, Final, Literal
 from rosbridge_mcp_server.errors import ProtocolError
 
 __all__ = [
+    "BRIDGE_MAX_FRAME_BYTES",
+    "ID_NAME_CHARS",
     "REPLY_OPS",
     "FragmentAssembler",
     "IdMinter",
@@ -48,6 +50,14 @@ __all__ = [
     "unadvertise",
     "unsubscribe",
 ]
+
+#: The largest frame rosbridge takes: ROS 2 rosbridge runs on tornado, whose default
+#: ``websocket_max_message_size`` (10 MiB, not overridden by rosbridge 2.x) closes the connection (code 1009)
+#: on a larger frame. ROS 1's 0.11.17 (autobahn) sets no limit; the same bound keeps what one request costs
+#: the robot's link the same on both lines.
+BRIDGE_MAX_FRAME_BYTES: Final = 10 * 1024 * 1024
+#: At most this much of a name goes into a request id.
+ID_NAME_CHARS: Final = 100
 
 #: Server → client ops answered to one of our requests, matched by ``id``.
 REPLY_OPS: Final = frozenset({"service_response", "action_feedback", "action_result"})
@@ -194,11 +204,18 @@ class IdMinter:
 
     def mint(self, op: str, name: str) -> str:
         """A fresh id for *op* on *name* (topic, service or action)."""
-        return f"{op}:{name}:{next(self._counter)}"
+        return f"{op}:{_id_name(name)}:{next(self._counter)}"
 
     def goal_id(self, action: str) -> str:
         """A goal id unique across every client of the bridge."""
-        return f"goal:{action}:{self.token}-{next(self._counter)}"
+        return f"goal:{_id_name(action)}:{self.token}-{next(self._counter)}"
+
+
+def _id_name(name: str) -> str:
+    # The name is there to read a log; the counter makes the id unique. A whole name would make every frame
+    # that carries it twice as large: a 6 MB topic name became a 12 MB advertise, which the bridge answered
+    # by dropping the connection.
+    return name if len(name) <= ID_NAME_CHARS else name[: ID_NAME_CHARS - 3] + "..."
 
 
 # --- fragments --------------------------------------------------------------------------------------

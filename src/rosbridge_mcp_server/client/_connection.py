@@ -11,9 +11,14 @@ from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 
 from rosbridge_mcp_server import protocol
-from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
+from rosbridge_mcp_server.errors import (
+    ConnectionLostError,
+    FrameTooLargeError,
+    NotConnectedError,
+    RequestTimeoutError,
+)
 
-__all__ = ["Connection", "GoalStream", "ReplyWaiter", "open_connection"]
+__all__ = ["Connection", "GoalStream", "ReplyWaiter", "check_frame_size", "open_connection"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
@@ -174,6 +179,7 @@ class Connection:
         )
 
     async def _write(self, text: str, what: str, timeout: float) -> None:
+        check_frame_size(text, what)
         try:
             # ws.send() waits for the socket buffer to drain below its high-water mark (32 KiB) after
             # writing. A small frame into an empty buffer can never wait, so it skips the timer.
@@ -191,6 +197,10 @@ class Connection:
                 ) from None
         except ConnectionClosed:
             raise NotConnectedError(self.url, "the connection closed") from None
+        except (OSError, AttributeError) as exc:
+            # websockets 17 can fail inside send() when the peer closed the socket mid-frame (it aborts a
+            # transport that is already gone: AttributeError). Whether the frame got through is unknown.
+            raise ConnectionLostError(self.url, what) from exc
 
     async def ping(self, timeout: float) -> float:
         """A WebSocket ping answered within *timeout* seconds: the bridge is reading this socket now.
@@ -281,6 +291,16 @@ class Connection:
             except TimeoutError:
                 self.reader.cancel()
         self.fail_pending()
+
+
+def check_frame_size(text: str, what: str) -> None:
+    """Refuse a frame the bridge would answer by dropping the connection (:class:`FrameTooLargeError`)."""
+    limit = protocol.BRIDGE_MAX_FRAME_BYTES
+    # A character is at most 4 UTF-8 bytes: most frames are far below the limit and skip the encoding.
+    if len(text) * 4 > limit:
+        size = len(text.encode("utf-8", errors="surrogatepass"))
+        if size > limit:
+            raise FrameTooLargeError(what, size, limit)
 
 
 def _close_text(ws: ClientConnection) -> str:
