@@ -20,7 +20,7 @@ from dataclasses import replace
 from typing import NoReturn, TextIO
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.check import run_check
+from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config
 from rosbridge_mcp_server.server import build_server
