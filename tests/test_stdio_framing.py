@@ -6,7 +6,7 @@ import asyncio
 
 from mcp.types import JSONRPCError, JSONRPCRequest
 
-from rosbridge_mcp_server.stdio import Overlong, parse_line, read_lines
+from rosbridge_mcp_server.server.stdio import Overlong, parse_line, read_lines
 
 
 async def _lines(data: bytes, limit: int) -> list[bytes | Overlong]:

@@ -25,12 +25,6 @@ from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
 from rosbridge_mcp_server.client import RosbridgeClient, Subscription
-from rosbridge_mcp_server.dialect import (
-    action_type_names,
-    goal_status_name,
-    is_success_status,
-    is_terminal_status,
-)
 from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
@@ -39,6 +33,12 @@ from rosbridge_mcp_server.errors import (
     RequestTimeoutError,
     RosbridgeError,
     ServiceError,
+)
+from rosbridge_mcp_server.wire.dialect import (
+    action_type_names,
+    goal_status_name,
+    is_success_status,
+    is_terminal_status,
 )
 
 __all__ = [

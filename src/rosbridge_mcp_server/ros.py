@@ -25,9 +25,9 @@ from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from rosbridge_mcp_server.dialect import RosInfo, action_type_names, normalize_type
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.typecheck import TypeDef, typedefs_from_rosapi
+from rosbridge_mcp_server.wire.dialect import RosInfo, action_type_names, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient

@@ -7,7 +7,6 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.actions import UNCONFIRMED_STATUS, GoalOutcome, run_goal
-from rosbridge_mcp_server.dialect import action_type_names, goal_status_name
 from rosbridge_mcp_server.errors import GoalTimeoutError, InvalidMessageError, ServiceError
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -21,6 +20,7 @@ from rosbridge_mcp_server.tools.base import (
     parse_json_object,
 )
 from rosbridge_mcp_server.typecheck import check_message, example_message
+from rosbridge_mcp_server.wire.dialect import action_type_names, goal_status_name
 
 __all__ = ["MAX_GOAL_TIMEOUT", "SPEC", "GoalAnswer", "run"]
 

@@ -6,7 +6,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.dialect import adapt_message, normalize_type
 from rosbridge_mcp_server.errors import InvalidMessageError, ServiceError
 from rosbridge_mcp_server.ros import is_missing_service
 from rosbridge_mcp_server.tools.base import (
@@ -21,6 +20,7 @@ from rosbridge_mcp_server.tools.base import (
     parse_json_object,
 )
 from rosbridge_mcp_server.typecheck import check_message, example_message, short_type_name
+from rosbridge_mcp_server.wire.dialect import adapt_message, normalize_type
 
 __all__ = ["MAX_SERVICE_TIMEOUT", "SPEC", "ServiceAnswer", "run"]
 

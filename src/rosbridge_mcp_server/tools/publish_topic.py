@@ -6,7 +6,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.dialect import adapt_message, normalize_type
 from rosbridge_mcp_server.errors import InvalidMessageError, RequestTimeoutError
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -19,6 +18,7 @@ from rosbridge_mcp_server.tools.base import (
     parse_json_object,
 )
 from rosbridge_mcp_server.typecheck import check_message, example_message, short_type_name
+from rosbridge_mcp_server.wire.dialect import adapt_message, normalize_type
 
 __all__ = ["PING_LIMIT", "SPEC", "PublishAnswer", "run"]
 

@@ -39,6 +39,8 @@ from mcp.types import (
 )
 from pydantic import ValidationError
 
+from rosbridge_mcp_server.server.sdk import serve_streams
+
 if TYPE_CHECKING:
     from mcp.server.mcpserver import MCPServer
 
@@ -303,10 +305,7 @@ async def serve_lines(
     async with anyio.create_task_group() as tasks:
         tasks.start_soon(read)
         tasks.start_soon(write)
-        # MCPServer.run_stdio_async does exactly this with the streams of its own transport; there is no
-        # public way to hand it others.
-        lowlevel = server._lowlevel_server
         try:
-            await lowlevel.run(from_lines, to_wire, lowlevel.create_initialization_options())
+            await serve_streams(server, from_lines, to_wire)
         finally:
             await to_wire.aclose()
