@@ -34,6 +34,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
+from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
 if typing.TYPE_CHECKING:
@@ -106,11 +107,7 @@ def _arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -
     for where, kinds in union_kinds.items():
         index = problems.index(where)
         problems[index] = f"{where}: expected {' or '.join(kinds)} (got {_short(union_inputs[where])})"
-    properties = schema.get("properties", {})
-    required = set(schema.get("required", []))
-    expected = ", ".join(f"{name}{'' if name in required else ' (optional)'}" for name in properties)
-    listing = expected or "no arguments ({})"
-    return f"Invalid arguments for {tool}: {'; '.join(problems)}. It takes: {listing}."
+    return f"Invalid arguments for {tool}: {'; '.join(problems)}. It takes: {parameter_listing(schema)}."
 
 
 _UNION_KINDS = {"dict[str,any]": "a JSON object", "str": "a string", "float": "a number", "int": "an integer"}
@@ -172,7 +169,10 @@ def tool_from_module(module: ModuleType, client: RosbridgeClient, config: Config
             open_world_hint=spec.hints.open_world,
         ),
         argument_error=_arguments_text,
+        argument_check=argument_problem,
     )
+    # What argument_problem holds every call to, said where clients read it.
+    tool.parameters["additionalProperties"] = False
     replace_output_schema(tool, inline_refs)
     return tool
 

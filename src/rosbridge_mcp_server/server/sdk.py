@@ -24,10 +24,18 @@ from mcp.server.mcpserver.tools import Tool
 from mcp.types import ToolAnnotations
 from pydantic import ValidationError
 
-__all__ = ["ArgumentErrorText", "replace_output_schema", "serve_streams", "tool_with_own_argument_errors"]
+__all__ = [
+    "ArgumentCheck",
+    "ArgumentErrorText",
+    "replace_output_schema",
+    "serve_streams",
+    "tool_with_own_argument_errors",
+]
 
 #: Rewords an argument error: (tool name, the pydantic error, the tool's input schema) -> one sentence.
 ArgumentErrorText = Callable[[str, ValidationError, dict[str, Any]], str]
+#: Checks arguments before the SDK converts them: (tool name, arguments, input schema) -> a refusal or None.
+ArgumentCheck = Callable[[str, dict[str, Any], dict[str, Any]], str | None]
 
 
 def tool_with_own_argument_errors(
@@ -38,8 +46,12 @@ def tool_with_own_argument_errors(
     description: str,
     annotations: ToolAnnotations,
     argument_error: ArgumentErrorText,
+    argument_check: ArgumentCheck | None = None,
 ) -> Tool:
     """A structured-output ``Tool`` for *fn* whose argument errors read as ``argument_error`` words them.
+
+    ``argument_check`` sees the arguments as the client sent them, before the SDK's lenient conversion
+    (which drops unknown keys and takes ``true`` for 1); its refusal is the ``isError`` result.
 
     Relies on ``Tool.run`` raising ``ToolError`` with the ``ValidationError`` as its ``__cause__`` when the
     arguments do not fit, and on ``MCPServer`` sending a ``ToolError``'s text as the ``isError`` result.
@@ -49,6 +61,10 @@ def tool_with_own_argument_errors(
         async def run(
             self, arguments: dict[str, Any], context: Context[Any, Any], convert_result: bool = False
         ) -> Any:
+            if argument_check is not None:
+                refusal = argument_check(self.name, arguments, self.parameters)
+                if refusal is not None:
+                    raise ToolError(refusal)
             try:
                 return await super().run(arguments, context, convert_result)
             except ToolError as exc:

@@ -15,6 +15,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolSpec,
     absolute_name,
+    check_name_for_ros,
     compact_json,
     did_you_mean,
     parse_json_object,
@@ -105,6 +106,7 @@ async def run(
     body = parse_json_object(goal, "goal", _EXAMPLE)
     names = action_type_names(action_type)
     info = await ctx.graph.ros_info()
+    check_name_for_ros(name, "action", info.version)
     wire_type = names.for_version(info.version)
 
     await _check_action(ctx, name, action_type)

@@ -15,6 +15,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolSpec,
     absolute_name,
+    check_name_for_ros,
     compact_json,
     did_you_mean,
     parse_json_object,
@@ -78,6 +79,7 @@ async def run(
     name = absolute_name(service, "service")
     body = parse_json_object(request, "request", _EXAMPLE)
     info = await ctx.graph.ros_info()
+    check_name_for_ros(name, "service", info.version)
     given_type = normalize_type(service_type, info.version, "srv")
 
     graph_type = await ctx.graph.service_type(name, cached=True)

@@ -14,6 +14,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolSpec,
     absolute_name,
+    check_name_for_ros,
     compact_json,
     parse_json_object,
 )
@@ -73,6 +74,7 @@ async def run(
     name = absolute_name(topic, "topic")
     body = parse_json_object(message, "message", _EXAMPLE)
     info = await ctx.graph.ros_info()
+    check_name_for_ros(name, "topic", info.version)
     bridge_type = normalize_type(message_type, info.version, "msg")
     typedefs = await ctx.graph.message_typedefs(message_type)
 
