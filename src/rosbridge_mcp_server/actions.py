@@ -77,6 +77,8 @@ class GoalOutcome:
 
     goal_id: str
     action: str
+    action_type: str
+    """As the bridge was given it (the dialect's spelling)."""
     status_code: int
     status: str
     succeeded: bool
@@ -209,6 +211,7 @@ def _outcome(
     return GoalOutcome(
         goal_id=entry.goal_id,
         action=entry.action,
+        action_type=action_type_names(entry.action_type).for_version(version),
         status_code=code,
         status=goal_status_name(code, version) if finished else UNCONFIRMED_STATUS,
         succeeded=succeeded,

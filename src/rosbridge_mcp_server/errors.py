@@ -15,10 +15,13 @@ The tree::
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
     ├── FrameTooLargeError          a frame larger than the bridge accepts, refused before sending (the bridge
     │                               would drop the connection)
+    ├── NotSentError                a check before an act refused it (a wrong name or type, a message that
+    │                               does not fit, a bridge that does not read); nothing was sent
+    ├── PolicyRefusal               the safety policy refused an act; the text names the rule
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
-and what to check. The MCP layer turns these into tool errors at one place (``server.py``).
+and what to check. The MCP layer turns these into tool errors at one place (``server/adapter.py``).
 """
 
 from __future__ import annotations
@@ -33,6 +36,8 @@ __all__ = [
     "GoalTimeoutError",
     "InvalidMessageError",
     "NotConnectedError",
+    "NotSentError",
+    "PolicyRefusal",
     "ProtocolError",
     "RequestTimeoutError",
     "RosbridgeError",
@@ -185,6 +190,14 @@ class FrameTooLargeError(RosbridgeError):
             f"{limit // (1024 * 1024)} MiB ({limit} bytes) rosbridge accepts in one frame (a larger one "
             "makes it drop the connection), so nothing was sent. Send a smaller message."
         )
+
+
+class NotSentError(RosbridgeError):
+    """A check before an act refused it, so nothing was sent; ``str()`` says why and what to try."""
+
+
+class PolicyRefusal(RosbridgeError):
+    """The safety policy refused an act before anything was sent; ``str()`` names the rule."""
 
 
 class ProtocolError(RosbridgeError):

@@ -22,7 +22,7 @@ from typing import Annotated, Any
 from mcp.server.mcpserver import Context
 from mcp.server.mcpserver.tools import Tool
 from mcp.types import CallToolResult, TextContent, ToolAnnotations
-from pydantic import ValidationError
+from pydantic import BaseModel, Field, ValidationError
 
 from rosbridge_mcp_server.errors import (
     ActionError,
@@ -33,6 +33,7 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
+from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
@@ -40,7 +41,7 @@ from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
-    from rosbridge_mcp_server.ros import RosGraph
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["error_text", "inline_refs", "tool_from_module"]
 
@@ -118,7 +119,10 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def tool_from_module(module: ModuleType, client: RosbridgeClient, config: Config, graph: RosGraph) -> Tool:
+def tool_from_module(
+    module: ModuleType, client: RosbridgeClient, config: Config, graph: RosGraph, guard: Guard = ALLOW_ALL
+) -> Tool:
+    """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`."""
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
 
@@ -139,7 +143,14 @@ def tool_from_module(module: ModuleType, client: RosbridgeClient, config: Config
                 # Progress is a courtesy; a client that went away must not fail the goal.
                 _log.debug("could not send a progress notification", exc_info=True)
 
-        ctx = ToolContext(client=client, config=config, graph=graph, report_progress=report_progress)
+        ctx = ToolContext(
+            client=client,
+            config=config,
+            graph=graph,
+            report_progress=report_progress,
+            guard=guard,
+            ask_person=_asker(mcp_context),
+        )
         try:
             answer = await run(ctx, **arguments)
         except (RosbridgeError, ToolFailure) as exc:
@@ -199,3 +210,26 @@ def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:
 
     resolved: dict[str, Any] = resolve(schema)
     return resolved
+
+
+class _Confirmation(BaseModel):
+    approve: bool = Field(description="Let the robot do this")
+
+
+def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
+    """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot)."""
+
+    async def ask(question: str) -> Answer:
+        capabilities = mcp_context.client_capabilities
+        if capabilities is None or capabilities.elicitation is None:
+            return "unsupported"
+        try:
+            result = await mcp_context.elicit(question, schema=_Confirmation)
+        except Exception:
+            _log.info("asking the person failed", exc_info=True)
+            return "unsupported"
+        if result.action == "accept":
+            return "accept" if result.data.approve else "decline"
+        return result.action
+
+    return ask

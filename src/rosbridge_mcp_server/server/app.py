@@ -14,7 +14,8 @@ from contextlib import asynccontextmanager
 from mcp.server.mcpserver import MCPServer
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.ros import RosGraph
+from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.server.adapter import tool_from_module
 from rosbridge_mcp_server.tools import TOOL_MODULES
 
@@ -48,8 +49,11 @@ request that timed out may still take effect later: check the robot's state befo
 """
 
 
-def build_server(client: RosbridgeClient, config: Config) -> MCPServer[None]:
-    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan)."""
+def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLOW_ALL) -> MCPServer[None]:
+    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
+
+    Every act on the robot is first approved by *guard* (the safety policy; by default everything is).
+    """
     graph = RosGraph(client)
 
     @asynccontextmanager
@@ -61,7 +65,7 @@ def build_server(client: RosbridgeClient, config: Config) -> MCPServer[None]:
         finally:
             await client.close()
 
-    tools = [tool_from_module(module, client, config, graph) for module in TOOL_MODULES]
+    tools = [tool_from_module(module, client, config, graph, guard) for module in TOOL_MODULES]
     return MCPServer(
         SERVER_NAME,
         title="rosbridge MCP server",
