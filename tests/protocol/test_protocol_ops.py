@@ -107,3 +107,14 @@ def test_decode_json_accepts_nan_and_infinity() -> None:
 def test_encode_writes_non_finite_floats_as_bare_tokens() -> None:
     """NaN goes out as NaN (rosbridge accepts it; it rejects null for a float)."""
     assert protocol.encode({"x": math.nan}) == '{"x":NaN}'
+
+
+def test_an_id_carries_at_most_a_bounded_part_of_a_long_name() -> None:
+    """A 6 MB name gives a short id (the counter keeps it unique); a normal name is kept whole."""
+    minter = protocol.IdMinter(token="t")
+    long_name = "/" + "a" * 6_000_000
+    first, second = minter.mint("advertise", long_name), minter.mint("advertise", long_name)
+    assert len(first) < protocol.ID_NAME_CHARS + 30
+    assert first != second
+    assert minter.mint("call_service", "/add_two_ints").startswith("call_service:/add_two_ints:")
+    assert len(minter.goal_id(long_name)) < protocol.ID_NAME_CHARS + 30

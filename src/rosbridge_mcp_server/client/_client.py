@@ -19,6 +19,7 @@ from rosbridge_mcp_server.client._subscription import Subscription
 from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
+    FrameTooLargeError,
     GoalTimeoutError,
     NotConnectedError,
     RequestTimeoutError,
@@ -398,24 +399,39 @@ class RosbridgeClient:
         """
         for topic, advert in list(self._adverts.items()):
             advert.wire_type = normalize_type(advert.msg_type, info.version, "msg")
-            await conn.send(
-                protocol.advertise(
-                    topic, advert.wire_type, id=advert.id, latch=advert.latch, queue_size=advert.queue_size
+            try:
+                await conn.send(
+                    protocol.advertise(
+                        topic,
+                        advert.wire_type,
+                        id=advert.id,
+                        latch=advert.latch,
+                        queue_size=advert.queue_size,
+                    )
                 )
-            )
+            except FrameTooLargeError as exc:
+                # Nothing restored may be able to cost the connection: this one is forgotten instead.
+                self._adverts.pop(topic, None)
+                logger.warning("Not advertising %s again after the reconnect: %s", topic[:100], exc)
+                continue
             conn.advertised.add(topic)
         for topic, subs in list(self._subs.items()):
             for sub in list(subs.values()):
                 sub.wire_type = normalize_type(sub.msg_type, info.version, "msg") if sub.msg_type else None
-                await conn.send(
-                    protocol.subscribe(
-                        topic,
-                        sub.wire_type,
-                        id=sub.id,
-                        throttle_rate=sub.throttle_rate,
-                        queue_length=sub.queue_length,
+                try:
+                    await conn.send(
+                        protocol.subscribe(
+                            topic,
+                            sub.wire_type,
+                            id=sub.id,
+                            throttle_rate=sub.throttle_rate,
+                            queue_length=sub.queue_length,
+                        )
                     )
-                )
+                except FrameTooLargeError as exc:
+                    self._forget_subscription(sub)
+                    sub._interrupt(exc)
+                    logger.warning("Not subscribing to %s again after the reconnect: %s", topic[:100], exc)
 
     async def _main_connection(self, deadline: float | None = None) -> Connection:
         """The open main connection, waiting only for an attempt already in progress."""
@@ -581,7 +597,6 @@ class RosbridgeClient:
             advert = None
         if advert is None:
             advert = _Advert(self._ids.mint("advertise", topic), msg_type, wire_type, latch, queue_size)
-            self._adverts[topic] = advert
         if topic not in conn.advertised:
             conn.advertised.add(topic)
             try:
@@ -593,6 +608,9 @@ class RosbridgeClient:
             except BaseException:
                 conn.advertised.discard(topic)
                 raise
+        # Kept for restoring after a reconnect only once a bridge has taken it: an advertisement that could
+        # not be sent (too large, say) would otherwise be re-sent on every reconnect.
+        self._adverts[topic] = advert
 
     async def publish(
         self,

@@ -14,11 +14,12 @@ from rosbridge_mcp_server.errors import (
     ConnectionLostError,
     FrameTooLargeError,
     NotConnectedError,
+    NotSentError,
     RequestTimeoutError,
 )
 from rosbridge_mcp_server.wire import protocol
 
-__all__ = ["Connection", "GoalStream", "ReplyWaiter", "check_frame_size", "open_connection"]
+__all__ = ["Connection", "GoalStream", "ReplyWaiter", "frame_bytes", "open_connection"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
@@ -174,21 +175,19 @@ class Connection:
         """
         if not self.is_open:
             raise NotConnectedError(self.url, self.close_reason or "the connection closed")
-        await self._write(
-            protocol.encode(op), f"{op.get('op')} {op.get('topic', '')}".rstrip(), self.send_timeout
-        )
+        what = f"{op.get('op')} {op.get('topic', '')}".rstrip()
+        await self._write(frame_bytes(protocol.encode(op), what), what, self.send_timeout)
 
-    async def _write(self, text: str, what: str, timeout: float) -> None:
-        check_frame_size(text, what)
+    async def _write(self, data: bytes, what: str, timeout: float) -> None:
         try:
             # ws.send() waits for the socket buffer to drain below its high-water mark (32 KiB) after
             # writing. A small frame into an empty buffer can never wait, so it skips the timer.
-            if len(text) < _NEVER_BLOCKS and not self.ws.transport.get_write_buffer_size():
-                await self.ws.send(text)
+            if len(data) < _NEVER_BLOCKS and not self.ws.transport.get_write_buffer_size():
+                await self.ws.send(data, text=True)
                 return
             try:
                 async with asyncio.timeout(timeout):
-                    await self.ws.send(text)
+                    await self.ws.send(data, text=True)
             except TimeoutError:
                 raise RequestTimeoutError(
                     f"sending {what}",
@@ -233,16 +232,16 @@ class Connection:
         try:
             if not self.is_open:
                 raise NotConnectedError(self.url, self.close_reason or "the connection closed")
-            text = protocol.encode(op)
+            data = frame_bytes(protocol.encode(op), what)
             ws = self.ws
-            if len(text) < _NEVER_BLOCKS and not ws.transport.get_write_buffer_size():
+            if len(data) < _NEVER_BLOCKS and not ws.transport.get_write_buffer_size():
                 # _write()'s fast path, inlined: one coroutine frame less per call.
                 try:
-                    await ws.send(text)
+                    await ws.send(data, text=True)
                 except ConnectionClosed:
                     raise NotConnectedError(self.url, "the connection closed") from None
             else:
-                await self._write(text, what, timeout)
+                await self._write(data, what, timeout)
             return await future
         finally:
             self.pending.pop(rid, None)
@@ -293,14 +292,24 @@ class Connection:
         self.fail_pending()
 
 
-def check_frame_size(text: str, what: str) -> None:
-    """Refuse a frame the bridge would answer by dropping the connection (:class:`FrameTooLargeError`)."""
-    limit = protocol.BRIDGE_MAX_FRAME_BYTES
-    # A character is at most 4 UTF-8 bytes: most frames are far below the limit and skip the encoding.
-    if len(text) * 4 > limit:
-        size = len(text.encode("utf-8", errors="surrogatepass"))
-        if size > limit:
-            raise FrameTooLargeError(what, size, limit)
+def frame_bytes(text: str, what: str) -> bytes:
+    """The UTF-8 bytes of a text frame, refused before anything is sent if the bridge could not take them.
+
+    Encoded here rather than inside websockets: there, text that is not valid Unicode (an unpaired UTF-16
+    surrogate, which JSON text can carry as ``\\ud800``) fails inside ``send()`` and websockets closes the
+    connection. A frame over :data:`~rosbridge_mcp_server.wire.protocol.BRIDGE_MAX_FRAME_BYTES` would make the
+    bridge drop the connection (:class:`FrameTooLargeError`).
+    """
+    try:
+        data = text.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        raise NotSentError(
+            f"The {what} holds text that is not valid Unicode (an unpaired UTF-16 surrogate, "
+            f"\\u{ord(text[exc.start]):04x}), so nothing was sent. Send plain text."
+        ) from None
+    if len(data) > protocol.BRIDGE_MAX_FRAME_BYTES:
+        raise FrameTooLargeError(what, len(data), protocol.BRIDGE_MAX_FRAME_BYTES)
+    return data
 
 
 def _close_text(ws: ClientConnection) -> str:

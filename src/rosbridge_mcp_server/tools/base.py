@@ -119,6 +119,10 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
     if value is None:
         return {}
     if isinstance(value, dict):
+        # Checked here too: the SDK turns an argument given as JSON text into an object before the tool runs.
+        problem = payload_problem(value)
+        if problem is not None:
+            raise ToolFailure(f"The {what} {problem}. Nothing was sent.")
         return value
     text = value.strip()
     if not text:

@@ -1,0 +1,159 @@
+"""Hostile arguments: each refused with a sentence naming the argument and the limit; nothing is sent."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from mcp_harness import Session, types_for
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+CHATTER = "/chatter"
+
+
+async def _still_works(session: Session) -> None:
+    """The session and its single rosbridge connection are intact."""
+    await session.ok("list_topics")
+    assert session.ros.connections_made == 1
+
+
+async def test_every_input_schema_refuses_unknown_keys(session_ros2: Session) -> None:
+    """Each tool's input schema says additionalProperties: false."""
+    listed = await session_ros2.mcp.list_tools()
+    assert listed.tools
+    assert all(tool.input_schema.get("additionalProperties") is False for tool in listed.tools)
+
+
+async def test_a_misspelt_argument_is_named_and_nothing_is_published(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """``mesage`` for ``message`` is an error naming it and the likely meant one, not an empty publish."""
+    text = await session.error(
+        "publish_topic",
+        {"topic": CHATTER, "message_type": types_for(sim)["string"], "mesage": {"data": "hi"}},
+    )
+    assert "unknown argument 'mesage' (did you mean message?)" in text
+    assert "It takes: topic, message_type, message (optional)" in text
+    assert CHATTER not in sim.world.published
+    await _still_works(session)
+
+
+async def test_a_boolean_is_not_a_number(session: Session, sim: SimulatedRobot) -> None:
+    """``timeout: true`` is refused, naming the argument, instead of being taken as 1 s."""
+    text = await session.error(
+        "publish_service",
+        {"service": "/add_two_ints", "service_type": types_for(sim)["add_two_ints"], "timeout": True},
+    )
+    assert "timeout: expected a number, got true (a boolean is not a number)" in text
+
+
+@pytest.mark.parametrize("name", ["/tür", "../..", "/robot/🤖", "/a b", "~/private", "/a-b", "/x.y"])
+async def test_a_name_outside_the_ros_rules_is_refused_and_nothing_is_published(
+    session: Session, sim: SimulatedRobot, name: str
+) -> None:
+    """Names with characters ROS does not allow are errors, not "published" messages the bridge drops."""
+    text = await session.error(
+        "publish_topic", {"topic": name, "message_type": types_for(sim)["string"], "message": {"data": "x"}}
+    )
+    assert "The topic name" in text
+    assert not sim.world.published
+
+
+async def test_a_name_part_led_by_a_digit_is_refused_by_ros2_only(
+    sim_ros2: SimulatedRobot, session_ros2: Session, sim_ros1: SimulatedRobot, session_ros1: Session
+) -> None:
+    """``/camera/2d`` is a valid ROS 1 name and an invalid ROS 2 one."""
+    ros2 = await session_ros2.error(
+        "publish_topic", {"topic": "/camera/2d", "message_type": "std_msgs/msg/String", "message": {}}
+    )
+    assert "starting with a digit ('2d')" in ros2
+    await session_ros1.ok("publish_topic", {"topic": "/camera/2d", "message_type": "std_msgs/String"})
+    await sim_ros1.world.wait_for(lambda w: "/camera/2d" in w.published)
+
+
+@pytest.mark.parametrize(
+    ("label", "name"), [("6 MB name", "/" + "a" * 6_000_000), ("1 MB of NUL", "\0" * 1_000_000)]
+)
+async def test_a_huge_topic_name_costs_neither_the_session_nor_the_connection(
+    session: Session, sim: SimulatedRobot, label: str, name: str
+) -> None:
+    """Refused before anything is sent, naming the argument and the limit; the connection is never dropped."""
+    text = await session.error(
+        "publish_topic", {"topic": name, "message_type": types_for(sim)["string"], "message": {"data": "x"}}
+    )
+    assert "topic:" in text
+    assert "more than the 1000 this argument may have" in text, label
+    await _still_works(session)
+
+
+async def test_a_name_just_over_the_ros_limit_is_refused(session: Session, sim: SimulatedRobot) -> None:
+    """A 300-character name passes the argument limit and fails ROS's 247-character rule."""
+    text = await session.error(
+        "publish_topic", {"topic": "/" + "a" * 300, "message_type": types_for(sim)["string"], "message": {}}
+    )
+    assert "more than the 247 a ROS name can have" in text
+
+
+async def test_a_message_over_the_bridge_frame_limit_is_refused_not_reported_as_published(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """A 12 MB message: an error naming the 10 MiB limit, never "Published ..."; the connection stays."""
+    text = await session.error(
+        "publish_topic",
+        {"topic": CHATTER, "message_type": types_for(sim)["string"], "message": {"data": "x" * 12_000_000}},
+    )
+    assert "message: is larger than 10 MiB" in text
+    assert CHATTER not in sim.world.published
+    await _still_works(session)
+
+
+async def test_a_message_under_the_character_limit_but_over_the_byte_limit_is_refused_by_the_client(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """4 M euro signs are 12 MB of UTF-8: the frame check before sending refuses it; nothing is published."""
+    text = await session.error(
+        "publish_topic",
+        {"topic": CHATTER, "message_type": types_for(sim)["string"], "message": {"data": "€" * 4_000_000}},
+    )
+    assert "frame would be 12.0 MB, more than the 10 MiB" in text
+    assert "nothing was sent" in text
+    assert CHATTER not in sim.world.published
+    await _still_works(session)
+
+
+async def test_a_message_nested_too_deep_is_refused_naming_the_limit(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """An object nested 100 levels deep, or JSON text nested 5,000 deep, is refused at 64 levels."""
+    deep: dict[str, object] = {}
+    for _ in range(100):
+        deep = {"a": deep}
+    as_object = await session.error(
+        "publish_topic", {"topic": CHATTER, "message_type": types_for(sim)["string"], "message": deep}
+    )
+    assert "message: nests deeper than 64 levels" in as_object
+    as_text = await session.error(
+        "publish_service",
+        {
+            "service": "/add_two_ints",
+            "service_type": types_for(sim)["add_two_ints"],
+            "request": "[" * 5000 + "]" * 5000,
+        },
+    )
+    assert "nests deeper than 64 levels" in as_text
+    await _still_works(session)
+
+
+async def test_a_lone_surrogate_in_json_text_is_refused(session: Session, sim: SimulatedRobot) -> None:
+    """``"\\ud800"`` in a message given as JSON text cannot be encoded: an error, not a crash."""
+    text = await session.error(
+        "publish_topic",
+        {
+            "topic": CHATTER,
+            "message_type": types_for(sim)["string"],
+            "message": json.dumps({"data": "\ud800"}, ensure_ascii=True),
+        },
+    )
+    assert "unpaired UTF-16 surrogate (\\ud800)" in text
+    await _still_works(session)
