@@ -145,9 +145,16 @@ class Connection:
                         level = _LEVELS[event.level]
                         if logger.isEnabledFor(level):
                             logger.log(level, "%s: %s", self.name, event.text)
-                except Exception:
-                    # One bad frame (or a bug in a listener) must not end the connection's reader.
-                    logger.exception("%s: error while handling a frame; frame dropped", self.name)
+                except Exception as exc:
+                    # One bad frame (or a bug in a listener) must not end the connection's reader, nor
+                    # fill the log: one line per frame, the traceback only at debug level.
+                    logger.error(
+                        "%s: error while handling a frame; frame dropped (%s: %.200s)",
+                        self.name,
+                        type(exc).__name__,
+                        exc,
+                        exc_info=logger.isEnabledFor(logging.DEBUG),
+                    )
         except ConnectionClosed:
             self.close_reason = _close_text(self.ws)
         except Exception as exc:  # a transport error: treat as a drop

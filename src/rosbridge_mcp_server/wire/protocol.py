@@ -382,6 +382,11 @@ InboundEvent = PublishEvent | ReplyEvent | Notice
 _PREVIEW = 200
 
 
+def _short(exc: Exception) -> str:
+    text = str(exc)
+    return text[:_PREVIEW] + ("…" if len(text) > _PREVIEW else "")
+
+
 def _preview(data: str | bytes) -> str:
     text = data if isinstance(data, str) else repr(data[:_PREVIEW])
     return text[:_PREVIEW] + ("…" if len(text) > _PREVIEW else "")
@@ -407,7 +412,11 @@ class InboundDecoder:
         try:
             frame = _decoder.decode(data)
         except ValueError as exc:
-            return Notice("warning", f"malformed JSON frame ignored ({exc}): {_preview(data)}")
+            return Notice("warning", f"malformed JSON frame ignored ({_short(exc)}): {_preview(data)}")
+        except RecursionError:
+            # Python's JSON parser recurses once per level; no rosbridge message nests anywhere near
+            # this deep.
+            return Notice("warning", f"frame nested too deep to parse ignored: {_preview(data)}")
         if not isinstance(frame, dict):
             return Notice("warning", f"frame that is not a JSON object ignored: {_preview(data)}")
         return self.route(frame)
@@ -415,6 +424,8 @@ class InboundDecoder:
     def route(self, frame: dict[str, Any]) -> InboundEvent:
         """Classify one decoded frame."""
         op = frame.get("op")
+        if not isinstance(op, str):
+            return Notice("warning", "frame without an op ignored", frame)
         if op == "publish":
             topic = frame.get("topic")
             msg = frame.get("msg")
@@ -438,7 +449,9 @@ class InboundDecoder:
             try:
                 whole = _decoder.decode(text)
             except ValueError as exc:
-                return Notice("warning", f"reassembled fragments are not JSON ({exc}); dropped")
+                return Notice("warning", f"reassembled fragments are not JSON ({_short(exc)}); dropped")
+            except RecursionError:
+                return Notice("warning", "reassembled fragments nest too deep to parse; dropped")
             if not isinstance(whole, dict) or whole.get("op") == "fragment":
                 return Notice("warning", "reassembled fragments are not a rosbridge op; dropped")
             return self.route(whole)
@@ -449,6 +462,4 @@ class InboundDecoder:
             return Notice("info", f"bridge status ({level}): {frame.get('msg')}", frame)
         if op == "png":
             return Notice("warning", "png frame ignored (we never ask for png compression)", frame)
-        if not isinstance(op, str):
-            return Notice("warning", "frame without an op ignored", frame)
-        return Notice("warning", f"unsupported op {op!r} ignored", frame)
+        return Notice("warning", f"unsupported op {op[:100]!r} ignored", frame)
