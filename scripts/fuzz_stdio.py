@@ -205,6 +205,7 @@ def _run(peer: StdioPeer, args: argparse.Namespace, url: str) -> int:
     calls: Counter[str] = Counter()
     tool_errors: Counter[str] = Counter()
     rpc_errors: Counter[str] = Counter()
+    rpc_texts: Counter[str] = Counter()
     hangs: list[str] = []
     dead: list[str] = []
     latencies: list[float] = []
@@ -255,6 +256,9 @@ def _run(peer: StdioPeer, args: argparse.Namespace, url: str) -> int:
             latencies.append(time.monotonic() - begin)
             if "error" in answer:
                 rpc_errors[label] += 1
+                rpc_texts[
+                    f"{label}: {answer['error'].get('code')} {str(answer['error'].get('message'))[:150]}"
+                ] += 1
             elif answer["result"].get("isError"):
                 tool_errors[label] += 1
         follow = peer.request("tools/call", {"name": "list_topics", "arguments": {}}, FOLLOW_UP_SECONDS)
@@ -277,6 +281,8 @@ def _run(peer: StdioPeer, args: argparse.Namespace, url: str) -> int:
         stderr.count("Traceback"),
         stderr.count("Reconnected to rosbridge"),
     )
+    for text, count in rpc_texts.most_common(8):
+        print(f"JSON-RPC error x{count}: {text}")
     return 0 if not hangs and not dead else 1
 
 
