@@ -13,10 +13,10 @@ The tree::
     ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
     │                               because the bridge drops such messages without a word)
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
-    ├── FrameTooLargeError          a frame larger than the bridge accepts, refused before sending (the bridge
-    │                               would drop the connection)
     ├── NotSentError                a check before an act refused it (a wrong name or type, a message that
-    │                               does not fit, a bridge that does not read); nothing was sent
+    │   │                           does not fit, a bridge that does not read); nothing was sent
+    │   └── FrameTooLargeError      a frame larger than the bridge accepts (the bridge would drop the
+    │                               connection)
     ├── PolicyRefusal               the safety policy refused an act; the text names the rule
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
@@ -178,7 +178,11 @@ class UnknownTypeError(RosbridgeError):
         )
 
 
-class FrameTooLargeError(RosbridgeError):
+class NotSentError(RosbridgeError):
+    """A check before an act refused it, so nothing was sent; ``str()`` says why and what to try."""
+
+
+class FrameTooLargeError(NotSentError):
     """A frame over the bridge's size limit; it was not sent and the connection is untouched."""
 
     def __init__(self, what: str, size: int, limit: int) -> None:
@@ -190,10 +194,6 @@ class FrameTooLargeError(RosbridgeError):
             f"{limit // (1024 * 1024)} MiB ({limit} bytes) rosbridge accepts in one frame (a larger one "
             "makes it drop the connection), so nothing was sent. Send a smaller message."
         )
-
-
-class NotSentError(RosbridgeError):
-    """A check before an act refused it, so nothing was sent; ``str()`` says why and what to try."""
 
 
 class PolicyRefusal(RosbridgeError):
