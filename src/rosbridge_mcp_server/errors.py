@@ -53,9 +53,11 @@ class RosbridgeError(Exception):
 class NotConnectedError(RosbridgeError):
     """There is no open connection to the bridge, so nothing was sent."""
 
-    def __init__(self, url: str, reason: str | None = None) -> None:
+    def __init__(self, url: str, reason: str | None = None, *, timed_out: bool = False) -> None:
         self.url = url
         self.reason = reason
+        #: The attempt ran out of time (no WebSocket answer), rather than being refused or cut off.
+        self.timed_out = timed_out
         detail = f" ({reason})" if reason else ""
         super().__init__(
             f"Not connected to rosbridge at {url}{detail}; nothing was sent. "

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import ipaddress
 import itertools
 import logging
+import math
 import random
 from collections.abc import Coroutine
 from types import TracebackType
-from typing import Any, Protocol, Self
+from typing import Any, Final, Protocol, Self
+from urllib.parse import urlsplit
 
 from rosbridge_mcp_server.client.connection import Connection, open_connection
 from rosbridge_mcp_server.client.detect import detect
@@ -23,9 +26,35 @@ from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
 
-__all__ = ["RosbridgeClient", "SessionWatcher"]
+__all__ = ["LOCAL_RECONNECT_MAX", "PROMPT_SPACING", "RosbridgeClient", "SessionWatcher", "reconnect_cap"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
+
+#: Longest wait between connection attempts to a bridge on this machine or the local network. An attempt there
+#: costs a refused connect (or a few packets), so retrying twice a second is cheap, and the robot is back in
+#: use within about half a second of its bridge, however long it was gone.
+LOCAL_RECONNECT_MAX: Final = 0.5
+#: A call that finds no connection prompts an attempt at once, but not sooner than this after the last one
+#: ended: a burst of calls against a dead bridge costs at most ten attempts a second.
+PROMPT_SPACING: Final = 0.1
+
+
+def reconnect_cap(url: str, reconnect_max: float) -> float:
+    """The longest wait between connection attempts for the bridge at *url*.
+
+    Loopback and local-network hosts (private, link-local and unique-local addresses, ``localhost``, names
+    ending in ``.local`` or without a dot) get :data:`LOCAL_RECONNECT_MAX`; other hosts *reconnect_max*, so
+    a remote bridge is not tried more than every few seconds, while a tool call still prompts an attempt at
+    once. Decided from the URL alone (no name lookup).
+    """
+    host = (urlsplit(url).hostname or "").rstrip(".").lower()
+    try:
+        address = ipaddress.ip_address(host)
+    except ValueError:
+        local = host == "localhost" or host.endswith((".localhost", ".local")) or "." not in host
+    else:
+        local = address.is_loopback or address.is_private or address.is_link_local
+    return min(reconnect_max, LOCAL_RECONNECT_MAX) if local else reconnect_max
 
 
 class SessionWatcher(Protocol):
@@ -42,10 +71,12 @@ class RosbridgeClient:
     """An asyncio client for a rosbridge v2 server (ROS 1 0.11.x, ROS 2 Humble…Rolling).
 
     One main WebSocket is shared by every caller; a reader task routes frames and replies are
-    matched by id. The connection is kept up in the background with exponential backoff. While
-    disconnected every call raises :class:`NotConnectedError` at once: nothing is queued and
-    nothing is replayed (a stale velocity command is a safety bug); only subscriptions and
-    advertisements still wanted are restored after a reconnect.
+    matched by id. The connection is kept up in the background with exponential backoff, capped at
+    :func:`reconnect_cap` (half a second for a bridge on this machine or the local network); a call
+    that finds no connection prompts an attempt at once and waits for that one attempt only. While
+    disconnected every call raises :class:`NotConnectedError`: nothing is queued and nothing is
+    replayed (a stale velocity command is a safety bug); only subscriptions and advertisements still
+    wanted are restored after a reconnect.
     """
 
     def __init__(
@@ -64,6 +95,8 @@ class RosbridgeClient:
         self.request_timeout = request_timeout
         self.reconnect_min = reconnect_min
         self.reconnect_max = max(reconnect_max, reconnect_min)
+        #: The backoff's ceiling for this bridge (short on this machine and the local network).
+        self.reconnect_cap = max(reconnect_cap(url, self.reconnect_max), reconnect_min)
         self._ids = protocol.IdMinter()
         self._session: Session | None = None
         self._last_reason: str | None = "not started"
@@ -71,6 +104,13 @@ class RosbridgeClient:
         self._closing = False
         self._closed = False
         self._attempt_done: asyncio.Event | None = None
+        # Set by a call that finds no connection: the connect loop stops waiting and tries at once.
+        self._wake = asyncio.Event()
+        self._last_attempt_end = -math.inf
+        # The last attempt got no WebSocket answer in time (a port that accepts but never completes the
+        # handshake, a host that drops packets): calls then fail at once instead of each waiting out the
+        # connect timeout again, while the loop keeps trying.
+        self._last_attempt_timed_out = False
         self._connected_event = asyncio.Event()
         self._disconnected_event = asyncio.Event()
         self._disconnected_event.set()
@@ -181,11 +221,14 @@ class RosbridgeClient:
     async def _run(self) -> None:
         delay = self.reconnect_min
         failures = 0
+        loop = asyncio.get_running_loop()
         while not self._closing:
+            self._wake.clear()
             if self._attempt_done is None or self._attempt_done.is_set():
                 self._attempt_done = asyncio.Event()
             attempt_done = self._attempt_done
             conn: Connection | None = None
+            served = False
             try:
                 conn = await open_connection(
                     self.url, "main", self.connect_timeout, self.topics.deliver, self.request_timeout
@@ -203,6 +246,7 @@ class RosbridgeClient:
                 raise
             except NotConnectedError as exc:
                 self._last_reason = exc.reason
+                self._last_attempt_timed_out = exc.timed_out
                 if conn is not None:
                     await conn.aclose()
                 failures += 1
@@ -221,6 +265,7 @@ class RosbridgeClient:
             else:
                 self._session = session
                 self._last_reason = None
+                self._last_attempt_timed_out = False
                 self.connections_made += 1
                 self._disconnected_event.clear()
                 self._connected_event.set()
@@ -235,6 +280,7 @@ class RosbridgeClient:
                 for watcher in self._watchers:
                     watcher.session_started(session)
                 delay = self.reconnect_min
+                served = True
                 await conn.closed.wait()
                 reason = conn.close_reason or "the connection closed"
                 self._set_disconnected(conn, reason)
@@ -243,11 +289,17 @@ class RosbridgeClient:
                         "Lost the connection to rosbridge at %s (%s); reconnecting", self.url, reason
                     )
             finally:
+                if not served:
+                    # A failed attempt (not the end of a session): prompts wait a moment before the next.
+                    self._last_attempt_end = loop.time()
                 attempt_done.set()
             sleep = random.uniform(delay / 2, delay)
-            delay = min(delay * 2, self.reconnect_max)
-            # No attempt is in progress while we sleep: calls fail at once instead of waiting.
-            await asyncio.sleep(sleep)
+            delay = min(delay * 2, self.reconnect_cap)
+            # No attempt is in progress while we wait; a call that needs the connection wakes us (see
+            # _prompt_attempt) instead of failing until the backoff runs out.
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(sleep):
+                    await self._wake.wait()
 
     def _set_disconnected(self, conn: Connection | None, reason: str) -> None:
         if conn is not None and self._session is not None and self._session.connection is conn:
@@ -260,16 +312,27 @@ class RosbridgeClient:
         self.topics.fail_all(ConnectionLostError(self.url, "messages"))
 
     async def _wait_session(self, deadline: float | None = None) -> Session:
-        """The open session, waiting only for a connection attempt already in progress."""
+        """The open session, waiting only for a connection attempt under way (or prompted now).
+
+        Between attempts, a call prompts one at once rather than failing until the backoff runs out; it waits
+        for that attempt (bounded by the connect timeout and *deadline*), never for a later one. Nothing is
+        queued: the caller sends its request itself, now, or gets :class:`NotConnectedError`.
+        """
         session = self.session
         if session is not None:
             return session
         if self._closed:
             raise NotConnectedError(self.url, "the client is closed")
+        if self._last_attempt_timed_out:
+            # Waiting out another handshake would cost every call the whole connect timeout.
+            raise NotConnectedError(self.url, self._last_reason)
         attempt = self._attempt_done
+        if attempt is None or attempt.is_set():
+            attempt = self._prompt_attempt()
         if attempt is not None and not attempt.is_set():
             loop = asyncio.get_running_loop()
-            until = loop.time() + self.connect_timeout
+            # The attempt is bounded by the connect timeout itself; the margin lets it report why it failed.
+            until = loop.time() + self.connect_timeout + 1.0
             if deadline is not None:
                 until = min(until, deadline)
             try:
@@ -281,6 +344,17 @@ class RosbridgeClient:
             if session is not None:
                 return session
         raise NotConnectedError(self.url, self._last_reason)
+
+    def _prompt_attempt(self) -> asyncio.Event | None:
+        """Wake the connect loop for an attempt now; the event set when it is done (None: not now)."""
+        if self._runner is None or self._closing:
+            return None
+        if asyncio.get_running_loop().time() - self._last_attempt_end < PROMPT_SPACING:
+            return None
+        if self._attempt_done is None or self._attempt_done.is_set():
+            self._attempt_done = asyncio.Event()
+        self._wake.set()
+        return self._attempt_done
 
     def require_session(self) -> Session:
         """The open session, or :class:`NotConnectedError` at once (for sends that must never wait)."""

@@ -349,7 +349,7 @@ async def open_connection(
     except asyncio.CancelledError:
         raise
     except TimeoutError:
-        raise NotConnectedError(url, f"no answer within {timeout:g} s") from None
+        raise NotConnectedError(url, f"no WebSocket answer within {timeout:g} s", timed_out=True) from None
     except OSError as exc:
         raise NotConnectedError(url, exc.strerror or str(exc)) from None
     except Exception as exc:

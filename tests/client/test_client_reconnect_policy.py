@@ -1,0 +1,104 @@
+"""Reconnecting: short backoff for local bridges, a call prompts an attempt, a silent port costs one wait."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+
+import pytest
+from client_harness import MakeClient, MakeSim
+
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.client.client import LOCAL_RECONNECT_MAX, reconnect_cap
+from rosbridge_mcp_server.errors import NotConnectedError
+
+
+@pytest.mark.parametrize(
+    ("url", "local"),
+    [
+        ("ws://127.0.0.1:9090", True),
+        ("ws://localhost:9090", True),
+        ("ws://[::1]:9090", True),
+        ("ws://192.168.1.20:9090", True),
+        ("ws://10.0.0.5:9090", True),
+        ("ws://169.254.3.4:9090", True),
+        ("ws://turtlebot:9090", True),
+        ("ws://robot.local:9090", True),
+        ("wss://robot.example.com:443", False),
+        ("ws://8.8.8.8:9090", False),
+    ],
+)
+def test_the_backoff_ceiling_is_short_on_this_machine_and_the_local_network(url: str, local: bool) -> None:
+    """Local bridges are retried at least twice a second; remote ones on the configured maximum."""
+    assert reconnect_cap(url, 5.0) == (LOCAL_RECONNECT_MAX if local else 5.0)
+    assert reconnect_cap(url, 0.2) == 0.2
+
+
+async def test_a_call_between_attempts_prompts_one_at_once(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """With a long backoff, a call after the bridge's return connects now instead of failing for seconds."""
+    robot = await make_sim()
+    client = await make_client(robot, reconnect_min=6.0, reconnect_max=30.0)
+    await robot.stop()
+    await client.wait_disconnected(5.0)
+    await robot.start()
+    loop = asyncio.get_running_loop()
+    start = loop.time()
+    await client.call_service("/rosapi/topics", timeout=3.0)
+    assert loop.time() - start < 1.0
+    assert client.connections_made == 2
+
+
+async def test_a_local_bridge_is_back_within_a_second_of_its_return_after_a_long_outage(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """Down for 2.5 s with the default backoff (0.2 s doubling to 5 s): connected within 1 s of the return."""
+    robot = await make_sim()
+    client = await make_client(robot, reconnect_min=0.2, reconnect_max=5.0)
+    await robot.stop()
+    await client.wait_disconnected(5.0)
+    # The outage itself, not a synchronisation: the backoff grows while the bridge is away.
+    await asyncio.sleep(2.5)
+    await robot.start()
+    loop = asyncio.get_running_loop()
+    start = loop.time()
+    await client.wait_connected(3.0)
+    assert loop.time() - start < 1.0
+
+
+@pytest.fixture
+async def silent_port() -> AsyncIterator[str]:
+    """A TCP port that accepts connections and never answers the WebSocket handshake."""
+    held: list[asyncio.StreamWriter] = []
+
+    async def accept(_reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        held.append(writer)
+
+    server = await asyncio.start_server(accept, "127.0.0.1", 0)
+    port = server.sockets[0].getsockname()[1]
+    try:
+        yield f"ws://127.0.0.1:{port}"
+    finally:
+        for writer in held:
+            writer.close()
+        server.close()
+        await server.wait_closed()
+
+
+async def test_a_port_that_never_completes_the_handshake_costs_one_wait_not_one_per_call(
+    silent_port: str,
+) -> None:
+    """The first call waits for the attempt under way (the connect timeout); later calls fail at once."""
+    loop = asyncio.get_running_loop()
+    async with RosbridgeClient(
+        silent_port, connect_timeout=0.5, reconnect_min=0.05, reconnect_max=0.2
+    ) as client:
+        start = loop.time()
+        with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 0\.5 s"):
+            await client.call_service("/rosapi/topics", timeout=5.0)
+        assert 0.3 < loop.time() - start < 1.5
+        start = loop.time()
+        with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 0\.5 s"):
+            await client.call_service("/rosapi/topics", timeout=5.0)
+        assert loop.time() - start < 0.1
