@@ -99,6 +99,7 @@ class Bridge:
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
         self.process: subprocess.Popen[bytes] | None = None
+        self.starting: subprocess.Popen[bytes] | None = None
         if args.url:
             self.url = args.url
         else:
@@ -112,7 +113,8 @@ class Bridge:
     def start(self) -> float:
         """Start the bridge; returns when its port accepts TCP (monotonic time)."""
         if self.args.lab_start:
-            subprocess.run(self.args.lab_start, shell=True, check=True, stdout=subprocess.DEVNULL)
+            # In the background: the moment its port accepts is what counts, not when the script returns.
+            self.starting = subprocess.Popen(self.args.lab_start, shell=True, stdout=subprocess.DEVNULL)
         else:
             self.process = subprocess.Popen(
                 [
@@ -136,7 +138,14 @@ class Bridge:
             except OSError:
                 time.sleep(0.002)
 
+    def finish_starting(self) -> None:
+        """Wait for a lab's start script to finish."""
+        if self.starting is not None:
+            self.starting.wait()
+            self.starting = None
+
     def stop(self) -> None:
+        self.finish_starting()
         if self.args.lab_restart:
             subprocess.run(self.args.lab_restart, shell=True, check=True, stdout=subprocess.DEVNULL)
         elif self.process is not None:
@@ -221,7 +230,10 @@ def main() -> int:
                 print(f"{row['mode']} {outage:g} s: {row['figure'] * 1000:.0f} ms", file=sys.stderr)
     finally:
         server.close()
-        bridge.stop()
+        if args.url:
+            bridge.finish_starting()  # a lab is left running, as it was found
+        else:
+            bridge.stop()
     print(f"# outages of {bridge.url} ({'simulated robot process' if not args.url else 'lab'})\n")
     print(
         "| down | mode | usable again after its return | attempts while down | calls while down (slowest) |"
