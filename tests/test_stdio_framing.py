@@ -74,3 +74,13 @@ def test_a_boolean_or_float_id_is_not_recovered() -> None:
 def test_a_blank_line_is_no_request() -> None:
     """Whitespace alone is skipped, not answered."""
     assert parse_line(b"  \r") is None
+
+
+def test_an_id_written_last_after_megabytes_of_nesting_is_still_found() -> None:
+    """Past the scanned head, an id just before the closing brace is found (the scan itself stays short)."""
+    deep = "[" * 2_000_000 + "]" * 2_000_000
+    reply = parse_line(
+        f'{{"jsonrpc": "2.0", "method": "tools/call", "params": {deep}, "id": "last"}}'.encode()
+    )
+    assert isinstance(reply, JSONRPCError)
+    assert (reply.id, reply.error.code) == ("last", -32700)

@@ -55,6 +55,9 @@ _CHUNK = 64 * 1024
 #: How much of an overlong line is kept to find its id (clients write "id" before "params").
 _HEAD_BYTES = 4096
 _ID_VALUE = re.compile(r'\s*("(?:[^"\\]|\\.)*"|-?\d+)\s*[,}]')
+#: How much of an unreadable line is scanned for its id from the start (clients write "id" early).
+_SCAN_CHARS = 64 * 1024
+_TRAILING_ID = re.compile(r'[,{]\s*"id"\s*:\s*("(?:[^"\\]|\\.)*"|-?\d+)\s*}\s*$')
 
 
 async def serve_stdio(server: MCPServer[Any]) -> None:
@@ -224,9 +227,26 @@ def _valid_id(value: object) -> int | str | None:
 def _recover_id(text: str) -> int | str | None:
     """The ``id`` member of the top-level object in ``text``, found without parsing the rest.
 
-    One pass that tracks strings and bracket depth, so a request nested too deep (or cut short) still
-    gets its reply under its own id.
+    One pass over the first :data:`_SCAN_CHARS` characters that tracks strings and bracket depth, so a request
+    nested too deep (or cut short) still gets its reply under its own id; past that, an id written last (just
+    before the closing brace) is still found. The work stays bounded however long the line.
     """
+    found = _scan_for_id(text[:_SCAN_CHARS])
+    if found is None and len(text) > _SCAN_CHARS:
+        match = _TRAILING_ID.search(text, len(text) - 1000)
+        if match is not None:
+            found = _id_from_json(match.group(1))
+    return found
+
+
+def _id_from_json(token: str) -> int | str | None:
+    try:
+        return _valid_id(json.loads(token))
+    except ValueError:
+        return None
+
+
+def _scan_for_id(text: str) -> int | str | None:
     depth = 0
     i = 0
     n = len(text)
@@ -241,10 +261,7 @@ def _recover_id(text: str) -> int | str | None:
                 if rest.startswith(":"):
                     match = _ID_VALUE.match(rest, 1)
                     if match is not None:
-                        try:
-                            return _valid_id(json.loads(match.group(1)))
-                        except ValueError:
-                            return None
+                        return _id_from_json(match.group(1))
             i = end + 1
             continue
         if ch in "{[":
