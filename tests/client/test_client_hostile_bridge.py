@@ -68,6 +68,12 @@ class HostileBridge:
             if service == "/hostile/garbage":
                 for frame in GARBAGE + QUIET:
                     await ws.send(frame)
+            if service == "/hostile/fragments":
+                chunk = "x" * 1_000_000
+                for n in range(100):
+                    await ws.send(
+                        json.dumps({"op": "fragment", "id": f"f{n}", "data": chunk, "num": 0, "total": 9})
+                    )
             values = {"version": 2, "distro": "jazzy"} if service == "/rosapi/get_ros_version" else {}
             await ws.send(
                 json.dumps(
@@ -107,4 +113,19 @@ async def test_garbage_frames_cost_one_log_line_each_and_nothing_else(
         assert len(bad) == len(GARBAGE), [r.getMessage()[:120] for r in bad]
         assert all(len(r.getMessage()) < 1000 for r in records)
         assert client.connected
+        assert client.connections_made == 1
+
+
+async def test_partial_fragments_from_a_bridge_stay_bounded_in_memory(hostile: HostileBridge) -> None:
+    """100 MB of fragments that never complete: at most 32 partial messages and 64 Mi characters are held."""
+    async with RosbridgeClient(hostile.url, reconnect_min=0.05, reconnect_max=0.2) as client:
+        await client.wait_connected(5.0)
+        await client.call_service("/hostile/fragments", timeout=20.0)
+        session = client.session
+        assert session is not None
+        buffers, chars = session.connection.held_fragments
+        assert buffers <= 32
+        assert chars <= 64 * 1024 * 1024
+        assert chars > 0, "the fragments did arrive"
+        await client.call_service("/hostile/after", timeout=5.0)
         assert client.connections_made == 1
