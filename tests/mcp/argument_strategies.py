@@ -4,7 +4,8 @@ What a confused or hostile client sends: every key present or missing, values of
 wrong one, unknown keys, huge strings, NaN and infinities, booleans for numbers, deep nesting, odd names
 (unicode, NUL characters, ``..``, ``~``, 6,000-character names) next to the robot's real names and types, so
 that valid calls (which reach the robot) are mixed in. Numbers that would make a valid call run long are kept
-small: a valid ``timeout`` is at most 2 s and payload integers are small, so a run's time is bounded.
+small: a valid ``timeout`` or ``duration`` is at most 2 s and valid integers are small, so a run's time is
+bounded.
 """
 
 from __future__ import annotations
@@ -133,7 +134,8 @@ def _value_for(vocabulary: Vocabulary, key: str, prop: dict[str, Any]) -> st.Sea
     if "string" in kinds:
         fitting.append(_strings(vocabulary, prop, key))
     if "number" in kinds or "integer" in kinds:
-        fitting.append(st.floats(0.01, MAX_VALID_TIMEOUT) if "timeout" in key else st.integers(-10, 60))
+        # Valid values stay small (a short wait, a few messages), so that valid calls end quickly.
+        fitting.append(st.floats(0.01, MAX_VALID_TIMEOUT) if _time_like(key) else st.integers(-2, 5))
         fitting.append(st.sampled_from([0, -1, 1e9, math.nan, math.inf, True]))
     if "boolean" in kinds:
         fitting.append(st.booleans())
@@ -203,14 +205,24 @@ def tool_calls(
     )
 
 
-def call_deadline(arguments: dict[str, Any], schema: dict[str, Any], slack: float = 5.0) -> float:
-    """How long a call may take: its own ``timeout`` when valid, else the schema's default, plus ``slack``."""
-    prop = schema.get("properties", {}).get("timeout")
-    if prop is None:
-        return slack + 10.0
-    given = arguments.get("timeout")
-    maximum = float(prop.get("maximum", math.inf))
-    if isinstance(given, int | float) and not isinstance(given, bool) and 0 < given <= maximum:
-        return float(given) + slack
-    default = prop.get("default", 10.0)
-    return float(default) + slack
+_TIME_WORDS = ("timeout", "duration", "seconds", "period", "wait")
+
+
+def _time_like(key: str) -> bool:
+    return any(word in key for word in _TIME_WORDS)
+
+
+def call_deadline(arguments: dict[str, Any], schema: dict[str, Any], slack: float = 15.0) -> float:
+    """How long a call may take: its time arguments (``timeout``, ``duration``, ...) as given when valid, else
+    their defaults, added up, plus ``slack``."""
+    total = slack
+    for key, prop in schema.get("properties", {}).items():
+        if not _time_like(key):
+            continue
+        given = arguments.get(key)
+        maximum = float(prop.get("maximum", math.inf))
+        if isinstance(given, int | float) and not isinstance(given, bool) and 0 < given <= maximum:
+            total += float(given)
+        elif isinstance(prop.get("default"), int | float):
+            total += float(prop["default"])
+    return total
