@@ -60,7 +60,7 @@ def _value_problem(value: Any, prop: dict[str, Any]) -> str | None:
         if "boolean" not in kinds and kinds & {"number", "integer"}:
             return f"expected a number, got {str(value).lower()} (a boolean is not a number)"
         return None
-    if isinstance(value, str) and kinds <= {"string", "null"}:
+    if isinstance(value, str) and kinds and kinds <= {"string", "null"}:
         if len(value) > MAX_TEXT_ARGUMENT:
             return (
                 f"{len(value)} characters, more than the {MAX_TEXT_ARGUMENT} this argument may have (names "
