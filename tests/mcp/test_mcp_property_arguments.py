@@ -25,26 +25,26 @@ from mcp_harness import Session, open_session, text_of
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-#: Per dialect; both together run in ~10 s here.
-EXAMPLES = 250
+#: Per bridge kind; the three together run in ~10 s here.
+EXAMPLES = 200
 
 
 class SessionThread:
     """A simulated robot and an MCP session on a loop in a background thread."""
 
-    def __init__(self, dialect: Literal["ros1", "ros2"]) -> None:
+    def __init__(self, dialect: Literal["ros1", "ros2"], *, in_order: bool = False) -> None:
         self.loop = asyncio.new_event_loop()
         self.thread = threading.Thread(target=self.loop.run_forever, daemon=True)
         self.thread.start()
         self.stack = AsyncExitStack()
-        self.session: Session = self.run(self._open(dialect), 30.0)
+        self.session: Session = self.run(self._open(dialect, in_order), 30.0)
         self.schemas: dict[str, dict[str, Any]] = {}
         self.vocabulary = Vocabulary()
         self.run(self._learn(), 30.0)
 
-    async def _open(self, dialect: Literal["ros1", "ros2"]) -> Session:
+    async def _open(self, dialect: Literal["ros1", "ros2"], in_order: bool) -> Session:
         robot = await self.stack.enter_async_context(
-            SimulatedRobot(dialect, action_step=0.01, slow_service_seconds=0.2)
+            SimulatedRobot(dialect, in_order=in_order, action_step=0.01, slow_service_seconds=0.2)
         )
         return await self.stack.enter_async_context(open_session(robot.url, request_timeout=5.0))
 
@@ -73,9 +73,11 @@ class SessionThread:
             self.loop.close()
 
 
-@pytest.fixture(scope="module", params=["ros2", "ros1"])
+@pytest.fixture(scope="module", params=["ros2", "ros1", "ros2-in-order"])
 def hosted(request: pytest.FixtureRequest) -> Iterator[SessionThread]:
-    hosted = SessionThread(request.param)
+    """A session per bridge kind; the in-order one (Humble's defaults) runs calls on lanes of their own."""
+    dialect: Literal["ros1", "ros2"] = "ros1" if request.param == "ros1" else "ros2"
+    hosted = SessionThread(dialect, in_order=request.param.endswith("in-order"))
     try:
         yield hosted
     finally:
