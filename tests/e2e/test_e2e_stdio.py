@@ -271,7 +271,7 @@ async def test_a_running_goal_is_cancelled_when_the_server_is_stopped(
 
 
 async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_on() -> None:
-    """Garbage, JSON nested 300 deep, non-JSON-RPC JSON: each answered (-32700/-32600, id when shown)."""
+    """Garbage, 300 deep, not JSON-RPC, bad UTF-8, 65 MiB: each gets -32700/-32600, with its id if shown."""
     server = await _start("--demo")
     deep = "[" * 300 + "]" * 300
     try:
@@ -284,7 +284,13 @@ async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_
         await server.send_line('{"jsonrpc": "2.0", "id": "forty-two", "method": 3}')
         await server.send_line("[1, 2]")
         await server.send_line("")
-        answers = [await server.read_message() for _ in range(4)]
+        assert server.process.stdin is not None
+        server.process.stdin.write(b"\xff\xfe not utf-8\n")
+        overlong = '{"jsonrpc": "2.0", "id": 43, "method": "tools/call", "params": {"x": "' + "y" * (
+            65 * 2**20
+        )
+        await server.send_line(overlong + '"}}')
+        answers = [await server.read_message() for _ in range(6)]
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
     finally:
         _rest, stderr, code = await _finish(server)
@@ -293,6 +299,8 @@ async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_
         (41, -32700),
         ("forty-two", -32600),
         (None, -32600),
+        (None, -32700),
+        (43, -32600),
     ]
     assert "nests deeper" in answers[1]["error"]["message"]
     assert topics["result"]["isError"] is False
