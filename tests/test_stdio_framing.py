@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import asyncio
 
-from mcp.types import JSONRPCError, JSONRPCRequest
+from mcp.types import JSONRPCError, JSONRPCRequest, jsonrpc_message_adapter
 
-from rosbridge_mcp_server.server.stdio import Overlong, parse_line, read_lines
+from rosbridge_mcp_server.server.stdio import Overlong, parse_line, read_lines, reply_for_unreadable
 
 
 async def _lines(data: bytes, limit: int) -> list[bytes | Overlong]:
@@ -84,3 +84,23 @@ def test_an_id_written_last_after_megabytes_of_nesting_is_still_found() -> None:
     )
     assert isinstance(reply, JSONRPCError)
     assert (reply.id, reply.error.code) == ("last", -32700)
+
+
+def _failure(line: str) -> Exception:
+    try:
+        jsonrpc_message_adapter.validate_json(line, by_name=False)
+    except Exception as exc:
+        return exc
+    raise AssertionError(f"{line!r} parsed")
+
+
+def test_the_sdk_transports_failures_are_answered_with_the_id_they_carry() -> None:
+    """From the exception alone: parse errors and invalid requests keep their ids; a blank line is skipped."""
+    deep = '{"jsonrpc": "2.0", "id": 3, "method": "x", "params": ' + "[" * 300 + "]" * 300 + "}"
+    parse = reply_for_unreadable(_failure(deep))
+    invalid = reply_for_unreadable(_failure('{"jsonrpc": "2.0", "id": "q", "method": 7}'))
+    assert parse is not None
+    assert (parse.id, parse.error.code) == (3, -32700)
+    assert invalid is not None
+    assert (invalid.id, invalid.error.code) == ("q", -32600)
+    assert reply_for_unreadable(_failure("\n")) is None

@@ -305,3 +305,32 @@ async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_
     assert "nests deeper" in answers[1]["error"]["message"]
     assert topics["result"]["isError"] is False
     assert code == 0, stderr.decode()
+
+
+async def test_unreadable_lines_read_from_a_file_are_answered_too(tmp_path: Path) -> None:
+    """stdin a regular file (the SDK's transport): garbage and a too-deep request get their error replies."""
+    deep = "[" * 300 + "]" * 300
+    lines = [
+        "not json",
+        f'{{"jsonrpc": "2.0", "id": 5, "method": "tools/list", "params": {{"x": {deep}}}}}',
+        '{"jsonrpc": "2.0", "id": 6, "method": 7}',
+    ]
+    requests = tmp_path / "requests.jsonl"
+    requests.write_text("\n".join(lines) + "\n")
+    with requests.open("rb") as stdin:
+        process = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-m",
+            "rosbridge_mcp_server",
+            "--url",
+            _closed_port_url(),
+            stdin=stdin,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+        )
+        stdout, stderr = await asyncio.wait_for(process.communicate(), WAIT)
+    answers = [json.loads(line) for line in stdout.decode().splitlines()]
+    assert [(a["id"], a["error"]["code"]) for a in answers] == [(None, -32700), (5, -32700), (6, -32600)], (
+        stderr.decode()
+    )
+    assert process.returncode == 0, stderr.decode()

@@ -7,8 +7,8 @@ read and write them from the event loop instead, with our own framing: every lin
 SDK cannot read (not JSON, JSON nested deeper than its parser allows, not JSON-RPC, longer than we read) gets
 the JSON-RPC error reply (-32700 / -32600) under the request's id when the text shows it, where the SDK only
 logs it at debug level and the client waits forever. Anything else (a terminal, a regular file) goes through
-the SDK's transport unchanged: a person typing JSON needs no speed, and a terminal's file description is
-shared with the shell, which must not be left non-blocking.
+the SDK's transport (a person typing JSON needs no speed, and a terminal's file description is shared with the
+shell, which must not be left non-blocking), with the lines it cannot read answered the same way.
 
 Like the SDK, we keep stray output off the wire: while serving, fd 1 points at stderr and fd 0 at the null
 device; the wire is served from private duplicates, and both descriptors are restored on the way out.
@@ -25,9 +25,10 @@ import os
 import re
 import stat
 from collections.abc import AsyncIterator, Iterator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import anyio
+from mcp.server.stdio import stdio_server
 from mcp.shared.message import SessionMessage
 from mcp.types import (
     INVALID_REQUEST,
@@ -44,7 +45,15 @@ from rosbridge_mcp_server.server.sdk import serve_streams
 if TYPE_CHECKING:
     from mcp.server.mcpserver import MCPServer
 
-__all__ = ["MAX_LINE_BYTES", "Overlong", "parse_line", "read_lines", "serve_lines", "serve_stdio"]
+__all__ = [
+    "MAX_LINE_BYTES",
+    "Overlong",
+    "parse_line",
+    "read_lines",
+    "reply_for_unreadable",
+    "serve_lines",
+    "serve_stdio",
+]
 
 _log = logging.getLogger(__name__)
 
@@ -63,7 +72,8 @@ _TRAILING_ID = re.compile(r'[,{]\s*"id"\s*:\s*("(?:[^"\\]|\\.)*"|-?\d+)\s*}\s*$'
 async def serve_stdio(server: MCPServer[Any]) -> None:
     """Serve ``server`` on this process's stdin/stdout until stdin closes."""
     if not (_is_pipe_or_socket(0) and _is_pipe_or_socket(1)):
-        await server.run_stdio_async()
+        async with stdio_server() as (read_stream, write_stream):
+            await serve_streams(server, _Answering(read_stream, write_stream), write_stream)
         return
     with _claim_std_fds() as (wire_in, wire_out):
         loop = asyncio.get_running_loop()
@@ -194,13 +204,40 @@ def parse_line(line: bytes | Overlong) -> JSONRPCMessage | JSONRPCError | None:
             return None
         first = exc.errors(include_url=False)[0]
         if first["type"] == "json_invalid":
-            reason = first["msg"].removeprefix("Invalid JSON: ")
-            if "recursion limit" in reason:
-                reason = "the JSON nests deeper than this server's parser allows (about 200 levels)"
-            return _error_reply(PARSE_ERROR, f"Parse error: {reason}", _recover_id(text))
-        return _error_reply(
-            INVALID_REQUEST, "Invalid request: not a JSON-RPC 2.0 request or notification", _parsed_id(text)
-        )
+            return _parse_error(first["msg"], _recover_id(text))
+        return _not_json_rpc(_parsed_id(text))
+
+
+def reply_for_unreadable(exc: Exception) -> JSONRPCError | None:
+    """The error reply for a line the SDK's own stdio transport could not read (``None``: a blank line).
+
+    That transport hands the parse failure on as an exception instead of the line; a pydantic error keeps
+    the line (or the object it decoded) as its input, which is where the id is found.
+    """
+    if not isinstance(exc, ValidationError):
+        return _error_reply(PARSE_ERROR, f"Parse error: {type(exc).__name__}", None)
+    errors = exc.errors(include_url=False)
+    first = errors[0]
+    if first["type"] == "json_invalid":
+        text = first.get("input")
+        if isinstance(text, str) and not text.strip():
+            return None
+        return _parse_error(first["msg"], _recover_id(text) if isinstance(text, str) else None)
+    decoded = [error["input"] for error in errors if isinstance(error.get("input"), dict)]
+    return _not_json_rpc(next((_valid_id(d.get("id")) for d in decoded if "id" in d), None))
+
+
+def _parse_error(pydantic_message: str, request_id: int | str | None) -> JSONRPCError:
+    reason = pydantic_message.removeprefix("Invalid JSON: ")
+    if "recursion limit" in reason:
+        reason = "the JSON nests deeper than this server's parser allows (about 200 levels)"
+    return _error_reply(PARSE_ERROR, f"Parse error: {reason}", request_id)
+
+
+def _not_json_rpc(request_id: int | str | None) -> JSONRPCError:
+    return _error_reply(
+        INVALID_REQUEST, "Invalid request: not a JSON-RPC 2.0 request or notification", request_id
+    )
 
 
 def _error_reply(code: int, message: str, request_id: int | str | None) -> JSONRPCError:
@@ -326,3 +363,43 @@ async def serve_lines(
             await serve_streams(server, from_lines, to_wire)
         finally:
             await to_wire.aclose()
+
+
+class _Answering:
+    """The SDK stdio transport's read stream, with every line it could not read answered, not dropped."""
+
+    def __init__(self, inner: Any, write_stream: Any) -> None:
+        self._inner = inner
+        self._write_stream = write_stream
+
+    @property
+    def last_context(self) -> Any:
+        # The SDK restores the sender's context variables from its own stream, when it has one.
+        return getattr(self._inner, "last_context", None)
+
+    async def receive(self) -> SessionMessage:
+        while True:
+            item = await self._inner.receive()
+            if not isinstance(item, Exception):
+                return cast("SessionMessage", item)
+            reply = reply_for_unreadable(item)
+            if reply is not None:
+                await self._write_stream.send(SessionMessage(reply))
+
+    def __aiter__(self) -> _Answering:
+        return self
+
+    async def __anext__(self) -> SessionMessage:
+        try:
+            return await self.receive()
+        except anyio.EndOfStream:
+            raise StopAsyncIteration from None
+
+    async def aclose(self) -> None:
+        await self._inner.aclose()
+
+    async def __aenter__(self) -> _Answering:
+        return self
+
+    async def __aexit__(self, *exc_info: object) -> None:
+        await self.aclose()
