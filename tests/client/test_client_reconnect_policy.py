@@ -9,7 +9,7 @@ import pytest
 from client_harness import MakeClient, MakeSim
 
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.client.client import LOCAL_RECONNECT_MAX, reconnect_cap
+from rosbridge_mcp_server.client.client import LOCAL_RECONNECT_MAX, PROMPT_SPACING, reconnect_cap
 from rosbridge_mcp_server.errors import NotConnectedError
 
 
@@ -102,3 +102,28 @@ async def test_a_port_that_never_completes_the_handshake_costs_one_wait_not_one_
         with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 0\.5 s"):
             await client.call_service("/rosapi/topics", timeout=5.0)
         assert loop.time() - start < 0.1
+
+
+async def test_after_a_silent_port_a_call_still_prompts_the_next_attempt(make_sim: MakeSim) -> None:
+    """After a timed-out attempt a call fails at once but wakes the loop, which finds the answering bridge."""
+    held: list[asyncio.StreamWriter] = []
+
+    async def accept(_reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        held.append(writer)
+
+    silent = await asyncio.start_server(accept, "127.0.0.1", 0)
+    port = silent.sockets[0].getsockname()[1]
+    url = f"ws://127.0.0.1:{port}"
+    async with RosbridgeClient(url, connect_timeout=0.3, reconnect_min=6.0, reconnect_max=30.0) as client:
+        with pytest.raises(NotConnectedError, match="no WebSocket answer"):
+            await client.call_service("/rosapi/topics", timeout=5.0)
+        for writer in held:
+            writer.close()
+        silent.close()
+        await silent.wait_closed()
+        await make_sim(port=port)
+        # The rule under test, not a synchronisation: prompts are spaced at least this far after an attempt.
+        await asyncio.sleep(PROMPT_SPACING)
+        with pytest.raises(NotConnectedError):
+            await client.call_service("/rosapi/topics", timeout=5.0)
+        await client.wait_connected(2.0)

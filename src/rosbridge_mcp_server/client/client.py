@@ -324,7 +324,9 @@ class RosbridgeClient:
         if self._closed:
             raise NotConnectedError(self.url, "the client is closed")
         if self._last_attempt_timed_out:
-            # Waiting out another handshake would cost every call the whole connect timeout.
+            # Waiting out another handshake would cost every call the whole connect timeout: the attempt is
+            # prompted, not awaited, so a later call finds the connection if the bridge answers again.
+            self._prompt_attempt()
             raise NotConnectedError(self.url, self._last_reason)
         attempt = self._attempt_done
         if attempt is None or attempt.is_set():
