@@ -16,6 +16,7 @@ The rosbridge client connects in the background from the server's lifespan, so `
 
 from __future__ import annotations
 
+import base64
 import inspect
 import logging
 import typing
@@ -27,7 +28,7 @@ from typing import Annotated, Any
 from mcp.server.mcpserver import Context, MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
 from mcp.server.mcpserver.tools import Tool
-from mcp.types import CallToolResult, TextContent, ToolAnnotations
+from mcp.types import CallToolResult, ImageContent, TextContent, ToolAnnotations
 from pydantic import ValidationError
 
 from rosbridge_mcp_server import __version__
@@ -217,8 +218,14 @@ def _tool_from_module(module: ModuleType, client: RosbridgeClient, config: Confi
         except (RosbridgeError, ToolFailure) as exc:
             _log.info("%s failed: %s", spec.name, exc)
             return CallToolResult(content=[TextContent(type="text", text=error_text(exc))], is_error=True)
+        images = [
+            ImageContent(
+                type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type
+            )
+            for image in answer.images
+        ]
         return CallToolResult(
-            content=[TextContent(type="text", text=answer.text)],
+            content=[TextContent(type="text", text=answer.text), *images],
             structured_content=answer.data.model_dump(mode="json"),
         )
 

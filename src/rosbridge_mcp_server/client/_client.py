@@ -414,6 +414,7 @@ class RosbridgeClient:
                         id=sub.id,
                         throttle_rate=sub.throttle_rate,
                         queue_length=sub.queue_length,
+                        qos=sub.qos,
                     )
                 )
 
@@ -650,8 +651,12 @@ class RosbridgeClient:
         throttle_rate: int = 0,
         queue_length: int = 0,
         max_queue: int = 1000,
+        qos: dict[str, Any] | None = None,
     ) -> Subscription:
-        """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``)."""
+        """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``).
+
+        ``qos`` is sent as the ROS 2 ``qos`` object (read by rosbridge 2.0.7 / 2.7.0 / 3.3.0 and later).
+        """
         return Subscription(
             self,
             topic,
@@ -660,6 +665,7 @@ class RosbridgeClient:
             throttle_rate=throttle_rate,
             queue_length=queue_length,
             max_queue=max_queue,
+            qos=qos,
         )
 
     async def _open_subscription(self, sub: Subscription) -> None:
@@ -677,6 +683,7 @@ class RosbridgeClient:
                     id=sub.id,
                     throttle_rate=sub.throttle_rate,
                     queue_length=sub.queue_length,
+                    qos=sub.qos,
                 )
             )
         except BaseException:
