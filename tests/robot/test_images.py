@@ -103,9 +103,9 @@ def test_too_little_data_is_an_error() -> None:
 def test_a_large_frame_is_resized_to_max_size_and_encoded() -> None:
     """A 1920×1080 frame comes out 800 px wide as JPEG, or as PNG when asked."""
     picture = decode_raw(raw_image("rgb8", 1920, 1080, bytes([10, 120, 230])))
-    jpeg = Image.open(io.BytesIO(encode_picture(picture, 800, "jpeg")))
+    jpeg = Image.open(io.BytesIO(encode_picture(picture, 800, "jpeg").data))
     assert (jpeg.format, jpeg.size) == ("JPEG", (800, 450))
-    png = Image.open(io.BytesIO(encode_picture(picture, 64, "png")))
+    png = Image.open(io.BytesIO(encode_picture(picture, 64, "png").data))
     assert (png.format, png.size) == ("PNG", (64, 36))
     assert png.getpixel((10, 10)) == (10, 120, 230)
 

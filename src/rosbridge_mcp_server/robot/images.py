@@ -24,7 +24,9 @@ from PIL import Image, UnidentifiedImageError
 __all__ = [
     "ENCODINGS",
     "DepthRange",
+    "Encoded",
     "ImageError",
+    "ImageFormat",
     "Picture",
     "decode_compressed",
     "decode_raw",
@@ -155,7 +157,16 @@ def decode_compressed(msg: Mapping[str, Any]) -> Picture:
     return Picture(image, encoding, image.width, image.height)
 
 
-def encode_picture(picture: Picture, max_size: int, fmt: ImageFormat) -> bytes:
+@dataclass(frozen=True)
+class Encoded:
+    """A picture as file bytes, and the size it was encoded at."""
+
+    data: bytes
+    width: int
+    height: int
+
+
+def encode_picture(picture: Picture, max_size: int, fmt: ImageFormat) -> Encoded:
     """The picture no larger than ``max_size`` on its longest side, as JPEG or PNG bytes."""
     image = picture.image
     if max(image.width, image.height) > max_size:
@@ -170,7 +181,7 @@ def encode_picture(picture: Picture, max_size: int, fmt: ImageFormat) -> bytes:
         image.save(out, "JPEG", quality=_JPEG_QUALITY)
     else:
         image.save(out, "PNG", compress_level=1)
-    return out.getvalue()
+    return Encoded(out.getvalue(), image.width, image.height)
 
 
 def _dimension(msg: Mapping[str, Any], name: str) -> int:

@@ -11,6 +11,7 @@ from types import ModuleType
 
 from rosbridge_mcp_server.tools import (
     cancel_action,
+    get_image,
     get_topic_info,
     list_actions,
     list_services,
@@ -33,4 +34,5 @@ TOOL_MODULES: tuple[ModuleType, ...] = (
     publish_action,
     cancel_action,
     subscribe_topic,
+    get_image,
 )
