@@ -68,7 +68,7 @@ def test_arrays_show_their_bounds_and_constants_are_listed() -> None:
 
 
 def test_rosapi_slot_names_lose_their_underscore() -> None:
-    """rosapi 2.1.0 answers _linear/_angular; the outline and example use linear/angular."""
+    """rosapi 2.1.0 answers _linear/_angular and IDL's double; the outline says linear and float64."""
     slots = typedef(
         "geometry_msgs/Twist",
         [("_linear", "geometry_msgs/Vector3", -1), ("_angular", "geometry_msgs/Vector3", -1)],
@@ -78,7 +78,7 @@ def test_rosapi_slot_names_lose_their_underscore() -> None:
     )
     raw = clean_typedefs({"typedefs": [slots, vector]})
     outline = outline_type("geometry_msgs/msg/Twist", raw, ros_version=2)
-    assert outline.lines[0:2] == ("linear: geometry_msgs/Vector3", "  x: double")
+    assert outline.lines[0:2] == ("linear: geometry_msgs/Vector3", "  x: float64")
     assert outline.example["angular"] == {"x": 0.0, "y": 0.0, "z": 0.0}
 
 
@@ -89,3 +89,21 @@ def test_ros1_time_fields_get_a_ros1_example() -> None:
     )
     outline = outline_type("std_msgs/Header", [header], ros_version=1)
     assert outline.example == {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+
+
+def test_ros2_pseudo_constants_are_dropped() -> None:
+    """ROS 2 rosapi's SLOT_TYPES, field properties and X__DEFAULT members are not shown as constants."""
+    raw = typedef(
+        "pkg/Mode",
+        [("mode", "uint8", -1)],
+        {"MODE__DEFAULT": "0", "SLOT_TYPES": "(<rosidl_parser...>,)", "mode": "0", "FAST": "1"},
+    )
+    outline = outline_type("pkg/msg/Mode", clean_typedefs([raw]), ros_version=2)
+    assert outline.constants == {"FAST": "1"}
+    assert outline.lines == ("FAST = 1  (constant)", "mode: uint8")
+
+
+def test_a_bounded_sequence_in_rosapi_2_spelling_shows_its_bound() -> None:
+    """rosapi 2.x writes sequence<int32, 3> as 'int32, 3'; the outline reads int32[<=3]."""
+    raw = typedef("pkg/Few", [("few", "int32, 3", 0)])
+    assert outline_type("pkg/Few", [raw], ros_version=2).lines == ("few: int32[<=3]",)

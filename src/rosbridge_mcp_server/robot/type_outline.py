@@ -22,6 +22,8 @@ __all__ = ["RawTypeDefs", "TypeOutline", "clean_typedefs", "outline_type"]
 RawTypeDefs = Sequence[Mapping[str, Any]]
 
 _MAX_LINES = 120
+# ROS 2 rosapi names primitives as in IDL; a .msg file (what people read and write) says these.
+_MSG_NAMES = {"double": "float64", "float": "float32", "boolean": "bool", "octet": "byte"}
 _BOUND = re.compile(r"^(.*?)(?:<=(\d+))$")
 _SEQUENCE = re.compile(r"^sequence<\s*([^,>]+?)\s*(?:,\s*(\d+)\s*)?>$")
 
@@ -46,12 +48,36 @@ def clean_typedefs(raw: Any) -> list[dict[str, Any]]:
     for item in items:
         if not isinstance(item, Mapping) or not isinstance(item.get("type"), str):
             continue
-        names = [str(name) for name in item.get("fieldnames") or ()]
+        raw_names = [str(name) for name in item.get("fieldnames") or ()]
+        names = raw_names
         # Only when every field has the prefix: a real field may start with "_" in other messages.
         if names and all(name.startswith("_") and len(name) > 1 for name in names):
             names = [name[1:] for name in names]
-        cleaned.append({**item, "fieldnames": names})
+        constants = [
+            (name, value)
+            for name, value in zip(
+                _strings(item.get("constnames")), _strings(item.get("constvalues")), strict=False
+            )
+            if _is_constant(name, {*raw_names, *names})
+        ]
+        cleaned.append(
+            {
+                **item,
+                "fieldnames": names,
+                "constnames": [name for name, _ in constants],
+                "constvalues": [value for _, value in constants],
+            }
+        )
     return cleaned
+
+
+def _is_constant(name: str, fields: set[str]) -> bool:
+    """Whether a rosapi "constant" is one.
+
+    ROS 2 rosapi lists every member of the Python message class: ``SLOT_TYPES``, each field's property and each
+    ``X__DEFAULT``; only the real constants are kept.
+    """
+    return name != "SLOT_TYPES" and not name.endswith("__DEFAULT") and name not in fields
 
 
 def outline_type(type_name: str, raw: RawTypeDefs, *, ros_version: int) -> TypeOutline:
@@ -128,14 +154,19 @@ def _field_type(base: str, length: int, raw: str) -> str:
     bound = ""
     text = raw.strip()
     sequence = _SEQUENCE.match(text)
+    comma = re.match(r"^[^,<>]+,\s*(\d+)$", text)
     if sequence and sequence.group(2):
         bound = f"<={sequence.group(2)}"
+    elif comma:
+        # rosapi 2.x writes a bounded sequence as "T, N" (its regex keeps what is inside sequence<...>).
+        bound = f"<={comma.group(1)}"
     else:
         inside = re.search(r"\[<=(\d+)\]$", text)
         if inside:
             bound = f"<={inside.group(1)}"
     string_bound = _BOUND.match(re.sub(r"\[.*\]$", "", text))
-    shown = base
+    base = base.split(",", 1)[0].strip()
+    shown = _MSG_NAMES.get(base, base)
     if string_bound and string_bound.group(2) and base in ("string", "wstring"):
         shown = f"{base}<={string_bound.group(2)}"
     if length == 0:

@@ -1,8 +1,8 @@
-"""The eight MCP tools, one module each (names and parameters as in the project this one replaces).
+"""The MCP tools, one module each: the original eight, then the ones that watch the robot.
 
 Each module exposes ``SPEC`` (:class:`~rosbridge_mcp_server.tools.base.ToolSpec`) and
 ``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. ``server.py`` registers them in the order of
-:data:`TOOL_MODULES`.
+:data:`TOOL_MODULES`; :func:`select_tools` picks the ones a host should see.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from types import ModuleType
 
 from rosbridge_mcp_server.tools import (
     cancel_action,
+    describe_type,
     get_image,
     get_topic_info,
     list_actions,
@@ -22,9 +23,10 @@ from rosbridge_mcp_server.tools import (
     subscribe_topic,
 )
 
-__all__ = ["TOOL_MODULES"]
+__all__ = ["ORIGINAL_TOOLS", "TOOL_MODULES", "WATCH_TOOLS"]
 
-TOOL_MODULES: tuple[ModuleType, ...] = (
+#: The eight tools the server started with (names and parameters of the project this one replaces).
+ORIGINAL_TOOLS: tuple[ModuleType, ...] = (
     list_topics,
     get_topic_info,
     publish_topic,
@@ -33,6 +35,13 @@ TOOL_MODULES: tuple[ModuleType, ...] = (
     list_actions,
     publish_action,
     cancel_action,
+)
+
+#: Tools that read the robot's state: topics, cameras, types, nodes, parameters, frames.
+WATCH_TOOLS: tuple[ModuleType, ...] = (
     subscribe_topic,
     get_image,
+    describe_type,
 )
+
+TOOL_MODULES: tuple[ModuleType, ...] = ORIGINAL_TOOLS + WATCH_TOOLS
