@@ -74,7 +74,7 @@ def clean_typedefs(raw: Any) -> list[dict[str, Any]]:
 def _is_constant(name: str, fields: set[str]) -> bool:
     """Whether a rosapi "constant" is one.
 
-    ROS 2 rosapi lists every member of the Python message class: ``SLOT_TYPES``, each field's property and each
+    ROS 2 rosapi lists every member of the message class: ``SLOT_TYPES``, each field's property and each
     ``X__DEFAULT``; only the real constants are kept.
     """
     return name != "SLOT_TYPES" and not name.endswith("__DEFAULT") and name not in fields
