@@ -13,8 +13,10 @@ from rosbridge_mcp_server.tools import (
     cancel_action,
     describe_type,
     get_image,
+    get_node_info,
     get_topic_info,
     list_actions,
+    list_nodes,
     list_services,
     list_topics,
     publish_action,
@@ -42,6 +44,8 @@ WATCH_TOOLS: tuple[ModuleType, ...] = (
     subscribe_topic,
     get_image,
     describe_type,
+    list_nodes,
+    get_node_info,
 )
 
 TOOL_MODULES: tuple[ModuleType, ...] = ORIGINAL_TOOLS + WATCH_TOOLS
