@@ -36,7 +36,7 @@ async def test_a_node_name_without_slash_is_made_absolute(session: Session) -> N
 
 
 async def test_an_unknown_node_is_an_error_with_a_suggestion(session: Session) -> None:
-    """A misspelt node is an error that suggests the real one, without asking node_details (ROS 2 never answers)."""
+    """A misspelt node is an error suggesting the real one (ROS 2 node_details never answers for it)."""
     text = await session.error("get_node_info", {"node": "/turtlesimm"})
     assert "Node /turtlesimm is not running" in text
     assert "Did you mean /turtlesim?" in text
