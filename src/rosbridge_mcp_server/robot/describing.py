@@ -73,21 +73,45 @@ async def describe_type(graph: RosGraph, type_name: str) -> Description:
 
 
 async def _installed_kinds(graph: RosGraph, type_name: str, kinds: tuple[Kind, ...]) -> tuple[Kind, ...]:
-    """The kinds under which ROS 2's ``/rosapi/interfaces`` (Humble 2.0.1 / Jazzy 2.2.0 on) lists the type.
+    """The kinds it is safe and useful to ask ROS 2's rosapi about.
 
-    Asking first spares a look-up per kind that never answers (rosapi's handler raises for an unknown type).
+    ``/rosapi/interfaces`` (Humble 2.0.1 / Jazzy 2.2.0 on) lists every installed type, which spares look-ups
+    that never answer. Without it (rosapi 2.1.0) a service type is asked about only when a running service has
+    it: ``service_request_details`` of a type rosapi cannot load gets no answer and ends the rosapi node on
+    2.1.0. Such a rosapi has no action details either.
     """
+    package, _, name = split_type(type_name)
     try:
         values = await graph.rosapi("interfaces")
     except (ServiceError, RequestTimeoutError):
-        return kinds
+        values = {}
     listed = values.get("interfaces")
-    if not isinstance(listed, list) or not listed:
-        return kinds
-    installed = {item for item in listed if isinstance(item, str)}
-    package, _, name = split_type(type_name)
-    folders: dict[Kind, str] = {"message": "msg", "service": "srv", "action": "action"}
-    return tuple(kind for kind in kinds if f"{package}/{folders[kind]}/{name}" in installed)
+    if isinstance(listed, list) and listed:
+        installed = {item for item in listed if isinstance(item, str)}
+        folders: dict[Kind, str] = {"message": "msg", "service": "srv", "action": "action"}
+        return tuple(kind for kind in kinds if f"{package}/{folders[kind]}/{name}" in installed)
+    safe: list[Kind] = []
+    for kind in kinds:
+        if kind == "message":
+            safe.append(kind)
+        elif kind == "service":
+            in_use = await graph.rosapi("services_for_type", {"type": f"{package}/srv/{name}"})
+            if in_use.get("services"):
+                safe.append(kind)
+    if "action" in kinds and len(kinds) == 1:
+        raise ServiceError(
+            "/rosapi/action_goal_details",
+            "This bridge's rosapi cannot describe action types (that needs Humble 2.0.2 / Jazzy 2.3.0 or "
+            "later); list_actions shows the action's type, and publish_action checks a goal against it.",
+        )
+    if "service" in kinds and "service" not in safe and len(kinds) == 1:
+        raise ServiceError(
+            "/rosapi/service_request_details",
+            f"No running service has the type {package}/srv/{name}, and this bridge's rosapi (no "
+            "/rosapi/interfaces) can only describe service types in use without risk; list_services shows "
+            "them.",
+        )
+    return tuple(safe)
 
 
 async def _describe_as(graph: RosGraph, type_name: str, kind: Kind, version: int) -> Description | None:

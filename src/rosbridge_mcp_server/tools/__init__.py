@@ -14,14 +14,17 @@ from rosbridge_mcp_server.tools import (
     describe_type,
     get_image,
     get_node_info,
+    get_parameter,
     get_topic_info,
     list_actions,
     list_nodes,
+    list_parameters,
     list_services,
     list_topics,
     publish_action,
     publish_service,
     publish_topic,
+    set_parameter,
     subscribe_topic,
 )
 
@@ -46,6 +49,9 @@ WATCH_TOOLS: tuple[ModuleType, ...] = (
     describe_type,
     list_nodes,
     get_node_info,
+    list_parameters,
+    get_parameter,
+    set_parameter,
 )
 
 TOOL_MODULES: tuple[ModuleType, ...] = ORIGINAL_TOOLS + WATCH_TOOLS
