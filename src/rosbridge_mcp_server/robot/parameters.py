@@ -95,7 +95,12 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
         if node is None:
             return names
         prefix = node.rstrip("/") + "/"
-        return [n for n in names if n.startswith(prefix)]
+        found = [n for n in names if n.startswith(prefix)]
+        if not found:
+            # ROS 1 parameters belong to namespaces, not nodes: suggest the namespaces that have some.
+            spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
+            raise ParameterError(f"No parameters under {prefix}.{_close(node, spaces)}")
+        return found
     services = set(await graph.service_names())
     nodes = [node] if node is not None else await _ros2_nodes(graph)
     offering = [n for n in nodes if f"{n.rstrip('/')}/list_parameters" in services]
