@@ -117,8 +117,8 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
                     raise
                 return []  # a node that does not answer does not hide the others
 
-    found = await asyncio.gather(*(one(name) for name in offering))
-    return sorted(name for names in found for name in names)
+    per_node = await asyncio.gather(*(one(name) for name in offering))
+    return sorted(name for names in per_node for name in names)
 
 
 async def get_parameter(graph: RosGraph, client: RosbridgeClient, name: str) -> tuple[ParameterName, Any]:
