@@ -16,6 +16,7 @@ from rosbridge_mcp_server.tools import (
     get_node_info,
     get_parameter,
     get_topic_info,
+    get_transform,
     list_actions,
     list_nodes,
     list_parameters,
@@ -52,6 +53,7 @@ WATCH_TOOLS: tuple[ModuleType, ...] = (
     list_parameters,
     get_parameter,
     set_parameter,
+    get_transform,
 )
 
 TOOL_MODULES: tuple[ModuleType, ...] = ORIGINAL_TOOLS + WATCH_TOOLS
