@@ -15,7 +15,7 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 
 
 def link(
-    robot: SimulatedRobot, parent: str, child: str, x: float, y: float, yaw_deg: float
+    robot: SimulatedRobot, parent: str, child: str, *, x: float, y: float, yaw_deg: float
 ) -> dict[str, Any]:
     stamp = {"sec": 10, "nanosec": 0} if robot.dialect == "ros2" else {"secs": 10, "nsecs": 0}
     half = math.radians(yaw_deg) / 2
@@ -31,16 +31,16 @@ def link(
 
 @asynccontextmanager
 async def broadcaster(robot: SimulatedRobot) -> AsyncIterator[None]:
-    """Another client: world → odom on /tf_static, odom → base_link (turned 90°) and base_link → laser on /tf."""
+    """Another client: world → odom on /tf_static; odom → base_link (turned 90°) → laser on /tf."""
     msg_type = "tf2_msgs/msg/TFMessage" if robot.dialect == "ros2" else "tf2_msgs/TFMessage"
     async with RosbridgeClient(robot.url, connect_timeout=2.0, request_timeout=5.0) as tf:
         await tf.wait_connected(5.0)
-        static = {"transforms": [link(robot, "world", "odom", 1.0, 0.0, 0.0)]}
+        static = {"transforms": [link(robot, "world", "odom", x=1.0, y=0.0, yaw_deg=0.0)]}
         await tf.publish("/tf_static", msg_type, static, latch=True)
         moving = {
             "transforms": [
-                link(robot, "odom", "base_link", 0.0, 2.0, 90.0),
-                link(robot, "base_link", "laser", 0.1, 0.0, 0.0),
+                link(robot, "odom", "base_link", x=0.0, y=2.0, yaw_deg=90.0),
+                link(robot, "base_link", "laser", x=0.1, y=0.0, yaw_deg=0.0),
             ]
         }
         # Latched here so a late subscriber hears it without a publishing loop in the test.
