@@ -13,10 +13,13 @@ The tree::
     ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
     │                               because the bridge drops such messages without a word)
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
+    ├── NotSentError                a check before an act refused it (a wrong name or type, a message that
+    │                               does not fit, a bridge that does not read); nothing was sent
+    ├── PolicyRefusal               the safety policy refused an act; the text names the rule
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
-and what to check. The MCP layer turns these into tool errors at one place (``server.py``).
+and what to check. The MCP layer turns these into tool errors at one place (``server/adapter.py``).
 """
 
 from __future__ import annotations
@@ -30,6 +33,8 @@ __all__ = [
     "GoalTimeoutError",
     "InvalidMessageError",
     "NotConnectedError",
+    "NotSentError",
+    "PolicyRefusal",
     "ProtocolError",
     "RequestTimeoutError",
     "RosbridgeError",
@@ -168,6 +173,14 @@ class UnknownTypeError(RosbridgeError):
             f"rosbridge does not know the type {type_name!r} (its interface package is not installed "
             f"on the robot, or the name is misspelled).{extra}"
         )
+
+
+class NotSentError(RosbridgeError):
+    """A check before an act refused it, so nothing was sent; ``str()`` says why and what to try."""
+
+
+class PolicyRefusal(RosbridgeError):
+    """The safety policy refused an act before anything was sent; ``str()`` names the rule."""
 
 
 class ProtocolError(RosbridgeError):

@@ -17,12 +17,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
-from rosbridge_mcp_server.dialect import action_type_names, normalize_type, split_type
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.type_outline import TypeOutline, clean_typedefs, outline_type
+from rosbridge_mcp_server.wire.dialect import action_type_names, normalize_type, split_type
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.ros import RosGraph
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["Description", "Kind", "describe_type"]
 

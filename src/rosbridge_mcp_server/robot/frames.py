@@ -17,7 +17,7 @@ from rosbridge_mcp_server.robot.transforms import FrameTree, Lookup, TransformEr
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.ros import RosGraph
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["TF_TOPICS", "FoundTransform", "look_up_transform"]
 

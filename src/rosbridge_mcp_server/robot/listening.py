@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RequestTimeoutError
-from rosbridge_mcp_server.typecheck import TypeDef, short_type_name
+from rosbridge_mcp_server.robot.messages import TypeDef, short_type_name
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.ros import RosGraph
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["NodeDetails", "UnknownNodeError", "node_details", "node_names"]
 

@@ -24,7 +24,7 @@ from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.ros import RosGraph
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = [
     "ParameterError",

@@ -15,7 +15,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from rosbridge_mcp_server.typecheck import TypeDef, example_message, short_type_name, typedefs_from_rosapi
+from rosbridge_mcp_server.robot.messages import (
+    TypeDef,
+    example_message,
+    short_type_name,
+    typedefs_from_rosapi,
+)
 
 __all__ = ["RawTypeDefs", "TypeOutline", "clean_typedefs", "outline_type"]
 

@@ -17,6 +17,7 @@ from rosbridge_mcp_server.robot.images import (
     encode_picture,
 )
 from rosbridge_mcp_server.robot.listening import listen
+from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -27,7 +28,6 @@ from rosbridge_mcp_server.tools.base import (
     absolute_name,
     did_you_mean,
 )
-from rosbridge_mcp_server.typecheck import short_type_name
 
 __all__ = ["SPEC", "ImageAnswer", "run"]
 

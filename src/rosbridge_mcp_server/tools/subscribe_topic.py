@@ -6,9 +6,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.dialect import normalize_type
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.listening import byte_array_paths, listen, unknown_field_path
+from rosbridge_mcp_server.robot.messages import TypeDef, short_type_name
 from rosbridge_mcp_server.robot.summary import FieldPathError, select_fields, summarize
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
@@ -20,7 +20,7 @@ from rosbridge_mcp_server.tools.base import (
     compact_json,
     did_you_mean,
 )
-from rosbridge_mcp_server.typecheck import TypeDef, short_type_name
+from rosbridge_mcp_server.wire.dialect import normalize_type
 
 __all__ = ["MAX_COUNT", "MAX_DURATION", "SPEC", "SubscribeAnswer", "run"]
 
