@@ -65,7 +65,8 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLO
         finally:
             await client.close()
 
-    tools = [tool_from_module(module, client, config, graph, guard) for module in TOOL_MODULES]
+    shown = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
+    tools = [tool_from_module(module, client, config, graph, guard) for module in shown]
     return MCPServer(
         SERVER_NAME,
         title="rosbridge MCP server",

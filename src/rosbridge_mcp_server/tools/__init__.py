@@ -29,7 +29,7 @@ from rosbridge_mcp_server.tools import (
     subscribe_topic,
 )
 
-__all__ = ["ORIGINAL_TOOLS", "TOOL_MODULES", "WATCH_TOOLS"]
+__all__ = ["ORIGINAL_TOOLS", "TOOL_GROUPS", "TOOL_MODULES", "WATCH_TOOLS", "select_tools"]
 
 #: The eight tools the server started with (names and parameters of the project this one replaces).
 ORIGINAL_TOOLS: tuple[ModuleType, ...] = (
@@ -57,3 +57,39 @@ WATCH_TOOLS: tuple[ModuleType, ...] = (
 )
 
 TOOL_MODULES: tuple[ModuleType, ...] = ORIGINAL_TOOLS + WATCH_TOOLS
+
+#: Names a ``--tools`` list may use for several tools at once.
+TOOL_GROUPS: dict[str, tuple[ModuleType, ...]] = {
+    "all": TOOL_MODULES,
+    "original": ORIGINAL_TOOLS,
+    "watch": WATCH_TOOLS,
+}
+
+
+def select_tools(spec: str) -> tuple[str, ...]:
+    """The tool names a ``--tools`` value stands for, in registration order.
+
+    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``) and tool names, e.g.
+    ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
+    """
+    by_name = {module.SPEC.name: module for module in TOOL_MODULES}
+    chosen: set[str] = set()
+    unknown: list[str] = []
+    for raw in spec.split(","):
+        item = raw.strip()
+        if not item:
+            continue
+        if item in TOOL_GROUPS:
+            chosen.update(module.SPEC.name for module in TOOL_GROUPS[item])
+        elif item in by_name:
+            chosen.add(item)
+        else:
+            unknown.append(item)
+    if unknown:
+        raise ValueError(
+            f"unknown tool or group {', '.join(repr(u) for u in unknown)}; use {', '.join(TOOL_GROUPS)} or "
+            f"tool names: {', '.join(by_name)}"
+        )
+    if not chosen:
+        raise ValueError(f"no tools chosen; use {', '.join(TOOL_GROUPS)} or tool names")
+    return tuple(name for name in by_name if name in chosen)

@@ -71,9 +71,9 @@ async def run(
     ctx: ToolContext,
     *,
     topic: Annotated[str, Field(description="Image topic, e.g. /camera/image_raw")],
-    max_size: Annotated[int, Field(ge=16, le=4096, description="Longest side of the picture, pixels")] = 800,
-    format: Annotated[ImageFormat, Field(description="Picture format: jpeg or png")] = "jpeg",
-    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to wait for a frame")] = 5.0,
+    max_size: Annotated[int, Field(ge=16, le=4096, description="Longest side in pixels, e.g. 800")] = 800,
+    format: Annotated[ImageFormat, Field(description="Picture format, e.g. jpeg (or png)")] = "jpeg",
+    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to wait for a frame, e.g. 5")] = 5.0,
 ) -> ToolAnswer:
     """Subscribe for one frame, convert it off the event loop, return it as an image."""
     name = absolute_name(topic, "topic")

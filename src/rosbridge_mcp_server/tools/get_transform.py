@@ -62,7 +62,7 @@ async def run(
     ctx: ToolContext,
     target_frame: Annotated[str, Field(description="Frame to express the answer in, e.g. odom or map")],
     source_frame: Annotated[str, Field(description="Frame to locate, e.g. base_link")],
-    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to listen for transforms")] = 3.0,
+    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to listen, e.g. 3")] = 3.0,
 ) -> ToolAnswer:
     """Listen to /tf and /tf_static until the frames connect, then compose the links."""
     try:

@@ -19,7 +19,10 @@ class NodesAnswer(BaseModel):
 SPEC = ToolSpec(
     name="list_nodes",
     title="List nodes",
-    description="List the running ROS nodes. Read-only. get_node_info shows one node's topics and services.",
+    description=(
+        "List the running ROS nodes. Read-only. Example: call it with {}. get_node_info shows one node's "
+        "topics and services."
+    ),
     hints=READS_ROBOT,
     output=NodesAnswer,
 )

@@ -78,13 +78,14 @@ async def run(
         str | None, Field(description="Message type, e.g. sensor_msgs/msg/LaserScan; default: the graph's")
     ] = None,
     count: Annotated[
-        int | None, Field(ge=1, le=MAX_COUNT, description="Messages to read (default 1)")
+        int | None, Field(ge=1, le=MAX_COUNT, description="Messages to read, e.g. 10 (default 1)")
     ] = None,
     duration: Annotated[
-        float | None, Field(gt=0, le=MAX_DURATION, description="Collect for this many seconds (up to count)")
+        float | None,
+        Field(gt=0, le=MAX_DURATION, description="Collect for this long (up to count), seconds, e.g. 2"),
     ] = None,
     timeout: Annotated[
-        float, Field(gt=0, le=MAX_DURATION, description="Seconds to wait for a message")
+        float, Field(gt=0, le=MAX_DURATION, description="Seconds to wait for a message, e.g. 5")
     ] = 5.0,
     fields: Annotated[
         list[str] | None, Field(description='Dotted paths to keep, e.g. ["pose.position", "header.stamp"]')
