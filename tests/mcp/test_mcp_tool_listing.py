@@ -17,7 +17,7 @@ from rosbridge_mcp_server.server import build_server
 EXPECTED_PARAMETERS = {
     "list_topics": [],
     "get_topic_info": ["topic"],
-    "publish_topic": ["topic", "message_type", "message"],
+    "publish_topic": ["topic", "message_type", "message", "rate_hz", "duration"],
     "list_services": [],
     "publish_service": ["service", "service_type", "request", "timeout"],
     "list_actions": [],
