@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import pytest
-from mcp_harness import Session, text_of
+from mcp_harness import Session, open_session, text_of
 
+from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.acting import Act, AskPerson
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 
@@ -96,3 +98,34 @@ async def test_a_ros2_value_of_another_type_is_refused(session_ros2: Session) ->
     text = await session_ros2.error("set_parameter", {"name": "/turtlesim:background_r", "value": "red"})
     assert "/turtlesim:background_r was not changed" in text
     assert "69" in text
+
+
+class RefusingGuard:
+    """Refuses every act, keeping what it was asked."""
+
+    def __init__(self) -> None:
+        self.asked: list[Act] = []
+
+    async def approve(self, act: Act, ask: AskPerson) -> Act:
+        self.asked.append(act)
+        raise PolicyRefusal("rule 'read only': parameters stay as they are")
+
+    def record(self, act: Act, outcome: str) -> None:
+        return None
+
+
+async def test_a_set_goes_through_the_safety_seam(sim_ros1: SimulatedRobot) -> None:
+    """The guard sees a parameter act with the value; its refusal is the answer and nothing is set."""
+    guard = RefusingGuard()
+    async with open_session(sim_ros1.url, guard=guard) as session:
+        text = await session.error("set_parameter", {"name": "/turtlesim/background_r", "value": 1})
+        after = await session.ok("get_parameter", {"name": "/turtlesim/background_r"})
+    assert "rule 'read only'" in text
+    [act] = guard.asked
+    assert (act.tool, act.kind, act.name, act.payload) == (
+        "set_parameter",
+        "parameter",
+        "/turtlesim/background_r",
+        1,
+    )
+    assert (after.structured_content or {})["value"] == 69

@@ -23,6 +23,7 @@ from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTime
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
+from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
 from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
 
 if TYPE_CHECKING:
@@ -50,6 +51,7 @@ __all__ = [
     "publish_stream",
     "require_action_server",
     "send_goal",
+    "set_parameter",
 ]
 
 _log = logging.getLogger(__name__)
@@ -459,3 +461,14 @@ async def require_action_server(graph: RosGraph, name: str, action_type: str | N
         raise NotSentError(
             f"Action {name} has type {found}, not {action_type}. Send a goal of type {found} instead."
         )
+
+
+# --- parameters -------------------------------------------------------------------------------------------
+
+
+async def set_parameter(ctx: Acting, *, tool: str, name: str, value: Any) -> SetOutcome:
+    """Check the parameter (name form, and on ROS 2 that its node has it), then set it and read it back."""
+    planned = await plan_set(ctx.graph, ctx.client, name, value)
+    act = await _approved(ctx, Act(tool, "parameter", planned.name.full, "", planned.value))
+    outcome: SetOutcome = await _carry_out(ctx, act, lambda: apply_set(ctx.graph, planned, act.payload))
+    return outcome

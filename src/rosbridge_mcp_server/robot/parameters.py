@@ -29,11 +29,13 @@ if TYPE_CHECKING:
 __all__ = [
     "ParameterError",
     "ParameterName",
+    "PlannedSet",
     "SetOutcome",
+    "apply_set",
     "get_parameter",
     "list_parameters",
     "parse_name",
-    "set_parameter",
+    "plan_set",
 ]
 
 _LOOKUPS_AT_ONCE = 8
@@ -129,18 +131,30 @@ async def get_parameter(graph: RosGraph, client: RosbridgeClient, name: str) -> 
     return parsed, await _read(graph, parsed, info.version)
 
 
-async def set_parameter(graph: RosGraph, client: RosbridgeClient, name: str, value: Any) -> SetOutcome:
-    """Set the parameter, then read it back; ``applied`` says whether the robot took the value."""
+@dataclass(frozen=True)
+class PlannedSet:
+    """A checked parameter set, not yet sent: the name, the value before, and the value to send."""
+
+    name: ParameterName
+    before: Any
+    value: Any
+
+
+async def plan_set(graph: RosGraph, client: RosbridgeClient, name: str, value: Any) -> PlannedSet:
+    """Check the name (and on ROS 2 that the node has the parameter) and read the value before."""
     info = await graph.ros_info()
     parsed = parse_name(name, info.version)
-    before: Any = None
     if info.version == 2:
         # A ROS 2 node only has the parameters it declared; rosapi cannot add one.
         await _require_existing(graph, client, parsed, info.version)
-        before = await _read(graph, parsed, info.version)
-    else:
-        before = await _read(graph, parsed, info.version)
-    value = _like(before, value)
+    before = await _read(graph, parsed, info.version)
+    return PlannedSet(parsed, before, _like(before, value))
+
+
+async def apply_set(graph: RosGraph, planned: PlannedSet, value: Any) -> SetOutcome:
+    """Send the set, then read the value back; ``applied`` says whether the robot took it."""
+    info = await graph.ros_info()
+    parsed = planned.name
     values = await graph.rosapi("set_param", {"name": parsed.full, "value": json.dumps(value)})
     given = values.get("reason")
     reason = given if isinstance(given, str) else ""
@@ -153,7 +167,7 @@ async def set_parameter(graph: RosGraph, client: RosbridgeClient, name: str, val
             if info.version == 2
             else "reading it back gave another value"
         )
-    return SetOutcome(parsed.full, before, after, applied, reason, value)
+    return SetOutcome(parsed.full, planned.before, after, applied, reason, value)
 
 
 async def _read(graph: RosGraph, parsed: ParameterName, version: int) -> Any:

@@ -6,7 +6,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.parameters import ParameterError, set_parameter
+from rosbridge_mcp_server.robot.acting import set_parameter
+from rosbridge_mcp_server.robot.parameters import ParameterError
 from rosbridge_mcp_server.tools.base import (
     ToolAnswer,
     ToolContext,
@@ -59,7 +60,7 @@ async def run(
             "value is null; ROS parameters cannot be null. Send a number, string, bool or list."
         )
     try:
-        outcome = await set_parameter(ctx.graph, ctx.client, name, value)
+        outcome = await set_parameter(ctx, tool=SPEC.name, name=name, value=value)
     except ParameterError as exc:
         raise ToolFailure(f"{exc} Nothing was set.") from None
     answer = SetParameterAnswer(
