@@ -14,16 +14,14 @@ import logging
 import math
 import time
 from collections.abc import Awaitable, Callable
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 from rosbridge_mcp_server.sim.actions import FIBONACCI_NODE, ActionlibFibonacciServer, FibonacciServer
+from rosbridge_mcp_server.sim.bridge import Bridge
 from rosbridge_mcp_server.sim.graph import ROSBRIDGE_NODE, ServiceEntry
 from rosbridge_mcp_server.sim.interfaces import InterfaceError
 from rosbridge_mcp_server.sim.png import encode_png
 from rosbridge_mcp_server.sim.rosapi import ROSAPI_NODE, Rosapi
-
-if TYPE_CHECKING:
-    from rosbridge_mcp_server.sim.bridge import Bridge
 
 __all__ = ["CameraSettings", "WorldNodes"]
 
