@@ -1,7 +1,7 @@
 """The rosapi node of each dialect (``rosapi/scripts/rosapi_node`` and ``proxy.py`` of rosbridge_suite).
 
 Answers come from the simulated graph. The quirks of the real services are kept on purpose, each marked
-with the version that has it (protocol file §12).
+with the version that has it.
 """
 
 from __future__ import annotations

@@ -281,7 +281,7 @@ class FibonacciServer(ActionServer):
 
 
 class HostedActionServer(ActionServer):
-    """An action server a client hosts with ``advertise_action`` (protocol §7.3).
+    """An action server a client hosts with ``advertise_action``.
 
     Every goal is accepted (rosbridge auto-accepts) and forwarded to the client as a server-initiated
     ``send_action_goal``; the client's ``action_feedback`` and ``action_result`` come back through

@@ -177,7 +177,7 @@ class Protocol:
             _log_failure(conn, op, mid, exc)
 
     def _set_fragment_size(self, conn: Connection, value: Any) -> None:
-        """Any message carrying ``fragment_size`` sets it for the whole connection (§4.2).
+        """Any message carrying ``fragment_size`` sets it for the whole connection.
 
         The value is kept as sent; :meth:`Connection._fragments` gives it Python's semantics (a string
         breaks every later send on 0.11.17).
