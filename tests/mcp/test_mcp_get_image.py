@@ -111,7 +111,7 @@ async def test_a_topic_that_is_no_image_is_an_error(session: Session) -> None:
 async def test_an_unknown_topic_lists_the_image_topics(session: Session) -> None:
     """A misspelt camera topic suggests the real one and lists the image topics."""
     text = await session.error("get_image", {"topic": "/camera/image_rw"})
-    assert "Did you mean /camera/image_raw?" in text
+    assert "Did you mean /camera/image_raw" in text
     assert "/camera/image_raw/compressed" in text
 
 
@@ -119,3 +119,15 @@ async def test_a_bad_format_is_an_argument_error(session: Session) -> None:
     """format gif is refused by the argument check."""
     text = await session.error("get_image", {"topic": "/camera/image_raw", "format": "gif"})
     assert "format" in text
+
+
+async def test_the_simulated_depth_camera_is_grey_with_its_range_in_millimetres(session: Session) -> None:
+    """The 16UC1 depth frame comes back grey with its nearest and farthest depth in mm."""
+    result = await session.ok("get_image", {"topic": "/camera/depth/image_raw", "format": "png"})
+    data = result.structured_content
+    assert data is not None
+    assert (data["encoding"], data["depth_unit"]) == ("16UC1", "mm")
+    near, far = data["depth_range"]
+    assert 0 < near < far
+    assert picture_of(result).mode == "L"
+    assert f"depth {near:g}-{far:g} mm" in text_of(result)

@@ -72,17 +72,33 @@ async def test_the_reverse_direction_inverts(session: Session, sim: SimulatedRob
     assert data["translation"] == pytest.approx({"x": -2.0, "y": 1.0, "z": 0.0})
 
 
-async def test_an_unknown_frame_lists_the_frames_seen(session: Session, sim: SimulatedRobot) -> None:
+async def test_an_unknown_frame_lists_the_frames_seen(session: Session) -> None:
     """A misspelt frame is an error after the timeout, listing the frames heard."""
-    async with broadcaster(sim):
-        text = await session.error(
-            "get_transform", {"target_frame": "world", "source_frame": "base_lnk", "timeout": 0.5}
-        )
+    text = await session.error(
+        "get_transform", {"target_frame": "world", "source_frame": "base_lnk", "timeout": 0.5}
+    )
     assert "'base_lnk' has not been seen" in text
-    assert "Frames seen: base_link, laser, odom, world." in text
+    assert "Frames seen: base_link, base_scan, camera, odom, world." in text
 
 
-async def test_no_tf_topics_is_an_error(session: Session) -> None:
-    """Without /tf or /tf_static in the graph the error says nothing publishes transforms."""
-    text = await session.error("get_transform", {"target_frame": "odom", "source_frame": "base_link"})
-    assert "nothing publishes transforms" in text
+async def test_the_robots_own_frames_give_the_turtles_pose(session: Session, sim: SimulatedRobot) -> None:
+    """world ← base_link from the robot's /tf_static and /tf is the turtle's pose in turtlesim coordinates."""
+    result = await session.ok("get_transform", {"target_frame": "world", "source_frame": "base_link"})
+    data = result.structured_content
+    assert data is not None
+    turtle = sim.world.turtle
+    assert data["translation"]["x"] == pytest.approx(turtle.x, abs=0.05)
+    assert data["translation"]["y"] == pytest.approx(turtle.y, abs=0.05)
+    assert data["chain"] == ["world", "odom", "base_link"]
+    assert data["static"] is False
+    assert data["age"] < 1.0
+
+
+async def test_a_static_only_chain_has_no_age(session: Session) -> None:
+    """camera ← base_scan uses /tf_static links only: static, no age."""
+    result = await session.ok("get_transform", {"target_frame": "camera", "source_frame": "base_scan"})
+    data = result.structured_content
+    assert data is not None
+    assert data["translation"] == pytest.approx({"x": -0.1, "y": 0.0, "z": -0.1})
+    assert (data["static"], data["age"]) == (True, None)
+    assert "static links only" in text_of(result)

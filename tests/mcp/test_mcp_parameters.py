@@ -2,19 +2,11 @@
 
 from __future__ import annotations
 
-import pytest
 from mcp_harness import Session, open_session, text_of
 
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.acting import Act, AskPerson
 from rosbridge_mcp_server.sim import SimulatedRobot
-
-
-@pytest.fixture(autouse=True)
-def _ros2_nodes_list_their_parameters(request: pytest.FixtureRequest) -> None:
-    """The simulated ROS 2 nodes do not answer list_parameters yet (the simulated robot grows it)."""
-    if "ros2" in request.node.name or "session_ros2" in request.fixturenames:
-        pytest.skip("simulated ROS 2 nodes answer list_parameters with nothing yet")
 
 
 def background_r(robot: SimulatedRobot) -> str:

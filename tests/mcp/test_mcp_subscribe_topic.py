@@ -126,3 +126,17 @@ async def test_qos_is_noted_per_dialect(session: Session, sim: SimulatedRobot) -
         assert note.startswith("QoS not applied: ROS 1")
     else:
         assert "2.7.0 (Jazzy)" in note
+
+
+async def test_a_laser_scan_stays_a_few_hundred_tokens(session: Session) -> None:
+    """/scan's 360 ranges are summarised with min/max/mean and the missing readings counted."""
+    result = await session.ok("subscribe_topic", {"topic": "/scan"})
+    data = result.structured_content
+    assert data is not None
+    message = data["messages"][0]
+    ranges = message["message"]["ranges"]
+    assert ranges["length"] == 360
+    assert 0 < ranges["min"] <= ranges["mean"] <= ranges["max"]
+    assert ranges["not_finite"] >= 5
+    assert "ranges: 360 numbers summarised" in message["cut"]
+    assert len(text_of(result)) < 1500
