@@ -470,5 +470,7 @@ async def set_parameter(ctx: Acting, *, tool: str, name: str, value: Any) -> Set
     """Check the parameter (name form, and on ROS 2 that its node has it), then set it and read it back."""
     planned = await plan_set(ctx.graph, ctx.client, name, value)
     act = await _approved(ctx, Act(tool, "parameter", planned.name.full, "", planned.value))
-    outcome: SetOutcome = await _carry_out(ctx, act, lambda: apply_set(ctx.graph, planned, act.payload))
+    outcome: SetOutcome = await _carry_out(
+        ctx, act, lambda: apply_set(ctx.graph, ctx.client, planned, act.payload)
+    )
     return outcome

@@ -6,8 +6,10 @@
   real 2.1.0 bridge: ``get_param_names`` kills rosapi, ``has_param`` of a missing parameter never answers (and
   on an in-order bridge blocks the connection), and ``get_param`` of a missing one answers its default. So
   names come from the node's own ``<node>/list_parameters`` service, and existence is checked against it.
-  ``set_param`` answers nothing useful before 2.2.0 (and a value of another type is refused silently), so a
-  set is confirmed by reading the value back.
+  Values are read and set through the node's own ``get_parameters`` / ``set_parameters`` services too:
+  rosapi 2.1.0's ``get_param`` of a parameter of the rosapi node itself deadlocks rosapi for good (its
+  handler waits on its own blocked executor), and ``set_parameters`` says why a value was refused.
+  A set is confirmed by reading the value back (rosapi's ``set_param`` answers nothing useful before 2.2.0).
 
 Values travel as JSON text both ways.
 """
@@ -128,7 +130,7 @@ async def get_parameter(graph: RosGraph, client: RosbridgeClient, name: str) -> 
     info = await graph.ros_info()
     parsed = parse_name(name, info.version)
     await _require_existing(graph, client, parsed, info.version)
-    return parsed, await _read(graph, parsed, info.version)
+    return parsed, await _read(graph, client, parsed, info.version)
 
 
 @dataclass(frozen=True)
@@ -147,18 +149,21 @@ async def plan_set(graph: RosGraph, client: RosbridgeClient, name: str, value: A
     if info.version == 2:
         # A ROS 2 node only has the parameters it declared; rosapi cannot add one.
         await _require_existing(graph, client, parsed, info.version)
-    before = await _read(graph, parsed, info.version)
+    before = await _read(graph, client, parsed, info.version)
     return PlannedSet(parsed, before, _like(before, value))
 
 
-async def apply_set(graph: RosGraph, planned: PlannedSet, value: Any) -> SetOutcome:
+async def apply_set(graph: RosGraph, client: RosbridgeClient, planned: PlannedSet, value: Any) -> SetOutcome:
     """Send the set, then read the value back; ``applied`` says whether the robot took it."""
     info = await graph.ros_info()
     parsed = planned.name
-    values = await graph.rosapi("set_param", {"name": parsed.full, "value": json.dumps(value)})
-    given = values.get("reason")
-    reason = given if isinstance(given, str) else ""
-    after = await _read(graph, parsed, info.version)
+    if info.version == 1:
+        values = await graph.rosapi("set_param", {"name": parsed.full, "value": json.dumps(value)})
+        given = values.get("reason")
+        reason = given if isinstance(given, str) else ""
+    else:
+        reason = await _ros2_set(client, parsed, value, planned.before)
+    after = await _read(graph, client, parsed, info.version)
     applied = _same(after, value)
     if not applied and not reason:
         reason = (
@@ -170,7 +175,9 @@ async def apply_set(graph: RosGraph, planned: PlannedSet, value: Any) -> SetOutc
     return SetOutcome(parsed.full, planned.before, after, applied, reason, value)
 
 
-async def _read(graph: RosGraph, parsed: ParameterName, version: int) -> Any:
+async def _read(graph: RosGraph, client: RosbridgeClient, parsed: ParameterName, version: int) -> Any:
+    if version == 2:
+        return await _ros2_read(client, parsed)
     args = {"name": parsed.full, ("default" if version == 1 else "default_value"): ""}
     values = await graph.rosapi("get_param", args)
     if values.get("successful") is False:
@@ -249,3 +256,79 @@ def _like(before: Any, value: Any) -> Any:
         except ValueError:
             return value
     return value
+
+
+# rcl_interfaces/msg/ParameterType: the field of ParameterValue that holds each type's value.
+_VALUE_FIELDS = {
+    1: "bool_value",
+    2: "integer_value",
+    3: "double_value",
+    4: "string_value",
+    5: "byte_array_value",
+    6: "bool_array_value",
+    7: "integer_array_value",
+    8: "double_array_value",
+    9: "string_array_value",
+}
+
+
+async def _ros2_read(client: RosbridgeClient, parsed: ParameterName) -> Any:
+    assert parsed.node is not None
+    reply = await client.call_service(f"{parsed.node.rstrip('/')}/get_parameters", {"names": [parsed.local]})
+    values = reply.get("values") if isinstance(reply, dict) else None
+    if not isinstance(values, list) or not values or not isinstance(values[0], dict):
+        # rclpy answers an empty list when a name is not declared.
+        raise ParameterError(f"Node {parsed.node} has no parameter {parsed.local!r}.")
+    return _from_parameter_value(values[0])
+
+
+def _from_parameter_value(value: dict[str, Any]) -> Any:
+    kind = value.get("type")
+    field = _VALUE_FIELDS.get(kind) if isinstance(kind, int) else None
+    return value.get(field) if field is not None else None
+
+
+def _to_parameter_value(value: Any, before: Any) -> dict[str, Any]:
+    """A ParameterValue for ``value``, typed like ``before`` where they fit (a whole number for a double)."""
+    if isinstance(value, bool):
+        kind = 1
+    elif isinstance(value, int):
+        kind = 3 if isinstance(before, float) else 2
+        value = float(value) if kind == 3 else value
+    elif isinstance(value, float):
+        kind = 3
+    elif isinstance(value, str):
+        kind = 4
+    elif isinstance(value, list) and all(isinstance(v, bool) for v in value):
+        kind = 6
+    elif isinstance(value, list) and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+        doubles = isinstance(before, list) and any(isinstance(v, float) for v in before)
+        kind = 8 if doubles else 7
+        value = [float(v) for v in value] if doubles else value
+    elif isinstance(value, list) and all(
+        isinstance(v, int | float) and not isinstance(v, bool) for v in value
+    ):
+        kind, value = 8, [float(v) for v in value]
+    elif isinstance(value, list) and all(isinstance(v, str) for v in value):
+        kind = 9
+    else:
+        raise ParameterError(
+            "A ROS 2 parameter holds a bool, an integer, a double, a string, or a list of one of these; "
+            f"{json.dumps(value)[:80]} is none of them."
+        )
+    return {"type": kind, _VALUE_FIELDS[kind]: value}
+
+
+async def _ros2_set(client: RosbridgeClient, parsed: ParameterName, value: Any, before: Any) -> str:
+    """Set through the node's ``set_parameters``; the node's reason when it refused, "" when it took it."""
+    assert parsed.node is not None
+    parameter = {"name": parsed.local, "value": _to_parameter_value(value, before)}
+    reply = await client.call_service(
+        f"{parsed.node.rstrip('/')}/set_parameters", {"parameters": [parameter]}
+    )
+    results = reply.get("results") if isinstance(reply, dict) else None
+    first = results[0] if isinstance(results, list) and results else None
+    if isinstance(first, dict) and first.get("successful") is False:
+        reason = first.get("reason")
+        return reason if isinstance(reason, str) and reason else "the node refused the value"
+    return ""
