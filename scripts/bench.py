@@ -21,7 +21,7 @@ What is measured (issue #4):
 5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
 6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
 7. RSS after startup and its growth over 10 000 tool calls, against the same bare server;
-8. the watch tools (issue #9): ``get_image`` on a live 640×480 and 1920×1080 rgb8 camera and
+9. the watch tools (issue #9): ``get_image`` on a live 640×480 and 1920×1080 rgb8 camera and
    ``subscribe_topic`` count 1 on a live topic, each against a raw subscribe → first message → unsubscribe
    started at the same point of the publisher's cycle; a 10 Hz × 5 s ``publish_topic`` stream as the robot
    receives it; the size of ``tools/list`` with every tool and with the original eight.
@@ -81,11 +81,11 @@ ADD_TWO_INTS = "/add_two_ints"
 SLOW_SERVICE = "/slow_service"
 SLOW_SERVICE_SECONDS = 0.05
 FAST_TOPIC = "/fast_counter"
-#: The camera of items 5 and 8 (the simulated robot's, at this size; item 8 also starts one at full HD).
+#: The camera of items 5 and 9 (the simulated robot's, at this size; item 9 also starts one at full HD).
 CAMERA_TOPIC = "/camera/image_raw"
 CAMERA_SIZE = "640x480"
 FULL_HD = "1920x1080"
-#: Item 8: a live 10 Hz topic, and a velocity topic for the publish stream.
+#: Item 9: a live 10 Hz topic, and a velocity topic for the publish stream.
 CHATTER = "/chatter"
 CMD_VEL = "/turtle1/cmd_vel"
 
@@ -931,7 +931,7 @@ async def measure_camera_image(ctx: Context) -> Row:
     return timing_row("5b", what, stats, target="≤ 100 ms", verdict=verdict(stats.median <= 0.1))
 
 
-# ---------------------------------------------------------------------------------- item 8: watch tools
+# ---------------------------------------------------------------------------------- item 9: watch tools
 
 
 class Metronome:
@@ -1007,20 +1007,20 @@ def ratio_row(item: str, what: str, stats: Stats, floor: Stats, limit: float) ->
 
 
 async def measure_watch(ctx: Context) -> list[Row]:
-    """Item 8: the watch tools against the raw socket, a publish stream as received, tools/list sizes."""
+    """Item 9: the watch tools against the raw socket, a publish stream as received, tools/list sizes."""
     trials = 20 if ctx.plan.name == "full" else 3
     rows: list[Row] = []
     camera_type = ctx.bridge.topics.get(CAMERA_TOPIC)
     async with contextlib.AsyncExitStack() as stack:
         if camera_type is None:
-            rows.append(Row("8a", f"`get_image` {CAMERA_TOPIC}", verdict=f"n/a (no {CAMERA_TOPIC})"))
+            rows.append(Row("9a", f"`get_image` {CAMERA_TOPIC}", verdict=f"n/a (no {CAMERA_TOPIC})"))
         else:
             size = CAMERA_SIZE.replace("x", "×") if ctx.bridge.simulated else "the bridge's"
             rows.append(
                 await _image_row(
                     ctx,
                     stack,
-                    item="8a",
+                    item="9a",
                     served=ctx.ours,
                     url=ctx.bridge.url,
                     camera_type=camera_type,
@@ -1035,7 +1035,7 @@ async def measure_watch(ctx: Context) -> list[Row]:
                 await _image_row(
                     ctx,
                     stack,
-                    item="8b",
+                    item="9b",
                     served=hd,
                     url=url,
                     camera_type=camera_type or "sensor_msgs/msg/Image",
@@ -1045,11 +1045,11 @@ async def measure_watch(ctx: Context) -> list[Row]:
             )
         else:
             rows.append(
-                Row("8b", "`get_image` on a 1920×1080 rgb8 camera", verdict="n/a (simulated robot only)")
+                Row("9b", "`get_image` on a 1920×1080 rgb8 camera", verdict="n/a (simulated robot only)")
             )
     chatter_type = ctx.bridge.topics.get(CHATTER)
     if chatter_type is None:
-        rows.append(Row("8c", f"`subscribe_topic` {CHATTER}", verdict=f"n/a (no {CHATTER})"))
+        rows.append(Row("9c", f"`subscribe_topic` {CHATTER}", verdict=f"n/a (no {CHATTER})"))
     else:
         async with (
             connect(ctx.bridge.url, max_size=None, compression=None) as ws,
@@ -1065,7 +1065,7 @@ async def measure_watch(ctx: Context) -> list[Row]:
                 },
             )
         rows.append(
-            ratio_row("8c", f"`subscribe_topic` {CHATTER} count 1 (10 Hz)", stats["tool"], stats["raw"], 1.2)
+            ratio_row("9c", f"`subscribe_topic` {CHATTER} count 1 (10 Hz)", stats["tool"], stats["raw"], 1.2)
         )
     rows.append(await _stream_row(ctx))
     rows += await _tools_list_rows(ctx)
@@ -1107,7 +1107,7 @@ async def _stream_row(ctx: Context) -> Row:
     what = f"`publish_topic` {CMD_VEL} at {rate} Hz for {duration:g} s, as received"
     twist_type = ctx.bridge.topics.get(CMD_VEL)
     if twist_type is None:
-        return Row("8d", what, verdict=f"n/a (no {CMD_VEL})")
+        return Row("9d", what, verdict=f"n/a (no {CMD_VEL})")
     arrivals: list[tuple[float, dict[str, Any]]] = []
     stopped = asyncio.Event()
     async with connect(ctx.bridge.url, max_size=None, compression=None) as ws:
@@ -1144,7 +1144,7 @@ async def _stream_row(ctx: Context) -> Row:
     p99 = errors[max(0, math.ceil(0.99 * len(errors)) - 1)] if errors else float("inf")
     met = abs(len(moving) - expected) <= 1 and p99 <= 0.010 and zero
     return Row(
-        "8d",
+        "9d",
         what,
         n=len(moving),
         median=ms(statistics.median(errors)) if errors else "",
@@ -1171,7 +1171,7 @@ async def _tools_list_rows(ctx: Context) -> list[Row]:
         sizes[f"{spec}_count"] = count
     return [
         Row(
-            "8e",
+            "9e",
             f"`tools/list` size, all {sizes['all_count']} tools",
             versus=f"{sizes['all'] / sizes['original']:.2f}× the original eight",
             median=f"{sizes['all']} B",
@@ -1180,7 +1180,7 @@ async def _tools_list_rows(ctx: Context) -> list[Row]:
             figures={"bytes": sizes["all"]},
         ),
         Row(
-            "8f",
+            "9f",
             f"`tools/list` size, --tools original ({sizes['original_count']} tools)",
             median=f"{sizes['original']} B",
             target="≤ 15 000 B (a test holds it)",
@@ -1354,7 +1354,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("throughput", "5", "throughput", measure_throughput, 60.0),
     ("startup", "6-7", "startup and RSS", measure_startup, 180.0),
     ("memory", "7", "memory growth", measure_memory, 300.0),
-    ("watch", "8", "watch tools", measure_watch, 240.0),
+    ("watch", "9", "watch tools", measure_watch, 240.0),
 ]
 
 
