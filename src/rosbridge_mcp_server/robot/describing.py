@@ -24,9 +24,13 @@ from rosbridge_mcp_server.wire.dialect import action_type_names, normalize_type,
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.graph import RosGraph
 
-__all__ = ["Description", "Kind", "describe_type"]
+__all__ = ["CannotDescribe", "Description", "Kind", "describe_type"]
 
 Kind = Literal["message", "service", "action"]
+
+
+class CannotDescribe(LookupError):
+    """This bridge's rosapi cannot describe the type safely; ``str()`` says why and what to use instead."""
 
 
 @dataclass(frozen=True)
@@ -99,17 +103,15 @@ async def _installed_kinds(graph: RosGraph, type_name: str, kinds: tuple[Kind, .
             if in_use.get("services"):
                 safe.append(kind)
     if "action" in kinds and len(kinds) == 1:
-        raise ServiceError(
-            "/rosapi/action_goal_details",
+        raise CannotDescribe(
             "This bridge's rosapi cannot describe action types (that needs Humble 2.0.2 / Jazzy 2.3.0 or "
-            "later); list_actions shows the action's type, and publish_action checks a goal against it.",
+            "later); list_actions shows the action's type, and publish_action checks a goal against it."
         )
     if "service" in kinds and "service" not in safe and len(kinds) == 1:
-        raise ServiceError(
-            "/rosapi/service_request_details",
+        raise CannotDescribe(
             f"No running service has the type {package}/srv/{name}, and this bridge's rosapi (no "
             "/rosapi/interfaces) can only describe service types in use without risk; list_services shows "
-            "them.",
+            "them."
         )
     return tuple(safe)
 
@@ -151,10 +153,9 @@ async def _part(graph: RosGraph, service: str, bridge_name: str, version: int) -
         values = await graph.rosapi(service, {"type": bridge_name})
     except ServiceError as exc:
         if "does not exist" in exc.message and service.startswith("action_"):
-            raise ServiceError(
-                f"/rosapi/{service}",
-                f"{exc.message}. This rosapi cannot describe actions (it needs Humble 2.0.2 / Jazzy 2.3.0 or "
-                "later).",
+            raise CannotDescribe(
+                "This bridge's rosapi cannot describe action types (that needs Humble 2.0.2 / Jazzy 2.3.0 or "
+                "later); list_actions shows the action's type, and publish_action checks a goal against it."
             ) from exc
         if "does not exist" in exc.message:
             raise

@@ -163,6 +163,8 @@ async def apply_set(graph: RosGraph, client: RosbridgeClient, planned: PlannedSe
         reason = given if isinstance(given, str) else ""
     else:
         reason = await _ros2_set(client, parsed, value, planned.before)
+        if reason and planned.before is not None:
+            reason += f" ({parsed.full} holds {_kind_of(planned.before)}; send one of those)"
     after = await _read(graph, client, parsed, info.version)
     applied = _same(after, value)
     if not applied and not reason:
@@ -332,3 +334,15 @@ async def _ros2_set(client: RosbridgeClient, parsed: ParameterName, value: Any, 
         reason = first.get("reason")
         return reason if isinstance(reason, str) and reason else "the node refused the value"
     return ""
+
+
+def _kind_of(value: Any) -> str:
+    if isinstance(value, bool):
+        return "a bool"
+    if isinstance(value, int):
+        return "an integer"
+    if isinstance(value, float):
+        return "a double"
+    if isinstance(value, str):
+        return "a string"
+    return "a list"

@@ -6,8 +6,15 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.describing import describe_type
-from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec, compact_json
+from rosbridge_mcp_server.robot.describing import CannotDescribe, describe_type
+from rosbridge_mcp_server.tools.base import (
+    READS_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolSpec,
+    compact_json,
+)
 
 __all__ = ["SPEC", "TypeAnswer", "run"]
 
@@ -54,7 +61,10 @@ async def run(
     ],
 ) -> ToolAnswer:
     """Ask rosapi for the type's definitions and outline them."""
-    found = await describe_type(ctx.graph, type_name)
+    try:
+        found = await describe_type(ctx.graph, type_name)
+    except CannotDescribe as exc:
+        raise ToolFailure(str(exc)) from None
     parts = [
         TypePart(
             part=title,
