@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import asyncio
+
 import pytest
 from mcp_harness import Session, text_of
 
@@ -140,3 +142,24 @@ async def test_a_laser_scan_stays_a_few_hundred_tokens(session: Session) -> None
     assert ranges["not_finite"] >= 5
     assert "ranges: 360 numbers summarised" in message["cut"]
     assert len(text_of(result)) < 1500
+
+
+async def test_the_subscription_is_gone_afterwards(session: Session) -> None:
+    """Once subscribe_topic answers, the bridge no longer subscribes /chatter for us."""
+    await session.ok("subscribe_topic", {"topic": "/chatter", "count": 2})
+    info = await session.ok("get_topic_info", {"topic": "/chatter"})
+    assert "/rosbridge_websocket" not in (info.structured_content or {})["subscribers"]
+
+
+async def test_while_listening_the_bridge_subscribes_for_us(session: Session) -> None:
+    """During a duration listen the bridge's node subscribes /chatter (so the check above can fail)."""
+    listening = asyncio.create_task(session.call("subscribe_topic", {"topic": "/chatter", "duration": 1.5}))
+    # Each /chatter message is a moment to look again; progress says the listen has heard one.
+    for _ in range(20):
+        if session.progress:
+            break
+        await session.ros.wait_for_message("/chatter", None, 5.0)
+    assert session.progress
+    info = await session.ok("get_topic_info", {"topic": "/chatter"})
+    await listening
+    assert "/rosbridge_websocket" in (info.structured_content or {})["subscribers"]
