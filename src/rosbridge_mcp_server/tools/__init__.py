@@ -1,8 +1,8 @@
 """The MCP tools, one module each: the original eight, then the ones that watch the robot.
 
 Each module exposes ``SPEC`` (:class:`~rosbridge_mcp_server.tools.base.ToolSpec`) and
-``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. ``server.py`` registers them in the order of
-:data:`TOOL_MODULES`; :func:`select_tools` picks the ones a host should see.
+``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. ``server/app.py`` registers them in the order
+of :data:`TOOL_MODULES`; :func:`select_tools` picks the ones a host should see.
 """
 
 from __future__ import annotations
