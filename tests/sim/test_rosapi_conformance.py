@@ -131,6 +131,9 @@ async def test_the_twin_answers_rosapi_as_the_real_bridge(bridge: Bridge, twin: 
             ("/rosapi/service_type", {"service": "/fibonacci/_action/send_goal"}),
             ("/rosapi/service_type", {"service": "/turtlesim/get_type_description"}),
             ("/turtlesim/get_parameters", {"names": ["background_r", "nope"]}),
+            ("/turtlesim/list_parameters", {}),
+            ("/rosapi/list_parameters", {}),
+            ("/rosbridge_websocket/list_parameters", {}),
         ]
     else:
         questions += [

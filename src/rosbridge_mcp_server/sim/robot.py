@@ -152,6 +152,7 @@ class SimulatedRobot:
         params = self.world.params
         for key in (
             "/rosbridge_websocket:port",
+            "/rosbridge_websocket:actual_port",
             "/rosbridge_websocket/port",
             "/rosbridge_websocket/actual_port",
         ):

@@ -230,12 +230,28 @@ class WorldNodes:
                     "/turtlesim:background_r": 69,
                     "/turtlesim:background_g": 86,
                     "/turtlesim:background_b": 255,
-                    "/rosbridge_websocket:port": self.port,
-                    "/rosbridge_websocket:address": "127.0.0.1",
-                    "/rosbridge_websocket:max_message_size": config.max_message_size or 0,
+                    # rosbridge_websocket's parameters in the order 2.1.0 declares them (its launch
+                    # defaults, as the Kilted lab lists them), then the newer service timeout.
+                    "/rosbridge_websocket:use_compression": False,
                     "/rosbridge_websocket:call_services_in_new_thread": not config.in_order,
                     "/rosbridge_websocket:send_action_goals_in_new_thread": not config.in_order,
-                    "/rosbridge_websocket:default_call_service_timeout": config.default_service_timeout,
+                    "/rosbridge_websocket:fragment_timeout": 600,
+                    "/rosbridge_websocket:delay_between_messages": 0,
+                    "/rosbridge_websocket:max_message_size": config.max_message_size or 0,
+                    "/rosbridge_websocket:unregister_timeout": 10.0,
+                    "/rosbridge_websocket:bson_only_mode": False,
+                    "/rosbridge_websocket:topics_glob": "",
+                    "/rosbridge_websocket:services_glob": "",
+                    "/rosbridge_websocket:params_glob": "",
+                    "/rosbridge_websocket:websocket_ping_interval": 0,
+                    "/rosbridge_websocket:websocket_ping_timeout": 30,
+                    "/rosbridge_websocket:certfile": "",
+                    "/rosbridge_websocket:keyfile": "",
+                    "/rosbridge_websocket:port": self.port,
+                    "/rosbridge_websocket:address": "127.0.0.1",
+                    "/rosbridge_websocket:url_path": "/",
+                    "/rosbridge_websocket:retry_startup_delay": 5.0,
+                    "/rosbridge_websocket:actual_port": self.port,
                     "/rosapi:topics_glob": "[*]",
                     "/rosapi:services_glob": "[*]",
                     "/rosapi:params_glob": "[*]",
@@ -249,6 +265,9 @@ class WorldNodes:
                     "/lidar:range_max": RANGE_MAX,
                 }
             )
+            if self.rosapi_options.release == "newest":
+                # rosbridge 2.2.0+ (2.1.0 has no service timeout).
+                params["/rosbridge_websocket:default_call_service_timeout"] = config.default_service_timeout
         else:
             # In the order the real parameter server lists them (roscore's, the world's, then what
             # rosbridge_websocket.launch sets, with its values; get_param_names is not sorted on ROS 1).
