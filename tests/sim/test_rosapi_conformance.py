@@ -172,3 +172,13 @@ async def test_every_node_offers_the_services_of_the_real_graph(bridge: Bridge, 
         if node == "/turtlesim":
             our_services = {n: t for n, t in our_services.items() if "/teleport_" not in n}
         assert our_services == real_services, node
+
+
+async def test_a_latched_topic_answers_a_new_subscriber_at_once(bridge: Bridge) -> None:
+    """rosbridge's /client_count is latched (ROS 1) / transient-local (ROS 2): a count comes without waiting
+    for the next connect or disconnect (on 2.1.0 first the one from before this client connected)."""
+    async with await RawClient.open(bridge.url) as client:
+        await client.send({"op": "subscribe", "topic": "/client_count", "id": "latched"})
+        count = (await client.next_publish("/client_count", wait=2.0))["msg"]["data"]
+    assert isinstance(count, int)
+    assert count >= 0
