@@ -148,6 +148,19 @@ async def test_rosapi_2_1_dies_on_has_param_of_an_undeclared_parameter(make_sim:
     assert topics["values"] == "Service /rosapi/topics does not exist"
 
 
+async def test_rosapi_2_1_hangs_for_good_on_a_parameter_of_rosapi_itself(make_sim: MakeSim) -> None:
+    """get_param of /rosapi:use_sim_time deadlocks 2.1.0: no answer, nor to any later rosapi call."""
+    robot = await make_sim(dialect="ros2", rosapi="2.1.0")
+    async with await RawClient.open(robot.url) as client:
+        own = await client.call("/rosapi/get_param", {"name": "/rosapi:use_sim_time"}, timeout=0.3)
+        later = await client.call("/rosapi/topics", timeout=0.3)
+        total = await client.values("/add_two_ints", {"a": 1, "b": 1})
+    assert own["values"] == later["values"] == "Timeout exceeded while waiting for service response"
+    assert total == {"sum": 2}
+    assert robot.rosapi_node.hung
+    assert "/rosapi/topics" in robot.graph.services  # the process lives on
+
+
 async def test_rosapi_2_1_dies_on_the_details_of_a_service_type_it_cannot_load(make_sim: MakeSim) -> None:
     """service_request_details of an unloadable type: no answer, rosapi gone; message_details just []."""
     robot = await make_sim(dialect="ros2", rosapi="2.1.0")

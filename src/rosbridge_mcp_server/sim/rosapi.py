@@ -55,8 +55,9 @@ class RosapiOptions:
 
     #: ``"newest"``, or ``"2.1.0"``: TypeDef field names with a leading underscore (rclpy slot names), no
     #: ``interfaces``/``action_type``/``action_*_details``, no hidden names in ``node_details``, parameters
-    #: set only when declared, one call at a time, and the calls that kill it (``get_param_names``;
-    #: ``service_*_details`` of a type it cannot load): no answer, and every rosapi service is gone.
+    #: set only when declared, one call at a time, and the calls that kill it (``get_param_names``,
+    #: ``has_param`` of an undeclared parameter, ``service_*_details`` of a type it cannot load: no answer,
+    #: and every rosapi service is gone) or hang it (a parameter of rosapi itself).
     release: Literal["newest", "2.1.0"] = "newest"
     #: Seconds every rosapi call takes, one call at a time (0: at once, side by side).
     latency: float = 0.0
@@ -128,6 +129,8 @@ class Rosapi:
         #: How long rosapi 2.1.0 waits for a node that has no parameter service (tests shorten it).
         self.param_node_wait = PARAM_NODE_WAIT
         self.dead = False
+        #: rosapi 2.1.0 deadlocked (a question about its own parameters): nothing answers any more.
+        self.hung = False
         store = bridge.world.params
         self.params2 = Ros2Params(store, lambda node: node in bridge.graph.nodes)
         self.params1 = Ros1Params(store)
@@ -196,8 +199,9 @@ class Rosapi:
                 response = await handler(request)
             else:
                 async with self._turn:
-                    if self.dead:
-                        await asyncio.Event().wait()  # queued behind the call that killed it: no answer
+                    if self.dead or self.hung:
+                        # Queued behind the call that killed or deadlocked it: no answer, ever.
+                        await asyncio.Event().wait()
                     if self.options.latency > 0:
                         await asyncio.sleep(self.options.latency)
                     response = await handler(request)
@@ -427,11 +431,11 @@ class Rosapi:
     async def has_param(self, request: dict[str, Any]) -> dict[str, Any]:
         name = request.get("name", "")
         if self.ros2 and self.legacy:
-            await self._wait_for_parameter_node(name)
             try:
                 node, _ = Ros2Params.split(name)
             except ValueError:
                 return {"exists": False}
+            await self._wait_for_parameter_node(name)
             if f"{node}/get_parameters" in self.bridge.graph.services and not self.params2.has(name):
                 # 2.1.0 reads the first value of get_parameters outside its try: rclpy answers an empty
                 # list for an undeclared name, and the IndexError ends rosapi.
@@ -460,13 +464,20 @@ class Rosapi:
         return {"names": self.params2.names() if self.ros2 else self.params1.names()}
 
     async def _wait_for_parameter_node(self, name: str) -> None:
-        """rosapi 2.1.0 waits for the node's parameter service; a node that does not exist costs 5 s."""
+        """rosapi 2.1.0 waits for the node's parameter service; a node that does not exist costs 5 s, and a
+        parameter of rosapi itself deadlocks it."""
         if not self.legacy:
             return
         try:
             node, _ = Ros2Params.split(name)
         except ValueError:
             return
+        if node == ROSAPI_NODE:
+            # It calls its own /rosapi/get_parameters and waits on a future only its blocked executor could
+            # complete: this call and every later rosapi call never answer; the process stays alive.
+            log.error("rosapi hangs: %s is a parameter of rosapi itself", name)
+            self.hung = True
+            await asyncio.Event().wait()
         if f"{node}/get_parameters" not in self.bridge.graph.services:
             await asyncio.sleep(self.param_node_wait)
 
