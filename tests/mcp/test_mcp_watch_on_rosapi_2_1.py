@@ -25,7 +25,7 @@ async def old(old_robot: SimulatedRobot) -> AsyncIterator[Session]:
 
 
 async def test_a_message_type_reads_with_plain_field_names(old: Session) -> None:
-    """Twist's TypeDef says _linear/_angular and lists SLOT_TYPES; the outline and example say linear/angular."""
+    """Twist's TypeDef says _linear/_angular and lists SLOT_TYPES; the outline says linear/angular."""
     data = (await old.ok("describe_type", {"type_name": "geometry_msgs/msg/Twist"})).structured_content
     assert data is not None
     assert data["parts"][0]["outline"][0] == "linear: geometry_msgs/Vector3"
@@ -44,7 +44,7 @@ async def test_a_service_type_in_use_is_described_and_rosapi_lives(
 
 
 async def test_a_service_type_not_in_use_is_not_asked_about(old: Session, old_robot: SimulatedRobot) -> None:
-    """A service type no running service has is refused before rosapi is asked (the question would kill it)."""
+    """A service type no running service has is refused before rosapi is asked (asking would kill it)."""
     text = await old.error("describe_type", {"type_name": "rospy_tutorials/srv/AddTwoInts"})
     assert "No running service has the type rospy_tutorials/srv/AddTwoInts" in text
     assert not old_robot.rosapi_node.dead
