@@ -10,7 +10,8 @@ Precedence, highest first:
 
 So a flag always beats the environment, and within one source a URL beats host and port. Nothing else in the
 package reads the environment; :func:`load_config` is called once, from ``cli.run()``. The same rule holds for
-``--timeout`` / ``ROSBRIDGE_TIMEOUT`` and ``--log-level`` / ``ROSBRIDGE_MCP_LOG_LEVEL``.
+``--timeout`` / ``ROSBRIDGE_TIMEOUT``, ``--log-level`` / ``ROSBRIDGE_MCP_LOG_LEVEL`` and ``--tools`` /
+``ROSBRIDGE_MCP_TOOLS``.
 """
 
 from __future__ import annotations
@@ -64,6 +65,8 @@ class Config:
     log_level: LogLevel = "INFO"
     demo: bool = False
     demo_dialect: DemoDialect = "ros2"
+    #: Names of the tools a host sees; ``None`` is every tool.
+    tools: tuple[str, ...] | None = None
 
 
 def load_config(
@@ -76,6 +79,7 @@ def load_config(
     log_level: str | None = None,
     demo: bool = False,
     demo_dialect: str = "ros2",
+    tools: str | None = None,
 ) -> Config:
     """Build a :class:`Config` from command-line values (``None`` = not given) and the environment.
 
@@ -94,13 +98,28 @@ def load_config(
     level = _parse_log_level(level_text, source=level_source) if level_text else "INFO"
     if demo_dialect not in ("ros1", "ros2"):
         raise ConfigError(f"--demo-dialect must be ros1 or ros2, not {demo_dialect!r}")
+    tools_text = tools if tools is not None else environ.get("ROSBRIDGE_MCP_TOOLS", "").strip() or None
+    tools_source = "--tools" if tools is not None else "ROSBRIDGE_MCP_TOOLS"
+    chosen = _parse_tools(tools_text, source=tools_source) if tools_text is not None else None
     return Config(
         url=resolved_url,
         request_timeout=request_timeout,
         log_level=level,
         demo=demo,
         demo_dialect="ros1" if demo_dialect == "ros1" else "ros2",
+        tools=chosen,
     )
+
+
+def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:
+    # The tool registry lives with the tools; imported here only, so the configuration stays importable alone.
+    from rosbridge_mcp_server.tools import TOOL_MODULES, select_tools  # noqa: PLC0415
+
+    try:
+        chosen = select_tools(value)
+    except ValueError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    return None if len(chosen) == len(TOOL_MODULES) else chosen
 
 
 def _resolve_url(

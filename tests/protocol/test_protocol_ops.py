@@ -118,3 +118,10 @@ def test_an_id_carries_at_most_a_bounded_part_of_a_long_name() -> None:
     assert first != second
     assert minter.mint("call_service", "/add_two_ints").startswith("call_service:/add_two_ints:")
     assert len(minter.goal_id(long_name)) < protocol.ID_NAME_CHARS + 30
+
+
+def test_subscribe_carries_a_qos_object_only_when_given() -> None:
+    """A ROS 2 qos object rides on subscribe as given; without one the key is absent (older bridges)."""
+    qos = {"reliability": "reliable", "durability": "transient_local", "depth": 1, "history": "keep_last"}
+    assert protocol.subscribe("/map", "nav_msgs/msg/OccupancyGrid", id="s1", qos=qos)["qos"] == qos
+    assert "qos" not in protocol.subscribe("/map", None, id="s2")

@@ -66,6 +66,13 @@ def _parser(command: str) -> _Parser:
         "--timeout", help="default request timeout in seconds (env ROSBRIDGE_TIMEOUT, default 10)"
     )
     parser.add_argument(
+        "--tools",
+        help=(
+            "tools the host sees: all, original (the first eight), watch, or a comma list of groups and tool "
+            "names (env ROSBRIDGE_MCP_TOOLS, default all)"
+        ),
+    )
+    parser.add_argument(
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
@@ -100,6 +107,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             log_level=options.log_level,
             demo=options.demo,
             demo_dialect=options.demo_dialect,
+            tools=options.tools,
         )
     except (_UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

@@ -12,6 +12,7 @@ failures become ``isError`` results:
 
 from __future__ import annotations
 
+import base64
 import inspect
 import logging
 import typing
@@ -21,7 +22,7 @@ from typing import Any
 
 from mcp.server.mcpserver import Context
 from mcp.server.mcpserver.tools import Tool
-from mcp.types import CallToolResult, TextContent, ToolAnnotations
+from mcp.types import CallToolResult, ImageContent, TextContent, ToolAnnotations
 from pydantic import BaseModel, Field, ValidationError
 
 from rosbridge_mcp_server.errors import (
@@ -153,8 +154,14 @@ def tool_from_module(
         except (RosbridgeError, ToolFailure) as exc:
             _log.info("%s failed: %s", spec.name, exc)
             return CallToolResult(content=[TextContent(type="text", text=error_text(exc))], is_error=True)
+        images = [
+            ImageContent(
+                type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type
+            )
+            for image in answer.images
+        ]
         return CallToolResult(
-            content=[TextContent(type="text", text=answer.text)],
+            content=[TextContent(type="text", text=answer.text), *images],
             structured_content=answer.data.model_dump(mode="json"),
         )
 

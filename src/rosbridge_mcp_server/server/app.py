@@ -31,15 +31,19 @@ SERVER_NAME = "rosbridge"
 
 INSTRUCTIONS = """\
 This server connects to a real (or simulated) ROS robot through rosbridge. Some tools only read the robot's \
-state; publish_topic, publish_service, publish_action and cancel_action act on the robot and can make it move.
+state; publish_topic, publish_service, publish_action, cancel_action and set_parameter act on the robot and \
+can make it move or change how it behaves.
 
 Work like this:
 1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
-names and types; get_topic_info shows who publishes and subscribes a topic.
+names and types; get_topic_info shows who publishes and subscribes a topic; describe_type shows a type's \
+fields with an example. To see the robot's state: subscribe_topic reads messages, get_image shows a camera, \
+get_transform says where a frame is (e.g. base_link in odom).
 2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
 zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
-3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; send \
-zeros to stop. Prefer small, safe values and say what you are about to do.
+3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; \
+publish_topic with rate_hz and duration keeps the robot moving and stops it with zeros at the end. Prefer \
+small, safe values and say what you are about to do.
 4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
 
 A failed call comes back as an error whose text says what went wrong and what to try (a field that does not \
@@ -65,7 +69,8 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLO
         finally:
             await client.close()
 
-    tools = [tool_from_module(module, client, config, graph, guard) for module in TOOL_MODULES]
+    shown = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
+    tools = [tool_from_module(module, client, config, graph, guard) for module in shown]
     return MCPServer(
         SERVER_NAME,
         title="rosbridge MCP server",
