@@ -81,9 +81,11 @@ class SimulatedRobot:
                 dialect="ros2",
                 in_order=in_order,
                 max_message_size=max_message_size or DEFAULT_MAX_MESSAGE_SIZE,
-                # Humble 2.0.x and 2.1.0: default_call_service_timeout 0 (forever); Jazzy 2.2.0+: 5 s.
-                default_service_timeout=0.0 if in_order else 5.0,
+                # Humble 2.0.x and 2.1.0: no service timeout (forever); Jazzy 2.2.0+: 5 s by default.
+                default_service_timeout=0.0 if in_order or rosapi != "newest" else 5.0,
                 distro=distro or ("humble" if in_order else "jazzy"),
+                # rosbridge_suite 2.1.0's call_service knows no timeout field (it waits as long as it takes).
+                timeout_field=rosapi == "newest",
             )
         else:
             config = BridgeConfig(

@@ -477,6 +477,7 @@ class Rosapi:
             # complete: this call and every later rosapi call never answer; the process stays alive.
             log.error("rosapi hangs: %s is a parameter of rosapi itself", name)
             self.hung = True
+            self.bridge.world.notify()
             await asyncio.Event().wait()
         if f"{node}/get_parameters" not in self.bridge.graph.services:
             await asyncio.sleep(self.param_node_wait)
