@@ -27,6 +27,19 @@ async def test_rosapi_latency_serves_one_call_at_a_time(make_sim: MakeSim) -> No
     assert elapsed >= 4 * LATENCY * 0.95
 
 
+async def test_rosapi_latencies_are_taken_in_turn(make_sim: MakeSim) -> None:
+    """(fast, fast, fast, slow): every fourth rosapi call is the slow one, as a real ROS 2 rosapi's p90."""
+    robot = await make_sim(dialect="ros2", rosapi_latency=(0.0, 0.0, 0.0, 0.25))
+    durations = []
+    async with await RawClient.open(robot.url) as client:
+        for _ in range(8):
+            started = time.monotonic()
+            await client.values("/rosapi/get_time")
+            durations.append(time.monotonic() - started)
+    slow = [n for n, d in enumerate(durations) if d >= 0.25 * 0.95]
+    assert slow == [3, 7]
+
+
 async def test_rosapi_latency_does_not_slow_other_services(make_sim: MakeSim) -> None:
     """A world service answers while rosapi is busy with a slow queue."""
     robot = await make_sim(dialect="ros1", rosapi_latency=1.0)
@@ -276,6 +289,7 @@ async def test_node_services_can_be_left_out(make_sim: MakeSim, dialect: str) ->
         {"dialect": "ros2", "distro": "iron-ish"},
         {"dialect": "ros2", "rosapi": "1.0"},
         {"dialect": "ros2", "rosapi_latency": -1.0},
+        {"dialect": "ros2", "rosapi_latency": (0.01, -0.01)},
     ],
 )
 def test_options_that_do_not_fit_the_dialect_are_refused(kwargs: dict[str, object]) -> None:

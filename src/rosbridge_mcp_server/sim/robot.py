@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from types import TracebackType
 from typing import Literal, Self
 
@@ -39,11 +39,12 @@ class SimulatedRobot:
 
     ``distro`` (ROS 2) is what ``get_ros_version`` says and decides whether nodes offer type descriptions
     (not on Humble); by default Humble when ``in_order``, else Jazzy. ``rosapi="2.1.0"`` behaves like the
-    rosapi of rosbridge_suite 2.1.0 (underscored TypeDef field names, no ``action_type``/``interfaces``,
-    one call at a time, the calls that kill it); with ``in_order=True, distro="kilted"`` that is the real
-    2.1.0 bridge with its default settings. ``rosapi_latency`` (seconds) makes every rosapi call take that
-    long, one call at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter
-    / type description (ROS 2) and logger (ROS 1) services every real node has.
+    rosapi and ``call_service`` of rosbridge_suite 2.1.0 (underscored TypeDef field names, no
+    ``action_type``/``interfaces``, one call at a time, the calls that kill it, no service timeout); with
+    ``in_order=True, distro="kilted"`` that is the real 2.1.0 bridge with its default settings.
+    ``rosapi_latency`` (seconds, or several taken in turn) makes every rosapi call take that long, one call
+    at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter / type
+    description (ROS 2) and logger (ROS 1) services every real node has.
     """
 
     def __init__(
@@ -53,7 +54,7 @@ class SimulatedRobot:
         in_order: bool = False,
         distro: str | None = None,
         rosapi: Literal["newest", "2.1.0"] = "newest",
-        rosapi_latency: float = 0.0,
+        rosapi_latency: float | Sequence[float] = 0.0,
         node_services: bool = True,
         host: str = "127.0.0.1",
         port: int = 0,
@@ -74,7 +75,8 @@ class SimulatedRobot:
             raise ValueError(f"distro must be one of {', '.join(ROS2_DISTROS)} (ROS 2 only), not {distro!r}")
         if rosapi not in ROSAPI_RELEASES or (rosapi != "newest" and dialect != "ros2"):
             raise ValueError(f"rosapi must be 'newest' or (ROS 2 only) '2.1.0', not {rosapi!r}")
-        if not rosapi_latency >= 0:
+        latencies = (rosapi_latency,) if isinstance(rosapi_latency, int | float) else tuple(rosapi_latency)
+        if not all(latency >= 0 for latency in latencies):
             raise ValueError("rosapi_latency must be >= 0 seconds")
         if dialect == "ros2":
             config = BridgeConfig(
@@ -111,7 +113,7 @@ class SimulatedRobot:
             slow_service_seconds=slow_service_seconds,
             camera=CameraSettings(camera_width, camera_height),
             port=port,
-            rosapi=RosapiOptions(release=rosapi, latency=rosapi_latency),
+            rosapi=RosapiOptions(release=rosapi, latency=latencies),
             node_services=node_services,
         )
         self._nodes.build()
