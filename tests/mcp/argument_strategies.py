@@ -220,7 +220,7 @@ def call_deadline(arguments: dict[str, Any], schema: dict[str, Any], slack: floa
         if not _time_like(key):
             continue
         given = arguments.get(key)
-        # An optional argument's bounds sit inside its anyOf branch (``{"anyOf": [{... "maximum": 60}, null]}``).
+        # An optional argument keeps its bounds inside an anyOf branch: {"anyOf": [{"maximum": 60}, null]}.
         bounds = [prop, *prop.get("anyOf", [])]
         maximum = min(float(branch.get("maximum", math.inf)) for branch in bounds)
         if isinstance(given, int | float) and not isinstance(given, bool) and 0 < given <= maximum:
