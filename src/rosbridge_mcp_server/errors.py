@@ -13,6 +13,7 @@ The tree::
     ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
     │                               because the bridge drops such messages without a word)
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
+    ├── PolicyRefusal               the safety policy (or the person asked) refused an acting call; nothing sent
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
@@ -30,6 +31,7 @@ __all__ = [
     "GoalTimeoutError",
     "InvalidMessageError",
     "NotConnectedError",
+    "PolicyRefusal",
     "ProtocolError",
     "RequestTimeoutError",
     "RosbridgeError",
@@ -172,3 +174,10 @@ class UnknownTypeError(RosbridgeError):
 
 class ProtocolError(RosbridgeError):
     """A frame broke the rosbridge v2 protocol."""
+
+
+class PolicyRefusal(RosbridgeError):
+    """The safety policy refused an acting call, or the person asked to confirm it did not; nothing was sent.
+
+    ``str()`` names the rule (e.g. ``[velocity] max_linear 0.5 m/s; you asked 2``) or the person's answer.
+    """
