@@ -13,7 +13,7 @@ The tree::
     ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
     │                               because the bridge drops such messages without a word)
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
-    ├── PolicyRefusal               the safety policy (or the person asked) refused an acting call; nothing sent
+    ├── PolicyRefusal               the safety policy or the person refused an acting call; nothing was sent
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,

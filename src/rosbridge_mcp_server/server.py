@@ -41,6 +41,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.ros import RosGraph
+from rosbridge_mcp_server.safety import PolicyGuard
 from rosbridge_mcp_server.tools import TOOL_MODULES
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
@@ -112,9 +113,15 @@ def error_text(exc: RosbridgeError | ToolFailure) -> str:
     return text
 
 
-def build_server(client: RosbridgeClient, config: Config) -> MCPServer[None]:
-    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan)."""
+def build_server(
+    client: RosbridgeClient, config: Config, *, guard: PolicyGuard | None = None
+) -> MCPServer[None]:
+    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
+
+    ``guard`` applies the safety policy to every acting call (default: ``config.policy``, audited on stderr).
+    """
     graph = RosGraph(client)
+    guard = guard if guard is not None else PolicyGuard(config.policy)
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:

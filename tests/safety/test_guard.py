@@ -259,6 +259,7 @@ async def test_every_decision_is_one_audit_line_on_stderr_and_in_the_file(
     with pytest.raises(PolicyRefusal):
         await g.approve(cmd({}, "std_msgs/msg/Empty", topic="/bad"), Person())
     g.record(cmd({}, "std_msgs/msg/Empty"), "sent")
+    g.record(cmd({}, "std_msgs/msg/Empty", topic="/bad"), "refused: Refused by the safety policy")
     g.record(cmd({}, "std_msgs/msg/Empty"), "failed: not connected")
 
     entries = [json.loads(line) for line in audit.getvalue().splitlines()]

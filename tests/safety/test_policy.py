@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from rosbridge_mcp_server.config import ConfigError
+from rosbridge_mcp_server.config import ConfigError, load_config
 from rosbridge_mcp_server.safety import NameRules, Policy, PolicyError, load_policy, parse_policy
 
 FULL = """
@@ -83,9 +83,9 @@ def test_a_misspelt_key_is_an_error_naming_it_with_a_suggestion(
 
 
 def test_a_policy_error_is_a_configuration_error(tmp_path: Path) -> None:
-    """The CLI's bad-configuration path (exit 2) catches it."""
-    with pytest.raises(ConfigError):
-        load_policy(write(tmp_path, "nonsense_key_entirely = 1"))
+    """Through the configuration it is a ConfigError, which the CLI's bad-configuration path catches."""
+    with pytest.raises(ConfigError, match=r"unknown key 'nonsense_key_entirely'"):
+        load_config({"ROSBRIDGE_MCP_POLICY": str(write(tmp_path, "nonsense_key_entirely = 1"))})
 
 
 @pytest.mark.parametrize(

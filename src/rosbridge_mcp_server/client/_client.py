@@ -7,8 +7,9 @@ import contextlib
 import itertools
 import logging
 import random
+import ssl
 import time
-from collections.abc import Awaitable, Callable, Coroutine
+from collections.abc import Awaitable, Callable, Coroutine, Sequence
 from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Any, Self
@@ -133,8 +134,14 @@ class RosbridgeClient:
         reconnect_max: float = 5.0,
         lane_cap: int = 16,
         lane_idle_seconds: float = 30.0,
+        ssl_context: ssl.SSLContext | None = None,
+        headers: Sequence[tuple[str, str]] = (),
     ) -> None:
         self.url = url
+        # For wss:// with a private CA or a client certificate, and for a bridge behind an authenticating
+        # proxy; every connection (main and lanes) opens with them.
+        self._ssl = ssl_context
+        self._headers = tuple(headers)
         self.connect_timeout = connect_timeout
         self.request_timeout = request_timeout
         self.reconnect_min = reconnect_min
@@ -269,7 +276,13 @@ class RosbridgeClient:
             conn: Connection | None = None
             try:
                 conn = await open_connection(
-                    self.url, "main", self.connect_timeout, self._route_publish, self.request_timeout
+                    self.url,
+                    "main",
+                    self.connect_timeout,
+                    self._route_publish,
+                    self.request_timeout,
+                    ssl_context=self._ssl,
+                    headers=self._headers,
                 )
                 info = await self._detect(conn)
                 await self._restore(conn, info)
@@ -484,6 +497,8 @@ class RosbridgeClient:
             f"lane {next(self._lane_numbers)}",
             min(timeout, self.connect_timeout),
             send_timeout=self.request_timeout,
+            ssl_context=self._ssl,
+            headers=self._headers,
         )
 
     # --- services -----------------------------------------------------------------------------------

@@ -132,8 +132,12 @@ class PolicyGuard:
         return approved
 
     def record(self, act: ActLike, outcome: str) -> None:
-        """Audit what happened after an approved act was sent; ``"sent"`` adds nothing to approve's line."""
-        if outcome != "sent":
+        """Audit what became of an act after :meth:`approve`.
+
+        :meth:`approve` already wrote the decision (allowed, clamped, confirmed or refused), so ``"sent"`` and
+        ``"refused: ..."`` add nothing; anything else (a send that failed, an e-stop) is a line of its own.
+        """
+        if outcome != "sent" and not outcome.startswith("refused"):
             self.audit.write(act, outcome)
 
     def _refuse(self, act: ActLike, rule: str, text: str) -> None:

@@ -29,8 +29,6 @@ from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Any, Literal
 
-from rosbridge_mcp_server.config import ConfigError
-
 __all__ = [
     "ACT_KINDS",
     "CONFIRM_MODES",
@@ -50,8 +48,11 @@ VelocityMode = Literal["refuse", "clamp"]
 ACT_KINDS = ("topics", "services", "actions", "parameters")
 
 
-class PolicyError(ConfigError):
-    """The policy file is missing, is not TOML, or holds a key or value it must not; ``str()`` says which."""
+class PolicyError(ValueError):
+    """The policy file is missing, is not TOML, or holds a key or value it must not; ``str()`` says which.
+
+    The configuration turns it into its own error, so a bad policy stops the start like a bad port.
+    """
 
 
 @dataclass(frozen=True)
