@@ -11,8 +11,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from rosbridge_mcp_server.check import run_check, unreachable_advice
 from rosbridge_mcp_server.cli import PROG, run
+from rosbridge_mcp_server.cli.check import run_check, unreachable_advice
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.sim import SimulatedRobot
 

@@ -8,7 +8,7 @@ separate process on stdio), so the difference between the two is what our server
 * With ``--reference-tools`` it has two tools that do no robot work, so the SDK's own cost can be separated
   from ours: ``noop`` (returns at once: the cost of one tool call through the SDK and stdio) and
   ``sleep(seconds)`` (an ``asyncio.sleep``: the SDK's ceiling for many slow tool calls in parallel).
-* With ``--our-stdio`` it serves through our transport (``rosbridge_mcp_server.stdio.serve_stdio``: asyncio
+* With ``--our-stdio`` it serves through our transport (``server.stdio.serve_stdio``: asyncio
   pipes, no worker threads) instead of the SDK's, which hands every line read and every write and flush to an
   anyio worker thread. Our server uses that transport, so this is the like-for-like reference for its tool
   calls; the SDK's is kept as a second reference to show what the hand-offs cost.
@@ -49,7 +49,7 @@ def main() -> None:
     server = build_server(reference_tools="--reference-tools" in flags)
     if "--our-stdio" in flags:
         # Imported only here: the startup and memory reference must not load our package.
-        from rosbridge_mcp_server.stdio import serve_stdio  # noqa: PLC0415
+        from rosbridge_mcp_server.server.stdio import serve_stdio  # noqa: PLC0415
 
         asyncio.run(serve_stdio(server))
     else:

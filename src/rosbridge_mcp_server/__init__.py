@@ -10,6 +10,6 @@ __version__ = "0.1.0"
 def main() -> None:
     """Console-script entry point: parse configuration, then serve MCP over stdio."""
     # Imported on use: `import rosbridge_mcp_server` (the simulated robot does) need not load the MCP SDK.
-    from rosbridge_mcp_server.cli import run  # noqa: PLC0415
+    from rosbridge_mcp_server.cli import main as cli_main  # noqa: PLC0415
 
-    raise SystemExit(run())
+    cli_main()

@@ -25,12 +25,6 @@ from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
 from rosbridge_mcp_server.client import RosbridgeClient, Subscription
-from rosbridge_mcp_server.dialect import (
-    action_type_names,
-    goal_status_name,
-    is_success_status,
-    is_terminal_status,
-)
 from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
@@ -39,6 +33,12 @@ from rosbridge_mcp_server.errors import (
     RequestTimeoutError,
     RosbridgeError,
     ServiceError,
+)
+from rosbridge_mcp_server.wire.dialect import (
+    action_type_names,
+    goal_status_name,
+    is_success_status,
+    is_terminal_status,
 )
 
 __all__ = [
@@ -77,6 +77,8 @@ class GoalOutcome:
 
     goal_id: str
     action: str
+    action_type: str
+    """As the bridge was given it (the dialect's spelling)."""
     status_code: int
     status: str
     succeeded: bool
@@ -209,6 +211,7 @@ def _outcome(
     return GoalOutcome(
         goal_id=entry.goal_id,
         action=entry.action,
+        action_type=action_type_names(entry.action_type).for_version(version),
         status_code=code,
         status=goal_status_name(code, version) if finished else UNCONFIRMED_STATUS,
         succeeded=succeeded,

@@ -13,11 +13,13 @@ The tree::
     ├── InvalidMessageError         a message, request or goal that does not fit its ROS type (checked by us,
     │                               because the bridge drops such messages without a word)
     ├── UnknownTypeError            the bridge does not know the type (its rosapi has no definition for it)
-    ├── PolicyRefusal               the safety policy or the person refused an acting call; nothing was sent
+    ├── NotSentError                a check before an act refused it (a wrong name or type, a message that
+    │                               does not fit, a bridge that does not read); nothing was sent
+    ├── PolicyRefusal               the safety policy (or the person asked) refused an act; names the rule
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
-and what to check. The MCP layer turns these into tool errors at one place (``server.py``).
+and what to check. The MCP layer turns these into tool errors at one place (``server/adapter.py``).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ __all__ = [
     "GoalTimeoutError",
     "InvalidMessageError",
     "NotConnectedError",
+    "NotSentError",
     "PolicyRefusal",
     "ProtocolError",
     "RequestTimeoutError",
@@ -172,12 +175,16 @@ class UnknownTypeError(RosbridgeError):
         )
 
 
-class ProtocolError(RosbridgeError):
-    """A frame broke the rosbridge v2 protocol."""
+class NotSentError(RosbridgeError):
+    """A check before an act refused it, so nothing was sent; ``str()`` says why and what to try."""
 
 
 class PolicyRefusal(RosbridgeError):
-    """The safety policy refused an acting call, or the person asked to confirm it did not; nothing was sent.
+    """The safety policy refused an act before anything was sent, or the person asked to confirm it did not.
 
     ``str()`` names the rule (e.g. ``[velocity] max_linear 0.5 m/s; you asked 2``) or the person's answer.
     """
+
+
+class ProtocolError(RosbridgeError):
+    """A frame broke the rosbridge v2 protocol."""

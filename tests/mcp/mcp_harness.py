@@ -17,6 +17,7 @@ from mcp.types import CallToolResult, TextContent
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
 from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -60,7 +61,13 @@ def text_of(result: CallToolResult) -> str:
 
 @asynccontextmanager
 async def open_session(
-    url: str, *, request_timeout: float = 5.0, wait: bool = True, mode: str = "legacy"
+    url: str,
+    *,
+    request_timeout: float = 5.0,
+    wait: bool = True,
+    mode: str = "legacy",
+    guard: Guard = ALLOW_ALL,
+    elicitation_callback: Any = None,
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
 
@@ -82,7 +89,8 @@ async def open_session(
 
     async def host() -> None:
         try:
-            async with Client(build_server(ros, config), mode=mode) as mcp:
+            server = build_server(ros, config, guard=guard)
+            async with Client(server, mode=mode, elicitation_callback=elicitation_callback) as mcp:
                 ready.set_result(Session(mcp, ros))
                 await stop.wait()
         except BaseException as exc:

@@ -27,7 +27,7 @@ import pytest
 from mcp.types import CallToolResult
 from mcp_harness import Session, open_session, text_of
 
-from rosbridge_mcp_server.check import run_check
+from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.config import Config
 
 REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")

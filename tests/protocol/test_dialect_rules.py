@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from rosbridge_mcp_server import dialect
-from rosbridge_mcp_server.dialect import RosInfo
 from rosbridge_mcp_server.errors import UnknownTypeError
+from rosbridge_mcp_server.wire import dialect
+from rosbridge_mcp_server.wire.dialect import RosInfo
 
 
 @pytest.mark.parametrize(

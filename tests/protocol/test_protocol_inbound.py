@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from rosbridge_mcp_server import protocol
 from rosbridge_mcp_server.errors import ProtocolError
+from rosbridge_mcp_server.wire import protocol
 
 
 def fragments(message: dict[str, object], size: int, fid: object) -> list[dict[str, object]]:

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from rosbridge_mcp_server import protocol
+from rosbridge_mcp_server.wire import protocol
 
 FORBIDDEN_KEYS = {"png", "message_intervall", "fragment_size"}
 

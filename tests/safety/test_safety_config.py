@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from rosbridge_mcp_server.check import run_check
 from rosbridge_mcp_server.cli import PROG, run
+from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
 from rosbridge_mcp_server.safety import parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot

@@ -9,6 +9,6 @@ from __future__ import annotations
 
 from rosbridge_mcp_server.client._client import ActionResult, GoalHandle, OrphanedGoal, RosbridgeClient
 from rosbridge_mcp_server.client._subscription import Subscription
-from rosbridge_mcp_server.dialect import RosInfo
+from rosbridge_mcp_server.wire.dialect import RosInfo
 
 __all__ = ["ActionResult", "GoalHandle", "OrphanedGoal", "RosInfo", "RosbridgeClient", "Subscription"]

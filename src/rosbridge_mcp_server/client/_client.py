@@ -14,17 +14,9 @@ from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Any, Self
 
-from rosbridge_mcp_server import protocol
 from rosbridge_mcp_server.client._connection import Connection, GoalStream, open_connection
 from rosbridge_mcp_server.client._lanes import LanePool
 from rosbridge_mcp_server.client._subscription import Subscription
-from rosbridge_mcp_server.dialect import (
-    RosInfo,
-    action_type_names,
-    adapt_message,
-    goal_status_name,
-    normalize_type,
-)
 from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
@@ -33,6 +25,14 @@ from rosbridge_mcp_server.errors import (
     RequestTimeoutError,
     RosbridgeError,
     ServiceError,
+)
+from rosbridge_mcp_server.wire import protocol
+from rosbridge_mcp_server.wire.dialect import (
+    RosInfo,
+    action_type_names,
+    adapt_message,
+    goal_status_name,
+    normalize_type,
 )
 
 __all__ = ["ActionResult", "GoalHandle", "OrphanedGoal", "RosbridgeClient"]

@@ -11,8 +11,8 @@ from typing import Any, Final
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 
-from rosbridge_mcp_server import protocol
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
+from rosbridge_mcp_server.wire import protocol
 
 __all__ = ["Connection", "GoalStream", "ReplyWaiter", "open_connection"]
 

@@ -1,26 +1,28 @@
 """What every tool module shares: its spec, its answer, and the context it runs in.
 
 A tool module never imports ``mcp`` and never touches a socket: it gets a :class:`ToolContext` (the rosbridge
-client, the configuration, a graph helper and a progress callback) and returns a :class:`ToolAnswer`.
-``server.py`` turns these into MCP tools.
+client, the configuration, graph look-ups, the safety guard, a way to ask the person, a progress callback),
+parses its arguments, calls one function of the domain layer (``robot/``) and renders a :class:`ToolAnswer`.
+``server/adapter.py`` turns these into MCP tools.
 """
 
 from __future__ import annotations
 
-import difflib
 import json
-import math
-import re
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
+from rosbridge_mcp_server.robot.acting import ALLOW_ALL, AskPerson, Guard, nobody_to_ask
+from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
+
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
-    from rosbridge_mcp_server.ros import RosGraph
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = [
     "ACTS_ON_ROBOT",
@@ -40,7 +42,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class ToolHints:
-    """The MCP tool annotations, in our own words (``server.py`` maps them to ``ToolAnnotations``)."""
+    """The MCP tool annotations, in our own words (``server/adapter.py`` maps them to ``ToolAnnotations``)."""
 
     read_only: bool
     destructive: bool
@@ -57,7 +59,7 @@ ACTS_ON_ROBOT = ToolHints(read_only=False, destructive=True, idempotent=False)
 class ToolSpec:
     """Name, title, description (with an example) and hints of one tool.
 
-    ``output`` is the pydantic model of the structured content of a successful answer; ``server.py`` publishes
+    ``output`` is the pydantic model of the structured content of a successful answer; the server publishes
     its JSON schema as the tool's output schema. Answers carry an instance of it, so they fit by construction.
     """
 
@@ -76,8 +78,6 @@ class ToolAnswer:
     data: BaseModel
 
 
-_SLASHES = re.compile(r"/{2,}")
-
 ProgressReporter = Callable[[float, float | None, str | None], Awaitable[None]]
 
 
@@ -87,18 +87,24 @@ async def _no_progress(progress: float, total: float | None, message: str | None
 
 @dataclass
 class ToolContext:
-    """What a tool may use: the client, the configuration, graph look-ups, and a progress callback."""
+    """What a tool may use: the client, the configuration, graph look-ups, the safety guard, a way to ask
+    the person at the MCP client (elicitation), and a progress callback.
+
+    It is the :class:`~rosbridge_mcp_server.robot.acting.Acting` every checked send in ``robot/`` takes.
+    """
 
     client: RosbridgeClient
     config: Config
     graph: RosGraph
     report_progress: ProgressReporter = field(default=_no_progress)
+    guard: Guard = field(default=ALLOW_ALL)
+    ask_person: AskPerson = field(default=nobody_to_ask)
 
 
 class ToolFailure(Exception):
     """A tool could not do what was asked (an unknown topic, a malformed argument, a goal that timed out).
 
-    ``str()`` is a sentence saying what happened and what to try. ``server.py`` turns it into an ``isError``
+    ``str()`` is a sentence saying what happened and what to try. The server turns it into an ``isError``
     result, like a :class:`~rosbridge_mcp_server.errors.RosbridgeError`.
     """
 
@@ -122,38 +128,3 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
     if not isinstance(parsed, dict):
         raise ToolFailure(f"The {what} must be a JSON object, e.g. {example}; got {compact_json(parsed)}.")
     return parsed
-
-
-def absolute_name(name: str, what: str) -> str:
-    """A ROS graph name with its leading slash (rosapi and rosbridge match names exactly)."""
-    # ROS names never end in "/" nor hold "//"; either would make rosapi's exact-name look-ups miss. rospy
-    # resolves "//a//b/" to "/a/b" (a real 0.11.17 bridge answers for it), so we do the same on both lines.
-    text = _SLASHES.sub("/", name.strip()).rstrip("/")
-    if not text:
-        raise ToolFailure(f"The {what} name is empty; give a name such as /turtle1/cmd_vel.")
-    if any(ch.isspace() for ch in text):
-        raise ToolFailure(f"The {what} name {name!r} contains whitespace; ROS names never do.")
-    return text if text.startswith("/") else "/" + text
-
-
-def compact_json(value: Any, limit: int = 600) -> str:
-    """One-line JSON for the answer text, cut at ``limit`` characters."""
-    text = json.dumps(_finite(value), separators=(", ", ": "), ensure_ascii=False, default=str)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def _finite(value: Any) -> Any:
-    # ROS 2 can send NaN in fixed-size float arrays; strict JSON has no NaN, so show it as null.
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_finite(v) for v in value]
-    return value
-
-
-def did_you_mean(name: str, known: list[str]) -> str:
-    """`` Did you mean /a or /b?`` for the names closest to a misspelt one, or ``""``."""
-    close = difflib.get_close_matches(name, known, n=3, cutoff=0.8)
-    return f" Did you mean {' or '.join(close)}?" if close else ""

@@ -7,16 +7,9 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.actions import CancelReport, cancel_goals
-from rosbridge_mcp_server.errors import ServiceError
-from rosbridge_mcp_server.tools.base import (
-    ACTS_ON_ROBOT,
-    ToolAnswer,
-    ToolContext,
-    ToolFailure,
-    ToolSpec,
-    absolute_name,
-    did_you_mean,
-)
+from rosbridge_mcp_server.errors import NotSentError
+from rosbridge_mcp_server.robot.names import absolute_name
+from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolSpec
 
 __all__ = ["SPEC", "CancelAnswer", "run"]
 
@@ -70,22 +63,14 @@ async def run(
     """Send the cancel and report what it reached."""
     name = absolute_name(action_name, "action")
     wanted = goal_id.strip() if goal_id is not None and goal_id.strip() else None
-    await _check_action(ctx, name)
-    report = await cancel_goals(ctx.client, name, wanted)
-    return _answer(report)
-
-
-async def _check_action(ctx: ToolContext, name: str) -> None:
-    try:
-        known = await ctx.graph.action_names()
-    except ServiceError:
-        return  # no usable rosapi action_servers: send the cancel anyway
-    if name not in known:
-        hint = did_you_mean(name, known)
-        raise ToolFailure(
+    hint = await ctx.graph.missing_action(name)
+    if hint is not None:
+        raise NotSentError(
             f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} Call "
             "list_actions to see the actions."
         )
+    report = await cancel_goals(ctx.client, name, wanted)
+    return _answer(report)
 
 
 def _answer(report: CancelReport) -> ToolAnswer:

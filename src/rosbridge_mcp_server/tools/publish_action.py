@@ -6,21 +6,16 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.actions import UNCONFIRMED_STATUS, GoalOutcome, run_goal
-from rosbridge_mcp_server.dialect import action_type_names, goal_status_name
-from rosbridge_mcp_server.errors import GoalTimeoutError, InvalidMessageError, ServiceError
+from rosbridge_mcp_server.actions import UNCONFIRMED_STATUS, GoalOutcome
+from rosbridge_mcp_server.robot.acting import send_goal
+from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
     ToolContext,
-    ToolFailure,
     ToolSpec,
-    absolute_name,
-    compact_json,
-    did_you_mean,
     parse_json_object,
 )
-from rosbridge_mcp_server.typecheck import check_message, example_message
 
 __all__ = ["MAX_GOAL_TIMEOUT", "SPEC", "GoalAnswer", "run"]
 
@@ -87,7 +82,6 @@ async def run(
         dict[str, Any] | str,
         Field(description=f"Goal fields as a JSON object, e.g. {_EXAMPLE}; {{}} for an empty goal"),
     ] = "{}",
-    # The name is the tool's parameter name, kept from the project this one replaces.
     timeout: Annotated[
         float,
         Field(
@@ -101,76 +95,27 @@ async def run(
     ] = 30.0,
 ) -> ToolAnswer:
     """Check the goal, run it (feedback → progress), and describe how it ended."""
-    name = absolute_name(action_name, "action")
     body = parse_json_object(goal, "goal", _EXAMPLE)
-    names = action_type_names(action_type)
-    info = await ctx.graph.ros_info()
-    wire_type = names.for_version(info.version)
 
-    await _check_action(ctx, name, action_type)
-    typedefs = await ctx.graph.action_goal_typedefs(action_type)
-    if typedefs:
-        goal_type = next(iter(typedefs))
-        try:
-            check_message(body, goal_type, typedefs, ros_version=info.version)
-        except InvalidMessageError as exc:
-            shape = compact_json(example_message(goal_type, typedefs, ros_version=info.version))
-            raise ToolFailure(f"{exc}. No goal was sent. A goal looks like {shape}.") from exc
-
-    # Minted here so that every progress message can name the goal: a client can cancel it by id while this
-    # call is still waiting for the result.
-    goal_id = ctx.client.new_goal_id(name)
-
-    async def on_feedback(index: int, feedback: Any) -> None:
+    # Every progress message names the goal: a client can cancel it by id while this call still waits.
+    async def on_feedback(goal_id: str, index: int, feedback: dict[str, Any]) -> None:
         message = f"goal {goal_id} feedback {index}: {compact_json(feedback, 300)}"
         await ctx.report_progress(float(index), None, message)
 
-    try:
-        outcome = await run_goal(
-            ctx.client, name, action_type, body, timeout=timeout, on_feedback=on_feedback, goal_id=goal_id
-        )
-    except GoalTimeoutError as exc:
-        raise ToolFailure(_timeout_text(exc, name, timeout, info.version)) from exc
-    return _answer(outcome, wire_type)
-
-
-async def _check_action(ctx: ToolContext, name: str, action_type: str) -> None:
-    """Fail fast on an action nobody serves, or on a type that is not the server's."""
-    try:
-        known = await ctx.graph.action_names()
-    except ServiceError:
-        return  # no usable rosapi action_servers: let the goal itself find out
-    if name not in known:
-        hint = did_you_mean(name, known)
-        raise ToolFailure(
-            f"No action server {name} is running on the robot.{hint} Call list_actions to see the actions."
-        )
-    found = await ctx.graph.action_type(name)
-    if found is None:
-        return
-    expected = action_type_names(found)
-    given = action_type_names(action_type)
-    if (expected.package, expected.name) != (given.package, given.name):
-        raise ToolFailure(
-            f"Action {name} has type {found}, not {action_type}. Send a goal of type {found} instead."
-        )
-
-
-def _timeout_text(exc: GoalTimeoutError, name: str, timeout: float, version: int) -> str:
-    ending = (
-        f"it then ended as {goal_status_name(exc.status, version)}"
-        if exc.status is not None
-        else "no final result arrived after the cancel, so it may still be running"
+    outcome = await send_goal(
+        ctx,
+        tool=SPEC.name,
+        action=action_name,
+        action_type=action_type,
+        goal=body,
+        timeout=timeout,
+        on_feedback=on_feedback,
     )
-    feedback = f" Last feedback: {compact_json(exc.feedback, 300)}." if exc.feedback is not None else ""
-    return (
-        f"Goal {exc.goal_id} on {name} did not finish within {timeout:g} s, so it was cancelled on the "
-        f"robot; {ending}.{feedback} Call publish_action again with a longer timeout if the goal needs more "
-        "time."
-    )
+    return _answer(outcome)
 
 
-def _answer(outcome: GoalOutcome, wire_type: str) -> ToolAnswer:
+def _answer(outcome: GoalOutcome) -> ToolAnswer:
+    wire_type = outcome.action_type
     last = list(outcome.last_feedback)
     data = GoalAnswer(
         goal_id=outcome.goal_id,

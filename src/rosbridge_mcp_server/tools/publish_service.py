@@ -6,21 +6,15 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.dialect import adapt_message, normalize_type
-from rosbridge_mcp_server.errors import InvalidMessageError, ServiceError
-from rosbridge_mcp_server.ros import is_missing_service
+from rosbridge_mcp_server.robot.acting import call_service
+from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
     ToolContext,
-    ToolFailure,
     ToolSpec,
-    absolute_name,
-    compact_json,
-    did_you_mean,
     parse_json_object,
 )
-from rosbridge_mcp_server.typecheck import check_message, example_message, short_type_name
 
 __all__ = ["MAX_SERVICE_TIMEOUT", "SPEC", "ServiceAnswer", "run"]
 
@@ -62,7 +56,6 @@ async def run(
         dict[str, Any] | str,
         Field(description=f"Request fields as a JSON object, e.g. {_EXAMPLE}; {{}} for std_srvs/srv/Trigger"),
     ] = "{}",
-    # The name is the tool's parameter name, kept from the project this one replaces.
     timeout: Annotated[
         float,
         Field(
@@ -75,51 +68,13 @@ async def run(
     ] = 10.0,
 ) -> ToolAnswer:
     """Check the request when the type is known, call the service, return its response."""
-    name = absolute_name(service, "service")
     body = parse_json_object(request, "request", _EXAMPLE)
-    info = await ctx.graph.ros_info()
-    given_type = normalize_type(service_type, info.version, "srv")
-
-    graph_type = await ctx.graph.service_type(name, cached=True)
-    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
-        # The cached type may be stale (the service was offered anew with another type): ask once more.
-        graph_type = await ctx.graph.service_type(name)
-    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
-        raise ToolFailure(
-            f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
-            "and call again with that service_type."
-        )
-    srv_type = graph_type or given_type
-    body = adapt_message(body, info.version)
-    if graph_type:
-        await _check_request(ctx, body, srv_type, info.version)
-
-    try:
-        response = await ctx.client.call_service(name, body, timeout=timeout)
-    except ServiceError as exc:
-        # rosapi does not list hidden services (ROS 2 `_action/...`), so an unlisted name is still tried;
-        # the bridge answers at once when nothing offers it.
-        if not is_missing_service(exc):
-            raise
-        ctx.graph.forget_service(name)
-        hint = did_you_mean(name, await ctx.graph.service_names())
-        raise ToolFailure(
-            f"Service {name} is not offered by any node.{hint} Call list_services to see the services."
-        ) from exc
-    text = f"Service {name} ({srv_type}) answered: {compact_json(response)}"
+    reply = await call_service(
+        ctx, tool=SPEC.name, service=service, service_type=service_type, request=body, timeout=timeout
+    )
+    text = f"Service {reply.service} ({reply.type}) answered: {compact_json(reply.response)}"
     # rosbridge answers a successful call with the response message as an object; anything else is kept whole.
-    fields = response if isinstance(response, dict) else {"value": response}
-    return ToolAnswer(text=text, data=ServiceAnswer(service=name, service_type=srv_type, response=fields))
-
-
-async def _check_request(ctx: ToolContext, body: dict[str, Any], srv_type: str, ros_version: int) -> None:
-    """Refuse a request that does not fit, when rosapi can describe the service type."""
-    typedefs = await ctx.graph.service_request_typedefs(srv_type)
-    if not typedefs:
-        return
-    request_type = next(iter(typedefs))
-    try:
-        check_message(body, request_type, typedefs, ros_version=ros_version)
-    except InvalidMessageError as exc:
-        shape = compact_json(example_message(request_type, typedefs, ros_version=ros_version))
-        raise ToolFailure(f"{exc}. The service was not called. A request looks like {shape}.") from exc
+    fields = reply.response if isinstance(reply.response, dict) else {"value": reply.response}
+    return ToolAnswer(
+        text=text, data=ServiceAnswer(service=reply.service, service_type=reply.type, response=fields)
+    )

@@ -1,17 +1,13 @@
-"""The MCP server: every tool module registered on an ``MCPServer``, with errors and progress translated.
+"""Tool modules as MCP tools: parameters from ``run``, output schema from the spec, errors as results.
 
-This is the only module that imports ``mcp``. Tool modules know nothing of MCP: each gives a ``SPEC`` and
-a ``run(ctx, ...)``; here each becomes an MCP tool whose parameters are the ``run`` parameters (plus the
-SDK's own ``Context``), whose output schema is the spec's model, and whose failures become ``isError``
-results:
+Each tool module gives a ``SPEC`` and a ``run(ctx, ...)``; here each becomes an MCP tool whose parameters are
+the ``run`` parameters (plus the SDK's own ``Context``), whose output schema is the spec's model, and whose
+failures become ``isError`` results:
 
 * a :class:`~rosbridge_mcp_server.errors.RosbridgeError` or a
   :class:`~rosbridge_mcp_server.tools.base.ToolFailure` → its sentence (plus what to try, for client errors);
 * arguments that do not fit the parameters → one line per wrong argument, instead of pydantic's dump;
 * anything else is a bug: logged with its traceback on stderr, and the model gets a generic error.
-
-The rosbridge client connects in the background from the server's lifespan, so ``initialize`` and
-``tools/list`` work while the robot is down; tools then fail fast with the not-connected text naming the URL.
 """
 
 from __future__ import annotations
@@ -19,18 +15,15 @@ from __future__ import annotations
 import inspect
 import logging
 import typing
-from collections.abc import AsyncIterator, Awaitable, Callable
-from contextlib import asynccontextmanager
+from collections.abc import Awaitable, Callable
 from types import ModuleType
 from typing import Annotated, Any
 
-from mcp.server.mcpserver import Context, MCPServer
-from mcp.server.mcpserver.exceptions import ToolError
+from mcp.server.mcpserver import Context
 from mcp.server.mcpserver.tools import Tool
 from mcp.types import CallToolResult, TextContent, ToolAnnotations
-from pydantic import ValidationError
+from pydantic import BaseModel, Field, ValidationError
 
-from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
@@ -40,39 +33,18 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.ros import RosGraph
-from rosbridge_mcp_server.safety import PolicyGuard
-from rosbridge_mcp_server.tools import TOOL_MODULES
+from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
+from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
-__all__ = ["INSTRUCTIONS", "SERVER_NAME", "build_server", "error_text", "inline_refs"]
+__all__ = ["error_text", "inline_refs", "tool_from_module"]
 
-_log = logging.getLogger(__name__)
-
-SERVER_NAME = "rosbridge"
-
-INSTRUCTIONS = """\
-This server connects to a real (or simulated) ROS robot through rosbridge. Some tools only read the robot's \
-state; publish_topic, publish_service, publish_action and cancel_action act on the robot and can make it move.
-
-Work like this:
-1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
-names and types; get_topic_info shows who publishes and subscribes a topic.
-2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
-zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
-3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; send \
-zeros to stop. Prefer small, safe values and say what you are about to do.
-4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
-
-A failed call comes back as an error whose text says what went wrong and what to try (a field that does not \
-fit the type, an unknown name, the robot being unreachable). Nothing is queued while the robot is \
-unreachable, and publish_topic first checks that the bridge answers, so a command is not delivered late. A \
-request that timed out may still take effect later: check the robot's state before repeating it.\
-"""
+_log = logging.getLogger("rosbridge_mcp_server.server")
 
 _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
     (
@@ -113,53 +85,6 @@ def error_text(exc: RosbridgeError | ToolFailure) -> str:
     return text
 
 
-def build_server(
-    client: RosbridgeClient, config: Config, *, guard: PolicyGuard | None = None
-) -> MCPServer[None]:
-    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
-
-    ``guard`` applies the safety policy to every acting call (default: ``config.policy``, audited on stderr).
-    """
-    graph = RosGraph(client)
-    guard = guard if guard is not None else PolicyGuard(config.policy)
-
-    @asynccontextmanager
-    async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
-        await client.start()
-        _log.info("rosbridge-mcp-server %s: connecting to %s in the background", __version__, client.url)
-        try:
-            yield None
-        finally:
-            await client.close()
-
-    tools = [_tool_from_module(module, client, config, graph) for module in TOOL_MODULES]
-    return MCPServer(
-        SERVER_NAME,
-        title="rosbridge MCP server",
-        description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
-        instructions=INSTRUCTIONS,
-        version=__version__,
-        tools=tools,
-        lifespan=lifespan,
-        log_level=config.log_level,
-    )
-
-
-class _RosTool(Tool):
-    """A ``Tool`` whose argument errors read as one line per wrong argument."""
-
-    async def run(
-        self, arguments: dict[str, Any], context: Context[Any, Any], convert_result: bool = False
-    ) -> Any:
-        try:
-            return await super().run(arguments, context, convert_result)
-        except ToolError as exc:
-            cause = exc.__cause__
-            if isinstance(cause, ValidationError):
-                raise ToolError(_arguments_text(self.name, cause, self.parameters)) from cause
-            raise
-
-
 def _arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
     problems: list[str] = []
     union_kinds: dict[str, list[str]] = {}
@@ -197,7 +122,10 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _tool_from_module(module: ModuleType, client: RosbridgeClient, config: Config, graph: RosGraph) -> Tool:
+def tool_from_module(
+    module: ModuleType, client: RosbridgeClient, config: Config, graph: RosGraph, guard: Guard = ALLOW_ALL
+) -> Tool:
+    """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`."""
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
 
@@ -218,7 +146,14 @@ def _tool_from_module(module: ModuleType, client: RosbridgeClient, config: Confi
                 # Progress is a courtesy; a client that went away must not fail the goal.
                 _log.debug("could not send a progress notification", exc_info=True)
 
-        ctx = ToolContext(client=client, config=config, graph=graph, report_progress=report_progress)
+        ctx = ToolContext(
+            client=client,
+            config=config,
+            graph=graph,
+            report_progress=report_progress,
+            guard=guard,
+            ask_person=_asker(mcp_context),
+        )
         try:
             answer = await run(ctx, **arguments)
         except (RosbridgeError, ToolFailure) as exc:
@@ -235,7 +170,7 @@ def _tool_from_module(module: ModuleType, client: RosbridgeClient, config: Confi
     setattr(call_tool, "__signature__", inspect.Signature(parameters, return_annotation=returns))  # noqa: B010
     call_tool.__annotations__ = {p.name: p.annotation for p in parameters} | {"return": returns}
 
-    tool = _RosTool.from_function(
+    tool = tool_with_own_argument_errors(
         call_tool,
         name=spec.name,
         title=spec.title,
@@ -247,11 +182,9 @@ def _tool_from_module(module: ModuleType, client: RosbridgeClient, config: Confi
             idempotent_hint=spec.hints.idempotent,
             open_world_hint=spec.hints.open_world,
         ),
-        structured_output=True,
+        argument_error=_arguments_text,
     )
-    schema = tool.fn_metadata.output_schema
-    if schema is not None:
-        tool.fn_metadata.output_schema = inline_refs(schema)
+    replace_output_schema(tool, inline_refs)
     return tool
 
 
@@ -277,3 +210,26 @@ def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:
 
     resolved: dict[str, Any] = resolve(schema)
     return resolved
+
+
+class _Confirmation(BaseModel):
+    approve: bool = Field(description="Let the robot do this")
+
+
+def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
+    """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot)."""
+
+    async def ask(question: str) -> Answer:
+        capabilities = mcp_context.client_capabilities
+        if capabilities is None or capabilities.elicitation is None:
+            return "unsupported"
+        try:
+            result = await mcp_context.elicit(question, schema=_Confirmation)
+        except Exception:
+            _log.info("asking the person failed", exc_info=True)
+            return "unsupported"
+        if result.action == "accept":
+            return "accept" if result.data.approve else "decline"
+        return result.action
+
+    return ask

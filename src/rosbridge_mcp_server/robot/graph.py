@@ -25,9 +25,10 @@ from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from rosbridge_mcp_server.dialect import RosInfo, action_type_names, normalize_type
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
-from rosbridge_mcp_server.typecheck import TypeDef, typedefs_from_rosapi
+from rosbridge_mcp_server.robot.messages import TypeDef, typedefs_from_rosapi
+from rosbridge_mcp_server.robot.names import absolute, did_you_mean
+from rosbridge_mcp_server.wire.dialect import RosInfo, action_type_names, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -230,7 +231,18 @@ class RosGraph:
         """Every action server name, once each, sorted."""
         values = await self.rosapi("action_servers")
         # ROS 1 rosapi 0.11 lists a namespace twice when other topics sort after `status` in it.
-        return sorted({_absolute(name) for name in _strings(values.get("action_servers"))})
+        return sorted({absolute(name) for name in _strings(values.get("action_servers"))})
+
+    async def missing_action(self, action: str) -> str | None:
+        """``None`` when *action* is served (or rosapi cannot list actions), else a hint naming close ones.
+
+        The hint is ``""`` or `` Did you mean /a?``, ready to end a sentence saying the action is not served.
+        """
+        try:
+            known = await self.action_names()
+        except ServiceError:
+            return None  # no usable rosapi action_servers: let the goal or the cancel itself find out
+        return None if action in known else did_you_mean(action, known)
 
     async def action_type(self, action: str) -> str | None:
         """The action's type in the bridge's own spelling, or ``None`` when the bridge cannot tell."""
@@ -372,10 +384,6 @@ def _type_hint(info: RosInfo) -> str:
     if info.version == 1:
         return "ROS 1 type names look like `geometry_msgs/Twist`; list_topics shows the types in use."
     return "ROS 2 type names look like `geometry_msgs/msg/Twist`; list_topics shows the types in use."
-
-
-def _absolute(name: str) -> str:
-    return name if name.startswith("/") else "/" + name
 
 
 def _strings(value: Any) -> list[str]:

@@ -14,9 +14,9 @@ from urllib.parse import urlsplit
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, plain_text_warning
-from rosbridge_mcp_server.dialect import RosInfo
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
-from rosbridge_mcp_server.ros import RosGraph
+from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.wire.dialect import RosInfo
 
 __all__ = ["run_check", "unreachable_advice"]
 

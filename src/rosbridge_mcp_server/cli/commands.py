@@ -20,12 +20,11 @@ from dataclasses import replace
 from typing import NoReturn, TextIO
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.check import run_check
+from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
 from rosbridge_mcp_server.safety import Audit, PolicyGuard
-from rosbridge_mcp_server.server import build_server
-from rosbridge_mcp_server.stdio import serve_stdio
+from rosbridge_mcp_server.server import build_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 

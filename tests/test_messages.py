@@ -7,7 +7,7 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.errors import InvalidMessageError
-from rosbridge_mcp_server.typecheck import (
+from rosbridge_mcp_server.robot.messages import (
     check_message,
     example_message,
     find_problems,

@@ -16,6 +16,7 @@ check first, against the rosapi ``TypeDef``s of the type (``/rosapi/message_deta
   uint32 nanosec.
 
 Missing fields are fine: rosbridge fills them with defaults. This module is pure: no I/O.
+
 """
 
 from __future__ import annotations
@@ -29,13 +30,15 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from rosbridge_mcp_server.errors import InvalidMessageError
+from rosbridge_mcp_server.errors import InvalidMessageError, NotSentError
 
 __all__ = [
     "TypeDef",
     "check_message",
+    "compact_json",
     "example_message",
     "find_problems",
+    "require_fit",
     "short_type_name",
     "typedefs_from_rosapi",
 ]
@@ -361,3 +364,41 @@ def _example_scalar(base: str, typedefs: Mapping[str, TypeDef], ros_version: int
     if base in _ROS1_TIMES and base not in typedefs:
         return {"secs": 0, "nsecs": 0}
     return _example_object(base, typedefs, ros_version, depth)
+
+
+def require_fit(
+    message: Any,
+    type_name: str,
+    typedefs: Mapping[str, TypeDef],
+    *,
+    ros_version: int,
+    nothing_sent: str,
+    looks_like: str,
+) -> None:
+    """Check *message*; one that does not fit is a :class:`NotSentError` with an example of the type.
+
+    The text reads ``<the wrong fields>. <nothing_sent>. <looks_like> looks like <example>.``, e.g.
+    ``... Nothing was published. A geometry_msgs/msg/Twist message looks like {...}.``
+    """
+    try:
+        check_message(message, type_name, typedefs, ros_version=ros_version)
+    except InvalidMessageError as exc:
+        shape = compact_json(example_message(type_name, typedefs, ros_version=ros_version))
+        raise NotSentError(f"{exc}. {nothing_sent}. {looks_like} looks like {shape}.") from exc
+
+
+def compact_json(value: Any, limit: int = 600) -> str:
+    """One-line JSON for an answer's text, cut at ``limit`` characters."""
+    text = json.dumps(_finite(value), separators=(", ", ": "), ensure_ascii=False, default=str)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _finite(value: Any) -> Any:
+    # ROS 2 can send NaN in fixed-size float arrays; strict JSON has no NaN, so show it as null.
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value

@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING, Any, cast
 
 from mcp.server.stdio import stdio_server
 
+from rosbridge_mcp_server.server.sdk import serve_streams
+
 if TYPE_CHECKING:
     import anyio
     from mcp.server.mcpserver import MCPServer
@@ -53,10 +55,7 @@ async def serve_stdio(server: MCPServer[Any]) -> None:
             stdin = cast("anyio.AsyncFile[str]", _Lines(reader))
             stdout = cast("anyio.AsyncFile[str]", _Text(writer))
             async with stdio_server(stdin=stdin, stdout=stdout) as (read_stream, write_stream):
-                # MCPServer.run_stdio_async does exactly this with the streams of its own transport; there is
-                # no public way to hand it others.
-                lowlevel = server._lowlevel_server
-                await lowlevel.run(read_stream, write_stream, lowlevel.create_initialization_options())
+                await serve_streams(server, read_stream, write_stream)
         finally:
             read_transport.close()
             write_transport.close()

@@ -1,0 +1,12 @@
+"""The command line: argument parsing, the subcommands (serve, ``check``) and their exit codes."""
+
+from __future__ import annotations
+
+from rosbridge_mcp_server.cli.commands import PROG, configure_logging, run
+
+__all__ = ["PROG", "configure_logging", "main", "run"]
+
+
+def main() -> None:
+    """Console-script entry point: parse configuration, then serve MCP over stdio."""
+    raise SystemExit(run())

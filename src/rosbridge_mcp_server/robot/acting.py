@@ -1,0 +1,347 @@
+"""Checked sends: every act on the robot goes through here, and through the safety seam.
+
+Each function takes what a caller gave (names, types, a message), makes the name absolute, spells the type
+for the bridge, compares it with the graph, checks the message against the type's definitions (raising a
+:class:`~rosbridge_mcp_server.errors.NotSentError` that carries an example of the type), and only then asks
+the :class:`Guard` whether the act may happen: ``await guard.approve(act, ask_person)``. The guard may return
+a clamped copy of the act (what is then sent) or raise :class:`~rosbridge_mcp_server.errors.PolicyRefusal`;
+either way it is told the outcome (``guard.record``), once per act.
+
+Nothing here knows MCP: the server hands in ``ask_person`` (its elicitation) through the tool's context.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal, Protocol
+
+from rosbridge_mcp_server.actions import GoalOutcome, run_goal
+from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.graph import is_missing_service
+from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
+from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
+from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.graph import RosGraph
+
+__all__ = [
+    "ALLOW_ALL",
+    "PING_LIMIT",
+    "Act",
+    "Acting",
+    "Answer",
+    "AskPerson",
+    "FeedbackCallback",
+    "Guard",
+    "Published",
+    "ServiceReply",
+    "call_service",
+    "nobody_to_ask",
+    "publish_once",
+    "require_action_server",
+    "send_goal",
+]
+
+#: Longest wait for the bridge's pong before a publish (less when the configured request timeout is shorter).
+PING_LIMIT = 3.0
+
+
+@dataclass(frozen=True)
+class Act:
+    """One act on the robot, as it will be sent: checked, normalised, with an absolute name."""
+
+    tool: str  #: the tool that asks, e.g. "publish_topic"
+    kind: Literal["topic", "service", "action", "parameter"]
+    name: str  #: absolute ROS name (topic/service/action/parameter)
+    type: str  #: ROS type as sent to the bridge ("" when none, e.g. a parameter)
+    payload: Any  #: message / request / goal / value that will be sent
+    rate_hz: float | None = None  #: publish streams only
+    duration: float | None = None  #: publish streams only
+
+
+Answer = Literal["accept", "decline", "cancel", "unsupported"]
+#: Asks the person at the MCP client a yes/no question (the server's elicitation).
+AskPerson = Callable[[str], Awaitable[Answer]]
+
+
+class Guard(Protocol):
+    """The safety policy's side of the seam."""
+
+    async def approve(self, act: Act, ask: AskPerson) -> Act:
+        """The act to send (*act*, or a clamped copy); raises :class:`PolicyRefusal` to refuse it."""
+        ...
+
+    def record(self, act: Act, outcome: str) -> None:
+        """One audit line per acting call: ``sent``, ``refused: ...`` or ``failed: ...``."""
+        ...
+
+
+class _AllowAll:
+    """Approves every act unchanged and records nothing."""
+
+    async def approve(self, act: Act, ask: AskPerson) -> Act:
+        return act
+
+    def record(self, act: Act, outcome: str) -> None:
+        return None
+
+    def __repr__(self) -> str:
+        return "ALLOW_ALL"
+
+
+ALLOW_ALL: Guard = _AllowAll()
+
+
+async def nobody_to_ask(question: str) -> Answer:
+    """The default :data:`AskPerson`: nobody to ask (no MCP client, or one without elicitation)."""
+    return "unsupported"
+
+
+class Acting(Protocol):
+    """What an act needs (a tool's ``ToolContext`` is one)."""
+
+    @property
+    def client(self) -> RosbridgeClient: ...
+    @property
+    def config(self) -> Config: ...
+    @property
+    def graph(self) -> RosGraph: ...
+    @property
+    def guard(self) -> Guard: ...
+    @property
+    def ask_person(self) -> AskPerson: ...
+
+
+async def _approved(ctx: Acting, act: Act) -> Act:
+    try:
+        return await ctx.guard.approve(act, ctx.ask_person)
+    except PolicyRefusal as exc:
+        ctx.guard.record(act, f"refused: {exc}")
+        raise
+
+
+async def _carry_out(ctx: Acting, act: Act, send: Callable[[], Awaitable[Any]]) -> Any:
+    """Run *send* for an approved *act* and tell the guard how it went."""
+    try:
+        result = await send()
+    except BaseException as exc:
+        ctx.guard.record(act, f"failed: {type(exc).__name__}: {exc}")
+        raise
+    ctx.guard.record(act, "sent")
+    return result
+
+
+# --- topics -----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Published:
+    """What was published."""
+
+    topic: str
+    type: str  #: as the bridge was given it
+    message: dict[str, Any]  #: as sent
+
+
+async def publish_once(
+    ctx: Acting, *, tool: str, topic: str, message_type: str, message: dict[str, Any]
+) -> Published:
+    """Check *message* against *message_type* and the topic's type in the graph, then publish it once.
+
+    Before the publish, a ping proves the bridge reads the connection now (see :func:`_bridge_is_reading`).
+    """
+    name = absolute_name(topic, "topic")
+    info = await ctx.graph.ros_info()
+    bridge_type = normalize_type(message_type, info.version, "msg")
+    typedefs = await ctx.graph.message_typedefs(message_type)
+
+    graph_type = await ctx.graph.publishing_type(name)
+    if graph_type and short_type_name(graph_type) != short_type_name(bridge_type):
+        raise NotSentError(
+            f"Topic {name} has type {graph_type}, not {bridge_type}; rosbridge would drop the message. "
+            f"Publish a {graph_type} message, or choose another topic (list_topics shows each topic's type)."
+        )
+    body = adapt_message(message, info.version)
+    require_fit(
+        body,
+        bridge_type,
+        typedefs,
+        ros_version=info.version,
+        nothing_sent="Nothing was published",
+        looks_like=f"A {bridge_type} message",
+    )
+
+    act = await _approved(ctx, Act(tool, "topic", name, bridge_type, body))
+
+    async def send() -> None:
+        await _bridge_is_reading(ctx)
+        await ctx.client.publish(act.name, act.type, act.payload)
+        ctx.graph.remember_publishing(act.name, act.type)
+
+    await _carry_out(ctx, act, send)
+    return Published(act.name, act.type, act.payload)
+
+
+async def _bridge_is_reading(ctx: Acting) -> None:
+    """Refuse to publish into a connection the bridge is not reading.
+
+    A frozen bridge (or a link that died without a close) still takes our frame into the socket buffer and
+    acts on it whenever it wakes up: a late velocity command. Seen against a real 0.11.17 bridge stopped with
+    SIGSTOP: the publish "succeeded" and the message arrived after SIGCONT. One ping round trip first proves
+    it reads the connection now.
+    """
+    limit = min(ctx.config.request_timeout, PING_LIMIT)
+    try:
+        await ctx.client.ping(limit)
+    except RequestTimeoutError as exc:
+        raise NotSentError(
+            f"rosbridge at {ctx.client.url} did not answer a ping within {limit:g} s (the bridge is frozen, "
+            "or the network to the robot is down), so nothing was published: a message sent now could reach "
+            "the robot late and move it then. Check the robot and its network, then try again."
+        ) from exc
+
+
+# --- services ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ServiceReply:
+    """A service's response."""
+
+    service: str
+    type: str  #: as the graph reports it (or as given, when the graph cannot tell)
+    response: Any  #: the response message (an object on every bridge we know)
+
+
+async def call_service(
+    ctx: Acting, *, tool: str, service: str, service_type: str, request: dict[str, Any], timeout: float
+) -> ServiceReply:
+    """Check the request when rosapi can describe the type, call the service, return its response."""
+    name = absolute_name(service, "service")
+    info = await ctx.graph.ros_info()
+    given_type = normalize_type(service_type, info.version, "srv")
+
+    graph_type = await ctx.graph.service_type(name, cached=True)
+    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
+        # The cached type may be stale (the service was offered anew with another type): ask once more.
+        graph_type = await ctx.graph.service_type(name)
+    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
+        raise NotSentError(
+            f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
+            "and call again with that service_type."
+        )
+    srv_type = graph_type or given_type
+    body = adapt_message(request, info.version)
+    if graph_type:
+        typedefs = await ctx.graph.service_request_typedefs(srv_type)
+        if typedefs:
+            require_fit(
+                body,
+                next(iter(typedefs)),
+                typedefs,
+                ros_version=info.version,
+                nothing_sent="The service was not called",
+                looks_like="A request",
+            )
+
+    act = await _approved(ctx, Act(tool, "service", name, srv_type, body))
+    try:
+        response = await _carry_out(
+            ctx, act, lambda: ctx.client.call_service(act.name, act.payload, timeout=timeout)
+        )
+    except ServiceError as exc:
+        # rosapi does not list hidden services (ROS 2 `_action/...`), so an unlisted name is still tried;
+        # the bridge answers at once when nothing offers it.
+        if not is_missing_service(exc):
+            raise
+        ctx.graph.forget_service(act.name)
+        hint = did_you_mean(act.name, await ctx.graph.service_names())
+        raise NotSentError(
+            f"Service {act.name} is not offered by any node.{hint} Call list_services to see the services."
+        ) from exc
+    return ServiceReply(act.name, srv_type, response)
+
+
+# --- action goals -----------------------------------------------------------------------------------------
+
+#: Told of each feedback of a running goal: (goal id, feedback number from 1, feedback message).
+FeedbackCallback = Callable[[str, int, dict[str, Any]], Awaitable[None] | None]
+
+
+async def send_goal(
+    ctx: Acting,
+    *,
+    tool: str,
+    action: str,
+    action_type: str,
+    goal: dict[str, Any],
+    timeout: float,
+    on_feedback: FeedbackCallback | None = None,
+) -> GoalOutcome:
+    """Check the goal against the action server's type, run it until it ends, and return how it ended.
+
+    *on_feedback* gets the goal's id, the feedback's number (from 1) and the feedback, so that a caller can
+    name the goal (to cancel it) while it runs.
+    """
+    name = absolute_name(action, "action")
+    info = await ctx.graph.ros_info()
+    wire_type = action_type_names(action_type).for_version(info.version)
+    await require_action_server(ctx.graph, name, action_type)
+    typedefs = await ctx.graph.action_goal_typedefs(action_type)
+    if typedefs:
+        require_fit(
+            goal,
+            next(iter(typedefs)),
+            typedefs,
+            ros_version=info.version,
+            nothing_sent="No goal was sent",
+            looks_like="A goal",
+        )
+
+    act = await _approved(ctx, Act(tool, "action", name, wire_type, goal))
+    goal_id = ctx.client.new_goal_id(act.name)
+
+    async def feedback(index: int, values: dict[str, Any]) -> None:
+        if on_feedback is not None:
+            maybe = on_feedback(goal_id, index, values)
+            if maybe is not None:
+                await maybe
+
+    outcome: GoalOutcome = await _carry_out(
+        ctx,
+        act,
+        lambda: run_goal(
+            ctx.client,
+            act.name,
+            action_type,
+            act.payload,
+            timeout=timeout,
+            on_feedback=feedback,
+            goal_id=goal_id,
+        ),
+    )
+    return outcome
+
+
+async def require_action_server(graph: RosGraph, name: str, action_type: str | None = None) -> None:
+    """Fail fast on an action nobody serves, or (given *action_type*) on a type that is not the server's."""
+    hint = await graph.missing_action(name)
+    if hint is not None:
+        raise NotSentError(
+            f"No action server {name} is running on the robot.{hint} Call list_actions to see the actions."
+        )
+    if action_type is None:
+        return
+    found = await graph.action_type(name)
+    if found is None:
+        return
+    expected = action_type_names(found)
+    given = action_type_names(action_type)
+    if (expected.package, expected.name) != (given.package, given.name):
+        raise NotSentError(
+            f"Action {name} has type {found}, not {action_type}. Send a goal of type {found} instead."
+        )

@@ -1,0 +1,78 @@
+"""The MCP server: ``build_server`` registers every tool module on an ``MCPServer``.
+
+The rosbridge client connects in the background from the server's lifespan, so ``initialize`` and
+``tools/list`` work while the robot is down; tools then fail fast with the not-connected text naming the URL.
+"""
+
+from __future__ import annotations
+
+import logging
+import typing
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+
+from mcp.server.mcpserver import MCPServer
+
+from rosbridge_mcp_server import __version__
+from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.server.adapter import tool_from_module
+from rosbridge_mcp_server.tools import TOOL_MODULES
+
+if typing.TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.config import Config
+
+__all__ = ["INSTRUCTIONS", "SERVER_NAME", "build_server"]
+
+_log = logging.getLogger("rosbridge_mcp_server.server")
+
+SERVER_NAME = "rosbridge"
+
+INSTRUCTIONS = """\
+This server connects to a real (or simulated) ROS robot through rosbridge. Some tools only read the robot's \
+state; publish_topic, publish_service, publish_action and cancel_action act on the robot and can make it move.
+
+Work like this:
+1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
+names and types; get_topic_info shows who publishes and subscribes a topic.
+2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
+zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
+3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; send \
+zeros to stop. Prefer small, safe values and say what you are about to do.
+4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
+
+A failed call comes back as an error whose text says what went wrong and what to try (a field that does not \
+fit the type, an unknown name, the robot being unreachable). Nothing is queued while the robot is \
+unreachable, and publish_topic first checks that the bridge answers, so a command is not delivered late. A \
+request that timed out may still take effect later: check the robot's state before repeating it.\
+"""
+
+
+def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLOW_ALL) -> MCPServer[None]:
+    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
+
+    Every act on the robot is first approved by *guard* (the safety policy; by default everything is).
+    """
+    graph = RosGraph(client)
+
+    @asynccontextmanager
+    async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
+        await client.start()
+        _log.info("rosbridge-mcp-server %s: connecting to %s in the background", __version__, client.url)
+        try:
+            yield None
+        finally:
+            await client.close()
+
+    tools = [tool_from_module(module, client, config, graph, guard) for module in TOOL_MODULES]
+    return MCPServer(
+        SERVER_NAME,
+        title="rosbridge MCP server",
+        description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
+        instructions=INSTRUCTIONS,
+        version=__version__,
+        tools=tools,
+        lifespan=lifespan,
+        log_level=config.log_level,
+    )

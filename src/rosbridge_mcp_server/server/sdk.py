@@ -1,0 +1,83 @@
+"""Every use of the MCP SDK beyond its documented API, each behind one named function.
+
+The SDK (``mcp`` 2.3) has no public way to do these three things; each function here says what it relies on,
+and ``tests/mcp/test_sdk_seam.py`` holds each to its effect, so an SDK upgrade that changes one fails there,
+by name, instead of somewhere in a tool call:
+
+* :func:`tool_with_own_argument_errors`: a ``Tool`` whose argument validation errors are reworded. The SDK
+  turns a ``ValidationError`` into ``ToolError("Error executing tool <name>: <pydantic dump>")`` inside
+  ``Tool.run``; a subclass is the only place to catch it with the tool's schema at hand.
+* :func:`replace_output_schema`: the output schema the SDK derived from the return annotation, replaced
+  (``Tool.output_schema`` reads ``Tool.fn_metadata.output_schema``).
+* :func:`serve_streams`: ``MCPServer`` on streams we give it. ``MCPServer.run_stdio_async`` only serves the
+  SDK's own stdio transport; what it runs is its low-level server's ``run`` with the streams.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from mcp.server.mcpserver import Context, MCPServer
+from mcp.server.mcpserver.exceptions import ToolError
+from mcp.server.mcpserver.tools import Tool
+from mcp.types import ToolAnnotations
+from pydantic import ValidationError
+
+__all__ = ["ArgumentErrorText", "replace_output_schema", "serve_streams", "tool_with_own_argument_errors"]
+
+#: Rewords an argument error: (tool name, the pydantic error, the tool's input schema) -> one sentence.
+ArgumentErrorText = Callable[[str, ValidationError, dict[str, Any]], str]
+
+
+def tool_with_own_argument_errors(
+    fn: Callable[..., Any],
+    *,
+    name: str,
+    title: str,
+    description: str,
+    annotations: ToolAnnotations,
+    argument_error: ArgumentErrorText,
+) -> Tool:
+    """A structured-output ``Tool`` for *fn* whose argument errors read as ``argument_error`` words them.
+
+    Relies on ``Tool.run`` raising ``ToolError`` with the ``ValidationError`` as its ``__cause__`` when the
+    arguments do not fit, and on ``MCPServer`` sending a ``ToolError``'s text as the ``isError`` result.
+    """
+
+    class _Tool(Tool):
+        async def run(
+            self, arguments: dict[str, Any], context: Context[Any, Any], convert_result: bool = False
+        ) -> Any:
+            try:
+                return await super().run(arguments, context, convert_result)
+            except ToolError as exc:
+                cause = exc.__cause__
+                if isinstance(cause, ValidationError):
+                    raise ToolError(argument_error(self.name, cause, self.parameters)) from cause
+                raise
+
+    return _Tool.from_function(
+        fn, name=name, title=title, description=description, annotations=annotations, structured_output=True
+    )
+
+
+def replace_output_schema(tool: Tool, schema: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
+    """Replace *tool*'s output schema by ``schema(derived)``, before anything has read it.
+
+    Relies on ``Tool.output_schema`` being read from ``Tool.fn_metadata.output_schema`` (a cached property,
+    so this must run before the tool is listed or called).
+    """
+    derived = tool.fn_metadata.output_schema
+    if derived is not None:
+        tool.fn_metadata.output_schema = schema(derived)
+
+
+async def serve_streams(server: MCPServer[Any], read_stream: Any, write_stream: Any) -> None:
+    """Serve *server* on the given message streams until the read stream ends.
+
+    What ``MCPServer.run_stdio_async`` does with the streams of the SDK's own stdio transport; it relies on
+    ``MCPServer._lowlevel_server`` (a ``mcp.server.lowlevel.Server``).
+    """
+    lowlevel = server._lowlevel_server
+    await lowlevel.run(read_stream, write_stream, lowlevel.create_initialization_options())

@@ -1,0 +1,106 @@
+"""Each use of MCP SDK internals (``server/sdk.py``) still has its effect on the installed SDK.
+
+These fail by name when an SDK upgrade changes what a function relies on, instead of somewhere in a tool call.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import anyio
+from mcp.client.session import ClientSession
+from mcp.server.mcpserver import MCPServer
+from mcp.shared.memory import create_client_server_memory_streams
+from mcp.types import CallToolResult, TextContent, ToolAnnotations
+from pydantic import BaseModel, Field, ValidationError
+
+from mcp import Client
+from rosbridge_mcp_server.server.sdk import (
+    replace_output_schema,
+    serve_streams,
+    tool_with_own_argument_errors,
+)
+
+
+class _Doubled(BaseModel):
+    value: int
+
+
+async def _double(
+    number: Annotated[int, Field(description="a number, e.g. 2")],
+) -> Annotated[CallToolResult, _Doubled]:
+    return CallToolResult(
+        content=[TextContent(type="text", text=str(number * 2))], structured_content={"value": number * 2}
+    )
+
+
+def _reword(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
+    return f"{tool} wants {', '.join(schema['properties'])} ({error.error_count()} wrong)"
+
+
+def _tool() -> Any:
+    return tool_with_own_argument_errors(
+        _double,
+        name="double",
+        title="Double",
+        description="Doubles a number.",
+        annotations=ToolAnnotations(title="Double", read_only_hint=True),
+        argument_error=_reword,
+    )
+
+
+async def test_argument_errors_are_worded_by_our_function() -> None:
+    """A call whose arguments do not fit is an isError result with our sentence, not pydantic's dump."""
+    async with Client(MCPServer("seam", tools=[_tool()])) as client:
+        result = await client.call_tool("double", {"number": "many"})
+    assert result.is_error
+    assert isinstance(result.content[0], TextContent)
+    assert result.content[0].text == "double wants number (1 wrong)"
+
+
+async def test_a_tool_with_reworded_errors_still_lists_its_parameters_and_runs() -> None:
+    """The tool keeps its input schema, annotations and structured output."""
+    async with Client(MCPServer("seam", tools=[_tool()])) as client:
+        [listed] = (await client.list_tools()).tools
+        result = await client.call_tool("double", {"number": 21})
+    assert listed.input_schema["required"] == ["number"]
+    assert listed.annotations is not None
+    assert listed.annotations.read_only_hint is True
+    assert not result.is_error
+    assert result.structured_content == {"value": 42}
+
+
+async def test_a_replaced_output_schema_is_the_one_clients_see() -> None:
+    """replace_output_schema changes the listed output schema, given the one the SDK derived."""
+    tool = _tool()
+    seen: list[dict[str, Any]] = []
+
+    def replace(derived: dict[str, Any]) -> dict[str, Any]:
+        seen.append(derived)
+        return {**derived, "description": "replaced"}
+
+    replace_output_schema(tool, replace)
+    async with Client(MCPServer("seam", tools=[tool])) as client:
+        [listed] = (await client.list_tools()).tools
+    assert seen
+    assert seen[0]["properties"] == {"value": {"title": "Value", "type": "integer"}}
+    assert listed.output_schema is not None
+    assert listed.output_schema["description"] == "replaced"
+
+
+async def test_serve_streams_serves_an_mcp_server_on_the_streams_it_is_given() -> None:
+    """A client on the other end of the streams initializes, lists and calls tools."""
+    server = MCPServer("seam", tools=[_tool()])
+    async with (
+        create_client_server_memory_streams() as (client_streams, server_streams),
+        anyio.create_task_group() as group,
+    ):
+        group.start_soon(serve_streams, server, *server_streams)
+        async with ClientSession(*client_streams) as session:
+            with anyio.fail_after(10):
+                await session.initialize()
+                listed = await session.list_tools()
+                result = await session.call_tool("double", {"number": 2})
+        group.cancel_scope.cancel()
+    assert [tool.name for tool in listed.tools] == ["double"]
+    assert result.structured_content == {"value": 4}
