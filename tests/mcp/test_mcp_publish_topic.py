@@ -22,6 +22,7 @@ async def test_a_twist_reaches_the_robot_and_the_turtle_moves(session: Session, 
         "message_type": types_for(sim)["twist"],
         "message": twist,
         "published": True,
+        "adjusted": None,
     }
     await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)
     received = sim.world.published[CMD_VEL][0].msg

@@ -1,4 +1,4 @@
-"""tools/list: the eight tools with their annotations, described parameters and output schemas."""
+"""tools/list: the nine tools with their annotations, described parameters and output schemas."""
 
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ EXPECTED_PARAMETERS = {
     "list_actions": [],
     "publish_action": ["action_name", "action_type", "goal", "timeout"],
     "cancel_action": ["action_name", "goal_id"],
+    "stop_robot": [],
 }
 READ_ONLY = {"list_topics", "get_topic_info", "list_services", "list_actions"}
 
@@ -32,7 +33,7 @@ def _closed_port_url() -> str:
     return f"ws://127.0.0.1:{port}"
 
 
-async def test_all_eight_tools_are_listed_with_annotations_and_described_parameters() -> None:
+async def test_all_nine_tools_are_listed_with_annotations_and_described_parameters() -> None:
     """Each tool keeps its original name and parameters, and has hints, an example and an output schema."""
     async with open_session(_closed_port_url(), wait=False) as session:
         listed = (await session.mcp.list_tools()).tools
@@ -48,7 +49,14 @@ async def test_all_eight_tools_are_listed_with_annotations_and_described_paramet
         hints = tool.annotations
         assert hints is not None
         assert hints.open_world_hint is True
-        if tool.name in READ_ONLY:
+        if tool.name == "stop_robot":
+            # It acts, but only takes motion away, and repeating it is harmless.
+            assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
+                False,
+                False,
+                True,
+            )
+        elif tool.name in READ_ONLY:
             assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
                 True,
                 False,
@@ -93,7 +101,7 @@ async def test_with_no_bridge_the_server_starts_lists_tools_and_tools_fail_namin
     async with Client(build_server(ros, config), mode="legacy") as mcp:
         assert mcp.instructions is not None
         assert "list_topics" in mcp.instructions
-        assert len((await mcp.list_tools()).tools) == 8
+        assert len((await mcp.list_tools()).tools) == len(EXPECTED_PARAMETERS)
         result = await mcp.call_tool("list_topics", {})
         publish = await mcp.call_tool(
             "publish_topic",

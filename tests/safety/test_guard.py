@@ -6,37 +6,24 @@ import io
 import json
 import logging
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import pytest
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
+from rosbridge_mcp_server.robot.acting import Act, Answer
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard, parse_policy, question
 from rosbridge_mcp_server.safety.velocity import measure
-
-
-@dataclass(frozen=True)
-class Act:
-    """The acting layer's record of one acting call (the fields the guard reads)."""
-
-    tool: str
-    kind: str
-    name: str
-    type: str
-    payload: Any
-    rate_hz: float | None = None
-    duration: float | None = None
 
 
 class Person:
     """Answers every question with ``answer`` and keeps the questions."""
 
-    def __init__(self, answer: str = "accept") -> None:
-        self.answer = answer
+    def __init__(self, answer: Answer = "accept") -> None:
+        self.answer: Answer = answer
         self.questions: list[str] = []
 
-    async def __call__(self, text: str) -> str:
+    async def __call__(self, text: str) -> Answer:
         self.questions.append(text)
         return self.answer
 
@@ -227,7 +214,7 @@ async def test_anything_but_accept_refuses_and_says_which(answer: str, said: str
 async def test_a_person_who_cannot_be_asked_because_asking_failed_has_not_said_yes() -> None:
     """An exception from the elicitation (client gone, timeout) is a refusal, not an approval."""
 
-    async def broken(text: str) -> str:
+    async def broken(text: str) -> Answer:
         raise RuntimeError("client went away")
 
     with pytest.raises(PolicyRefusal, match=r"Could not ask"):

@@ -21,12 +21,14 @@ from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTime
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
+from rosbridge_mcp_server.safety.velocity import clamp_text
 from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
     from rosbridge_mcp_server.robot.graph import RosGraph
+    from rosbridge_mcp_server.safety.activity import SessionActivity
 
 __all__ = [
     "ALLOW_ALL",
@@ -114,6 +116,8 @@ class Acting(Protocol):
     def guard(self) -> Guard: ...
     @property
     def ask_person(self) -> AskPerson: ...
+    @property
+    def activity(self) -> SessionActivity: ...
 
 
 async def _approved(ctx: Acting, act: Act) -> Act:
@@ -145,6 +149,8 @@ class Published:
     topic: str
     type: str  #: as the bridge was given it
     message: dict[str, Any]  #: as sent
+    #: How the safety policy changed the message before it was sent (velocity caps in clamp mode), or None.
+    adjusted: str | None = None
 
 
 async def publish_once(
@@ -181,9 +187,12 @@ async def publish_once(
         await _bridge_is_reading(ctx)
         await ctx.client.publish(act.name, act.type, act.payload)
         ctx.graph.remember_publishing(act.name, act.type)
+        # stop_robot zeroes every velocity topic this session has driven.
+        ctx.activity.published(act.name, act.type, act.payload)
 
     await _carry_out(ctx, act, send)
-    return Published(act.name, act.type, act.payload)
+    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    return Published(act.name, act.type, act.payload, adjusted)
 
 
 async def _bridge_is_reading(ctx: Acting) -> None:

@@ -6,7 +6,7 @@ ask the person; the acting layer calls the guard before anything is sent.
 
 from rosbridge_mcp_server.safety.activity import SessionActivity, Stream, VelocityTopic
 from rosbridge_mcp_server.safety.estop import StopReport, emergency_stop
-from rosbridge_mcp_server.safety.guard import Audit, PolicyGuard, clamp_text, question
+from rosbridge_mcp_server.safety.guard import Audit, PolicyGuard, question
 from rosbridge_mcp_server.safety.policy import (
     NameRules,
     Policy,
@@ -16,7 +16,7 @@ from rosbridge_mcp_server.safety.policy import (
     load_policy,
     parse_policy,
 )
-from rosbridge_mcp_server.safety.velocity import is_velocity_type, measure
+from rosbridge_mcp_server.safety.velocity import clamp_text, is_velocity_type, measure
 
 __all__ = [
     "Audit",

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.actions import cancel_goals, running_goals
 from rosbridge_mcp_server.errors import RosbridgeError
@@ -33,6 +33,10 @@ class StopReport:
     zeroed_topics: list[str] = field(default_factory=list)
     goals_cancelled: list[str] = field(default_factory=list)
     failures: list[str] = field(default_factory=list)
+    #: Every zero command sent: (topic, type, message), for the audit.
+    zero_messages: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)
+    #: Every goal a cancel was sent for: (action, goal id).
+    goals: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def did_anything(self) -> bool:
@@ -64,6 +68,7 @@ async def emergency_stop(client: RosbridgeClient, activity: SessionActivity) -> 
                 report.failures.append(f"zero command on {target.topic} failed: {exc}")
             else:
                 report.zeroed_topics.append(target.topic)
+                report.zero_messages.append((target.topic, target.type, message))
 
     for goal in running_goals(client):
         try:
@@ -72,4 +77,5 @@ async def emergency_stop(client: RosbridgeClient, activity: SessionActivity) -> 
             report.failures.append(f"cancelling goal {goal.goal_id} on {goal.action} failed: {exc}")
         else:
             report.goals_cancelled.append(goal.goal_id)
+            report.goals.append((goal.action, goal.goal_id))
     return report

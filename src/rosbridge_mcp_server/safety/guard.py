@@ -16,45 +16,20 @@ import dataclasses
 import datetime
 import json
 import logging
-import math
-from collections.abc import Awaitable, Callable
-from typing import IO, Any, ClassVar, Protocol, TypeVar
+from typing import IO, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.acting import Act, Answer, AskPerson
 from rosbridge_mcp_server.safety.policy import Policy
-from rosbridge_mcp_server.safety.velocity import is_velocity_type, measure, scaled
+from rosbridge_mcp_server.safety.velocity import clamp_text, is_velocity_type, measure, scaled
 
-__all__ = ["QUESTION_LIMIT", "ActLike", "Audit", "PolicyGuard", "clamp_text", "question"]
+__all__ = ["QUESTION_LIMIT", "Audit", "PolicyGuard", "question"]
 
 _log = logging.getLogger("rosbridge_mcp_server.audit")
 
 #: Longest message shown to the person in full; a camera image is not something to read in a dialog.
 QUESTION_LIMIT = 4000
 
-
-class ActLike(Protocol):
-    """The fields of an acting call the guard reads (the acting layer's ``Act``)."""
-
-    __dataclass_fields__: ClassVar[dict[str, Any]]
-
-    @property
-    def tool(self) -> str: ...
-    @property
-    def kind(self) -> str: ...
-    @property
-    def name(self) -> str: ...
-    @property
-    def type(self) -> str: ...
-    @property
-    def payload(self) -> Any: ...
-    @property
-    def rate_hz(self) -> float | None: ...
-    @property
-    def duration(self) -> float | None: ...
-
-
-A = TypeVar("A", bound=ActLike)
-Ask = Callable[[str], Awaitable[str]]
 
 _NOUNS = {"topic": "topic", "service": "service", "action": "action", "parameter": "parameter"}
 _PAYLOADS = {"topic": "message", "service": "request", "action": "goal", "parameter": "value"}
@@ -72,7 +47,7 @@ class Audit:
     def __init__(self, stream: IO[str] | None = None) -> None:
         self._stream = stream
 
-    def write(self, act: ActLike, outcome: str, detail: str | None = None) -> None:
+    def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
         level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
@@ -116,7 +91,7 @@ class PolicyGuard:
         self.policy = policy
         self.audit = audit if audit is not None else Audit()
 
-    async def approve(self, act: A, ask: Ask) -> A:
+    async def approve(self, act: Act, ask: AskPerson) -> Act:
         """``act`` as it may be sent (perhaps clamped), or :class:`PolicyRefusal` naming the rule."""
         rule = self._rule_refusal(act)
         if rule is not None:
@@ -131,7 +106,7 @@ class PolicyGuard:
             self.audit.write(approved, "clamped" if clamp else "allowed", clamp)
         return approved
 
-    def record(self, act: ActLike, outcome: str) -> None:
+    def record(self, act: Act, outcome: str) -> None:
         """Audit what became of an act after :meth:`approve`.
 
         :meth:`approve` already wrote the decision (allowed, clamped, confirmed or refused), so ``"sent"`` and
@@ -140,11 +115,11 @@ class PolicyGuard:
         if outcome != "sent" and not outcome.startswith("refused"):
             self.audit.write(act, outcome)
 
-    def _refuse(self, act: ActLike, rule: str, text: str) -> None:
+    def _refuse(self, act: Act, rule: str, text: str) -> NoReturn:
         self.audit.write(act, "refused", rule)
         raise PolicyRefusal(text)
 
-    def _rule_refusal(self, act: ActLike) -> str | None:
+    def _rule_refusal(self, act: Act) -> str | None:
         policy = self.policy
         if policy.read_only:
             return "read_only: this server may only read the robot"
@@ -165,7 +140,7 @@ class PolicyGuard:
                     return f"[publish] max_duration {limits.max_duration:g} s; you asked {act.duration:g} s"
         return None
 
-    def _capped(self, act: A) -> tuple[A, str | None]:
+    def _capped(self, act: Act) -> tuple[Act, str | None]:
         caps = self.policy.velocity
         if act.kind != "topic" or not is_velocity_type(act.type):
             return act, None
@@ -196,7 +171,7 @@ class PolicyGuard:
         clamped = dataclasses.replace(act, payload=payload)
         return clamped, clamp_text(act.type, act.payload, payload)
 
-    def _needs_person(self, act: ActLike) -> bool:
+    def _needs_person(self, act: Act) -> bool:
         confirm = self.policy.confirm
         if confirm == "always":
             return True
@@ -204,7 +179,7 @@ class PolicyGuard:
             return act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type))
         return False
 
-    async def _ask(self, act: ActLike, ask: Ask, clamp: str | None) -> str:
+    async def _ask(self, act: Act, ask: AskPerson, clamp: str | None) -> Answer | str:
         try:
             return await ask(question(act, clamp))
         except Exception as exc:
@@ -213,7 +188,7 @@ class PolicyGuard:
             return "error"
 
 
-def question(act: ActLike, clamp: str | None = None) -> str:
+def question(act: Act, clamp: str | None = None) -> str:
     """What the person is asked: exactly what would be sent, and by which tool."""
     payload_kind = _PAYLOADS.get(act.kind, "payload")
     body = json.dumps(act.payload, ensure_ascii=False, default=str)
@@ -236,7 +211,7 @@ def question(act: ActLike, clamp: str | None = None) -> str:
     return "\n".join(lines)
 
 
-def _answer_text(act: ActLike, answer: str, policy: Policy) -> str:
+def _answer_text(act: Act, answer: str, policy: Policy) -> str:
     what = f"{act.tool} on {act.name}"
     if answer == "decline":
         return f"The person declined {what}; nothing was sent. Do not retry it unless they ask you to."
@@ -249,14 +224,3 @@ def _answer_text(act: ActLike, answer: str, policy: Policy) -> str:
             "that supports elicitation, or ask the robot's operator to change the policy."
         )
     return f"Could not ask the person to confirm {what}, so nothing was sent."
-
-
-def clamp_text(type_name: str, before: Any, after: Any) -> str:
-    """How the velocity caps changed a command, e.g. ``scaled down to the caps: linear 2 → 0.5 m/s``."""
-    old, new = measure(type_name, before), measure(type_name, after)
-    parts = []
-    if not math.isclose(old.linear, new.linear):
-        parts.append(f"linear {old.linear:g} → {new.linear:g} m/s")
-    if not math.isclose(old.angular, new.angular):
-        parts.append(f"angular {old.angular:g} → {new.angular:g} rad/s")
-    return "scaled down to the [velocity] caps: " + ", ".join(parts)

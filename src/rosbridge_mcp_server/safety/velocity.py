@@ -13,6 +13,7 @@ from typing import Any
 __all__ = [
     "TWIST_TYPES",
     "Velocity",
+    "clamp_text",
     "is_velocity_type",
     "measure",
     "scaled",
@@ -120,3 +121,14 @@ def zero_command(type_name: str, ros_version: int, now: float, frame_id: str = "
         {"sec": seconds, "nanosec": fraction} if ros_version == 2 else {"secs": seconds, "nsecs": fraction}
     )
     return {"header": {"stamp": stamp, "frame_id": frame_id}, "twist": zeros}
+
+
+def clamp_text(type_name: str, before: Any, after: Any) -> str:
+    """How the velocity caps changed a command, e.g. ``scaled down to the caps: linear 2 → 0.5 m/s``."""
+    old, new = measure(type_name, before), measure(type_name, after)
+    parts = []
+    if not math.isclose(old.linear, new.linear):
+        parts.append(f"linear {old.linear:g} → {new.linear:g} m/s")
+    if not math.isclose(old.angular, new.angular):
+        parts.append(f"angular {old.angular:g} → {new.angular:g} rad/s")
+    return "scaled down to the [velocity] caps: " + ", ".join(parts)

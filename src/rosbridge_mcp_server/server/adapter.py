@@ -34,6 +34,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
+from rosbridge_mcp_server.safety.activity import SessionActivity
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
@@ -123,9 +124,19 @@ def _short(value: Any) -> str:
 
 
 def tool_from_module(
-    module: ModuleType, client: RosbridgeClient, config: Config, graph: RosGraph, guard: Guard = ALLOW_ALL
+    module: ModuleType,
+    client: RosbridgeClient,
+    config: Config,
+    graph: RosGraph,
+    *,
+    guard: Guard = ALLOW_ALL,
+    activity: SessionActivity | None = None,
 ) -> Tool:
-    """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`."""
+    """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`.
+
+    ``activity`` is shared by every tool of one server, so that stop_robot sees what the others started.
+    """
+    session_activity = activity if activity is not None else SessionActivity()
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
 
@@ -153,6 +164,7 @@ def tool_from_module(
             report_progress=report_progress,
             guard=guard,
             ask_person=_asker(mcp_context),
+            activity=session_activity,
         )
         try:
             answer = await run(ctx, **arguments)

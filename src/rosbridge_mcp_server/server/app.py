@@ -14,8 +14,9 @@ from contextlib import asynccontextmanager
 from mcp.server.mcpserver import MCPServer
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.robot.acting import Guard
 from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import tool_from_module
 from rosbridge_mcp_server.tools import TOOL_MODULES
 
@@ -41,6 +42,11 @@ zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds,
 3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; send \
 zeros to stop. Prefer small, safe values and say what you are about to do.
 4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
+5. stop_robot stops everything this server started (streams, velocity, goals): use it when in doubt.
+
+A safety policy set by the robot's operator may refuse a call (the error names the rule) or ask the person \
+at the client to confirm it. A refusal is final: do not try to reach the same effect another way; tell the \
+user what was refused and why.
 
 A failed call comes back as an error whose text says what went wrong and what to try (a field that does not \
 fit the type, an unknown name, the robot being unreachable). Nothing is queued while the robot is \
@@ -49,12 +55,23 @@ request that timed out may still take effect later: check the robot's state befo
 """
 
 
-def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLOW_ALL) -> MCPServer[None]:
+_READ_ONLY_NOTE = """
+
+This server is read-only: it lists only tools that read the robot, and refuses any other.\
+"""
+
+
+def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None = None) -> MCPServer[None]:
     """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
 
-    Every act on the robot is first approved by *guard* (the safety policy; by default everything is).
+    Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
+    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools.
     """
     graph = RosGraph(client)
+    policy = config.policy
+    approver: Guard = guard if guard is not None else PolicyGuard(policy)
+    activity = SessionActivity()
+    modules = [m for m in TOOL_MODULES if m.SPEC.hints.read_only or not policy.read_only]
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
@@ -65,12 +82,15 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLO
         finally:
             await client.close()
 
-    tools = [tool_from_module(module, client, config, graph, guard) for module in TOOL_MODULES]
+    tools = [
+        tool_from_module(module, client, config, graph, guard=approver, activity=activity)
+        for module in modules
+    ]
     return MCPServer(
         SERVER_NAME,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
-        instructions=INSTRUCTIONS,
+        instructions=INSTRUCTIONS + (_READ_ONLY_NOTE if policy.read_only else ""),
         version=__version__,
         tools=tools,
         lifespan=lifespan,

@@ -18,6 +18,7 @@ from rosbridge_mcp_server.tools import (
     publish_action,
     publish_service,
     publish_topic,
+    stop_robot,
 )
 
 __all__ = ["TOOL_MODULES"]
@@ -31,4 +32,5 @@ TOOL_MODULES: tuple[ModuleType, ...] = (
     list_actions,
     publish_action,
     cancel_action,
+    stop_robot,
 )

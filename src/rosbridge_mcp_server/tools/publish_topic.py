@@ -28,6 +28,9 @@ class PublishAnswer(BaseModel):
     message_type: str = Field(description="The type as the bridge was given it")
     message: dict[str, Any] = Field(description="The message as sent")
     published: bool
+    adjusted: str | None = Field(
+        default=None, description="How the safety policy changed the message before sending (velocity caps)"
+    )
 
 
 SPEC = ToolSpec(
@@ -67,7 +70,15 @@ async def run(
     body = parse_json_object(message, "message", _EXAMPLE)
     sent = await publish_once(ctx, tool=SPEC.name, topic=topic, message_type=message_type, message=body)
     text = f"Published one {sent.type} message on {sent.topic}: {compact_json(sent.message)}"
+    if sent.adjusted:
+        text += f" (the safety policy {sent.adjusted})"
     return ToolAnswer(
         text=text,
-        data=PublishAnswer(topic=sent.topic, message_type=sent.type, message=sent.message, published=True),
+        data=PublishAnswer(
+            topic=sent.topic,
+            message_type=sent.type,
+            message=sent.message,
+            published=True,
+            adjusted=sent.adjusted,
+        ),
     )
