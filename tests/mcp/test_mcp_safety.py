@@ -333,3 +333,22 @@ async def test_every_acting_call_is_one_json_line_in_the_audit_file(sim: Simulat
     ]
     assert math.isclose(entries[1]["payload"]["linear"]["x"], 0.5)
     assert entries[2]["detail"] == "[services] deny '/add_two_ints' matches /add_two_ints"
+
+
+@pytest.mark.parametrize(("person", "arrives"), [(Person(), True), (Person("decline"), False)])
+async def test_a_2026_session_asks_through_an_input_round_and_sends_once(
+    sim_ros2: SimulatedRobot, person: Person, arrives: bool
+) -> None:
+    """On the 2026-07-28 protocol the question comes back as input_required; a yes sends the twist once."""
+    async with open_session(
+        sim_ros2.url, mode="auto", guard=None, policy=policy(confirm="motion"), elicitation_callback=person
+    ) as session:
+        result = await session.call("publish_topic", twist_call(sim_ros2, 0.2))
+    [question] = person.questions
+    assert f"Topic: {CMD_VEL}" in question
+    assert result.is_error is not arrives
+    if arrives:
+        assert [m.msg["linear"]["x"] for m in sim_ros2.world.published[CMD_VEL]] == [0.2]
+    else:
+        assert "The person declined" in text_of(result)
+        assert CMD_VEL not in sim_ros2.world.published

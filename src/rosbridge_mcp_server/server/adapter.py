@@ -12,6 +12,7 @@ failures become ``isError`` results:
 
 from __future__ import annotations
 
+import hashlib
 import inspect
 import logging
 import typing
@@ -19,9 +20,18 @@ from collections.abc import Awaitable, Callable
 from types import ModuleType
 from typing import Annotated, Any
 
+from mcp.server.elicitation import render_elicitation_schema
 from mcp.server.mcpserver import Context
 from mcp.server.mcpserver.tools import Tool
-from mcp.types import CallToolResult, TextContent, ToolAnnotations
+from mcp.types import (
+    CallToolResult,
+    ElicitRequest,
+    ElicitRequestFormParams,
+    ElicitResult,
+    InputRequiredResult,
+    TextContent,
+    ToolAnnotations,
+)
 from pydantic import BaseModel, Field, ValidationError
 
 from rosbridge_mcp_server.errors import (
@@ -149,7 +159,9 @@ def tool_from_module(
     parameters.append(inspect.Parameter("mcp_context", inspect.Parameter.KEYWORD_ONLY, annotation=Context))
     returns = Annotated[CallToolResult, spec.output]
 
-    async def call_tool(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
+    async def call_tool(
+        mcp_context: Context[Any, Any], **arguments: Any
+    ) -> CallToolResult | InputRequiredResult:
         async def report_progress(progress: float, total: float | None, message: str | None) -> None:
             try:
                 await mcp_context.report_progress(progress, total, message)
@@ -168,6 +180,8 @@ def tool_from_module(
         )
         try:
             answer = await run(ctx, **arguments)
+        except _AskInNextRound as asking:
+            return _question_round(asking)
         except (RosbridgeError, ToolFailure) as exc:
             _log.info("%s failed: %s", spec.name, exc)
             return CallToolResult(content=[TextContent(type="text", text=error_text(exc))], is_error=True)
@@ -228,13 +242,47 @@ class _Confirmation(BaseModel):
     approve: bool = Field(description="Let the robot do this")
 
 
+#: From this protocol version on a server cannot send a request in the middle of a call: it answers with
+#: ``InputRequiredResult`` and the client calls again with the person's answers (``input_responses``).
+_INPUT_ROUNDS_FROM = "2026-07-28"
+
+
+class _AskInNextRound(BaseException):
+    """The person must be asked before this call can go on: answer with an ``InputRequiredResult``.
+
+    A ``BaseException`` so that no ``except Exception`` on the way (the guard treats a failed question as a
+    "no") turns "not asked yet" into a refusal; nothing has been sent when it is raised, because the guard
+    asks before anything is sent.
+    """
+
+    def __init__(self, key: str, question: str) -> None:
+        super().__init__(key)
+        self.key = key
+        self.question = question
+
+
 def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
-    """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot)."""
+    """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot).
+
+    Handshake sessions (up to 2025-11-25) get an ``elicitation/create`` request in the middle of the call.
+    In 2026-07-28 sessions the call ends with an ``InputRequiredResult`` holding the question; the client asks
+    the person and calls again, the tool runs again up to the same question, and the answer is found by a key
+    made from the question's text, so a "yes" only ever approves exactly what it was shown.
+    """
 
     async def ask(question: str) -> Answer:
         capabilities = mcp_context.client_capabilities
         if capabilities is None or capabilities.elicitation is None:
             return "unsupported"
+        version = mcp_context.protocol_version
+        if version is not None and version >= _INPUT_ROUNDS_FROM:
+            key = "confirm-" + hashlib.sha256(question.encode()).hexdigest()[:24]
+            response = (mcp_context.input_responses or {}).get(key)
+            if not isinstance(response, ElicitResult):
+                raise _AskInNextRound(key, question)
+            if response.action != "accept":
+                return response.action
+            return "accept" if (response.content or {}).get("approve") is True else "decline"
         try:
             result = await mcp_context.elicit(question, schema=_Confirmation)
         except Exception:
@@ -245,3 +293,12 @@ def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
         return result.action
 
     return ask
+
+
+def _question_round(asking: _AskInNextRound) -> InputRequiredResult:
+    request = ElicitRequest(
+        params=ElicitRequestFormParams(
+            message=asking.question, requested_schema=render_elicitation_schema(_Confirmation)
+        )
+    )
+    return InputRequiredResult(input_requests={asking.key: request})
