@@ -16,8 +16,8 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
-from rosbridge_mcp_server.actions import GoalOutcome, run_goal
 from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.goals import Goal, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
@@ -290,7 +290,7 @@ async def send_goal(
     goal: dict[str, Any],
     timeout: float,
     on_feedback: FeedbackCallback | None = None,
-) -> GoalOutcome:
+) -> Goal:
     """Check the goal against the action server's type, run it until it ends, and return how it ended.
 
     *on_feedback* gets the goal's id, the feedback's number (from 1) and the feedback, so that a caller can
@@ -320,7 +320,7 @@ async def send_goal(
             if maybe is not None:
                 await maybe
 
-    outcome: GoalOutcome = await _carry_out(
+    outcome: Goal = await _carry_out(
         ctx,
         act,
         lambda: run_goal(

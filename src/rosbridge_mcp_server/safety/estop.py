@@ -10,8 +10,8 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.actions import cancel_goals, running_goals
 from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.robot.goals import cancel_goals, running_goals
 from rosbridge_mcp_server.safety.velocity import zero_command
 
 if TYPE_CHECKING:

@@ -6,8 +6,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.actions import UNCONFIRMED_STATUS, GoalOutcome
 from rosbridge_mcp_server.robot.acting import send_goal
+from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -114,7 +114,7 @@ async def run(
     return _answer(outcome)
 
 
-def _answer(outcome: GoalOutcome) -> ToolAnswer:
+def _answer(outcome: Goal) -> ToolAnswer:
     wire_type = outcome.action_type
     last = list(outcome.last_feedback)
     data = GoalAnswer(
