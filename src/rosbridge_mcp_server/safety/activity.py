@@ -32,12 +32,33 @@ class VelocityTopic:
 
 @dataclass
 class Stream:
-    """A running publish stream: the task that runs it, and what it publishes."""
+    """A running publish stream: what it publishes, the task that runs it, and stop_robot's request to end.
+
+    A stream loop waits with :meth:`pause` instead of ``asyncio.sleep``: it returns early, with ``True``, once
+    stop_robot asks the stream to stop; the loop then ends as it would at its planned end (a velocity stream
+    sends its closing zero) and the tool answers normally, saying it was stopped.
+    """
 
     topic: str
     type: str
     task: asyncio.Task[Any]
-    stopped_by_estop: bool = field(default=False)
+    stop_requested: asyncio.Event = field(default_factory=asyncio.Event)
+    ended: asyncio.Event = field(default_factory=asyncio.Event)
+
+    @property
+    def stopped_by_estop(self) -> bool:
+        return self.stop_requested.is_set()
+
+    async def pause(self, seconds: float) -> bool:
+        """Wait up to ``seconds``; ``True`` (at once) when stop_robot asked this stream to stop."""
+        if self.stop_requested.is_set():
+            return True
+        if seconds <= 0:
+            return False
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(seconds):
+                await self.stop_requested.wait()
+        return self.stop_requested.is_set()
 
 
 class SessionActivity:
@@ -45,8 +66,7 @@ class SessionActivity:
 
     def __init__(self) -> None:
         self._velocity: dict[str, VelocityTopic] = {}
-        self._streams: dict[asyncio.Task[Any], Stream] = {}
-        self._estopped: set[asyncio.Task[Any]] = set()
+        self._streams: list[Stream] = []
 
     def published(self, topic: str, type_name: str, message: Any) -> None:
         """Note a message that reached the bridge; only velocity commands are remembered."""
@@ -65,39 +85,49 @@ class SessionActivity:
 
     @contextlib.contextmanager
     def stream(self, topic: str, type_name: str, task: asyncio.Task[Any] | None = None) -> Iterator[Stream]:
-        """Register a running stream for the ``with`` block; ``task`` (default: the current one) is what
-        ``stop_robot`` cancels."""
+        """Register a running stream for the ``with`` block (``task``, default the current one, is what
+        stop_robot cancels if the stream does not end when asked)."""
         runner = task if task is not None else asyncio.current_task()
         if runner is None:
             raise RuntimeError("a stream must run in an asyncio task")
         entry = Stream(topic, type_name, runner)
-        self._streams[runner] = entry
+        self._streams.append(entry)
         try:
             yield entry
         finally:
-            self._streams.pop(runner, None)
+            self._streams.remove(entry)
+            entry.ended.set()
 
     @property
     def streams(self) -> list[Stream]:
-        return list(self._streams.values())
-
-    def stopped_by_estop(self, task: asyncio.Task[Any] | None = None) -> bool:
-        """Whether ``stop_robot`` cancelled ``task`` (default: the current task): it ended on purpose."""
-        runner = task if task is not None else asyncio.current_task()
-        return runner in self._estopped
+        return list(self._streams)
 
     async def stop_streams(self, timeout: float) -> tuple[list[Stream], list[Stream]]:
-        """Cancel every stream, wait up to ``timeout`` s for them to end; returns (ended, still running)."""
+        """Ask every stream to stop and wait up to ``timeout`` s; returns (ended, still running).
+
+        A stream that has not ended when asked is cancelled halfway through the wait: stopping must not
+        depend on the stream's loop looking at the request.
+        """
         streams = self.streams
         for entry in streams:
-            entry.stopped_by_estop = True
-            self._estopped.add(entry.task)
-            entry.task.cancel()
-        tasks = [entry.task for entry in streams]
-        if tasks:
-            await asyncio.wait(tasks, timeout=timeout)
-        ended = [entry for entry in streams if entry.task.done()]
-        running = [entry for entry in streams if not entry.task.done()]
-        for entry in ended:
-            self._estopped.discard(entry.task)
+            entry.stop_requested.set()
+        if streams:
+            await self._wait_ended(streams, timeout / 2)
+            for entry in streams:
+                if not entry.ended.is_set():
+                    entry.task.cancel()
+            await self._wait_ended(streams, timeout / 2)
+        ended = [entry for entry in streams if entry.ended.is_set()]
+        running = [entry for entry in streams if not entry.ended.is_set()]
         return ended, running
+
+    @staticmethod
+    async def _wait_ended(streams: list[Stream], timeout: float) -> None:
+        waiters = [asyncio.ensure_future(entry.ended.wait()) for entry in streams if not entry.ended.is_set()]
+        if not waiters:
+            return
+        try:
+            await asyncio.wait(waiters, timeout=timeout)
+        finally:
+            for waiter in waiters:
+                waiter.cancel()
