@@ -302,6 +302,8 @@ async def test_stop_robot_cancels_a_running_goal_within_a_second(make_sim: Any, 
     assert len(stopped.structured_content["goals_cancelled"]) == 1
     assert outcome.structured_content is not None
     assert outcome.structured_content["status"] in ("canceled", "preempted")
+    assert outcome.structured_content["canceled_by"] == "stop_robot"
+    assert "it was cancelled by stop_robot" in text_of(outcome)
 
 
 async def test_stop_robot_with_nothing_started_says_so(sim_ros2: SimulatedRobot) -> None:

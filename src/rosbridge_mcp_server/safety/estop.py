@@ -72,7 +72,7 @@ async def emergency_stop(client: RosbridgeClient, activity: SessionActivity) -> 
 
     for goal in running_goals(client):
         try:
-            await cancel_goals(client, goal.action, goal.goal_id)
+            await cancel_goals(client, goal.action, goal.goal_id, by="stop_robot")
         except RosbridgeError as exc:
             report.failures.append(f"cancelling goal {goal.goal_id} on {goal.action} failed: {exc}")
         else:
