@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import io
 import json
 import logging
@@ -271,3 +272,15 @@ def test_a_huge_message_is_shortened_in_the_question() -> None:
     text = question(cmd({"data": "x" * 10_000}, "std_msgs/msg/String"))
     assert "more characters not shown" in text
     assert len(text) < 5000
+
+
+async def test_a_person_who_does_not_answer_in_time_has_said_no() -> None:
+    """confirm_timeout: silence is a refusal, so a late yes cannot send a command whose moment has passed."""
+
+    async def silent(text: str) -> Answer:
+        await asyncio.Event().wait()
+        return "accept"
+
+    g = guard({"confirm": "always", "confirm_timeout": 0.05})
+    with pytest.raises(PolicyRefusal, match=r"did not answer the confirmation .* within 0\.05 s"):
+        await g.approve(cmd(twist(0.1)), silent)

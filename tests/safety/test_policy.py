@@ -12,6 +12,7 @@ from rosbridge_mcp_server.safety import NameRules, Policy, PolicyError, load_pol
 FULL = """
 read_only = false
 confirm = "motion"
+confirm_timeout = 45
 [topics]
 allow = ["/turtle1/*"]
 deny = ["/rosout"]
@@ -49,6 +50,7 @@ def test_every_key_of_the_sample_is_read(tmp_path: Path) -> None:
     """The documented sample loads into the values it spells."""
     policy = load_policy(write(tmp_path, FULL))
     assert policy.confirm == "motion"
+    assert policy.confirm_timeout == 45.0
     assert policy.topics == NameRules(allow=("/turtle1/*",), deny=("/rosout",))
     assert policy.services == NameRules(allow=None, deny=("/rosapi/*",))
     assert policy.parameters.allow == ()
@@ -98,6 +100,8 @@ def test_a_policy_error_is_a_configuration_error(tmp_path: Path) -> None:
         ("[velocity]\nmode = 'slow'", "mode must be 'refuse' or 'clamp'"),
         ("[topics]\nallow = '/a'", "allow must be a list"),
         ("[publish]\nmax_rate_hz = 0", "max_rate_hz must be more than 0"),
+        ("confirm_timeout = 0", "confirm_timeout must be more than 0"),
+        ("confirm_timeout = 'long'", "confirm_timeout must be a number of seconds"),
         ("topics = 3", "topics must be a table"),
         ("read_only = tru", "not valid TOML"),
     ],

@@ -12,6 +12,7 @@ is one audit line (:class:`Audit`): on stderr, and as JSON in the audit file whe
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import datetime
 import json
@@ -185,7 +186,10 @@ class PolicyGuard:
 
     async def _ask(self, act: Act, ask: AskPerson, clamp: str | None) -> Answer | str:
         try:
-            return await ask(question(act, clamp))
+            async with asyncio.timeout(self.policy.confirm_timeout):
+                return await ask(question(act, clamp))
+        except TimeoutError:
+            return "timeout"
         except Exception as exc:
             # A client that fails the request (or never answers in time) has not said yes.
             _log.warning("asking the person failed: %s", exc)
@@ -226,5 +230,10 @@ def _answer_text(act: Act, answer: str, policy: Policy) -> str:
             f"The safety policy requires a person to confirm {what} (confirm = {policy.confirm!r}), but this "
             "MCP client cannot ask (it does not support elicitation); nothing was sent. Use an MCP client "
             "that supports elicitation, or ask the robot's operator to change the policy."
+        )
+    if answer == "timeout":
+        return (
+            f"The person did not answer the confirmation for {what} within {policy.confirm_timeout:g} s, so "
+            "nothing was sent (a late yes could move the robot when the moment has passed)."
         )
     return f"Could not ask the person to confirm {what}, so nothing was sent."

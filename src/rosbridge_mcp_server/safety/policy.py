@@ -6,6 +6,7 @@ robot uncapped). The file::
 
     read_only = false            # true: only reading tools are listed or callable
     confirm = "never"            # "never" | "motion" | "always": ask the person before acting
+    confirm_timeout = 120        # seconds the person has to answer; no answer is a "no"
     [topics]                     # publishing; also [services], [actions], [parameters]
     allow = ["/turtle1/*"]       # absent = everything; shell-style globs, * crosses /
     deny = ["/rosout"]           # deny wins over allow
@@ -32,6 +33,7 @@ from typing import Any, Literal
 __all__ = [
     "ACT_KINDS",
     "CONFIRM_MODES",
+    "DEFAULT_CONFIRM_TIMEOUT",
     "NameRules",
     "Policy",
     "PolicyError",
@@ -44,6 +46,9 @@ __all__ = [
 Confirm = Literal["never", "motion", "always"]
 CONFIRM_MODES: tuple[Confirm, ...] = ("never", "motion", "always")
 VelocityMode = Literal["refuse", "clamp"]
+#: How long the person has to answer a confirmation. An answer much later would send a command the situation
+#: may no longer call for, so silence counts as a no.
+DEFAULT_CONFIRM_TIMEOUT = 120.0
 #: The policy sections with allow/deny lists, one per kind of act.
 ACT_KINDS = ("topics", "services", "actions", "parameters")
 
@@ -102,6 +107,7 @@ class Policy:
 
     read_only: bool = False
     confirm: Confirm = "never"
+    confirm_timeout: float = DEFAULT_CONFIRM_TIMEOUT
     topics: NameRules = field(default_factory=NameRules)
     services: NameRules = field(default_factory=NameRules)
     actions: NameRules = field(default_factory=NameRules)
@@ -133,7 +139,8 @@ class Policy:
         if self.read_only:
             lines.append("  read_only: only reading tools are listed or callable")
             return lines
-        lines.append(f"  confirm = {self.confirm}: {_CONFIRM_TEXT[self.confirm]}")
+        asked = f" (no answer within {self.confirm_timeout:g} s is a no)" if self.confirm != "never" else ""
+        lines.append(f"  confirm = {self.confirm}: {_CONFIRM_TEXT[self.confirm]}{asked}")
         for section in ACT_KINDS:
             rules: NameRules = getattr(self, section)
             if rules.is_open:
@@ -166,7 +173,7 @@ _CONFIRM_TEXT: dict[Confirm, str] = {
     "always": "the person confirms every acting call",
 }
 
-_TOP_KEYS = ("read_only", "confirm", *ACT_KINDS, "velocity", "publish")
+_TOP_KEYS = ("read_only", "confirm", "confirm_timeout", *ACT_KINDS, "velocity", "publish")
 _RULE_KEYS = ("allow", "deny")
 _VELOCITY_KEYS = ("max_linear", "max_angular", "mode")
 _PUBLISH_KEYS = ("max_rate_hz", "max_duration")
@@ -198,10 +205,14 @@ def parse_policy(data: Mapping[str, Any], *, where: str = "policy") -> Policy:
             f"{where}: confirm must be one of {', '.join(repr(m) for m in CONFIRM_MODES)}, not "
             f"{confirm_text!r}"
         )
+    timeout = _positive(data, "confirm_timeout", "", where, "seconds")
+    if timeout == 0:
+        raise PolicyError(f"{where}: confirm_timeout must be more than 0 seconds")
     rules = {section: _name_rules(data, section, where) for section in ACT_KINDS}
     return Policy(
         read_only=read_only,
         confirm=confirm_text,
+        confirm_timeout=DEFAULT_CONFIRM_TIMEOUT if timeout is None else timeout,
         topics=rules["topics"],
         services=rules["services"],
         actions=rules["actions"],
@@ -258,7 +269,8 @@ def _positive(table: Mapping[str, Any], key: str, section: str, where: str, unit
         return None
     value = table[key]
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
-        raise PolicyError(f"{where}: [{section}] {key} must be a number of {unit} ≥ 0, not {value!r}")
+        place = f"[{section}] " if section else ""
+        raise PolicyError(f"{where}: {place}{key} must be a number of {unit} ≥ 0, not {value!r}")
     return float(value)
 
 
