@@ -284,3 +284,12 @@ async def test_a_person_who_does_not_answer_in_time_has_said_no() -> None:
     g = guard({"confirm": "always", "confirm_timeout": 0.05})
     with pytest.raises(PolicyRefusal, match=r"did not answer the confirmation .* within 0\.05 s"):
         await g.approve(cmd(twist(0.1)), silent)
+
+
+async def test_a_huge_payload_is_cut_in_the_audit_file_with_its_length() -> None:
+    """A camera frame does not land whole in every audit line; its length is kept."""
+    audit = io.StringIO()
+    await guard({}, audit).approve(cmd({"data": "x" * 100_000}, "std_msgs/msg/String"), Person())
+    entry = json.loads(audit.getvalue())
+    assert entry["payload"]["characters"] > 100_000
+    assert len(audit.getvalue()) < 20_000

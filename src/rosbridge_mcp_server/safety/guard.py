@@ -28,12 +28,14 @@ if TYPE_CHECKING:
     # would be circular.
     from rosbridge_mcp_server.robot.acting import Act, Answer, AskPerson
 
-__all__ = ["QUESTION_LIMIT", "Audit", "PolicyGuard", "question"]
+__all__ = ["AUDIT_PAYLOAD_LIMIT", "QUESTION_LIMIT", "Audit", "PolicyGuard", "question"]
 
 _log = logging.getLogger("rosbridge_mcp_server.audit")
 
 #: Longest message shown to the person in full; a camera image is not something to read in a dialog.
 QUESTION_LIMIT = 4000
+#: Longest audit file line; beyond it the payload is cut, with its full length noted.
+AUDIT_PAYLOAD_LIMIT = 16_000
 
 
 _NOUNS = {"topic": "topic", "service": "service", "action": "action", "parameter": "parameter"}
@@ -81,8 +83,14 @@ class Audit:
             "rate_hz": act.rate_hz,
             "duration": act.duration,
         }
+        line = json.dumps(entry, ensure_ascii=False, default=str)
+        if len(line) > AUDIT_PAYLOAD_LIMIT:
+            # A camera frame in every line would bury the audit; its size and start are enough.
+            body = json.dumps(act.payload, ensure_ascii=False, default=str)
+            entry["payload"] = {"truncated": body[: AUDIT_PAYLOAD_LIMIT // 4], "characters": len(body)}
+            line = json.dumps(entry, ensure_ascii=False, default=str)
         try:
-            self._stream.write(json.dumps(entry, ensure_ascii=False, default=str) + "\n")
+            self._stream.write(line + "\n")
             self._stream.flush()
         except (OSError, ValueError):
             # A full disk must not stop the robot being driven safely; stderr still has the line.
