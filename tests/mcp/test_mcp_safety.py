@@ -83,16 +83,22 @@ class Person:
 
 async def test_read_only_lists_only_reading_tools_and_refuses_every_acting_call(sim: SimulatedRobot) -> None:
     """No acting tool is listed, each one called by name anyway is an error, and nothing reaches the robot."""
-    async with open_session(sim.url, guard=None, policy=Policy(read_only=True)) as session:
+    stream = io.StringIO()
+    guard = PolicyGuard(Policy(read_only=True), Audit(stream))
+    async with open_session(sim.url, guard=guard, policy=Policy(read_only=True)) as session:
         listed = (await session.mcp.list_tools()).tools
         calls = acting_calls(sim)
         errors = {name: await session.error(name, arguments) for name, arguments in calls.items()}
         topics = await session.ok("list_topics")
+        unknown = await session.error("no_such_tool", {})
     assert all(tool.annotations is not None and tool.annotations.read_only_hint for tool in listed)
     acting = {m.SPEC.name for m in TOOL_MODULES if not m.SPEC.hints.read_only}
     assert acting >= set(calls)
     assert not acting & {tool.name for tool in listed}
-    assert all("Unknown tool" in text for text in errors.values()), errors
+    assert all("is not available: this server is read-only" in text for text in errors.values()), errors
+    assert "Unknown tool" in unknown
+    audited = [json.loads(line) for line in stream.getvalue().splitlines()]
+    assert [(e["tool"], e["outcome"]) for e in audited] == [(name, "withheld: read-only") for name in calls]
     assert topics.structured_content is not None
     nothing_reached(sim)
 

@@ -10,14 +10,17 @@ import logging
 import typing
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from typing import Any, Literal
 
 from mcp.server.mcpserver import MCPServer
+from mcp.types import CallToolResult, TextContent
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.robot.acting import Guard
+from rosbridge_mcp_server.robot.acting import Act, Guard
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import tool_from_module
+from rosbridge_mcp_server.server.sdk import server_answering_unlisted
 from rosbridge_mcp_server.tools import TOOL_MODULES
 
 if typing.TYPE_CHECKING:
@@ -86,8 +89,22 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None
         tool_from_module(module, client, config, graph, guard=approver, activity=activity)
         for module in modules
     ]
-    return MCPServer(
-        SERVER_NAME,
+    withheld = {m.SPEC.name for m in TOOL_MODULES} - {m.SPEC.name for m in modules}
+
+    def unlisted(name: str, arguments: dict[str, Any]) -> CallToolResult | None:
+        """A withheld acting tool called by name anyway: refused, and audited like any refusal."""
+        if name not in withheld:
+            return None
+        approver.record(Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only")
+        text = (
+            f"{name} is not available: this server is read-only (its operator started it with --read-only or "
+            "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
+        )
+        return CallToolResult(content=[TextContent(type="text", text=text)], is_error=True)
+
+    return server_answering_unlisted(
+        unlisted,
+        name=SERVER_NAME,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
         instructions=INSTRUCTIONS + (_READ_ONLY_NOTE if policy.read_only else ""),
@@ -96,3 +113,12 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None
         lifespan=lifespan,
         log_level=config.log_level,
     )
+
+
+#: What a withheld tool would have acted on, for its audit line.
+_KIND_OF: dict[str, Literal["topic", "service", "action", "parameter"]] = {
+    "publish_service": "service",
+    "publish_action": "action",
+    "cancel_action": "action",
+    "set_parameter": "parameter",
+}
