@@ -58,7 +58,7 @@ async def test_send_action_goal_returns_the_result_and_streams_feedback(
     client = await make_client(robot2)
     feedback: list[dict[str, Any]] = []
 
-    async def on_feedback(values: dict[str, Any]) -> None:
+    async def on_feedback(_goal: goals.Goal, values: dict[str, Any]) -> None:
         feedback.append(values)
 
     result = await ros2.send_action_goal(
@@ -170,8 +170,8 @@ async def test_run_goal_succeeds_with_feedback_on_every_dialect(
     client = await make_client(robot)
     seen: list[int] = []
 
-    async def on_feedback(count: int, values: dict[str, Any]) -> None:
-        seen.append(count)
+    async def on_feedback(goal: goals.Goal, values: dict[str, Any]) -> None:
+        seen.append(goal.feedback_count)
 
     outcome = await goals.run_goal(
         client, "/fibonacci", action_type_for(robot), {"order": 6}, timeout=5.0, on_feedback=on_feedback
@@ -335,7 +335,12 @@ async def test_a_plain_function_can_take_feedback(sim_ros2: SimulatedRobot, make
     client = await make_client(sim_ros2)
     seen: list[dict[str, Any]] = []
     result = await ros2.send_action_goal(
-        client, "/fibonacci", ROS2_TYPE, {"order": 3}, on_feedback=seen.append, timeout=5.0
+        client,
+        "/fibonacci",
+        ROS2_TYPE,
+        {"order": 3},
+        on_feedback=lambda _goal, values: seen.append(values),
+        timeout=5.0,
     )
     assert result.status_code == 4
     assert seen

@@ -1,4 +1,4 @@
-"""Checked sends: every act on the robot goes through here, and through the safety seam.
+"""Checked sends: every act on the robot goes through here and through the safety seam (cancels: unguarded).
 
 Each function takes what a caller gave (names, types, a message), makes the name absolute, spells the type
 for the bridge, compares it with the graph, checks the message against the type's definitions (raising a
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
-from rosbridge_mcp_server.robot.goals import Goal, run_goal
+from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
@@ -37,7 +37,6 @@ __all__ = [
     "Acting",
     "Answer",
     "AskPerson",
-    "FeedbackCallback",
     "Guard",
     "Published",
     "ServiceReply",
@@ -46,6 +45,7 @@ __all__ = [
     "publish_once",
     "require_action_server",
     "send_goal",
+    "stop_goals",
 ]
 
 #: Longest wait for the bridge's pong before a publish (less when the configured request timeout is shorter).
@@ -174,8 +174,8 @@ async def publish_once(
     body = adapt_message(message, info.version)
     require_fit(
         body,
-        bridge_type,
         typedefs,
+        type_name=bridge_type,
         ros_version=info.version,
         nothing_sent="Nothing was published",
         looks_like=f"A {bridge_type} message",
@@ -248,14 +248,8 @@ async def call_service(
     if graph_type:
         typedefs = await ctx.graph.service_request_typedefs(srv_type)
         if typedefs:
-            require_fit(
-                body,
-                next(iter(typedefs)),
-                typedefs,
-                ros_version=info.version,
-                nothing_sent="The service was not called",
-                looks_like="A request",
-            )
+            fit = "The service was not called"
+            require_fit(body, typedefs, ros_version=info.version, nothing_sent=fit, looks_like="A request")
 
     act = await _approved(ctx, Act(tool, "service", name, srv_type, body))
     try:
@@ -277,9 +271,6 @@ async def call_service(
 
 # --- action goals -----------------------------------------------------------------------------------------
 
-#: Told of each feedback of a running goal: (goal id, feedback number from 1, feedback message).
-FeedbackCallback = Callable[[str, int, dict[str, Any]], Awaitable[None] | None]
-
 
 async def send_goal(
     ctx: Acting,
@@ -289,12 +280,12 @@ async def send_goal(
     action_type: str,
     goal: dict[str, Any],
     timeout: float,
-    on_feedback: FeedbackCallback | None = None,
+    on_feedback: GoalFeedback | None = None,
 ) -> Goal:
     """Check the goal against the action server's type, run it until it ends, and return how it ended.
 
-    *on_feedback* gets the goal's id, the feedback's number (from 1) and the feedback, so that a caller can
-    name the goal (to cancel it) while it runs.
+    *on_feedback* gets the running goal (``goal_id``, ``feedback_count``) and each feedback, so that a caller
+    can name the goal (to cancel it) while it runs.
     """
     name = absolute_name(action, "action")
     info = await ctx.graph.ros_info()
@@ -303,34 +294,15 @@ async def send_goal(
     typedefs = await ctx.graph.action_goal_typedefs(action_type)
     if typedefs:
         require_fit(
-            goal,
-            next(iter(typedefs)),
-            typedefs,
-            ros_version=info.version,
-            nothing_sent="No goal was sent",
-            looks_like="A goal",
+            goal, typedefs, ros_version=info.version, nothing_sent="No goal was sent", looks_like="A goal"
         )
 
     act = await _approved(ctx, Act(tool, "action", name, wire_type, goal))
-    goal_id = ctx.client.new_goal_id(act.name)
-
-    async def feedback(index: int, values: dict[str, Any]) -> None:
-        if on_feedback is not None:
-            maybe = on_feedback(goal_id, index, values)
-            if maybe is not None:
-                await maybe
-
     outcome: Goal = await _carry_out(
         ctx,
         act,
         lambda: run_goal(
-            ctx.client,
-            act.name,
-            action_type,
-            act.payload,
-            timeout=timeout,
-            on_feedback=feedback,
-            goal_id=goal_id,
+            ctx.client, act.name, action_type, act.payload, timeout=timeout, on_feedback=on_feedback
         ),
     )
     return outcome
@@ -354,3 +326,18 @@ async def require_action_server(graph: RosGraph, name: str, action_type: str | N
         raise NotSentError(
             f"Action {name} has type {found}, not {action_type}. Send a goal of type {found} instead."
         )
+
+
+async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) -> CancelReport:
+    """Cancel one goal of *action* (by id) or all of them, after checking that the action is served.
+
+    A cancel only stops what the robot does, so it does not ask the guard.
+    """
+    name = absolute_name(action, "action")
+    hint = await ctx.graph.missing_action(name)
+    if hint is not None:
+        raise NotSentError(
+            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} Call "
+            "list_actions to see the actions."
+        )
+    return await cancel_goals(ctx.client, name, goal_id)

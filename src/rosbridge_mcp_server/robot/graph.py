@@ -1,20 +1,19 @@
-"""Graph look-ups through rosapi, with the dialect quirks handled, for the tools.
+"""Graph look-ups through rosapi, with the dialect quirks handled (the domain's view of the robot's graph).
 
 Everything here is an ordinary ``call_service`` to a ``/rosapi/...`` service on the shared client. What
-differs
-between bridges:
+differs between bridges (``docs/rosbridge-behaviour.md``):
 
 * ROS 1 (rosapi 0.11) has no ``get_ros_version``, ``action_type`` or ``interfaces``; ``action_servers`` may
-list a
-  namespace twice; the type of an action is only visible as the type of its ``<ns>/goal`` topic
+  list a namespace twice; the type of an action is only visible as the type of its ``<ns>/goal`` topic
   (``pkg/NameActionGoal``).
-* ROS 2 ``action_type`` exists from Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0; before that we fall back to the
-  hidden ``<ns>/_action/feedback`` topic, whose type is ``pkg/action/Name_FeedbackMessage``.
+* ROS 2 ``action_type`` exists from Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0; before that we fall back to
+  the hidden ``<ns>/_action/feedback`` topic, whose type is ``pkg/action/Name_FeedbackMessage``.
 * ``message_details`` answers an unknown type with an empty ``typedefs`` list (both lines); on ROS 2 it may
-also
-  never answer if the handler raises, so such a failure is reported as an unknown type as well.
+  also never answer if the handler raises, so such a failure is reported as an unknown type as well.
 
-Type definitions are cached per connection: a reconnect may be to a robot with other packages installed.
+What one connection has learnt (type definitions, the topics it publishes, service types) is one object,
+replaced whole when the client reports a new connection: a reconnect may be to a robot with other packages
+installed.
 """
 
 from __future__ import annotations

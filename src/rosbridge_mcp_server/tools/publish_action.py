@@ -101,8 +101,9 @@ async def run(
     body = parse_json_object(goal, "goal", _EXAMPLE)
 
     # Every progress message names the goal: a client can cancel it by id while this call still waits.
-    async def on_feedback(goal_id: str, index: int, feedback: dict[str, Any]) -> None:
-        message = f"goal {goal_id} feedback {index}: {compact_json(feedback, 300)}"
+    async def on_feedback(running: Goal, feedback: dict[str, Any]) -> None:
+        index = running.feedback_count
+        message = f"goal {running.goal_id} feedback {index}: {compact_json(feedback, 300)}"
         await ctx.report_progress(float(index), None, message)
 
     outcome = await send_goal(

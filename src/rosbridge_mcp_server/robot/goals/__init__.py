@@ -13,7 +13,6 @@ from __future__ import annotations
 import base64
 import binascii
 import contextlib
-from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any, Final
 
 from rosbridge_mcp_server.errors import GoalTimeoutError, NotConnectedError, ServiceError
@@ -24,6 +23,7 @@ from rosbridge_mcp_server.robot.goals.record import (
     CanceledBy,
     CancelReport,
     Goal,
+    GoalFeedback,
 )
 from rosbridge_mcp_server.robot.goals.registry import GoalRegistry, goals_of
 from rosbridge_mcp_server.robot.names import absolute
@@ -38,6 +38,7 @@ __all__ = [
     "CancelReport",
     "CanceledBy",
     "Goal",
+    "GoalFeedback",
     "GoalRegistry",
     "cancel_goals",
     "goals_of",
@@ -46,9 +47,6 @@ __all__ = [
 ]
 
 _ZERO_UUID: Final = [0] * 16
-
-#: Told of each feedback of a goal: (feedback number from 1, feedback message).
-CountedFeedback = Callable[[int, dict[str, Any]], Awaitable[None] | None]
 
 
 def running_goals(client: RosbridgeClient, action: str | None = None) -> list[Goal]:
@@ -63,7 +61,7 @@ async def run_goal(
     goal: dict[str, Any],
     *,
     timeout: float,
-    on_feedback: CountedFeedback | None = None,
+    on_feedback: GoalFeedback | None = None,
     goal_id: str | None = None,
 ) -> Goal:
     """Send a goal and wait (up to *timeout* seconds) for it to end; returns the goal, ended.
@@ -78,24 +76,16 @@ async def run_goal(
     action = absolute(action)
     gid = goal_id if goal_id is not None else client.new_goal_id(action)
 
-    async def counted(record: Goal, values: dict[str, Any]) -> None:
-        if on_feedback is not None:
-            maybe = on_feedback(record.feedback_count, values)
-            if maybe is not None:
-                await maybe
-
-    registry = goals_of(client)
-    record = registry.start(
-        Goal(gid, action, action_type_names(action_type).for_version(info.version), info.version)
-    )
-    if info.version == 1:
-        return await ros1.run(client, registry, record, goal, timeout=timeout, on_feedback=counted)
-    try:
-        return await ros2.run(client, registry, record, goal, timeout=timeout, on_feedback=counted)
-    except GoalTimeoutError as exc:
-        if exc.status is None:
-            return record.end(0, None, timed_out=True, confirmed=False)
-        return record.end(exc.status, exc.result, timed_out=True)
+    wire_type = action_type_names(action_type).for_version(info.version)
+    with goals_of(client).tracking(Goal(gid, action, wire_type, info.version)) as record:
+        if info.version == 1:
+            return await ros1.run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
+        try:
+            return await ros2.run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
+        except GoalTimeoutError as exc:
+            if exc.status is None:
+                return record.end(0, None, timed_out=True, confirmed=False)
+            return record.end(exc.status, exc.result, timed_out=True)
 
 
 async def cancel_goals(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
@@ -16,6 +17,7 @@ __all__ = [
     "CancelReport",
     "CanceledBy",
     "Goal",
+    "GoalFeedback",
 ]
 
 CanceledBy = Literal["timeout", "request_cancelled", "cancel_action", "stop_robot"]
@@ -54,10 +56,15 @@ class Goal:
     result: dict[str, Any] | None = None
     canceled_by: CanceledBy | None = None
 
-    def add_feedback(self, values: dict[str, Any]) -> None:
-        """Count a feedback message and keep it among the last few."""
+    async def take_feedback(self, values: Any, listener: GoalFeedback | None) -> None:
+        """Count a feedback message (anything but an object counts as ``{}``), keep it, tell *listener*."""
+        feedback = values if isinstance(values, dict) else {}
         self.feedback_count += 1
-        self.last_feedback.append(values)
+        self.last_feedback.append(feedback)
+        if listener is not None:
+            maybe = listener(self, feedback)
+            if maybe is not None:
+                await maybe
 
     def end(self, code: int, result: Any, *, timed_out: bool = False, confirmed: bool = True) -> Goal:
         """Record how the goal ended (*confirmed*: the robot said so, not only our timeout); returns self."""
@@ -89,3 +96,7 @@ class CancelReport:
     goals_canceling: list[str] | None = None
     """ROS 2, cancel-all: goal UUIDs (hex) the action server said it is canceling, ours or not."""
     note: str | None = None
+
+
+#: Told of each feedback message of a goal, after the goal counted it (``goal.feedback_count`` is its number).
+GoalFeedback = Callable[[Goal, dict[str, Any]], Awaitable[None] | None]

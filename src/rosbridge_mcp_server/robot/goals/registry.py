@@ -12,6 +12,7 @@ import contextlib
 import logging
 import time
 import weakref
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Final
 
 from rosbridge_mcp_server.errors import ActionError
@@ -75,17 +76,17 @@ class GoalRegistry:
 
     # --- running goals ----------------------------------------------------------------------------------
 
-    def start(self, goal: Goal) -> Goal:
-        """Register *goal* as running; :class:`ActionError` if its id is already in use."""
+    @contextlib.contextmanager
+    def tracking(self, goal: Goal) -> Iterator[Goal]:
+        """*goal* is running for the duration; :class:`ActionError` if its id is already in use."""
         if goal.goal_id in self._running:
             raise ActionError(goal.action, f"goal id {goal.goal_id!r} is already in use by a running goal")
         self._running[goal.goal_id] = goal
-        return goal
-
-    def finish(self, goal: Goal) -> None:
-        """*goal* no longer runs (it ended, or we gave up on it)."""
-        if self._running.get(goal.goal_id) is goal:
-            del self._running[goal.goal_id]
+        try:
+            yield goal
+        finally:
+            if self._running.get(goal.goal_id) is goal:
+                del self._running[goal.goal_id]
 
     def running(self, action: str | None = None) -> list[Goal]:
         """Goals running now (all, or those of *action*)."""

@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any, Final
 
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, RequestTimeoutError, RosbridgeError
 from rosbridge_mcp_server.robot.goals.actionlib import goal_id_of, publish_cancel
-from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal
-from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
+from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
+from rosbridge_mcp_server.robot.goals.registry import GoalRegistry, goals_of
 from rosbridge_mcp_server.wire.dialect import action_type_names, is_terminal_status
 
 if TYPE_CHECKING:
@@ -27,38 +26,17 @@ ACTIONLIB_SERVER_WAIT: Final = 3.0
 #: A ROS 1 goal whose status says it finished, but whose result never came, ends after this long.
 RESULT_AFTER_STATUS_GRACE: Final = 1.0
 
-#: Told of each feedback message of a goal (after it was counted on the goal).
-Feedback = Callable[[Goal, dict[str, Any]], Awaitable[None] | None]
-
 
 async def run(
     client: RosbridgeClient,
-    registry: GoalRegistry,
     record: Goal,
     goal: dict[str, Any],
     *,
     timeout: float,
-    on_feedback: Feedback | None,
+    on_feedback: GoalFeedback | None,
 ) -> Goal:
-    """Send *goal* on ``<ns>/goal``, follow it until it ends (at *timeout*: cancel it); returns *record*.
-
-    *record* is registered in *registry*, which it leaves when this returns.
-    """
-    try:
-        return await _run(client, registry, record, goal, timeout=timeout, on_feedback=on_feedback)
-    finally:
-        registry.finish(record)
-
-
-async def _run(
-    client: RosbridgeClient,
-    registry: GoalRegistry,
-    record: Goal,
-    goal: dict[str, Any],
-    *,
-    timeout: float,
-    on_feedback: Feedback | None,
-) -> Goal:
+    """Send *goal* on ``<ns>/goal``, follow it until it ends (at *timeout*: cancel it); returns *record*."""
+    registry = goals_of(client)
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     ns = record.action
@@ -148,7 +126,7 @@ class Progress:
 
 
 async def follow(
-    queue: asyncio.Queue[tuple[str, Any]], record: Goal, on_feedback: Feedback | None, seen: Progress
+    queue: asyncio.Queue[tuple[str, Any]], record: Goal, on_feedback: GoalFeedback | None, seen: Progress
 ) -> tuple[int, Any]:
     """Wait for our goal's result, counting its feedback on *record*; returns (status, result)."""
     loop = asyncio.get_running_loop()
@@ -176,13 +154,7 @@ async def follow(
                 return seen.code, msg.get("result")
         elif kind == "feedback":
             if goal_id_of(msg.get("status")) == gid:
-                values = msg.get("feedback")
-                feedback = values if isinstance(values, dict) else {}
-                record.add_feedback(feedback)
-                if on_feedback is not None:
-                    maybe = on_feedback(record, feedback)
-                    if maybe is not None:
-                        await maybe
+                await record.take_feedback(msg.get("feedback"), on_feedback)
         elif kind == "status":
             for status in msg.get("status_list") or []:
                 if goal_id_of(status) == gid and isinstance(status.get("status"), int):

@@ -7,7 +7,6 @@ its cancel, which goes on the main connection: rosbridge keeps one goal table pe
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import (
@@ -15,7 +14,7 @@ from rosbridge_mcp_server.errors import (
     ConnectionLostError,
     GoalTimeoutError,
 )
-from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal
+from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
 from rosbridge_mcp_server.robot.goals.registry import CANCEL_CONFIRM_SECONDS, GoalRegistry, goals_of
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import action_type_names
@@ -23,10 +22,7 @@ from rosbridge_mcp_server.wire.dialect import action_type_names
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import GoalLane, RosbridgeClient
 
-__all__ = ["GoalFeedback", "run", "send_action_goal"]
-
-#: Told of each feedback message of a goal (after it was counted on the goal).
-GoalFeedback = Callable[[Goal, dict[str, Any]], Awaitable[None] | None]
+__all__ = ["run", "send_action_goal"]
 
 
 async def send_action_goal(
@@ -36,7 +32,7 @@ async def send_action_goal(
     goal: dict[str, Any],
     *,
     timeout: float,
-    on_feedback: Callable[[dict[str, Any]], Awaitable[None] | None] | None = None,
+    on_feedback: GoalFeedback | None = None,
     goal_id: str | None = None,
 ) -> Goal:
     """Send a ROS 2 goal on a lane of its own and wait for its result; returns the goal, ended.
@@ -48,35 +44,26 @@ async def send_action_goal(
     If the awaiting task is cancelled, the goal is cancelled too before the task ends.
     """
     gid = goal_id if goal_id is not None else client.new_goal_id(action)
-    registry = goals_of(client)
-    record = registry.start(Goal(gid, action, action_type_names(action_type).ros2, 2))
-
-    def feedback(_record: Goal, values: dict[str, Any]) -> Awaitable[None] | None:
-        return on_feedback(values) if on_feedback is not None else None
-
-    return await run(client, registry, record, goal, timeout=timeout, on_feedback=feedback)
+    with goals_of(client).tracking(Goal(gid, action, action_type_names(action_type).ros2, 2)) as record:
+        return await run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
 
 
 async def run(
     client: RosbridgeClient,
-    registry: GoalRegistry,
     record: Goal,
     goal: dict[str, Any],
     *,
     timeout: float,
     on_feedback: GoalFeedback | None,
 ) -> Goal:
-    """Run *record* (registered in *registry*, left when this returns); see :func:`send_action_goal`."""
+    """Run *record* (a goal the registry tracks); see :func:`send_action_goal`."""
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     action, gid, wire_type = record.action, record.goal_id, record.action_type
-    try:
-        session = client.require_session()
-        if not session.info.has_action_ops:
-            raise ActionError(action, "this bridge runs ROS 1, which has no action ops; use actionlib topics")
-    except BaseException:
-        registry.finish(record)
-        raise
+    registry = goals_of(client)
+    session = client.require_session()
+    if not session.info.has_action_ops:
+        raise ActionError(action, "this bridge runs ROS 1, which has no action ops; use actionlib topics")
     # Whether a cancel on the goal's own lane is read in time depends on the bridge the goal went to.
     in_order = session.lanes_by_default
     what = f"action goal {gid} on {action}"
@@ -117,7 +104,6 @@ async def run(
         status, values = _result(action, frame)
         return record.end(status, values)
     finally:
-        registry.finish(record)
         try:
             if sent and not finished:
                 await asyncio.shield(_cancel_quietly(client, registry, record, lane, in_order))
@@ -134,13 +120,7 @@ async def _follow(lane: GoalLane, record: Goal, on_feedback: GoalFeedback | None
         if op == "action_result":
             return frame
         if op == "action_feedback":
-            values = frame.get("values")
-            feedback = values if isinstance(values, dict) else {}
-            record.add_feedback(feedback)
-            if on_feedback is not None:
-                maybe = on_feedback(record, feedback)
-                if maybe is not None:
-                    await maybe
+            await record.take_feedback(frame.get("values"), on_feedback)
 
 
 async def _cancel_quietly(
