@@ -20,7 +20,11 @@ What is measured:
 4. 100 tool calls at once in one session against a 50 ms service, against 100 in a row;
 5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
 6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
-7. RSS after startup and its growth over 10 000 tool calls, against the same bare server.
+7. RSS after startup and its growth over 10 000 tool calls, against the same bare server;
+9. the watch tools (issue #9): ``get_image`` on a live 640×480 and 1920×1080 rgb8 camera and
+   ``subscribe_topic`` count 1 on a live topic, each against a raw subscribe → first message → unsubscribe
+   started at the same point of the publisher's cycle; a 10 Hz × 5 s ``publish_topic`` stream as the robot
+   receives it; the size of ``tools/list`` with every tool and with the original eight.
 
 The table goes to stdout (Markdown, so it can be pasted into docs/performance.md), progress to stderr.
 The exit status is 0 when every measurement ran, whatever the figures; 1 when something errored.
@@ -30,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import base64
 import contextlib
 import dataclasses
 import datetime as dt
@@ -76,9 +81,13 @@ ADD_TWO_INTS = "/add_two_ints"
 SLOW_SERVICE = "/slow_service"
 SLOW_SERVICE_SECONDS = 0.05
 FAST_TOPIC = "/fast_counter"
-#: The camera frame of item 5; the tool that would turn it into an MCP image does not exist yet.
+#: The camera of items 5 and 9 (the simulated robot's, at this size; item 9 also starts one at full HD).
 CAMERA_TOPIC = "/camera/image_raw"
 CAMERA_SIZE = "640x480"
+FULL_HD = "1920x1080"
+#: Item 9: a live 10 Hz topic, and a velocity topic for the publish stream.
+CHATTER = "/chatter"
+CMD_VEL = "/turtle1/cmd_vel"
 
 MIB = 1024 * 1024
 
@@ -290,7 +299,9 @@ def tail(errlog: IO[str], lines: int = 15) -> str:
 
 
 @contextlib.asynccontextmanager
-async def simulated_robot(errlog: IO[str], *, fast_topic: bool = False) -> AsyncIterator[str]:
+async def simulated_robot(
+    errlog: IO[str], *, fast_topic: bool = False, camera_size: str = CAMERA_SIZE
+) -> AsyncIterator[str]:
     """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL.
 
     The 1 kHz topic is a separate robot's (``fast_topic``): its publishing loop costs the sim ~6 % of a core
@@ -307,7 +318,7 @@ async def simulated_robot(errlog: IO[str], *, fast_topic: bool = False) -> Async
         "--slow-service-seconds",
         str(SLOW_SERVICE_SECONDS),
         "--camera-size",
-        CAMERA_SIZE,
+        camera_size,
         "--log-level",
         "WARNING",
     ]
@@ -886,16 +897,297 @@ async def measure_throughput(ctx: Context) -> list[Row]:
 
 
 async def measure_camera_image(ctx: Context) -> Row:
-    """One 640×480 camera frame turned into an MCP image, timed against ≤ 100 ms.
+    """One 640×480 rgb8 frame turned into an MCP image by ``get_image``, on a frame already waiting.
 
-    No tool returns images yet. When one exists, time ``ctx.ours.tool(<name>, {"topic": CAMERA_TOPIC, ...})``
-    here (a few warm-up calls, then ``Stats.of`` over ~20) and check the answer holds an ``ImageContent``.
+    The bench publishes one latched frame of its own, so the time is the tool's work (subscribe, receive,
+    decode, resize, JPEG, answer) and not the camera's period.
     """
-    images = sorted(name for name in ctx.ours.tools if "image" in name or "camera" in name)
-    what = f"one 640×480 frame of {CAMERA_TOPIC} as an MCP image"
-    if not images:
-        return Row("5b", what, target="≤ 100 ms", verdict="n/a (no image tool)")
-    return Row("5b", what, target="≤ 100 ms", verdict=f"n/a (not measured yet: {', '.join(images)})")
+    what = "`get_image`: one latched 640×480 rgb8 frame as an MCP image (the tool's own work)"
+    if "get_image" not in ctx.ours.tools:
+        return Row("5b", what, target="≤ 100 ms", verdict="n/a (no get_image tool)")
+    topic = "/bench/latched_image"
+    width, height = 640, 480
+    frame = {
+        "header": {"frame_id": "bench"},
+        "height": height,
+        "width": width,
+        "encoding": "rgb8",
+        "is_bigendian": 0,
+        "step": width * 3,
+        "data": base64.b64encode(bytes(range(256)) * (width * height * 3 // 256)).decode(),
+    }
+    await ctx.client.publish(topic, "sensor_msgs/msg/Image", frame, latch=True)
+    arguments = {"topic": topic, "max_size": 640}
+    samples: list[float] = []
+    for index in range(max(3, ctx.plan.block) + 2):
+        began = time.perf_counter()
+        result = await ctx.ours.tool("get_image", arguments)
+        if index >= 2:  # the first two warm up (graph look-ups, the bridge's publisher)
+            samples.append(time.perf_counter() - began)
+    if not any(isinstance(block, mcp_types.ImageContent) for block in result.content):
+        raise RuntimeError("get_image answered without an image")
+    await ctx.client.unadvertise(topic)
+    stats = Stats.of(samples)
+    return timing_row("5b", what, stats, target="≤ 100 ms", verdict=verdict(stats.median <= 0.1))
+
+
+# ---------------------------------------------------------------------------------- item 9: watch tools
+
+
+class Metronome:
+    """A raw connection that only notes when each message of a topic arrives (frames are not parsed).
+
+    Each trial of a subscribe-to-first-message comparison starts right after a tick, so the raw socket and
+    the tool both wait one period of the publisher plus their own overhead, instead of a random part of it.
+    """
+
+    def __init__(self, ws: ClientConnection, topic: str, msg_type: str) -> None:
+        self.ws, self.topic, self.msg_type = ws, topic, msg_type
+        self.tick = asyncio.Event()
+        self._task: asyncio.Task[None] | None = None
+
+    async def __aenter__(self) -> Metronome:
+        await self.ws.send(
+            json.dumps({"op": "subscribe", "id": "metronome", "topic": self.topic, "type": self.msg_type})
+        )
+        self._task = asyncio.create_task(self._listen())
+        return self
+
+    async def __aexit__(self, *_: object) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+        await self.ws.send(json.dumps({"op": "unsubscribe", "id": "metronome", "topic": self.topic}))
+
+    async def _listen(self) -> None:
+        async for _ in self.ws:
+            self.tick.set()
+
+    async def next_tick(self) -> None:
+        self.tick.clear()
+        await asyncio.wait_for(self.tick.wait(), 10)
+
+
+async def raw_first_message(raw: RawBridge, topic: str, msg_type: str) -> None:
+    """subscribe → first message (parsed) → unsubscribe, on the raw connection."""
+    await raw.collect(topic, msg_type, 1)
+
+
+async def phase_locked(
+    metronome: Metronome, trials: int, subjects: dict[str, Callable[[], Awaitable[object]]]
+) -> dict[str, Stats]:
+    """Each subject ``trials`` times, alternating, every call started right after a metronome tick."""
+    samples: dict[str, list[float]] = {name: [] for name in subjects}
+    for trial in range(trials + 1):
+        order = list(subjects.items())
+        if trial % 2:
+            order.reverse()
+        for name, call in order:
+            await metronome.next_tick()
+            began = time.perf_counter()
+            await call()
+            if trial:  # the first round warms up
+                samples[name].append(time.perf_counter() - began)
+    return {name: Stats.of(values) for name, values in samples.items()}
+
+
+def ratio_row(item: str, what: str, stats: Stats, floor: Stats, limit: float) -> Row:
+    ratio = stats.median / floor.median
+    row = timing_row(
+        item,
+        what,
+        stats,
+        versus=f"{ratio:.2f}× raw ({ms(floor.median)})",
+        target=f"≤ {limit:g}× raw",
+        verdict=verdict(ratio <= limit),
+    )
+    row.figures.update(floor_median_s=floor.median, ratio=ratio)
+    return row
+
+
+async def measure_watch(ctx: Context) -> list[Row]:
+    """Item 9: the watch tools against the raw socket, a publish stream as received, tools/list sizes."""
+    trials = 20 if ctx.plan.name == "full" else 3
+    rows: list[Row] = []
+    camera_type = ctx.bridge.topics.get(CAMERA_TOPIC)
+    async with contextlib.AsyncExitStack() as stack:
+        if camera_type is None:
+            rows.append(Row("9a", f"`get_image` {CAMERA_TOPIC}", verdict=f"n/a (no {CAMERA_TOPIC})"))
+        else:
+            size = CAMERA_SIZE.replace("x", "×") if ctx.bridge.simulated else "the bridge's"
+            rows.append(
+                await _image_row(
+                    ctx,
+                    stack,
+                    item="9a",
+                    served=ctx.ours,
+                    url=ctx.bridge.url,
+                    camera_type=camera_type,
+                    size=size,
+                    trials=trials,
+                )
+            )
+        if ctx.bridge.simulated:
+            url = await stack.enter_async_context(simulated_robot(ctx.errlog, camera_size=FULL_HD))
+            hd = await stack.enter_async_context(serve_mcp(our_server_command(url), ctx.errlog))
+            rows.append(
+                await _image_row(
+                    ctx,
+                    stack,
+                    item="9b",
+                    served=hd,
+                    url=url,
+                    camera_type=camera_type or "sensor_msgs/msg/Image",
+                    size="1920×1080",
+                    trials=trials,
+                )
+            )
+        else:
+            rows.append(
+                Row("9b", "`get_image` on a 1920×1080 rgb8 camera", verdict="n/a (simulated robot only)")
+            )
+    chatter_type = ctx.bridge.topics.get(CHATTER)
+    if chatter_type is None:
+        rows.append(Row("9c", f"`subscribe_topic` {CHATTER}", verdict=f"n/a (no {CHATTER})"))
+    else:
+        async with (
+            connect(ctx.bridge.url, max_size=None, compression=None) as ws,
+            Metronome(ws, CHATTER, chatter_type) as metronome,
+        ):
+            arguments = {"topic": CHATTER}
+            stats = await phase_locked(
+                metronome,
+                trials,
+                {
+                    "raw": lambda: raw_first_message(ctx.raw, CHATTER, chatter_type),
+                    "tool": lambda: ctx.ours.tool("subscribe_topic", arguments),
+                },
+            )
+        rows.append(
+            ratio_row("9c", f"`subscribe_topic` {CHATTER} count 1 (10 Hz)", stats["tool"], stats["raw"], 1.2)
+        )
+    rows.append(await _stream_row(ctx))
+    rows += await _tools_list_rows(ctx)
+    return rows
+
+
+async def _image_row(
+    ctx: Context,
+    stack: contextlib.AsyncExitStack,
+    *,
+    item: str,
+    served: Served,
+    url: str,
+    camera_type: str,
+    size: str,
+    trials: int,
+) -> Row:
+    ws = await stack.enter_async_context(connect(url, max_size=None, compression=None))
+    raw = RawBridge(await stack.enter_async_context(connect(url, max_size=None, compression=None)))
+    arguments = {"topic": CAMERA_TOPIC, "timeout": 10}
+    async with Metronome(ws, CAMERA_TOPIC, camera_type) as metronome:
+        stats = await phase_locked(
+            metronome,
+            trials,
+            {
+                "raw": lambda: raw_first_message(raw, CAMERA_TOPIC, camera_type),
+                "tool": lambda: served.tool("get_image", arguments),
+            },
+        )
+    return ratio_row(
+        item, f"`get_image` {CAMERA_TOPIC} {size} rgb8 → JPEG 800 px", stats["tool"], stats["raw"], 1.3
+    )
+
+
+async def _stream_row(ctx: Context) -> Row:
+    """A 10 Hz publish_topic stream as a raw subscriber on the robot side receives it."""
+    rate, duration = 10, 5.0 if ctx.plan.name == "full" else 1.0
+    expected = round(rate * duration)
+    what = f"`publish_topic` {CMD_VEL} at {rate} Hz for {duration:g} s, as received"
+    twist_type = ctx.bridge.topics.get(CMD_VEL)
+    if twist_type is None:
+        return Row("9d", what, verdict=f"n/a (no {CMD_VEL})")
+    arrivals: list[tuple[float, dict[str, Any]]] = []
+    stopped = asyncio.Event()
+    async with connect(ctx.bridge.url, max_size=None, compression=None) as ws:
+        await ws.send(json.dumps({"op": "subscribe", "id": "stream", "topic": CMD_VEL, "type": twist_type}))
+
+        async def listen() -> None:
+            async for frame in ws:
+                message = json.loads(frame)
+                if message.get("op") == "publish":
+                    arrivals.append((time.perf_counter(), message["msg"]))
+                    if message["msg"]["linear"]["x"] == 0:
+                        stopped.set()
+
+        listener = asyncio.create_task(listen())
+        await asyncio.sleep(0.3)  # the subscription reaches the bridge before the stream starts
+        await ctx.ours.tool(
+            "publish_topic",
+            {
+                "topic": CMD_VEL,
+                "message_type": twist_type,
+                "message": {"linear": {"x": 0.1}},
+                "rate_hz": rate,
+                "duration": duration,
+            },
+        )
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(stopped.wait(), 2)
+        listener.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await listener
+    moving = [at for at, message in arrivals if message["linear"]["x"] != 0]
+    zero = bool(arrivals) and arrivals[-1][1]["linear"]["x"] == 0
+    errors = sorted(abs((later - earlier) - 1 / rate) for earlier, later in itertools.pairwise(moving))
+    p99 = errors[max(0, math.ceil(0.99 * len(errors)) - 1)] if errors else float("inf")
+    met = abs(len(moving) - expected) <= 1 and p99 <= 0.010 and zero
+    return Row(
+        "9d",
+        what,
+        n=len(moving),
+        median=ms(statistics.median(errors)) if errors else "",
+        p90=ms(errors[max(0, math.ceil(0.9 * len(errors)) - 1)]) if errors else "",
+        versus=f"{len(moving)} received (+{'1 zero' if zero else 'no zero'}); interval error p99 {ms(p99)}",
+        target=f"{expected} ± 1, p99 interval error ≤ 10 ms",
+        verdict=verdict(met),
+        figures={"received": len(moving), "zero": zero, "p99_interval_error_s": p99},
+    )
+
+
+async def _tools_list_rows(ctx: Context) -> list[Row]:
+    """The size of tools/list (compact JSON, what a host pays per session): all tools, the first eight."""
+    sizes: dict[str, int] = {}
+    for spec in ("all", "original"):
+        command = [*our_server_command(ctx.bridge.url), "--tools", spec]
+        async with serve_mcp(command, ctx.errlog) as served:
+            dumped = [
+                tool.model_dump(mode="json", by_alias=True, exclude_none=True)
+                for tool in served.tools.values()
+            ]
+            sizes[spec] = len(json.dumps(dumped, separators=(",", ":")))
+            count = len(served.tools)
+        sizes[f"{spec}_count"] = count
+    return [
+        Row(
+            "9e",
+            f"`tools/list` size, all {sizes['all_count']} tools",
+            versus=f"{sizes['all'] / sizes['original']:.2f}× the original eight",
+            median=f"{sizes['all']} B",
+            target="≤ 32 000 B (a test holds it)",
+            verdict=verdict(sizes["all"] <= 32_000),
+            figures={"bytes": sizes["all"]},
+        ),
+        Row(
+            "9f",
+            f"`tools/list` size, --tools original ({sizes['original_count']} tools)",
+            median=f"{sizes['original']} B",
+            target="≤ 15 000 B (a test holds it)",
+            verdict=verdict(sizes["original"] <= 15_000),
+            figures={"bytes": sizes["original"]},
+        ),
+    ]
 
 
 # --------------------------------------------------------------------------------- items 6-7: startup, memory
@@ -1062,6 +1354,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("throughput", "5", "throughput", measure_throughput, 60.0),
     ("startup", "6-7", "startup and RSS", measure_startup, 180.0),
     ("memory", "7", "memory growth", measure_memory, 300.0),
+    ("watch", "9", "watch tools", measure_watch, 240.0),
 ]
 
 

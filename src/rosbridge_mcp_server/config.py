@@ -12,7 +12,8 @@ So a flag always beats the environment, and within one source a URL beats host a
 package reads the environment; :func:`load_config` is called once, from ``cli.run()``. The same rule holds for
 every other pair:
 
-* ``--timeout`` / ``ROSBRIDGE_TIMEOUT``, ``--log-level`` / ``ROSBRIDGE_MCP_LOG_LEVEL``;
+* ``--timeout`` / ``ROSBRIDGE_TIMEOUT``, ``--log-level`` / ``ROSBRIDGE_MCP_LOG_LEVEL``, ``--tools`` /
+  ``ROSBRIDGE_MCP_TOOLS``;
 * safety: ``--policy`` / ``ROSBRIDGE_MCP_POLICY`` (a TOML file), ``--read-only`` /
   ``ROSBRIDGE_MCP_READ_ONLY=1`` (either one makes the server read-only), ``--audit-log`` /
   ``ROSBRIDGE_MCP_AUDIT_LOG``;
@@ -84,6 +85,8 @@ class Config:
     client_cert: str | None = None
     client_key: str | None = None
     headers: tuple[tuple[str, str], ...] = field(default=(), repr=False)
+    #: Names of the tools a host sees; ``None`` is every tool.
+    tools: tuple[str, ...] | None = None
 
     def ssl_context(self) -> ssl.SSLContext | None:
         """The TLS context for wss:// with a private CA or a client certificate; ``None`` for the default.
@@ -125,6 +128,7 @@ def load_config(
     client_cert: str | None = None,
     client_key: str | None = None,
     headers: Sequence[str] | None = None,
+    tools: str | None = None,
 ) -> Config:
     """Build a :class:`Config` from command-line values (``None`` = not given) and the environment.
 
@@ -143,6 +147,9 @@ def load_config(
     level = _parse_log_level(level_text, source=level_source) if level_text else "INFO"
     if demo_dialect not in ("ros1", "ros2"):
         raise ConfigError(f"--demo-dialect must be ros1 or ros2, not {demo_dialect!r}")
+    tools_text = tools if tools is not None else environ.get("ROSBRIDGE_MCP_TOOLS", "").strip() or None
+    tools_source = "--tools" if tools is not None else "ROSBRIDGE_MCP_TOOLS"
+    chosen = _parse_tools(tools_text, source=tools_source) if tools_text is not None else None
     config = Config(
         url=resolved_url,
         request_timeout=request_timeout,
@@ -155,6 +162,7 @@ def load_config(
         client_cert=_path(environ, client_cert, "--client-cert", "ROSBRIDGE_CLIENT_CERT"),
         client_key=_path(environ, client_key, "--client-key", "ROSBRIDGE_CLIENT_KEY"),
         headers=_headers(environ, headers),
+        tools=chosen,
     )
     _check_tls(config)
     return config
@@ -249,6 +257,17 @@ def _is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
+
+
+def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:
+    # The tool registry lives with the tools; imported here only, so the configuration stays importable alone.
+    from rosbridge_mcp_server.tools import TOOL_MODULES, select_tools  # noqa: PLC0415
+
+    try:
+        chosen = select_tools(value)
+    except ValueError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    return None if len(chosen) == len(TOOL_MODULES) else chosen
 
 
 def _resolve_url(

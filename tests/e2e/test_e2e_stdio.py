@@ -92,7 +92,7 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
 
         tools = await server.request("tools/list")
-        assert len(tools["result"]["tools"]) == 9
+        assert len(tools["result"]["tools"]) == 18
 
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
         assert topics["result"]["isError"] is False
@@ -133,6 +133,8 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
             "tools/call", {"name": "get_topic_info", "arguments": {"topic": "/no_such_topic"}}
         )
         assert failed["result"]["isError"] is True
+
+        await _watch_the_robot(server)
     finally:
         rest, stderr, code = await _finish(server)
 
@@ -143,6 +145,39 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
     assert b"Connected to rosbridge" in stderr
 
 
+async def _watch_the_robot(server: StdioServer) -> None:
+    """The tools that watch: a scan, a camera frame as an image, a transform, parameters, a type."""
+
+    async def call(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
+        answer = await server.request("tools/call", {"name": name, "arguments": arguments})
+        result: dict[str, Any] = answer["result"]
+        assert result["isError"] is False, result["content"]
+        return result
+
+    scan = await call("subscribe_topic", {"topic": "/scan"})
+    assert scan["structuredContent"]["messages"][0]["message"]["ranges"]["length"] == 360
+    image = await call("get_image", {"topic": "/camera/image_raw"})
+    assert [block["type"] for block in image["content"]] == ["text", "image"]
+    assert image["content"][1]["mimeType"] == "image/jpeg"
+    frame = await call("get_transform", {"target_frame": "world", "source_frame": "base_link"})
+    assert frame["structuredContent"]["chain"] == ["world", "odom", "base_link"]
+    parameters = await call("list_parameters", {"node": "/turtlesim"})
+    assert "/turtlesim:background_r" in parameters["structuredContent"]["parameters"]
+    described = await call("describe_type", {"type_name": "sensor_msgs/msg/LaserScan"})
+    assert "ranges: float32[]" in described["structuredContent"]["parts"][0]["outline"]
+    streamed = await call(
+        "publish_topic",
+        {
+            "topic": "/turtle1/cmd_vel",
+            "message_type": "geometry_msgs/msg/Twist",
+            "message": {"linear": {"x": 0.2}},
+            "rate_hz": 10,
+            "duration": 0.3,
+        },
+    )
+    assert streamed["structuredContent"]["zero_sent"] is True
+
+
 def _closed_port_url() -> str:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
@@ -151,9 +186,9 @@ def _closed_port_url() -> str:
 
 
 async def test_a_server_with_no_bridge_still_answers_and_reports_the_url() -> None:
-    """Pointed at a closed port, the process lists its tools and a tool call fails naming the URL."""
+    """Pointed at a closed port, it lists its tools (--tools original: eight) and a call names the URL."""
     url = _closed_port_url()
-    server = await _start("--url", url)
+    server = await _start("--url", url, "--tools", "original")
     try:
         await server.request(
             "initialize",

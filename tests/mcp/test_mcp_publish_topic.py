@@ -22,6 +22,11 @@ async def test_a_twist_reaches_the_robot_and_the_turtle_moves(session: Session, 
         "message_type": types_for(sim)["twist"],
         "message": twist,
         "published": True,
+        "count": 1,
+        "rate_hz": None,
+        "duration": None,
+        "zero_sent": False,
+        "stopped_by_stop_robot": False,
         "adjusted": None,
     }
     await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)

@@ -274,3 +274,137 @@ async def test_check_finds_the_bridge_healthy() -> None:
     code = await run_check(Config(url=REAL_URL), out)
     assert code == 0, out.getvalue()
     assert "rosapi answers" in out.getvalue()
+
+
+# --- the watch tools --------------------------------------------------------------------------------------
+
+
+async def _latched(real: Session, topic: str, short_type: str, message: dict[str, Any]) -> str:
+    """Publish one latched (ROS 2: transient-local) message on a test topic; returns the type used."""
+    package, name = short_type.split("/")
+    msg_type = short_type if await _version(real) == 1 else f"{package}/msg/{name}"
+    await real.ros.publish(topic, msg_type, message, latch=True)
+
+    async def listed() -> None:
+        # The bridge registers the publisher with the graph on its own time (ROS 1 master, ROS 2 discovery).
+        while not (await real.ros.call_service("/rosapi/topic_type", {"topic": topic})).get("type"):
+            continue
+
+    await asyncio.wait_for(listed(), WAIT)
+    return msg_type
+
+
+async def test_subscribe_topic_reads_a_latched_test_message(real: Session) -> None:
+    """subscribe_topic answers at once with the last message of a latched test topic, then unsubscribes."""
+    topic = "/mcp_test/latched"
+    await _latched(real, topic, "std_msgs/String", {"data": "kept for late subscribers"})
+    result = await real.ok("subscribe_topic", {"topic": topic, "timeout": WAIT})
+    data = result.structured_content
+    assert data is not None
+    assert data["messages"][0]["message"] == {"data": "kept for late subscribers"}
+
+
+async def test_get_image_turns_a_test_frame_into_an_image(real: Session) -> None:
+    """A latched 64×48 rgb8 test frame comes back as an MCP image with its size and encoding."""
+    image_type = "sensor_msgs/Image" if await _version(real) == 1 else "sensor_msgs/msg/Image"
+    if (await real.call("describe_type", {"type_name": image_type})).is_error:
+        pytest.skip("sensor_msgs is not installed on this robot (the ROS 1 lab has none)")
+    frame = {
+        "header": {"frame_id": "mcp_test"},
+        "height": 48,
+        "width": 64,
+        "encoding": "rgb8",
+        "is_bigendian": 0,
+        "step": 64 * 3,
+        "data": list(bytes([200, 40, 10]) * (64 * 48)),
+    }
+    await _latched(real, "/mcp_test/image", "sensor_msgs/Image", frame)
+    result = await real.ok("get_image", {"topic": "/mcp_test/image", "format": "png", "timeout": WAIT})
+    data = result.structured_content
+    assert data is not None
+    assert (data["width"], data["height"], data["encoding"]) == (64, 48, "rgb8")
+    assert [block.type for block in result.content] == ["text", "image"]
+
+
+async def test_describe_type_outlines_twist_and_a_rosapi_service(real: Session) -> None:
+    """Twist is outlined with plain field names; rosapi's topics service shows its request and response."""
+    twist = "geometry_msgs/Twist" if await _version(real) == 1 else "geometry_msgs/msg/Twist"
+    described = (await real.ok("describe_type", {"type_name": twist})).structured_content
+    assert described is not None
+    assert described["parts"][0]["outline"][:2] == ["linear: geometry_msgs/Vector3", "  x: float64"]
+    assert described["parts"][0]["constants"] == {}
+    service_type = (await real.ok("get_node_info", {"node": "/rosapi"})).structured_content
+    assert service_type is not None
+    topics_type = next(s["type"] for s in service_type["services"] if s["name"] == "/rosapi/topics")
+    service = (await real.ok("describe_type", {"type_name": topics_type})).structured_content
+    assert service is not None
+    assert service["kind"] == "service"
+    assert "topics: string[]" in service["parts"][1]["outline"]
+
+
+async def test_list_nodes_and_node_info_show_rosapi(real: Session) -> None:
+    """/rosapi is a running node, and serves /rosapi/topics."""
+    nodes = (await real.ok("list_nodes")).structured_content
+    assert nodes is not None
+    assert "/rosapi" in nodes["nodes"]
+    info = (await real.ok("get_node_info", {"node": "/rosapi"})).structured_content
+    assert info is not None
+    assert "/rosapi/topics" in {s["name"] for s in info["services"]}
+    assert "Did you mean /rosapi?" in await real.error("get_node_info", {"node": "/rosapii"})
+
+
+async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
+    """ROS 2: /rosapi's own parameters (never get_param_names: it kills rosapi 2.1.0); ROS 1: the server's."""
+    if await _version(real) == 1:
+        names = (await real.ok("list_parameters")).structured_content
+        assert names is not None
+        assert names["parameters"]
+        first = names["parameters"][0]
+        value = (await real.ok("get_parameter", {"name": first})).structured_content
+        assert value is not None
+        assert value["name"] == first
+        written = await real.ok("set_parameter", {"name": "/mcp_test/param", "value": [1, 2.5, "x"]})
+        assert (written.structured_content or {})["value"] == [1, 2.5, "x"]
+        return
+    names = (await real.ok("list_parameters", {"node": "/rosapi"})).structured_content
+    assert names is not None
+    assert "/rosapi:use_sim_time" in names["parameters"]
+    value = (await real.ok("get_parameter", {"name": "/rosapi:use_sim_time"})).structured_content
+    assert value is not None
+    assert value["value"] is False
+    assert "has no parameter" in await real.error("get_parameter", {"name": "/rosapi:no_such_parameter"})
+
+
+async def test_get_transform_explains_what_it_heard(real: Session) -> None:
+    """Without transforms on the robot it says nothing publishes them; with them, it lists the frames seen."""
+    text = await real.error(
+        "get_transform", {"target_frame": "mcp_test_a", "source_frame": "mcp_test_b", "timeout": 1}
+    )
+    assert "nothing publishes transforms" in text or "Frames seen" in text or "No transforms" in text
+
+
+async def test_a_publish_stream_arrives_at_its_rate(real: Session) -> None:
+    """publish_topic at 20 Hz for 0.5 s on a test topic: a subscriber gets the messages of the stream."""
+    string_type = "std_msgs/String" if await _version(real) == 1 else "std_msgs/msg/String"
+    topic = "/mcp_test/stream"
+    async with real.ros.subscribe(topic, string_type) as sub:
+        # The first publish registers the topic; a stream after it is heard from its first message.
+        await real.ok(
+            "publish_topic", {"topic": topic, "message_type": string_type, "message": {"data": "0"}}
+        )
+        result = await real.ok(
+            "publish_topic",
+            {
+                "topic": topic,
+                "message_type": string_type,
+                "message": {"data": "s"},
+                "rate_hz": 20,
+                "duration": 0.5,
+            },
+        )
+        assert (result.structured_content or {})["count"] == 10
+        heard = 0
+        while heard < 8:
+            message = await sub.get(timeout=WAIT)
+            heard += message == {"data": "s"}
+    assert heard >= 8

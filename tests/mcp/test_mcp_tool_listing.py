@@ -1,29 +1,60 @@
-"""tools/list: the nine tools with their annotations, described parameters and output schemas."""
+"""tools/list: every tool with annotations, described parameters and output schemas; --tools picks some."""
 
 from __future__ import annotations
 
 import json
 import socket
+from typing import Any
 
+import pytest
 from mcp_harness import open_session, text_of
 
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.config import Config, ConfigError, load_config
 from rosbridge_mcp_server.server import build_server
 
 EXPECTED_PARAMETERS = {
     "list_topics": [],
     "get_topic_info": ["topic"],
-    "publish_topic": ["topic", "message_type", "message"],
+    "publish_topic": ["topic", "message_type", "message", "rate_hz", "duration"],
     "list_services": [],
     "publish_service": ["service", "service_type", "request", "timeout"],
     "list_actions": [],
     "publish_action": ["action_name", "action_type", "goal", "timeout"],
     "cancel_action": ["action_name", "goal_id"],
+    "subscribe_topic": ["topic", "message_type", "count", "duration", "timeout", "fields", "qos"],
+    "get_image": ["topic", "max_size", "format", "timeout"],
+    "describe_type": ["type_name"],
+    "list_nodes": [],
+    "get_node_info": ["node"],
+    "list_parameters": ["node"],
+    "get_parameter": ["name"],
+    "set_parameter": ["name", "value"],
+    "get_transform": ["target_frame", "source_frame", "timeout"],
     "stop_robot": [],
 }
-READ_ONLY = {"list_topics", "get_topic_info", "list_services", "list_actions"}
+READ_ONLY = {
+    "list_topics",
+    "get_topic_info",
+    "list_services",
+    "list_actions",
+    "subscribe_topic",
+    "get_image",
+    "describe_type",
+    "list_nodes",
+    "get_node_info",
+    "list_parameters",
+    "get_parameter",
+    "get_transform",
+}
+#: Acting tools that leave the robot as they found it when called twice with the same arguments.
+IDEMPOTENT_ACTS = {"set_parameter"}
+ORIGINAL = list(EXPECTED_PARAMETERS)[:8]
+#: Budgets for the tools/list answer (compact JSON): what a host pays in context for every session.
+ALL_TOOLS_BUDGET = 32_000
+#: The original eight come with the e-stop (stop_robot), which is listed wherever acting tools are.
+ORIGINAL_TOOLS_BUDGET = 16_500
 
 
 def _closed_port_url() -> str:
@@ -33,7 +64,7 @@ def _closed_port_url() -> str:
     return f"ws://127.0.0.1:{port}"
 
 
-async def test_all_nine_tools_are_listed_with_annotations_and_described_parameters() -> None:
+async def test_every_tool_is_listed_with_annotations_and_described_parameters() -> None:
     """Each tool keeps its original name and parameters, and has hints, an example and an output schema."""
     async with open_session(_closed_port_url(), wait=False) as session:
         listed = (await session.mcp.list_tools()).tools
@@ -66,7 +97,7 @@ async def test_all_nine_tools_are_listed_with_annotations_and_described_paramete
             assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
                 False,
                 True,
-                False,
+                tool.name in IDEMPOTENT_ACTS,
             )
 
 
@@ -139,3 +170,48 @@ async def test_a_message_of_the_wrong_json_kind_is_one_line_naming_what_is_expec
         )
     assert text.startswith("Invalid arguments for publish_topic: message: expected a JSON object or a string")
     assert text.count("message:") == 1
+
+
+def _listing_size(tools: list[Any]) -> int:
+    dumped = [tool.model_dump(mode="json", by_alias=True, exclude_none=True) for tool in tools]
+    return len(json.dumps(dumped, separators=(",", ":")))
+
+
+async def test_tools_original_lists_only_the_first_eight_within_budget() -> None:
+    """--tools original shows the eight original tools and the e-stop that goes with acting tools; both
+    listings stay within their size budgets."""
+    url = _closed_port_url()
+    sizes = {}
+    for spec in ("original", "all"):
+        config = load_config({}, url=url, tools=spec)
+        async with Client(build_server(RosbridgeClient(url), config), mode="legacy") as mcp:
+            tools = (await mcp.list_tools()).tools
+        sizes[spec] = _listing_size(tools)
+        expected = [*ORIGINAL, "stop_robot"] if spec == "original" else list(EXPECTED_PARAMETERS)
+        assert [tool.name for tool in tools] == expected
+    assert sizes["original"] <= ORIGINAL_TOOLS_BUDGET
+    assert sizes["all"] <= ALL_TOOLS_BUDGET
+
+
+async def test_a_comma_list_of_groups_and_names_is_honoured_in_order() -> None:
+    """ROSBRIDGE_MCP_TOOLS=get_image,original lists the original eight, then get_image (and the e-stop)."""
+    url = _closed_port_url()
+    config = load_config({"ROSBRIDGE_MCP_TOOLS": "get_image, original"}, url=url)
+    async with Client(build_server(RosbridgeClient(url), config), mode="legacy") as mcp:
+        names = [tool.name for tool in (await mcp.list_tools()).tools]
+    assert names == [*ORIGINAL, "get_image", "stop_robot"]
+
+
+def test_an_unknown_tool_name_is_a_configuration_error_listing_the_names() -> None:
+    """--tools with a misspelt name fails at start with the groups and names that exist."""
+    with pytest.raises(
+        ConfigError, match=r"--tools: unknown tool or group 'get_imag'; use all, original, watch"
+    ):
+        load_config({}, tools="original,get_imag")
+
+
+def test_the_flag_wins_over_the_environment() -> None:
+    """--tools beats ROSBRIDGE_MCP_TOOLS; all is stored as no restriction."""
+    config = load_config({"ROSBRIDGE_MCP_TOOLS": "original"}, tools="all")
+    assert config.tools is None
+    assert load_config({"ROSBRIDGE_MCP_TOOLS": "list_nodes"}).tools == ("list_nodes",)

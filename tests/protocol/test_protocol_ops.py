@@ -107,3 +107,10 @@ def test_decode_json_accepts_nan_and_infinity() -> None:
 def test_encode_writes_non_finite_floats_as_bare_tokens() -> None:
     """NaN goes out as NaN (rosbridge accepts it; it rejects null for a float)."""
     assert protocol.encode({"x": math.nan}) == '{"x":NaN}'
+
+
+def test_subscribe_carries_a_qos_object_only_when_given() -> None:
+    """A ROS 2 qos object rides on subscribe as given; without one the key is absent (older bridges)."""
+    qos = {"reliability": "reliable", "durability": "transient_local", "depth": 1, "history": "keep_last"}
+    assert protocol.subscribe("/map", "nav_msgs/msg/OccupancyGrid", id="s1", qos=qos)["qos"] == qos
+    assert "qos" not in protocol.subscribe("/map", None, id="s2")

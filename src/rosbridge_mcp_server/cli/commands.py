@@ -96,6 +96,13 @@ def _parser(command: str) -> _Parser:
         help="append one JSON line per acting call to this file (env ROSBRIDGE_MCP_AUDIT_LOG)",
     )
     parser.add_argument(
+        "--tools",
+        help=(
+            "tools the host sees: all, original (the first eight), watch, or a comma list of groups and tool "
+            "names (env ROSBRIDGE_MCP_TOOLS, default all)"
+        ),
+    )
+    parser.add_argument(
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
@@ -137,6 +144,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             client_cert=options.client_cert,
             client_key=options.client_key,
             headers=options.header,
+            tools=options.tools,
         )
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (_UsageError, ConfigError) as exc:

@@ -404,10 +404,19 @@ class RosbridgeClient:
         throttle_rate: int = 0,
         queue_length: int = 0,
         max_queue: int = 1000,
+        qos: dict[str, Any] | None = None,
     ) -> Subscription:
-        """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``)."""
+        """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``).
+
+        ``qos`` is sent as the ROS 2 ``qos`` object (read by rosbridge 2.0.7 / 2.7.0 / 3.3.0 and later).
+        """
         return self.topics.subscribe(
-            topic, msg_type, throttle_rate=throttle_rate, queue_length=queue_length, max_queue=max_queue
+            topic,
+            msg_type,
+            throttle_rate=throttle_rate,
+            queue_length=queue_length,
+            max_queue=max_queue,
+            qos=qos,
         )
 
     async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:

@@ -44,6 +44,7 @@ class Subscription:
         throttle_rate: int,
         queue_length: int,
         max_queue: int,
+        qos: dict[str, Any] | None = None,
     ) -> None:
         if max_queue < 1:
             raise ValueError("max_queue must be at least 1")
@@ -53,6 +54,7 @@ class Subscription:
         self.throttle_rate = int(throttle_rate)
         self.queue_length = int(queue_length)
         self.max_queue = max_queue
+        self.qos = qos
         self.dropped = 0
         self.received = 0
         self.wire_type: str | None = None

@@ -122,7 +122,14 @@ class Topics:
     # --- subscriptions ----------------------------------------------------------------------------------
 
     def subscribe(
-        self, topic: str, msg_type: str | None, *, throttle_rate: int, queue_length: int, max_queue: int
+        self,
+        topic: str,
+        msg_type: str | None,
+        *,
+        throttle_rate: int,
+        queue_length: int,
+        max_queue: int,
+        qos: dict[str, Any] | None = None,
     ) -> Subscription:
         """A new, not yet opened :class:`Subscription`."""
         return Subscription(
@@ -133,6 +140,7 @@ class Topics:
             throttle_rate=throttle_rate,
             queue_length=queue_length,
             max_queue=max_queue,
+            qos=qos,
         )
 
     async def open_subscription(self, sub: Subscription) -> None:
@@ -209,5 +217,10 @@ class Topics:
 
 def _subscribe_op(sub: Subscription) -> dict[str, Any]:
     return protocol.subscribe(
-        sub.topic, sub.wire_type, id=sub.id, throttle_rate=sub.throttle_rate, queue_length=sub.queue_length
+        sub.topic,
+        sub.wire_type,
+        id=sub.id,
+        throttle_rate=sub.throttle_rate,
+        queue_length=sub.queue_length,
+        qos=sub.qos,
     )

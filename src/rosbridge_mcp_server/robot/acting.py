@@ -12,6 +12,8 @@ Nothing here knows MCP: the server hands in ``ask_person`` (its elicitation) thr
 
 from __future__ import annotations
 
+import asyncio
+import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
@@ -21,6 +23,7 @@ from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, c
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
+from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
 from rosbridge_mcp_server.safety.velocity import clamp_text
 from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
 
@@ -33,6 +36,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ALLOW_ALL",
     "PING_LIMIT",
+    "VELOCITY_TYPES",
     "Act",
     "Acting",
     "Answer",
@@ -40,13 +44,19 @@ __all__ = [
     "Guard",
     "Published",
     "ServiceReply",
+    "StreamProgress",
+    "Streamed",
     "call_service",
     "nobody_to_ask",
     "publish_once",
+    "publish_stream",
     "require_action_server",
     "send_goal",
+    "set_parameter",
     "stop_goals",
 ]
+
+_log = logging.getLogger(__name__)
 
 #: Longest wait for the bridge's pong before a publish (less when the configured request timeout is shorter).
 PING_LIMIT = 3.0
@@ -160,6 +170,25 @@ async def publish_once(
 
     Before the publish, a ping proves the bridge reads the connection now (see :func:`_bridge_is_reading`).
     """
+    name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
+    act = await _approved(ctx, Act(tool, "topic", name, bridge_type, body))
+
+    async def send() -> None:
+        await _bridge_is_reading(ctx)
+        await ctx.client.publish(act.name, act.type, act.payload)
+        ctx.graph.remember_publishing(act.name, act.type)
+        # stop_robot zeroes every velocity topic this session has driven.
+        ctx.activity.published(act.name, act.type, act.payload)
+
+    await _carry_out(ctx, act, send)
+    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    return Published(act.name, act.type, act.payload, adjusted)
+
+
+async def _checked_message(
+    ctx: Acting, topic: str, message_type: str, message: dict[str, Any]
+) -> tuple[str, str, dict[str, Any]]:
+    """The absolute topic, the type as the bridge spells it, and the message adapted and checked."""
     name = absolute_name(topic, "topic")
     info = await ctx.graph.ros_info()
     bridge_type = normalize_type(message_type, info.version, "msg")
@@ -180,19 +209,116 @@ async def publish_once(
         nothing_sent="Nothing was published",
         looks_like=f"A {bridge_type} message",
     )
+    return name, bridge_type, body
 
-    act = await _approved(ctx, Act(tool, "topic", name, bridge_type, body))
 
-    async def send() -> None:
+#: Velocity commands: a stream of them ends with one all-zero message, so the robot stops.
+VELOCITY_TYPES = frozenset({"geometry_msgs/Twist", "geometry_msgs/TwistStamped"})
+#: Told of a stream's progress: (messages sent, messages planned).
+StreamProgress = Callable[[int, int], Awaitable[None]]
+
+
+@dataclass(frozen=True)
+class Streamed:
+    """What a publish stream did."""
+
+    topic: str
+    type: str
+    message: dict[str, Any]  #: as sent each time
+    rate_hz: float  #: as approved (the guard may lower it)
+    duration: float  #: as approved
+    planned: int
+    sent: int
+    cancelled: bool  #: stopped early (an MCP cancel, or the server stopping)
+    zero: dict[str, Any] | None  #: the all-zero message sent at the end (velocity types), else None
+    stopped: bool = False  #: ended early because stop_robot asked
+    #: How the safety policy changed the message before it was sent (velocity caps in clamp mode), or None.
+    adjusted: str | None = None
+
+
+async def publish_stream(
+    ctx: Acting,
+    *,
+    tool: str,
+    topic: str,
+    message_type: str,
+    message: dict[str, Any],
+    rate_hz: float,
+    duration: float,
+    on_progress: StreamProgress | None = None,
+) -> Streamed:
+    """Publish *message* at *rate_hz* for *duration* seconds, on an absolute schedule (no drift).
+
+    The stream is approved once, at the start, with its rate and duration (the guard may clamp both). A
+    velocity stream (``Twist``, ``TwistStamped``) always ends with one all-zero message, also when it is
+    cancelled; cancellation stops it at once otherwise and is re-raised after that zero message.
+    """
+    name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
+    act = await _approved(
+        ctx, Act(tool, "topic", name, bridge_type, body, rate_hz=rate_hz, duration=duration)
+    )
+    rate = act.rate_hz or rate_hz
+    length = act.duration if act.duration is not None else duration
+    planned = max(1, round(length * rate))
+    zero = _zero_velocity(act.type, act.payload)
+    sent = 0
+    cancelled = False
+    every = max(1, round(rate / 5))  # progress about five times a second at most
+    loop = asyncio.get_running_loop()
+    stopped = False
+    try:
         await _bridge_is_reading(ctx)
-        await ctx.client.publish(act.name, act.type, act.payload)
-        ctx.graph.remember_publishing(act.name, act.type)
-        # stop_robot zeroes every velocity topic this session has driven.
-        ctx.activity.published(act.name, act.type, act.payload)
-
-    await _carry_out(ctx, act, send)
+        start = loop.time()
+        # Registered while it runs, so that stop_robot can end it (pause() returns early when asked).
+        with ctx.activity.stream(act.name, act.type) as running:
+            for index in range(planned):
+                if await running.pause(start + index / rate - loop.time()):
+                    stopped = True
+                    break
+                await ctx.client.publish(act.name, act.type, act.payload)
+                if sent == 0:
+                    ctx.graph.remember_publishing(act.name, act.type)
+                    ctx.activity.published(act.name, act.type, act.payload)
+                sent += 1
+                if on_progress is not None and (sent % every == 0 or sent == planned):
+                    await on_progress(sent, planned)
+    except asyncio.CancelledError:
+        cancelled = True
+        raise
+    except BaseException as exc:
+        ctx.guard.record(act, f"failed after {sent} of {planned}: {type(exc).__name__}: {exc}")
+        raise
+    finally:
+        if zero is not None and sent > 0:
+            # Shielded: a second cancel must not leave the robot moving.
+            await asyncio.shield(_publish_quietly(ctx, act, zero))
+        if cancelled:
+            ctx.guard.record(act, f"cancelled after {sent} of {planned}")
+    ctx.guard.record(act, f"{'stopped by stop_robot after' if stopped else 'sent'} {sent} of {planned}")
     adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
-    return Published(act.name, act.type, act.payload, adjusted)
+    return Streamed(
+        act.name, act.type, act.payload, rate, length, planned, sent, cancelled, zero, stopped, adjusted
+    )
+
+
+async def _publish_quietly(ctx: Acting, act: Act, message: dict[str, Any]) -> None:
+    try:
+        await ctx.client.publish(act.name, act.type, message)
+    except Exception:
+        _log.warning("could not send the zero message that ends the stream on %s", act.name, exc_info=True)
+
+
+def _zero_velocity(bridge_type: str, message: dict[str, Any]) -> dict[str, Any] | None:
+    short = short_type_name(bridge_type)
+    if short not in VELOCITY_TYPES:
+        return None
+    still = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+    if short == "geometry_msgs/Twist":
+        return still
+    header = message.get("header")
+    frame = header.get("frame_id", "") if isinstance(header, dict) else ""
+    # The stamp is left out: rosbridge stamps a root header it is not given (ROS 1; ROS 2 2.0.7 / 2.7.0 on).
+    return {"header": {"frame_id": frame}, "twist": still}
 
 
 async def _bridge_is_reading(ctx: Acting) -> None:
@@ -341,3 +467,16 @@ async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) ->
             "list_actions to see the actions."
         )
     return await cancel_goals(ctx.client, name, goal_id)
+
+
+# --- parameters -------------------------------------------------------------------------------------------
+
+
+async def set_parameter(ctx: Acting, *, tool: str, name: str, value: Any) -> SetOutcome:
+    """Check the parameter (name form, and on ROS 2 that its node has it), then set it and read it back."""
+    planned = await plan_set(ctx.graph, ctx.client, name, value)
+    act = await _approved(ctx, Act(tool, "parameter", planned.name.full, "", planned.value))
+    outcome: SetOutcome = await _carry_out(
+        ctx, act, lambda: apply_set(ctx.graph, ctx.client, planned, act.payload)
+    )
+    return outcome

@@ -12,6 +12,7 @@ failures become ``isError`` results:
 
 from __future__ import annotations
 
+import base64
 import hashlib
 import inspect
 import logging
@@ -28,6 +29,7 @@ from mcp.types import (
     ElicitRequest,
     ElicitRequestFormParams,
     ElicitResult,
+    ImageContent,
     InputRequiredResult,
     TextContent,
     ToolAnnotations,
@@ -182,8 +184,14 @@ def tool_from_module(
         except (RosbridgeError, ToolFailure) as exc:
             _log.info("%s failed: %s", spec.name, exc)
             return CallToolResult(content=[TextContent(type="text", text=error_text(exc))], is_error=True)
+        images = [
+            ImageContent(
+                type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type
+            )
+            for image in answer.images
+        ]
         return CallToolResult(
-            content=[TextContent(type="text", text=answer.text)],
+            content=[TextContent(type="text", text=answer.text), *images],
             structured_content=answer.data.model_dump(mode="json"),
         )
 

@@ -21,7 +21,7 @@ from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import tool_from_module
 from rosbridge_mcp_server.server.sdk import server_answering_unlisted
-from rosbridge_mcp_server.tools import TOOL_MODULES
+from rosbridge_mcp_server.tools import TOOL_MODULES, stop_robot
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -35,15 +35,19 @@ SERVER_NAME = "rosbridge"
 
 INSTRUCTIONS = """\
 This server connects to a real (or simulated) ROS robot through rosbridge. Some tools only read the robot's \
-state; publish_topic, publish_service, publish_action and cancel_action act on the robot and can make it move.
+state; publish_topic, publish_service, publish_action, cancel_action and set_parameter act on the robot and \
+can make it move or change how it behaves.
 
 Work like this:
 1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
-names and types; get_topic_info shows who publishes and subscribes a topic.
+names and types; get_topic_info shows who publishes and subscribes a topic; describe_type shows a type's \
+fields with an example. To see the robot's state: subscribe_topic reads messages, get_image shows a camera, \
+get_transform says where a frame is (e.g. base_link in odom).
 2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
 zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
-3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; send \
-zeros to stop. Prefer small, safe values and say what you are about to do.
+3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; \
+publish_topic with rate_hz and duration keeps the robot moving and stops it with zeros at the end. Prefer \
+small, safe values and say what you are about to do.
 4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
 5. stop_robot stops everything this server started (streams, velocity, goals): use it when in doubt.
 
@@ -74,7 +78,11 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None
     policy = config.policy
     approver: Guard = guard if guard is not None else PolicyGuard(policy)
     activity = SessionActivity()
-    modules = [m for m in TOOL_MODULES if m.SPEC.hints.read_only or not policy.read_only]
+    chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
+    if any(not m.SPEC.hints.read_only for m in chosen) and stop_robot not in chosen:
+        # Whoever can set the robot going can stop it, whatever --tools picked.
+        chosen.append(stop_robot)
+    modules = [m for m in chosen if m.SPEC.hints.read_only or not policy.read_only]
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
@@ -89,7 +97,8 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None
         tool_from_module(module, client, config, graph, guard=approver, activity=activity)
         for module in modules
     ]
-    withheld = {m.SPEC.name for m in TOOL_MODULES} - {m.SPEC.name for m in modules}
+    # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
+    withheld = {m.SPEC.name for m in chosen} - {m.SPEC.name for m in modules}
 
     def unlisted(name: str, arguments: dict[str, Any]) -> CallToolResult | None:
         """A withheld acting tool called by name anyway: refused, and audited like any refusal."""

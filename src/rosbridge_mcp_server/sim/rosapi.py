@@ -1,7 +1,7 @@
 """The rosapi node of each dialect (``rosapi/scripts/rosapi_node`` and ``proxy.py`` of rosbridge_suite).
 
 Answers come from the simulated graph. The quirks of the real services are kept on purpose, each marked
-with the version that has it (protocol file §12).
+with the version that has it.
 """
 
 from __future__ import annotations
@@ -9,14 +9,12 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Coroutine
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from rosbridge_mcp_server.sim.bridge import Bridge
 from rosbridge_mcp_server.sim.graph import ServiceEntry, ServiceFailure, is_hidden, rostopic_type
 from rosbridge_mcp_server.sim.interfaces import InterfaceError
 from rosbridge_mcp_server.sim.params import Ros1Params, Ros2Params
-
-if TYPE_CHECKING:
-    from rosbridge_mcp_server.sim.bridge import Bridge
 
 __all__ = ["ROSAPI_NODE", "Rosapi", "ros1_action_servers", "ros2_action_servers"]
 

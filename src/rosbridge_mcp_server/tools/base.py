@@ -33,6 +33,7 @@ __all__ = [
     "ToolContext",
     "ToolFailure",
     "ToolHints",
+    "ToolImage",
     "ToolSpec",
     "absolute_name",
     "compact_json",
@@ -72,11 +73,23 @@ class ToolSpec:
 
 
 @dataclass(frozen=True)
+class ToolImage:
+    """A picture in an answer (e.g. a camera frame): encoded bytes and their MIME type."""
+
+    data: bytes
+    mime_type: str
+
+
+@dataclass(frozen=True)
 class ToolAnswer:
-    """A tool's answer: short readable text for the model and the same facts as structured data."""
+    """A tool's answer: short readable text for the model and the same facts as structured data.
+
+    ``images`` follow the text as MCP image content (the structured data describes them, never holds them).
+    """
 
     text: str
     data: BaseModel
+    images: tuple[ToolImage, ...] = ()
 
 
 ProgressReporter = Callable[[float, float | None, str | None], Awaitable[None]]

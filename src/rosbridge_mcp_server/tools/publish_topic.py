@@ -6,18 +6,24 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.acting import PING_LIMIT, publish_once
+from rosbridge_mcp_server.robot.acting import PING_LIMIT, publish_once, publish_stream
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
     ToolContext,
+    ToolFailure,
     ToolSpec,
     parse_json_object,
 )
 
-__all__ = ["PING_LIMIT", "SPEC", "PublishAnswer", "run"]
+__all__ = ["MAX_RATE", "MAX_STREAM", "PING_LIMIT", "SPEC", "PublishAnswer", "run"]
 
+#: Fastest stream rate, Hz: faster than rosbridge's JSON path and a model's use for it.
+MAX_RATE = 100.0
+#: Longest stream, seconds.
+MAX_STREAM = 300.0
+DEFAULT_RATE = 10.0
 _EXAMPLE = '{"linear": {"x": 0.5}, "angular": {"z": 0.3}}'
 
 
@@ -28,6 +34,11 @@ class PublishAnswer(BaseModel):
     message_type: str = Field(description="The type as the bridge was given it")
     message: dict[str, Any] = Field(description="The message as sent")
     published: bool
+    count: int = Field(default=1, description="Messages published (a stream sends many)")
+    rate_hz: float | None = Field(default=None, description="Stream rate, when one was asked for")
+    duration: float | None = Field(default=None, description="Stream length in seconds, when asked for")
+    zero_sent: bool = Field(default=False, description="A stream of velocity commands ended with all zeros")
+    stopped_by_stop_robot: bool = Field(default=False, description="The stream was ended early by stop_robot")
     adjusted: str | None = Field(
         default=None, description="How the safety policy changed the message before sending (velocity caps)"
     )
@@ -42,7 +53,8 @@ SPEC = ToolSpec(
         "at 0.3 rad/s (velocity commands usually act only briefly; publish again to keep moving, publish "
         "zeros to stop). The message is checked against the type first; a field that does not fit is an "
         "error naming it. Omitted fields are zero/empty; {} is a valid message for std_msgs/msg/Empty. "
-        "Use list_topics and get_topic_info to find topics and types."
+        "Use list_topics and get_topic_info to find topics and types. With rate_hz and duration it "
+        "publishes repeatedly (e.g. 10 Hz for 3 s keeps a robot moving) and ends a Twist stream with zeros."
     ),
     hints=ACTS_ON_ROBOT,
     output=PublishAnswer,
@@ -51,6 +63,7 @@ SPEC = ToolSpec(
 
 async def run(
     ctx: ToolContext,
+    *,
     topic: Annotated[str, Field(description="Topic to publish on, e.g. /turtle1/cmd_vel")],
     message_type: Annotated[
         str,
@@ -65,9 +78,31 @@ async def run(
             )
         ),
     ] = "{}",
+    rate_hz: Annotated[
+        float | None,
+        Field(gt=0, le=MAX_RATE, description="Publish repeatedly at this rate, e.g. 10 (needs duration)"),
+    ] = None,
+    duration: Annotated[
+        float | None,
+        Field(gt=0, le=MAX_STREAM, description="Seconds to keep publishing, e.g. 3 (rate_hz default 10)"),
+    ] = None,
 ) -> ToolAnswer:
-    """Check ``message`` against ``message_type``, then publish it on ``topic``."""
+    """Check ``message`` against ``message_type``, then publish it on ``topic`` once or as a stream."""
     body = parse_json_object(message, "message", _EXAMPLE)
+    if rate_hz is not None or duration is not None:
+        if duration is None:
+            raise ToolFailure(
+                f"rate_hz {rate_hz:g} needs a duration: how many seconds to publish, e.g. 3. Nothing was "
+                "published."
+            )
+        return await _stream(
+            ctx,
+            topic=topic,
+            message_type=message_type,
+            body=body,
+            rate_hz=rate_hz or DEFAULT_RATE,
+            duration=duration,
+        )
     sent = await publish_once(ctx, tool=SPEC.name, topic=topic, message_type=message_type, message=body)
     text = f"Published one {sent.type} message on {sent.topic}: {compact_json(sent.message)}"
     if sent.adjusted:
@@ -82,3 +117,47 @@ async def run(
             adjusted=sent.adjusted,
         ),
     )
+
+
+async def _stream(
+    ctx: ToolContext, *, topic: str, message_type: str, body: dict[str, Any], rate_hz: float, duration: float
+) -> ToolAnswer:
+    async def progress(sent: int, planned: int) -> None:
+        await ctx.report_progress(sent, planned, f"{sent} of {planned} messages")
+
+    streamed = await publish_stream(
+        ctx,
+        tool=SPEC.name,
+        topic=topic,
+        message_type=message_type,
+        message=body,
+        rate_hz=rate_hz,
+        duration=duration,
+        on_progress=progress,
+    )
+    text = (
+        f"Published {streamed.sent} {streamed.type} messages on {streamed.topic} at {streamed.rate_hz:g} Hz "
+        f"for {streamed.duration:g} s: {compact_json(streamed.message)}"
+    )
+    if streamed.stopped:
+        text = (
+            f"stop_robot ended the stream on {streamed.topic} after {streamed.sent} of {streamed.planned} "
+            f"{streamed.type} messages ({compact_json(streamed.message)})"
+        )
+    if streamed.zero is not None:
+        text += "; then one all-zero message to stop"
+    if streamed.adjusted:
+        text += f" (the safety policy {streamed.adjusted})"
+    answer = PublishAnswer(
+        topic=streamed.topic,
+        message_type=streamed.type,
+        message=streamed.message,
+        published=True,
+        count=streamed.sent,
+        rate_hz=streamed.rate_hz,
+        duration=streamed.duration,
+        zero_sent=streamed.zero is not None,
+        stopped_by_stop_robot=streamed.stopped,
+        adjusted=streamed.adjusted,
+    )
+    return ToolAnswer(text=text + ".", data=answer)

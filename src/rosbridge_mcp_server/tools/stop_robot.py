@@ -14,25 +14,20 @@ __all__ = ["SPEC", "StopAnswer", "run"]
 class StopAnswer(BaseModel):
     """What stop_robot did."""
 
-    streams_stopped: list[str] = Field(description="Topics whose publish_topic streams were ended")
-    streams_still_running: list[str] = Field(
-        description="Topics whose streams did not end within half a second of being told to"
-    )
-    zeroed_topics: list[str] = Field(description="Velocity topics that got one zero command")
-    goals_cancelled: list[str] = Field(
-        description="Ids of running publish_action goals a cancel was sent for"
-    )
-    failures: list[str] = Field(description="Steps that failed, each in a sentence")
+    streams_stopped: list[str] = Field(description="Topics whose streams ended")
+    streams_still_running: list[str] = Field(description="Topics whose streams did not end in time")
+    zeroed_topics: list[str] = Field(description="Topics that got one zero velocity command")
+    goals_cancelled: list[str] = Field(description="Goal ids a cancel was sent for")
+    failures: list[str]
 
 
 SPEC = ToolSpec(
     name="stop_robot",
     title="Stop everything this server started",
     description=(
-        "Emergency stop for what this server started in this session: ends every running publish_topic "
-        "stream, publishes one zero velocity command on every topic a Twist or TwistStamped was sent to, and "
-        "cancels every goal publish_action started that still runs; call it with {}. Use it whenever the "
-        "robot must stop now; it never asks for confirmation. It cannot stop what other programs started."
+        "Emergency stop for what this server started: ends every publish_topic stream, publishes one zero "
+        "velocity on every topic it sent a Twist/TwistStamped to, cancels every running publish_action goal. "
+        "Never asks for confirmation; call it with {} whenever the robot must stop now."
     ),
     # It acts on the robot, but only ever takes motion away; repeating it is harmless.
     hints=ToolHints(read_only=False, destructive=False, idempotent=True),

@@ -112,11 +112,13 @@ def subscribe(
     id: str,
     throttle_rate: int = 0,
     queue_length: int = 0,
+    qos: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """``subscribe`` with its own id, so it can be removed without touching other listeners.
 
     ``throttle_rate`` and ``queue_length`` must be JSON integers: every server type-checks them and
-    silently ignores a subscribe with ``100.0``.
+    silently ignores a subscribe with ``100.0``. ``qos`` is ROS 2's QoS object (rosbridge 2.0.7 / 2.7.0 /
+    3.3.0 on); older servers and ROS 1 ignore the key.
     """
     op: dict[str, Any] = {"op": "subscribe", "id": id, "topic": topic}
     if msg_type:
@@ -125,6 +127,8 @@ def subscribe(
         op["throttle_rate"] = int(throttle_rate)
     if queue_length:
         op["queue_length"] = int(queue_length)
+    if qos:
+        op["qos"] = qos
     return op
 
 

@@ -1,0 +1,1 @@
+"""The domain layer: what the tools know about a robot, with no MCP in it."""

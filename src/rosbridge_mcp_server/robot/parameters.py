@@ -1,0 +1,348 @@
+"""ROS parameters through rosapi, in each dialect's naming.
+
+* ROS 1: one global parameter server; names are graph names (``/turtlesim/background_r``). rosapi's
+  ``get_param_names``, ``has_param``, ``get_param`` (``name``, ``default``) and ``set_param`` all work.
+* ROS 2: parameters live in nodes; rosapi names them ``/node:name``. Three rosapi calls are unusable on a
+  real 2.1.0 bridge: ``get_param_names`` kills rosapi, ``has_param`` of a missing parameter never answers (and
+  on an in-order bridge blocks the connection), and ``get_param`` of a missing one answers its default. So
+  names come from the node's own ``<node>/list_parameters`` service, and existence is checked against it.
+  Values are read and set through the node's own ``get_parameters`` / ``set_parameters`` services too:
+  rosapi 2.1.0's ``get_param`` of a parameter of the rosapi node itself deadlocks rosapi for good (its
+  handler waits on its own blocked executor), and ``set_parameters`` says why a value was refused.
+  A set is confirmed by reading the value back (rosapi's ``set_param`` answers nothing useful before 2.2.0).
+
+Values travel as JSON text both ways.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import difflib
+import json
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.robot.graph import RosGraph
+
+__all__ = [
+    "ParameterError",
+    "ParameterName",
+    "PlannedSet",
+    "SetOutcome",
+    "apply_set",
+    "get_parameter",
+    "list_parameters",
+    "parse_name",
+    "plan_set",
+]
+
+_LOOKUPS_AT_ONCE = 8
+
+
+class ParameterError(LookupError):
+    """A parameter request that cannot be answered; ``str()`` says why and what exists."""
+
+
+@dataclass(frozen=True)
+class ParameterName:
+    """A parameter's full name in the dialect's form, and (ROS 2) its node and name within the node."""
+
+    full: str
+    node: str | None = None
+    local: str | None = None
+
+
+@dataclass(frozen=True)
+class SetOutcome:
+    """What a set did: the value before, the value read back after, and whether it now equals the request."""
+
+    name: str
+    before: Any
+    after: Any
+    applied: bool
+    reason: str
+    sent: Any = None
+
+
+def parse_name(name: str, version: int) -> ParameterName:
+    """``/turtlesim:background_r`` (ROS 2) or ``/turtlesim/background_r`` (ROS 1), checked."""
+    text = name.strip()
+    if not text or any(ch.isspace() for ch in text):
+        raise ParameterError(f"The parameter name {name!r} is empty or holds whitespace.")
+    if version == 1:
+        if ":" in text:
+            raise ParameterError(
+                f"{text!r} is a ROS 2 style name; ROS 1 parameters are graph names like "
+                "/turtlesim/background_r."
+            )
+        return ParameterName(text if text.startswith("/") else "/" + text)
+    node, sep, local = text.partition(":")
+    if not sep or not node.strip("/") or not local or ":" in local:
+        raise ParameterError(
+            f"{text!r} is not a ROS 2 parameter name: they look like /node:name, e.g. "
+            "/turtlesim:background_r (list_parameters shows them)."
+        )
+    node = node if node.startswith("/") else "/" + node
+    return ParameterName(f"{node}:{local}", node, local)
+
+
+async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | None) -> list[str]:
+    """Every parameter name (of ``node`` only, when given), sorted, in the dialect's form."""
+    info = await graph.ros_info()
+    if info.version == 1:
+        values = await graph.rosapi("get_param_names")
+        names = sorted({n for n in values.get("names") or () if isinstance(n, str)})
+        if node is None:
+            return names
+        prefix = node.rstrip("/") + "/"
+        found = [n for n in names if n.startswith(prefix)]
+        if not found:
+            # ROS 1 parameters belong to namespaces, not nodes: suggest the namespaces that have some.
+            spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
+            raise ParameterError(f"No parameters under {prefix}.{_close(node, spaces)}")
+        return found
+    services = set(await graph.service_names())
+    nodes = [node] if node is not None else await _ros2_nodes(graph)
+    offering = [n for n in nodes if f"{n.rstrip('/')}/list_parameters" in services]
+    if node is not None and not offering:
+        raise ParameterError(_no_parameter_service(node, nodes=await _ros2_nodes(graph)))
+    gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE)
+
+    async def one(name: str) -> list[str]:
+        async with gate:
+            try:
+                return [f"{name}:{local}" for local in await _node_parameter_names(client, name)]
+            except (ServiceError, RequestTimeoutError):
+                if node is not None:
+                    raise
+                return []  # a node that does not answer does not hide the others
+
+    per_node = await asyncio.gather(*(one(name) for name in offering))
+    return sorted(name for names in per_node for name in names)
+
+
+async def get_parameter(graph: RosGraph, client: RosbridgeClient, name: str) -> tuple[ParameterName, Any]:
+    """The parameter's value (decoded JSON); :class:`ParameterError` when it does not exist."""
+    info = await graph.ros_info()
+    parsed = parse_name(name, info.version)
+    await _require_existing(graph, client, parsed, info.version)
+    return parsed, await _read(graph, client, parsed, info.version)
+
+
+@dataclass(frozen=True)
+class PlannedSet:
+    """A checked parameter set, not yet sent: the name, the value before, and the value to send."""
+
+    name: ParameterName
+    before: Any
+    value: Any
+
+
+async def plan_set(graph: RosGraph, client: RosbridgeClient, name: str, value: Any) -> PlannedSet:
+    """Check the name (and on ROS 2 that the node has the parameter) and read the value before."""
+    info = await graph.ros_info()
+    parsed = parse_name(name, info.version)
+    if info.version == 2:
+        # A ROS 2 node only has the parameters it declared; rosapi cannot add one.
+        await _require_existing(graph, client, parsed, info.version)
+    before = await _read(graph, client, parsed, info.version)
+    return PlannedSet(parsed, before, _like(before, value))
+
+
+async def apply_set(graph: RosGraph, client: RosbridgeClient, planned: PlannedSet, value: Any) -> SetOutcome:
+    """Send the set, then read the value back; ``applied`` says whether the robot took it."""
+    info = await graph.ros_info()
+    parsed = planned.name
+    if info.version == 1:
+        values = await graph.rosapi("set_param", {"name": parsed.full, "value": json.dumps(value)})
+        given = values.get("reason")
+        reason = given if isinstance(given, str) else ""
+    else:
+        reason = await _ros2_set(client, parsed, value, planned.before)
+        if reason and planned.before is not None:
+            reason += f" ({parsed.full} holds {_kind_of(planned.before)}; send one of those)"
+    after = await _read(graph, client, parsed, info.version)
+    applied = _same(after, value)
+    if not applied and not reason:
+        reason = (
+            "the node kept its value (a ROS 2 parameter keeps its type: send a value of the same type, "
+            "e.g. 2.0 for a double)"
+            if info.version == 2
+            else "reading it back gave another value"
+        )
+    return SetOutcome(parsed.full, planned.before, after, applied, reason, value)
+
+
+async def _read(graph: RosGraph, client: RosbridgeClient, parsed: ParameterName, version: int) -> Any:
+    if version == 2:
+        return await _ros2_read(client, parsed)
+    args = {"name": parsed.full, ("default" if version == 1 else "default_value"): ""}
+    values = await graph.rosapi("get_param", args)
+    if values.get("successful") is False:
+        raise ParameterError(
+            f"rosapi could not read {parsed.full}: {values.get('reason') or 'no reason given'}."
+        )
+    text = values.get("value")
+    if not isinstance(text, str):
+        return None
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+async def _require_existing(
+    graph: RosGraph, client: RosbridgeClient, parsed: ParameterName, version: int
+) -> None:
+    if version == 1:
+        values = await graph.rosapi("has_param", {"name": parsed.full})
+        if values.get("exists") is True:
+            return
+        names = await list_parameters(graph, client, None)
+        raise ParameterError(f"Parameter {parsed.full} does not exist.{_close(parsed.full, names)}")
+    assert parsed.node is not None
+    assert parsed.local is not None
+    services = set(await graph.service_names())
+    if f"{parsed.node.rstrip('/')}/list_parameters" not in services:
+        raise ParameterError(_no_parameter_service(parsed.node, nodes=await _ros2_nodes(graph)))
+    names = await _node_parameter_names(client, parsed.node)
+    if parsed.local not in names:
+        shown = ", ".join(sorted(names)) or "none"
+        raise ParameterError(
+            f"Node {parsed.node} has no parameter {parsed.local!r}; its parameters: {shown}."
+        )
+
+
+async def _node_parameter_names(client: RosbridgeClient, node: str) -> list[str]:
+    reply = await client.call_service(f"{node.rstrip('/')}/list_parameters", {"prefixes": [], "depth": 0})
+    if not isinstance(reply, dict):
+        return []
+    result = reply.get("result")
+    names = result.get("names") if isinstance(result, dict) else None
+    return [n for n in names or () if isinstance(n, str)]
+
+
+async def _ros2_nodes(graph: RosGraph) -> list[str]:
+    values = await graph.rosapi("nodes")
+    return sorted({n for n in values.get("nodes") or () if isinstance(n, str)})
+
+
+def _no_parameter_service(node: str, *, nodes: list[str]) -> str:
+    if node not in nodes:
+        return f"Node {node} is not running.{_close(node, nodes)} list_nodes shows the nodes."
+    return f"Node {node} offers no parameter services (it has no parameters to read or set)."
+
+
+def _close(name: str, known: list[str]) -> str:
+    close = difflib.get_close_matches(name, known, n=3, cutoff=0.7)
+    return f" Did you mean {' or '.join(close)}?" if close else ""
+
+
+def _same(after: Any, wanted: Any) -> bool:
+    if isinstance(after, bool) or isinstance(wanted, bool):
+        return after is wanted
+    if isinstance(after, int | float) and isinstance(wanted, int | float):
+        return float(after) == float(wanted)
+    return bool(after == wanted)
+
+
+def _like(before: Any, value: Any) -> Any:
+    """A value given as JSON text for a parameter that is not text (models often send "2.0") is decoded."""
+    if isinstance(value, str) and before is not None and not isinstance(before, str):
+        try:
+            return json.loads(value)
+        except ValueError:
+            return value
+    return value
+
+
+# rcl_interfaces/msg/ParameterType: the field of ParameterValue that holds each type's value.
+_VALUE_FIELDS = {
+    1: "bool_value",
+    2: "integer_value",
+    3: "double_value",
+    4: "string_value",
+    5: "byte_array_value",
+    6: "bool_array_value",
+    7: "integer_array_value",
+    8: "double_array_value",
+    9: "string_array_value",
+}
+
+
+async def _ros2_read(client: RosbridgeClient, parsed: ParameterName) -> Any:
+    assert parsed.node is not None
+    reply = await client.call_service(f"{parsed.node.rstrip('/')}/get_parameters", {"names": [parsed.local]})
+    values = reply.get("values") if isinstance(reply, dict) else None
+    if not isinstance(values, list) or not values or not isinstance(values[0], dict):
+        # rclpy answers an empty list when a name is not declared.
+        raise ParameterError(f"Node {parsed.node} has no parameter {parsed.local!r}.")
+    return _from_parameter_value(values[0])
+
+
+def _from_parameter_value(value: dict[str, Any]) -> Any:
+    kind = value.get("type")
+    field = _VALUE_FIELDS.get(kind) if isinstance(kind, int) else None
+    return value.get(field) if field is not None else None
+
+
+def _to_parameter_value(value: Any, before: Any) -> dict[str, Any]:
+    """A ParameterValue for ``value``, typed like ``before`` where they fit (a whole number for a double)."""
+    if isinstance(value, bool):
+        kind = 1
+    elif isinstance(value, int):
+        kind = 3 if isinstance(before, float) else 2
+        value = float(value) if kind == 3 else value
+    elif isinstance(value, float):
+        kind = 3
+    elif isinstance(value, str):
+        kind = 4
+    elif isinstance(value, list) and all(isinstance(v, bool) for v in value):
+        kind = 6
+    elif isinstance(value, list) and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+        doubles = isinstance(before, list) and any(isinstance(v, float) for v in before)
+        kind = 8 if doubles else 7
+        value = [float(v) for v in value] if doubles else value
+    elif isinstance(value, list) and all(
+        isinstance(v, int | float) and not isinstance(v, bool) for v in value
+    ):
+        kind, value = 8, [float(v) for v in value]
+    elif isinstance(value, list) and all(isinstance(v, str) for v in value):
+        kind = 9
+    else:
+        raise ParameterError(
+            "A ROS 2 parameter holds a bool, an integer, a double, a string, or a list of one of these; "
+            f"{json.dumps(value)[:80]} is none of them."
+        )
+    return {"type": kind, _VALUE_FIELDS[kind]: value}
+
+
+async def _ros2_set(client: RosbridgeClient, parsed: ParameterName, value: Any, before: Any) -> str:
+    """Set through the node's ``set_parameters``; the node's reason when it refused, "" when it took it."""
+    assert parsed.node is not None
+    parameter = {"name": parsed.local, "value": _to_parameter_value(value, before)}
+    reply = await client.call_service(
+        f"{parsed.node.rstrip('/')}/set_parameters", {"parameters": [parameter]}
+    )
+    results = reply.get("results") if isinstance(reply, dict) else None
+    first = results[0] if isinstance(results, list) and results else None
+    if isinstance(first, dict) and first.get("successful") is False:
+        reason = first.get("reason")
+        return reason if isinstance(reason, str) and reason else "the node refused the value"
+    return ""
+
+
+def _kind_of(value: Any) -> str:
+    if isinstance(value, bool):
+        return "a bool"
+    if isinstance(value, int):
+        return "an integer"
+    if isinstance(value, float):
+        return "a double"
+    if isinstance(value, str):
+        return "a string"
+    return "a list"

@@ -1,0 +1,88 @@
+"""``describe_type``: the fields of a message, service or action type, and an example to send."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.robot.describing import CannotDescribe, describe_type
+from rosbridge_mcp_server.tools.base import (
+    READS_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolSpec,
+    compact_json,
+)
+
+__all__ = ["SPEC", "TypeAnswer", "run"]
+
+_TOOL_FOR = {"message": "publish_topic", "service": "publish_service", "action": "publish_action"}
+_EXAMPLE_PART = {"message": "message", "service": "request", "action": "goal"}
+
+
+class TypePart(BaseModel):
+    """One part of a type: the message itself, or a service's request/response, or an action's goal/…."""
+
+    part: str = Field(description="message, request, response, goal, result or feedback")
+    type: str
+    outline: list[str] = Field(description="One line per field, nested fields indented")
+    constants: dict[str, str]
+    example: dict[str, Any]
+
+
+class TypeAnswer(BaseModel):
+    """A type's fields."""
+
+    type: str
+    kind: Literal["message", "service", "action"]
+    parts: list[TypePart]
+    example: dict[str, Any] = Field(description="What the publish tool for this kind accepts")
+
+
+SPEC = ToolSpec(
+    name="describe_type",
+    title="Describe a type",
+    description=(
+        "Show the fields of a message, service or action type as a nested outline, with an example JSON "
+        'object to send. Read-only. Examples: {"type_name": "geometry_msgs/msg/Twist"}, '
+        '{"type_name": "std_srvs/srv/SetBool"}, {"type_name": "example_interfaces/action/Fibonacci"}.'
+    ),
+    hints=READS_ROBOT,
+    output=TypeAnswer,
+)
+
+
+async def run(
+    ctx: ToolContext,
+    type_name: Annotated[
+        str, Field(description="pkg/msg/T, pkg/srv/T, pkg/action/T or pkg/T, e.g. sensor_msgs/msg/LaserScan")
+    ],
+) -> ToolAnswer:
+    """Ask rosapi for the type's definitions and outline them."""
+    try:
+        found = await describe_type(ctx.graph, type_name)
+    except CannotDescribe as exc:
+        raise ToolFailure(str(exc)) from None
+    parts = [
+        TypePart(
+            part=title,
+            type=outline.type,
+            outline=list(outline.lines),
+            constants=outline.constants,
+            example=outline.example,
+        )
+        for title, outline in found.parts
+    ]
+    wanted = _EXAMPLE_PART[found.kind]
+    example = next((part.example for part in parts if part.part == wanted), {})
+    answer = TypeAnswer(type=found.type, kind=found.kind, parts=parts, example=example)
+    lines = [f"{found.type} ({found.kind})"]
+    for part in parts:
+        if len(parts) > 1:
+            lines.append(f"{part.part} ({part.type}):")
+        indent = "  " if len(parts) > 1 else ""
+        lines.extend(f"{indent}{line}" for line in part.outline or ["(no fields)"])
+    lines.append(f"Example for {_TOOL_FOR[found.kind]}: {compact_json(example, 1500)}")
+    return ToolAnswer(text="\n".join(lines), data=answer)

@@ -1,0 +1,77 @@
+"""``get_node_info``: what one node publishes, subscribes and serves."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_details
+from rosbridge_mcp_server.tools.base import (
+    READS_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolSpec,
+    absolute_name,
+    did_you_mean,
+)
+
+__all__ = ["SPEC", "NodeInfoAnswer", "run"]
+
+
+class NamedType(BaseModel):
+    """A topic or service and its type ("" when unknown)."""
+
+    name: str
+    type: str
+
+
+class NodeInfoAnswer(BaseModel):
+    """One node's connections."""
+
+    node: str
+    publications: list[NamedType]
+    subscriptions: list[NamedType]
+    services: list[NamedType]
+
+
+SPEC = ToolSpec(
+    name="get_node_info",
+    title="Node details",
+    description=(
+        "Show what one ROS node publishes, subscribes to and serves, with types. Read-only. "
+        'Example: {"node": "/turtlesim"}. list_nodes shows the nodes.'
+    ),
+    hints=READS_ROBOT,
+    output=NodeInfoAnswer,
+)
+
+
+async def run(
+    ctx: ToolContext,
+    node: Annotated[str, Field(description="Full node name, e.g. /turtlesim")],
+) -> ToolAnswer:
+    """Ask rosapi for the node's topics and services, then their types."""
+    name = absolute_name(node, "node")
+    try:
+        details = await node_details(ctx.graph, name)
+    except UnknownNodeError as exc:
+        raise ToolFailure(
+            f"Node {name} is not running.{did_you_mean(name, exc.known)} Call list_nodes to see the nodes."
+        ) from None
+    answer = NodeInfoAnswer(
+        node=name,
+        publications=[NamedType(name=n, type=t) for n, t in details.publishes],
+        subscriptions=[NamedType(name=n, type=t) for n, t in details.subscribes],
+        services=[NamedType(name=n, type=t) for n, t in details.services],
+    )
+    lines = [name]
+    for title, items in (
+        ("publishes", answer.publications),
+        ("subscribes", answer.subscriptions),
+        ("services", answer.services),
+    ):
+        lines.append(f"{title} ({len(items)}):")
+        lines.extend(f"  {item.name} [{item.type or 'type unknown'}]" for item in items)
+    return ToolAnswer(text="\n".join(lines), data=answer)
