@@ -17,7 +17,11 @@ from mcp.client.context import ClientRequestContext
 from mcp.types import ElicitRequestParams, ElicitResult
 from mcp_harness import open_session, text_of, types_for
 
+from mcp import Client
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import load_config
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard, parse_policy
+from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.tools import TOOL_MODULES
 
@@ -360,3 +364,98 @@ async def test_a_2026_session_asks_through_an_input_round_and_sends_once(
     else:
         assert "The person declined" in text_of(result)
         assert CMD_VEL not in sim_ros2.world.published
+
+
+# --- streams and parameters -----------------------------------------------------------------------------
+
+
+def stream_call(sim: SimulatedRobot, x: float, rate_hz: float, duration: float) -> dict[str, Any]:
+    return dict(twist_call(sim, x), rate_hz=rate_hz, duration=duration)
+
+
+async def test_stop_robot_ends_a_running_stream_within_a_second_and_the_last_message_is_zero(
+    sim: SimulatedRobot,
+) -> None:
+    """A 30 s velocity stream is ended by stop_robot; the stream's call answers normally, saying so."""
+    async with open_session(sim.url, guard=None, policy=Policy()) as session:
+        streaming = asyncio.create_task(session.call("publish_topic", stream_call(sim, 0.4, 20.0, 30.0)))
+        await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 3, WAIT)
+        loop = asyncio.get_running_loop()
+        started = loop.time()
+        stopped = await session.ok("stop_robot")
+        streamed = await asyncio.wait_for(streaming, 1.0)
+        took = loop.time() - started
+        # A barrier: once this reading call is answered, everything the server sent before has been handled.
+        await session.ok("get_topic_info", {"topic": CMD_VEL})
+    assert took < 1.0
+    assert not streamed.is_error, text_of(streamed)
+    assert streamed.structured_content is not None
+    assert streamed.structured_content["stopped_by_stop_robot"] is True
+    assert "stop_robot ended the stream" in text_of(streamed)
+    assert stopped.structured_content is not None
+    assert stopped.structured_content["streams_stopped"] == [CMD_VEL]
+    received = [m.msg["linear"]["x"] for m in sim.world.published[CMD_VEL]]
+    assert received[-1] == 0
+    assert 0.4 in received
+    assert len(received) < 20 * 30
+
+
+@pytest.mark.parametrize(
+    ("rate_hz", "duration", "rule"),
+    [
+        (50.0, 2.0, "[publish] max_rate_hz 20 Hz; you asked 50 Hz"),
+        (10.0, 60.0, "[publish] max_duration 10 s; you asked 60 s"),
+    ],
+)
+async def test_a_stream_over_the_publish_limits_is_refused_before_its_first_message(
+    sim: SimulatedRobot, rate_hz: float, duration: float, rule: str
+) -> None:
+    """[publish] max_rate_hz and max_duration: refused with the rule; not one message reaches the robot."""
+    limits = policy(publish={"max_rate_hz": 20, "max_duration": 10})
+    async with open_session(sim.url, guard=None, policy=limits) as session:
+        text = await session.error("publish_topic", stream_call(sim, 0.1, rate_hz, duration))
+    assert rule in text
+    assert CMD_VEL not in sim.world.published
+
+
+async def test_a_stream_is_confirmed_once_showing_its_rate_and_capped_like_one_message(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """confirm = "motion" asks once per stream (rate and duration shown); the cap clamps each message."""
+    person = Person()
+    rules = policy(confirm="motion", velocity={"max_linear": 0.2, "mode": "clamp"})
+    async with open_session(sim_ros2.url, guard=None, policy=rules, elicitation_callback=person) as session:
+        result = await session.ok("publish_topic", stream_call(sim_ros2, 1.0, 20.0, 0.2))
+    [question] = person.questions
+    assert "Repeated at 20 Hz for 0.2 s." in question
+    assert '"x": 0.2' in question
+    assert "scaled down" in text_of(result)
+    received = [m.msg["linear"]["x"] for m in sim_ros2.world.published[CMD_VEL]]
+    assert set(received) <= {0.2, 0.0}
+    assert received[-1] == 0
+
+
+async def test_a_denied_parameter_is_not_set(sim: SimulatedRobot) -> None:
+    """[parameters] deny: set_parameter is refused and the robot's parameter keeps its value."""
+    name = "/turtlesim:background_r" if sim.dialect == "ros2" else "/turtlesim/background_r"
+    before = sim.world.params[name]
+    rules = policy(parameters={"deny": ["/turtlesim*"]})
+    async with open_session(sim.url, guard=None, policy=rules) as session:
+        text = await session.error("set_parameter", {"name": name, "value": 200})
+    assert f"[parameters] deny '/turtlesim*' matches {name}" in text
+    assert sim.world.params[name] == before
+
+
+async def test_read_only_withholds_set_parameter_and_stop_robot_even_when_tools_picks_them(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """--tools watch (which holds set_parameter) under read-only lists neither it nor stop_robot."""
+    config = load_config({"ROSBRIDGE_MCP_READ_ONLY": "1"}, url=sim_ros2.url, tools="watch")
+    async with Client(build_server(RosbridgeClient(sim_ros2.url), config), mode="legacy") as mcp:
+        names = [tool.name for tool in (await mcp.list_tools()).tools]
+        refused = await mcp.call_tool("set_parameter", {"name": "/turtlesim:background_r", "value": 1})
+    assert "set_parameter" not in names
+    assert "stop_robot" not in names
+    assert "get_parameter" in names
+    assert refused.is_error
+    assert "read-only" in text_of(refused)
