@@ -184,3 +184,12 @@ def test_check_shows_read_only_and_the_absence_of_a_policy(capsys: pytest.Captur
     assert "read_only: only reading tools" in capsys.readouterr().out
     assert run(["check", "--demo"], {}) == 0
     assert "safety no restrictions" in capsys.readouterr().out
+
+
+def test_a_header_value_never_reaches_the_log_even_at_debug(capsys: pytest.CaptureFixture[str]) -> None:
+    """websockets logs every handshake header at DEBUG; the token is replaced by *** in those lines."""
+    env = {"ROSBRIDGE_HEADERS": "Authorization: Bearer s3cret-t0ken"}
+    assert run(["check", "--demo", "--log-level", "DEBUG"], env) == 0
+    captured = capsys.readouterr()
+    assert "s3cret-t0ken" not in captured.err + captured.out
+    assert "Authorization: ***" in captured.err

@@ -152,7 +152,10 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         return 2
 
     # `check` prints its own findings; the client's warnings would only repeat them.
-    configure_logging(config.log_level if command == "serve" or config.log_level == "DEBUG" else "ERROR")
+    configure_logging(
+        config.log_level if command == "serve" or config.log_level == "DEBUG" else "ERROR",
+        secrets=[value for _, value in config.headers],
+    )
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout))
@@ -178,11 +181,17 @@ def open_audit_log(path: str | None) -> TextIO | None:
         raise ConfigError(f"audit log: cannot open {path!r} for appending: {exc.strerror or exc}") from None
 
 
-def configure_logging(level: str, stream: TextIO | None = None) -> None:
-    """Log to stderr: our own loggers at ``level``, everyone else's at WARNING (or DEBUG when asked)."""
+def configure_logging(level: str, stream: TextIO | None = None, secrets: Sequence[str] = ()) -> None:
+    """Log to stderr: our own loggers at ``level``, everyone else's at WARNING (or DEBUG when asked).
+
+    ``secrets`` (e.g. the values of ``--header``) are replaced by ``***`` in every line: at DEBUG, websockets
+    logs each handshake header it sends.
+    """
     handler = logging.StreamHandler(stream if stream is not None else sys.stderr)
     handler.set_name(PROG)
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+    if secrets:
+        handler.addFilter(_Redact(secrets))
     root = logging.getLogger()
     # Replace only our own handler (run() may be called more than once in one process, e.g. in tests). Having
     # a handler on the root also keeps MCPServer's logging.basicConfig from adding its own.
@@ -191,6 +200,22 @@ def configure_logging(level: str, stream: TextIO | None = None) -> None:
     root.addHandler(handler)
     root.setLevel(logging.DEBUG if level == "DEBUG" else logging.WARNING)
     logging.getLogger("rosbridge_mcp_server").setLevel(level)
+
+
+class _Redact(logging.Filter):
+    """Replaces each secret by ``***`` in a record's message (and drops its arguments, already merged)."""
+
+    def __init__(self, secrets: Sequence[str]) -> None:
+        super().__init__()
+        self._secrets = [secret for secret in secrets if secret]
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        if any(secret in message for secret in self._secrets):
+            for secret in self._secrets:
+                message = message.replace(secret, "***")
+            record.msg, record.args = message, None
+        return True
 
 
 def _stop_on_signals(client: RosbridgeClient) -> None:
