@@ -21,7 +21,7 @@ What is measured:
 5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
 6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
 7. RSS after startup and its growth over 10 000 tool calls, against the same bare server;
-9. the watch tools (issue #9): ``get_image`` on a live 640×480 and 1920×1080 rgb8 camera and
+9. the watch tools: ``get_image`` on a live 640×480 and 1920×1080 rgb8 camera and
    ``subscribe_topic`` count 1 on a live topic, each against a raw subscribe → first message → unsubscribe
    started at the same point of the publisher's cycle; a 10 Hz × 5 s ``publish_topic`` stream as the robot
    receives it; the size of ``tools/list`` with every tool and with the original eight.

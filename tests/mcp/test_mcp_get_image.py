@@ -6,13 +6,13 @@ import array
 import base64
 import io
 import sys
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
 from typing import Any
 
 import pytest
 from mcp.types import ImageContent
-from mcp_harness import Session, text_of
+from mcp_harness import Session, open_session, text_of
 from PIL import Image
 
 from rosbridge_mcp_server.client import RosbridgeClient
@@ -131,3 +131,18 @@ async def test_the_simulated_depth_camera_is_grey_with_its_range_in_millimetres(
     assert 0 < near < far
     assert picture_of(result).mode == "L"
     assert f"depth {near:g}-{far:g} mm" in text_of(result)
+
+
+async def test_a_full_hd_frame_in_fragments_passes_through(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]],
+) -> None:
+    """A bridge run with `ros2 run` fragments above 1 MB: an 8 MB frame arrives in 9 pieces and works."""
+    robot = await make_sim(dialect="ros2", max_message_size=1_000_000)
+    width, height = 1920, 1080
+    pixels = bytes([90, 60, 30]) * (width * height)
+    async with (
+        open_session(robot.url) as session,
+        camera(robot, "/test/full_hd", "Image", frame(width, height, "rgb8", pixels, step=width * 3)),
+    ):
+        result = await session.ok("get_image", {"topic": "/test/full_hd", "timeout": 10})
+    assert picture_of(result).size == (800, 450)

@@ -132,3 +132,22 @@ async def test_the_stream_is_approved_once_and_the_guard_may_shorten_it(sim: Sim
     assert (act.tool, act.name, act.rate_hz, act.duration) == ("publish_topic", CMD_VEL, 20, 30)
     assert (result.structured_content or {})["count"] == 4
     assert guard.records == ["sent 4 of 4"]
+
+
+async def test_a_twist_stamped_stream_ends_with_a_zero_keeping_its_frame(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """TwistStamped: the last message is zero velocity in the same frame."""
+    msg_type = "geometry_msgs/msg/TwistStamped" if sim.dialect == "ros2" else "geometry_msgs/TwistStamped"
+    topic = "/test/cmd_vel_stamped"
+    message = {"header": {"frame_id": "base_link"}, "twist": FORWARD}
+    result = await session.ok(
+        "publish_topic",
+        {"topic": topic, "message_type": msg_type, "message": message, "rate_hz": 20, "duration": 0.1},
+    )
+    assert (result.structured_content or {})["zero_sent"] is True
+    await sim.world.wait_for(lambda w: len(w.published.get(topic, ())) == 3, WAIT)
+    last = sim.world.published[topic][-1].msg
+    assert last["twist"] == STILL
+    assert last["header"]["frame_id"] == "base_link"
+    assert sim.world.published[topic][0].msg["twist"]["linear"]["x"] == 0.4

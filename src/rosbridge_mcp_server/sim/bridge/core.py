@@ -142,7 +142,7 @@ class BridgeCore:
         used as it is, and anything else (null, a string, a number) is ignored, an empty request (both
         lines)."""
         if isinstance(args, list):
-            names = self.registry.message_typedefs(msg_type)[0]["fieldnames"]
+            names = self.registry.field_names(msg_type)
             return dict(zip(names, args, strict=False))
         if isinstance(args, dict):
             return args

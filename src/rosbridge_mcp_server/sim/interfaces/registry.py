@@ -31,7 +31,7 @@ from .base import (
     no_field,
     split_seconds,
 )
-from .definitions import COMMON, ROS1_ONLY, ROS2_ONLY, to_ros1_text
+from .definitions import COMMON, ROS1_ONLY, ROS2_ONLY, ROSAPI_2_1, to_ros1_text
 from .ros1 import Ros1Conversion
 from .ros2 import Ros2Conversion
 from .specs import Cat, FieldSpec, MessageSpec, ParsedTable, parse_table
@@ -42,22 +42,28 @@ __all__ = ["ConversionError", "Dialect", "InterfaceError", "InterfaceRegistry", 
 # rospkg's ResourceNotFound lists the package path after the name; a stock Noetic install has one entry.
 _ROS1_PACKAGE_PATH = "/opt/ros/noetic/share"
 
-_tables: dict[str, ParsedTable] = {}
+_tables: dict[tuple[str, str], ParsedTable] = {}
 _tables_lock = threading.Lock()
 
 
-def _table_for(dialect: Dialect) -> ParsedTable:
+def _table_for(dialect: Dialect, rosapi: str) -> ParsedTable:
     # Parsed once per process: the specs are never mutated after linking, so robots share them.
     with _tables_lock:
-        table = _tables.get(dialect)
+        table = _tables.get((dialect, rosapi))
         if table is None:
             if dialect == "ros2":
                 texts = {**COMMON, **ROS2_ONLY}
+                if rosapi == "2.1.0":
+                    for key, text in ROSAPI_2_1.items():
+                        if text is None:
+                            texts.pop(key, None)
+                        else:
+                            texts[key] = text
             else:
                 texts = {key: to_ros1_text(text) for key, text in COMMON.items()}
                 texts.update(ROS1_ONLY)
             table = parse_table(dialect, texts)
-            _tables[dialect] = table
+            _tables[(dialect, rosapi)] = table
         return table
 
 
@@ -68,16 +74,19 @@ def _finite_or_none(value: float) -> float | None:
 class InterfaceRegistry:
     """Every interface type the simulated robot knows, in one dialect.
 
-    ``clock`` gives "now" in seconds for header stamps and ``"now"`` times (default: wall clock); the parsed
-    definitions are shared by every registry of a dialect, the per-registry caches are small dicts.
+    ``clock`` gives "now" in seconds for header stamps and ``"now"`` times (default: wall clock); ``rosapi``
+    ``"2.1.0"`` (ROS 2) has rosapi_msgs as rosbridge_suite 2.1.0 ships them. The parsed definitions are
+    shared by every registry of a dialect, the per-registry caches are small dicts.
     """
 
-    def __init__(self, dialect: Dialect, *, clock: Callable[[], float] | None = None) -> None:
+    def __init__(
+        self, dialect: Dialect, *, clock: Callable[[], float] | None = None, rosapi: str = "newest"
+    ) -> None:
         if dialect not in ("ros1", "ros2"):
             raise ValueError(f"unknown dialect {dialect!r}")
         self.dialect: Dialect = dialect
         self._clock = clock or time.time
-        self._table = _table_for(dialect)
+        self._table = _table_for(dialect, rosapi)
         self._packages: set[str] = set()
         self._modules: dict[tuple[str, str], dict[str, Kind]] = {}
         for key in self._table.msg_names:
@@ -245,6 +254,10 @@ class InterfaceRegistry:
             spec = messages.get(f"{pkg}/msg/{cls}") or messages[f"{pkg}/action/{cls}"]
         self._lookup_cache[name] = spec
         return spec
+
+    def field_names(self, msg_type: str) -> list[str]:
+        """The fields of a message (or service/action part) in definition order."""
+        return [f.name for f in self._spec(msg_type).fields]
 
     def constants(self, msg_type: str) -> dict[str, Any]:
         return {const.name: const.value for const in self._spec(msg_type).constants}

@@ -28,7 +28,7 @@ from rosbridge_mcp_server.sim.nodes.sensors import (
     robot_description,
 )
 from rosbridge_mcp_server.sim.nodes.turtlesim import TURTLESIM, Turtlesim
-from rosbridge_mcp_server.sim.rosapi import ROSAPI_NODE, Rosapi
+from rosbridge_mcp_server.sim.rosapi import ROSAPI_NODE, ROSAPI_PARAMS, Rosapi, RosapiOptions
 
 __all__ = ["WorldNodes"]
 
@@ -38,7 +38,6 @@ TALKER = "/talker"
 ADD_TWO_INTS = "/add_two_ints_server"
 CONTROLLER = "/robot_controller"
 FAST = "/fast_publisher"
-ROSAPI_PARAMS = "/rosapi_params"
 
 CHATTER_PERIOD = 0.1
 FAST_PERIOD = 0.001
@@ -57,6 +56,8 @@ class WorldNodes:
         slow_service_seconds: float,
         camera: CameraSettings,
         port: int,
+        rosapi: RosapiOptions | None = None,
+        node_services: bool = True,
     ) -> None:
         self.bridge = bridge
         self.kit = NodeKit(bridge)
@@ -65,6 +66,11 @@ class WorldNodes:
         self.action_step = action_step
         self.slow_service_seconds = slow_service_seconds
         self.port = port
+        self.rosapi_options = rosapi or RosapiOptions()
+        self.node_services = node_services
+        #: Since Iron every ROS 2 node offers ~/get_type_description and declares
+        #: start_type_description_service; Humble's do not.
+        self.type_descriptions = self.ros2 and bridge.config.distro != "humble"
         self.turtlesim = Turtlesim(self.kit)
         self.camera = Camera(self.kit, camera, self.turtlesim.background)
         self.robot_state = RobotState(self.kit)
@@ -88,7 +94,7 @@ class WorldNodes:
         if self.fast_topic:
             self._fast()
         self._fibonacci()
-        Rosapi(self.bridge)
+        self.rosapi = Rosapi(self.bridge, self.rosapi_options)
         self._parameters()
 
     def _node_names(self) -> list[str]:
@@ -124,16 +130,17 @@ class WorldNodes:
                     graph.add_publisher(node, "/rosout", log_type)
                 if events_type:
                     graph.add_publisher(node, "/parameter_events", events_type)
-                if node == ROSAPI_PARAMS:
+                if not self.node_services:
                     continue
-                services = ParameterServices(self.bridge.world, node)
-                for leaf, service_type in PARAMETER_SERVICES:
-                    graph.add_service(
-                        ServiceEntry(f"{node}/{leaf}", service_type, node, getattr(services, leaf))
-                    )
-                if not self.bridge.config.in_order:
-                    # Since Iron every node also offers ~/get_type_description (Humble's do not); it is
-                    # listed and answers with an empty response.
+                if node != ROSAPI_PARAMS:
+                    # rosapi's helper node starts without parameter services.
+                    services = ParameterServices(self.bridge.world, node)
+                    for leaf, service_type in PARAMETER_SERVICES:
+                        graph.add_service(
+                            ServiceEntry(f"{node}/{leaf}", service_type, node, getattr(services, leaf))
+                        )
+                if self.type_descriptions:
+                    # Listed like a real node's; it answers with an empty response.
                     graph.add_service(
                         ServiceEntry(
                             f"{node}/get_type_description",
@@ -148,6 +155,8 @@ class WorldNodes:
                 graph.node(node)
                 if log_type and node != "/rosout":
                     graph.add_publisher(node, "/rosout", log_type)
+                if not self.node_services:
+                    continue
                 for leaf, service_type in (
                     ("get_loggers", "roscpp/GetLoggers"),
                     ("set_logger_level", "roscpp/SetLoggerLevel"),
@@ -213,20 +222,36 @@ class WorldNodes:
             for node in self.bridge.graph.node_names():
                 if node != ROSAPI_PARAMS:
                     params[f"{node}:use_sim_time"] = False
-                    if not config.in_order:
-                        # Since Iron every node declares it (what the Jazzy and Kilted labs list second).
+                    if self.type_descriptions:
+                        # Declared by every node since Iron (what the Jazzy and Kilted labs list second).
                         params[f"{node}:start_type_description_service"] = True
             params.update(
                 {
                     "/turtlesim:background_r": 69,
                     "/turtlesim:background_g": 86,
                     "/turtlesim:background_b": 255,
-                    "/rosbridge_websocket:port": self.port,
-                    "/rosbridge_websocket:address": "127.0.0.1",
-                    "/rosbridge_websocket:max_message_size": config.max_message_size or 0,
+                    # rosbridge_websocket's parameters in the order 2.1.0 declares them (its launch
+                    # defaults, as the Kilted lab lists them), then the newer service timeout.
+                    "/rosbridge_websocket:use_compression": False,
                     "/rosbridge_websocket:call_services_in_new_thread": not config.in_order,
                     "/rosbridge_websocket:send_action_goals_in_new_thread": not config.in_order,
-                    "/rosbridge_websocket:default_call_service_timeout": config.default_service_timeout,
+                    "/rosbridge_websocket:fragment_timeout": 600,
+                    "/rosbridge_websocket:delay_between_messages": 0,
+                    "/rosbridge_websocket:max_message_size": config.max_message_size or 0,
+                    "/rosbridge_websocket:unregister_timeout": 10.0,
+                    "/rosbridge_websocket:bson_only_mode": False,
+                    "/rosbridge_websocket:topics_glob": "",
+                    "/rosbridge_websocket:services_glob": "",
+                    "/rosbridge_websocket:params_glob": "",
+                    "/rosbridge_websocket:websocket_ping_interval": 0,
+                    "/rosbridge_websocket:websocket_ping_timeout": 30,
+                    "/rosbridge_websocket:certfile": "",
+                    "/rosbridge_websocket:keyfile": "",
+                    "/rosbridge_websocket:port": self.port,
+                    "/rosbridge_websocket:address": "127.0.0.1",
+                    "/rosbridge_websocket:url_path": "/",
+                    "/rosbridge_websocket:retry_startup_delay": 5.0,
+                    "/rosbridge_websocket:actual_port": self.port,
                     "/rosapi:topics_glob": "[*]",
                     "/rosapi:services_glob": "[*]",
                     "/rosapi:params_glob": "[*]",
@@ -240,6 +265,9 @@ class WorldNodes:
                     "/lidar:range_max": RANGE_MAX,
                 }
             )
+            if self.rosapi_options.release == "newest":
+                # rosbridge 2.2.0+ (2.1.0 has no service timeout).
+                params["/rosbridge_websocket:default_call_service_timeout"] = config.default_service_timeout
         else:
             # In the order the real parameter server lists them (roscore's, the world's, then what
             # rosbridge_websocket.launch sets, with its values; get_param_names is not sorted on ROS 1).
