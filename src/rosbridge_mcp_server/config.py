@@ -10,18 +10,31 @@ Precedence, highest first:
 
 So a flag always beats the environment, and within one source a URL beats host and port. Nothing else in the
 package reads the environment; :func:`load_config` is called once, from ``cli.run()``. The same rule holds for
-``--timeout`` / ``ROSBRIDGE_TIMEOUT``, ``--log-level`` / ``ROSBRIDGE_MCP_LOG_LEVEL`` and ``--tools`` /
-``ROSBRIDGE_MCP_TOOLS``.
+every other pair:
+
+* ``--timeout`` / ``ROSBRIDGE_TIMEOUT``, ``--log-level`` / ``ROSBRIDGE_MCP_LOG_LEVEL``, ``--tools`` /
+  ``ROSBRIDGE_MCP_TOOLS``;
+* safety: ``--policy`` / ``ROSBRIDGE_MCP_POLICY`` (a TOML file), ``--read-only`` /
+  ``ROSBRIDGE_MCP_READ_ONLY=1`` (either one makes the server read-only), ``--audit-log`` /
+  ``ROSBRIDGE_MCP_AUDIT_LOG``;
+* connection security: ``--ca-file`` / ``ROSBRIDGE_CA_FILE``, ``--client-cert`` / ``ROSBRIDGE_CLIENT_CERT``,
+  ``--client-key`` / ``ROSBRIDGE_CLIENT_KEY``, ``--header`` (repeatable) / ``ROSBRIDGE_HEADERS`` (one
+  ``Name: value`` per line). Header values are secrets: they are never logged.
 """
 
 from __future__ import annotations
 
 import ipaddress
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
+import re
+import ssl
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Literal
 from urllib.parse import urlsplit
+
+from rosbridge_mcp_server.safety.policy import Policy, PolicyError, load_policy
 
 __all__ = [
     "DEFAULT_HOST",
@@ -34,6 +47,7 @@ __all__ = [
     "DemoDialect",
     "LogLevel",
     "load_config",
+    "plain_text_warning",
 ]
 
 DEFAULT_HOST = "localhost"
@@ -65,8 +79,36 @@ class Config:
     log_level: LogLevel = "INFO"
     demo: bool = False
     demo_dialect: DemoDialect = "ros2"
+    policy: Policy = field(default_factory=Policy)
+    audit_log: str | None = None
+    ca_file: str | None = None
+    client_cert: str | None = None
+    client_key: str | None = None
+    headers: tuple[tuple[str, str], ...] = field(default=(), repr=False)
     #: Names of the tools a host sees; ``None`` is every tool.
     tools: tuple[str, ...] | None = None
+
+    def ssl_context(self) -> ssl.SSLContext | None:
+        """The TLS context for wss:// with a private CA or a client certificate; ``None`` for the default.
+
+        Raises :class:`ConfigError` when a file cannot be loaded (``load_config`` has tried it once already).
+        """
+        if self.ca_file is None and self.client_cert is None:
+            return None
+        try:
+            context = ssl.create_default_context(cafile=self.ca_file)
+        except (OSError, ssl.SSLError) as exc:
+            raise ConfigError(f"CA file {self.ca_file!r} cannot be loaded: {_reason(exc)}") from None
+        if self.client_cert is not None:
+            try:
+                context.load_cert_chain(self.client_cert, self.client_key)
+            except (OSError, ssl.SSLError) as exc:
+                raise ConfigError(
+                    f"client certificate {self.client_cert!r}"
+                    f"{f' with key {self.client_key!r}' if self.client_key else ''} cannot be loaded: "
+                    f"{_reason(exc)}"
+                ) from None
+        return context
 
 
 def load_config(
@@ -79,6 +121,13 @@ def load_config(
     log_level: str | None = None,
     demo: bool = False,
     demo_dialect: str = "ros2",
+    policy: str | None = None,
+    read_only: bool = False,
+    audit_log: str | None = None,
+    ca_file: str | None = None,
+    client_cert: str | None = None,
+    client_key: str | None = None,
+    headers: Sequence[str] | None = None,
     tools: str | None = None,
 ) -> Config:
     """Build a :class:`Config` from command-line values (``None`` = not given) and the environment.
@@ -101,14 +150,113 @@ def load_config(
     tools_text = tools if tools is not None else environ.get("ROSBRIDGE_MCP_TOOLS", "").strip() or None
     tools_source = "--tools" if tools is not None else "ROSBRIDGE_MCP_TOOLS"
     chosen = _parse_tools(tools_text, source=tools_source) if tools_text is not None else None
-    return Config(
+    config = Config(
         url=resolved_url,
         request_timeout=request_timeout,
         log_level=level,
         demo=demo,
         demo_dialect="ros1" if demo_dialect == "ros1" else "ros2",
+        policy=_load_policy(environ, policy, read_only),
+        audit_log=_path(environ, audit_log, "--audit-log", "ROSBRIDGE_MCP_AUDIT_LOG"),
+        ca_file=_path(environ, ca_file, "--ca-file", "ROSBRIDGE_CA_FILE"),
+        client_cert=_path(environ, client_cert, "--client-cert", "ROSBRIDGE_CLIENT_CERT"),
+        client_key=_path(environ, client_key, "--client-key", "ROSBRIDGE_CLIENT_KEY"),
+        headers=_headers(environ, headers),
         tools=chosen,
     )
+    _check_tls(config)
+    return config
+
+
+_TRUE = ("1", "true", "yes", "on")
+_FALSE = ("", "0", "false", "no", "off")
+
+
+def _load_policy(environ: Mapping[str, str], path: str | None, read_only: bool) -> Policy:
+    source = "--policy" if path is not None else "ROSBRIDGE_MCP_POLICY"
+    text = path if path is not None else environ.get("ROSBRIDGE_MCP_POLICY", "").strip()
+    try:
+        loaded = load_policy(text, source=source) if text else Policy()
+    except PolicyError as exc:
+        raise ConfigError(str(exc)) from None
+    env_read_only = environ.get("ROSBRIDGE_MCP_READ_ONLY", "").strip().lower()
+    if env_read_only not in _TRUE + _FALSE:
+        raise ConfigError(f"ROSBRIDGE_MCP_READ_ONLY must be 1 or 0 (true or false), not {env_read_only!r}")
+    if read_only or env_read_only in _TRUE:
+        return loaded.with_read_only()
+    return loaded
+
+
+def _path(environ: Mapping[str, str], flag: str | None, flag_name: str, env_name: str) -> str | None:
+    value = flag if flag is not None else environ.get(env_name, "").strip() or None
+    if value is not None and not value.strip():
+        raise ConfigError(f"{flag_name} is empty; give a file path")
+    return value
+
+
+# An HTTP header name is a token (RFC 9110); values must not break the request line by line.
+_HEADER_NAME = re.compile(r"^[!#$%&'*+.^_`|~0-9A-Za-z-]+$")
+
+
+def _headers(environ: Mapping[str, str], flags: Sequence[str] | None) -> tuple[tuple[str, str], ...]:
+    if flags:
+        lines, source = list(flags), "--header"
+    else:
+        lines = [line for line in environ.get("ROSBRIDGE_HEADERS", "").splitlines() if line.strip()]
+        source = "ROSBRIDGE_HEADERS"
+    headers = []
+    for line in lines:
+        name, colon, value = line.partition(":")
+        name, value = name.strip(), value.strip()
+        # The value is a secret (a token): the error names the header, never its value.
+        if not colon or not _HEADER_NAME.match(name):
+            shown = name if _HEADER_NAME.match(name) else "(not a header name)"
+            raise ConfigError(f"{source} must be 'Name: value', e.g. 'Authorization: Bearer …'; got {shown}")
+        if not value or "\r" in value or "\n" in value:
+            raise ConfigError(f"{source}: header {name} has an empty or multi-line value")
+        headers.append((name, value))
+    return tuple(headers)
+
+
+def _check_tls(config: Config) -> None:
+    uses_tls = config.ca_file is not None or config.client_cert is not None
+    if config.client_key is not None and config.client_cert is None:
+        raise ConfigError("--client-key / ROSBRIDGE_CLIENT_KEY needs --client-cert / ROSBRIDGE_CLIENT_CERT")
+    if uses_tls and not config.demo and urlsplit(config.url).scheme != "wss":
+        raise ConfigError(
+            f"a CA file or client certificate is for TLS, but the URL is {config.url}; use a wss:// URL"
+        )
+    for file in (config.ca_file, config.client_cert, config.client_key):
+        if file is not None and not Path(file).is_file():
+            raise ConfigError(f"TLS file {file!r} does not exist or is not a file")
+    config.ssl_context()
+
+
+def _reason(exc: OSError) -> str:
+    # ssl.SSLError is an OSError whose strerror is unset; its reason ("PEM_LIB", ...) is the useful part.
+    return str(exc.strerror or getattr(exc, "reason", None) or exc)
+
+
+def plain_text_warning(url: str) -> str | None:
+    """A warning for a plain ws:// URL to another machine: commands and any token travel unencrypted."""
+    parts = urlsplit(url)
+    host = parts.hostname or ""
+    if parts.scheme != "ws" or _is_loopback(host):
+        return None
+    return (
+        f"rosbridge at {url} is reached over plain ws://: anyone on the network path can read and inject "
+        "robot commands. Use wss:// (rosbridge's certfile/keyfile, or a TLS proxy) for a robot off this "
+        "machine."
+    )
+
+
+def _is_loopback(host: str) -> bool:
+    if host.lower() in ("localhost", "localhost.localdomain") or host.lower().endswith(".localhost"):
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
 
 
 def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:

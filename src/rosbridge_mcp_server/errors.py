@@ -17,7 +17,7 @@ The tree::
     │   │                           does not fit, a bridge that does not read); nothing was sent
     │   └── FrameTooLargeError      a frame larger than the bridge accepts (the bridge would drop the
     │                               connection)
-    ├── PolicyRefusal               the safety policy refused an act; the text names the rule
+    ├── PolicyRefusal               the safety policy (or the person asked) refused an act; names the rule
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
@@ -199,7 +199,10 @@ class FrameTooLargeError(NotSentError):
 
 
 class PolicyRefusal(RosbridgeError):
-    """The safety policy refused an act before anything was sent; ``str()`` names the rule."""
+    """The safety policy refused an act before anything was sent, or the person asked to confirm it did not.
+
+    ``str()`` names the rule (e.g. ``[velocity] max_linear 0.5 m/s; you asked 2``) or the person's answer.
+    """
 
 
 class ProtocolError(RosbridgeError):

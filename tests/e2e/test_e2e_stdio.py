@@ -95,7 +95,7 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
 
         tools = await server.request("tools/list")
-        assert len(tools["result"]["tools"]) == 17
+        assert len(tools["result"]["tools"]) == 18
 
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
         assert topics["result"]["isError"] is False
@@ -202,7 +202,7 @@ async def test_a_server_with_no_bridge_still_answers_and_reports_the_url() -> No
             },
         )
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
-        assert len((await server.request("tools/list"))["result"]["tools"]) == 8
+        assert len((await server.request("tools/list"))["result"]["tools"]) == 9
         answer = await server.request("tools/call", {"name": "list_actions", "arguments": {}})
         assert answer["result"]["isError"] is True
         assert f"Not connected to rosbridge at {url}" in answer["result"]["content"][0]["text"]

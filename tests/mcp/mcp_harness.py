@@ -18,6 +18,7 @@ from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.safety import Policy
 from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -66,17 +67,19 @@ async def open_session(
     request_timeout: float = 5.0,
     wait: bool = True,
     mode: str = "legacy",
-    guard: Guard = ALLOW_ALL,
+    guard: Guard | None = ALLOW_ALL,
     elicitation_callback: Any = None,
+    policy: Policy | None = None,
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
 
     ``mode="auto"`` speaks the 2026-07-28 protocol instead (in-process: direct dispatch, no JSON-RPC framing).
+    With ``policy`` the server runs under that safety policy (``guard=None``: the server's own PolicyGuard).
 
     The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
     pytest-asyncio sets a fixture up and tears it down in different tasks.
     """
-    config = Config(url=url, request_timeout=request_timeout, connect_timeout=2.0)
+    config = Config(url=url, request_timeout=request_timeout, connect_timeout=2.0, policy=policy or Policy())
     ros = RosbridgeClient(
         url,
         connect_timeout=config.connect_timeout,

@@ -26,6 +26,8 @@ async def test_a_twist_reaches_the_robot_and_the_turtle_moves(session: Session, 
         "rate_hz": None,
         "duration": None,
         "zero_sent": False,
+        "stopped_by_stop_robot": False,
+        "adjusted": None,
     }
     await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)
     received = sim.world.published[CMD_VEL][0].msg

@@ -32,6 +32,7 @@ EXPECTED_PARAMETERS = {
     "get_parameter": ["name"],
     "set_parameter": ["name", "value"],
     "get_transform": ["target_frame", "source_frame", "timeout"],
+    "stop_robot": [],
 }
 READ_ONLY = {
     "list_topics",
@@ -51,8 +52,9 @@ READ_ONLY = {
 IDEMPOTENT_ACTS = {"set_parameter"}
 ORIGINAL = list(EXPECTED_PARAMETERS)[:8]
 #: Budgets for the tools/list answer (compact JSON): what a host pays in context for every session.
-ALL_TOOLS_BUDGET = 32_000
-ORIGINAL_TOOLS_BUDGET = 15_000
+ALL_TOOLS_BUDGET = 33_000
+#: The original eight come with the e-stop (stop_robot), which is listed wherever acting tools are.
+ORIGINAL_TOOLS_BUDGET = 16_500
 
 
 def _closed_port_url() -> str:
@@ -78,7 +80,14 @@ async def test_every_tool_is_listed_with_annotations_and_described_parameters() 
         hints = tool.annotations
         assert hints is not None
         assert hints.open_world_hint is True
-        if tool.name in READ_ONLY:
+        if tool.name == "stop_robot":
+            # It acts, but only takes motion away, and repeating it is harmless.
+            assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
+                False,
+                False,
+                True,
+            )
+        elif tool.name in READ_ONLY:
             assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
                 True,
                 False,
@@ -169,7 +178,8 @@ def _listing_size(tools: list[Any]) -> int:
 
 
 async def test_tools_original_lists_only_the_first_eight_within_budget() -> None:
-    """--tools original shows the eight original tools; both listings stay within their size budgets."""
+    """--tools original shows the eight original tools and the e-stop that goes with acting tools; both
+    listings stay within their size budgets."""
     url = _closed_port_url()
     sizes = {}
     for spec in ("original", "all"):
@@ -177,19 +187,19 @@ async def test_tools_original_lists_only_the_first_eight_within_budget() -> None
         async with Client(build_server(RosbridgeClient(url), config), mode="legacy") as mcp:
             tools = (await mcp.list_tools()).tools
         sizes[spec] = _listing_size(tools)
-        expected = ORIGINAL if spec == "original" else list(EXPECTED_PARAMETERS)
+        expected = [*ORIGINAL, "stop_robot"] if spec == "original" else list(EXPECTED_PARAMETERS)
         assert [tool.name for tool in tools] == expected
     assert sizes["original"] <= ORIGINAL_TOOLS_BUDGET
     assert sizes["all"] <= ALL_TOOLS_BUDGET
 
 
 async def test_a_comma_list_of_groups_and_names_is_honoured_in_order() -> None:
-    """ROSBRIDGE_MCP_TOOLS=get_image,original lists the original eight, then get_image."""
+    """ROSBRIDGE_MCP_TOOLS=get_image,original lists the original eight, then get_image (and the e-stop)."""
     url = _closed_port_url()
     config = load_config({"ROSBRIDGE_MCP_TOOLS": "get_image, original"}, url=url)
     async with Client(build_server(RosbridgeClient(url), config), mode="legacy") as mcp:
         names = [tool.name for tool in (await mcp.list_tools()).tools]
-    assert names == [*ORIGINAL, "get_image"]
+    assert names == [*ORIGINAL, "get_image", "stop_robot"]
 
 
 def test_an_unknown_tool_name_is_a_configuration_error_listing_the_names() -> None:

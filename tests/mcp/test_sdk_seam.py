@@ -19,6 +19,7 @@ from mcp import Client
 from rosbridge_mcp_server.server.sdk import (
     replace_output_schema,
     serve_streams,
+    server_answering_unlisted,
     tool_with_own_argument_errors,
 )
 
@@ -141,3 +142,23 @@ async def test_serve_streams_serves_an_mcp_server_on_the_streams_it_is_given() -
         group.cancel_scope.cancel()
     assert [tool.name for tool in listed.tools] == ["double"]
     assert result.structured_content == {"value": 4}
+
+
+async def test_a_server_answering_unlisted_tools_answers_those_it_knows_and_no_others() -> None:
+    """A withheld tool gets our answer; any other unknown name still gets the SDK's "Unknown tool"."""
+
+    def unlisted(name: str, arguments: dict[str, Any]) -> CallToolResult | None:
+        if name != "withheld":
+            return None
+        text = f"withheld, arguments {sorted(arguments)}"
+        return CallToolResult(content=[TextContent(type="text", text=text)], is_error=True)
+
+    server = server_answering_unlisted(unlisted, name="seam")
+    async with Client(server, mode="legacy") as client:
+        assert (await client.list_tools()).tools == []
+        ours = await client.call_tool("withheld", {"a": 1})
+        theirs = await client.call_tool("other", {})
+    assert ours.is_error
+    assert ours.content[0].text == "withheld, arguments ['a']"  # type: ignore[union-attr]
+    assert theirs.is_error
+    assert "Unknown tool: other" in theirs.content[0].text  # type: ignore[union-attr]

@@ -13,7 +13,7 @@ from urllib.parse import urlsplit
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.config import Config, plain_text_warning
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.wire.dialect import RosInfo
@@ -118,9 +118,18 @@ async def run_check(config: Config, out: TextIO) -> int:
     out.write(f"rosbridge-mcp-server {__version__}: checking {config.url}\n")
     if config.demo:
         say(_NOTE, f"demo mode: this is the built-in simulated ROS {config.demo_dialect[-1]} robot")
+    for line in config.policy.describe():
+        say(_NOTE, f"safety {line.strip()}" if not line.startswith(" ") else f"  {line.strip()}")
+    warning = plain_text_warning(config.url)
+    if warning:
+        say(_NOTE, warning)
 
     async with RosbridgeClient(
-        config.url, connect_timeout=config.connect_timeout, request_timeout=config.request_timeout
+        config.url,
+        connect_timeout=config.connect_timeout,
+        request_timeout=config.request_timeout,
+        ssl_context=config.ssl_context(),
+        headers=config.headers,
     ) as client:
         try:
             # ros_info() waits for the first connection attempt only, so a refused connection shows at once.

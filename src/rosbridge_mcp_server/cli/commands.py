@@ -22,10 +22,11 @@ from typing import NoReturn, TextIO
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config
+from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.safety import Audit, PolicyGuard
 from rosbridge_mcp_server.server import build_server, serve_stdio
 
-__all__ = ["PROG", "check", "configure_logging", "demo_robot", "run", "serve"]
+__all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 
 PROG = "rosbridge-mcp-server"
 #: After SIGTERM or Ctrl-C: how long tool calls get to cancel their goals, and then the client to close.
@@ -64,6 +65,35 @@ def _parser(command: str) -> _Parser:
     )
     connection.add_argument(
         "--timeout", help="default request timeout in seconds (env ROSBRIDGE_TIMEOUT, default 10)"
+    )
+    security = parser.add_argument_group("connection security")
+    security.add_argument("--ca-file", help="CA certificate(s) to trust for wss:// (env ROSBRIDGE_CA_FILE)")
+    security.add_argument(
+        "--client-cert",
+        help="client certificate for wss:// (PEM, may hold the key) (env ROSBRIDGE_CLIENT_CERT)",
+    )
+    security.add_argument("--client-key", help="client certificate's key (env ROSBRIDGE_CLIENT_KEY)")
+    security.add_argument(
+        "--header",
+        action="append",
+        metavar="'NAME: VALUE'",
+        help=(
+            "extra HTTP header for the WebSocket handshake, repeatable, e.g. 'Authorization: Bearer …' "
+            "(env ROSBRIDGE_HEADERS, one per line; prefer the environment for secrets)"
+        ),
+    )
+    safety = parser.add_argument_group("safety")
+    safety.add_argument(
+        "--policy", help="safety policy TOML file (env ROSBRIDGE_MCP_POLICY); see docs/safety.md"
+    )
+    safety.add_argument(
+        "--read-only",
+        action="store_true",
+        help="only reading tools are listed or callable (env ROSBRIDGE_MCP_READ_ONLY=1)",
+    )
+    safety.add_argument(
+        "--audit-log",
+        help="append one JSON line per acting call to this file (env ROSBRIDGE_MCP_AUDIT_LOG)",
     )
     parser.add_argument(
         "--tools",
@@ -107,31 +137,61 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             log_level=options.log_level,
             demo=options.demo,
             demo_dialect=options.demo_dialect,
+            policy=options.policy,
+            read_only=options.read_only,
+            audit_log=options.audit_log,
+            ca_file=options.ca_file,
+            client_cert=options.client_cert,
+            client_key=options.client_key,
+            headers=options.header,
             tools=options.tools,
         )
+        audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (_UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
 
     # `check` prints its own findings; the client's warnings would only repeat them.
-    configure_logging(config.log_level if command == "serve" or config.log_level == "DEBUG" else "ERROR")
+    configure_logging(
+        config.log_level if command == "serve" or config.log_level == "DEBUG" else "ERROR",
+        secrets=[value for _, value in config.headers],
+    )
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout))
-        asyncio.run(serve(config))
+        asyncio.run(serve(config, audit_file))
     except KeyboardInterrupt:
         return 130
     except asyncio.CancelledError:
         # A signal after stdin was closed: the server unwound and cleaned up by itself.
         return 0
+    finally:
+        if audit_file is not None:
+            audit_file.close()
     return 0
 
 
-def configure_logging(level: str, stream: TextIO | None = None) -> None:
-    """Log to stderr: our own loggers at ``level``, everyone else's at WARNING (or DEBUG when asked)."""
+def open_audit_log(path: str | None) -> TextIO | None:
+    """The audit file, opened for appending (line-buffered); :class:`ConfigError` if it cannot be."""
+    if path is None:
+        return None
+    try:
+        return open(path, "a", encoding="utf-8", buffering=1)
+    except OSError as exc:
+        raise ConfigError(f"audit log: cannot open {path!r} for appending: {exc.strerror or exc}") from None
+
+
+def configure_logging(level: str, stream: TextIO | None = None, secrets: Sequence[str] = ()) -> None:
+    """Log to stderr: our own loggers at ``level``, everyone else's at WARNING (or DEBUG when asked).
+
+    ``secrets`` (e.g. the values of ``--header``) are replaced by ``***`` in every line: at DEBUG, websockets
+    logs each handshake header it sends.
+    """
     handler = logging.StreamHandler(stream if stream is not None else sys.stderr)
     handler.set_name(PROG)
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+    if secrets:
+        handler.addFilter(_Redact(secrets))
     root = logging.getLogger()
     # Replace only our own handler (run() may be called more than once in one process, e.g. in tests). Having
     # a handler on the root also keeps MCPServer's logging.basicConfig from adding its own.
@@ -140,6 +200,22 @@ def configure_logging(level: str, stream: TextIO | None = None) -> None:
     root.addHandler(handler)
     root.setLevel(logging.DEBUG if level == "DEBUG" else logging.WARNING)
     logging.getLogger("rosbridge_mcp_server").setLevel(level)
+
+
+class _Redact(logging.Filter):
+    """Replaces each secret by ``***`` in a record's message (and drops its arguments, already merged)."""
+
+    def __init__(self, secrets: Sequence[str]) -> None:
+        super().__init__()
+        self._secrets = [secret for secret in secrets if secret]
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        if any(secret in message for secret in self._secrets):
+            for secret in self._secrets:
+                message = message.replace(secret, "***")
+            record.msg, record.args = message, None
+        return True
 
 
 def _stop_on_signals(client: RosbridgeClient) -> None:
@@ -202,15 +278,23 @@ async def check(config: Config, out: TextIO) -> int:
         return await run_check(effective, out)
 
 
-async def serve(config: Config) -> None:
+async def serve(config: Config, audit_file: TextIO | None = None) -> None:
     """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM / Ctrl-C)."""
     async with demo_robot(config) as effective:
+        warning = plain_text_warning(effective.url)
+        if warning:
+            _log.warning("%s", warning)
+        for line in effective.policy.describe():
+            _log.info("safety %s", line.strip())
         client = RosbridgeClient(
             effective.url,
             connect_timeout=effective.connect_timeout,
             request_timeout=effective.request_timeout,
+            ssl_context=effective.ssl_context(),
+            headers=effective.headers,
         )
-        server = build_server(client, effective)
+        guard = PolicyGuard(effective.policy, Audit(audit_file))
+        server = build_server(client, effective, guard=guard)
         _stop_on_signals(client)
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.

@@ -9,7 +9,8 @@ import itertools
 import logging
 import math
 import random
-from collections.abc import Coroutine
+import ssl
+from collections.abc import Coroutine, Sequence
 from types import TracebackType
 from typing import Any, Final, Protocol, Self
 from urllib.parse import urlsplit
@@ -89,8 +90,14 @@ class RosbridgeClient:
         reconnect_max: float = 5.0,
         lane_cap: int = 16,
         lane_idle_seconds: float = 30.0,
+        ssl_context: ssl.SSLContext | None = None,
+        headers: Sequence[tuple[str, str]] = (),
     ) -> None:
         self.url = url
+        # For wss:// with a private CA or a client certificate, and for a bridge behind an authenticating
+        # proxy; every connection (main and lanes) opens with them.
+        self._ssl = ssl_context
+        self._headers = tuple(headers)
         self.connect_timeout = connect_timeout
         self.request_timeout = request_timeout
         self.reconnect_min = reconnect_min
@@ -231,7 +238,13 @@ class RosbridgeClient:
             served = False
             try:
                 conn = await open_connection(
-                    self.url, "main", self.connect_timeout, self.topics.deliver, self.request_timeout
+                    self.url,
+                    "main",
+                    self.connect_timeout,
+                    self.topics.deliver,
+                    self.request_timeout,
+                    ssl_context=self._ssl,
+                    headers=self._headers,
                 )
                 info = await detect(
                     conn, self._ids, self.url, min(self.connect_timeout, self.request_timeout)
@@ -387,6 +400,8 @@ class RosbridgeClient:
             f"lane {next(self._lane_numbers)}",
             min(timeout, self.connect_timeout),
             send_timeout=self.request_timeout,
+            ssl_context=self._ssl,
+            headers=self._headers,
         )
 
     # --- services -----------------------------------------------------------------------------------

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Callable
+import ssl
+from collections.abc import Callable, Sequence
 from typing import Any, Final
 
 from websockets.asyncio.client import ClientConnection, connect
@@ -339,11 +340,22 @@ async def open_connection(
     timeout: float,
     on_publish: Callable[[protocol.PublishEvent], None] | None = None,
     send_timeout: float = 10.0,
+    *,
+    ssl_context: ssl.SSLContext | None = None,
+    headers: Sequence[tuple[str, str]] = (),
 ) -> Connection:
-    """Open a WebSocket to *url* within *timeout* seconds; raises :class:`NotConnectedError`."""
+    """Open a WebSocket to *url* within *timeout* seconds; raises :class:`NotConnectedError`.
+
+    ``ssl_context`` (wss:// only) carries a private CA or a client certificate; ``headers`` go with the
+    opening handshake (e.g. ``Authorization`` for a bridge behind an authenticating proxy).
+    """
+    # websockets refuses an ssl argument for a ws:// URL, and picks the system's CAs for wss:// without one.
+    tls: dict[str, Any] = {"ssl": ssl_context} if ssl_context is not None else {}
     try:
         ws = await connect(
             url,
+            additional_headers=list(headers) or None,
+            **tls,
             open_timeout=timeout,
             close_timeout=1.0,
             max_size=MAX_FRAME_BYTES,
@@ -356,6 +368,10 @@ async def open_connection(
         raise
     except TimeoutError:
         raise NotConnectedError(url, f"no WebSocket answer within {timeout:g} s", timed_out=True) from None
+    except ssl.SSLCertVerificationError as exc:
+        raise NotConnectedError(
+            url, f"the bridge's TLS certificate was not accepted: {exc.verify_message or exc}"
+        ) from None
     except OSError as exc:
         raise NotConnectedError(url, exc.strerror or str(exc)) from None
     except Exception as exc:

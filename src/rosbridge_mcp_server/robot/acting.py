@@ -24,12 +24,14 @@ from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
+from rosbridge_mcp_server.safety.velocity import clamp_text
 from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
     from rosbridge_mcp_server.robot.graph import RosGraph
+    from rosbridge_mcp_server.safety.activity import SessionActivity
 
 __all__ = [
     "ALLOW_ALL",
@@ -124,6 +126,8 @@ class Acting(Protocol):
     def guard(self) -> Guard: ...
     @property
     def ask_person(self) -> AskPerson: ...
+    @property
+    def activity(self) -> SessionActivity: ...
 
 
 async def _approved(ctx: Acting, act: Act) -> Act:
@@ -155,6 +159,8 @@ class Published:
     topic: str
     type: str  #: as the bridge was given it
     message: dict[str, Any]  #: as sent
+    #: How the safety policy changed the message before it was sent (velocity caps in clamp mode), or None.
+    adjusted: str | None = None
 
 
 async def publish_once(
@@ -171,9 +177,12 @@ async def publish_once(
         await _bridge_is_reading(ctx)
         await ctx.client.publish(act.name, act.type, act.payload)
         ctx.graph.remember_publishing(act.name, act.type)
+        # stop_robot zeroes every velocity topic this session has driven.
+        ctx.activity.published(act.name, act.type, act.payload)
 
     await _carry_out(ctx, act, send)
-    return Published(act.name, act.type, act.payload)
+    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    return Published(act.name, act.type, act.payload, adjusted)
 
 
 async def _checked_message(
@@ -223,6 +232,9 @@ class Streamed:
     sent: int
     cancelled: bool  #: stopped early (an MCP cancel, or the server stopping)
     zero: dict[str, Any] | None  #: the all-zero message sent at the end (velocity types), else None
+    stopped: bool = False  #: ended early because stop_robot asked
+    #: How the safety policy changed the message before it was sent (velocity caps in clamp mode), or None.
+    adjusted: str | None = None
 
 
 async def publish_stream(
@@ -254,19 +266,23 @@ async def publish_stream(
     cancelled = False
     every = max(1, round(rate / 5))  # progress about five times a second at most
     loop = asyncio.get_running_loop()
+    stopped = False
     try:
         await _bridge_is_reading(ctx)
         start = loop.time()
-        for index in range(planned):
-            delay = start + index / rate - loop.time()
-            if delay > 0:
-                await asyncio.sleep(delay)
-            await ctx.client.publish(act.name, act.type, act.payload)
-            if sent == 0:
-                ctx.graph.remember_publishing(act.name, act.type)
-            sent += 1
-            if on_progress is not None and (sent % every == 0 or sent == planned):
-                await on_progress(sent, planned)
+        # Registered while it runs, so that stop_robot can end it (pause() returns early when asked).
+        with ctx.activity.stream(act.name, act.type) as running:
+            for index in range(planned):
+                if await running.pause(start + index / rate - loop.time()):
+                    stopped = True
+                    break
+                await ctx.client.publish(act.name, act.type, act.payload)
+                if sent == 0:
+                    ctx.graph.remember_publishing(act.name, act.type)
+                    ctx.activity.published(act.name, act.type, act.payload)
+                sent += 1
+                if on_progress is not None and (sent % every == 0 or sent == planned):
+                    await on_progress(sent, planned)
     except asyncio.CancelledError:
         cancelled = True
         raise
@@ -279,8 +295,11 @@ async def publish_stream(
             await asyncio.shield(_publish_quietly(ctx, act, zero))
         if cancelled:
             ctx.guard.record(act, f"cancelled after {sent} of {planned}")
-    ctx.guard.record(act, f"sent {sent} of {planned}")
-    return Streamed(act.name, act.type, act.payload, rate, length, planned, sent, cancelled, zero)
+    ctx.guard.record(act, f"{'stopped by stop_robot after' if stopped else 'sent'} {sent} of {planned}")
+    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    return Streamed(
+        act.name, act.type, act.payload, rate, length, planned, sent, cancelled, zero, stopped, adjusted
+    )
 
 
 async def _publish_quietly(ctx: Acting, act: Act, message: dict[str, Any]) -> None:

@@ -13,6 +13,7 @@ failures become ``isError`` results:
 from __future__ import annotations
 
 import base64
+import hashlib
 import inspect
 import logging
 import typing
@@ -20,9 +21,19 @@ from collections.abc import Awaitable, Callable
 from types import ModuleType
 from typing import Any
 
+from mcp.server.elicitation import render_elicitation_schema
 from mcp.server.mcpserver import Context
 from mcp.server.mcpserver.tools import Tool
-from mcp.types import CallToolResult, ImageContent, TextContent, ToolAnnotations
+from mcp.types import (
+    CallToolResult,
+    ElicitRequest,
+    ElicitRequestFormParams,
+    ElicitResult,
+    ImageContent,
+    InputRequiredResult,
+    TextContent,
+    ToolAnnotations,
+)
 from pydantic import BaseModel, Field, ValidationError
 
 from rosbridge_mcp_server.errors import (
@@ -35,6 +46,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
+from rosbridge_mcp_server.safety.activity import SessionActivity
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
@@ -121,9 +133,19 @@ def _short(value: Any) -> str:
 
 
 def tool_from_module(
-    module: ModuleType, client: RosbridgeClient, config: Config, graph: RosGraph, guard: Guard = ALLOW_ALL
+    module: ModuleType,
+    client: RosbridgeClient,
+    config: Config,
+    graph: RosGraph,
+    *,
+    guard: Guard = ALLOW_ALL,
+    activity: SessionActivity | None = None,
 ) -> Tool:
-    """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`."""
+    """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`.
+
+    ``activity`` is shared by every tool of one server, so that stop_robot sees what the others started.
+    """
+    session_activity = activity if activity is not None else SessionActivity()
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
 
@@ -133,7 +155,9 @@ def tool_from_module(
     run_parameters = list(inspect.signature(run).parameters.values())[1:]
     parameters = [p.replace(annotation=hints[p.name]) for p in run_parameters]
 
-    async def call_tool(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
+    async def call_tool(
+        mcp_context: Context[Any, Any], **arguments: Any
+    ) -> CallToolResult | InputRequiredResult:
         async def report_progress(progress: float, total: float | None, message: str | None) -> None:
             try:
                 await mcp_context.report_progress(progress, total, message)
@@ -148,9 +172,12 @@ def tool_from_module(
             report_progress=report_progress,
             guard=guard,
             ask_person=_asker(mcp_context),
+            activity=session_activity,
         )
         try:
             answer = await run(ctx, **arguments)
+        except _AskInNextRound as asking:
+            return _question_round(asking)
         except (RosbridgeError, ToolFailure) as exc:
             _log.info("%s failed: %s", spec.name, exc)
             return CallToolResult(content=[TextContent(type="text", text=error_text(exc))], is_error=True)
@@ -216,13 +243,47 @@ class _Confirmation(BaseModel):
     approve: bool = Field(description="Let the robot do this")
 
 
+#: From this protocol version on a server cannot send a request in the middle of a call: it answers with
+#: ``InputRequiredResult`` and the client calls again with the person's answers (``input_responses``).
+_INPUT_ROUNDS_FROM = "2026-07-28"
+
+
+class _AskInNextRound(BaseException):
+    """The person must be asked before this call can go on: answer with an ``InputRequiredResult``.
+
+    A ``BaseException`` so that no ``except Exception`` on the way (the guard treats a failed question as a
+    "no") turns "not asked yet" into a refusal; nothing has been sent when it is raised, because the guard
+    asks before anything is sent.
+    """
+
+    def __init__(self, key: str, question: str) -> None:
+        super().__init__(key)
+        self.key = key
+        self.question = question
+
+
 def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
-    """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot)."""
+    """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot).
+
+    Handshake sessions (up to 2025-11-25) get an ``elicitation/create`` request in the middle of the call.
+    In 2026-07-28 sessions the call ends with an ``InputRequiredResult`` holding the question; the client asks
+    the person and calls again, the tool runs again up to the same question, and the answer is found by a key
+    made from the question's text, so a "yes" only ever approves exactly what it was shown.
+    """
 
     async def ask(question: str) -> Answer:
         capabilities = mcp_context.client_capabilities
         if capabilities is None or capabilities.elicitation is None:
             return "unsupported"
+        version = mcp_context.protocol_version
+        if version is not None and version >= _INPUT_ROUNDS_FROM:
+            key = "confirm-" + hashlib.sha256(question.encode()).hexdigest()[:24]
+            response = (mcp_context.input_responses or {}).get(key)
+            if not isinstance(response, ElicitResult):
+                raise _AskInNextRound(key, question)
+            if response.action != "accept":
+                return response.action
+            return "accept" if (response.content or {}).get("approve") is True else "decline"
         try:
             result = await mcp_context.elicit(question, schema=_Confirmation)
         except Exception:
@@ -233,3 +294,12 @@ def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
         return result.action
 
     return ask
+
+
+def _question_round(asking: _AskInNextRound) -> InputRequiredResult:
+    request = ElicitRequest(
+        params=ElicitRequestFormParams(
+            message=asking.question, requested_schema=render_elicitation_schema(_Confirmation)
+        )
+    )
+    return InputRequiredResult(input_requests={asking.key: request})

@@ -10,14 +10,18 @@ import logging
 import typing
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from typing import Any, Literal
 
 from mcp.server.mcpserver import MCPServer
+from mcp.types import CallToolResult, TextContent
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.robot.acting import Act, Guard
 from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import tool_from_module
-from rosbridge_mcp_server.tools import TOOL_MODULES
+from rosbridge_mcp_server.server.sdk import server_answering_unlisted
+from rosbridge_mcp_server.tools import TOOL_MODULES, stop_robot
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -45,6 +49,11 @@ zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds,
 publish_topic with rate_hz and duration keeps the robot moving and stops it with zeros at the end. Prefer \
 small, safe values and say what you are about to do.
 4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
+5. stop_robot stops everything this server started (streams, velocity, goals): use it when in doubt.
+
+A safety policy set by the robot's operator may refuse a call (the error names the rule) or ask the person \
+at the client to confirm it. A refusal is final: do not try to reach the same effect another way; tell the \
+user what was refused and why.
 
 A failed call comes back as an error whose text says what went wrong and what to try (a field that does not \
 fit the type, an unknown name, the robot being unreachable). Nothing is queued while the robot is \
@@ -53,12 +62,27 @@ request that timed out may still take effect later: check the robot's state befo
 """
 
 
-def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLOW_ALL) -> MCPServer[None]:
+_READ_ONLY_NOTE = """
+
+This server is read-only: it lists only tools that read the robot, and refuses any other.\
+"""
+
+
+def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None = None) -> MCPServer[None]:
     """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
 
-    Every act on the robot is first approved by *guard* (the safety policy; by default everything is).
+    Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
+    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools.
     """
     graph = RosGraph(client)
+    policy = config.policy
+    approver: Guard = guard if guard is not None else PolicyGuard(policy)
+    activity = SessionActivity()
+    chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
+    if any(not m.SPEC.hints.read_only for m in chosen) and stop_robot not in chosen:
+        # Whoever can set the robot going can stop it, whatever --tools picked.
+        chosen.append(stop_robot)
+    modules = [m for m in chosen if m.SPEC.hints.read_only or not policy.read_only]
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
@@ -69,15 +93,41 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard = ALLO
         finally:
             await client.close()
 
-    shown = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
-    tools = [tool_from_module(module, client, config, graph, guard) for module in shown]
-    return MCPServer(
-        SERVER_NAME,
+    tools = [
+        tool_from_module(module, client, config, graph, guard=approver, activity=activity)
+        for module in modules
+    ]
+    # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
+    withheld = {m.SPEC.name for m in chosen} - {m.SPEC.name for m in modules}
+
+    def unlisted(name: str, arguments: dict[str, Any]) -> CallToolResult | None:
+        """A withheld acting tool called by name anyway: refused, and audited like any refusal."""
+        if name not in withheld:
+            return None
+        approver.record(Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only")
+        text = (
+            f"{name} is not available: this server is read-only (its operator started it with --read-only or "
+            "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
+        )
+        return CallToolResult(content=[TextContent(type="text", text=text)], is_error=True)
+
+    return server_answering_unlisted(
+        unlisted,
+        name=SERVER_NAME,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
-        instructions=INSTRUCTIONS,
+        instructions=INSTRUCTIONS + (_READ_ONLY_NOTE if policy.read_only else ""),
         version=__version__,
         tools=tools,
         lifespan=lifespan,
         log_level=config.log_level,
     )
+
+
+#: What a withheld tool would have acted on, for its audit line.
+_KIND_OF: dict[str, Literal["topic", "service", "action", "parameter"]] = {
+    "publish_service": "service",
+    "publish_action": "action",
+    "cancel_action": "action",
+    "set_parameter": "parameter",
+}

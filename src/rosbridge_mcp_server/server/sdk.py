@@ -13,6 +13,8 @@ by name, instead of somewhere in a tool call:
   (``Tool.output_schema`` reads ``Tool.fn_metadata.output_schema``).
 * :func:`serve_streams`: ``MCPServer`` on streams we give it. ``MCPServer.run_stdio_async`` only serves the
   SDK's own stdio transport; what it runs is its low-level server's ``run`` with the streams.
+* :func:`server_answering_unlisted`: an ``MCPServer`` that answers calls of some tools it does not list with
+  an answer of ours (a read-only server saying why, not "Unknown tool").
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from typing import Annotated, Any
 from mcp.server.mcpserver import Context, MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
 from mcp.server.mcpserver.tools import Tool
-from mcp.types import CallToolResult, ToolAnnotations
+from mcp.types import CallToolResult, InputRequiredResult, ToolAnnotations
 from pydantic import BaseModel, ValidationError
 
 __all__ = [
@@ -32,6 +34,7 @@ __all__ = [
     "ArgumentErrorText",
     "replace_output_schema",
     "serve_streams",
+    "server_answering_unlisted",
     "tool_with_own_argument_errors",
 ]
 
@@ -42,7 +45,7 @@ ArgumentCheck = Callable[[str, dict[str, Any], dict[str, Any]], str | None]
 
 
 def tool_with_own_argument_errors(
-    handler: Callable[..., Awaitable[CallToolResult]],
+    handler: Callable[..., Awaitable[CallToolResult | InputRequiredResult]],
     parameters: list[inspect.Parameter],
     output: type[BaseModel],
     *,
@@ -63,6 +66,7 @@ def tool_with_own_argument_errors(
 
     ``argument_check`` sees the arguments as the client sent them, before the SDK's lenient conversion (which
     drops unknown keys and takes ``true`` for 1); its refusal is the error result.
+    An ``InputRequiredResult`` from the handler (a question for the person, 2026-07-28) goes out unchanged.
     """
     returns = Annotated[CallToolResult, output]
     every = [
@@ -120,3 +124,24 @@ async def serve_streams(server: MCPServer[Any], read_stream: Any, write_stream: 
     """
     lowlevel = server._lowlevel_server
     await lowlevel.run(read_stream, write_stream, lowlevel.create_initialization_options())
+
+
+def server_answering_unlisted(
+    unlisted: Callable[[str, dict[str, Any]], CallToolResult | None], **kwargs: Any
+) -> MCPServer[None]:
+    """``MCPServer(**kwargs)`` whose calls of a tool it lacks go to ``unlisted(name, arguments)`` first.
+
+    ``unlisted`` returns the answer for a name it knows, ``None`` for the SDK's own "Unknown tool". Relies on
+    the SDK's ``tools/call`` handler calling ``MCPServer.call_tool`` for every call, and on
+    ``MCPServer._tool_manager.get_tool`` telling whether a tool is registered.
+    """
+
+    class _Server(MCPServer[None]):
+        async def call_tool(self, name: str, arguments: dict[str, Any], context: Any = None) -> Any:
+            if self._tool_manager.get_tool(name) is None:
+                answer = unlisted(name, arguments)
+                if answer is not None:
+                    return answer
+            return await super().call_tool(name, arguments, context)
+
+    return _Server(**kwargs)

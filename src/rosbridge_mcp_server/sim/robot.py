@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import ssl as _ssl
 from collections.abc import Callable, Sequence
 from types import TracebackType
 from typing import Literal, Self
@@ -64,6 +65,7 @@ class SimulatedRobot:
         camera_width: int = 160,
         camera_height: int = 120,
         max_message_size: int | None = None,
+        ssl: _ssl.SSLContext | None = None,
     ) -> None:
         if dialect not in ("ros1", "ros2"):
             raise ValueError(f"dialect must be 'ros1' or 'ros2', not {dialect!r}")
@@ -102,6 +104,8 @@ class SimulatedRobot:
         self.rosapi_release = rosapi
         self.host = host
         self.port = port
+        # rosbridge serves wss:// when given certfile/keyfile; a server-side context does the same here.
+        self.ssl = ssl
         self.world = World(dialect)
         self.graph = Graph()
         self.registry = InterfaceRegistry(dialect, rosapi=rosapi)
@@ -121,8 +125,8 @@ class SimulatedRobot:
 
     @property
     def url(self) -> str:
-        """``ws://host:port`` of the running server."""
-        return f"ws://{self.host}:{self.port}"
+        """``ws://host:port`` of the running server (``wss://`` when it serves TLS)."""
+        return f"{'wss' if self.ssl is not None else 'ws'}://{self.host}:{self.port}"
 
     @property
     def rosapi_node(self) -> Rosapi:
@@ -151,6 +155,7 @@ class SimulatedRobot:
             # rosbridge never pings unless websocket_ping_interval is set, and does not compress.
             ping_interval=None,
             compression=None,
+            ssl=self.ssl,
         )
         self.port = self._server.sockets[0].getsockname()[1]
         params = self.world.params

@@ -1,4 +1,4 @@
-"""The MCP tools, one module each: the original eight, then the ones that watch the robot.
+"""The MCP tools, one module each: the original eight, the ones that watch the robot, and the e-stop.
 
 Each module exposes ``SPEC`` (:class:`~rosbridge_mcp_server.tools.base.ToolSpec`) and
 ``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. ``server/app.py`` registers them in the order
@@ -26,10 +26,11 @@ from rosbridge_mcp_server.tools import (
     publish_service,
     publish_topic,
     set_parameter,
+    stop_robot,
     subscribe_topic,
 )
 
-__all__ = ["ORIGINAL_TOOLS", "TOOL_GROUPS", "TOOL_MODULES", "WATCH_TOOLS", "select_tools"]
+__all__ = ["ORIGINAL_TOOLS", "SAFETY_TOOLS", "TOOL_GROUPS", "TOOL_MODULES", "WATCH_TOOLS", "select_tools"]
 
 #: The eight tools the server started with (names and parameters of the project this one replaces).
 ORIGINAL_TOOLS: tuple[ModuleType, ...] = (
@@ -56,20 +57,25 @@ WATCH_TOOLS: tuple[ModuleType, ...] = (
     get_transform,
 )
 
-TOOL_MODULES: tuple[ModuleType, ...] = ORIGINAL_TOOLS + WATCH_TOOLS
+#: The e-stop for what this server started. Listed whenever any acting tool is (see ``server/app.py``).
+SAFETY_TOOLS: tuple[ModuleType, ...] = (stop_robot,)
+
+TOOL_MODULES: tuple[ModuleType, ...] = ORIGINAL_TOOLS + WATCH_TOOLS + SAFETY_TOOLS
 
 #: Names a ``--tools`` list may use for several tools at once.
 TOOL_GROUPS: dict[str, tuple[ModuleType, ...]] = {
     "all": TOOL_MODULES,
     "original": ORIGINAL_TOOLS,
     "watch": WATCH_TOOLS,
+    "safety": SAFETY_TOOLS,
 }
 
 
 def select_tools(spec: str) -> tuple[str, ...]:
     """The tool names a ``--tools`` value stands for, in registration order.
 
-    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``) and tool names, e.g.
+    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``safety``) and tool
+    names, e.g.
     ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
     """
     by_name = {module.SPEC.name: module for module in TOOL_MODULES}

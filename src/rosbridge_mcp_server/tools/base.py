@@ -19,6 +19,7 @@ from pydantic import BaseModel
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, AskPerson, Guard, nobody_to_ask
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
+from rosbridge_mcp_server.safety.activity import SessionActivity
 from rosbridge_mcp_server.wire.protocol import BRIDGE_MAX_FRAME_BYTES
 
 if TYPE_CHECKING:
@@ -117,6 +118,8 @@ class ToolContext:
     report_progress: ProgressReporter = field(default=_no_progress)
     guard: Guard = field(default=ALLOW_ALL)
     ask_person: AskPerson = field(default=nobody_to_ask)
+    #: What this server session set going (velocity topics, streams), shared by every call: stop_robot's list.
+    activity: SessionActivity = field(default_factory=SessionActivity)
 
 
 class ToolFailure(Exception):

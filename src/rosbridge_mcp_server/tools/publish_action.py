@@ -26,6 +26,7 @@ _CANCELLED_BY = {
     "timeout": "it was cancelled because it did not finish within the timeout",
     "request_cancelled": "it was cancelled because the tool call was cancelled",
     "cancel_action": "it was cancelled by cancel_action",
+    "stop_robot": "it was cancelled by stop_robot",
 }
 
 
@@ -46,7 +47,9 @@ class GoalAnswer(BaseModel):
     result: dict[str, Any] | None = Field(description="The action's result message (null when none came)")
     feedback_count: int = Field(description="How many feedback messages arrived")
     last_feedback: list[dict[str, Any]] = Field(description="The last few feedback messages, oldest first")
-    canceled_by: str | None = Field(description='"timeout", "request_cancelled", "cancel_action" or null')
+    canceled_by: str | None = Field(
+        description='"timeout", "request_cancelled", "cancel_action", "stop_robot" or null'
+    )
 
 
 SPEC = ToolSpec(

@@ -38,6 +38,10 @@ class PublishAnswer(BaseModel):
     rate_hz: float | None = Field(default=None, description="Stream rate, when one was asked for")
     duration: float | None = Field(default=None, description="Stream length in seconds, when asked for")
     zero_sent: bool = Field(default=False, description="A stream of velocity commands ended with all zeros")
+    stopped_by_stop_robot: bool = Field(default=False, description="The stream was ended early by stop_robot")
+    adjusted: str | None = Field(
+        default=None, description="How the safety policy changed the message before sending (velocity caps)"
+    )
 
 
 SPEC = ToolSpec(
@@ -101,9 +105,17 @@ async def run(
         )
     sent = await publish_once(ctx, tool=SPEC.name, topic=topic, message_type=message_type, message=body)
     text = f"Published one {sent.type} message on {sent.topic}: {compact_json(sent.message)}"
+    if sent.adjusted:
+        text += f" (the safety policy {sent.adjusted})"
     return ToolAnswer(
         text=text,
-        data=PublishAnswer(topic=sent.topic, message_type=sent.type, message=sent.message, published=True),
+        data=PublishAnswer(
+            topic=sent.topic,
+            message_type=sent.type,
+            message=sent.message,
+            published=True,
+            adjusted=sent.adjusted,
+        ),
     )
 
 
@@ -127,8 +139,15 @@ async def _stream(
         f"Published {streamed.sent} {streamed.type} messages on {streamed.topic} at {streamed.rate_hz:g} Hz "
         f"for {streamed.duration:g} s: {compact_json(streamed.message)}"
     )
+    if streamed.stopped:
+        text = (
+            f"stop_robot ended the stream on {streamed.topic} after {streamed.sent} of {streamed.planned} "
+            f"{streamed.type} messages ({compact_json(streamed.message)})"
+        )
     if streamed.zero is not None:
         text += "; then one all-zero message to stop"
+    if streamed.adjusted:
+        text += f" (the safety policy {streamed.adjusted})"
     answer = PublishAnswer(
         topic=streamed.topic,
         message_type=streamed.type,
@@ -138,5 +157,7 @@ async def _stream(
         rate_hz=streamed.rate_hz,
         duration=streamed.duration,
         zero_sent=streamed.zero is not None,
+        stopped_by_stop_robot=streamed.stopped,
+        adjusted=streamed.adjusted,
     )
     return ToolAnswer(text=text + ".", data=answer)

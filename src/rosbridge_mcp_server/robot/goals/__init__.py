@@ -88,8 +88,10 @@ async def run_goal(
             return record.end(exc.status, exc.result, timed_out=True)
 
 
-async def cancel_goals(client: RosbridgeClient, action: str, goal_id: str | None = None) -> CancelReport:
-    """Cancel one goal (by our id) or every goal of *action* (ours and others').
+async def cancel_goals(
+    client: RosbridgeClient, action: str, goal_id: str | None = None, *, by: CanceledBy = "cancel_action"
+) -> CancelReport:
+    """Cancel one goal (by our id) or every goal of *action* (ours and others'); *by* names who asked.
 
     ROS 2: ``cancel_action_goal`` for our goals (on the main connection, so it reaches a goal
     running on its own lane), plus, to cancel every goal, the action's hidden
@@ -102,6 +104,7 @@ async def cancel_goals(client: RosbridgeClient, action: str, goal_id: str | None
     ours = [g for g in registry.running(ns) if goal_id is None or g.goal_id == goal_id]
     for entry in ours:
         entry.cancel_requested = True
+        entry.cancel_source = by
     canceled_ours = [g.goal_id for g in ours]
     unknown = goal_id is not None and not ours
     if info.version == 1:

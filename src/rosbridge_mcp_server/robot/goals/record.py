@@ -20,7 +20,7 @@ __all__ = [
     "GoalFeedback",
 ]
 
-CanceledBy = Literal["timeout", "request_cancelled", "cancel_action"]
+CanceledBy = Literal["timeout", "request_cancelled", "cancel_action", "stop_robot"]
 #: ``Goal.status`` of a goal that timed out and whose end the server never confirmed after the cancel.
 UNCONFIRMED_STATUS: Final = "timed out"
 #: After a timeout's cancel, how long we wait for the goal's final result.
@@ -46,6 +46,8 @@ class Goal:
     feedback_count: int = 0
     last_feedback: deque[dict[str, Any]] = field(default_factory=lambda: deque(maxlen=LAST_FEEDBACK))
     cancel_requested: bool = False
+    #: Who asked for the cancel (cancel_action, or stop_robot's e-stop), for the answer.
+    cancel_source: CanceledBy = "cancel_action"
     # How it ended; set by end(). `status` stays "running" until then.
     finished: bool = False
     status_code: int = 0
@@ -75,7 +77,7 @@ class Goal:
             if timed_out:
                 self.canceled_by = "timeout"
             elif self.cancel_requested:
-                self.canceled_by = "cancel_action"
+                self.canceled_by = self.cancel_source
         return self
 
 

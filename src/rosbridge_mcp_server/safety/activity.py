@@ -1,0 +1,133 @@
+"""What this server session set going on the robot, so that ``stop_robot`` can stop exactly that.
+
+Two things are remembered here: the topics on which a velocity command (Twist / TwistStamped) was published,
+with their type, and the publish streams still running. Goals are remembered by the goal registry, which
+already knows which goals this session started and which still run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+from rosbridge_mcp_server.safety.velocity import is_velocity_type, stamped
+
+__all__ = ["SessionActivity", "Stream", "VelocityTopic"]
+
+_log = logging.getLogger("rosbridge_mcp_server.safety")
+
+
+@dataclass
+class VelocityTopic:
+    """A topic this session sent velocity commands on, and how (type as sent, the last frame id)."""
+
+    topic: str
+    type: str
+    frame_id: str = ""
+
+
+@dataclass
+class Stream:
+    """A running publish stream: what it publishes, the task that runs it, and stop_robot's request to end.
+
+    A stream loop waits with :meth:`pause` instead of ``asyncio.sleep``: it returns early, with ``True``, once
+    stop_robot asks the stream to stop; the loop then ends as it would at its planned end (a velocity stream
+    sends its closing zero) and the tool answers normally, saying it was stopped.
+    """
+
+    topic: str
+    type: str
+    task: asyncio.Task[Any]
+    stop_requested: asyncio.Event = field(default_factory=asyncio.Event)
+    ended: asyncio.Event = field(default_factory=asyncio.Event)
+
+    @property
+    def stopped_by_estop(self) -> bool:
+        return self.stop_requested.is_set()
+
+    async def pause(self, seconds: float) -> bool:
+        """Wait up to ``seconds``; ``True`` (at once) when stop_robot asked this stream to stop."""
+        if self.stop_requested.is_set():
+            return True
+        if seconds <= 0:
+            return False
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(seconds):
+                await self.stop_requested.wait()
+        return self.stop_requested.is_set()
+
+
+class SessionActivity:
+    """The velocity topics published to and the streams running, for one server session."""
+
+    def __init__(self) -> None:
+        self._velocity: dict[str, VelocityTopic] = {}
+        self._streams: list[Stream] = []
+
+    def published(self, topic: str, type_name: str, message: Any) -> None:
+        """Note a message that reached the bridge; only velocity commands are remembered."""
+        if not is_velocity_type(type_name):
+            return
+        frame_id = ""
+        if stamped(type_name) and isinstance(message, dict):
+            header = message.get("header")
+            if isinstance(header, dict) and isinstance(header.get("frame_id"), str):
+                frame_id = header["frame_id"]
+        self._velocity[topic] = VelocityTopic(topic, type_name, frame_id)
+
+    @property
+    def velocity_topics(self) -> list[VelocityTopic]:
+        return list(self._velocity.values())
+
+    @contextlib.contextmanager
+    def stream(self, topic: str, type_name: str, task: asyncio.Task[Any] | None = None) -> Iterator[Stream]:
+        """Register a running stream for the ``with`` block (``task``, default the current one, is what
+        stop_robot cancels if the stream does not end when asked)."""
+        runner = task if task is not None else asyncio.current_task()
+        if runner is None:
+            raise RuntimeError("a stream must run in an asyncio task")
+        entry = Stream(topic, type_name, runner)
+        self._streams.append(entry)
+        try:
+            yield entry
+        finally:
+            self._streams.remove(entry)
+            entry.ended.set()
+
+    @property
+    def streams(self) -> list[Stream]:
+        return list(self._streams)
+
+    async def stop_streams(self, timeout: float) -> tuple[list[Stream], list[Stream]]:
+        """Ask every stream to stop and wait up to ``timeout`` s; returns (ended, still running).
+
+        A stream that has not ended when asked is cancelled halfway through the wait: stopping must not
+        depend on the stream's loop looking at the request.
+        """
+        streams = self.streams
+        for entry in streams:
+            entry.stop_requested.set()
+        if streams:
+            await self._wait_ended(streams, timeout / 2)
+            for entry in streams:
+                if not entry.ended.is_set():
+                    entry.task.cancel()
+            await self._wait_ended(streams, timeout / 2)
+        ended = [entry for entry in streams if entry.ended.is_set()]
+        running = [entry for entry in streams if not entry.ended.is_set()]
+        return ended, running
+
+    @staticmethod
+    async def _wait_ended(streams: list[Stream], timeout: float) -> None:
+        waiters = [asyncio.ensure_future(entry.ended.wait()) for entry in streams if not entry.ended.is_set()]
+        if not waiters:
+            return
+        try:
+            await asyncio.wait(waiters, timeout=timeout)
+        finally:
+            for waiter in waiters:
+                waiter.cancel()

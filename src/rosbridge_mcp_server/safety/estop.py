@@ -1,0 +1,81 @@
+"""The e-stop for what this session started: streams ended, velocity topics zeroed, goals cancelled.
+
+It asks no one and consults no policy: stopping must always be possible, and each step only takes motion away.
+Every step is tried even when an earlier one failed (a dropped connection must not keep the streams running).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.robot.goals import cancel_goals, running_goals
+from rosbridge_mcp_server.safety.velocity import zero_command
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.safety.activity import SessionActivity
+
+__all__ = ["STREAM_STOP_SECONDS", "StopReport", "emergency_stop"]
+
+#: How long the streams get to end after their cancel before the zero messages go out anyway.
+STREAM_STOP_SECONDS = 0.5
+
+
+@dataclass
+class StopReport:
+    """What :func:`emergency_stop` did, step by step."""
+
+    streams_stopped: list[str] = field(default_factory=list)
+    streams_still_running: list[str] = field(default_factory=list)
+    zeroed_topics: list[str] = field(default_factory=list)
+    goals_cancelled: list[str] = field(default_factory=list)
+    failures: list[str] = field(default_factory=list)
+    #: Every zero command sent: (topic, type, message), for the audit.
+    zero_messages: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)
+    #: Every goal a cancel was sent for: (action, goal id).
+    goals: list[tuple[str, str]] = field(default_factory=list)
+
+    @property
+    def did_anything(self) -> bool:
+        return bool(
+            self.streams_stopped or self.streams_still_running or self.zeroed_topics or self.goals_cancelled
+        )
+
+
+async def emergency_stop(client: RosbridgeClient, activity: SessionActivity) -> StopReport:
+    """End every stream, publish one zero command on every velocity topic used, cancel every running goal."""
+    report = StopReport()
+    # Streams first: a stream still running after the zero message would set the robot moving again.
+    ended, running = await activity.stop_streams(STREAM_STOP_SECONDS)
+    report.streams_stopped = [entry.topic for entry in ended]
+    report.streams_still_running = [entry.topic for entry in running]
+
+    version: int | None = None
+    try:
+        version = (await client.ros_info()).version
+    except RosbridgeError as exc:
+        report.failures.append(f"not connected, so no zero command was sent: {exc}")
+    if version is not None:
+        now = time.time()
+        for target in activity.velocity_topics:
+            message = zero_command(target.type, version, now, target.frame_id)
+            try:
+                await client.publish(target.topic, target.type, message)
+            except RosbridgeError as exc:
+                report.failures.append(f"zero command on {target.topic} failed: {exc}")
+            else:
+                report.zeroed_topics.append(target.topic)
+                report.zero_messages.append((target.topic, target.type, message))
+
+    for goal in running_goals(client):
+        try:
+            await cancel_goals(client, goal.action, goal.goal_id, by="stop_robot")
+        except RosbridgeError as exc:
+            report.failures.append(f"cancelling goal {goal.goal_id} on {goal.action} failed: {exc}")
+        else:
+            report.goals_cancelled.append(goal.goal_id)
+            report.goals.append((goal.action, goal.goal_id))
+    return report

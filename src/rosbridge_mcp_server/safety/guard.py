@@ -1,0 +1,247 @@
+"""The policy as a guard on every acting call: rules, then caps, then a person's confirmation, then the audit.
+
+:class:`PolicyGuard` is what the acting layer calls before anything is sent. Order matters:
+
+1. ``read_only`` and the allow/deny globs: a name the policy forbids is refused without asking anyone;
+2. stream limits and velocity caps: refused, or (``mode = "clamp"``) scaled down to the cap;
+3. confirmation, with the act as it will be sent (after clamping), so the person approves exactly that.
+
+A refusal raises :class:`~rosbridge_mcp_server.errors.PolicyRefusal` whose text names the rule. Every decision
+is one audit line (:class:`Audit`): on stderr, and as JSON in the audit file when one is configured.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import datetime
+import json
+import logging
+from typing import IO, TYPE_CHECKING, NoReturn
+
+from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.safety.policy import Policy
+from rosbridge_mcp_server.safety.velocity import clamp_text, is_velocity_type, measure, scaled
+
+if TYPE_CHECKING:
+    # Only for annotations: the acting layer imports this package's velocity rules, so a runtime import here
+    # would be circular.
+    from rosbridge_mcp_server.robot.acting import Act, Answer, AskPerson
+
+__all__ = ["AUDIT_PAYLOAD_LIMIT", "QUESTION_LIMIT", "Audit", "PolicyGuard", "question"]
+
+_log = logging.getLogger("rosbridge_mcp_server.audit")
+
+#: Longest message shown to the person in full; a camera image is not something to read in a dialog.
+QUESTION_LIMIT = 4000
+#: Longest audit file line; beyond it the payload is cut, with its full length noted.
+AUDIT_PAYLOAD_LIMIT = 16_000
+
+
+_NOUNS = {"topic": "topic", "service": "service", "action": "action", "parameter": "parameter"}
+_PAYLOADS = {"topic": "message", "service": "request", "action": "goal", "parameter": "value"}
+_VERBS = {
+    "topic": "publish on",
+    "service": "call the service",
+    "action": "send a goal to",
+    "parameter": "set the parameter",
+}
+
+
+class Audit:
+    """One line per acting decision on stderr, and a JSON line in ``stream`` (the audit file) when given."""
+
+    def __init__(self, stream: IO[str] | None = None) -> None:
+        self._stream = stream
+
+    def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
+        extra = f" ({detail})" if detail else ""
+        stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
+        level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
+        _log.log(
+            level,
+            "audit: %s %s %s %s%s: %s%s",
+            act.tool,
+            act.kind,
+            act.name,
+            act.type or "-",
+            stream,
+            outcome,
+            extra,
+        )
+        if self._stream is None:
+            return
+        entry = {
+            "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds"),
+            "tool": act.tool,
+            "kind": act.kind,
+            "name": act.name,
+            "type": act.type,
+            "outcome": outcome,
+            "detail": detail,
+            "payload": act.payload,
+            "rate_hz": act.rate_hz,
+            "duration": act.duration,
+        }
+        line = json.dumps(entry, ensure_ascii=False, default=str)
+        if len(line) > AUDIT_PAYLOAD_LIMIT:
+            # A camera frame in every line would bury the audit; its size and start are enough.
+            body = json.dumps(act.payload, ensure_ascii=False, default=str)
+            entry["payload"] = {"truncated": body[: AUDIT_PAYLOAD_LIMIT // 4], "characters": len(body)}
+            line = json.dumps(entry, ensure_ascii=False, default=str)
+        try:
+            self._stream.write(line + "\n")
+            self._stream.flush()
+        except (OSError, ValueError):
+            # A full disk must not stop the robot being driven safely; stderr still has the line.
+            _log.exception("could not write to the audit log")
+
+
+class PolicyGuard:
+    """Applies a :class:`Policy` to each acting call (see the module docstring for the order)."""
+
+    def __init__(self, policy: Policy, audit: Audit | None = None) -> None:
+        self.policy = policy
+        self.audit = audit if audit is not None else Audit()
+
+    async def approve(self, act: Act, ask: AskPerson) -> Act:
+        """``act`` as it may be sent (perhaps clamped), or :class:`PolicyRefusal` naming the rule."""
+        rule = self._rule_refusal(act)
+        if rule is not None:
+            self._refuse(act, rule, f"Refused by the safety policy ({rule}); nothing was sent.")
+        approved, clamp = self._capped(act)
+        if self._needs_person(approved):
+            answer = await self._ask(approved, ask, clamp)
+            if answer != "accept":
+                self._refuse(approved, f"person: {answer}", _answer_text(approved, answer, self.policy))
+            self.audit.write(approved, "confirmed", clamp)
+        else:
+            self.audit.write(approved, "clamped" if clamp else "allowed", clamp)
+        return approved
+
+    def record(self, act: Act, outcome: str) -> None:
+        """Audit what became of an act after :meth:`approve`.
+
+        :meth:`approve` already wrote the decision (allowed, clamped, confirmed or refused), so ``"sent"`` and
+        ``"refused: ..."`` add nothing; anything else (a send that failed, an e-stop) is a line of its own.
+        """
+        if outcome != "sent" and not outcome.startswith("refused"):
+            self.audit.write(act, outcome)
+
+    def _refuse(self, act: Act, rule: str, text: str) -> NoReturn:
+        self.audit.write(act, "refused", rule)
+        raise PolicyRefusal(text)
+
+    def _rule_refusal(self, act: Act) -> str | None:
+        policy = self.policy
+        if policy.read_only:
+            return "read_only: this server may only read the robot"
+        section, rules = policy.rules_for(act.kind)
+        refusal = rules.refusal(act.name, section)
+        if refusal is not None:
+            return refusal
+        limits = policy.publish
+        if act.rate_hz is not None:
+            if limits.max_rate_hz is not None and act.rate_hz > limits.max_rate_hz:
+                return f"[publish] max_rate_hz {limits.max_rate_hz:g} Hz; you asked {act.rate_hz:g} Hz"
+            if limits.max_duration is not None:
+                if act.duration is None:
+                    return (
+                        f"[publish] max_duration {limits.max_duration:g} s; you asked for an endless stream"
+                    )
+                if act.duration > limits.max_duration:
+                    return f"[publish] max_duration {limits.max_duration:g} s; you asked {act.duration:g} s"
+        return None
+
+    def _capped(self, act: Act) -> tuple[Act, str | None]:
+        caps = self.policy.velocity
+        if act.kind != "topic" or not is_velocity_type(act.type):
+            return act, None
+        if caps.max_linear is None and caps.max_angular is None:
+            return act, None
+        speed = measure(act.type, act.payload)
+        if not speed.finite:
+            rule = "[velocity] caps: the command holds a value that is not a finite number"
+            self._refuse(act, rule, f"Refused by the safety policy ({rule}); nothing was sent.")
+        over: list[str] = []
+        linear_factor = angular_factor = 1.0
+        if caps.max_linear is not None and speed.linear > caps.max_linear:
+            over.append(f"max_linear {caps.max_linear:g} m/s; you asked {speed.linear:g}")
+            linear_factor = caps.max_linear / speed.linear
+        if caps.max_angular is not None and speed.angular > caps.max_angular:
+            over.append(f"max_angular {caps.max_angular:g} rad/s; you asked {speed.angular:g}")
+            angular_factor = caps.max_angular / speed.angular
+        if not over:
+            return act, None
+        rule = f"[velocity] {' and '.join(over)}"
+        if caps.mode == "refuse":
+            self._refuse(
+                act,
+                rule,
+                f"Refused by the safety policy ({rule}); nothing was sent. Send a command within the caps.",
+            )
+        payload = scaled(act.type, act.payload, linear_factor, angular_factor)
+        clamped = dataclasses.replace(act, payload=payload)
+        return clamped, clamp_text(act.type, act.payload, payload)
+
+    def _needs_person(self, act: Act) -> bool:
+        confirm = self.policy.confirm
+        if confirm == "always":
+            return True
+        if confirm == "motion":
+            return act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type))
+        return False
+
+    async def _ask(self, act: Act, ask: AskPerson, clamp: str | None) -> Answer | str:
+        try:
+            async with asyncio.timeout(self.policy.confirm_timeout):
+                return await ask(question(act, clamp))
+        except TimeoutError:
+            return "timeout"
+        except Exception as exc:
+            # A client that fails the request (or never answers in time) has not said yes.
+            _log.warning("asking the person failed: %s", exc)
+            return "error"
+
+
+def question(act: Act, clamp: str | None = None) -> str:
+    """What the person is asked: exactly what would be sent, and by which tool."""
+    payload_kind = _PAYLOADS.get(act.kind, "payload")
+    body = json.dumps(act.payload, ensure_ascii=False, default=str)
+    if len(body) > QUESTION_LIMIT:
+        body = f"{body[:QUESTION_LIMIT]}… ({len(body) - QUESTION_LIMIT} more characters not shown)"
+    lines = [
+        f"The AI assistant wants to {_VERBS.get(act.kind, 'act on')} {act.name} on the robot.",
+        f"Tool: {act.tool}",
+        f"{_NOUNS.get(act.kind, act.kind).capitalize()}: {act.name}",
+    ]
+    if act.type:
+        lines.append(f"Type: {act.type}")
+    lines.append(f"{payload_kind.capitalize()}: {body}")
+    if act.rate_hz is not None:
+        lasting = f" for {act.duration:g} s" if act.duration is not None else " until stopped"
+        lines.append(f"Repeated at {act.rate_hz:g} Hz{lasting}.")
+    if clamp:
+        lines.append(f"Note: {clamp}.")
+    lines.append("Allow this?")
+    return "\n".join(lines)
+
+
+def _answer_text(act: Act, answer: str, policy: Policy) -> str:
+    what = f"{act.tool} on {act.name}"
+    if answer == "decline":
+        return f"The person declined {what}; nothing was sent. Do not retry it unless they ask you to."
+    if answer == "cancel":
+        return f"The person dismissed the confirmation for {what} without accepting; nothing was sent."
+    if answer == "unsupported":
+        return (
+            f"The safety policy requires a person to confirm {what} (confirm = {policy.confirm!r}), but this "
+            "MCP client cannot ask (it does not support elicitation); nothing was sent. Use an MCP client "
+            "that supports elicitation, or ask the robot's operator to change the policy."
+        )
+    if answer == "timeout":
+        return (
+            f"The person did not answer the confirmation for {what} within {policy.confirm_timeout:g} s, so "
+            "nothing was sent (a late yes could move the robot when the moment has passed)."
+        )
+    return f"Could not ask the person to confirm {what}, so nothing was sent."

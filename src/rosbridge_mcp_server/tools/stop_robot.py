@@ -1,0 +1,79 @@
+"""``stop_robot``: the e-stop for what this server started (streams, velocity commands, goals)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.robot.acting import Act
+from rosbridge_mcp_server.safety.estop import emergency_stop
+from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolHints, ToolSpec
+
+__all__ = ["SPEC", "StopAnswer", "run"]
+
+
+class StopAnswer(BaseModel):
+    """What stop_robot did."""
+
+    streams_stopped: list[str] = Field(description="Topics whose streams ended")
+    streams_still_running: list[str] = Field(description="Topics whose streams did not end in time")
+    zeroed_topics: list[str] = Field(description="Topics that got one zero velocity command")
+    goals_cancelled: list[str] = Field(description="Goal ids a cancel was sent for")
+    failures: list[str]
+
+
+SPEC = ToolSpec(
+    name="stop_robot",
+    title="Stop everything this server started",
+    description=(
+        "Emergency stop for what this server started: ends every publish_topic stream, publishes one zero "
+        "velocity on every topic it sent a Twist/TwistStamped to, cancels every running publish_action goal. "
+        "Never asks for confirmation; call it with {} whenever the robot must stop now."
+    ),
+    # It acts on the robot, but only ever takes motion away; repeating it is harmless.
+    hints=ToolHints(read_only=False, destructive=False, idempotent=True),
+    output=StopAnswer,
+)
+
+
+async def run(ctx: ToolContext) -> ToolAnswer:
+    """Stop the streams, zero the velocity topics, cancel the goals, and say what was done."""
+    report = await emergency_stop(ctx.client, ctx.activity)
+    # Stopping is never put to the policy; each stop that went out is still audited.
+    for topic, type_name, message in report.zero_messages:
+        ctx.guard.record(Act(SPEC.name, "topic", topic, type_name, message), "e-stop")
+    for action, goal_id in report.goals:
+        ctx.guard.record(Act(SPEC.name, "action", action, "", {"cancel": goal_id}), "e-stop")
+    if not report.did_anything:
+        ctx.guard.record(Act(SPEC.name, "topic", "", "", None), "e-stop: nothing to stop")
+    data = StopAnswer(
+        streams_stopped=report.streams_stopped,
+        streams_still_running=report.streams_still_running,
+        zeroed_topics=report.zeroed_topics,
+        goals_cancelled=report.goals_cancelled,
+        failures=report.failures,
+    )
+    return ToolAnswer(text=_text(data), data=data)
+
+
+def _text(data: StopAnswer) -> str:
+    lines = []
+    if data.streams_stopped:
+        lines.append(
+            f"Ended {len(data.streams_stopped)} publish stream(s) on {', '.join(data.streams_stopped)}."
+        )
+    if data.streams_still_running:
+        lines.append(
+            f"Stream(s) on {', '.join(data.streams_still_running)} did not end in time; call stop_robot "
+            "again."
+        )
+    if data.zeroed_topics:
+        lines.append(f"Published a zero velocity command on {', '.join(data.zeroed_topics)}.")
+    if data.goals_cancelled:
+        lines.append(f"Sent a cancel for goal(s) {', '.join(data.goals_cancelled)}.")
+    if not lines:
+        lines.append(
+            "Nothing to stop: this server has no running stream or goal and has sent no velocity command in "
+            "this session."
+        )
+    lines.extend(data.failures)
+    return "\n".join(lines)

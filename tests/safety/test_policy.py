@@ -1,0 +1,156 @@
+"""The policy file: every key optional, unknown keys a start-up error naming them, globs like rosbridge's."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rosbridge_mcp_server.config import ConfigError, load_config
+from rosbridge_mcp_server.safety import NameRules, Policy, PolicyError, load_policy, parse_policy
+
+FULL = """
+read_only = false
+confirm = "motion"
+confirm_timeout = 45
+[topics]
+allow = ["/turtle1/*"]
+deny = ["/rosout"]
+[services]
+deny = ["/rosapi/*"]
+[actions]
+allow = ["/fibonacci"]
+[parameters]
+allow = []
+[velocity]
+max_linear = 0.5
+max_angular = 1
+mode = "clamp"
+[publish]
+max_rate_hz = 20
+max_duration = 30
+"""
+
+
+def write(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "policy.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_an_empty_file_allows_everything(tmp_path: Path) -> None:
+    """No keys at all is the same as no policy: nothing restricted, nobody asked."""
+    policy = load_policy(write(tmp_path, ""))
+    assert not policy.restricts
+    assert policy.confirm == "never"
+    assert policy.topics.allow is None
+
+
+def test_every_key_of_the_sample_is_read(tmp_path: Path) -> None:
+    """The documented sample loads into the values it spells."""
+    policy = load_policy(write(tmp_path, FULL))
+    assert policy.confirm == "motion"
+    assert policy.confirm_timeout == 45.0
+    assert policy.topics == NameRules(allow=("/turtle1/*",), deny=("/rosout",))
+    assert policy.services == NameRules(allow=None, deny=("/rosapi/*",))
+    assert policy.parameters.allow == ()
+    assert policy.velocity.max_linear == 0.5
+    assert policy.velocity.max_angular == 1.0
+    assert policy.velocity.mode == "clamp"
+    assert policy.publish.max_rate_hz == 20.0
+    assert policy.publish.max_duration == 30.0
+    assert policy.restricts
+
+
+@pytest.mark.parametrize(
+    ("text", "named", "suggested"),
+    [
+        ("confrim = 'always'", "'confrim'", "'confirm'"),
+        ("[velocity]\nmax_linaer = 0.5", "[velocity] 'max_linaer'", "'max_linear'"),
+        ("[topic]\nallow = ['/a']", "'topic'", "'topics'"),
+        ("[topics]\nalow = ['/a']", "[topics] 'alow'", "'allow'"),
+        ("[publish]\nmax_rate = 5", "[publish] 'max_rate'", "'max_rate_hz'"),
+    ],
+)
+def test_a_misspelt_key_is_an_error_naming_it_with_a_suggestion(
+    tmp_path: Path, text: str, named: str, suggested: str
+) -> None:
+    """A key the loader does not know would leave the robot unprotected, so it stops the start."""
+    with pytest.raises(PolicyError) as caught:
+        load_policy(write(tmp_path, text))
+    message = str(caught.value)
+    assert named in message
+    assert f"did you mean {suggested}" in message
+    assert "\n" not in message
+
+
+def test_a_policy_error_is_a_configuration_error(tmp_path: Path) -> None:
+    """Through the configuration it is a ConfigError, which the CLI's bad-configuration path catches."""
+    with pytest.raises(ConfigError, match=r"unknown key 'nonsense_key_entirely'"):
+        load_config({"ROSBRIDGE_MCP_POLICY": str(write(tmp_path, "nonsense_key_entirely = 1"))})
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ("confirm = 'sometimes'", "confirm must be one of"),
+        ("read_only = 'yes'", "read_only must be true or false"),
+        ("[velocity]\nmax_linear = -1", "max_linear must be a number of m/s"),
+        ("[velocity]\nmax_linear = 'fast'", "max_linear must be a number"),
+        ("[velocity]\nmode = 'slow'", "mode must be 'refuse' or 'clamp'"),
+        ("[topics]\nallow = '/a'", "allow must be a list"),
+        ("[publish]\nmax_rate_hz = 0", "max_rate_hz must be more than 0"),
+        ("confirm_timeout = 0", "confirm_timeout must be more than 0"),
+        ("confirm_timeout = 'long'", "confirm_timeout must be a number of seconds"),
+        ("topics = 3", "topics must be a table"),
+        ("read_only = tru", "not valid TOML"),
+    ],
+)
+def test_a_bad_value_is_an_error_saying_what_fits(tmp_path: Path, text: str, fragment: str) -> None:
+    """Wrong types and values are one line naming the key and what it takes."""
+    with pytest.raises(PolicyError, match=fragment):
+        load_policy(write(tmp_path, text))
+
+
+def test_a_missing_file_is_an_error_naming_it(tmp_path: Path) -> None:
+    """A policy path that does not exist does not silently mean "no policy"."""
+    with pytest.raises(PolicyError, match=r"does not exist"):
+        load_policy(tmp_path / "nope.toml")
+
+
+@pytest.mark.parametrize(
+    ("name", "allowed"),
+    [
+        ("/turtle1/cmd_vel", True),
+        ("/turtle1/deep/er/topic", True),  # * crosses "/", as in rosbridge's topics_glob
+        ("/turtle2/cmd_vel", False),
+        ("/Turtle1/cmd_vel", False),  # ROS names are case-sensitive
+        ("/turtle1/secret", False),  # denied although allowed: deny wins
+    ],
+)
+def test_allow_and_deny_globs_follow_fnmatch_and_deny_wins(name: str, allowed: bool) -> None:
+    """Shell-style globs, * crossing slashes, case-sensitive, deny over allow."""
+    rules = NameRules(allow=("/turtle1/*",), deny=("/turtle1/secret",))
+    assert (rules.refusal(name, "topics") is None) is allowed
+
+
+def test_a_refusal_names_the_rule_that_refused() -> None:
+    """The refusal text says which list and which glob decided."""
+    rules = NameRules(allow=("/turtle1/*",), deny=("/rosout",))
+    assert rules.refusal("/rosout", "topics") == "[topics] deny '/rosout' matches /rosout"
+    assert "[topics] allow lists only '/turtle1/*'" in (rules.refusal("/other", "topics") or "")
+
+
+def test_describe_lists_what_the_policy_restricts() -> None:
+    """``check`` shows each restriction in a line a person can read."""
+    policy = parse_policy(
+        {"confirm": "always", "topics": {"deny": ["/rosout"]}, "velocity": {"max_linear": 0.5}},
+        where="robot.toml",
+    )
+    text = "\n".join(policy.describe())
+    assert "robot.toml" in text
+    assert "confirm = always" in text
+    assert "[topics] allow everything; deny /rosout" in text
+    assert "linear ≤ 0.5 m/s" in text
+    assert "no restrictions" in Policy().describe()[0]
+    assert "read_only" in "\n".join(Policy(read_only=True).describe())
