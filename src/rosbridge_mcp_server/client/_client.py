@@ -42,6 +42,8 @@ logger = logging.getLogger("rosbridge_mcp_server.client")
 CANCEL_GRACE_SECONDS = 2.0
 #: rosbridge's node name in rosbridge_websocket.launch (ROS 1 0.11); used to tell ROS 1 without rosapi.
 ROS1_BRIDGE_NODE = "rosbridge_websocket"
+#: The node name rosbridge's launch files (ROS 1 and 2) and `ros2 run` give the bridge.
+BRIDGE_NODE = "rosbridge_websocket"
 #: At most this many goals left running by a drop are remembered for a cancel (the oldest are forgotten).
 ORPHAN_LIMIT = 100
 #: A goal left running by a drop longer ago than this is not cancelled when the connection comes back: a
@@ -144,6 +146,8 @@ class RosbridgeClient:
         self._info: RosInfo | None = None
         # Derived from _info once per connection, so the hot path does not recompute them.
         self._lanes_by_default = False
+        self._goals_block = False
+        self._spread_calls = False
         self._send_service_timeout = False
         self._last_reason: str | None = "not started"
         self._runner: asyncio.Task[None] | None = None
@@ -299,6 +303,8 @@ class RosbridgeClient:
             else:
                 self._info = info
                 self._lanes_by_default = info.may_be_in_order
+                self._goals_block = info.goals_may_block
+                self._spread_calls = info.one_call_per_connection
                 self._send_service_timeout = info.honours_service_timeout
                 self._main = conn
                 self._last_reason = None
@@ -362,7 +368,8 @@ class RosbridgeClient:
             distro = values.get("distro") if isinstance(values, dict) else None
             if version == 1:
                 return RosInfo(1, distro or None)
-            return RosInfo(2, str(distro) if distro else None)
+            calls, goals = await self._threading(conn, timeout)
+            return RosInfo(2, str(distro) if distro else None, calls_threaded=calls, goals_threaded=goals)
         try:
             values = await self._call_on(conn, "/rosapi/topics", None, timeout, send_timeout=False)
         except ServiceError as exc:
@@ -381,6 +388,38 @@ class RosbridgeClient:
         if any(isinstance(t, str) and "/msg/" in t for t in types):
             return RosInfo(2, None)
         return RosInfo(1, None)
+
+    async def _threading(self, conn: Connection, timeout: float) -> tuple[bool | None, bool | None]:
+        """Whether a ROS 2 bridge runs each call and each goal in a thread of its own, as its node says.
+
+        rosbridge 2.x reads ``call_services_in_new_thread`` and ``send_action_goals_in_new_thread``; 2.1.0's
+        launch file sets both false, on Jazzy and Kilted alike. The node is found in ``/rosapi/nodes`` first:
+        rosapi's ``get_param`` waits 5 s for a node that does not exist, serving nobody else meanwhile.
+        ``None`` where the bridge did not tell (no such node, several, an older bridge without the parameter).
+        """
+        try:
+            values = await self._call_on(conn, "/rosapi/nodes", None, timeout, send_timeout=False)
+        except (ServiceError, RequestTimeoutError):
+            return None, None
+        listed = values.get("nodes") if isinstance(values, dict) else None
+        nodes = [
+            node
+            for node in (listed if isinstance(listed, list) else [])
+            if isinstance(node, str) and node.rsplit("/", 1)[-1] == BRIDGE_NODE
+        ]
+        if len(nodes) != 1:
+            return None, None
+        answers: list[bool | None] = []
+        for parameter in ("call_services_in_new_thread", "send_action_goals_in_new_thread"):
+            args = {"name": f"{nodes[0]}:{parameter}", "default_value": ""}
+            try:
+                found = await self._call_on(conn, "/rosapi/get_param", args, timeout, send_timeout=False)
+            except (ServiceError, RequestTimeoutError):
+                answers.append(None)
+                continue
+            text = found.get("value") if isinstance(found, dict) else None
+            answers.append({"true": True, "false": False}.get(text) if isinstance(text, str) else None)
+        return answers[0], answers[1]
 
     async def _answers(self, conn: Connection, service: str, timeout: float) -> bool:
         """Whether *service* answers a call with an empty request."""
@@ -521,7 +560,9 @@ class RosbridgeClient:
         conn = self._main
         if conn is None or not conn.is_open:
             conn = await self._main_connection(asyncio.get_running_loop().time() + t)
-        if isolated or (isolated is None and self._lanes_by_default):
+        if isolated or (
+            isolated is None and (self._lanes_by_default or (self._spread_calls and conn.pending))
+        ):
             return await self._call_on_lane(service, args, t)
         # The hot path: kept flat (one coroutine frame below this one) because a benchmark holds
         # it to a raw websockets round trip.
@@ -984,8 +1025,8 @@ class RosbridgeClient:
         # close() has already sent cancels for every running goal on the main connection.
         if self._closed:
             return
-        # An in-order bridge (Humble 2.0.x) reads a lane's cancel only after the goal it would stop has ended.
-        if not on_lane or self._lanes_by_default:
+        # An in-order bridge (2.1.0's and Humble's defaults) reads a lane's cancel only after the goal ended.
+        if not on_lane or self._goals_block:
             self.remember_orphaned_goal(action, goal_id, 2)
 
     async def _cancel_after_drop(self, action: str, goal_id: str) -> bool:

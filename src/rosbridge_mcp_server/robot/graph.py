@@ -1,26 +1,27 @@
 """Graph look-ups through rosapi, with the dialect quirks handled, for the tools.
 
 Everything here is an ordinary ``call_service`` to a ``/rosapi/...`` service on the shared client. What
-differs
-between bridges:
+differs between bridges (docs/rosbridge-behaviour.md has what was verified on which release):
 
 * ROS 1 (rosapi 0.11) has no ``get_ros_version``, ``action_type`` or ``interfaces``; ``action_servers`` may
-list a
-  namespace twice; the type of an action is only visible as the type of its ``<ns>/goal`` topic
-  (``pkg/NameActionGoal``).
-* ROS 2 ``action_type`` exists from Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0; before that we fall back to the
-  hidden ``<ns>/_action/feedback`` topic, whose type is ``pkg/action/Name_FeedbackMessage``.
-* ``message_details`` answers an unknown type with an empty ``typedefs`` list (both lines); on ROS 2 it may
-also
-  never answer if the handler raises, so such a failure is reported as an unknown type as well.
+  list a namespace several times; the type of an action is only visible as the type of its ``<ns>/goal``
+  topic (``pkg/NameActionGoal``).
+* ROS 2 ``action_type`` exists from Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0. rosapi 2.1.0 has none and hides
+  the hidden ``<ns>/_action/...`` names from every look-up; the bridge itself names the type when it refuses
+  a probe call to ``<ns>/_action/send_goal``.
+* rosapi 2.1.0 writes TypeDef field names as Python slot names (``_linear``); :mod:`.messages` reads both.
+* ``message_details`` answers an unknown type with an empty ``typedefs`` list (both lines). rosapi 2.1.0's
+  ``service_request_details`` instead ends the rosapi node on a type it cannot load, so it is only ever asked
+  about a type rosapi itself reported for a live service.
 
-Type definitions are cached per connection: a reconnect may be to a robot with other packages installed.
+What one connection learnt is cached with it: a reconnect may be to a robot with other packages installed.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import re
 from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -108,6 +109,8 @@ class _ConnectionKnowledge:
     interfaces_asked: bool = False
     publishing: dict[str, str] = field(default_factory=dict)
     service_types: dict[str, str] = field(default_factory=dict)
+    action_types: dict[str, str] = field(default_factory=dict)
+    no_action_type_service: bool = False
 
 
 class RosGraph:
@@ -272,20 +275,43 @@ class RosGraph:
         return None
 
     async def _ros2_action_type(self, action: str) -> str | None:
+        known = self._known.action_types.get(action)
+        if known:
+            return known
+        found: str | None = None
+        if not self._known.no_action_type_service:
+            try:
+                values = await self.rosapi("action_type", {"action": action})
+            except ServiceError as exc:
+                # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0.
+                if not is_missing_service(exc):
+                    raise
+                self._known.no_action_type_service = True
+            else:
+                answer = values.get("type")
+                found = answer if isinstance(answer, str) and answer else None
+        if found is None:
+            found = await self._send_goal_type(action)
+        if found:
+            self._known.action_types[action] = found
+        return found
+
+    async def _send_goal_type(self, action: str) -> str | None:
+        """The action's type as the bridge names it when refusing a call to ``<action>/_action/send_goal``.
+
+        rosapi 2.1.0 hides every hidden name (``service_type`` of ``<action>/_action/send_goal`` is ``""``),
+        but the bridge looks the service up itself. Called with a field no request has, it refuses before
+        building a request, so nothing reaches the action server; its refusal names the type: "Unable to
+        import srv class Fibonacci_SendGoal from package example_interfaces" (2.1.0 cannot load an action's
+        services), or "Message type example_interfaces/action/Fibonacci_SendGoal_Request does not have a
+        field ..." from a bridge that can.
+        """
+        service = f"{action.rstrip('/')}/_action/send_goal"
         try:
-            values = await self.rosapi("action_type", {"action": action})
+            await self._client.call_service(service, {_PROBE_FIELD: 0})
         except ServiceError as exc:
-            # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0.
-            if not is_missing_service(exc):
-                raise
-        else:
-            found = values.get("type")
-            if isinstance(found, str) and found:
-                return found
-        feedback_type = await self.topic_type(f"{action.rstrip('/')}/_action/feedback")
-        if feedback_type.endswith("_FeedbackMessage"):
-            return feedback_type[: -len("_FeedbackMessage")]
-        return None
+            return _action_type_from_refusal(exc.message)
+        return None  # a bridge that took the probe as a request: do not read anything into it
 
     # --- type definitions -------------------------------------------------------------------------
 
@@ -378,6 +404,21 @@ _ROS1_LOAD_FAILURES = ("Unable to import", "Unable to load", "is not a valid typ
 
 def _ros1_load_failure(message: str) -> bool:
     return any(text in message for text in _ROS1_LOAD_FAILURES)
+
+
+#: A field name no ROS message has (ROS field names start with a letter): a request carrying it is refused.
+_PROBE_FIELD = "__type_probe__"
+_IMPORT_REFUSAL = re.compile(r"Unable to import \w+ class (\w+)_SendGoal from package (\w+)")
+_FIELD_REFUSAL = re.compile(r"Message type (\w+)/(?:action/)?(\w+)_SendGoal_Request does not have a field")
+
+
+def _action_type_from_refusal(text: str) -> str | None:
+    """``pkg/action/Name`` from the bridge's refusal of a send_goal probe, or ``None``."""
+    if match := _IMPORT_REFUSAL.search(text):
+        return f"{match.group(2)}/action/{match.group(1)}"
+    if match := _FIELD_REFUSAL.search(text):
+        return f"{match.group(1)}/action/{match.group(2)}"
+    return None
 
 
 def _type_hint(info: RosInfo) -> str:
