@@ -72,6 +72,23 @@ async def test_list_services_shows_every_service_with_its_type(session: Session,
     assert all(services.values()), "every simulated service has a known type"
 
 
+async def test_list_services_looks_each_type_up_once_and_never_for_per_node_services(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """Per-node and rosapi services are typed by name; the next listing only asks for the names again."""
+    first = (await session.ok("list_services")).structured_content
+    assert first is not None
+    services = {row["name"]: row["type"] for row in first["services"]}
+    per_node = "/turtlesim/get_parameters" if sim.dialect == "ros2" else "/turtlesim/get_loggers"
+    assert services[per_node] in ("rcl_interfaces/srv/GetParameters", "roscpp/GetLoggers")
+    assert services["/rosapi/topics"] in ("rosapi_msgs/srv/Topics", "rosapi/Topics")
+    looked_up = sim.world.service_calls.get("/rosapi/service_type", 0)
+    assert 0 < looked_up < len(services) / 2, "per-node and rosapi services need no look-up"
+    second = (await session.ok("list_services")).structured_content
+    assert second == first
+    assert sim.world.service_calls.get("/rosapi/service_type", 0) == looked_up
+
+
 async def test_list_actions_lists_each_server_once_with_its_type(
     session: Session, sim: SimulatedRobot
 ) -> None:

@@ -24,7 +24,7 @@ import logging
 import re
 from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Final, TypeVar
 
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.messages import TypeDef, typedefs_from_rosapi
@@ -41,6 +41,7 @@ __all__ = [
     "ServiceEntry",
     "TopicDetails",
     "TopicEntry",
+    "infrastructure_types",
     "is_missing_service",
 ]
 
@@ -52,10 +53,10 @@ ROSAPI_HINT = (
     "`rosbridge_websocket` run alone does not."
 )
 
-# Type look-ups for many names at once (service types, action types) run side by side, but not hundreds at
-# a time:
-# each is a request on the bridge, and an in-order bridge serialises them anyway.
-_LOOKUP_CONCURRENCY = 16
+# Type look-ups for many names at once (service types, action types) run a few side by side, not more:
+# rosbridge 0.11.17 answered 46 service_type calls in ~0.2 s one after another or four at a time, but took
+# ~1.1 s eight or more at a time; rosbridge 2.1.0 left a call unanswered with sixteen connections asking.
+_LOOKUP_CONCURRENCY = 4
 
 _T = TypeVar("_T")
 _R = TypeVar("_R")
@@ -223,10 +224,21 @@ class RosGraph:
             return ""
 
     async def services(self) -> list[ServiceEntry]:
-        """Every service with its type (types looked up side by side; ``""`` where a look-up failed)."""
+        """Every service with its type (``""`` where a look-up failed).
+
+        A service's type cannot change while it exists, so each is looked up once per connection and kept
+        until the service is gone from the list; the per-node services every ROS node offers are typed from
+        their names (:func:`infrastructure_types`) without asking.
+        """
+        info = await self.ros_info()
         names = await self.service_names()
-        types = await _bounded_map(self._service_type_or_blank, names)
-        return [ServiceEntry(name, found) for name, found in zip(names, types, strict=True)]
+        known = self._known.service_types
+        for gone in known.keys() - set(names):
+            del known[gone]
+        fixed = infrastructure_types(names, info.version)
+        missing = [name for name in names if name not in known and name not in fixed]
+        await _bounded_map(self._service_type_or_blank, missing)
+        return [ServiceEntry(name, fixed.get(name) or known.get(name, "")) for name in names]
 
     # --- actions ----------------------------------------------------------------------------------
 
@@ -404,6 +416,80 @@ _ROS1_LOAD_FAILURES = ("Unable to import", "Unable to load", "is not a valid typ
 
 def _ros1_load_failure(message: str) -> bool:
     return any(text in message for text in _ROS1_LOAD_FAILURES)
+
+
+# The services every node offers, by the last part of their name, with their fixed types. ROS 2 (rclcpp and
+# rclpy): six parameter services, and since Iron get_type_description; ROS 1 (roscpp and rospy): two logger
+# services. Seen on rosbridge 2.1.0's Jazzy and Kilted graphs and on a 0.11.17 Noetic-line graph.
+_ROS2_PARAMETER_SERVICES: Final = {
+    "describe_parameters": "rcl_interfaces/srv/DescribeParameters",
+    "get_parameter_types": "rcl_interfaces/srv/GetParameterTypes",
+    "get_parameters": "rcl_interfaces/srv/GetParameters",
+    "list_parameters": "rcl_interfaces/srv/ListParameters",
+    "set_parameters": "rcl_interfaces/srv/SetParameters",
+    "set_parameters_atomically": "rcl_interfaces/srv/SetParametersAtomically",
+}
+_ROS2_TYPE_DESCRIPTION = ("get_type_description", "type_description_interfaces/srv/GetTypeDescription")
+_ROS1_LOGGER_SERVICES: Final = {
+    "get_loggers": "roscpp/GetLoggers",
+    "set_logger_level": "roscpp/SetLoggerLevel",
+}
+# rosapi's own services under /rosapi, whose types rosapi fixes (`rosapi_msgs/srv/X` on ROS 2, `rosapi/X` on
+# ROS 1). Services a later rosapi adds are simply looked up.
+_ROSAPI_SERVICES: Final = {
+    "action_servers": "GetActionServers",
+    "delete_param": "DeleteParam",
+    "get_param": "GetParam",
+    "get_param_names": "GetParamNames",
+    "get_time": "GetTime",
+    "has_param": "HasParam",
+    "message_details": "MessageDetails",
+    "node_details": "NodeDetails",
+    "nodes": "Nodes",
+    "publishers": "Publishers",
+    "service_node": "ServiceNode",
+    "service_providers": "ServiceProviders",
+    "service_request_details": "ServiceRequestDetails",
+    "service_response_details": "ServiceResponseDetails",
+    "service_type": "ServiceType",
+    "services": "Services",
+    "services_for_type": "ServicesForType",
+    "set_param": "SetParam",
+    "subscribers": "Subscribers",
+    "topic_type": "TopicType",
+    "topics": "Topics",
+    "topics_and_raw_types": "TopicsAndRawTypes",
+    "topics_for_type": "TopicsForType",
+}
+_ROSAPI_SERVICES_ROS1: Final = {"search_param": "SearchParam", "service_host": "ServiceHost"}
+_ROSAPI_SERVICES_ROS2: Final = {"get_ros_version": "GetROSVersion"}
+
+
+def infrastructure_types(names: Iterable[str], version: int) -> dict[str, str]:
+    """The types of the per-node and rosapi services among *names*, told from the names alone.
+
+    A node's set counts only when it is complete (all six parameter services under one prefix on ROS 2,
+    both logger services on ROS 1), so a single service that merely shares a leaf name is looked up as usual.
+    """
+    listed = set(names)
+    by_prefix: dict[str, set[str]] = {}
+    for name in listed:
+        prefix, _, leaf = name.rpartition("/")
+        by_prefix.setdefault(prefix, set()).add(leaf)
+    found: dict[str, str] = {}
+    per_node = _ROS2_PARAMETER_SERVICES if version == 2 else _ROS1_LOGGER_SERVICES
+    for prefix, leaves in by_prefix.items():
+        if per_node.keys() <= leaves:
+            found.update({f"{prefix}/{leaf}": kind for leaf, kind in per_node.items()})
+            leaf, kind = _ROS2_TYPE_DESCRIPTION
+            if version == 2 and leaf in leaves:
+                found[f"{prefix}/{leaf}"] = kind
+    rosapi = {**_ROSAPI_SERVICES, **(_ROSAPI_SERVICES_ROS2 if version == 2 else _ROSAPI_SERVICES_ROS1)}
+    package = "rosapi_msgs/srv" if version == 2 else "rosapi"
+    for leaf in by_prefix.get("/rosapi", set()):
+        if leaf in rosapi:
+            found[f"/rosapi/{leaf}"] = f"{package}/{rosapi[leaf]}"
+    return found
 
 
 #: A field name no ROS message has (ROS field names start with a letter): a request carrying it is refused.
