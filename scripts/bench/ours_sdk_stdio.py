@@ -12,8 +12,8 @@ from typing import Any
 
 from mcp.server.mcpserver import MCPServer
 
-from rosbridge_mcp_server import main
 from rosbridge_mcp_server.cli import commands as cli
+from rosbridge_mcp_server.cli import main
 
 __all__: list[str] = []
 

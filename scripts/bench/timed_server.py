@@ -24,8 +24,8 @@ from typing import Any
 
 from mcp.server.mcpserver import MCPServer
 
-from rosbridge_mcp_server import main
 from rosbridge_mcp_server.cli import commands as cli
+from rosbridge_mcp_server.cli import main
 from rosbridge_mcp_server.client import RosbridgeClient
 
 __all__: list[str] = []

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rosbridge_mcp_server import main
+from rosbridge_mcp_server.cli import main
 
 __all__: list[str] = []
 

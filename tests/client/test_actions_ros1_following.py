@@ -7,7 +7,8 @@ from typing import Any
 
 import pytest
 
-from rosbridge_mcp_server.actions import RunningGoal, _FeedbackLog, _follow_ros1, _Ros1Progress
+from rosbridge_mcp_server.robot.goals import Goal
+from rosbridge_mcp_server.robot.goals.ros1 import Progress, follow
 
 
 def status(goal_id: str, code: int) -> dict[str, Any]:
@@ -15,10 +16,10 @@ def status(goal_id: str, code: int) -> dict[str, Any]:
     return {"goal_id": {"stamp": {"secs": 0, "nsecs": 0}, "id": goal_id}, "status": code, "text": ""}
 
 
-def follower() -> tuple[asyncio.Queue[tuple[str, Any]], _FeedbackLog, _Ros1Progress]:
-    """An empty queue, a feedback log and fresh progress for goal "g"."""
-    entry = RunningGoal("g", "/fibonacci", "actionlib_tutorials/Fibonacci", 1)
-    return asyncio.Queue(), _FeedbackLog(entry, None), _Ros1Progress()
+def follower() -> tuple[asyncio.Queue[tuple[str, Any]], Goal, Progress]:
+    """An empty queue, goal "g" (which counts its feedback) and fresh progress."""
+    goal = Goal("g", "/fibonacci", "actionlib_tutorials/FibonacciAction", 1)
+    return asyncio.Queue(), goal, Progress()
 
 
 async def test_messages_of_other_goals_are_ignored() -> None:
@@ -28,15 +29,15 @@ async def test_messages_of_other_goals_are_ignored() -> None:
     queue.put_nowait(("result", {"status": status("other", 3), "result": {"sequence": [9]}}))
     queue.put_nowait(("feedback", {"status": status("g", 1), "feedback": {"sequence": [0, 1]}}))
     queue.put_nowait(("result", {"status": status("g", 3), "result": {"sequence": [0, 1, 1]}}))
-    assert await _follow_ros1(queue, "g", log, seen) == (3, {"sequence": [0, 1, 1]})
-    assert list(log.last) == [{"sequence": [0, 1]}]
+    assert await follow(queue, log, None, seen) == (3, {"sequence": [0, 1, 1]})
+    assert list(log.last_feedback) == [{"sequence": [0, 1]}]
 
 
 async def test_a_goal_the_status_says_ended_finishes_even_without_a_result() -> None:
     """If the status array says our goal ended and no result follows, the wait ends with that status."""
     queue, log, seen = follower()
     queue.put_nowait(("status", {"status_list": [status("other", 1), status("g", 4)]}))
-    assert await asyncio.wait_for(_follow_ros1(queue, "g", log, seen), 5.0) == (4, None)
+    assert await asyncio.wait_for(follow(queue, log, None, seen), 5.0) == (4, None)
 
 
 async def test_the_last_status_survives_a_timeout() -> None:
@@ -45,7 +46,7 @@ async def test_the_last_status_survives_a_timeout() -> None:
     queue.put_nowait(("status", {"status_list": [status("g", 1)]}))
     with pytest.raises(TimeoutError):
         async with asyncio.timeout(0.1):
-            await _follow_ros1(queue, "g", log, seen)
+            await follow(queue, log, None, seen)
     assert seen.code == 1
 
 
@@ -54,4 +55,4 @@ async def test_an_error_from_a_subscription_ends_the_wait() -> None:
     queue, log, seen = follower()
     queue.put_nowait(("error", RuntimeError("lost")))
     with pytest.raises(RuntimeError, match="lost"):
-        await _follow_ros1(queue, "g", log, seen)
+        await follow(queue, log, None, seen)

@@ -8,9 +8,10 @@ from typing import Any
 import pytest
 from client_harness import MakeClient, MakeSim
 
-from rosbridge_mcp_server import actions
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, GoalTimeoutError
+from rosbridge_mcp_server.robot import goals
+from rosbridge_mcp_server.robot.goals import ros2
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 ROS2_TYPE = "example_interfaces/action/Fibonacci"
@@ -47,7 +48,7 @@ async def robot2(request: pytest.FixtureRequest, make_sim: MakeSim) -> Simulated
     return await make_sim(**ROBOTS[request.param])
 
 
-# --- RosbridgeClient.send_action_goal (ROS 2) ----------------------------------------------------------
+# --- goals.ros2.send_action_goal (ROS 2) ----------------------------------------------------------
 
 
 async def test_send_action_goal_returns_the_result_and_streams_feedback(
@@ -57,18 +58,23 @@ async def test_send_action_goal_returns_the_result_and_streams_feedback(
     client = await make_client(robot2)
     feedback: list[dict[str, Any]] = []
 
-    async def on_feedback(values: dict[str, Any]) -> None:
+    async def on_feedback(_goal: goals.Goal, values: dict[str, Any]) -> None:
         feedback.append(values)
 
-    result = await client.send_action_goal(
-        "/fibonacci", "example_interfaces/Fibonacci", {"order": 5}, on_feedback=on_feedback, timeout=5.0
+    result = await ros2.send_action_goal(
+        client,
+        "/fibonacci",
+        "example_interfaces/Fibonacci",
+        {"order": 5},
+        on_feedback=on_feedback,
+        timeout=5.0,
     )
-    assert result.status == 4
-    assert result.status_name == "succeeded"
-    assert result.values["sequence"] == [0, 1, 1, 2, 3, 5]
+    assert result.status_code == 4
+    assert result.status == "succeeded"
+    assert result.result["sequence"] == [0, 1, 1, 2, 3, 5]
     assert feedback
     assert feedback[-1]["sequence"] == [0, 1, 1, 2, 3, 5]
-    assert client.running_goals() == []
+    assert goals.running_goals(client) == []
 
 
 async def test_a_running_goal_can_be_cancelled_from_the_main_connection(
@@ -77,14 +83,14 @@ async def test_a_running_goal_can_be_cancelled_from_the_main_connection(
     """cancel_action_goal reaches a goal running on its lane, even on an in-order (Humble) bridge."""
     client = await make_client(robot2)
     goal = asyncio.create_task(
-        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
+        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot2.wait_for(running_goal_with_feedback)
-    [handle] = client.running_goals("/fibonacci")
+    [handle] = goals.running_goals(client, "/fibonacci")
     await client.cancel_action_goal("/fibonacci", handle.goal_id)
     result = await asyncio.wait_for(goal, 5.0)
-    assert result.status == 5
-    assert len(result.values["sequence"]) < LONG_ORDER + 1
+    assert result.status_code == 5
+    assert len(result.result["sequence"]) < LONG_ORDER + 1
 
 
 async def test_a_goal_past_its_timeout_is_cancelled_and_reports_the_partial_result(
@@ -93,7 +99,7 @@ async def test_a_goal_past_its_timeout_is_cancelled_and_reports_the_partial_resu
     """At the deadline a cancel is sent; GoalTimeoutError carries the canceled status and result."""
     client = await make_client(robot2)
     with pytest.raises(GoalTimeoutError) as caught:
-        await client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=0.3)
+        await ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=0.3)
     assert caught.value.status == 5
     assert isinstance(caught.value.result, dict)
     assert 2 <= len(caught.value.result["sequence"]) < LONG_ORDER + 1
@@ -106,14 +112,14 @@ async def test_cancelling_the_awaiting_task_cancels_the_goal_on_the_robot(
     """If the caller is cancelled (the MCP request was cancelled), the goal is cancelled too."""
     client = await make_client(robot2)
     goal = asyncio.create_task(
-        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
+        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot2.wait_for(running_goal_with_feedback)
     goal.cancel()
     with pytest.raises(asyncio.CancelledError):
         await goal
     await robot2.wait_for(lambda world: all(g.finished and g.cancel_requested for g in world.goals.values()))
-    assert client.running_goals() == []
+    assert goals.running_goals(client) == []
 
 
 async def test_a_goal_for_a_missing_action_server_raises_action_error(
@@ -122,14 +128,14 @@ async def test_a_goal_for_a_missing_action_server_raises_action_error(
     """The bridge's "No action server available" surfaces as ActionError."""
     client = await make_client(sim_ros2)
     with pytest.raises(ActionError, match="No action server available"):
-        await client.send_action_goal("/no_such_action", ROS2_TYPE, {"order": 1}, timeout=5.0)
+        await ros2.send_action_goal(client, "/no_such_action", ROS2_TYPE, {"order": 1}, timeout=5.0)
 
 
 async def test_a_rejected_goal_raises_action_error(sim_ros2: SimulatedRobot, make_client: MakeClient) -> None:
     """A goal the server rejects raises ActionError with the bridge's text."""
     client = await make_client(sim_ros2)
     with pytest.raises(ActionError, match="rejected"):
-        await client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": -1}, timeout=5.0)
+        await ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": -1}, timeout=5.0)
 
 
 async def test_a_drop_fails_a_running_goal_with_connection_lost(
@@ -138,23 +144,23 @@ async def test_a_drop_fails_a_running_goal_with_connection_lost(
     """When the bridge drops every connection, a goal waiting on its lane fails at once."""
     client = await make_client(sim_ros2)
     goal = asyncio.create_task(
-        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=20.0)
+        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=20.0)
     )
     await sim_ros2.wait_for(running_goal_with_feedback)
     await sim_ros2.drop_connections()
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(goal, 5.0)
-    assert client.running_goals() == []
+    assert goals.running_goals(client) == []
 
 
 async def test_send_action_goal_refuses_ros1(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
     """ROS 1 has no action ops: send_action_goal says to use actionlib topics."""
     client = await make_client(sim_ros1)
     with pytest.raises(ActionError, match="actionlib"):
-        await client.send_action_goal("/fibonacci", ROS1_TYPE, {"order": 3}, timeout=2.0)
+        await ros2.send_action_goal(client, "/fibonacci", ROS1_TYPE, {"order": 3}, timeout=2.0)
 
 
-# --- actions.run_goal / cancel_goals (both dialects) ---------------------------------------------------
+# --- goals.run_goal / cancel_goals (both dialects) ---------------------------------------------------
 
 
 async def test_run_goal_succeeds_with_feedback_on_every_dialect(
@@ -164,10 +170,10 @@ async def test_run_goal_succeeds_with_feedback_on_every_dialect(
     client = await make_client(robot)
     seen: list[int] = []
 
-    async def on_feedback(count: int, values: dict[str, Any]) -> None:
-        seen.append(count)
+    async def on_feedback(goal: goals.Goal, values: dict[str, Any]) -> None:
+        seen.append(goal.feedback_count)
 
-    outcome = await actions.run_goal(
+    outcome = await goals.run_goal(
         client, "/fibonacci", action_type_for(robot), {"order": 6}, timeout=5.0, on_feedback=on_feedback
     )
     assert outcome.succeeded
@@ -179,7 +185,7 @@ async def test_run_goal_succeeds_with_feedback_on_every_dialect(
     assert 1 <= len(outcome.last_feedback) <= 5
     assert outcome.canceled_by is None
     assert outcome.dialect == (2 if robot.dialect == "ros2" else 1)
-    assert actions.running_goals(client) == []
+    assert goals.running_goals(client) == []
 
 
 @pytest.mark.parametrize(
@@ -197,7 +203,7 @@ async def test_run_goal_accepts_the_action_type_as_users_write_it(
     """pkg/Fibonacci, pkg/action/Fibonacci and pkg/FibonacciAction all work on both dialects."""
     robot = await make_sim(dialect=dialect)
     client = await make_client(robot)
-    outcome = await actions.run_goal(client, "fibonacci", written, {"order": 2}, timeout=5.0)
+    outcome = await goals.run_goal(client, "fibonacci", written, {"order": 2}, timeout=5.0)
     assert outcome.succeeded
     assert outcome.action == "/fibonacci"
 
@@ -207,7 +213,7 @@ async def test_run_goal_past_its_timeout_cancels_and_says_so(
 ) -> None:
     """A goal past its timeout is cancelled; the outcome names the dialect's canceled status."""
     client = await make_client(robot)
-    outcome = await actions.run_goal(
+    outcome = await goals.run_goal(
         client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=0.3
     )
     assert not outcome.succeeded
@@ -223,11 +229,11 @@ async def test_cancel_goals_stops_a_goal_while_run_goal_is_waiting(
     """cancel_goals by our goal id works during run_goal, on Humble too; the outcome says who cancelled."""
     client = await make_client(robot)
     run = asyncio.create_task(
-        actions.run_goal(client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
+        goals.run_goal(client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot.wait_for(running_goal_with_feedback)
-    [running] = actions.running_goals(client, "/fibonacci")
-    report = await actions.cancel_goals(client, "/fibonacci", running.goal_id)
+    [running] = goals.running_goals(client, "/fibonacci")
+    report = await goals.cancel_goals(client, "/fibonacci", running.goal_id)
     assert report.canceled_ours == [running.goal_id]
     assert not report.unknown_goal_id
     outcome = await asyncio.wait_for(run, 5.0)
@@ -242,10 +248,10 @@ async def test_cancel_goals_without_an_id_also_cancels_goals_of_other_clients(
     ours = await make_client(robot)
     theirs = await make_client(robot)
     run = asyncio.create_task(
-        actions.run_goal(theirs, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
+        goals.run_goal(theirs, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot.wait_for(running_goal_with_feedback)
-    report = await actions.cancel_goals(ours, "/fibonacci")
+    report = await goals.cancel_goals(ours, "/fibonacci")
     assert report.canceled_ours == []
     if robot.dialect == "ros2":
         assert report.goals_canceling is not None
@@ -260,7 +266,7 @@ async def test_cancel_goals_reports_an_unknown_goal_id(
 ) -> None:
     """A goal id that is not one of our running goals is reported as unknown."""
     client = await make_client(robot)
-    report = await actions.cancel_goals(client, "/fibonacci", "not-a-goal-of-ours")
+    report = await goals.cancel_goals(client, "/fibonacci", "not-a-goal-of-ours")
     assert report.unknown_goal_id
     assert report.canceled_ours == []
 
@@ -272,13 +278,13 @@ async def test_a_ros1_goal_without_an_action_server_fails_with_a_clear_error(
     client = await make_client(sim_ros1)
     expected = r"no action server at /nowhere: no status messages on /nowhere/status within 0\.3 s "
     with pytest.raises(ActionError, match=expected):
-        await actions.run_goal(client, "/nowhere", ROS1_TYPE, {"order": 1}, timeout=0.3)
+        await goals.run_goal(client, "/nowhere", ROS1_TYPE, {"order": 1}, timeout=0.3)
 
 
 async def test_a_rejected_ros1_goal_ends_rejected(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
     """A goal the actionlib server rejects ends with status "rejected" (5)."""
     client = await make_client(sim_ros1)
-    outcome = await actions.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": -1}, timeout=5.0)
+    outcome = await goals.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": -1}, timeout=5.0)
     assert outcome.status == "rejected"
     assert outcome.status_code == 5
     assert not outcome.succeeded
@@ -290,7 +296,7 @@ async def test_cancelling_run_goal_cancels_the_ros1_goal(
     """Cancelling the task running a ROS 1 goal publishes a cancel for it before giving up."""
     client = await make_client(sim_ros1)
     run = asyncio.create_task(
-        actions.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=10.0)
+        goals.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=10.0)
     )
     await sim_ros1.wait_for(running_goal_with_feedback)
     run.cancel()
@@ -298,7 +304,7 @@ async def test_cancelling_run_goal_cancels_the_ros1_goal(
         await run
     await sim_ros1.wait_for(lambda world: all(g.finished for g in world.goals.values()))
     assert all(g.cancel_requested for g in sim_ros1.world.goals.values())
-    assert actions.running_goals(client) == []
+    assert goals.running_goals(client) == []
 
 
 async def test_two_clients_never_mint_the_same_goal_id(
@@ -315,10 +321,12 @@ async def test_every_goal_runs_on_a_connection_of_its_own_closed_afterwards(
 ) -> None:
     """While a goal runs the robot sees a second connection (its lane); it goes away with the goal."""
     client = await make_client(robot2)
-    goal = asyncio.create_task(client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": 8}, timeout=10.0))
+    goal = asyncio.create_task(
+        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": 8}, timeout=10.0)
+    )
     await robot2.wait_for(running_goal_with_feedback)
     assert robot2.connection_count == 2
-    assert (await goal).status == 4
+    assert (await goal).status_code == 4
     await robot2.wait_for(lambda _world: robot2.connection_count == 1)
 
 
@@ -326,10 +334,15 @@ async def test_a_plain_function_can_take_feedback(sim_ros2: SimulatedRobot, make
     """on_feedback may be a plain function as well as a coroutine function."""
     client = await make_client(sim_ros2)
     seen: list[dict[str, Any]] = []
-    result = await client.send_action_goal(
-        "/fibonacci", ROS2_TYPE, {"order": 3}, on_feedback=seen.append, timeout=5.0
+    result = await ros2.send_action_goal(
+        client,
+        "/fibonacci",
+        ROS2_TYPE,
+        {"order": 3},
+        on_feedback=lambda _goal, values: seen.append(values),
+        timeout=5.0,
     )
-    assert result.status == 4
+    assert result.status_code == 4
     assert seen
 
 
@@ -339,11 +352,11 @@ async def test_a_drop_fails_a_running_ros1_goal_with_connection_lost(
     """A ROS 1 goal followed over topics fails with ConnectionLostError when the connection drops."""
     client = await make_client(sim_ros1)
     run = asyncio.create_task(
-        actions.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=20.0)
+        goals.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=20.0)
     )
     await sim_ros1.wait_for(running_goal_with_feedback)
     await sim_ros1.drop_connections()
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(run, 5.0)
-    assert actions.running_goals(client) == []
-    assert client._subs == {}
+    assert goals.running_goals(client) == []
+    assert client.topics.subscriptions == {}

@@ -13,6 +13,7 @@ from client_harness import MakeClient, MakeSim
 from websockets.asyncio.server import ServerConnection, serve
 
 from rosbridge_mcp_server.errors import GoalTimeoutError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.goals import ros2
 
 
 async def test_fragmented_replies_and_messages_are_reassembled(
@@ -24,8 +25,8 @@ async def test_fragmented_replies_and_messages_are_reassembled(
     topics = await client.call_service("/rosapi/topics")
     assert "/chatter" in topics["topics"]
     assert (await client.wait_for_message("/chatter", "std_msgs/String", 3.0))["data"].startswith("Hello")
-    assert client._main is not None
-    assembler = client._main._decoder.assembler
+    assert client.session is not None
+    assembler = client.session.connection._decoder.assembler
     assert assembler.completed >= 2
     assert assembler.pending == 0
 
@@ -182,7 +183,9 @@ async def test_a_silent_goal_is_cancelled_on_the_main_connection_at_its_deadline
     bridge, url = recording_bridge
     client = await make_client(url)
     with pytest.raises(GoalTimeoutError) as caught:
-        await client.send_action_goal("/fibonacci", "example_interfaces/Fibonacci", {"order": 3}, timeout=0.2)
+        await ros2.send_action_goal(
+            client, "/fibonacci", "example_interfaces/Fibonacci", {"order": 3}, timeout=0.2
+        )
     assert caught.value.status is None
     goal_connection, goal = await bridge.wait_for_op("send_action_goal")
     cancel_connection, cancel = await bridge.wait_for_op("cancel_action_goal")

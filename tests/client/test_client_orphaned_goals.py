@@ -9,10 +9,11 @@ from collections.abc import Callable, Iterator
 import pytest
 from client_harness import MakeClient, MakeSim
 
-from rosbridge_mcp_server import actions
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.client import _client as client_module
 from rosbridge_mcp_server.errors import ConnectionLostError, GoalTimeoutError
+from rosbridge_mcp_server.robot import goals
+from rosbridge_mcp_server.robot.goals import registry as registry_module
+from rosbridge_mcp_server.robot.goals import ros2
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import PublishedMessage, World
 
@@ -71,11 +72,11 @@ class _CancelLog(logging.Handler):
 
 @pytest.fixture
 def cancel_log() -> Iterator[_CancelLog]:
-    """The client's and the actions' warnings (not the simulated robot's), for the duration of the test."""
+    """The client's and the goals' warnings (not the simulated robot's), for the duration of the test."""
     handler = _CancelLog()
     loggers = [
         logging.getLogger("rosbridge_mcp_server.client"),
-        logging.getLogger("rosbridge_mcp_server.actions"),
+        logging.getLogger("rosbridge_mcp_server.robot.goals"),
     ]
     for logger in loggers:
         logger.addHandler(handler)
@@ -105,7 +106,7 @@ async def start_long_goal(client: RosbridgeClient, robot: SimulatedRobot) -> tup
     """A long /fibonacci goal through run_goal, once it runs on the robot: its id and its task."""
     goal_id = client.new_goal_id("/fibonacci")
     task: asyncio.Task[object] = asyncio.create_task(
-        actions.run_goal(
+        goals.run_goal(
             client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=60.0, goal_id=goal_id
         )
     )
@@ -130,7 +131,7 @@ async def test_a_goal_running_at_a_drop_is_cancelled_on_the_robot_once_the_conne
     assert record.status == CANCELED[robot.dialect]
     assert len(record.sequence) < LONG_ORDER + 1
     await cancel_log.wait_for_goal(goal_id)
-    assert client.orphaned_goals() == []
+    assert goals.goals_of(client).cut_off() == []
 
 
 async def test_a_ros1_cancel_after_a_reconnect_is_published_again_a_moment_later(
@@ -150,7 +151,7 @@ async def test_a_ros1_cancel_after_a_reconnect_is_published_again_a_moment_later
     await robot.wait_for(lambda world: len(cancels(world)) >= 2, WAIT)
     first, second = cancels(robot.world)[:2]
     assert first.connection_id == second.connection_id
-    assert second.received_at - first.received_at >= client_module.ROS1_CANCEL_REPEAT_SECONDS * 0.9
+    assert second.received_at - first.received_at >= registry_module.ROS1_CANCEL_REPEAT_SECONDS * 0.9
 
 
 async def test_a_goal_that_finished_before_the_drop_is_not_cancelled(
@@ -159,7 +160,7 @@ async def test_a_goal_that_finished_before_the_drop_is_not_cancelled(
     """Only the goal still running at the drop gets a cancel after the reconnect, not one that had ended."""
     client = await make_client(robot)
     done_id = client.new_goal_id("/fibonacci")
-    outcome = await actions.run_goal(
+    outcome = await goals.run_goal(
         client, "/fibonacci", action_type_for(robot), {"order": 2}, timeout=WAIT, goal_id=done_id
     )
     assert outcome.succeeded
@@ -173,7 +174,7 @@ async def test_a_goal_that_finished_before_the_drop_is_not_cancelled(
     assert not robot.world.goals[done_id].cancel_requested
     cancels = [m.msg.get("id") for m in robot.world.published.get("/fibonacci/cancel", [])]
     assert done_id not in cancels
-    assert client.orphaned_goals() == []
+    assert goals.goals_of(client).cut_off() == []
 
 
 async def test_a_restarted_robot_that_lost_the_goal_gets_a_harmless_cancel_and_a_log_line(
@@ -189,8 +190,8 @@ async def test_a_restarted_robot_that_lost_the_goal_gets_a_harmless_cancel_and_a
     await client.wait_connected(WAIT)
     await cancel_log.wait_for_goal(goal_id)
     assert cancel_log.errors == []
-    assert client.orphaned_goals() == []
-    outcome = await actions.run_goal(client, "/fibonacci", action_type_for(robot), {"order": 1}, timeout=WAIT)
+    assert goals.goals_of(client).cut_off() == []
+    outcome = await goals.run_goal(client, "/fibonacci", action_type_for(robot), {"order": 1}, timeout=WAIT)
     assert outcome.succeeded
 
 
@@ -198,15 +199,15 @@ async def test_a_goal_orphaned_too_long_ago_is_forgotten_without_a_cancel(
     sim_ros2: SimulatedRobot, make_client: MakeClient, cancel_log: _CancelLog, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Past the age limit a surprise cancel would stop whatever the robot does now: it is logged, not sent."""
-    monkeypatch.setattr(client_module, "ORPHAN_MAX_AGE_SECONDS", 0.0)
+    monkeypatch.setattr(registry_module, "ORPHAN_MAX_AGE_SECONDS", 0.0)
     client = await make_client(sim_ros2)
     goal_id = client.new_goal_id("/fibonacci")
     await sim_ros2.stop()
-    client.remember_orphaned_goal("/fibonacci", goal_id, 2)
+    goals.goals_of(client).remember_cut_off("/fibonacci", goal_id, 2)
     await sim_ros2.start()
     await client.wait_connected(WAIT)
     await cancel_log.wait_for(f"Not cancelling goal {goal_id}")
-    assert client.orphaned_goals() == []
+    assert goals.goals_of(client).cut_off() == []
     assert not any(goal_id in line for line in cancel_log.lines)
 
 
@@ -217,10 +218,10 @@ async def test_at_most_a_bounded_number_of_orphaned_goals_are_remembered(
     client = await make_client(sim_ros2)
     await sim_ros2.stop()
     await client.wait_disconnected(WAIT)
-    ids = [f"goal-{n}" for n in range(client_module.ORPHAN_LIMIT + 1)]
+    ids = [f"goal-{n}" for n in range(registry_module.ORPHAN_LIMIT + 1)]
     for goal_id in ids:
-        client.remember_orphaned_goal("/fibonacci", goal_id, 2)
-    assert [orphan.goal_id for orphan in client.orphaned_goals()] == ids[1:]
+        goals.goals_of(client).remember_cut_off("/fibonacci", goal_id, 2)
+    assert [orphan.goal_id for orphan in goals.goals_of(client).cut_off()] == ids[1:]
 
 
 @pytest.fixture(params=["jazzy", "humble"])
@@ -242,7 +243,7 @@ async def test_when_only_the_goals_lane_drops_the_cancel_goes_out_at_once_on_the
     assert caught.value.goal_cancel == "sent"
     await robot2.wait_for(lambda world: world.goals[goal_id].finished, WAIT)
     assert robot2.world.goals[goal_id].status == CANCELED["ros2"]
-    assert client.orphaned_goals() == []
+    assert goals.goals_of(client).cut_off() == []
     assert client.connections_made == 1
     assert main_id in robot2.bridge.connections
     assert cancel_log.lines == []
@@ -256,7 +257,9 @@ async def test_a_goal_timing_out_while_only_its_lane_is_up_is_remembered_only_on
     client = await make_client(robot2, reconnect_min=60.0, reconnect_max=60.0)
     goal_id = client.new_goal_id("/fibonacci")
     task = asyncio.create_task(
-        client.send_action_goal("/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=1.0, goal_id=goal_id)
+        ros2.send_action_goal(
+            client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=1.0, goal_id=goal_id
+        )
     )
     await robot2.wait_for(running_with_feedback(goal_id), WAIT)
     main_id, _lane_id = sorted(robot2.bridge.connections)
@@ -266,8 +269,8 @@ async def test_a_goal_timing_out_while_only_its_lane_is_up_is_remembered_only_on
         await asyncio.wait_for(task, WAIT)
     if robot2.bridge.config.in_order:
         assert caught.value.status is None
-        assert [orphan.goal_id for orphan in client.orphaned_goals()] == [goal_id]
+        assert [orphan.goal_id for orphan in goals.goals_of(client).cut_off()] == [goal_id]
         assert not robot2.world.goals[goal_id].cancel_requested
     else:
         assert caught.value.status == CANCELED["ros2"]
-        assert client.orphaned_goals() == []
+        assert goals.goals_of(client).cut_off() == []

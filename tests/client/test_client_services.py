@@ -64,8 +64,8 @@ async def test_a_slow_service_times_out_on_ros1_with_request_timeout_error(
     client = await make_client(sim_ros1)
     with pytest.raises(RequestTimeoutError, match=r"service /slow_service within 0\.3 s"):
         await client.call_service("/slow_service", timeout=0.3)
-    assert client._main is not None
-    assert client._main.pending == {}
+    assert client.session is not None
+    assert client.session.connection.pending == {}
 
 
 @pytest.mark.parametrize("in_order", [False, True], ids=["jazzy", "humble"])
@@ -137,12 +137,12 @@ async def test_cancelling_a_call_leaves_no_pending_entry(
     client = await make_client(sim_ros2)
     call = asyncio.create_task(client.call_service("/slow_service", timeout=10.0))
     await sim_ros2.wait_for(lambda world: world.service_calls.get("/slow_service", 0) >= 1)
-    assert client._main is not None
-    assert len(client._main.pending) == 1
+    assert client.session is not None
+    assert len(client.session.connection.pending) == 1
     call.cancel()
     with pytest.raises(asyncio.CancelledError):
         await call
-    assert client._main.pending == {}
+    assert client.session.connection.pending == {}
 
 
 async def test_ros1_service_failures_carry_the_bridge_text(

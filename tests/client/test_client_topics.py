@@ -100,7 +100,7 @@ async def test_publish_advertises_once_and_reuses_the_advertisement(
         await client.publish("/chatter_in", "std_msgs/String", {"data": f"m{n}"})
     await sim_ros2.wait_for(lambda world: len(world.published.get("/chatter_in", ())) == 5)
     advertisements = [c.advertisements.get("/chatter_in") for c in sim_ros2.bridge.connections.values()]
-    assert [ids for ids in advertisements if ids] == [[client._adverts["/chatter_in"].id]]
+    assert [ids for ids in advertisements if ids] == [[client.topics.adverts["/chatter_in"].id]]
     await client.unadvertise("/chatter_in")
     await client.call_service("/rosapi/topics")  # the bridge handles our frames in order: a barrier
     assert all("/chatter_in" not in c.advertisements for c in sim_ros2.bridge.connections.values())
@@ -110,7 +110,7 @@ async def test_wait_for_message_returns_the_next_message(client: RosbridgeClient
     """wait_for_message subscribes, returns one message, and unsubscribes."""
     msg = await client.wait_for_message("/chatter", "std_msgs/String", 3.0)
     assert "data" in msg
-    assert client._subs == {}
+    assert client.topics.subscriptions == {}
 
 
 async def test_wait_for_message_times_out_on_a_silent_topic(client: RosbridgeClient) -> None:
@@ -189,7 +189,7 @@ async def test_subscribing_while_disconnected_raises_not_connected(make_client: 
     with pytest.raises(NotConnectedError):
         async with client.subscribe("/chatter", "std_msgs/String"):
             pass
-    assert client._subs == {}
+    assert client.topics.subscriptions == {}
 
 
 async def test_a_second_concurrent_consumer_of_one_subscription_is_refused(client: RosbridgeClient) -> None:

@@ -2,13 +2,18 @@
 
 ``RosbridgeClient`` keeps one shared WebSocket to the bridge (reconnecting in the background), plus
 short-lived lanes for goals and, on bridges that handle a connection in order (Humble), for service
-calls. ``Subscription`` is one listener on a topic.
+calls. By job: ``client.py`` (lifecycle, the connect loop, the current ``Session``), ``session.py``
+(one connection and what was learnt on it), ``detect.py`` (ROS version detection), ``services.py``
+(service calls), ``topics.py`` and ``subscription.py`` (advertisements, subscriptions), ``lanes.py`` and
+``goal_lane.py`` (extra connections), ``connection.py`` (one WebSocket and its reader).
 """
 
 from __future__ import annotations
 
-from rosbridge_mcp_server.client._client import ActionResult, GoalHandle, OrphanedGoal, RosbridgeClient
-from rosbridge_mcp_server.client._subscription import Subscription
+from rosbridge_mcp_server.client.client import RosbridgeClient, SessionWatcher
+from rosbridge_mcp_server.client.goal_lane import GoalLane
+from rosbridge_mcp_server.client.session import Session
+from rosbridge_mcp_server.client.subscription import Subscription
 from rosbridge_mcp_server.wire.dialect import RosInfo
 
-__all__ = ["ActionResult", "GoalHandle", "OrphanedGoal", "RosInfo", "RosbridgeClient", "Subscription"]
+__all__ = ["GoalLane", "RosInfo", "RosbridgeClient", "Session", "SessionWatcher", "Subscription"]

@@ -16,8 +16,8 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
-from rosbridge_mcp_server.actions import GoalOutcome, run_goal
 from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.goals import Goal, GoalFeedback, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
@@ -35,7 +35,6 @@ __all__ = [
     "Acting",
     "Answer",
     "AskPerson",
-    "FeedbackCallback",
     "Guard",
     "Published",
     "ServiceReply",
@@ -168,8 +167,8 @@ async def publish_once(
     body = adapt_message(message, info.version)
     require_fit(
         body,
-        bridge_type,
         typedefs,
+        type_name=bridge_type,
         ros_version=info.version,
         nothing_sent="Nothing was published",
         looks_like=f"A {bridge_type} message",
@@ -239,14 +238,8 @@ async def call_service(
     if graph_type:
         typedefs = await ctx.graph.service_request_typedefs(srv_type)
         if typedefs:
-            require_fit(
-                body,
-                next(iter(typedefs)),
-                typedefs,
-                ros_version=info.version,
-                nothing_sent="The service was not called",
-                looks_like="A request",
-            )
+            fit = "The service was not called"
+            require_fit(body, typedefs, ros_version=info.version, nothing_sent=fit, looks_like="A request")
 
     act = await _approved(ctx, Act(tool, "service", name, srv_type, body))
     try:
@@ -268,9 +261,6 @@ async def call_service(
 
 # --- action goals -----------------------------------------------------------------------------------------
 
-#: Told of each feedback of a running goal: (goal id, feedback number from 1, feedback message).
-FeedbackCallback = Callable[[str, int, dict[str, Any]], Awaitable[None] | None]
-
 
 async def send_goal(
     ctx: Acting,
@@ -280,12 +270,12 @@ async def send_goal(
     action_type: str,
     goal: dict[str, Any],
     timeout: float,
-    on_feedback: FeedbackCallback | None = None,
-) -> GoalOutcome:
+    on_feedback: GoalFeedback | None = None,
+) -> Goal:
     """Check the goal against the action server's type, run it until it ends, and return how it ended.
 
-    *on_feedback* gets the goal's id, the feedback's number (from 1) and the feedback, so that a caller can
-    name the goal (to cancel it) while it runs.
+    *on_feedback* gets the running goal (``goal_id``, ``feedback_count``) and each feedback, so that a caller
+    can name the goal (to cancel it) while it runs.
     """
     name = absolute_name(action, "action")
     info = await ctx.graph.ros_info()
@@ -294,34 +284,15 @@ async def send_goal(
     typedefs = await ctx.graph.action_goal_typedefs(action_type)
     if typedefs:
         require_fit(
-            goal,
-            next(iter(typedefs)),
-            typedefs,
-            ros_version=info.version,
-            nothing_sent="No goal was sent",
-            looks_like="A goal",
+            goal, typedefs, ros_version=info.version, nothing_sent="No goal was sent", looks_like="A goal"
         )
 
     act = await _approved(ctx, Act(tool, "action", name, wire_type, goal))
-    goal_id = ctx.client.new_goal_id(act.name)
-
-    async def feedback(index: int, values: dict[str, Any]) -> None:
-        if on_feedback is not None:
-            maybe = on_feedback(goal_id, index, values)
-            if maybe is not None:
-                await maybe
-
-    outcome: GoalOutcome = await _carry_out(
+    outcome: Goal = await _carry_out(
         ctx,
         act,
         lambda: run_goal(
-            ctx.client,
-            act.name,
-            action_type,
-            act.payload,
-            timeout=timeout,
-            on_feedback=feedback,
-            goal_id=goal_id,
+            ctx.client, act.name, action_type, act.payload, timeout=timeout, on_feedback=on_feedback
         ),
     )
     return outcome

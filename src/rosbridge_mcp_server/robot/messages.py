@@ -381,18 +381,21 @@ def _example_scalar(base: str, typedefs: Mapping[str, TypeDef], ros_version: int
 
 def require_fit(
     message: Any,
-    type_name: str,
     typedefs: Mapping[str, TypeDef],
     *,
+    type_name: str | None = None,
     ros_version: int,
     nothing_sent: str,
     looks_like: str,
 ) -> None:
-    """Check *message*; one that does not fit is a :class:`NotSentError` with an example of the type.
+    """Check *message* against *type_name* (default: the first of *typedefs*, the one rosapi asked about).
 
-    The text reads ``<the wrong fields>. <nothing_sent>. <looks_like> looks like <example>.``, e.g.
-    ``... Nothing was published. A geometry_msgs/msg/Twist message looks like {...}.``
+    One that does not fit is a :class:`NotSentError` with an example of the type, reading ``<the wrong
+    fields>. <nothing_sent>. <looks_like> looks like <example>.``, e.g. ``... Nothing was published. A
+    geometry_msgs/msg/Twist message looks like {...}.``
     """
+    if type_name is None:
+        type_name = next(iter(typedefs))
     try:
         check_message(message, type_name, typedefs, ros_version=ros_version)
     except InvalidMessageError as exc:

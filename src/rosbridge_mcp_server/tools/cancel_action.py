@@ -6,8 +6,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.actions import CancelReport, cancel_goals
 from rosbridge_mcp_server.errors import NotSentError
+from rosbridge_mcp_server.robot.goals import CancelReport, cancel_goals
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolSpec
 

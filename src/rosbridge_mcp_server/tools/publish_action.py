@@ -6,8 +6,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.actions import UNCONFIRMED_STATUS, GoalOutcome
 from rosbridge_mcp_server.robot.acting import send_goal
+from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -98,8 +98,9 @@ async def run(
     body = parse_json_object(goal, "goal", _EXAMPLE)
 
     # Every progress message names the goal: a client can cancel it by id while this call still waits.
-    async def on_feedback(goal_id: str, index: int, feedback: dict[str, Any]) -> None:
-        message = f"goal {goal_id} feedback {index}: {compact_json(feedback, 300)}"
+    async def on_feedback(running: Goal, feedback: dict[str, Any]) -> None:
+        index = running.feedback_count
+        message = f"goal {running.goal_id} feedback {index}: {compact_json(feedback, 300)}"
         await ctx.report_progress(float(index), None, message)
 
     outcome = await send_goal(
@@ -114,7 +115,7 @@ async def run(
     return _answer(outcome)
 
 
-def _answer(outcome: GoalOutcome) -> ToolAnswer:
+def _answer(outcome: Goal) -> ToolAnswer:
     wire_type = outcome.action_type
     last = list(outcome.last_feedback)
     data = GoalAnswer(

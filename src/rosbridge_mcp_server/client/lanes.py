@@ -12,7 +12,7 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable
 
-from rosbridge_mcp_server.client._connection import Connection
+from rosbridge_mcp_server.client.connection import Connection
 from rosbridge_mcp_server.errors import RequestTimeoutError
 
 __all__ = ["LanePool"]

@@ -5,14 +5,22 @@ from __future__ import annotations
 import asyncio
 from collections import deque
 from types import TracebackType
-from typing import TYPE_CHECKING, Any, Self
+from typing import Any, Protocol, Self
 
 from rosbridge_mcp_server.errors import NotConnectedError, RequestTimeoutError
 
-if TYPE_CHECKING:
-    from rosbridge_mcp_server.client._client import RosbridgeClient
+__all__ = ["Subscription", "SubscriptionHost"]
 
-__all__ = ["Subscription"]
+
+class SubscriptionHost(Protocol):
+    """What a subscription needs from the client's topics: send its ``subscribe`` and ``unsubscribe``."""
+
+    @property
+    def url(self) -> str: ...
+
+    async def open_subscription(self, sub: Subscription) -> None: ...
+
+    async def close_subscription(self, sub: Subscription) -> None: ...
 
 
 class Subscription:
@@ -28,7 +36,7 @@ class Subscription:
 
     def __init__(
         self,
-        client: RosbridgeClient,
+        host: SubscriptionHost,
         topic: str,
         msg_type: str | None,
         *,
@@ -48,15 +56,16 @@ class Subscription:
         self.dropped = 0
         self.received = 0
         self.wire_type: str | None = None
-        self._client = client
+        self._host = host
         self._queue: deque[dict[str, Any]] = deque()
         self._waiter: asyncio.Future[None] | None = None
         self.is_open = False
         self.is_closed = False
 
-    # --- called by the client -------------------------------------------------------------------
+    # --- fed by the client's topics ------------------------------------------------------------
 
-    def _push(self, msg: dict[str, Any]) -> None:
+    def deliver(self, msg: dict[str, Any]) -> None:
+        """A message arrived on the topic: queue it (dropping the oldest beyond ``max_queue``)."""
         self.received += 1
         if len(self._queue) >= self.max_queue:
             self._queue.popleft()
@@ -66,7 +75,8 @@ class Subscription:
         if waiter is not None and not waiter.done():
             waiter.set_result(None)
 
-    def _interrupt(self, exc: BaseException) -> None:
+    def fail(self, exc: BaseException) -> None:
+        """Raise *exc* in the consumer waiting in :meth:`get`, if any (the subscription stays usable)."""
         waiter = self._waiter
         if waiter is not None and not waiter.done():
             waiter.set_exception(exc)
@@ -76,9 +86,9 @@ class Subscription:
     async def open(self) -> Self:
         """Send the ``subscribe``; raises :class:`NotConnectedError` if there is no connection."""
         if self.is_closed:
-            raise NotConnectedError(self._client.url, f"the subscription to {self.topic} was closed")
+            raise NotConnectedError(self._host.url, f"the subscription to {self.topic} was closed")
         if not self.is_open:
-            await self._client._open_subscription(self)
+            await self._host.open_subscription(self)
             self.is_open = True
         return self
 
@@ -89,9 +99,9 @@ class Subscription:
         self.is_closed = True
         was_open = self.is_open
         self.is_open = False
-        self._interrupt(NotConnectedError(self._client.url, f"the subscription to {self.topic} was closed"))
+        self.fail(NotConnectedError(self._host.url, f"the subscription to {self.topic} was closed"))
         if was_open:
-            await self._client._close_subscription(self)
+            await self._host.close_subscription(self)
 
     async def __aenter__(self) -> Self:
         return await self.open()
@@ -114,7 +124,7 @@ class Subscription:
         if self._queue:
             return self._queue.popleft()
         if self.is_closed:
-            raise NotConnectedError(self._client.url, f"the subscription to {self.topic} was closed")
+            raise NotConnectedError(self._host.url, f"the subscription to {self.topic} was closed")
         if self._waiter is not None and not self._waiter.done():
             # One consumer per subscription: a second waiter would silently starve the first.
             raise RuntimeError(f"another task is already waiting on this subscription to {self.topic}")

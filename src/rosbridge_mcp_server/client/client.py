@@ -1,0 +1,444 @@
+"""``RosbridgeClient``: one shared WebSocket, background reconnects, lanes for in-order bridges."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+import logging
+import random
+from collections.abc import Coroutine
+from types import TracebackType
+from typing import Any, Protocol, Self
+
+from rosbridge_mcp_server.client.connection import Connection, open_connection
+from rosbridge_mcp_server.client.detect import detect
+from rosbridge_mcp_server.client.goal_lane import GoalLane
+from rosbridge_mcp_server.client.lanes import LanePool
+from rosbridge_mcp_server.client.services import bridge_timeout, call_on, call_on_lane
+from rosbridge_mcp_server.client.session import Session
+from rosbridge_mcp_server.client.subscription import Subscription
+from rosbridge_mcp_server.client.topics import Topics
+from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
+from rosbridge_mcp_server.wire import protocol
+from rosbridge_mcp_server.wire.dialect import RosInfo
+
+__all__ = ["RosbridgeClient", "SessionWatcher"]
+
+logger = logging.getLogger("rosbridge_mcp_server.client")
+
+
+class SessionWatcher(Protocol):
+    """Told when a session starts and before the client closes (``robot/goals`` cancels goals then)."""
+
+    def session_started(self, session: Session) -> None:
+        """A new main connection is up (called in the connect loop: start tasks, do not wait)."""
+
+    async def client_closing(self, session: Session | None) -> None:
+        """``close()`` is about to close every socket; *session* is the open one, if any."""
+
+
+class RosbridgeClient:
+    """An asyncio client for a rosbridge v2 server (ROS 1 0.11.x, ROS 2 Humble…Rolling).
+
+    One main WebSocket is shared by every caller; a reader task routes frames and replies are
+    matched by id. The connection is kept up in the background with exponential backoff. While
+    disconnected every call raises :class:`NotConnectedError` at once: nothing is queued and
+    nothing is replayed (a stale velocity command is a safety bug); only subscriptions and
+    advertisements still wanted are restored after a reconnect.
+    """
+
+    def __init__(
+        self,
+        url: str,
+        *,
+        connect_timeout: float = 5.0,
+        request_timeout: float = 10.0,
+        reconnect_min: float = 0.2,
+        reconnect_max: float = 5.0,
+        lane_cap: int = 16,
+        lane_idle_seconds: float = 30.0,
+    ) -> None:
+        self.url = url
+        self.connect_timeout = connect_timeout
+        self.request_timeout = request_timeout
+        self.reconnect_min = reconnect_min
+        self.reconnect_max = max(reconnect_max, reconnect_min)
+        self._ids = protocol.IdMinter()
+        self._session: Session | None = None
+        self._last_reason: str | None = "not started"
+        self._runner: asyncio.Task[None] | None = None
+        self._closing = False
+        self._closed = False
+        self._attempt_done: asyncio.Event | None = None
+        self._connected_event = asyncio.Event()
+        self._disconnected_event = asyncio.Event()
+        self._disconnected_event.set()
+        self._watchers: list[SessionWatcher] = []
+        self._goal_lanes: set[GoalLane] = set()
+        self._background: set[asyncio.Task[Any]] = set()
+        self._lanes = LanePool(
+            self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
+        )
+        self.topics = Topics(url, self._ids, lambda: self.session, self._wait_session)
+        self.connections_made = 0
+        self._lane_numbers = itertools.count(1)
+
+    # --- lifecycle --------------------------------------------------------------------------------
+
+    @property
+    def connected(self) -> bool:
+        """The main connection is open and the bridge's flavour is known."""
+        return self._session is not None and self._session.is_open
+
+    @property
+    def session(self) -> Session | None:
+        """The current session (main connection and what is known of its bridge), or None while down."""
+        session = self._session
+        return session if session is not None and session.is_open else None
+
+    @property
+    def closed(self) -> bool:
+        """``close()`` was called."""
+        return self._closed
+
+    @property
+    def lanes(self) -> LanePool:
+        """The pool of single-call lanes (for diagnostics)."""
+        return self._lanes
+
+    def watch(self, watcher: SessionWatcher) -> None:
+        """Tell *watcher* of every new session and of ``close()``."""
+        self._watchers.append(watcher)
+
+    async def start(self) -> None:
+        """Start the background connect/reconnect loop; returns at once."""
+        if self._closed:
+            raise RuntimeError("this RosbridgeClient is closed")
+        if self._runner is not None:
+            return
+        # Marks an attempt as in progress before the loop runs, so a call right after start()
+        # waits for the first attempt instead of failing.
+        self._attempt_done = asyncio.Event()
+        self._runner = asyncio.create_task(self._run(), name=f"rosbridge connect loop ({self.url})")
+
+    async def __aenter__(self) -> Self:
+        await self.start()
+        return self
+
+    async def __aexit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.close()
+
+    async def close(self) -> None:
+        """Let watchers cancel what runs, unadvertise, close every socket. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        self._closing = True
+        session = self.session
+        for watcher in self._watchers:
+            await watcher.client_closing(session)
+        if session is not None:
+            await self.topics.unadvertise_all(session)
+        if self._runner is not None:
+            self._runner.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._runner
+        lanes = self._lanes.close_all() + [lane.connection for lane in self._goal_lanes]
+        self._goal_lanes.clear()
+        await asyncio.gather(*(lane.aclose() for lane in lanes), return_exceptions=True)
+        main = self._session.connection if self._session is not None else None
+        if main is not None:
+            await main.aclose()
+        self._set_disconnected(main, "the client was closed")
+        self.topics.close_all(NotConnectedError(self.url, "the client was closed"))
+        if self._background:
+            await asyncio.gather(*list(self._background), return_exceptions=True)
+
+    async def wait_connected(self, timeout: float) -> None:
+        """Wait until connected; raises :class:`NotConnectedError` naming the URL and last reason."""
+        if self.connected:
+            return
+        if self._closed:
+            raise NotConnectedError(self.url, "the client is closed")
+        try:
+            async with asyncio.timeout(timeout):
+                await self._connected_event.wait()
+        except TimeoutError:
+            raise NotConnectedError(
+                self.url, f"no connection within {timeout:g} s; last error: {self._last_reason}"
+            ) from None
+
+    async def wait_disconnected(self, timeout: float) -> None:
+        """Wait until the main connection is down (diagnostics and tests); raises TimeoutError."""
+        async with asyncio.timeout(timeout):
+            await self._disconnected_event.wait()
+
+    # --- the connect loop ---------------------------------------------------------------------------
+
+    async def _run(self) -> None:
+        delay = self.reconnect_min
+        failures = 0
+        while not self._closing:
+            if self._attempt_done is None or self._attempt_done.is_set():
+                self._attempt_done = asyncio.Event()
+            attempt_done = self._attempt_done
+            conn: Connection | None = None
+            try:
+                conn = await open_connection(
+                    self.url, "main", self.connect_timeout, self.topics.deliver, self.request_timeout
+                )
+                info = await detect(
+                    conn, self._ids, self.url, min(self.connect_timeout, self.request_timeout)
+                )
+                session = Session(conn, info, self.connections_made + 1)
+                await self.topics.restore(session)
+            except asyncio.CancelledError:
+                # close() cancelled us mid-setup: the half-set-up socket is not the session's, so
+                # nobody else would close it.
+                if conn is not None:
+                    await conn.aclose()
+                raise
+            except NotConnectedError as exc:
+                self._last_reason = exc.reason
+                if conn is not None:
+                    await conn.aclose()
+                failures += 1
+                if failures == 1:
+                    logger.warning(
+                        "Cannot reach rosbridge at %s (%s); retrying in the background", self.url, exc.reason
+                    )
+                else:
+                    logger.debug("rosbridge at %s still unreachable (%s)", self.url, exc.reason)
+            except Exception as exc:
+                self._last_reason = f"{type(exc).__name__}: {exc}"
+                if conn is not None:
+                    await conn.aclose()
+                failures += 1
+                logger.warning("Setting up the connection to %s failed: %s", self.url, self._last_reason)
+            else:
+                self._session = session
+                self._last_reason = None
+                self.connections_made += 1
+                self._disconnected_event.clear()
+                self._connected_event.set()
+                attempt_done.set()
+                logger.info(
+                    "%s rosbridge at %s: %s",
+                    "Reconnected to" if session.number > 1 else "Connected to",
+                    self.url,
+                    info.describe(),
+                )
+                failures = 0
+                for watcher in self._watchers:
+                    watcher.session_started(session)
+                delay = self.reconnect_min
+                await conn.closed.wait()
+                reason = conn.close_reason or "the connection closed"
+                self._set_disconnected(conn, reason)
+                if not self._closing:
+                    logger.warning(
+                        "Lost the connection to rosbridge at %s (%s); reconnecting", self.url, reason
+                    )
+            finally:
+                attempt_done.set()
+            sleep = random.uniform(delay / 2, delay)
+            delay = min(delay * 2, self.reconnect_max)
+            # No attempt is in progress while we sleep: calls fail at once instead of waiting.
+            await asyncio.sleep(sleep)
+
+    def _set_disconnected(self, conn: Connection | None, reason: str) -> None:
+        if conn is not None and self._session is not None and self._session.connection is conn:
+            self._session = None
+            self._last_reason = reason
+        self._connected_event.clear()
+        self._disconnected_event.set()
+        # Idle lanes belong to the old bridge session; busy ones fail on their own when it is gone.
+        self._lanes.drop_idle()
+        self.topics.fail_all(ConnectionLostError(self.url, "messages"))
+
+    async def _wait_session(self, deadline: float | None = None) -> Session:
+        """The open session, waiting only for a connection attempt already in progress."""
+        session = self.session
+        if session is not None:
+            return session
+        if self._closed:
+            raise NotConnectedError(self.url, "the client is closed")
+        attempt = self._attempt_done
+        if attempt is not None and not attempt.is_set():
+            loop = asyncio.get_running_loop()
+            until = loop.time() + self.connect_timeout
+            if deadline is not None:
+                until = min(until, deadline)
+            try:
+                async with asyncio.timeout_at(until):
+                    await attempt.wait()
+            except TimeoutError:
+                pass
+            session = self.session
+            if session is not None:
+                return session
+        raise NotConnectedError(self.url, self._last_reason)
+
+    def require_session(self) -> Session:
+        """The open session, or :class:`NotConnectedError` at once (for sends that must never wait)."""
+        session = self.session
+        if session is None:
+            raise NotConnectedError(self.url, self._last_reason)
+        return session
+
+    async def ros_info(self) -> RosInfo:
+        """What the bridge is: ROS version and distro, detected once per connection."""
+        return (await self._wait_session()).info
+
+    # --- background helpers -------------------------------------------------------------------------
+
+    def run_in_background(self, coro: Coroutine[Any, Any, Any], name: str) -> asyncio.Task[Any]:
+        """Run *coro* as a task the client keeps (and waits for on ``close()``)."""
+        task = asyncio.get_running_loop().create_task(coro, name=name)
+        self._background.add(task)
+        task.add_done_callback(self._background.discard)
+        return task
+
+    def _close_in_background(self, conn: Connection) -> None:
+        self.run_in_background(conn.aclose(), f"close {conn.name}")
+
+    async def _open_lane(self, timeout: float) -> Connection:
+        return await open_connection(
+            self.url,
+            f"lane {next(self._lane_numbers)}",
+            min(timeout, self.connect_timeout),
+            send_timeout=self.request_timeout,
+        )
+
+    # --- services -----------------------------------------------------------------------------------
+
+    async def call_service(
+        self,
+        service: str,
+        args: dict[str, Any] | list[Any] | None = None,
+        *,
+        timeout: float | None = None,
+        isolated: bool | None = None,
+    ) -> Any:
+        """Call a ROS service and return its response fields (``values``).
+
+        Runs on the shared connection, or on a lane of its own when the bridge may handle one
+        connection in order, when another call is in flight on a ROS 1 connection (see
+        :attr:`RosInfo.one_call_per_connection`), or when *isolated* is true. Raises :class:`ServiceError`
+        with the bridge's text, :class:`RequestTimeoutError`, :class:`ConnectionLostError`,
+        :class:`NotConnectedError`.
+        """
+        t = self.request_timeout if timeout is None else timeout
+        session = self._session
+        if session is None or not session.is_open:
+            session = await self._wait_session(asyncio.get_running_loop().time() + t)
+        if isolated or (
+            isolated is None
+            and (session.lanes_by_default or (session.spread_calls and session.connection.pending))
+        ):
+            return await call_on_lane(
+                self._lanes, self._ids, service, args, t, send_timeout=session.send_service_timeout
+            )
+        return await call_on(
+            session.connection,
+            self._ids,
+            service,
+            args,
+            t,
+            bridge_timeout=bridge_timeout(t) if session.send_service_timeout else None,
+        )
+
+    # --- topics -------------------------------------------------------------------------------------
+
+    async def advertise(
+        self, topic: str, msg_type: str, *, latch: bool = False, queue_size: int = 10
+    ) -> None:
+        """Advertise *topic* now (``publish`` does this on first use); restored after reconnects."""
+        await self.topics.advertise(
+            self.require_session(), topic, msg_type, latch=latch, queue_size=queue_size
+        )
+
+    async def publish(
+        self,
+        topic: str,
+        msg_type: str,
+        msg: dict[str, Any],
+        *,
+        latch: bool = False,
+        queue_size: int = 10,
+        session: Session | None = None,
+    ) -> None:
+        """Publish one message now, or raise :class:`NotConnectedError`. Never queued, never replayed.
+
+        The topic is advertised once (per topic and type) and the advertisement reused; time
+        fields are respelled for ROS 1, which ignores ``sec``/``nanosec``. With *session*, only on that
+        session (:class:`NotConnectedError` if it is gone).
+        """
+        await self.topics.publish(
+            session or self.require_session(), topic, msg_type, msg, latch=latch, queue_size=queue_size
+        )
+
+    async def unadvertise(self, topic: str) -> None:
+        """Stop advertising *topic* (our advertisement only)."""
+        await self.topics.unadvertise(topic)
+
+    def subscribe(
+        self,
+        topic: str,
+        msg_type: str | None = None,
+        *,
+        throttle_rate: int = 0,
+        queue_length: int = 0,
+        max_queue: int = 1000,
+    ) -> Subscription:
+        """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``)."""
+        return self.topics.subscribe(
+            topic, msg_type, throttle_rate=throttle_rate, queue_length=queue_length, max_queue=max_queue
+        )
+
+    async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:
+        """The next message on *topic*, within *timeout* seconds."""
+        async with self.subscribe(topic, msg_type, max_queue=1) as sub:
+            return await sub.get(timeout)
+
+    async def ping(self, timeout: float | None = None) -> float:
+        """Round-trip a WebSocket ping on the main connection; returns the seconds it took.
+
+        Proves the bridge reads the connection now: a frozen bridge, or a link that died without a close,
+        still takes frames into the socket buffer and would act on them whenever it wakes up.
+        :class:`RequestTimeoutError` if no pong within *timeout* (default ``request_timeout``),
+        :class:`NotConnectedError` when there is no connection.
+        """
+        session = self.require_session()
+        return await session.connection.ping(self.request_timeout if timeout is None else timeout)
+
+    # --- action goals: ids, lanes and the cancel op (what a goal means is robot/goals' job) ---------
+
+    def new_goal_id(self, action: str) -> str:
+        """A goal id unique across every client of the bridge (rosbridge's goal table is process-wide)."""
+        return self._ids.goal_id(action)
+
+    async def open_goal_lane(self, goal_id: str, what: str, timeout: float) -> GoalLane:
+        """A connection of its own for goal *goal_id*, opened within *timeout*; ``lane.close()`` after."""
+        try:
+            conn = await self._open_lane(timeout)
+        except NotConnectedError as exc:
+            raise NotConnectedError(self.url, f"could not open a lane for the goal: {exc.reason}") from None
+        lane = GoalLane(conn, goal_id, what, self._forget_goal_lane)
+        self._goal_lanes.add(lane)
+        return lane
+
+    def _forget_goal_lane(self, lane: GoalLane) -> None:
+        self._goal_lanes.discard(lane)
+        self._close_in_background(lane.connection)
+
+    async def cancel_action_goal(self, action: str, goal_id: str) -> None:
+        """Ask the bridge to cancel goal *goal_id*, on the main connection.
+
+        rosbridge keeps one goal table per process, so this reaches a goal running on a lane (or
+        on another client's connection) too. No reply comes; the goal's result says what happened.
+        """
+        await self.require_session().send(protocol.cancel_action_goal(action, id=goal_id))

@@ -1,0 +1,52 @@
+"""A goal's own lane: a WebSocket opened for one action goal, carrying its feedback and result, closed after.
+
+rosbridge 2.0.x (Humble) runs a goal inside the connection's one incoming thread until the goal ends, so a
+goal on the shared connection would block every other tool and its own cancel; a lane of its own keeps the
+main connection free. What a goal means (timeouts, cancels, what a drop leaves running) is ``robot/goals``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from rosbridge_mcp_server.client.connection import Connection, GoalStream
+from rosbridge_mcp_server.client.session import send_quietly
+
+__all__ = ["GoalLane"]
+
+
+class GoalLane:
+    """One goal's connection: frames for ``goal_id`` arrive in :meth:`next`."""
+
+    def __init__(
+        self, connection: Connection, goal_id: str, what: str, on_close: Callable[[GoalLane], None]
+    ) -> None:
+        self.connection = connection
+        self.goal_id = goal_id
+        self._stream = GoalStream(what)
+        self._on_close = on_close
+        connection.pending[goal_id] = self._stream
+
+    async def send(self, op: dict[str, Any]) -> None:
+        """Send an op on the lane (the goal itself)."""
+        await self.connection.send(op)
+
+    async def try_send(self, op: dict[str, Any]) -> bool:
+        """Send an op if the lane is open; False when it could not be sent."""
+        return await send_quietly(self.connection, op)
+
+    async def next(self) -> tuple[str, dict[str, Any]]:
+        """The next ``action_feedback`` or ``action_result`` frame, as ``(op, frame)``.
+
+        :class:`ConnectionLostError` when the lane drops (the goal keeps running on the robot).
+        """
+        item = await self._stream.queue.get()
+        if isinstance(item, BaseException):
+            raise item
+        return item
+
+    def close(self) -> None:
+        """Stop listening and close the lane in the background."""
+        self.connection.pending.pop(self.goal_id, None)
+        self._on_close(self)

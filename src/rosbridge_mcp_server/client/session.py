@@ -1,0 +1,84 @@
+"""One session with the bridge: the main connection and what was learnt on it, replaced whole on a reconnect.
+
+Whatever depends on the bridge behind the connection (its ROS version and distro, whether it may handle
+a connection in order, whether it honours a service call's ``timeout``) lives here, so a new connection
+can never inherit a fact about the old one: the client swaps the whole object.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from rosbridge_mcp_server.client.connection import Connection
+from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.wire.dialect import RosInfo
+
+__all__ = ["Session"]
+
+logger = logging.getLogger("rosbridge_mcp_server.client")
+
+
+class Session:
+    """The main connection to the bridge, with the bridge's :class:`RosInfo` detected on it."""
+
+    __slots__ = (
+        "connection",
+        "goals_block",
+        "info",
+        "lanes_by_default",
+        "number",
+        "send_service_timeout",
+        "spread_calls",
+    )
+
+    def __init__(self, connection: Connection, info: RosInfo, number: int) -> None:
+        self.connection = connection
+        self.info = info
+        #: 1 for the first connection of a client, 2 after the first reconnect, ...
+        self.number = number
+        # Derived once per connection, so the hot path does not recompute them.
+        self.lanes_by_default = info.may_be_in_order
+        self.goals_block = info.goals_may_block
+        self.spread_calls = info.one_call_per_connection
+        self.send_service_timeout = info.honours_service_timeout
+
+    @property
+    def is_open(self) -> bool:
+        """The connection is open (it may still be dying: only :meth:`confirm` proves the bridge reads it)."""
+        return self.connection.is_open
+
+    async def send(self, op: dict[str, Any]) -> None:
+        """Send one op on this session's connection; :class:`NotConnectedError` once it is closed."""
+        await self.connection.send(op)
+
+    async def try_send(self, op: dict[str, Any]) -> bool:
+        """Send one op if the connection is open; False (and nothing raised) when it could not be sent."""
+        return await send_quietly(self.connection, op)
+
+    async def confirm(self, timeout: float) -> bool:
+        """Whether the bridge has read everything sent on this session so far (a pong came back in time)."""
+        if not self.connection.is_open:
+            return False
+        try:
+            await self.connection.ping(timeout)
+        except RosbridgeError:
+            return False
+        except Exception:
+            logger.debug("ping on %s failed", self.connection.name, exc_info=True)
+            return False
+        return True
+
+
+async def send_quietly(conn: Connection | None, op: dict[str, Any]) -> bool:
+    """Send *op* on *conn* if it is open; False when it could not be sent (logged at debug level)."""
+    if conn is None or not conn.is_open:
+        return False
+    try:
+        await conn.send(op)
+    except RosbridgeError:
+        return False
+    except Exception:
+        logger.debug("sending %s failed", op.get("op"), exc_info=True)
+        return False
+    return True

@@ -1,0 +1,168 @@
+"""ROS 2 goals: rosbridge's action ops, each goal on a lane of its own, cancels on the main connection.
+
+A goal runs on its own lane so that a Humble bridge that runs it inside the connection's thread still hears
+its cancel, which goes on the main connection: rosbridge keeps one goal table per process, not per connection.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.errors import (
+    ActionError,
+    ConnectionLostError,
+    GoalTimeoutError,
+)
+from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
+from rosbridge_mcp_server.robot.goals.registry import CANCEL_CONFIRM_SECONDS, GoalRegistry, goals_of
+from rosbridge_mcp_server.wire import protocol
+from rosbridge_mcp_server.wire.dialect import action_type_names
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import GoalLane, RosbridgeClient
+
+__all__ = ["run", "send_action_goal"]
+
+
+async def send_action_goal(
+    client: RosbridgeClient,
+    action: str,
+    action_type: str,
+    goal: dict[str, Any],
+    *,
+    timeout: float,
+    on_feedback: GoalFeedback | None = None,
+    goal_id: str | None = None,
+) -> Goal:
+    """Send a ROS 2 goal on a lane of its own and wait for its result; returns the goal, ended.
+
+    Raises :class:`ActionError` when the bridge refuses the goal ("No action server available", ...),
+    :class:`GoalTimeoutError` after *timeout* (a cancel was sent; the error carries the canceled result if
+    it came within a short grace), :class:`ConnectionLostError` when the goal's lane drops (the goal keeps
+    running on the robot, so it is cancelled on the main connection, or as soon as a connection is back).
+    If the awaiting task is cancelled, the goal is cancelled too before the task ends.
+    """
+    gid = goal_id if goal_id is not None else client.new_goal_id(action)
+    with goals_of(client).tracking(Goal(gid, action, action_type_names(action_type).ros2, 2)) as record:
+        return await run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
+
+
+async def run(
+    client: RosbridgeClient,
+    record: Goal,
+    goal: dict[str, Any],
+    *,
+    timeout: float,
+    on_feedback: GoalFeedback | None,
+) -> Goal:
+    """Run *record* (a goal the registry tracks); see :func:`send_action_goal`."""
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + timeout
+    action, gid, wire_type = record.action, record.goal_id, record.action_type
+    registry = goals_of(client)
+    session = client.require_session()
+    if not session.info.has_action_ops:
+        raise ActionError(action, "this bridge runs ROS 1, which has no action ops; use actionlib topics")
+    # Whether a cancel on the goal's own lane is read in time depends on the bridge the goal went to.
+    in_order = session.goals_block
+    what = f"action goal {gid} on {action}"
+    lane: GoalLane | None = None
+    sent = False
+    finished = False
+    try:
+        lane = await client.open_goal_lane(gid, what, max(deadline - loop.time(), 0.05))
+        await lane.send(protocol.send_action_goal(action, wire_type, goal, id=gid, feedback=True))
+        sent = True
+        try:
+            async with asyncio.timeout_at(deadline):
+                frame = await _follow(lane, record, on_feedback)
+        except TimeoutError:
+            await asyncio.shield(_cancel_quietly(client, registry, record, lane, in_order))
+            late: dict[str, Any] | None = None
+            try:
+                async with asyncio.timeout(CANCEL_GRACE_SECONDS):
+                    late = await _follow(lane, record, None)
+            except (TimeoutError, ConnectionLostError):
+                pass
+            last = record.last_feedback[-1] if record.last_feedback else None
+            if late is None:
+                raise GoalTimeoutError(action, gid, timeout, feedback=last) from None
+            finished = True
+            status, values = _result(action, late)
+            raise GoalTimeoutError(
+                action, gid, timeout, status=status, result=values, feedback=last
+            ) from None
+        except ConnectionLostError:
+            # The goal's lane dropped; the goal itself keeps running on the robot.
+            finished = True  # the cancel is taken care of here, not in `finally`
+            reached = await asyncio.shield(_cancel_after_drop(client, registry, record))
+            raise ConnectionLostError(
+                client.url, what, goal_cancel="sent" if reached else "pending"
+            ) from None
+        finished = True
+        status, values = _result(action, frame)
+        return record.end(status, values)
+    finally:
+        try:
+            if sent and not finished:
+                await asyncio.shield(_cancel_quietly(client, registry, record, lane, in_order))
+        finally:
+            # Even if we are cancelled again while the cancel is being sent.
+            if lane is not None:
+                lane.close()
+
+
+async def _follow(lane: GoalLane, record: Goal, on_feedback: GoalFeedback | None) -> dict[str, Any]:
+    """Feedback until the result frame, which is returned."""
+    while True:
+        op, frame = await lane.next()
+        if op == "action_result":
+            return frame
+        if op == "action_feedback":
+            await record.take_feedback(frame.get("values"), on_feedback)
+
+
+async def _cancel_quietly(
+    client: RosbridgeClient, registry: GoalRegistry, record: Goal, lane: GoalLane | None, in_order: bool
+) -> None:
+    op = protocol.cancel_action_goal(record.action, id=record.goal_id)
+    # The main connection first: on an in-order bridge the goal's own lane is blocked by the goal.
+    session = client.session
+    if session is not None and await session.try_send(op):
+        return
+    on_lane = lane is not None and await lane.try_send(op)
+    # close() has already sent cancels for every running goal on the main connection.
+    if client.closed:
+        return
+    # An in-order bridge (2.1.0's and Humble's defaults) reads a lane's cancel only after the goal ended.
+    if not on_lane or in_order:
+        registry.remember_cut_off(record.action, record.goal_id, 2)
+
+
+async def _cancel_after_drop(client: RosbridgeClient, registry: GoalRegistry, record: Goal) -> bool:
+    """Cancel a goal whose lane dropped on the main connection; True if the bridge surely read it.
+
+    A drop of the whole bridge closes the main connection too, but its reader may not have noticed
+    yet: a cancel written then is lost, so it counts only once a ping on the same connection is answered.
+    Otherwise the goal is remembered and cancelled on the next connection.
+    """
+    session = client.session
+    op = protocol.cancel_action_goal(record.action, id=record.goal_id)
+    if (
+        session is not None
+        and await session.try_send(op)
+        and await session.confirm(min(CANCEL_CONFIRM_SECONDS, client.request_timeout))
+    ):
+        return True
+    if not client.closed:
+        registry.remember_cut_off(record.action, record.goal_id, 2, stale=session)
+    return False
+
+
+def _result(action: str, frame: dict[str, Any]) -> tuple[int, Any]:
+    values = frame.get("values")
+    if frame.get("result") is False:
+        raise ActionError(action, values if isinstance(values, str) else repr(values))
+    status = frame.get("status")
+    return (status if isinstance(status, int) and not isinstance(status, bool) else 0), values
