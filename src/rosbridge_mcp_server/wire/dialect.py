@@ -53,6 +53,7 @@ class RosInfo:
     ``call_services_in_new_thread`` and ``send_action_goals_in_new_thread`` parameters), ``None`` when it
     could not tell. The distro says nothing here: rosbridge 2.1.0 runs a connection's calls in order on
     Jazzy and Kilted alike, later releases changed the launch defaults, and a launch file may override them.
+    What was verified on which release: docs/rosbridge-behaviour.md.
     """
 
     version: Literal[1, 2]
