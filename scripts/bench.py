@@ -20,7 +20,8 @@ What is measured (issue #4):
 4. 100 tool calls at once in one session against a 50 ms service, against 100 in a row;
 5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
 6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
-7. RSS after startup and its growth over 10 000 tool calls, against the same bare server.
+7. RSS after startup and its growth over 10 000 tool calls, against the same bare server;
+8. the graph tools against the raw rosapi round trips each needs (``--only graph``; meant for real bridges).
 
 The table goes to stdout (Markdown, so it can be pasted into docs/performance.md), progress to stderr.
 The exit status is 0 when every measurement ran, whatever the figures; 1 when something errored.
@@ -743,6 +744,126 @@ async def measure_latency(ctx: Context) -> list[Row]:
     return rows
 
 
+# ------------------------------------------------------------------------------- item 8: the graph tools
+
+#: Fresh servers for list_services' first call (each spawn is ~1 s; the call itself is what is timed).
+FIRST_CALL_SERVERS = {"full": 6, "quick": 1}
+GRAPH_TOPIC = "/rosout"
+
+
+async def measure_graph_tools(ctx: Context) -> list[Row]:
+    """Item 8: each graph tool against the raw rosapi round trips it needs, interleaved in one run.
+
+    get_topic_info needs topic_type, publishers and subscribers: its floor is the faster of the two raw ways
+    to ask them (one after another on one connection, or side by side on three). list_actions needs
+    action_servers (and, the first time on a connection, one type look-up per action). list_services is
+    held to list_topics: at most 3× on a connection's first call (fresh servers), at most 1.5× after.
+    """
+    raw, ours, plan, url = ctx.raw, ctx.ours, ctx.plan, ctx.bridge.url
+    topic_args = {"topic": GRAPH_TOPIC}
+    queries = ("/rosapi/topic_type", "/rosapi/publishers", "/rosapi/subscribers")
+    async with contextlib.AsyncExitStack() as stack:
+        extra = [
+            RawBridge(await stack.enter_async_context(connect(url, max_size=None, compression=None)))
+            for _ in range(2)
+        ]
+
+        async def info_in_a_row() -> None:
+            for service in queries:
+                await raw.call(service, topic_args)
+
+        async def info_side_by_side() -> None:
+            await asyncio.gather(
+                *(
+                    bridge.call(service, topic_args)
+                    for bridge, service in zip([raw, *extra], queries, strict=True)
+                )
+            )
+
+        subjects = [
+            Subject("g_floor_topics", lambda: raw.call("/rosapi/topics")),
+            Subject("g_list_topics", lambda: ours.tool("list_topics", {}), ours.process),
+            Subject("g_list_services", lambda: ours.tool("list_services", {}), ours.process),
+            Subject("g_floor_info_row", info_in_a_row),
+            Subject("g_floor_info_wide", info_side_by_side),
+            Subject("g_get_topic_info", lambda: ours.tool("get_topic_info", topic_args), ours.process),
+            Subject("g_floor_actions", lambda: raw.call("/rosapi/action_servers")),
+            Subject("g_list_actions", lambda: ours.tool("list_actions", {}), ours.process),
+        ]
+        await interleave(subjects, Plan(**{**dataclasses.asdict(plan), "block": max(2, plan.block // 4)}))
+    first: list[float] = []
+    for _ in range(FIRST_CALL_SERVERS[plan.name]):
+        async with serve_mcp(our_server_command(url), ctx.errlog) as fresh:
+            await fresh.tool("list_topics", {})  # the connection is up and its version known
+            began = time.perf_counter()
+            await fresh.tool("list_services", {})
+            first.append(time.perf_counter() - began)
+    ctx.samples.update(
+        {subject.key: subject.samples for subject in subjects} | {"g_list_services_first": first}
+    )
+    by_key = {subject.key: subject.stats for subject in subjects}
+    topics = by_key["g_list_topics"]
+    first_stats = Stats.of(first)
+
+    def ratio_row(item: str, what: str, stats: Stats, limit: float) -> Row:
+        factor = stats.median / topics.median
+        row = timing_row(
+            item, what, stats, versus=f"{factor:.2f}× list_topics", target=f"≤ {limit:g}× list_topics"
+        )
+        row.verdict = verdict(factor <= limit)
+        row.figures["times_list_topics"] = factor
+        return row
+
+    def floor_row(item: str, what: str, key: str, floor: Stats, floor_name: str) -> Row:
+        stats = by_key[key]
+        over = stats.median - floor.median
+        row = timing_row(
+            item,
+            what,
+            stats,
+            versus=f"{over * 1e3:+.2f} ms over {floor_name} ({stats.median / floor.median:.2f}×)",
+            target="≤ +1.5 ms over its floor",
+        )
+        row.verdict = verdict(over <= 1.5e-3)
+        row.figures["over_floor_s"] = over
+        return row
+
+    row_floor, wide_floor = by_key["g_floor_info_row"], by_key["g_floor_info_wide"]
+    info_floor, info_name = (
+        (row_floor, "3 raw calls in a row")
+        if row_floor.median <= wide_floor.median
+        else (wide_floor, "3 raw calls side by side")
+    )
+    return [
+        timing_row(
+            "8·", "floor: raw `call_service /rosapi/topics`", by_key["g_floor_topics"], versus="reference"
+        ),
+        floor_row("8a", "tool `list_topics`", "g_list_topics", by_key["g_floor_topics"], "its floor"),
+        ratio_row("8b", "tool `list_services`, first call on a connection (fresh server)", first_stats, 3.0),
+        ratio_row("8c", "tool `list_services`, later calls", by_key["g_list_services"], 1.5),
+        timing_row(
+            "8·", "floor: raw topic_type + publishers + subscribers, in a row", row_floor, versus="reference"
+        ),
+        timing_row(
+            "8·", "floor: the same three side by side on three connections", wide_floor, versus="reference"
+        ),
+        floor_row("8d", f"tool `get_topic_info` {GRAPH_TOPIC}", "g_get_topic_info", info_floor, info_name),
+        timing_row(
+            "8·",
+            "floor: raw `call_service /rosapi/action_servers`",
+            by_key["g_floor_actions"],
+            versus="reference",
+        ),
+        floor_row(
+            "8e",
+            "tool `list_actions` (types known on the connection)",
+            "g_list_actions",
+            by_key["g_floor_actions"],
+            "its floor",
+        ),
+    ]
+
+
 # ------------------------------------------------------------------------------------ item 4: concurrency
 
 
@@ -1058,6 +1179,7 @@ Item = Callable[[Context], Awaitable[list[Row]]]
 #: name for --only, item numbers, title, the measuring function, its deadline in seconds.
 ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("latency", "1-3", "call latency", measure_latency, 240.0),
+    ("graph", "8", "graph tools", measure_graph_tools, 240.0),
     ("concurrency", "4", "concurrency", measure_concurrency, 120.0),
     ("throughput", "5", "throughput", measure_throughput, 60.0),
     ("startup", "6-7", "startup and RSS", measure_startup, 180.0),
