@@ -101,6 +101,20 @@ async def test_list_actions_lists_each_server_once_with_its_type(
     assert "/fibonacci" in text_of(result)
 
 
+async def test_list_actions_asks_an_action_type_once_per_connection(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """The next listing asks only for the action servers: a server's type is kept while it is listed."""
+    first = (await session.ok("list_actions")).structured_content
+    calls = dict(sim.world.service_calls)
+    second = (await session.ok("list_actions")).structured_content
+    assert second == first
+    asked = {
+        name: n - calls.get(name, 0) for name, n in sim.world.service_calls.items() if n != calls.get(name)
+    }
+    assert asked == {"/rosapi/action_servers": 1}
+
+
 async def test_listings_and_a_service_call_work_on_a_humble_in_order_bridge(
     sim_humble: SimulatedRobot,
 ) -> None:

@@ -262,9 +262,16 @@ class RosGraph:
     async def action_type(self, action: str) -> str | None:
         """The action's type in the bridge's own spelling, or ``None`` when the bridge cannot tell."""
         info = await self.ros_info()
-        if info.version == 1:
-            return await self._ros1_action_type(action)
-        return await self._ros2_action_type(action)
+        known = self._known.action_types.get(action)
+        if known:
+            return known
+        found = await (
+            self._ros1_action_type(action) if info.version == 1 else self._ros2_action_type(action)
+        )
+        if found:
+            # Fixed while the action server exists; forgotten when it leaves the list (actions()).
+            self._known.action_types[action] = found
+        return found
 
     async def _action_type_or_none(self, action: str) -> str | None:
         try:
@@ -276,6 +283,9 @@ class RosGraph:
     async def actions(self) -> list[ActionEntry]:
         """Every action server once, with its type where it can be known."""
         names = await self.action_names()
+        known = self._known.action_types
+        for gone in known.keys() - set(names):
+            del known[gone]
         types = await _bounded_map(self._action_type_or_none, names)
         return [ActionEntry(name, found) for name, found in zip(names, types, strict=True)]
 
@@ -287,9 +297,6 @@ class RosGraph:
         return None
 
     async def _ros2_action_type(self, action: str) -> str | None:
-        known = self._known.action_types.get(action)
-        if known:
-            return known
         found: str | None = None
         if not self._known.no_action_type_service:
             try:
@@ -304,8 +311,6 @@ class RosGraph:
                 found = answer if isinstance(answer, str) and answer else None
         if found is None:
             found = await self._send_goal_type(action)
-        if found:
-            self._known.action_types[action] = found
         return found
 
     async def _send_goal_type(self, action: str) -> str | None:
