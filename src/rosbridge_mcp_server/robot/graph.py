@@ -434,7 +434,17 @@ _ROS2_PARAMETER_SERVICES: Final = {
     "set_parameters": "rcl_interfaces/srv/SetParameters",
     "set_parameters_atomically": "rcl_interfaces/srv/SetParametersAtomically",
 }
+# Offered by every node since Iron (also by rosapi's helper node, which has no parameter services); the
+# name is rcl's, so it is typed wherever it appears.
 _ROS2_TYPE_DESCRIPTION = ("get_type_description", "type_description_interfaces/srv/GetTypeDescription")
+# A managed (lifecycle) node's five services, typed when all five are under one prefix.
+_ROS2_LIFECYCLE_SERVICES: Final = {
+    "change_state": "lifecycle_msgs/srv/ChangeState",
+    "get_state": "lifecycle_msgs/srv/GetState",
+    "get_available_states": "lifecycle_msgs/srv/GetAvailableStates",
+    "get_available_transitions": "lifecycle_msgs/srv/GetAvailableTransitions",
+    "get_transition_graph": "lifecycle_msgs/srv/GetAvailableTransitions",
+}
 _ROS1_LOGGER_SERVICES: Final = {
     "get_loggers": "roscpp/GetLoggers",
     "set_logger_level": "roscpp/SetLoggerLevel",
@@ -473,8 +483,9 @@ _ROSAPI_SERVICES_ROS2: Final = {"get_ros_version": "GetROSVersion"}
 def infrastructure_types(names: Iterable[str], version: int) -> dict[str, str]:
     """The types of the per-node and rosapi services among *names*, told from the names alone.
 
-    A node's set counts only when it is complete (all six parameter services under one prefix on ROS 2,
-    both logger services on ROS 1), so a single service that merely shares a leaf name is looked up as usual.
+    A node's set counts only when it is complete (all six parameter services, or all five lifecycle services,
+    under one prefix on ROS 2; both logger services on ROS 1), so a single service that merely shares a leaf
+    name is looked up as usual.
     """
     listed = set(names)
     by_prefix: dict[str, set[str]] = {}
@@ -482,13 +493,14 @@ def infrastructure_types(names: Iterable[str], version: int) -> dict[str, str]:
         prefix, _, leaf = name.rpartition("/")
         by_prefix.setdefault(prefix, set()).add(leaf)
     found: dict[str, str] = {}
-    per_node = _ROS2_PARAMETER_SERVICES if version == 2 else _ROS1_LOGGER_SERVICES
+    sets = (_ROS2_PARAMETER_SERVICES, _ROS2_LIFECYCLE_SERVICES) if version == 2 else (_ROS1_LOGGER_SERVICES,)
     for prefix, leaves in by_prefix.items():
-        if per_node.keys() <= leaves:
-            found.update({f"{prefix}/{leaf}": kind for leaf, kind in per_node.items()})
-            leaf, kind = _ROS2_TYPE_DESCRIPTION
-            if version == 2 and leaf in leaves:
-                found[f"{prefix}/{leaf}"] = kind
+        for per_node in sets:
+            if per_node.keys() <= leaves:
+                found.update({f"{prefix}/{leaf}": kind for leaf, kind in per_node.items()})
+        leaf, kind = _ROS2_TYPE_DESCRIPTION
+        if version == 2 and leaf in leaves:
+            found[f"{prefix}/{leaf}"] = kind
     rosapi = {**_ROSAPI_SERVICES, **(_ROSAPI_SERVICES_ROS2 if version == 2 else _ROSAPI_SERVICES_ROS1)}
     package = "rosapi_msgs/srv" if version == 2 else "rosapi"
     for leaf in by_prefix.get("/rosapi", set()):
