@@ -62,6 +62,7 @@ from mcp.client.stdio import StdioServerParameters, stdio_client
 from websockets.asyncio.client import ClientConnection, connect
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.graph import infrastructure_types
 
 __all__ = ["main"]
 
@@ -538,6 +539,7 @@ class Subject:
     key: str
     call: Callable[[], Awaitable[object]]
     server: psutil.Process | None = None  # the MCP server process the calls go through, if any
+    pause: float = 0.0  # idle seconds before each call, not timed (a tool call's rosapi request follows one)
     samples: list[float] = dataclasses.field(default_factory=list)
     cpu: dict[str, float] = dataclasses.field(
         default_factory=lambda: {"bench": 0.0, "server": 0.0, "bridge": 0.0}
@@ -568,6 +570,8 @@ async def interleave(subjects: Sequence[Subject], plan: Plan, bridge: psutil.Pro
             call, samples = subject.call, subject.samples
             before = (cpu_seconds(me), cpu_seconds(subject.server), cpu_seconds(bridge))
             for _ in range(plan.block):
+                if subject.pause:
+                    await asyncio.sleep(subject.pause)
                 began = clock()
                 await call()
                 samples.append(clock() - began)
@@ -749,6 +753,8 @@ async def measure_latency(ctx: Context) -> list[Row]:
 #: Fresh servers for list_services' first call (each spawn is ~1 s; the call itself is what is timed).
 FIRST_CALL_SERVERS = {"full": 6, "quick": 1}
 GRAPH_TOPIC = "/rosout"
+#: An MCP round trip's worth of idle before a floor call (the no-op tool's median on this machine).
+TOOL_PAUSE = 0.001
 
 
 async def measure_graph_tools(ctx: Context) -> list[Row]:
@@ -758,6 +764,11 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
     to ask them (one after another on one connection, or side by side on three). list_actions needs
     action_servers (and, the first time on a connection, one type look-up per action). list_services is
     held to list_topics: at most 3× on a connection's first call (fresh servers), at most 1.5× after.
+
+    Each floor is measured twice: back to back, and after an untimed pause as long as an MCP round trip
+    (``TOOL_PAUSE``), because a tool's request always reaches the bridge after one, and rosbridge 2.1.0
+    answers a request that follows a short pause ~9 ms later than one sent back to back
+    (docs/rosbridge-behaviour.md).
     """
     raw, ours, plan, url = ctx.raw, ctx.ours, ctx.plan, ctx.bridge.url
     topic_args = {"topic": GRAPH_TOPIC}
@@ -773,95 +784,155 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
                 await raw.call(service, topic_args)
 
         async def info_side_by_side() -> None:
+            bridges = [raw, *extra]
             await asyncio.gather(
-                *(
-                    bridge.call(service, topic_args)
-                    for bridge, service in zip([raw, *extra], queries, strict=True)
-                )
+                *(bridge.call(service, topic_args) for bridge, service in zip(bridges, queries, strict=True))
             )
 
+        def floor(key: str, call: Callable[[], Awaitable[object]]) -> list[Subject]:
+            return [Subject(key, call), Subject(f"{key}_paused", call, pause=TOOL_PAUSE)]
+
         subjects = [
-            Subject("g_floor_topics", lambda: raw.call("/rosapi/topics")),
+            *floor("g_floor_topics", lambda: raw.call("/rosapi/topics")),
             Subject("g_list_topics", lambda: ours.tool("list_topics", {}), ours.process),
             Subject("g_list_services", lambda: ours.tool("list_services", {}), ours.process),
-            Subject("g_floor_info_row", info_in_a_row),
-            Subject("g_floor_info_wide", info_side_by_side),
+            *floor("g_floor_info_row", info_in_a_row),
+            *floor("g_floor_info_wide", info_side_by_side),
             Subject("g_get_topic_info", lambda: ours.tool("get_topic_info", topic_args), ours.process),
-            Subject("g_floor_actions", lambda: raw.call("/rosapi/action_servers")),
+            *floor("g_floor_actions", lambda: raw.call("/rosapi/action_servers")),
             Subject("g_list_actions", lambda: ours.tool("list_actions", {}), ours.process),
         ]
         await interleave(subjects, Plan(**{**dataclasses.asdict(plan), "block": max(2, plan.block // 4)}))
-    first: list[float] = []
-    for _ in range(FIRST_CALL_SERVERS[plan.name]):
-        async with serve_mcp(our_server_command(url), ctx.errlog) as fresh:
-            await fresh.tool("list_topics", {})  # the connection is up and its version known
-            began = time.perf_counter()
-            await fresh.tool("list_services", {})
-            first.append(time.perf_counter() - began)
+    first, first_floor = await first_listings(ctx)
     ctx.samples.update(
-        {subject.key: subject.samples for subject in subjects} | {"g_list_services_first": first}
+        {subject.key: subject.samples for subject in subjects}
+        | {"g_list_services_first": first, "g_floor_services_first": first_floor}
     )
     by_key = {subject.key: subject.stats for subject in subjects}
     topics = by_key["g_list_topics"]
-    first_stats = Stats.of(first)
+    first_stats, first_floor_stats = Stats.of(first), Stats.of(first_floor)
 
-    def ratio_row(item: str, what: str, stats: Stats, limit: float) -> Row:
+    def ratio_row(item: str, what: str, stats: Stats, limit: float, extra: str = "") -> Row:
         factor = stats.median / topics.median
         row = timing_row(
-            item, what, stats, versus=f"{factor:.2f}× list_topics", target=f"≤ {limit:g}× list_topics"
+            item,
+            what,
+            stats,
+            versus=f"{factor:.2f}× list_topics{extra}",
+            target=f"≤ {limit:g}× list_topics",
         )
         row.verdict = verdict(factor <= limit)
         row.figures["times_list_topics"] = factor
         return row
 
-    def floor_row(item: str, what: str, key: str, floor: Stats, floor_name: str) -> Row:
+    def floor_row(item: str, what: str, key: str, *, hot: Stats, paused: Stats, floor_name: str) -> Row:
         stats = by_key[key]
-        over = stats.median - floor.median
+        over_hot, over_paused = stats.median - hot.median, stats.median - paused.median
         row = timing_row(
             item,
             what,
             stats,
-            versus=f"{over * 1e3:+.2f} ms over {floor_name} ({stats.median / floor.median:.2f}×)",
+            versus=f"{over_paused * 1e3:+.2f} ms over {floor_name} after a pause; "
+            f"{over_hot * 1e3:+.2f} ms over it back to back",
             target="≤ +1.5 ms over its floor",
         )
-        row.verdict = verdict(over <= 1.5e-3)
-        row.figures["over_floor_s"] = over
+        row.verdict = verdict(over_paused <= 1.5e-3) + ("" if over_hot <= 1.5e-3 else " (after a pause)")
+        row.figures["over_floor_s"] = over_hot
+        row.figures["over_paused_floor_s"] = over_paused
         return row
 
-    row_floor, wide_floor = by_key["g_floor_info_row"], by_key["g_floor_info_wide"]
-    info_floor, info_name = (
-        (row_floor, "3 raw calls in a row")
+    def floor_rows(what: str, key: str) -> list[Row]:
+        return [
+            timing_row("8·", f"floor: {what}", by_key[key], versus="reference"),
+            timing_row("8·", f"the same after a {TOOL_PAUSE * 1e3:g} ms pause", by_key[f"{key}_paused"]),
+        ]
+
+    row_floor, wide_floor = by_key["g_floor_info_row_paused"], by_key["g_floor_info_wide_paused"]
+    info_key, info_name = (
+        ("g_floor_info_row", "3 raw calls in a row")
         if row_floor.median <= wide_floor.median
-        else (wide_floor, "3 raw calls side by side")
+        else ("g_floor_info_wide", "3 raw calls side by side")
     )
+    over_first = first_stats.median - first_floor_stats.median
     return [
-        timing_row(
-            "8·", "floor: raw `call_service /rosapi/topics`", by_key["g_floor_topics"], versus="reference"
+        *floor_rows("raw `call_service /rosapi/topics`", "g_floor_topics"),
+        floor_row(
+            "8a",
+            "tool `list_topics`",
+            "g_list_topics",
+            hot=by_key["g_floor_topics"],
+            paused=by_key["g_floor_topics_paused"],
+            floor_name="its floor",
         ),
-        floor_row("8a", "tool `list_topics`", "g_list_topics", by_key["g_floor_topics"], "its floor"),
-        ratio_row("8b", "tool `list_services`, first call on a connection (fresh server)", first_stats, 3.0),
-        ratio_row("8c", "tool `list_services`, later calls", by_key["g_list_services"], 1.5),
-        timing_row(
-            "8·", "floor: raw topic_type + publishers + subscribers, in a row", row_floor, versus="reference"
-        ),
-        timing_row(
-            "8·", "floor: the same three side by side on three connections", wide_floor, versus="reference"
-        ),
-        floor_row("8d", f"tool `get_topic_info` {GRAPH_TOPIC}", "g_get_topic_info", info_floor, info_name),
         timing_row(
             "8·",
-            "floor: raw `call_service /rosapi/action_servers`",
-            by_key["g_floor_actions"],
+            "floor: a fresh raw client asks `services`, then the types our server looks up, 4 at a time "
+            "on connections of their own",
+            first_floor_stats,
             versus="reference",
         ),
+        ratio_row(
+            "8b",
+            "tool `list_services`, first call on a connection (fresh server)",
+            first_stats,
+            3.0,
+            f"; {over_first * 1e3:+.1f} ms over its floor",
+        ),
+        ratio_row("8c", "tool `list_services`, later calls", by_key["g_list_services"], 1.5),
+        *floor_rows("raw topic_type + publishers + subscribers, in a row", "g_floor_info_row"),
+        *floor_rows("the same three side by side on three connections", "g_floor_info_wide"),
+        floor_row(
+            "8d",
+            f"tool `get_topic_info` {GRAPH_TOPIC}",
+            "g_get_topic_info",
+            hot=by_key[info_key],
+            paused=by_key[f"{info_key}_paused"],
+            floor_name=info_name,
+        ),
+        *floor_rows("raw `call_service /rosapi/action_servers`", "g_floor_actions"),
         floor_row(
             "8e",
             "tool `list_actions` (types known on the connection)",
             "g_list_actions",
-            by_key["g_floor_actions"],
-            "its floor",
+            hot=by_key["g_floor_actions"],
+            paused=by_key["g_floor_actions_paused"],
+            floor_name="its floor",
         ),
     ]
+
+
+async def look_up_types(bridge: RawBridge, queue: list[str]) -> None:
+    """Take services off *queue* and ask their types, one at a time on *bridge*, until none is left."""
+    while queue:
+        await bridge.call("/rosapi/service_type", {"service": queue.pop()})
+
+
+async def first_listings(ctx: Context) -> tuple[list[float], list[float]]:
+    """list_services on fresh servers, and the same rosapi round trips from a fresh raw client, in turn."""
+    url, errlog = ctx.bridge.url, ctx.errlog
+    first: list[float] = []
+    floor: list[float] = []
+    for _ in range(FIRST_CALL_SERVERS[ctx.plan.name]):
+        async with serve_mcp(our_server_command(url), errlog) as fresh:
+            await fresh.tool("list_topics", {})  # the connection is up and the bridge's kind known
+            began = time.perf_counter()
+            await fresh.tool("list_services", {})
+            first.append(time.perf_counter() - began)
+        began = time.perf_counter()
+        async with connect(url, max_size=None, compression=None) as ws:
+            names = (await RawBridge(ws).call("/rosapi/services")).get("services", [])
+            version = 2 if any(name == "/rosapi/get_ros_version" for name in names) else 1
+            fixed = infrastructure_types(names, version)
+            asked = [name for name in names if name not in fixed]
+            async with contextlib.AsyncExitStack() as lanes:
+                wide = [
+                    RawBridge(await lanes.enter_async_context(connect(url, max_size=None, compression=None)))
+                    for _ in range(min(4, len(asked)))
+                ]
+
+                await asyncio.gather(*(look_up_types(bridge, asked) for bridge in wide))
+        floor.append(time.perf_counter() - began)
+    return first, floor
 
 
 # ------------------------------------------------------------------------------------ item 4: concurrency
