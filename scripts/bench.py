@@ -10,7 +10,7 @@ The machines we run on are shared and noisy, so nothing is compared with a numbe
 subject is measured next to its reference in the same run, in interleaved blocks (A B C A B C ..., with the
 order rotated every round) after warm-up rounds, and reported as median, p90 and the ratio of the medians.
 
-What is measured (issue #4):
+What is measured:
 
 1. the floor: ``call_service /rosapi/topics`` over one raw ``websockets`` connection;
 2. the same call through our ``RosbridgeClient`` and through roslibpy;
@@ -464,7 +464,7 @@ def bare_server_command(*, reference_tools: bool = False, our_stdio: bool = Fals
 
 
 def our_server_on_sdk_stdio_command(url: str) -> list[str]:
-    """Our server on the MCP SDK's stdio transport, as before 9e675a4 (``bench/ours_sdk_stdio.py``)."""
+    """Our server on the MCP SDK's stdio transport instead of its own (``bench/ours_sdk_stdio.py``)."""
     return [sys.executable, str(OURS_SDK_STDIO), "--url", url]
 
 

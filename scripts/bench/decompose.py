@@ -1,7 +1,7 @@
 """Where the time of one tool call goes: a profiling aid for the misses in docs/performance.md.
 
     uv run python scripts/bench/decompose.py               # our stdio transport (asyncio pipes)
-    uv run python scripts/bench/decompose.py --sdk-stdio   # the MCP SDK's (worker threads), as before 9e675a4
+    uv run python scripts/bench/decompose.py --sdk-stdio   # the MCP SDK's (worker threads)
 
 It starts a simulated robot and ``timed_server.py`` (our unchanged server with stopwatches around
 ``MCPServer._handle_call_tool`` and ``RosbridgeClient.call_service``), then makes the same tool call

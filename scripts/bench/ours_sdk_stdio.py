@@ -1,7 +1,7 @@
-"""``rosbridge-mcp-server`` served through the MCP SDK's own stdio transport: how it ran before 9e675a4.
+"""``rosbridge-mcp-server`` served through the MCP SDK's own stdio transport instead of ours.
 
-Since 9e675a4 our server reads and writes stdio through asyncio pipes (``rosbridge_mcp_server.stdio``); the
-SDK's transport hands every line read and every write and flush to an anyio worker thread instead. This runs
+Our server reads and writes stdio through asyncio pipes (``rosbridge_mcp_server.server.stdio``); the SDK's
+transport hands every line read and every write and flush to an anyio worker thread instead. This runs
 our unchanged server with that one choice reverted, so the benchmark keeps showing what the hand-offs cost
 (the "SDK's stdio" comparison rows) and would notice if an SDK release made them cheap.
 """

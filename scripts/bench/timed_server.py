@@ -5,7 +5,7 @@ It runs the unchanged server (the console script's ``main``) after wrapping thre
 * ``MCPServer._handle_call_tool`` — everything the server does for one tool call after the SDK has read
   and parsed the request, up to the result it hands back to the SDK;
 * ``RosbridgeClient.call_service`` — each rosbridge round trip made inside that;
-* the stdio transport is our own (or, with ``--sdk-stdio``, the MCP SDK's, as before 9e675a4).
+* the stdio transport is our own (or, with ``--sdk-stdio``, the MCP SDK's worker-thread one).
 
 At exit it writes the samples, in seconds, as JSON to the file named by ``BENCH_TIMINGS``.
 """

@@ -5,11 +5,12 @@ These fail by name when an SDK upgrade changes what a function relies on, instea
 
 from __future__ import annotations
 
+import inspect
 from typing import Annotated, Any
 
 import anyio
 from mcp.client.session import ClientSession
-from mcp.server.mcpserver import MCPServer
+from mcp.server.mcpserver import Context, MCPServer
 from mcp.shared.memory import create_client_server_memory_streams
 from mcp.types import CallToolResult, TextContent, ToolAnnotations
 from pydantic import BaseModel, Field, ValidationError
@@ -26,9 +27,19 @@ class _Doubled(BaseModel):
     value: int
 
 
-async def _double(
-    number: Annotated[int, Field(description="a number, e.g. 2")],
-) -> Annotated[CallToolResult, _Doubled]:
+PARAMETERS = [
+    inspect.Parameter(
+        "number",
+        inspect.Parameter.POSITIONAL_OR_KEYWORD,
+        annotation=Annotated[int, Field(description="a number, e.g. 2")],
+    )
+]
+contexts: list[object] = []
+
+
+async def _double(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
+    contexts.append(mcp_context)
+    number = arguments["number"]
     return CallToolResult(
         content=[TextContent(type="text", text=str(number * 2))], structured_content={"value": number * 2}
     )
@@ -41,6 +52,8 @@ def _reword(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
 def _tool() -> Any:
     return tool_with_own_argument_errors(
         _double,
+        PARAMETERS,
+        _Doubled,
         name="double",
         title="Double",
         description="Doubles a number.",
@@ -58,12 +71,17 @@ async def test_argument_errors_are_worded_by_our_function() -> None:
     assert result.content[0].text == "double wants number (1 wrong)"
 
 
-async def test_a_tool_with_reworded_errors_still_lists_its_parameters_and_runs() -> None:
-    """The tool keeps its input schema, annotations and structured output."""
+async def test_the_tool_has_the_parameters_given_and_its_handler_gets_them_with_the_sdk_context() -> None:
+    """The input schema is the parameters given (not the handler's **arguments nor its context); it runs."""
+    contexts.clear()
     async with Client(MCPServer("seam", tools=[_tool()])) as client:
         [listed] = (await client.list_tools()).tools
         result = await client.call_tool("double", {"number": 21})
+    assert list(listed.input_schema["properties"]) == ["number"]
+    assert listed.input_schema["properties"]["number"]["description"] == "a number, e.g. 2"
     assert listed.input_schema["required"] == ["number"]
+    assert len(contexts) == 1
+    assert isinstance(contexts[0], Context)
     assert listed.annotations is not None
     assert listed.annotations.read_only_hint is True
     assert not result.is_error

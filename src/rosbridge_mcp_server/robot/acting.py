@@ -1,4 +1,4 @@
-"""Checked sends: every act on the robot goes through here, and through the safety seam.
+"""Checked sends: every act on the robot goes through here and through the safety seam (cancels: unguarded).
 
 Each function takes what a caller gave (names, types, a message), makes the name absolute, spells the type
 for the bridge, compares it with the graph, checks the message against the type's definitions (raising a
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
-from rosbridge_mcp_server.robot.goals import Goal, GoalFeedback, run_goal
+from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
@@ -43,6 +43,7 @@ __all__ = [
     "publish_once",
     "require_action_server",
     "send_goal",
+    "stop_goals",
 ]
 
 #: Longest wait for the bridge's pong before a publish (less when the configured request timeout is shorter).
@@ -316,3 +317,18 @@ async def require_action_server(graph: RosGraph, name: str, action_type: str | N
         raise NotSentError(
             f"Action {name} has type {found}, not {action_type}. Send a goal of type {found} instead."
         )
+
+
+async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) -> CancelReport:
+    """Cancel one goal of *action* (by id) or all of them, after checking that the action is served.
+
+    A cancel only stops what the robot does, so it does not ask the guard.
+    """
+    name = absolute_name(action, "action")
+    hint = await ctx.graph.missing_action(name)
+    if hint is not None:
+        raise NotSentError(
+            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} Call "
+            "list_actions to see the actions."
+        )
+    return await cancel_goals(ctx.client, name, goal_id)

@@ -1,4 +1,4 @@
-"""Graph look-ups through rosapi, with the dialect quirks handled, for the tools.
+"""Graph look-ups through rosapi, with the dialect quirks handled (the domain's view of the robot's graph).
 
 Everything here is an ordinary ``call_service`` to a ``/rosapi/...`` service on the shared client. What
 differs between bridges (docs/rosbridge-behaviour.md has what was verified on which release):
@@ -14,7 +14,9 @@ differs between bridges (docs/rosbridge-behaviour.md has what was verified on wh
   ``service_request_details`` instead ends the rosapi node on a type it cannot load, so it is only ever asked
   about a type rosapi itself reported for a live service.
 
-What one connection learnt is cached with it: a reconnect may be to a robot with other packages installed.
+What one connection has learnt (type definitions, the topics it publishes, service and action types) is one
+object, replaced whole when the client reports a new connection: a reconnect may be to a robot with other
+packages installed.
 """
 
 from __future__ import annotations

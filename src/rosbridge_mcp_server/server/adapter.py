@@ -17,7 +17,7 @@ import logging
 import typing
 from collections.abc import Awaitable, Callable
 from types import ModuleType
-from typing import Annotated, Any
+from typing import Any
 
 from mcp.server.mcpserver import Context
 from mcp.server.mcpserver.tools import Tool
@@ -129,14 +129,11 @@ def tool_from_module(
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
 
-    # The tool's parameters are run()'s, minus its ToolContext, plus the SDK's Context (which the SDK fills in
-    # and leaves out of the input schema). Annotations are resolved here: the modules use postponed
-    # annotations.
+    # The tool's parameters are run()'s, minus its ToolContext. Annotations are resolved here: the modules
+    # use postponed annotations.
     hints = typing.get_type_hints(run, include_extras=True)
     run_parameters = list(inspect.signature(run).parameters.values())[1:]
     parameters = [p.replace(annotation=hints[p.name]) for p in run_parameters]
-    parameters.append(inspect.Parameter("mcp_context", inspect.Parameter.KEYWORD_ONLY, annotation=Context))
-    returns = Annotated[CallToolResult, spec.output]
 
     async def call_tool(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
         async def report_progress(progress: float, total: float | None, message: str | None) -> None:
@@ -164,14 +161,10 @@ def tool_from_module(
             structured_content=answer.data.model_dump(mode="json"),
         )
 
-    call_tool.__name__ = spec.name
-    call_tool.__qualname__ = spec.name
-    call_tool.__doc__ = spec.description
-    setattr(call_tool, "__signature__", inspect.Signature(parameters, return_annotation=returns))  # noqa: B010
-    call_tool.__annotations__ = {p.name: p.annotation for p in parameters} | {"return": returns}
-
     tool = tool_with_own_argument_errors(
         call_tool,
+        parameters,
+        spec.output,
         name=spec.name,
         title=spec.title,
         description=spec.description,

@@ -4,9 +4,11 @@ The SDK (``mcp`` 2.3) has no public way to do these three things; each function 
 and ``tests/mcp/test_sdk_seam.py`` holds each to its effect, so an SDK upgrade that changes one fails there,
 by name, instead of somewhere in a tool call:
 
-* :func:`tool_with_own_argument_errors`: a ``Tool`` whose argument validation errors are reworded. The SDK
-  turns a ``ValidationError`` into ``ToolError("Error executing tool <name>: <pydantic dump>")`` inside
-  ``Tool.run``; a subclass is the only place to catch it with the tool's schema at hand.
+* :func:`tool_with_own_argument_errors`: a ``Tool`` for a handler that takes ``**arguments``, with the
+  parameters we give it, whose argument validation errors are reworded. The SDK reads a tool's parameters
+  from ``inspect.signature`` of the function (so we hand it one) and finds the ``Context`` parameter by its
+  annotation; it turns a ``ValidationError`` into ``ToolError("Error executing tool <name>: <pydantic
+  dump>")`` inside ``Tool.run``, and a subclass is the only place to catch it with the tool's schema at hand.
 * :func:`replace_output_schema`: the output schema the SDK derived from the return annotation, replaced
   (``Tool.output_schema`` reads ``Tool.fn_metadata.output_schema``).
 * :func:`serve_streams`: ``MCPServer`` on streams we give it. ``MCPServer.run_stdio_async`` only serves the
@@ -15,14 +17,15 @@ by name, instead of somewhere in a tool call:
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
+import inspect
+from collections.abc import Awaitable, Callable
+from typing import Annotated, Any
 
 from mcp.server.mcpserver import Context, MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
 from mcp.server.mcpserver.tools import Tool
-from mcp.types import ToolAnnotations
-from pydantic import ValidationError
+from mcp.types import CallToolResult, ToolAnnotations
+from pydantic import BaseModel, ValidationError
 
 __all__ = ["ArgumentErrorText", "replace_output_schema", "serve_streams", "tool_with_own_argument_errors"]
 
@@ -31,7 +34,9 @@ ArgumentErrorText = Callable[[str, ValidationError, dict[str, Any]], str]
 
 
 def tool_with_own_argument_errors(
-    fn: Callable[..., Any],
+    handler: Callable[..., Awaitable[CallToolResult]],
+    parameters: list[inspect.Parameter],
+    output: type[BaseModel],
     *,
     name: str,
     title: str,
@@ -39,11 +44,24 @@ def tool_with_own_argument_errors(
     annotations: ToolAnnotations,
     argument_error: ArgumentErrorText,
 ) -> Tool:
-    """A structured-output ``Tool`` for *fn* whose argument errors read as ``argument_error`` words them.
+    """A structured-output ``Tool``: ``await handler(mcp_context=<the SDK's Context>, **arguments)``.
 
-    Relies on ``Tool.run`` raising ``ToolError`` with the ``ValidationError`` as its ``__cause__`` when the
-    arguments do not fit, and on ``MCPServer`` sending a ``ToolError``'s text as the ``isError`` result.
+    *parameters* (annotations resolved) are the tool's input schema; *output* is the model of its structured
+    content. Argument errors read as *argument_error* words them. Relies on the SDK taking the parameters
+    from ``inspect.signature`` (which honours ``__signature__``) and leaving a ``Context``-annotated one out
+    of the schema, on ``Tool.run`` raising ``ToolError`` with the ``ValidationError`` as its ``__cause__``
+    when the arguments do not fit, and on ``MCPServer`` sending a ``ToolError``'s text as an error result.
     """
+    returns = Annotated[CallToolResult, output]
+    every = [
+        *parameters,
+        inspect.Parameter("mcp_context", inspect.Parameter.KEYWORD_ONLY, annotation=Context),
+    ]
+    handler.__name__ = name
+    handler.__qualname__ = name
+    handler.__doc__ = description
+    setattr(handler, "__signature__", inspect.Signature(every, return_annotation=returns))  # noqa: B010
+    handler.__annotations__ = {p.name: p.annotation for p in every} | {"return": returns}
 
     class _Tool(Tool):
         async def run(
@@ -58,7 +76,12 @@ def tool_with_own_argument_errors(
                 raise
 
     return _Tool.from_function(
-        fn, name=name, title=title, description=description, annotations=annotations, structured_output=True
+        handler,
+        name=name,
+        title=title,
+        description=description,
+        annotations=annotations,
+        structured_output=True,
     )
 
 

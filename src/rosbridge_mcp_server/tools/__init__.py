@@ -1,8 +1,8 @@
-"""The eight MCP tools, one module each (names and parameters as in the project this one replaces).
+"""The eight MCP tools, one module each (names and parameters are kept stable: prompts and clients use them).
 
 Each module exposes ``SPEC`` (:class:`~rosbridge_mcp_server.tools.base.ToolSpec`) and
-``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. ``server.py`` registers them in the order of
-:data:`TOOL_MODULES`.
+``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. ``server/app.py`` registers them in the
+order of :data:`TOOL_MODULES`.
 """
 
 from __future__ import annotations

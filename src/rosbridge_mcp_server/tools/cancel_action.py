@@ -6,9 +6,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.errors import NotSentError
-from rosbridge_mcp_server.robot.goals import CancelReport, cancel_goals
-from rosbridge_mcp_server.robot.names import absolute_name
+from rosbridge_mcp_server.robot.acting import stop_goals
+from rosbridge_mcp_server.robot.goals import CancelReport
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolSpec
 
 __all__ = ["SPEC", "CancelAnswer", "run"]
@@ -61,16 +60,8 @@ async def run(
     ] = None,
 ) -> ToolAnswer:
     """Send the cancel and report what it reached."""
-    name = absolute_name(action_name, "action")
     wanted = goal_id.strip() if goal_id is not None and goal_id.strip() else None
-    hint = await ctx.graph.missing_action(name)
-    if hint is not None:
-        raise NotSentError(
-            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} Call "
-            "list_actions to see the actions."
-        )
-    report = await cancel_goals(ctx.client, name, wanted)
-    return _answer(report)
+    return _answer(await stop_goals(ctx, action=action_name, goal_id=wanted))
 
 
 def _answer(report: CancelReport) -> ToolAnswer:

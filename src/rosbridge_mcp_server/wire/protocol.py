@@ -5,7 +5,7 @@ WebSocket frame. :class:`InboundDecoder` turns received frames into events (a ``
 topic, a reply routed by id, or a notice worth logging). :class:`IdMinter` makes readable unique ids
 and :class:`FragmentAssembler` rebuilds messages the server split into ``fragment`` ops.
 
-Facts about real servers that shape this module (see ``/work/shared/rosbridge-protocol.md``):
+Facts about real servers that shape this module (more in ``docs/rosbridge-behaviour.md``):
 
 * rosbridge_suite (ROS 1 0.11.x, every ROS 2 release) reads some keys before its per-op error
   handler, so ``png``, ``message_intervall`` or ``fragment_size: null`` can silently kill a
