@@ -65,6 +65,11 @@ async def test_command_serves_the_robot_and_stops_cleanly_on_a_signal(
         ["--action-step", "0"],
         ["--slow-service-seconds", "-1"],
         ["--camera-size", "big"],
+        ["--dialect", "ros1", "--rosapi", "2.1.0"],
+        ["--dialect", "ros1", "--distro", "jazzy"],
+        ["--distro", "iron-ish"],
+        ["--rosapi", "1.0"],
+        ["--rosapi-latency", "-1"],
     ],
 )
 async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str]) -> None:
@@ -89,3 +94,24 @@ async def test_a_port_in_use_is_one_line_and_exit_code_1(sim_ros2: SimulatedRobo
     assert stdout == b""
     assert f"cannot serve on 127.0.0.1:{sim_ros2.port}" in stderr.decode()
     assert "Traceback" not in stderr.decode()
+
+
+async def test_command_serves_a_bridge_like_the_real_2_1_0_on_kilted() -> None:
+    """--in-order --distro kilted --rosapi 2.1.0: the distro is kilted, TypeDef fields are underscored."""
+    process, url = await _start(
+        "--port", "0", "--in-order", "--distro", "kilted", "--rosapi", "2.1.0", "--rosapi-latency", "0.001"
+    )
+    try:
+        async with await RawClient.open(url) as client:
+            version = await client.values("/rosapi/get_ros_version")
+            details = await client.values("/rosapi/message_details", {"type": "geometry_msgs/msg/Twist"})
+            action_type = await client.call("/rosapi/action_type", {"action": "/fibonacci"})
+        process.send_signal(signal.SIGTERM)
+        await asyncio.wait_for(process.communicate(), 20)
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    assert version == {"version": 2, "distro": "kilted"}
+    assert details["typedefs"][0]["fieldnames"] == ["_linear", "_angular"]
+    assert action_type["result"] is False

@@ -9,7 +9,7 @@ import signal
 import sys
 from typing import NoReturn
 
-from rosbridge_mcp_server.sim.robot import SimulatedRobot
+from rosbridge_mcp_server.sim.robot import ROS2_DISTROS, SimulatedRobot
 
 __all__ = ["build_parser", "main", "run"]
 
@@ -69,7 +69,30 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--in-order",
         action="store_true",
-        help="ros2 only: Humble's defaults, each connection's operations strictly in order",
+        help="ros2 only: Humble's and 2.1.0's defaults, each connection's operations strictly in order",
+    )
+    parser.add_argument(
+        "--distro",
+        choices=ROS2_DISTROS,
+        help="ros2 only: the distro get_ros_version names (default humble with --in-order, else jazzy)",
+    )
+    parser.add_argument(
+        "--rosapi",
+        choices=["newest", "2.1.0"],
+        default="newest",
+        help="ros2 only: which rosapi to behave like (default newest; 2.1.0 as on the Jazzy/Kilted labs)",
+    )
+    parser.add_argument(
+        "--rosapi-latency",
+        type=_non_negative_float,
+        default=0.0,
+        metavar="SECONDS",
+        help="every rosapi call takes this long, one at a time (default 0: at once)",
+    )
+    parser.add_argument(
+        "--no-node-services",
+        action="store_true",
+        help="leave out every node's parameter / type description (ros2) or logger (ros1) services",
     )
     parser.add_argument("--fast-topic", action="store_true", help="publish /fast_counter at 1 kHz")
     parser.add_argument(
@@ -108,6 +131,8 @@ def run(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.in_order and args.dialect != "ros2":
         parser.error("--in-order models Humble's rosbridge and needs --dialect ros2")
+    if args.dialect != "ros2" and (args.distro is not None or args.rosapi != "newest"):
+        parser.error("--distro and --rosapi are ROS 2 settings and need --dialect ros2")
     try:
         width_text, height_text = args.camera_size.lower().split("x")
         width, height = int(width_text), int(height_text)
@@ -121,6 +146,10 @@ def run(argv: list[str] | None = None) -> int:
     robot = SimulatedRobot(
         dialect=args.dialect,
         in_order=args.in_order,
+        distro=args.distro,
+        rosapi=args.rosapi,
+        rosapi_latency=args.rosapi_latency,
+        node_services=not args.no_node_services,
         host=args.host,
         port=args.port,
         fast_topic=args.fast_topic,

@@ -88,7 +88,7 @@ class OutgoingMessage:
 
 def png_frame_data(text: str) -> str:
     """rosbridge's ``pngcompression.encode``: the text as the RGB pixels of a near-square PNG, padded with
-    newlines, base64-encoded (§4.3)."""
+    newlines, base64-encoded."""
     data = text.encode("utf-8")
     width = max(1, math.floor(math.sqrt(len(data) / 3.0)))
     height = math.ceil(len(data) / 3.0 / width)
@@ -119,7 +119,7 @@ class TopicSubscription:
 
     @property
     def throttle_rate(self) -> int:
-        """rosbridge uses the smallest throttle of all requests (§4.6)."""
+        """rosbridge uses the smallest throttle of all requests (0.11.17 and 2.x)."""
         return min((o.throttle_rate for o in self.by_id.values()), default=0)
 
     @property
@@ -158,12 +158,12 @@ class Connection:
         self.id = cid
         #: Fragment id of an id-less message: ``"0"`` on ROS 2, ``0`` on ROS 1.
         self.fragment_id = fragment_id
-        #: Connection-wide outgoing fragment size (§4.2) as the client sent it; ``None`` = never fragment.
+        #: Connection-wide outgoing fragment size as the client sent it; ``None`` = never fragment.
         self.fragment_size: Any = fragment_size
         #: rosbridge's per-connection input buffer (``protocol.incoming``) and its loop guard.
         self.buffer = ""
         self.old_buffer = ""
-        #: The real server's incoming thread died on an input: every later frame is ignored (§1).
+        #: The real server's incoming thread died on an input: every later frame is ignored.
         self.dead = False
         #: Frames dropped because the reading died, and frames ever queued for sending (for tests).
         self.frames_ignored = 0

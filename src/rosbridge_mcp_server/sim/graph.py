@@ -10,13 +10,11 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:
-    from rosbridge_mcp_server.sim.actions import ActionServer
+from typing import Any, Protocol
 
 __all__ = [
     "ROSBRIDGE_NODE",
+    "ActionEntry",
     "Graph",
     "HandlerReturnedNone",
     "LocalSubscriber",
@@ -91,6 +89,16 @@ def is_hidden(name: str) -> bool:
     return any(part.startswith("_") for part in name.split("/"))
 
 
+class ActionEntry(Protocol):
+    """An action server as the graph knows it (ROS 2): its name, its type, and a way to take it out."""
+
+    name: str
+    type: str
+
+    def remove(self) -> None:
+        """Take the server out of the graph; goals still running end ABORTED."""
+
+
 @dataclass
 class NodeInfo:
     """What one node publishes, subscribes and serves (reference-counted: rosbridge shares one node)."""
@@ -121,7 +129,7 @@ class Graph:
     topic_types: dict[str, str] = field(default_factory=dict)
     services: dict[str, ServiceEntry] = field(default_factory=dict)
     #: ROS 2 action servers by action name (ROS 1 actions are plain topics).
-    actions: dict[str, ActionServer] = field(default_factory=dict)
+    actions: dict[str, ActionEntry] = field(default_factory=dict)
     local_subscribers: dict[str, list[LocalSubscriber]] = field(default_factory=dict)
     #: Topics whose last message is kept for late subscribers (latched / transient local).
     latched: dict[str, Any] = field(default_factory=dict)

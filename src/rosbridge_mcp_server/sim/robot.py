@@ -15,9 +15,10 @@ from rosbridge_mcp_server.sim.bridge import Bridge, BridgeConfig
 from rosbridge_mcp_server.sim.graph import Graph
 from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
 from rosbridge_mcp_server.sim.nodes import CameraSettings, WorldNodes
+from rosbridge_mcp_server.sim.rosapi import ROSAPI_RELEASES, Rosapi, RosapiOptions
 from rosbridge_mcp_server.sim.world import World
 
-__all__ = ["DEFAULT_MAX_MESSAGE_SIZE", "SimulatedRobot"]
+__all__ = ["DEFAULT_MAX_MESSAGE_SIZE", "ROS2_DISTROS", "SimulatedRobot"]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
 
@@ -25,6 +26,8 @@ log = logging.getLogger("rosbridge_mcp_server.sim")
 DEFAULT_MAX_MESSAGE_SIZE = 10_000_000
 #: Tornado's default limit for one incoming frame, which rosbridge does not change.
 MAX_INCOMING_FRAME = 10 * 1024 * 1024
+#: ROS 2 distros the simulated robot can say it runs (``get_ros_version``; Humble has no type descriptions).
+ROS2_DISTROS = ("humble", "jazzy", "kilted", "rolling")
 
 
 class SimulatedRobot:
@@ -33,6 +36,14 @@ class SimulatedRobot:
     ``dialect="ros2"`` behaves like a current Jazzy rosbridge (or Humble 2.0.x with ``in_order=True``);
     ``dialect="ros1"`` like rosbridge_suite 0.11.17 on Noetic. Use it as an async context manager; it serves
     on ``host:port`` (port 0 picks a free port, kept across :meth:`stop`/:meth:`start`).
+
+    ``distro`` (ROS 2) is what ``get_ros_version`` says and decides whether nodes offer type descriptions
+    (not on Humble); by default Humble when ``in_order``, else Jazzy. ``rosapi="2.1.0"`` behaves like the
+    rosapi of rosbridge_suite 2.1.0 (underscored TypeDef field names, no ``action_type``/``interfaces``,
+    one call at a time, the calls that kill it); with ``in_order=True, distro="kilted"`` that is the real
+    2.1.0 bridge with its default settings. ``rosapi_latency`` (seconds) makes every rosapi call take that
+    long, one call at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter
+    / type description (ROS 2) and logger (ROS 1) services every real node has.
     """
 
     def __init__(
@@ -40,6 +51,10 @@ class SimulatedRobot:
         dialect: Literal["ros2", "ros1"] = "ros2",
         *,
         in_order: bool = False,
+        distro: str | None = None,
+        rosapi: Literal["newest", "2.1.0"] = "newest",
+        rosapi_latency: float = 0.0,
+        node_services: bool = True,
         host: str = "127.0.0.1",
         port: int = 0,
         fast_topic: bool = False,
@@ -55,14 +70,20 @@ class SimulatedRobot:
             raise ValueError("in_order models Humble's rosbridge, so it needs dialect='ros2'")
         if action_step <= 0 or slow_service_seconds < 0:
             raise ValueError("action_step must be > 0 and slow_service_seconds >= 0")
+        if distro is not None and (dialect != "ros2" or distro not in ROS2_DISTROS):
+            raise ValueError(f"distro must be one of {', '.join(ROS2_DISTROS)} (ROS 2 only), not {distro!r}")
+        if rosapi not in ROSAPI_RELEASES or (rosapi != "newest" and dialect != "ros2"):
+            raise ValueError(f"rosapi must be 'newest' or (ROS 2 only) '2.1.0', not {rosapi!r}")
+        if not rosapi_latency >= 0:
+            raise ValueError("rosapi_latency must be >= 0 seconds")
         if dialect == "ros2":
             config = BridgeConfig(
                 dialect="ros2",
                 in_order=in_order,
                 max_message_size=max_message_size or DEFAULT_MAX_MESSAGE_SIZE,
-                # Humble 2.0.x: default_call_service_timeout 0 (forever); Jazzy 2.2.0+: 5 s.
+                # Humble 2.0.x and 2.1.0: default_call_service_timeout 0 (forever); Jazzy 2.2.0+: 5 s.
                 default_service_timeout=0.0 if in_order else 5.0,
-                distro="humble" if in_order else "jazzy",
+                distro=distro or ("humble" if in_order else "jazzy"),
             )
         else:
             config = BridgeConfig(
@@ -74,11 +95,12 @@ class SimulatedRobot:
             )
         self.dialect = dialect
         self.in_order = in_order
+        self.rosapi_release = rosapi
         self.host = host
         self.port = port
         self.world = World(dialect)
         self.graph = Graph()
-        self.registry = InterfaceRegistry(dialect)
+        self.registry = InterfaceRegistry(dialect, rosapi=rosapi)
         self.bridge = Bridge(config, self.registry, self.world, self.graph)
         self._nodes = WorldNodes(
             self.bridge,
@@ -87,6 +109,8 @@ class SimulatedRobot:
             slow_service_seconds=slow_service_seconds,
             camera=CameraSettings(camera_width, camera_height),
             port=port,
+            rosapi=RosapiOptions(release=rosapi, latency=rosapi_latency),
+            node_services=node_services,
         )
         self._nodes.build()
         self._server: Server | None = None
@@ -95,6 +119,11 @@ class SimulatedRobot:
     def url(self) -> str:
         """``ws://host:port`` of the running server."""
         return f"ws://{self.host}:{self.port}"
+
+    @property
+    def rosapi_node(self) -> Rosapi:
+        """The rosapi node (e.g. ``rosapi_node.param_node_wait``, ``rosapi_node.dead``)."""
+        return self._nodes.rosapi
 
     @property
     def connection_count(self) -> int:
@@ -123,6 +152,7 @@ class SimulatedRobot:
         params = self.world.params
         for key in (
             "/rosbridge_websocket:port",
+            "/rosbridge_websocket:actual_port",
             "/rosbridge_websocket/port",
             "/rosbridge_websocket/actual_port",
         ):
@@ -130,10 +160,11 @@ class SimulatedRobot:
                 params[key] = self.port
         self._nodes.start()
         log.info(
-            "simulated robot (%s, %s%s) serving rosbridge v2 on %s",
+            "simulated robot (%s, %s%s%s) serving rosbridge v2 on %s",
             self.dialect,
             self.bridge.config.distro,
             ", in-order" if self.in_order else "",
+            f", rosapi {self.rosapi_release}" if self.rosapi_release != "newest" else "",
             self.url,
         )
 

@@ -1,28 +1,67 @@
 """The rosapi node of each dialect (``rosapi/scripts/rosapi_node`` and ``proxy.py`` of rosbridge_suite).
 
 Answers come from the simulated graph. The quirks of the real services are kept on purpose, each marked
-with the version that has it (protocol file §12).
+with the version that has it. ROS 2 comes as the newest rosapi or as the one of rosbridge_suite 2.1.0
+(:class:`RosapiOptions`), which the Jazzy and Kilted labs run.
 """
 
 from __future__ import annotations
 
+import asyncio
+import json
 import logging
 import time
 from collections.abc import Callable, Coroutine
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import Any, Literal
 
+from rosbridge_mcp_server.sim.bridge import Bridge
 from rosbridge_mcp_server.sim.graph import ServiceEntry, ServiceFailure, is_hidden, rostopic_type
 from rosbridge_mcp_server.sim.interfaces import InterfaceError
-from rosbridge_mcp_server.sim.params import Ros1Params, Ros2Params
+from rosbridge_mcp_server.sim.params import JSON_REQUIRED, Ros1Params, Ros2Params
 
-if TYPE_CHECKING:
-    from rosbridge_mcp_server.sim.bridge import Bridge
-
-__all__ = ["ROSAPI_NODE", "Rosapi", "ros1_action_servers", "ros2_action_servers"]
+__all__ = [
+    "PARAM_NODE_WAIT",
+    "ROSAPI_NODE",
+    "ROSAPI_PARAMS",
+    "ROSAPI_RELEASES",
+    "Rosapi",
+    "RosapiOptions",
+    "ros1_action_servers",
+    "ros2_action_servers",
+]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
 
 ROSAPI_NODE = "/rosapi"
+#: ROS 2 rosapi's helper node (it asks other nodes for their parameters).
+ROSAPI_PARAMS = "/rosapi_params"
+ROSAPI_RELEASES = ("newest", "2.1.0")
+#: rosapi 2.1.0 waits this long for a node's parameter service before it gives up.
+PARAM_NODE_WAIT = 5.0
+#: What rosapi 2.1.0 does not offer yet.
+_NEWER_THAN_2_1 = (
+    "interfaces",
+    "action_type",
+    "action_goal_details",
+    "action_result_details",
+    "action_feedback_details",
+)
+
+
+@dataclass(frozen=True)
+class RosapiOptions:
+    """Which rosapi, and how fast it answers."""
+
+    #: ``"newest"``, or ``"2.1.0"``: TypeDef field names with a leading underscore (rclpy slot names), no
+    #: ``interfaces``/``action_type``/``action_*_details``, no hidden names in ``node_details``, parameters
+    #: set only when declared, one call at a time, and the calls that kill it (``get_param_names``,
+    #: ``has_param`` of an undeclared parameter, ``service_*_details`` of a type it cannot load: no answer,
+    #: and every rosapi service is gone) or hang it (a parameter of rosapi itself).
+    release: Literal["newest", "2.1.0"] = "newest"
+    #: Seconds every rosapi call takes, one call at a time (0: at once, side by side).
+    latency: float = 0.0
+
 
 _Handler = Callable[[dict[str, Any]], Coroutine[Any, Any, dict[str, Any]]]
 
@@ -80,9 +119,18 @@ def ros2_action_servers(topics: list[str]) -> list[str]:
 class Rosapi:
     """Registers every rosapi service of the dialect on the graph."""
 
-    def __init__(self, bridge: Bridge) -> None:
+    def __init__(self, bridge: Bridge, options: RosapiOptions | None = None) -> None:
         self.bridge = bridge
+        self.options = options or RosapiOptions()
+        self.legacy = self.options.release == "2.1.0"
         self.ros2 = bridge.config.dialect == "ros2"
+        #: A real rosapi answers one call at a time; the newest without latency is modelled answering at once.
+        self._turn = asyncio.Lock() if self.legacy or self.options.latency > 0 else None
+        #: How long rosapi 2.1.0 waits for a node that has no parameter service (tests shorten it).
+        self.param_node_wait = PARAM_NODE_WAIT
+        self.dead = False
+        #: rosapi 2.1.0 deadlocked (a question about its own parameters): nothing answers any more.
+        self.hung = False
         store = bridge.world.params
         self.params2 = Ros2Params(store, lambda node: node in bridge.graph.nodes)
         self.params1 = Ros1Params(store)
@@ -128,26 +176,56 @@ class Rosapi:
         package = "rosapi_msgs" if self.ros2 else "rosapi"
         registry = bridge.registry
         for name, (type_name, handler) in handlers.items():
+            if self.legacy and name in _NEWER_THAN_2_1:
+                continue
             try:
                 service_type = registry.resolve(f"{package}/{type_name}", "srv")
                 _, response_type = registry.service_parts(service_type)
-                fields = set(registry.message_typedefs(response_type)[0]["fieldnames"])
+                fields = set(registry.field_names(response_type))
             except InterfaceError as exc:
                 log.warning("rosapi %s left out: %s", name, exc)
                 continue
+
             bridge.graph.add_service(
                 ServiceEntry(f"/rosapi/{name}", service_type, ROSAPI_NODE, self._fitted(handler, fields))
             )
 
-    @staticmethod
-    def _fitted(handler: _Handler, fields: set[str]) -> _Handler:
-        """Keep only the response fields this rosapi version has (e.g. ``successful`` is Jazzy's)."""
+    def _fitted(self, handler: _Handler, fields: set[str]) -> _Handler:
+        """Keep only the response fields this rosapi version has (e.g. ``successful`` is Jazzy's), and
+        answer one call at a time when rosapi is modelled that way."""
 
         async def call(request: dict[str, Any]) -> dict[str, Any]:
-            response = await handler(request)
+            if self._turn is None:
+                response = await handler(request)
+            else:
+                async with self._turn:
+                    if self.dead or self.hung:
+                        # Queued behind the call that killed or deadlocked it: no answer, ever.
+                        await asyncio.Event().wait()
+                    if self.options.latency > 0:
+                        await asyncio.sleep(self.options.latency)
+                    response = await handler(request)
             return {k: v for k, v in response.items() if k in fields}
 
         return call
+
+    async def _die(self, reason: str) -> dict[str, Any]:
+        """rosapi 2.1.0's process ends: no answer to this call; its services and nodes leave the graph."""
+        log.error("rosapi dies: %s (every /rosapi/* call fails from now on)", reason)
+        self.dead = True
+        graph = self.bridge.graph
+        for name, entry in list(graph.services.items()):
+            if entry.node in (ROSAPI_NODE, ROSAPI_PARAMS):
+                graph.remove_service(name)
+        for node in (ROSAPI_NODE, ROSAPI_PARAMS):
+            info = graph.nodes.pop(node, None)
+            if info is not None:
+                for topic in list(info.publishes):
+                    if not graph.topic_in_use(topic):
+                        graph.topic_types.pop(topic, None)
+        self.bridge.world.notify()
+        await asyncio.Event().wait()
+        raise AssertionError("unreachable")
 
     # --- graph ----------------------------------------------------------------------------------------------
 
@@ -241,10 +319,12 @@ class Rosapi:
                     f"cannot unpack non-iterable NoneType object (unknown node {request.get('node')})"
                 )
             return {"subscribing": [], "publishing": [], "services": []}
+        shown: Callable[[str], bool] = (lambda n: not is_hidden(n)) if self.legacy else (lambda n: True)
+        # rosapi 2.1.0 asks ros2cli's node API, which leaves hidden names out.
         return {
-            "subscribing": sorted(node.subscribes),
-            "publishing": sorted(node.publishes),
-            "services": sorted(node.services),
+            "subscribing": sorted(filter(shown, node.subscribes)),
+            "publishing": sorted(filter(shown, node.publishes)),
+            "services": sorted(filter(shown, node.services)),
         }
 
     async def action_servers(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -264,7 +344,7 @@ class Rosapi:
             if not self.ros2 and ("/" in msg_type or not msg_type):
                 # roslib's loader takes pkg/Type only: 'std_msgs/msg/String' is not a valid type string.
                 msg_type = self.bridge.registry.resolve(msg_type, "msg")
-            return {"typedefs": self.bridge.registry.message_typedefs(msg_type)}
+            return {"typedefs": self._slots(self.bridge.registry.message_typedefs(msg_type))}
         except InterfaceError as exc:
             if self.ros2:
                 # ROS 2 objectutils logs the import error and answers with no typedefs.
@@ -274,12 +354,23 @@ class Rosapi:
                 return {"typedefs": []}
             raise ServiceFailure(str(exc)) from exc
 
+    def _slots(self, typedefs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """rosapi 2.1.0 names fields by the message's ``__slots__``: ``_linear``, ``_x``."""
+        if not self.legacy:
+            return typedefs
+        return [{**t, "fieldnames": [f"_{name}" for name in t["fieldnames"]]} for t in typedefs]
+
     async def _details(
         self, getter: Callable[[str], list[dict[str, Any]]], request: dict[str, Any]
     ) -> dict[str, Any]:
         try:
-            return {"typedefs": getter(request.get("type", ""))}
+            if self.legacy:
+                self.bridge.registry.service_parts(request.get("type", ""))
+            return {"typedefs": self._slots(getter(request.get("type", "")))}
         except InterfaceError as exc:
+            if self.legacy:
+                # 2.1.0's loader error escapes the service callback and ends rosapi's spin.
+                return await self._die(f"service type {request.get('type')!r} does not load: {exc}")
             raise ServiceFailure(str(exc)) from exc
 
     async def service_request_details(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -314,6 +405,7 @@ class Rosapi:
     async def get_param(self, request: dict[str, Any]) -> dict[str, Any]:
         name = request.get("name", "")
         if self.ros2:
+            await self._wait_for_parameter_node(name)
             value, ok, reason = self.params2.get(name, request.get("default_value", ""))
             return {"value": value, "successful": ok, "reason": reason}
         return {"value": self.params1.get(name, request.get("default", ""))}
@@ -321,6 +413,14 @@ class Rosapi:
     async def set_param(self, request: dict[str, Any]) -> dict[str, Any]:
         name, value = request.get("name", ""), request.get("value", "")
         if self.ros2:
+            await self._wait_for_parameter_node(name)
+            if self.legacy and not self.params2.has(name):
+                # 2.1.0 sets through the node's set_parameters: an undeclared parameter stays unset.
+                try:
+                    json.loads(value)
+                except ValueError as exc:
+                    raise ServiceFailure(JSON_REQUIRED) from exc
+                return {}
             ok, reason = self.params2.set(name, value)
             self.bridge.world.notify()
             return {"successful": ok, "reason": reason}
@@ -330,13 +430,23 @@ class Rosapi:
 
     async def has_param(self, request: dict[str, Any]) -> dict[str, Any]:
         name = request.get("name", "")
+        if self.ros2 and self.legacy:
+            try:
+                node, _ = Ros2Params.split(name)
+            except ValueError:
+                return {"exists": False}
+            await self._wait_for_parameter_node(name)
+            if f"{node}/get_parameters" in self.bridge.graph.services and not self.params2.has(name):
+                # 2.1.0 reads the first value of get_parameters outside its try: rclpy answers an empty
+                # list for an undeclared name, and the IndexError ends rosapi.
+                return await self._die(f"has_param of {name}, which the node has not declared")
         return {"exists": self.params2.has(name) if self.ros2 else self.params1.has(name)}
 
     async def delete_param(self, request: dict[str, Any]) -> dict[str, Any]:
         name = request.get("name", "")
         if self.ros2:
-            if self.bridge.config.in_order:
-                # Humble 2.0.x rosapi reads `request.node_name`, which DeleteParam does not have.
+            if self.bridge.config.in_order or self.legacy:
+                # Humble 2.0.x and 2.1.0 rosapi read `request.node_name`, which DeleteParam does not have.
                 raise ServiceFailure("'DeleteParam_Request' object has no attribute 'node_name'")
             ok, reason = self.params2.delete(name)
             self.bridge.world.notify()
@@ -346,7 +456,30 @@ class Rosapi:
         return {}
 
     async def get_param_names(self, request: dict[str, Any]) -> dict[str, Any]:
+        if self.legacy:
+            # 2.1.0 asks every node's list_parameters, /rosapi_params too, which has none: after its 5 s
+            # wait the error escapes the service callback and rosapi ends.
+            await asyncio.sleep(self.param_node_wait)
+            return await self._die(f"{ROSAPI_PARAMS}/list_parameters did not come up")
         return {"names": self.params2.names() if self.ros2 else self.params1.names()}
+
+    async def _wait_for_parameter_node(self, name: str) -> None:
+        """rosapi 2.1.0 waits for the node's parameter service; a node that does not exist costs 5 s, and a
+        parameter of rosapi itself deadlocks it."""
+        if not self.legacy:
+            return
+        try:
+            node, _ = Ros2Params.split(name)
+        except ValueError:
+            return
+        if node == ROSAPI_NODE:
+            # It calls its own /rosapi/get_parameters and waits on a future only its blocked executor could
+            # complete: this call and every later rosapi call never answer; the process stays alive.
+            log.error("rosapi hangs: %s is a parameter of rosapi itself", name)
+            self.hung = True
+            await asyncio.Event().wait()
+        if f"{node}/get_parameters" not in self.bridge.graph.services:
+            await asyncio.sleep(self.param_node_wait)
 
     async def search_param(self, request: dict[str, Any]) -> dict[str, Any]:
         return {"global_name": self.params1.search(request.get("name", ""))}

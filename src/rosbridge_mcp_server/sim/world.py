@@ -111,6 +111,8 @@ class World:
     chatter_count: int = 0
     fast_count: int = 0
     camera_frames: int = 0
+    depth_frames: int = 0
+    scans: int = 0
     _changed: asyncio.Event = field(default_factory=asyncio.Event, repr=False)
 
     def notify(self) -> None:

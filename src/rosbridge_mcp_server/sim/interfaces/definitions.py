@@ -8,7 +8,7 @@ into ROS 1 form by :func:`to_ros1_text` (``builtin_interfaces/Time`` -> ``time``
 
 from __future__ import annotations
 
-__all__ = ["COMMON", "ROS1_ONLY", "ROS2_ONLY", "to_ros1_text"]
+__all__ = ["COMMON", "ROS1_ONLY", "ROS2_ONLY", "ROSAPI_2_1", "to_ros1_text"]
 
 
 _STD_SCALARS = {
@@ -381,6 +381,18 @@ ROS1_ONLY: dict[str, str] = {
     "rosapi/srv/GetParamNames": "---\nstring[] names\n",
     "rosapi/srv/SearchParam": "string name\n---\nstring global_name\n",
     "rosapi/srv/GetTime": "---\ntime time\n",
+}
+
+#: rosapi_msgs of rosbridge_suite 2.1.0 where they differ from the newest: ``None`` = not there yet.
+ROSAPI_2_1: dict[str, str | None] = {
+    "rosapi_msgs/srv/GetParam": "string name\nstring default_value\n---\nstring value\n",
+    "rosapi_msgs/srv/SetParam": "string name\nstring value\n---\n",
+    "rosapi_msgs/srv/DeleteParam": "string name\n---\n",
+    "rosapi_msgs/srv/ActionType": None,
+    "rosapi_msgs/srv/Interfaces": None,
+    "rosapi_msgs/srv/ActionGoalDetails": None,
+    "rosapi_msgs/srv/ActionResultDetails": None,
+    "rosapi_msgs/srv/ActionFeedbackDetails": None,
 }
 
 _ROS1_TOKENS = {
