@@ -23,25 +23,28 @@ Answer = tuple[bool, Any]
 class Rosbridge21:
     """Answers call_service like rosbridge 2.1.0 with the given threading switches; records every op."""
 
-    def __init__(self, *, calls_threaded: str = "false", goals_threaded: str = "false") -> None:
+    def __init__(self, *, calls_threaded: bool = False, goals_threaded: bool = False) -> None:
         self.switches = {
-            "/rosbridge_websocket:call_services_in_new_thread": calls_threaded,
-            "/rosbridge_websocket:send_action_goals_in_new_thread": goals_threaded,
+            "call_services_in_new_thread": calls_threaded,
+            "send_action_goals_in_new_thread": goals_threaded,
         }
         self.ops: list[dict[str, Any]] = []
         self.services: dict[str, Callable[[dict[str, Any]], Answer]] = {
             "/rosapi/get_ros_version": lambda _args: (True, {"version": 2, "distro": "jazzy"}),
             "/rosapi/nodes": lambda _args: (True, {"nodes": ["/rosapi", "/rosbridge_websocket", "/fib"]}),
-            "/rosapi/get_param": self._get_param,
+            "/rosbridge_websocket/get_parameters": self._get_parameters,
             "/rosapi/action_servers": lambda _args: (True, {"action_servers": ["/fibonacci"]}),
             "/rosapi/topic_type": lambda _args: (True, {"type": ""}),
             "/fibonacci/_action/send_goal": self._send_goal,
         }
 
-    def _get_param(self, args: dict[str, Any]) -> Answer:
-        if "default_value" not in args:
-            return False, "Message type rosapi_msgs/GetParam_Request does not have a field default"
-        return True, {"value": self.switches.get(args["name"], json.dumps(args["default_value"]))}
+    def _get_parameters(self, args: dict[str, Any]) -> Answer:
+        # As rclpy answers: a ParameterValue per name, type 1 (bool) if declared, 0 if not.
+        values = [
+            {"type": 1, "bool_value": self.switches[name]} if name in self.switches else {"type": 0}
+            for name in args.get("names", [])
+        ]
+        return True, {"values": values}
 
     def _send_goal(self, args: dict[str, Any]) -> Answer:
         # 2.1.0 cannot load an action's services; the real text, before any request is built.
@@ -97,21 +100,23 @@ async def test_a_bridge_that_threads_its_calls_is_not_in_order(
     serve_bridge: Callable[[Rosbridge21], Any], make_client: MakeClient
 ) -> None:
     """call_services_in_new_thread true: calls share the main connection; goals follow their own switch."""
-    bridge = Rosbridge21(calls_threaded="true", goals_threaded="false")
+    bridge = Rosbridge21(calls_threaded=True, goals_threaded=False)
     client = await make_client(await serve_bridge(bridge))
     info = await client.ros_info()
     assert not info.may_be_in_order
     assert info.goals_may_block
 
 
-async def test_a_bridge_node_of_another_name_is_not_asked_and_counts_as_in_order(
+async def test_a_bridge_node_of_another_name_counts_as_in_order(
     serve_bridge: Callable[[Rosbridge21], Any], make_client: MakeClient
 ) -> None:
-    """No /rosbridge_websocket in the graph: no get_param (rosapi would stall 5 s), in-order assumed."""
-    bridge = Rosbridge21(calls_threaded="true", goals_threaded="true")
-    bridge.services["/rosapi/nodes"] = lambda _args: (True, {"nodes": ["/rosapi", "/my_bridge"]})
+    """No /rosbridge_websocket/get_parameters: the bridge did not tell, so in-order is assumed; rosapi's
+    get_param (5 s for a node that does not exist) is never asked."""
+    bridge = Rosbridge21(calls_threaded=True, goals_threaded=True)
+    del bridge.services["/rosbridge_websocket/get_parameters"]
     client = await make_client(await serve_bridge(bridge))
     info = await client.ros_info()
+    assert (info.calls_threaded, info.goals_threaded) == (None, None)
     assert info.may_be_in_order
     assert not [op for op in bridge.ops if op.get("service") == "/rosapi/get_param"]
 

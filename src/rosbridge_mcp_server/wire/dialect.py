@@ -51,7 +51,7 @@ class RosInfo:
 
     ``calls_threaded`` and ``goals_threaded`` are what a ROS 2 bridge says about itself (its node's
     ``call_services_in_new_thread`` and ``send_action_goals_in_new_thread`` parameters), ``None`` when it
-    could not tell. The distro says nothing here: rosbridge 2.1.0 runs a connection's calls in order on
+    did not tell. The distro says nothing here: rosbridge 2.1.0 runs a connection's calls in order on
     Jazzy and Kilted alike, later releases changed the launch defaults, and a launch file may override them.
     What was verified on which release: docs/rosbridge-behaviour.md.
     """
