@@ -70,6 +70,7 @@ async def test_command_serves_the_robot_and_stops_cleanly_on_a_signal(
         ["--distro", "iron-ish"],
         ["--rosapi", "1.0"],
         ["--rosapi-latency", "-1"],
+        ["--rosapi-latency", "0.005,x"],
     ],
 )
 async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str]) -> None:
@@ -99,7 +100,15 @@ async def test_a_port_in_use_is_one_line_and_exit_code_1(sim_ros2: SimulatedRobo
 async def test_command_serves_a_bridge_like_the_real_2_1_0_on_kilted() -> None:
     """--in-order --distro kilted --rosapi 2.1.0: the distro is kilted, TypeDef fields are underscored."""
     process, url = await _start(
-        "--port", "0", "--in-order", "--distro", "kilted", "--rosapi", "2.1.0", "--rosapi-latency", "0.001"
+        "--port",
+        "0",
+        "--in-order",
+        "--distro",
+        "kilted",
+        "--rosapi",
+        "2.1.0",
+        "--rosapi-latency",
+        "0.001,0.002",
     )
     try:
         async with await RawClient.open(url) as client:

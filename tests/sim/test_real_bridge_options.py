@@ -4,6 +4,7 @@ and the per-node services of a real graph."""
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import pytest
 from rawclient import MakeSim, RawClient
@@ -24,6 +25,19 @@ async def test_rosapi_latency_serves_one_call_at_a_time(make_sim: MakeSim) -> No
         elapsed = time.monotonic() - started
     assert all("/chatter" in a["values"]["topics"] for a in answers)
     assert elapsed >= 4 * LATENCY * 0.95
+
+
+async def test_rosapi_latencies_are_taken_in_turn(make_sim: MakeSim) -> None:
+    """(fast, fast, fast, slow): every fourth rosapi call is the slow one, as a real ROS 2 rosapi's p90."""
+    robot = await make_sim(dialect="ros2", rosapi_latency=(0.0, 0.0, 0.0, 0.25))
+    durations = []
+    async with await RawClient.open(robot.url) as client:
+        for _ in range(8):
+            started = time.monotonic()
+            await client.values("/rosapi/get_time")
+            durations.append(time.monotonic() - started)
+    slow = [n for n, d in enumerate(durations) if d >= 0.25 * 0.95]
+    assert slow == [3, 7]
 
 
 async def test_rosapi_latency_does_not_slow_other_services(make_sim: MakeSim) -> None:
@@ -121,18 +135,28 @@ async def test_rosapi_2_1_node_details_leaves_hidden_names_out(make_sim: MakeSim
     assert len(node["services"]) == 7
 
 
+async def _send_unanswered(client: RawClient, service: str, args: dict[str, Any], call_id: str) -> None:
+    await client.send({"op": "call_service", "service": service, "args": args, "id": call_id})
+
+
+def _answered(client: RawClient, call_id: str) -> bool:
+    """Whether a reply with ``call_id`` has arrived (the replies waited for since are kept in the backlog)."""
+    return any(frame.get("id") == call_id for frame in client.backlog)
+
+
 async def test_rosapi_2_1_dies_on_get_param_names(make_sim: MakeSim) -> None:
     """The call that kills rosapi 2.1.0 gets no answer, and every rosapi service is gone afterwards."""
     robot = await make_sim(dialect="ros2", rosapi="2.1.0")
     robot.rosapi_node.param_node_wait = 0.05
     async with await RawClient.open(robot.url) as client:
-        names = await client.call("/rosapi/get_param_names", timeout=0.5)
+        await _send_unanswered(client, "/rosapi/get_param_names", {}, "killer")
+        await robot.wait_for(lambda _: robot.rosapi_node.dead, timeout=2.0)
         topics = await client.call("/rosapi/topics")
         total = await client.values("/add_two_ints", {"a": 1, "b": 1})
-    assert names["values"] == "Timeout exceeded while waiting for service response"
+        answered = _answered(client, "killer")
     assert topics["values"] == "Service /rosapi/topics does not exist"
     assert total == {"sum": 2}
-    assert robot.rosapi_node.dead
+    assert not answered
     assert "/rosapi" not in robot.graph.nodes
 
 
@@ -141,23 +165,27 @@ async def test_rosapi_2_1_dies_on_has_param_of_an_undeclared_parameter(make_sim:
     robot = await make_sim(dialect="ros2", rosapi="2.1.0")
     async with await RawClient.open(robot.url) as client:
         declared = await client.values("/rosapi/has_param", {"name": "/turtlesim:background_r"})
-        undeclared = await client.call("/rosapi/has_param", {"name": "/turtlesim:nope"}, timeout=0.3)
+        await _send_unanswered(client, "/rosapi/has_param", {"name": "/turtlesim:nope"}, "killer")
+        await robot.wait_for(lambda _: robot.rosapi_node.dead, timeout=2.0)
         topics = await client.call("/rosapi/topics")
+        answered = _answered(client, "killer")
     assert declared == {"exists": True}
-    assert undeclared["values"] == "Timeout exceeded while waiting for service response"
     assert topics["values"] == "Service /rosapi/topics does not exist"
+    assert not answered
 
 
 async def test_rosapi_2_1_hangs_for_good_on_a_parameter_of_rosapi_itself(make_sim: MakeSim) -> None:
     """get_param of /rosapi:use_sim_time deadlocks 2.1.0: no answer, nor to any later rosapi call."""
     robot = await make_sim(dialect="ros2", rosapi="2.1.0")
     async with await RawClient.open(robot.url) as client:
-        own = await client.call("/rosapi/get_param", {"name": "/rosapi:use_sim_time"}, timeout=0.3)
-        later = await client.call("/rosapi/topics", timeout=0.3)
+        await _send_unanswered(client, "/rosapi/get_param", {"name": "/rosapi:use_sim_time"}, "own")
+        await robot.wait_for(lambda _: robot.rosapi_node.hung, timeout=2.0)
+        await _send_unanswered(client, "/rosapi/topics", {}, "later")
+        await robot.wait_for(lambda w: w.service_calls.get("/rosapi/topics", 0) == 1, timeout=2.0)
         total = await client.values("/add_two_ints", {"a": 1, "b": 1})
-    assert own["values"] == later["values"] == "Timeout exceeded while waiting for service response"
+        answered = _answered(client, "own") or _answered(client, "later")
     assert total == {"sum": 2}
-    assert robot.rosapi_node.hung
+    assert not answered
     assert "/rosapi/topics" in robot.graph.services  # the process lives on
 
 
@@ -166,13 +194,26 @@ async def test_rosapi_2_1_dies_on_the_details_of_a_service_type_it_cannot_load(m
     robot = await make_sim(dialect="ros2", rosapi="2.1.0")
     async with await RawClient.open(robot.url) as client:
         unknown_msg = await client.values("/rosapi/message_details", {"type": "nope_msgs/msg/Nope"})
-        details = await client.call(
-            "/rosapi/service_request_details", {"type": "rospy_tutorials/AddTwoInts"}, timeout=0.3
-        )
+        args = {"type": "rospy_tutorials/AddTwoInts"}
+        await _send_unanswered(client, "/rosapi/service_request_details", args, "killer")
+        await robot.wait_for(lambda _: robot.rosapi_node.dead, timeout=2.0)
         nodes = await client.call("/rosapi/nodes")
+        answered = _answered(client, "killer")
     assert unknown_msg == {"typedefs": []}
-    assert details["values"] == "Timeout exceeded while waiting for service response"
     assert nodes["values"] == "Service /rosapi/nodes does not exist"
+    assert not answered
+
+
+async def test_rosbridge_2_1_ignores_a_timeout_field(make_sim: MakeSim) -> None:
+    """2.1.0's call_service has no timeout: a slow service answers after its time; the newest times out."""
+    old = await make_sim(dialect="ros2", rosapi="2.1.0", slow_service_seconds=0.3)
+    new = await make_sim(dialect="ros2", slow_service_seconds=0.3)
+    async with await RawClient.open(old.url) as client:
+        slow_old = await client.call("/slow_service", {}, timeout=0.05)
+    async with await RawClient.open(new.url) as client:
+        slow_new = await client.call("/slow_service", {}, timeout=0.05)
+    assert slow_old["result"] is True
+    assert slow_new["values"] == "Timeout exceeded while waiting for service response"
 
 
 async def test_the_newest_rosapi_survives_what_kills_2_1(sim_ros2: SimulatedRobot) -> None:
@@ -248,6 +289,7 @@ async def test_node_services_can_be_left_out(make_sim: MakeSim, dialect: str) ->
         {"dialect": "ros2", "distro": "iron-ish"},
         {"dialect": "ros2", "rosapi": "1.0"},
         {"dialect": "ros2", "rosapi_latency": -1.0},
+        {"dialect": "ros2", "rosapi_latency": (0.01, -0.01)},
     ],
 )
 def test_options_that_do_not_fit_the_dialect_are_refused(kwargs: dict[str, object]) -> None:

@@ -182,3 +182,15 @@ async def test_a_latched_topic_answers_a_new_subscriber_at_once(bridge: Bridge) 
         count = (await client.next_publish("/client_count", wait=2.0))["msg"]["data"]
     assert isinstance(count, int)
     assert count >= 0
+
+
+async def test_the_twin_waits_out_a_slow_service_despite_a_timeout_field(
+    bridge: Bridge, twin: SimulatedRobot
+) -> None:
+    """2.1.0 and 0.11.17 read no timeout field: /slow_service answers after its 3 s on both."""
+    answers = []
+    for url in (bridge.url, twin.url):
+        async with await RawClient.open(url) as client:
+            answers.append(await client.call("/slow_service", {}, timeout=0.5))
+    assert [a["result"] for a in answers] == [True, True]
+    assert answers[0]["values"] == answers[1]["values"]

@@ -42,6 +42,10 @@ def _non_negative_float(text: str) -> float:
     return value
 
 
+def _latencies(text: str) -> tuple[float, ...]:
+    return tuple(_non_negative_float(part) for part in text.split(","))
+
+
 def _port(text: str) -> int:
     try:
         value = int(text)
@@ -84,10 +88,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--rosapi-latency",
-        type=_non_negative_float,
-        default=0.0,
-        metavar="SECONDS",
-        help="every rosapi call takes this long, one at a time (default 0: at once)",
+        type=_latencies,
+        default=(0.0,),
+        metavar="SECONDS[,SECONDS...]",
+        help="each rosapi call takes this long, one at a time; several values are taken in turn (default 0)",
     )
     parser.add_argument(
         "--no-node-services",

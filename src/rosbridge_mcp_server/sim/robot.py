@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from types import TracebackType
 from typing import Literal, Self
 
@@ -39,11 +39,12 @@ class SimulatedRobot:
 
     ``distro`` (ROS 2) is what ``get_ros_version`` says and decides whether nodes offer type descriptions
     (not on Humble); by default Humble when ``in_order``, else Jazzy. ``rosapi="2.1.0"`` behaves like the
-    rosapi of rosbridge_suite 2.1.0 (underscored TypeDef field names, no ``action_type``/``interfaces``,
-    one call at a time, the calls that kill it); with ``in_order=True, distro="kilted"`` that is the real
-    2.1.0 bridge with its default settings. ``rosapi_latency`` (seconds) makes every rosapi call take that
-    long, one call at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter
-    / type description (ROS 2) and logger (ROS 1) services every real node has.
+    rosapi and ``call_service`` of rosbridge_suite 2.1.0 (underscored TypeDef field names, no
+    ``action_type``/``interfaces``, one call at a time, the calls that kill it, no service timeout); with
+    ``in_order=True, distro="kilted"`` that is the real 2.1.0 bridge with its default settings.
+    ``rosapi_latency`` (seconds, or several taken in turn) makes every rosapi call take that long, one call
+    at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter / type
+    description (ROS 2) and logger (ROS 1) services every real node has.
     """
 
     def __init__(
@@ -53,7 +54,7 @@ class SimulatedRobot:
         in_order: bool = False,
         distro: str | None = None,
         rosapi: Literal["newest", "2.1.0"] = "newest",
-        rosapi_latency: float = 0.0,
+        rosapi_latency: float | Sequence[float] = 0.0,
         node_services: bool = True,
         host: str = "127.0.0.1",
         port: int = 0,
@@ -74,16 +75,19 @@ class SimulatedRobot:
             raise ValueError(f"distro must be one of {', '.join(ROS2_DISTROS)} (ROS 2 only), not {distro!r}")
         if rosapi not in ROSAPI_RELEASES or (rosapi != "newest" and dialect != "ros2"):
             raise ValueError(f"rosapi must be 'newest' or (ROS 2 only) '2.1.0', not {rosapi!r}")
-        if not rosapi_latency >= 0:
+        latencies = (rosapi_latency,) if isinstance(rosapi_latency, int | float) else tuple(rosapi_latency)
+        if not all(latency >= 0 for latency in latencies):
             raise ValueError("rosapi_latency must be >= 0 seconds")
         if dialect == "ros2":
             config = BridgeConfig(
                 dialect="ros2",
                 in_order=in_order,
                 max_message_size=max_message_size or DEFAULT_MAX_MESSAGE_SIZE,
-                # Humble 2.0.x and 2.1.0: default_call_service_timeout 0 (forever); Jazzy 2.2.0+: 5 s.
-                default_service_timeout=0.0 if in_order else 5.0,
+                # Humble 2.0.x and 2.1.0: no service timeout (forever); Jazzy 2.2.0+: 5 s by default.
+                default_service_timeout=0.0 if in_order or rosapi != "newest" else 5.0,
                 distro=distro or ("humble" if in_order else "jazzy"),
+                # rosbridge_suite 2.1.0's call_service knows no timeout field (it waits as long as it takes).
+                timeout_field=rosapi == "newest",
             )
         else:
             config = BridgeConfig(
@@ -109,7 +113,7 @@ class SimulatedRobot:
             slow_service_seconds=slow_service_seconds,
             camera=CameraSettings(camera_width, camera_height),
             port=port,
-            rosapi=RosapiOptions(release=rosapi, latency=rosapi_latency),
+            rosapi=RosapiOptions(release=rosapi, latency=latencies),
             node_services=node_services,
         )
         self._nodes.build()

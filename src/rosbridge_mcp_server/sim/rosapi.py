@@ -8,6 +8,7 @@ with the version that has it. ROS 2 comes as the newest rosapi or as the one of 
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import logging
 import time
@@ -59,8 +60,10 @@ class RosapiOptions:
     #: ``has_param`` of an undeclared parameter, ``service_*_details`` of a type it cannot load: no answer,
     #: and every rosapi service is gone) or hang it (a parameter of rosapi itself).
     release: Literal["newest", "2.1.0"] = "newest"
-    #: Seconds every rosapi call takes, one call at a time (0: at once, side by side).
-    latency: float = 0.0
+    #: Seconds each rosapi call takes, one call at a time, the values taken in turn (``(0.005,)``: 5 ms each;
+    #: ``(0.005, 0.005, 0.005, 0.09)``: every fourth call 90 ms, as the slow mode of a real ROS 2 rosapi).
+    #: Empty or all 0: at once, side by side.
+    latency: tuple[float, ...] = ()
 
 
 _Handler = Callable[[dict[str, Any]], Coroutine[Any, Any, dict[str, Any]]]
@@ -125,7 +128,8 @@ class Rosapi:
         self.legacy = self.options.release == "2.1.0"
         self.ros2 = bridge.config.dialect == "ros2"
         #: A real rosapi answers one call at a time; the newest without latency is modelled answering at once.
-        self._turn = asyncio.Lock() if self.legacy or self.options.latency > 0 else None
+        self._latencies = itertools.cycle(self.options.latency) if any(self.options.latency) else None
+        self._turn = asyncio.Lock() if self.legacy or self._latencies is not None else None
         #: How long rosapi 2.1.0 waits for a node that has no parameter service (tests shorten it).
         self.param_node_wait = PARAM_NODE_WAIT
         self.dead = False
@@ -202,8 +206,8 @@ class Rosapi:
                     if self.dead or self.hung:
                         # Queued behind the call that killed or deadlocked it: no answer, ever.
                         await asyncio.Event().wait()
-                    if self.options.latency > 0:
-                        await asyncio.sleep(self.options.latency)
+                    if self._latencies is not None:
+                        await asyncio.sleep(next(self._latencies))
                     response = await handler(request)
             return {k: v for k, v in response.items() if k in fields}
 
@@ -477,6 +481,7 @@ class Rosapi:
             # complete: this call and every later rosapi call never answer; the process stays alive.
             log.error("rosapi hangs: %s is a parameter of rosapi itself", name)
             self.hung = True
+            self.bridge.world.notify()
             await asyncio.Event().wait()
         if f"{node}/get_parameters" not in self.bridge.graph.services:
             await asyncio.sleep(self.param_node_wait)

@@ -63,6 +63,8 @@ class BridgeConfig:
     #: Service timeout when the request has no ``timeout`` field; 0 = wait forever.
     default_service_timeout: float
     distro: str
+    #: Whether ``call_service`` reads a ``timeout`` field (ROS 2; rosbridge_suite 2.1.0 ignores it).
+    timeout_field: bool = True
 
 
 def check_fields(msg: dict[str, Any], fields: list[FieldSpec]) -> None:

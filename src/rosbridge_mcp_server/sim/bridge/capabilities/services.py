@@ -111,13 +111,14 @@ class Services(Capability):
             (False, "fragment_size", (int, type(None))),
             (False, "compression", (str,)),
         ]
-        if self.core.ros2:
+        honours_timeout = self.core.ros2 and self.core.config.timeout_field
+        if honours_timeout:
             fields.append((False, "timeout", (int, float)))
         check_fields(msg, fields)
         service = msg["service"]
         name, cid = extract_id(service, msg.get("id"))
         timeout = self.core.config.default_service_timeout
-        if self.core.ros2 and "timeout" in msg:
+        if honours_timeout and "timeout" in msg:
             timeout = float(msg["timeout"])
         reply: dict[str, Any] = {"op": "service_response", "service": service}
         try:
