@@ -155,3 +155,49 @@ async def test_a_newer_bridges_refusal_names_the_type_too(
     )
     client = await make_client(await serve_bridge(bridge))
     assert await RosGraph(client).action_type("/fibonacci") == "example_interfaces/action/Fibonacci"
+
+
+def _strict(service_type: str) -> Callable[[dict[str, Any]], Answer]:
+    """A service as rosbridge converts its request: an unknown field is refused, naming the request type."""
+
+    def answer(args: dict[str, Any]) -> Answer:
+        unknown = [name for name in args if name.startswith("_")]
+        if unknown:
+            return False, f"Message type {service_type}_Request does not have a field {unknown[0]}"
+        return True, {}
+
+    return answer
+
+
+async def test_list_services_reads_types_from_the_bridges_refusals(
+    serve_bridge: Callable[[Rosbridge21], Any], make_client: MakeClient
+) -> None:
+    """A bridge that refuses unknown fields names each service's type; rosapi's service_type is not asked."""
+    bridge = Rosbridge21()
+    bridge.services["/rosapi/services"] = lambda _args: (
+        True,
+        {"services": ["/add_two_ints", "/rosapi/get_time"]},
+    )
+    bridge.services["/rosapi/get_time"] = _strict("rosapi_msgs/GetTime")
+    bridge.services["/add_two_ints"] = _strict("example_interfaces/AddTwoInts")
+    client = await make_client(await serve_bridge(bridge))
+    entries = await RosGraph(client).services()
+    assert [(entry.name, entry.type) for entry in entries] == [
+        ("/add_two_ints", "example_interfaces/srv/AddTwoInts"),
+        ("/rosapi/get_time", "rosapi_msgs/srv/GetTime"),
+    ]
+    assert not [op for op in bridge.ops if op.get("service") == "/rosapi/service_type"]
+
+
+async def test_a_bridge_that_takes_unknown_fields_is_never_probed(
+    serve_bridge: Callable[[Rosbridge21], Any], make_client: MakeClient
+) -> None:
+    """If rosapi's get_time takes the probe field, no service is probed: rosapi's service_type is asked."""
+    bridge = Rosbridge21()
+    bridge.services["/rosapi/services"] = lambda _args: (True, {"services": ["/reset"]})
+    bridge.services["/rosapi/get_time"] = lambda _args: (True, {"time": {"sec": 1, "nanosec": 0}})
+    bridge.services["/rosapi/service_type"] = lambda _args: (True, {"type": "std_srvs/srv/Empty"})
+    client = await make_client(await serve_bridge(bridge))
+    entries = await RosGraph(client).services()
+    assert [(entry.name, entry.type) for entry in entries] == [("/reset", "std_srvs/srv/Empty")]
+    assert not [op for op in bridge.ops if op.get("service") == "/reset"], "/reset is never called"

@@ -114,6 +114,9 @@ class _ConnectionKnowledge:
     service_types: dict[str, str] = field(default_factory=dict)
     action_types: dict[str, str] = field(default_factory=dict)
     no_action_type_service: bool = False
+    # Types the bridge named when refusing a probe call; only listed, never used to ask rosapi for details.
+    listed_types: dict[str, str] = field(default_factory=dict)
+    refuses_unknown_fields: bool | None = None
 
 
 class RosGraph:
@@ -234,13 +237,56 @@ class RosGraph:
         """
         info = await self.ros_info()
         names = await self.service_names()
-        known = self._known.service_types
-        for gone in known.keys() - set(names):
-            del known[gone]
+        known, listed = self._known.service_types, self._known.listed_types
+        for cache in (known, listed):
+            for gone in cache.keys() - set(names):
+                del cache[gone]
         fixed = infrastructure_types(names, info.version)
-        missing = [name for name in names if name not in known and name not in fixed]
-        await _bounded_map(self._service_type_or_blank, missing)
-        return [ServiceEntry(name, fixed.get(name) or known.get(name, "")) for name in names]
+        missing = [name for name in names if name not in known and name not in listed and name not in fixed]
+        if missing and info.version == 2 and await self._refuses_unknown_fields():
+            await _bounded_map(self._listed_type, missing)
+        else:
+            await _bounded_map(self._service_type_or_blank, missing)
+        return [
+            ServiceEntry(name, fixed.get(name) or known.get(name) or listed.get(name, "")) for name in names
+        ]
+
+    async def _refuses_unknown_fields(self) -> bool:
+        """Whether this bridge refuses a request with a field no message has, before calling anything.
+
+        Every rosbridge we know does ("Message type X_Request does not have a field ..."); it is checked once
+        per connection on rosapi's harmless ``get_time`` before any other service is probed that way.
+        """
+        if self._known.refuses_unknown_fields is None:
+            try:
+                await self._client.call_service("/rosapi/get_time", {_PROBE_FIELD: 0}, timeout=_PROBE_SECONDS)
+            except ServiceError as exc:
+                self._known.refuses_unknown_fields = "does not have a field" in exc.message
+            except RequestTimeoutError:
+                self._known.refuses_unknown_fields = False
+            else:
+                self._known.refuses_unknown_fields = False
+        return self._known.refuses_unknown_fields
+
+    async def _listed_type(self, service: str) -> None:
+        """A service's type for the listing, from the bridge's refusal of a probe call; rosapi if none.
+
+        rosbridge 2.1.0 answers such a probe in ~2-12 ms without creating a ROS client, where each rosapi
+        ``service_type`` call creates one and about a quarter of them take ~90 ms
+        (docs/rosbridge-behaviour.md).
+        The type is only shown: checking a request still asks rosapi, so a misread refusal can never make
+        rosapi describe a type it cannot load (that ends rosapi 2.1.0).
+        """
+        try:
+            await self._client.call_service(service, {_PROBE_FIELD: 0}, timeout=_PROBE_SECONDS)
+        except ServiceError as exc:
+            found = _service_type_from_refusal(exc.message)
+            if found:
+                self._known.listed_types[service] = found
+                return
+        except RequestTimeoutError:
+            pass  # a glob-denied service gets no answer at all; rosapi may still know its type
+        await self._service_type_or_blank(service)
 
     # --- actions ----------------------------------------------------------------------------------
 
@@ -515,6 +561,21 @@ def infrastructure_types(names: Iterable[str], version: int) -> dict[str, str]:
 _PROBE_FIELD = "__type_probe__"
 _IMPORT_REFUSAL = re.compile(r"Unable to import \w+ class (\w+)_SendGoal from package (\w+)")
 _FIELD_REFUSAL = re.compile(r"Message type (\w+)/(?:action/)?(\w+)_SendGoal_Request does not have a field")
+
+
+#: How long a probe call may take before rosapi is asked instead (a refusal comes in ~2-20 ms).
+_PROBE_SECONDS = 1.0
+_SERVICE_FIELD_REFUSAL = re.compile(r"Message type (\w+)/(?:srv/)?(\w+)_Request does not have a field")
+_SERVICE_IMPORT_REFUSAL = re.compile(r"Unable to import srv class (\w+) from package (\w+)")
+
+
+def _service_type_from_refusal(text: str) -> str | None:
+    """``pkg/srv/Name`` from a ROS 2 bridge's refusal of a probe call, or ``None``."""
+    if match := _SERVICE_FIELD_REFUSAL.search(text):
+        return f"{match.group(1)}/srv/{match.group(2)}"
+    if match := _SERVICE_IMPORT_REFUSAL.search(text):
+        return f"{match.group(2)}/srv/{match.group(1)}"
+    return None
 
 
 def _action_type_from_refusal(text: str) -> str | None:
