@@ -236,14 +236,18 @@ class RosGraph:
         their names (:func:`infrastructure_types`) without asking.
         """
         info = await self.ros_info()
-        names = await self.service_names()
+        if info.version == 2:
+            # Asked side by side: the check is answered once per connection, then kept.
+            names, probing = await asyncio.gather(self.service_names(), self._refuses_unknown_fields())
+        else:
+            names, probing = await self.service_names(), False
         known, listed = self._known.service_types, self._known.listed_types
         for cache in (known, listed):
             for gone in cache.keys() - set(names):
                 del cache[gone]
         fixed = infrastructure_types(names, info.version)
         missing = [name for name in names if name not in known and name not in listed and name not in fixed]
-        if missing and info.version == 2 and await self._refuses_unknown_fields():
+        if missing and probing:
             await _bounded_map(self._listed_type, missing)
         else:
             await _bounded_map(self._service_type_or_blank, missing)
