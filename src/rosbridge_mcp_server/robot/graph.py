@@ -248,7 +248,7 @@ class RosGraph:
         fixed = infrastructure_types(names, info.version)
         missing = [name for name in names if name not in known and name not in listed and name not in fixed]
         if missing and probing:
-            await _bounded_map(self._listed_type, missing)
+            await _bounded_map(self._listed_type, missing, _PROBE_CONCURRENCY)
         else:
             await _bounded_map(self._service_type_or_blank, missing)
         return [
@@ -567,6 +567,9 @@ _IMPORT_REFUSAL = re.compile(r"Unable to import \w+ class (\w+)_SendGoal from pa
 _FIELD_REFUSAL = re.compile(r"Message type (\w+)/(?:action/)?(\w+)_SendGoal_Request does not have a field")
 
 
+#: Probes are refused before the bridge makes a ROS client, so more may run at once than rosapi look-ups
+#: (2.1.0 lost calls only with sixteen or more in flight).
+_PROBE_CONCURRENCY = 8
 #: How long a probe call may take before rosapi is asked instead (a refusal comes in ~2-20 ms).
 _PROBE_SECONDS = 1.0
 _SERVICE_FIELD_REFUSAL = re.compile(r"Message type (\w+)/(?:srv/)?(\w+)_Request does not have a field")
@@ -603,8 +606,10 @@ def _strings(value: Any) -> list[str]:
     return [item for item in value if isinstance(item, str)]
 
 
-async def _bounded_map(func: Callable[[_T], Awaitable[_R]], items: Iterable[_T]) -> list[_R]:
-    semaphore = asyncio.Semaphore(_LOOKUP_CONCURRENCY)
+async def _bounded_map(
+    func: Callable[[_T], Awaitable[_R]], items: Iterable[_T], limit: int = _LOOKUP_CONCURRENCY
+) -> list[_R]:
+    semaphore = asyncio.Semaphore(limit)
 
     async def one(item: _T) -> _R:
         async with semaphore:
