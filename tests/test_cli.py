@@ -107,11 +107,13 @@ async def test_check_against_a_robot_reports_version_features_and_counts(dialect
     assert "rosapi answers" in text
     if dialect == "ros2":
         assert "actions: native action ops" in text
-        assert "the bridge reads the timeout field" in text
-        assert "calls on one connection run side by side" in text
+        assert "[ok  ] messages: a geometry_msgs/msg/Twist is checked before it is published" in text
+        assert "action types: known (/fibonacci is example_interfaces/action/Fibonacci)" in text
     else:
         assert "actions: over actionlib topics" in text
         assert "no timeout field" in text
+        assert "[ok  ] messages: a geometry_msgs/Twist is checked before it is published" in text
+    assert "[ok  ] calls on one connection run side by side (measured" in text
     assert "Healthy" in text
     counts = next(line for line in text.splitlines() if "topics," in line)
     topics = int(counts.split("]", 1)[1].split()[0])
@@ -126,7 +128,8 @@ async def test_check_notes_an_in_order_humble_bridge() -> None:
         code = await run_check(Config(url=robot.url), out)
     assert code == 0
     assert "ROS 2 (humble)" in out.getvalue()
-    assert "strictly in order" in out.getvalue()
+    assert "[ok  ] a slow service call holds up later calls on its connection" in out.getvalue()
+    assert "strictly in order; its call_services_in_new_thread: false" in out.getvalue()
 
 
 def test_check_demo_runs_against_the_built_in_robot(capsys: pytest.CaptureFixture[str]) -> None:
@@ -168,3 +171,14 @@ async def test_check_of_a_plain_bridge_over_wss_suggests_ws(sim_ros2: SimulatedR
     code = await run_check(Config(url=sim_ros2.url.replace("ws://", "wss://"), connect_timeout=3.0), out)
     assert code == 1
     assert "use ws:// instead of wss://" in out.getvalue()
+
+
+async def test_check_fails_a_bridge_whose_calls_queue_though_it_says_they_do_not() -> None:
+    """The ordering is measured: a bridge claiming threaded calls but running them in order is unhealthy."""
+    async with SimulatedRobot(dialect="ros2", in_order=True, port=0) as robot:
+        robot.bridge.world.params["/rosbridge_websocket:call_services_in_new_thread"] = True
+        out = io.StringIO()
+        code = await run_check(Config(url=robot.url), out)
+    assert code == 1, out.getvalue()
+    assert "[FAIL] a slow service call holds up later calls on its connection" in out.getvalue()
+    assert "Not healthy" in out.getvalue()

@@ -230,3 +230,58 @@ def test_short_type_name_drops_the_category() -> None:
     assert short_type_name("geometry_msgs/msg/Twist") == "geometry_msgs/Twist"
     assert short_type_name("std_srvs/srv/Trigger") == "std_srvs/Trigger"
     assert short_type_name("geometry_msgs/Twist") == "geometry_msgs/Twist"
+
+
+# As rosapi 2.1.0 (Jazzy and Kilted) answers message_details: slot names, properties among the constants.
+TWIST_SLOTS = typedefs_from_rosapi(
+    {
+        "typedefs": [
+            {
+                "type": "geometry_msgs/Twist",
+                "fieldnames": ["_linear", "_angular"],
+                "fieldtypes": ["geometry_msgs/Vector3", "geometry_msgs/Vector3"],
+                "fieldarraylen": [-1, -1],
+                "examples": ["{}", "{}"],
+                "constnames": ["SLOT_TYPES", "angular", "linear"],
+                "constvalues": [
+                    "(<rosidl_parser.definition.NamespacedType object at 0x7f6f1c6bde70>, ...)",
+                    "geometry_msgs.msg.Vector3(x=0.0, y=0.0, z=0.0)",
+                    "geometry_msgs.msg.Vector3(x=0.0, y=0.0, z=0.0)",
+                ],
+            },
+            {
+                "type": "geometry_msgs/Vector3",
+                "fieldnames": ["_x", "_y", "_z"],
+                "fieldtypes": ["double", "double", "double"],
+                "fieldarraylen": [-1, -1, -1],
+                "examples": ["0.0", "0.0", "0.0"],
+                "constnames": ["SLOT_TYPES", "x", "y", "z"],
+                "constvalues": ["(...)", "0.0", "0.0", "0.0"],
+            },
+        ]
+    }
+)
+
+
+def test_slot_named_typedefs_check_messages_by_their_plain_field_names() -> None:
+    """A Twist described with _linear/_angular accepts linear/angular, as the bridge itself does."""
+    message = {"linear": {"x": 1.0}, "angular": {"z": 0.5}}
+    assert find_problems(message, "geometry_msgs/msg/Twist", TWIST_SLOTS, ros_version=2) == []
+
+
+def test_slot_names_are_never_offered_to_the_model() -> None:
+    """An underscore name is refused, and neither the suggestion nor the example shows one."""
+    problems = find_problems({"_linear": {"x": 1.0}}, "geometry_msgs/Twist", TWIST_SLOTS, ros_version=2)
+    assert len(problems) == 1
+    assert "did you mean linear?" in problems[0]
+    assert "_linear" not in problems[0].split(":", 1)[1]
+    example = example_message("geometry_msgs/Twist", TWIST_SLOTS, ros_version=2)
+    assert example == {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+
+
+def test_a_typedef_with_plain_names_keeps_them() -> None:
+    """Only a TypeDef whose every field starts with an underscore is in slot names."""
+    typedefs = typedefs_from_rosapi(
+        {"typedefs": [_typedef("pkg/Odd", [("_a", "int32", -1), ("b", "int32", -1)])]}
+    )
+    assert typedefs["pkg/Odd"].fieldnames == ("_a", "b")

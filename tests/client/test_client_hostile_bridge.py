@@ -74,7 +74,12 @@ class HostileBridge:
                     await ws.send(
                         json.dumps({"op": "fragment", "id": f"f{n}", "data": chunk, "num": 0, "total": 9})
                     )
-            values = {"version": 2, "distro": "jazzy"} if service == "/rosapi/get_ros_version" else {}
+            values: dict[str, object] = {}
+            if service == "/rosapi/get_ros_version":
+                values = {"version": 2, "distro": "jazzy"}
+            elif service == "/rosbridge_websocket/get_parameters":
+                # It threads its calls, so the client keeps them on the one connection under test.
+                values = {"values": [{"type": 1, "bool_value": True}] * 2}
             await ws.send(
                 json.dumps(
                     {

@@ -18,7 +18,22 @@ async def test_a_hundred_concurrent_calls_each_get_their_own_reply(client: Rosbr
         *(client.call_service("/add_two_ints", {"a": i, "b": 1000}) for i in range(100))
     )
     assert [r["sum"] for r in results] == [i + 1000 for i in range(100)]
-    assert client.lanes.opened == 0, "a non-Humble bridge multiplexes calls on the main connection"
+    info = await client.ros_info()
+    if info.version == 2:
+        assert client.lanes.opened == 0, "a threaded ROS 2 bridge multiplexes calls on the main connection"
+    else:
+        # rosbridge 0.11.17 answers a second call in flight on one socket ~40 ms late: calls are spread.
+        assert 1 <= client.lanes.opened <= client.lanes.cap
+
+
+async def test_ros1_calls_one_after_another_stay_on_the_main_connection(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """On ROS 1 a call goes on the main connection when no other call is in flight there."""
+    client = await make_client(await make_sim(dialect="ros1"))
+    for i in range(5):
+        assert (await client.call_service("/add_two_ints", {"a": i, "b": 1}))["sum"] == i + 1
+    assert client.lanes.opened == 0
 
 
 async def test_a_hundred_concurrent_calls_on_humble_use_a_bounded_pool_of_lanes(

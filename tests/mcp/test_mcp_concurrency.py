@@ -18,13 +18,24 @@ SLOW_SECONDS = 30.0
 HUMBLE_SLOW_SECONDS = 4.0
 
 
-@pytest.fixture(params=["ros2", "ros1", "humble"])
+@pytest.fixture(params=["ros2", "ros1", "humble", "jazzy-2.1.0"])
 async def robot(
     request: pytest.FixtureRequest, make_sim: Callable[..., Awaitable[SimulatedRobot]]
 ) -> SimulatedRobot:
-    """Each dialect, and ROS 2 with Humble's one-connection-in-order behaviour, with a very slow service."""
+    """Each dialect, and ROS 2 handling each connection in order, with a very slow service.
+
+    "jazzy-2.1.0" is rosbridge 2.1.0 on Jazzy with its launch defaults: in order although the distro is Jazzy.
+    """
     if request.param == "humble":
         return await make_sim(dialect="ros2", in_order=True, slow_service_seconds=HUMBLE_SLOW_SECONDS)
+    if request.param == "jazzy-2.1.0":
+        return await make_sim(
+            dialect="ros2",
+            in_order=True,
+            distro="jazzy",
+            rosapi="2.1.0",
+            slow_service_seconds=HUMBLE_SLOW_SECONDS,
+        )
     return await make_sim(dialect=request.param, slow_service_seconds=SLOW_SECONDS)
 
 

@@ -72,6 +72,28 @@ async def test_list_services_shows_every_service_with_its_type(session: Session,
     assert all(services.values()), "every simulated service has a known type"
 
 
+async def test_list_services_looks_each_type_up_once_and_never_for_per_node_services(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """Per-node and rosapi services are typed by name; the next listing only asks for the names again."""
+    first = (await session.ok("list_services")).structured_content
+    assert first is not None
+    services = {row["name"]: row["type"] for row in first["services"]}
+    per_node = "/turtlesim/get_parameters" if sim.dialect == "ros2" else "/turtlesim/get_loggers"
+    assert services[per_node] in ("rcl_interfaces/srv/GetParameters", "roscpp/GetLoggers")
+    assert services["/rosapi/topics"] in ("rosapi_msgs/srv/Topics", "rosapi/Topics")
+    assert all(services.values()), "every service is typed"
+    looked_up = sim.world.service_calls.get("/rosapi/service_type", 0)
+    assert looked_up < len(services) / 2, "per-node and rosapi services need no look-up"
+    calls = dict(sim.world.service_calls)
+    second = (await session.ok("list_services")).structured_content
+    assert second == first
+    asked = {
+        name: n - calls.get(name, 0) for name, n in sim.world.service_calls.items() if n != calls.get(name)
+    }
+    assert asked == {"/rosapi/services": 1}
+
+
 async def test_list_actions_lists_each_server_once_with_its_type(
     session: Session, sim: SimulatedRobot
 ) -> None:
@@ -82,6 +104,20 @@ async def test_list_actions_lists_each_server_once_with_its_type(
     assert data["actions"] == [{"name": "/fibonacci", "type": types_for(sim)["fibonacci"]}]
     assert data["count"] == 1
     assert "/fibonacci" in text_of(result)
+
+
+async def test_list_actions_asks_an_action_type_once_per_connection(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """The next listing asks only for the action servers: a server's type is kept while it is listed."""
+    first = (await session.ok("list_actions")).structured_content
+    calls = dict(sim.world.service_calls)
+    second = (await session.ok("list_actions")).structured_content
+    assert second == first
+    asked = {
+        name: n - calls.get(name, 0) for name, n in sim.world.service_calls.items() if n != calls.get(name)
+    }
+    assert asked == {"/rosapi/action_servers": 1}
 
 
 async def test_listings_and_a_service_call_work_on_a_humble_in_order_bridge(

@@ -10,7 +10,8 @@ runs a goal for a second or more and sends feedback while it runs::
     ROSBRIDGE_TEST_ACTION=/fibonacci ROSBRIDGE_TEST_ACTION_TYPE=actionlib_tutorials/FibonacciAction \\
     ROSBRIDGE_TEST_ACTION_GOAL='{"order": 20}' ...
 
-The tests publish only on topics under ``/mcp_test/`` and call only rosapi's read-only services.
+The tests publish only on topics under ``/mcp_test/`` and call only rosapi's read-only services and a service
+they offer themselves under ``/mcp_test/``.
 """
 
 from __future__ import annotations
@@ -24,11 +25,13 @@ from collections.abc import AsyncIterator
 from typing import Any
 
 import pytest
+import websockets
 from mcp.types import CallToolResult
 from mcp_harness import Session, open_session, text_of
 
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.wire.dialect import action_type_names
 
 REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
 ACTION = os.environ.get("ROSBRIDGE_TEST_ACTION")
@@ -119,6 +122,26 @@ async def test_a_published_string_reaches_a_subscriber(real: Session) -> None:
     assert message == {"data": text}
 
 
+async def test_a_twist_passes_the_check_and_reaches_a_subscriber(real: Session) -> None:
+    """A geometry Twist as a model writes it is checked against rosapi's TypeDefs and delivered as sent."""
+    twist = "geometry_msgs/Twist" if await _version(real) == 1 else "geometry_msgs/msg/Twist"
+    topic = "/mcp_test/cmd_vel"
+    sent = {"linear": {"x": 0.25}, "angular": {"z": 0.5}}
+    async with real.ros.subscribe(topic, twist) as sub:
+
+        async def delivered() -> dict[str, Any]:
+            while True:
+                await real.ok("publish_topic", {"topic": topic, "message_type": twist, "message": sent})
+                try:
+                    return await sub.get(timeout=0.5)
+                except TimeoutError:
+                    continue
+
+        message = await asyncio.wait_for(delivered(), WAIT)
+    assert message["linear"] == {"x": 0.25, "y": 0.0, "z": 0.0}
+    assert message["angular"] == {"x": 0.0, "y": 0.0, "z": 0.5}
+
+
 async def test_a_message_that_does_not_fit_its_type_is_refused(real: Session) -> None:
     """A string in a float field is refused before anything is published, naming the field."""
     twist = "geometry_msgs/Twist" if await _version(real) == 1 else "geometry_msgs/msg/Twist"
@@ -189,6 +212,62 @@ async def test_list_actions_names_each_action_once(real: Session) -> None:
     assert data["count"] == len(names)
     if ACTION:
         assert ACTION in names
+
+
+async def test_list_actions_types_the_test_action(real: Session) -> None:
+    """The test action is listed with its type, whether or not rosapi has action_type."""
+    action, action_type = _needs_action()
+    data = (await real.ok("list_actions")).structured_content
+    assert data is not None
+    row = next(row for row in data["actions"] if row["name"] == action)
+    expected = action_type_names(action_type).for_version(await _version(real))
+    assert row["type"] == expected
+
+
+async def test_a_slow_service_call_does_not_hold_up_other_tools(real: Session) -> None:
+    """While one publish_service waits on a slow service, list_topics still answers at once."""
+    assert REAL_URL is not None
+    version = await _version(real)
+    name = f"/mcp_test/slow_{os.getpid()}"
+    trigger = "std_srvs/Trigger" if version == 1 else "std_srvs/srv/Trigger"
+    async with websockets.connect(REAL_URL, compression=None) as host:
+        await host.send(json.dumps({"op": "advertise_service", "service": name, "type": trigger}))
+        try:
+            await _until_listed(real, name)
+            call = asyncio.create_task(
+                real.call("publish_service", {"service": name, "service_type": trigger, "request": {}})
+            )
+            request = await asyncio.wait_for(_next_call(host, name), WAIT)
+            # The service has the call and holds it: another tool must not wait behind it.
+            listed = await asyncio.wait_for(real.ok("list_topics"), 2.0)
+            assert listed.structured_content is not None
+            assert not call.done()
+            answer = {"success": True, "message": "held"}
+            reply = {"op": "service_response", "id": request["id"], "service": name, "result": True}
+            await host.send(json.dumps({**reply, "values": answer}))
+            result = await asyncio.wait_for(call, WAIT)
+            assert not result.is_error, text_of(result)
+            assert result.structured_content is not None
+            assert result.structured_content["response"] == answer
+        finally:
+            await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
+
+
+async def _until_listed(session: Session, service: str) -> None:
+    """Until rosapi lists a service just advertised (the bridge registers it with the graph first)."""
+    async with asyncio.timeout(WAIT):
+        while True:
+            values = await session.ros.call_service("/rosapi/service_type", {"service": service})
+            if isinstance(values, dict) and values.get("type"):
+                return
+            await asyncio.sleep(0.05)
+
+
+async def _next_call(host: Any, service: str) -> dict[str, Any]:
+    while True:
+        frame = json.loads(await host.recv())
+        if frame.get("op") == "call_service" and frame.get("service") == service:
+            return dict(frame)
 
 
 def _start_goal(

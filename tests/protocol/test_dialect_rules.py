@@ -138,19 +138,20 @@ def test_unknown_status_numbers_are_named_by_number() -> None:
     ("info", "in_order", "actions"),
     [
         (RosInfo(2, "humble"), True, True),
-        (RosInfo(2, "Humble"), True, True),
-        (RosInfo(2, "iron"), True, True),
+        (RosInfo(2, "jazzy"), True, True),
         (RosInfo(2, None), True, True),
-        (RosInfo(2, "jazzy"), False, True),
-        (RosInfo(2, "rolling"), False, True),
+        (RosInfo(2, "jazzy", calls_threaded=False, goals_threaded=False), True, True),
+        (RosInfo(2, "jazzy", calls_threaded=True, goals_threaded=True), False, True),
+        (RosInfo(2, "humble", calls_threaded=True, goals_threaded=True), False, True),
         (RosInfo(1, None), False, False),
     ],
 )
-def test_ros_info_derives_capabilities_from_version_and_distro(
+def test_ros_info_takes_a_bridge_as_in_order_unless_it_says_it_threads(
     info: RosInfo, in_order: bool, actions: bool
 ) -> None:
-    """Humble-era (or unknown) ROS 2 may be in-order; only ROS 2 has action ops and the timeout field."""
+    """The bridge's threading switches decide, never the distro; only ROS 2 has action ops and timeouts."""
     assert info.may_be_in_order is in_order
+    assert info.goals_may_block is in_order
     assert info.has_action_ops is actions
     assert info.honours_service_timeout is (info.version == 2)
 

@@ -315,10 +315,22 @@ async def test_roslibpy_ros2_action_goal_gets_feedback_and_a_result(target: Targ
     assert feedback.items[0]["sequence"] == [0, 1, 1]
 
 
+async def _goals_threaded(ros: Any) -> bool:
+    """The bridge node's send_action_goals_in_new_thread, through rosapi (false or unreadable: in order)."""
+    get_param = roslibpy.Service(ros, "/rosapi/get_param", "rosapi_msgs/srv/GetParam")
+    request = {"name": "/rosbridge_websocket:send_action_goals_in_new_thread", "default_value": ""}
+    response = await asyncio.to_thread(get_param.call, roslibpy.ServiceRequest(request), None, None, WAIT)
+    return bool(response.get("value") == "true")
+
+
 async def test_roslibpy_ros2_action_cancel_ends_the_goal_canceled(target: Target, ros: Any) -> None:
     """ActionClient.cancel_goal on a long goal: the result comes with status CANCELED (5)."""
     if target.dialect != "ros2" or not await _has_fibonacci(ros):
         pytest.skip("needs a ROS 2 bridge with the /fibonacci action server")
+    if not await _goals_threaded(ros):
+        # rosbridge 2.1.0's defaults (Jazzy, Kilted) and Humble's: the connection reads roslibpy's cancel only
+        # after the goal ended; the in-order test below shows that on the simulator.
+        pytest.skip("this bridge runs a connection's goals in order: a same-connection cancel comes too late")
     client = roslibpy.ActionClient(ros, "/fibonacci", "example_interfaces/action/Fibonacci")
     results, feedback, errors = Inbox(), Inbox(), Inbox()
     goal_id = await asyncio.to_thread(

@@ -1,22 +1,32 @@
 """``rosbridge-mcp-server check``: a diagnosis of the connection to rosbridge, for a person at a terminal.
 
 It is not the MCP server, so it writes to stdout. It says whether the bridge is reachable (and if not, what to
-try), which ROS and distro it runs, what this rosbridge can do, whether rosapi answers, and how many topics,
-services and actions it sees. Exit code 0 when healthy, 1 when not.
+try), which ROS and distro it runs, whether rosapi answers, and tests what the tools rely on rather than
+trusting version names: that a geometry_msgs/Twist passes our check against this rosapi's TypeDefs, whether a
+slow service call holds up later calls on its connection (measured with a service of its own, offered for
+about a second), and whether an action server's type can be found. Exit code 0 when healthy, 1 when not.
 """
 
 from __future__ import annotations
 
 import asyncio
-from typing import TextIO
+import itertools
+import json
+import uuid
+from collections.abc import Callable
+from typing import Any, TextIO
 from urllib.parse import urlsplit
+
+from websockets.asyncio.client import ClientConnection, connect
+from websockets.exceptions import WebSocketException
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, plain_text_warning
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.graph import RosGraph
-from rosbridge_mcp_server.wire.dialect import RosInfo
+from rosbridge_mcp_server.robot.messages import find_problems, typedefs_from_rosapi
+from rosbridge_mcp_server.wire.dialect import RosInfo, normalize_type
 
 __all__ = ["run_check", "unreachable_advice"]
 
@@ -66,8 +76,8 @@ def _count(number: int, noun: str) -> str:
     return f"{number} {noun}{'' if number == 1 else 's'}"
 
 
-def _features(info: RosInfo, services: set[str]) -> list[tuple[str, str]]:
-    """What this rosbridge can do, told from its ROS version and from which rosapi services it offers."""
+def _features(info: RosInfo) -> list[tuple[str, str]]:
+    """What follows from the ROS version alone (the probes below test the rest)."""
     if info.version == 1:
         return [
             (_NOTE, "actions: over actionlib topics (ROS 1 rosbridge has no action ops)"),
@@ -76,37 +86,154 @@ def _features(info: RosInfo, services: set[str]) -> list[tuple[str, str]]:
                 "service calls: ROS 1 rosbridge has no timeout field; this server applies its own deadline",
             ),
         ]
-    # rosapi grew with rosbridge: `interfaces` came with Humble 2.0.1 / Jazzy 2.2.0 (as did the call_service
-    # timeout field), `action_type` with Humble 2.0.2 / Jazzy 2.4.0. Action ops exist from 2.0.0 on.
-    recent = "/rosapi/interfaces" in services
-    features = [
+    return [
+        (_NOTE, "actions: native action ops (send_action_goal; rosbridge 2.0.0 and later)"),
         (
-            (_OK, "actions: native action ops (rosbridge 2.0.0 and later)")
-            if recent
-            else (
-                _NOTE,
-                "actions: native action ops from rosbridge 2.0.0 on; this bridge may be older (1.3.x)",
-            )
-        ),
-        (
-            (_OK, "service calls: the bridge reads the timeout field")
-            if recent
-            else (_NOTE, "service calls: this bridge may ignore the timeout field; this server keeps its own")
+            _NOTE,
+            "service calls: this server keeps its own deadline (rosbridge reads the timeout field only from "
+            "Humble 2.0.1 / Jazzy 2.2.0 on)",
         ),
     ]
-    if "/rosapi/action_type" not in services:
-        features.append((_NOTE, "action types: no /rosapi/action_type here; read from the action's topics"))
-    if info.may_be_in_order:
-        features.append(
-            (
-                _NOTE,
-                "this bridge may handle one connection strictly in order (Humble defaults): goals and "
-                "service calls run on extra connections so they do not block each other",
-            )
+
+
+async def _message_check(graph: RosGraph, info: RosInfo) -> tuple[str, str]:
+    """Whether a valid geometry_msgs/Twist passes our check against this rosapi's TypeDefs."""
+    twist = normalize_type("geometry_msgs/Twist", info.version, "msg")
+    try:
+        raw = await graph.rosapi("message_details", {"type": twist})
+    except RosbridgeError as exc:
+        return _NOTE, f"messages: rosapi cannot describe {twist} ({exc}); publish_topic sends unchecked"
+    typedefs = typedefs_from_rosapi(raw)
+    if not typedefs:
+        return _NOTE, f"messages: rosapi does not describe {twist}; publish_topic sends messages unchecked"
+    problems = find_problems(
+        {"linear": {"x": 0.5}, "angular": {"z": 0.2}}, twist, typedefs, ros_version=info.version
+    )
+    if problems:
+        return (
+            _BAD,
+            f"messages: a valid {twist} fails our check ({problems[0]}): publish_topic would refuse it",
         )
-    else:
-        features.append((_OK, "calls on one connection run side by side"))
-    return features
+    listed = raw.get("typedefs") or [{}]
+    names = listed[0].get("fieldnames") if isinstance(listed[0], dict) else None
+    slots = isinstance(names, list) and bool(names) and all(str(n).startswith("_") for n in names)
+    how = " (rosapi names fields _linear, _angular: read as linear, angular)" if slots else ""
+    return _OK, f"messages: a {twist} is checked before it is published{how}"
+
+
+async def call_ordering(url: str, info: RosInfo, timeout: float) -> bool:
+    """Whether a slow service call holds up the next call on its connection, measured on the bridge.
+
+    One connection offers a short-lived Trigger service of its own; a second connection calls it and then
+    ``/rosapi/get_time``. The service answers only after ``get_time`` did, or after a second: when
+    ``get_time`` had to wait, the bridge handles a connection's calls in order. Raises
+    :class:`RosbridgeError` (or ``TimeoutError``/``OSError``) when the probe cannot run.
+    """
+    name = f"/rosbridge_mcp_check_{uuid.uuid4().hex[:8]}"
+    srv_type = normalize_type("std_srvs/Trigger", info.version, "srv")
+    async with asyncio.timeout(timeout):
+        async with connect(url, compression=None) as host, connect(url, compression=None) as caller:
+            await host.send(json.dumps({"op": "advertise_service", "service": name, "type": srv_type}))
+            try:
+                await _wait_listed(caller, name)
+                for rid, service in (("slow", name), ("fast", "/rosapi/get_time")):
+                    await caller.send(json.dumps({"op": "call_service", "id": rid, "service": service}))
+                request = await _next(host, lambda f: f.get("op") == "call_service")
+                try:
+                    async with asyncio.timeout(_HOLD_SECONDS):
+                        await _next(caller, _with_id("fast"))
+                    queued = False
+                except TimeoutError:
+                    queued = True
+                answer = {"success": True, "message": "rosbridge-mcp-server check"}
+                await host.send(
+                    json.dumps(
+                        {
+                            "op": "service_response",
+                            "id": request.get("id"),
+                            "service": name,
+                            "result": True,
+                            "values": answer,
+                        }
+                    )
+                )
+                await _next(caller, _with_id("slow"))
+            finally:
+                await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
+    return queued
+
+
+#: How long the probe's service holds its caller: far above a rosapi round trip (3-100 ms on the labs).
+_HOLD_SECONDS = 1.0
+
+
+async def _next(ws: ClientConnection, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
+    """The next frame on ``ws`` that ``wanted`` accepts (others are skipped)."""
+    while True:
+        frame = json.loads(await ws.recv())
+        if isinstance(frame, dict) and wanted(frame):
+            return frame
+
+
+def _with_id(rid: str) -> Callable[[dict[str, Any]], bool]:
+    return lambda frame: frame.get("id") == rid
+
+
+async def _wait_listed(ws: ClientConnection, service: str) -> None:
+    """Until rosapi lists ``service`` (the bridge registers an advertised service with the graph first)."""
+    for attempt in itertools.count():
+        rid = f"listed-{attempt}"
+        args = {"service": service}
+        await ws.send(
+            json.dumps({"op": "call_service", "id": rid, "service": "/rosapi/service_type", "args": args})
+        )
+        reply = await _next(ws, _with_id(rid))
+        values = reply.get("values")
+        if isinstance(values, dict) and values.get("type"):
+            return
+        await asyncio.sleep(0.05)
+
+
+async def _ordering_check(config: Config, info: RosInfo) -> tuple[str, str]:
+    """Calls queue behind a slow one or not, measured, and whether the client treats the bridge so."""
+    try:
+        queued = await call_ordering(config.url, info, timeout=max(config.request_timeout, 5.0))
+    except (RosbridgeError, TimeoutError, OSError, WebSocketException) as exc:
+        return _NOTE, f"could not measure whether calls queue behind a slow one ({type(exc).__name__}: {exc})"
+    said = ""
+    if info.version == 2:
+        told = {True: "true", False: "false", None: "not readable"}
+        said = f"; its call_services_in_new_thread: {told[info.calls_threaded]}"
+    if queued and not info.may_be_in_order:
+        return (
+            _BAD,
+            "a slow service call holds up later calls on its connection, yet this bridge was taken to run "
+            f"them side by side{said}: its tools would wait behind a slow call",
+        )
+    if queued:
+        return (
+            _OK,
+            "a slow service call holds up later calls on its connection (the bridge handles one connection "
+            f"strictly in order{said}): this server gives each call a connection of its own",
+        )
+    return _OK, f"calls on one connection run side by side (measured{said})"
+
+
+async def _action_check(graph: RosGraph, info: RosInfo, actions: list[str]) -> tuple[str, str]:
+    """Whether the type of an action server can be found, as list_actions needs."""
+    if not actions:
+        return _NOTE, "action types: no action server to try"
+    try:
+        found = await graph.action_type(actions[0])
+    except RosbridgeError as exc:
+        return _NOTE, f"action types: looking up {actions[0]} failed ({exc})"
+    if not found:
+        return (
+            _NOTE,
+            f"action types: this bridge cannot tell the type of {actions[0]}; list_actions shows it untyped "
+            "and publish_action needs the type from the model",
+        )
+    return _OK, f"action types: known ({actions[0]} is {found})"
 
 
 async def run_check(config: Config, out: TextIO) -> int:
@@ -153,7 +280,19 @@ async def run_check(config: Config, out: TextIO) -> int:
             say(_BAD, f"rosapi does not answer: {exc}")
             return 1
         say(_OK, "rosapi answers")
-        for mark, text in _features(info, set(services)):
+        results = _features(info)
+        results.append(await _message_check(graph, info))
+        results.append(await _ordering_check(config, info))
+        if info.version == 2 and info.goals_may_block:
+            results.append(
+                (
+                    _NOTE,
+                    "a goal holds up its connection until it ends (send_action_goals_in_new_thread is not "
+                    "true): each goal runs on a connection of its own and cancels go on another",
+                )
+            )
+        results.append(await _action_check(graph, info, actions))
+        for mark, text in results:
             say(mark, text)
         counts = [
             _count(len(topics), "topic"),
@@ -161,5 +300,8 @@ async def run_check(config: Config, out: TextIO) -> int:
             _count(len(actions), "action server"),
         ]
         say(_OK, ", ".join(counts))
+        if any(mark == _BAD for mark, _ in results):
+            out.write("Not healthy: see the FAIL lines above.\n")
+            return 1
         out.write("Healthy: the MCP server can use this bridge.\n")
         return 0

@@ -417,7 +417,8 @@ class RosbridgeClient:
         """Call a ROS service and return its response fields (``values``).
 
         Runs on the shared connection, or on a lane of its own when the bridge may handle one
-        connection in order (Humble) or when *isolated* is true. Raises :class:`ServiceError`
+        connection in order, when another call is in flight on a ROS 1 connection (see
+        :attr:`RosInfo.one_call_per_connection`), or when *isolated* is true. Raises :class:`ServiceError`
         with the bridge's text, :class:`RequestTimeoutError`, :class:`ConnectionLostError`,
         :class:`NotConnectedError`.
         """
@@ -425,7 +426,10 @@ class RosbridgeClient:
         session = self._session
         if session is None or not session.is_open:
             session = await self._wait_session(asyncio.get_running_loop().time() + t)
-        if isolated or (isolated is None and session.lanes_by_default):
+        if isolated or (
+            isolated is None
+            and (session.lanes_by_default or (session.spread_calls and session.connection.pending))
+        ):
             return await call_on_lane(
                 self._lanes, self._ids, service, args, t, send_timeout=session.send_service_timeout
             )

@@ -17,6 +17,8 @@ logger = logging.getLogger("rosbridge_mcp_server.client")
 
 #: rosbridge's node name in rosbridge_websocket.launch (ROS 1 0.11); used to tell ROS 1 without rosapi.
 ROS1_BRIDGE_NODE = "rosbridge_websocket"
+#: The node name rosbridge's launch files (ROS 1 and 2) and `ros2 run` give the bridge.
+BRIDGE_NODE = "rosbridge_websocket"
 
 
 async def detect(conn: Connection, ids: protocol.IdMinter, url: str, timeout: float) -> RosInfo:
@@ -39,7 +41,8 @@ async def detect(conn: Connection, ids: protocol.IdMinter, url: str, timeout: fl
         distro = values.get("distro") if isinstance(values, dict) else None
         if version == 1:
             return RosInfo(1, distro or None)
-        return RosInfo(2, str(distro) if distro else None)
+        calls, goals = await _threading(conn, ids, timeout)
+        return RosInfo(2, str(distro) if distro else None, calls_threaded=calls, goals_threaded=goals)
     try:
         values = await call("/rosapi/topics")
     except ServiceError as exc:
@@ -58,6 +61,36 @@ async def detect(conn: Connection, ids: protocol.IdMinter, url: str, timeout: fl
     if any(isinstance(t, str) and "/msg/" in t for t in types):
         return RosInfo(2, None)
     return RosInfo(1, None)
+
+
+async def _threading(
+    conn: Connection, ids: protocol.IdMinter, timeout: float
+) -> tuple[bool | None, bool | None]:
+    """Whether a ROS 2 bridge runs each call and each goal in a thread of its own, as its node says.
+
+    rosbridge 2.x reads ``call_services_in_new_thread`` and ``send_action_goals_in_new_thread``; 2.1.0's
+    launch file sets both false, on Jazzy and Kilted alike. They are asked of the bridge node's own
+    ``get_parameters`` service: one call of ~6-10 ms on 2.1.0, where rosapi's ``get_param`` takes 60-180 ms
+    per parameter (and 5 s, serving nobody else, for a node that does not exist). ``None`` where the bridge
+    did not tell: a node of another name, or a parameter it does not declare.
+    """
+    service = f"/{BRIDGE_NODE}/get_parameters"
+    args = {"names": ["call_services_in_new_thread", "send_action_goals_in_new_thread"]}
+    try:
+        values = await call_on(conn, ids, service, args, timeout, bridge_timeout=None)
+    except (ServiceError, RequestTimeoutError):
+        return None, None
+    listed = values.get("values") if isinstance(values, dict) else None
+    if not isinstance(listed, list) or len(listed) != 2:
+        return None, None
+    return _bool_parameter(listed[0]), _bool_parameter(listed[1])
+
+
+def _bool_parameter(value: Any) -> bool | None:
+    """A boolean ``rcl_interfaces/ParameterValue`` (type 1), else ``None`` (not set, or another type)."""
+    if isinstance(value, dict) and value.get("type") == 1 and isinstance(value.get("bool_value"), bool):
+        return bool(value["bool_value"])
+    return None
 
 
 async def _answers(call: Any, service: str) -> bool:

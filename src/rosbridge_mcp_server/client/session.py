@@ -22,7 +22,15 @@ logger = logging.getLogger("rosbridge_mcp_server.client")
 class Session:
     """The main connection to the bridge, with the bridge's :class:`RosInfo` detected on it."""
 
-    __slots__ = ("connection", "info", "lanes_by_default", "number", "send_service_timeout")
+    __slots__ = (
+        "connection",
+        "goals_block",
+        "info",
+        "lanes_by_default",
+        "number",
+        "send_service_timeout",
+        "spread_calls",
+    )
 
     def __init__(self, connection: Connection, info: RosInfo, number: int) -> None:
         self.connection = connection
@@ -31,6 +39,8 @@ class Session:
         self.number = number
         # Derived once per connection, so the hot path does not recompute them.
         self.lanes_by_default = info.may_be_in_order
+        self.goals_block = info.goals_may_block
+        self.spread_calls = info.one_call_per_connection
         self.send_service_timeout = info.honours_service_timeout
 
     @property

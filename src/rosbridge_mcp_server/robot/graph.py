@@ -1,28 +1,32 @@
 """Graph look-ups through rosapi, with the dialect quirks handled (the domain's view of the robot's graph).
 
 Everything here is an ordinary ``call_service`` to a ``/rosapi/...`` service on the shared client. What
-differs between bridges (``docs/rosbridge-behaviour.md``):
+differs between bridges (docs/rosbridge-behaviour.md has what was verified on which release):
 
 * ROS 1 (rosapi 0.11) has no ``get_ros_version``, ``action_type`` or ``interfaces``; ``action_servers`` may
-  list a namespace twice; the type of an action is only visible as the type of its ``<ns>/goal`` topic
-  (``pkg/NameActionGoal``).
-* ROS 2 ``action_type`` exists from Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0; before that we fall back to
-  the hidden ``<ns>/_action/feedback`` topic, whose type is ``pkg/action/Name_FeedbackMessage``.
-* ``message_details`` answers an unknown type with an empty ``typedefs`` list (both lines); on ROS 2 it may
-  also never answer if the handler raises, so such a failure is reported as an unknown type as well.
+  list a namespace several times; the type of an action is only visible as the type of its ``<ns>/goal``
+  topic (``pkg/NameActionGoal``).
+* ROS 2 ``action_type`` exists from Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0. rosapi 2.1.0 has none and hides
+  the hidden ``<ns>/_action/...`` names from every look-up; the bridge itself names the type when it refuses
+  a probe call to ``<ns>/_action/send_goal``.
+* rosapi 2.1.0 writes TypeDef field names as Python slot names (``_linear``); :mod:`.messages` reads both.
+* ``message_details`` answers an unknown type with an empty ``typedefs`` list (both lines). rosapi 2.1.0's
+  ``service_request_details`` instead ends the rosapi node on a type it cannot load, so it is only ever asked
+  about a type rosapi itself reported for a live service.
 
-What one connection has learnt (type definitions, the topics it publishes, service types) is one object,
-replaced whole when the client reports a new connection: a reconnect may be to a robot with other packages
-installed.
+What one connection has learnt (type definitions, the topics it publishes, service and action types) is one
+object, replaced whole when the client reports a new connection: a reconnect may be to a robot with other
+packages installed.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import re
 from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Final, TypeVar
 
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.messages import TypeDef, typedefs_from_rosapi
@@ -39,6 +43,7 @@ __all__ = [
     "ServiceEntry",
     "TopicDetails",
     "TopicEntry",
+    "infrastructure_types",
     "is_missing_service",
 ]
 
@@ -50,10 +55,10 @@ ROSAPI_HINT = (
     "`rosbridge_websocket` run alone does not."
 )
 
-# Type look-ups for many names at once (service types, action types) run side by side, but not hundreds at
-# a time:
-# each is a request on the bridge, and an in-order bridge serialises them anyway.
-_LOOKUP_CONCURRENCY = 16
+# Type look-ups for many names at once (service types, action types) run a few side by side, not more:
+# rosbridge 0.11.17 answered 46 service_type calls in ~0.2 s one after another or four at a time, but took
+# ~1.1 s eight or more at a time; rosbridge 2.1.0 left a call unanswered with sixteen connections asking.
+_LOOKUP_CONCURRENCY = 4
 
 _T = TypeVar("_T")
 _R = TypeVar("_R")
@@ -107,6 +112,11 @@ class _ConnectionKnowledge:
     interfaces_asked: bool = False
     publishing: dict[str, str] = field(default_factory=dict)
     service_types: dict[str, str] = field(default_factory=dict)
+    action_types: dict[str, str] = field(default_factory=dict)
+    no_action_type_service: bool = False
+    # Types the bridge named when refusing a probe call; only listed, never used to ask rosapi for details.
+    listed_types: dict[str, str] = field(default_factory=dict)
+    refuses_unknown_fields: bool | None = None
 
 
 class RosGraph:
@@ -219,10 +229,68 @@ class RosGraph:
             return ""
 
     async def services(self) -> list[ServiceEntry]:
-        """Every service with its type (types looked up side by side; ``""`` where a look-up failed)."""
-        names = await self.service_names()
-        types = await _bounded_map(self._service_type_or_blank, names)
-        return [ServiceEntry(name, found) for name, found in zip(names, types, strict=True)]
+        """Every service with its type (``""`` where a look-up failed).
+
+        A service's type cannot change while it exists, so each is looked up once per connection and kept
+        until the service is gone from the list; the per-node services every ROS node offers are typed from
+        their names (:func:`infrastructure_types`) without asking.
+        """
+        info = await self.ros_info()
+        if info.version == 2:
+            # Asked side by side: the check is answered once per connection, then kept.
+            names, probing = await asyncio.gather(self.service_names(), self._refuses_unknown_fields())
+        else:
+            names, probing = await self.service_names(), False
+        known, listed = self._known.service_types, self._known.listed_types
+        for cache in (known, listed):
+            for gone in cache.keys() - set(names):
+                del cache[gone]
+        fixed = infrastructure_types(names, info.version)
+        missing = [name for name in names if name not in known and name not in listed and name not in fixed]
+        if missing and probing:
+            await _bounded_map(self._listed_type, missing, _PROBE_CONCURRENCY)
+        else:
+            await _bounded_map(self._service_type_or_blank, missing)
+        return [
+            ServiceEntry(name, fixed.get(name) or known.get(name) or listed.get(name, "")) for name in names
+        ]
+
+    async def _refuses_unknown_fields(self) -> bool:
+        """Whether this bridge refuses a request with a field no message has, before calling anything.
+
+        Every rosbridge we know does ("Message type X_Request does not have a field ..."); it is checked once
+        per connection on rosapi's harmless ``get_time`` before any other service is probed that way.
+        """
+        if self._known.refuses_unknown_fields is None:
+            try:
+                await self._client.call_service("/rosapi/get_time", {_PROBE_FIELD: 0}, timeout=_PROBE_SECONDS)
+            except ServiceError as exc:
+                self._known.refuses_unknown_fields = "does not have a field" in exc.message
+            except RequestTimeoutError:
+                self._known.refuses_unknown_fields = False
+            else:
+                self._known.refuses_unknown_fields = False
+        return self._known.refuses_unknown_fields
+
+    async def _listed_type(self, service: str) -> None:
+        """A service's type for the listing, from the bridge's refusal of a probe call; rosapi if none.
+
+        rosbridge 2.1.0 answers such a probe in ~2-12 ms without creating a ROS client, where each rosapi
+        ``service_type`` call creates one and about a quarter of them take ~90 ms
+        (docs/rosbridge-behaviour.md).
+        The type is only shown: checking a request still asks rosapi, so a misread refusal can never make
+        rosapi describe a type it cannot load (that ends rosapi 2.1.0).
+        """
+        try:
+            await self._client.call_service(service, {_PROBE_FIELD: 0}, timeout=_PROBE_SECONDS)
+        except ServiceError as exc:
+            found = _service_type_from_refusal(exc.message)
+            if found:
+                self._known.listed_types[service] = found
+                return
+        except RequestTimeoutError:
+            pass  # a glob-denied service gets no answer at all; rosapi may still know its type
+        await self._service_type_or_blank(service)
 
     # --- actions ----------------------------------------------------------------------------------
 
@@ -246,9 +314,16 @@ class RosGraph:
     async def action_type(self, action: str) -> str | None:
         """The action's type in the bridge's own spelling, or ``None`` when the bridge cannot tell."""
         info = await self.ros_info()
-        if info.version == 1:
-            return await self._ros1_action_type(action)
-        return await self._ros2_action_type(action)
+        known = self._known.action_types.get(action)
+        if known:
+            return known
+        found = await (
+            self._ros1_action_type(action) if info.version == 1 else self._ros2_action_type(action)
+        )
+        if found:
+            # Fixed while the action server exists; forgotten when it leaves the list (actions()).
+            self._known.action_types[action] = found
+        return found
 
     async def _action_type_or_none(self, action: str) -> str | None:
         try:
@@ -260,6 +335,9 @@ class RosGraph:
     async def actions(self) -> list[ActionEntry]:
         """Every action server once, with its type where it can be known."""
         names = await self.action_names()
+        known = self._known.action_types
+        for gone in known.keys() - set(names):
+            del known[gone]
         types = await _bounded_map(self._action_type_or_none, names)
         return [ActionEntry(name, found) for name, found in zip(names, types, strict=True)]
 
@@ -271,20 +349,38 @@ class RosGraph:
         return None
 
     async def _ros2_action_type(self, action: str) -> str | None:
+        found: str | None = None
+        if not self._known.no_action_type_service:
+            try:
+                values = await self.rosapi("action_type", {"action": action})
+            except ServiceError as exc:
+                # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0.
+                if not is_missing_service(exc):
+                    raise
+                self._known.no_action_type_service = True
+            else:
+                answer = values.get("type")
+                found = answer if isinstance(answer, str) and answer else None
+        if found is None:
+            found = await self._send_goal_type(action)
+        return found
+
+    async def _send_goal_type(self, action: str) -> str | None:
+        """The action's type as the bridge names it when refusing a call to ``<action>/_action/send_goal``.
+
+        rosapi 2.1.0 hides every hidden name (``service_type`` of ``<action>/_action/send_goal`` is ``""``),
+        but the bridge looks the service up itself. Called with a field no request has, it refuses before
+        building a request, so nothing reaches the action server; its refusal names the type: "Unable to
+        import srv class Fibonacci_SendGoal from package example_interfaces" (2.1.0 cannot load an action's
+        services), or "Message type example_interfaces/action/Fibonacci_SendGoal_Request does not have a
+        field ..." from a bridge that can.
+        """
+        service = f"{action.rstrip('/')}/_action/send_goal"
         try:
-            values = await self.rosapi("action_type", {"action": action})
+            await self._client.call_service(service, {_PROBE_FIELD: 0})
         except ServiceError as exc:
-            # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0.
-            if not is_missing_service(exc):
-                raise
-        else:
-            found = values.get("type")
-            if isinstance(found, str) and found:
-                return found
-        feedback_type = await self.topic_type(f"{action.rstrip('/')}/_action/feedback")
-        if feedback_type.endswith("_FeedbackMessage"):
-            return feedback_type[: -len("_FeedbackMessage")]
-        return None
+            return _action_type_from_refusal(exc.message)
+        return None  # a bridge that took the probe as a request: do not read anything into it
 
     # --- type definitions -------------------------------------------------------------------------
 
@@ -379,6 +475,125 @@ def _ros1_load_failure(message: str) -> bool:
     return any(text in message for text in _ROS1_LOAD_FAILURES)
 
 
+# The services every node offers, by the last part of their name, with their fixed types. ROS 2 (rclcpp and
+# rclpy): six parameter services, and since Iron get_type_description; ROS 1 (roscpp and rospy): two logger
+# services. Seen on rosbridge 2.1.0's Jazzy and Kilted graphs and on a 0.11.17 Noetic-line graph.
+_ROS2_PARAMETER_SERVICES: Final = {
+    "describe_parameters": "rcl_interfaces/srv/DescribeParameters",
+    "get_parameter_types": "rcl_interfaces/srv/GetParameterTypes",
+    "get_parameters": "rcl_interfaces/srv/GetParameters",
+    "list_parameters": "rcl_interfaces/srv/ListParameters",
+    "set_parameters": "rcl_interfaces/srv/SetParameters",
+    "set_parameters_atomically": "rcl_interfaces/srv/SetParametersAtomically",
+}
+# Offered by every node since Iron (also by rosapi's helper node, which has no parameter services); the
+# name is rcl's, so it is typed wherever it appears.
+_ROS2_TYPE_DESCRIPTION = ("get_type_description", "type_description_interfaces/srv/GetTypeDescription")
+# A managed (lifecycle) node's five services, typed when all five are under one prefix.
+_ROS2_LIFECYCLE_SERVICES: Final = {
+    "change_state": "lifecycle_msgs/srv/ChangeState",
+    "get_state": "lifecycle_msgs/srv/GetState",
+    "get_available_states": "lifecycle_msgs/srv/GetAvailableStates",
+    "get_available_transitions": "lifecycle_msgs/srv/GetAvailableTransitions",
+    "get_transition_graph": "lifecycle_msgs/srv/GetAvailableTransitions",
+}
+_ROS1_LOGGER_SERVICES: Final = {
+    "get_loggers": "roscpp/GetLoggers",
+    "set_logger_level": "roscpp/SetLoggerLevel",
+}
+# rosapi's own services under /rosapi, whose types rosapi fixes (`rosapi_msgs/srv/X` on ROS 2, `rosapi/X` on
+# ROS 1). Services a later rosapi adds are simply looked up.
+_ROSAPI_SERVICES: Final = {
+    "action_servers": "GetActionServers",
+    "delete_param": "DeleteParam",
+    "get_param": "GetParam",
+    "get_param_names": "GetParamNames",
+    "get_time": "GetTime",
+    "has_param": "HasParam",
+    "message_details": "MessageDetails",
+    "node_details": "NodeDetails",
+    "nodes": "Nodes",
+    "publishers": "Publishers",
+    "service_node": "ServiceNode",
+    "service_providers": "ServiceProviders",
+    "service_request_details": "ServiceRequestDetails",
+    "service_response_details": "ServiceResponseDetails",
+    "service_type": "ServiceType",
+    "services": "Services",
+    "services_for_type": "ServicesForType",
+    "set_param": "SetParam",
+    "subscribers": "Subscribers",
+    "topic_type": "TopicType",
+    "topics": "Topics",
+    "topics_and_raw_types": "TopicsAndRawTypes",
+    "topics_for_type": "TopicsForType",
+}
+_ROSAPI_SERVICES_ROS1: Final = {"search_param": "SearchParam", "service_host": "ServiceHost"}
+_ROSAPI_SERVICES_ROS2: Final = {"get_ros_version": "GetROSVersion"}
+
+
+def infrastructure_types(names: Iterable[str], version: int) -> dict[str, str]:
+    """The types of the per-node and rosapi services among *names*, told from the names alone.
+
+    A node's set counts only when it is complete (all six parameter services, or all five lifecycle services,
+    under one prefix on ROS 2; both logger services on ROS 1), so a single service that merely shares a leaf
+    name is looked up as usual.
+    """
+    listed = set(names)
+    by_prefix: dict[str, set[str]] = {}
+    for name in listed:
+        prefix, _, leaf = name.rpartition("/")
+        by_prefix.setdefault(prefix, set()).add(leaf)
+    found: dict[str, str] = {}
+    sets = (_ROS2_PARAMETER_SERVICES, _ROS2_LIFECYCLE_SERVICES) if version == 2 else (_ROS1_LOGGER_SERVICES,)
+    for prefix, leaves in by_prefix.items():
+        for per_node in sets:
+            if per_node.keys() <= leaves:
+                found.update({f"{prefix}/{leaf}": kind for leaf, kind in per_node.items()})
+        leaf, kind = _ROS2_TYPE_DESCRIPTION
+        if version == 2 and leaf in leaves:
+            found[f"{prefix}/{leaf}"] = kind
+    rosapi = {**_ROSAPI_SERVICES, **(_ROSAPI_SERVICES_ROS2 if version == 2 else _ROSAPI_SERVICES_ROS1)}
+    package = "rosapi_msgs/srv" if version == 2 else "rosapi"
+    for leaf in by_prefix.get("/rosapi", set()):
+        if leaf in rosapi:
+            found[f"/rosapi/{leaf}"] = f"{package}/{rosapi[leaf]}"
+    return found
+
+
+#: A field name no ROS message has (ROS field names start with a letter): a request carrying it is refused.
+_PROBE_FIELD = "__type_probe__"
+_IMPORT_REFUSAL = re.compile(r"Unable to import \w+ class (\w+)_SendGoal from package (\w+)")
+_FIELD_REFUSAL = re.compile(r"Message type (\w+)/(?:action/)?(\w+)_SendGoal_Request does not have a field")
+
+
+#: Probes are refused before the bridge makes a ROS client, so more may run at once than rosapi look-ups
+#: (2.1.0 lost calls only with sixteen or more in flight).
+_PROBE_CONCURRENCY = 8
+#: How long a probe call may take before rosapi is asked instead (a refusal comes in ~2-20 ms).
+_PROBE_SECONDS = 1.0
+_SERVICE_FIELD_REFUSAL = re.compile(r"Message type (\w+)/(?:srv/)?(\w+)_Request does not have a field")
+_SERVICE_IMPORT_REFUSAL = re.compile(r"Unable to import srv class (\w+) from package (\w+)")
+
+
+def _service_type_from_refusal(text: str) -> str | None:
+    """``pkg/srv/Name`` from a ROS 2 bridge's refusal of a probe call, or ``None``."""
+    if match := _SERVICE_FIELD_REFUSAL.search(text):
+        return f"{match.group(1)}/srv/{match.group(2)}"
+    if match := _SERVICE_IMPORT_REFUSAL.search(text):
+        return f"{match.group(2)}/srv/{match.group(1)}"
+    return None
+
+
+def _action_type_from_refusal(text: str) -> str | None:
+    """``pkg/action/Name`` from the bridge's refusal of a send_goal probe, or ``None``."""
+    if match := _IMPORT_REFUSAL.search(text):
+        return f"{match.group(2)}/action/{match.group(1)}"
+    if match := _FIELD_REFUSAL.search(text):
+        return f"{match.group(1)}/action/{match.group(2)}"
+    return None
+
+
 def _type_hint(info: RosInfo) -> str:
     if info.version == 1:
         return "ROS 1 type names look like `geometry_msgs/Twist`; list_topics shows the types in use."
@@ -391,8 +606,10 @@ def _strings(value: Any) -> list[str]:
     return [item for item in value if isinstance(item, str)]
 
 
-async def _bounded_map(func: Callable[[_T], Awaitable[_R]], items: Iterable[_T]) -> list[_R]:
-    semaphore = asyncio.Semaphore(_LOOKUP_CONCURRENCY)
+async def _bounded_map(
+    func: Callable[[_T], Awaitable[_R]], items: Iterable[_T], limit: int = _LOOKUP_CONCURRENCY
+) -> list[_R]:
+    semaphore = asyncio.Semaphore(limit)
 
     async def one(item: _T) -> _R:
         async with semaphore:

@@ -144,13 +144,26 @@ def typedefs_from_rosapi(values: Mapping[str, Any]) -> dict[str, TypeDef]:
             continue
         typedef = TypeDef(
             type=short_type_name(raw["type"]),
-            fieldnames=tuple(str(x) for x in raw.get("fieldnames") or ()),
+            fieldnames=_wire_field_names([str(x) for x in raw.get("fieldnames") or ()]),
             fieldtypes=tuple(str(x) for x in raw.get("fieldtypes") or ()),
             fieldarraylen=tuple(_int_or(x, -1) for x in raw.get("fieldarraylen") or ()),
             examples=tuple(str(x) for x in raw.get("examples") or ()),
         )
         result.setdefault(typedef.type, typedef)
     return result
+
+
+def _wire_field_names(names: list[str]) -> tuple[str, ...]:
+    """The field names a message is sent with, from the names one rosapi TypeDef lists.
+
+    rosapi 2.1.0 (Jazzy and Kilted alike) lists the Python slot names of the message class, ``_linear``
+    for ``linear``, while the bridge reads and writes the plain names. A ROS field name always starts with a
+    letter (rosidl and genmsg both require it), so a TypeDef whose every field starts with ``_`` is in slot
+    names: the answer tells which form it is, whatever the release.
+    """
+    if names and all(name.startswith("_") and len(name) > 1 for name in names):
+        return tuple(name[1:] for name in names)
+    return tuple(names)
 
 
 def _int_or(value: Any, default: int) -> int:

@@ -21,7 +21,6 @@ from typing import Any, Final, Literal
 from rosbridge_mcp_server.errors import UnknownTypeError
 
 __all__ = [
-    "IN_ORDER_DISTROS",
     "ROS1_GOAL_STATUS",
     "ROS1_TERMINAL",
     "ROS2_GOAL_STATUS",
@@ -45,19 +44,22 @@ Category = Literal["msg", "srv", "action"]
 _NAME = r"[A-Za-z][A-Za-z0-9_]*"
 _TYPE_RE: Final = re.compile(rf"^/?({_NAME})/(?:(msg|srv|action)/)?({_NAME})$")
 
-#: ROS 2 distros whose rosbridge runs one connection's service calls and goals strictly in order
-#: by default (Humble 2.0.x; Iron/Jazzy 2.1.0 too; older distros had no threading at all).
-IN_ORDER_DISTROS: Final = frozenset(
-    {"ardent", "bouncy", "crystal", "dashing", "eloquent", "foxy", "galactic", "humble", "iron"}
-)
-
 
 @dataclass(frozen=True, slots=True)
 class RosInfo:
-    """What kind of bridge is on the other side, detected once per connection."""
+    """What kind of bridge is on the other side, detected once per connection.
+
+    ``calls_threaded`` and ``goals_threaded`` are what a ROS 2 bridge says about itself (its node's
+    ``call_services_in_new_thread`` and ``send_action_goals_in_new_thread`` parameters), ``None`` when it
+    did not tell. The distro says nothing here: rosbridge 2.1.0 runs a connection's calls in order on
+    Jazzy and Kilted alike, later releases changed the launch defaults, and a launch file may override them.
+    What was verified on which release: docs/rosbridge-behaviour.md.
+    """
 
     version: Literal[1, 2]
     distro: str | None = None
+    calls_threaded: bool | None = None
+    goals_threaded: bool | None = None
 
     @property
     def has_action_ops(self) -> bool:
@@ -71,14 +73,27 @@ class RosInfo:
 
     @property
     def may_be_in_order(self) -> bool:
-        """One connection's service calls and goals may block each other (Humble-era defaults).
+        """One connection's service calls may hold each other up.
 
-        A ROS 2 bridge that does not tell its distro is treated as in-order: it is older than
-        ``get_ros_version`` (rosbridge 1.2.0), so it predates threaded calls too.
+        rosbridge 0.11 (ROS 1) runs every call in a thread of its own. A ROS 2 bridge that did not say it
+        does the same is taken to handle a connection strictly in order: 2.1.0's defaults and Humble's do.
         """
-        if self.version != 2:
-            return False
-        return self.distro is None or self.distro.lower() in IN_ORDER_DISTROS
+        return self.version == 2 and self.calls_threaded is not True
+
+    @property
+    def goals_may_block(self) -> bool:
+        """A goal may hold up its connection until it ends, so a cancel on that connection comes too late."""
+        return self.version == 2 and self.goals_threaded is not True
+
+    @property
+    def one_call_per_connection(self) -> bool:
+        """Two calls in flight on one connection answer slowly: spread them over connections.
+
+        rosbridge 0.11.17 sends the second of two answers on one socket about 40 ms late (its server side
+        leaves Nagle's algorithm on): three rosapi look-ups took 52 ms side by side on one connection, 17 ms
+        one after another and 13 ms side by side on three connections.
+        """
+        return self.version == 1
 
     def describe(self) -> str:
         """``ROS 2 (jazzy)``, ``ROS 1``."""

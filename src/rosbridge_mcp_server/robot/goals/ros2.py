@@ -65,7 +65,7 @@ async def run(
     if not session.info.has_action_ops:
         raise ActionError(action, "this bridge runs ROS 1, which has no action ops; use actionlib topics")
     # Whether a cancel on the goal's own lane is read in time depends on the bridge the goal went to.
-    in_order = session.lanes_by_default
+    in_order = session.goals_block
     what = f"action goal {gid} on {action}"
     lane: GoalLane | None = None
     sent = False
@@ -135,7 +135,7 @@ async def _cancel_quietly(
     # close() has already sent cancels for every running goal on the main connection.
     if client.closed:
         return
-    # An in-order bridge (Humble 2.0.x) reads a lane's cancel only after the goal it would stop has ended.
+    # An in-order bridge (2.1.0's and Humble's defaults) reads a lane's cancel only after the goal ended.
     if not on_lane or in_order:
         registry.remember_cut_off(record.action, record.goal_id, 2)
 
