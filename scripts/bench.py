@@ -948,10 +948,13 @@ async def first_listings(ctx: Context) -> tuple[list[float], list[float]]:
             # call, one probe of rosapi's get_time); on ROS 1 rosapi's service_type, 4 at once.
             wide_count = min(8 if version == 2 else 4, len(asked))
             async with contextlib.AsyncExitStack() as lanes:
-                wide = [
-                    RawBridge(await lanes.enter_async_context(connect(url, max_size=None, compression=None)))
-                    for _ in range(wide_count)
-                ]
+                # Opened side by side, as the server's client opens its lanes.
+                opened = await asyncio.gather(
+                    *(connect(url, max_size=None, compression=None) for _ in range(wide_count))
+                )
+                for ws_lane in opened:
+                    lanes.push_async_callback(ws_lane.close)
+                wide = [RawBridge(ws_lane) for ws_lane in opened]
                 look_up = probe_types if version == 2 else look_up_types
                 await asyncio.gather(*(look_up(bridge, asked) for bridge in wide))
         floor.append(time.perf_counter() - began)
