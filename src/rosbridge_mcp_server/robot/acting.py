@@ -24,14 +24,13 @@ from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
-from rosbridge_mcp_server.safety.velocity import clamp_text
+from rosbridge_mcp_server.robot.velocity import clamp_text
 from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.activity import SessionActivity
     from rosbridge_mcp_server.robot.graph import RosGraph
-    from rosbridge_mcp_server.safety.activity import SessionActivity
 
 __all__ = [
     "ALLOW_ALL",
@@ -113,13 +112,20 @@ async def nobody_to_ask(question: str) -> Answer:
     return "unsupported"
 
 
+class Timeouts(Protocol):
+    """The one setting an act reads (the server's ``Config`` is one)."""
+
+    @property
+    def request_timeout(self) -> float: ...
+
+
 class Acting(Protocol):
     """What an act needs (a tool's ``ToolContext`` is one)."""
 
     @property
     def client(self) -> RosbridgeClient: ...
     @property
-    def config(self) -> Config: ...
+    def config(self) -> Timeouts: ...
     @property
     def graph(self) -> RosGraph: ...
     @property

@@ -46,7 +46,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
-from rosbridge_mcp_server.safety.activity import SessionActivity
+from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
