@@ -67,7 +67,7 @@ from mcp.client.stdio import StdioServerParameters, stdio_client
 from websockets.asyncio.client import ClientConnection, connect
 
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.robot.graph import infrastructure_types
+from rosbridge_mcp_server.robot.known_types import infrastructure_types
 
 __all__ = ["main"]
 
