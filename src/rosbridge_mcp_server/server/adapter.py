@@ -210,7 +210,7 @@ def tool_from_module(
         argument_check=argument_problem,
     )
     # What argument_problem holds every call to, said where clients read it.
-    tool.parameters["additionalProperties"] = False
+    tool.parameters = {**without_name_titles(tool.parameters), "additionalProperties": False}
     replace_output_schema(tool, lambda schema: without_name_titles(inline_refs(schema)))
     return tool
 

@@ -41,10 +41,10 @@ class ImageAnswer(BaseModel):
     topic: str
     message_type: str
     encoding: str = Field(description="The frame's encoding (rgb8, 16UC1, jpeg, ...)")
-    width: int = Field(description="Width of the frame as received, pixels")
-    height: int = Field(description="Height of the frame as received, pixels")
-    sent_width: int = Field(description="Width of the returned picture, pixels")
-    sent_height: int = Field(description="Height of the returned picture, pixels")
+    width: int = Field(description="Pixels, as received")
+    height: int = Field(description="Pixels, as received")
+    sent_width: int = Field(description="Pixels, as returned")
+    sent_height: int = Field(description="Pixels, as returned")
     format: ImageFormat
     frame_id: str
     stamp: float | None = Field(description="header.stamp in seconds (None when zero)")

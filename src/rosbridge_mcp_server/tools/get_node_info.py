@@ -21,7 +21,7 @@ __all__ = ["SPEC", "NodeInfoAnswer", "run"]
 
 
 class NamedType(BaseModel):
-    """A topic or service and its type ("" when unknown)."""
+    """Name and type ("" when unknown)."""
 
     name: str
     type: str
