@@ -180,6 +180,14 @@ class RosGraph:
         known = self._known.publishing.get(topic)
         return known if known is not None else await self.topic_type(topic)
 
+    async def unknown_topic(
+        self, topic: str, why: str = "", among: Callable[[str], bool] | None = None
+    ) -> tuple[str, list[str]]:
+        """``Topic /x is not in the ROS graph<why>.`` and the likely meant names, with the topics considered
+        (those whose type *among* accepts; every topic without it)."""
+        known = [entry.name for entry in await self.topics() if among is None or among(entry.type)]
+        return f"Topic {topic} is not in the ROS graph{why}.{did_you_mean(topic, known)}", known
+
     def remember_publishing(self, topic: str, msg_type: str) -> None:
         """Note that this connection now publishes ``topic`` as ``msg_type``."""
         self._known.publishing[topic] = msg_type

@@ -18,7 +18,6 @@ from rosbridge_mcp_server.tools.base import (
     ToolSpec,
     absolute_name,
     compact_json,
-    did_you_mean,
 )
 from rosbridge_mcp_server.wire.dialect import normalize_type
 
@@ -110,11 +109,10 @@ async def run(
     elif graph_type:
         msg_type = graph_type
     else:
-        known = [entry.name for entry in await ctx.graph.topics()]
+        missing, _ = await ctx.graph.unknown_topic(name, " (nothing publishes it)")
         raise ToolFailure(
-            f"Topic {name} is not in the ROS graph (nothing publishes it).{did_you_mean(name, known)} Call "
-            "list_topics to see the topics, or give message_type to wait for a publisher that has not "
-            "started yet."
+            f"{missing} Call list_topics to see the topics, or give message_type to wait for a publisher "
+            "that has not started yet."
         )
     typedefs = await _typedefs(ctx, msg_type)
     if fields and typedefs and (problem := unknown_field_path(msg_type, typedefs, fields)):
