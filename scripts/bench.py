@@ -67,7 +67,7 @@ from mcp.client.stdio import StdioServerParameters, stdio_client
 from websockets.asyncio.client import ClientConnection, connect
 
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.robot.graph import infrastructure_types
+from rosbridge_mcp_server.robot.known_types import infrastructure_types
 
 __all__ = ["main"]
 
@@ -1382,16 +1382,16 @@ async def _tools_list_rows(ctx: Context) -> list[Row]:
             f"`tools/list` size, all {sizes['all_count']} tools",
             versus=f"{sizes['all'] / sizes['original']:.2f}× the original eight",
             median=f"{sizes['all']} B",
-            target="≤ 32 000 B (a test holds it)",
-            verdict=verdict(sizes["all"] <= 32_000),
+            target="≤ 30 000 B (a test holds it)",
+            verdict=verdict(sizes["all"] <= 30_000),
             figures={"bytes": sizes["all"]},
         ),
         Row(
             "9f",
             f"`tools/list` size, --tools original ({sizes['original_count']} tools)",
             median=f"{sizes['original']} B",
-            target="≤ 15 000 B (a test holds it)",
-            verdict=verdict(sizes["original"] <= 15_000),
+            target="≤ 15 400 B (a test holds it)",
+            verdict=verdict(sizes["original"] <= 15_400),
             figures={"bytes": sizes["original"]},
         ),
     ]

@@ -3,8 +3,7 @@
     uv run python scripts/outage.py                       # the simulated robot, as a process of its own
     uv run python scripts/outage.py --outages 1 3         # other outage lengths (seconds)
     uv run python scripts/outage.py --url ws://127.0.0.1:9090 --outages 3 \\
-        --lab-restart 'LAB=/root/labs/ros1 /work/shared/labs/ros1/stop.sh' \\
-        --lab-start 'LAB=/root/labs/ros1 /work/shared/labs/ros1/start.sh'
+        --lab-restart '<command that stops the bridge>' --lab-start '<command that starts it>'
 
 The console script runs over stdio (``--log-level DEBUG``, so every attempt shows on its stderr). Each outage
 is run twice:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rosbridge_mcp_server.robot.graph import infrastructure_types
+from rosbridge_mcp_server.robot.known_types import infrastructure_types
 
 PARAMETERS = [
     "describe_parameters",

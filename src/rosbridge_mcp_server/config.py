@@ -259,15 +259,73 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
-def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:
-    # The tool registry lives with the tools; imported here only, so the configuration stays importable alone.
-    from rosbridge_mcp_server.tools import TOOL_MODULES, select_tools  # noqa: PLC0415
+#: Tool names by ``--tools`` group, in registration order. ``tools/__init__.py`` builds its module lists from
+#: these names (failing at import when one has no module), so the configuration needs none of the tools.
+ORIGINAL_TOOL_NAMES = (
+    "list_topics",
+    "get_topic_info",
+    "publish_topic",
+    "list_services",
+    "publish_service",
+    "list_actions",
+    "publish_action",
+    "cancel_action",
+)
+WATCH_TOOL_NAMES = (
+    "subscribe_topic",
+    "get_image",
+    "describe_type",
+    "list_nodes",
+    "get_node_info",
+    "list_parameters",
+    "get_parameter",
+    "set_parameter",
+    "get_transform",
+)
+SAFETY_TOOL_NAMES = ("stop_robot",)
+ALL_TOOL_NAMES = ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + SAFETY_TOOL_NAMES
+TOOL_GROUPS: dict[str, tuple[str, ...]] = {
+    "all": ALL_TOOL_NAMES,
+    "original": ORIGINAL_TOOL_NAMES,
+    "watch": WATCH_TOOL_NAMES,
+    "safety": SAFETY_TOOL_NAMES,
+}
 
+
+def select_tools(spec: str) -> tuple[str, ...]:
+    """The tool names a ``--tools`` value stands for, in registration order.
+
+    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``safety``) and tool
+    names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
+    """
+    chosen: set[str] = set()
+    unknown: list[str] = []
+    for raw in spec.split(","):
+        item = raw.strip()
+        if not item:
+            continue
+        if item in TOOL_GROUPS:
+            chosen.update(TOOL_GROUPS[item])
+        elif item in ALL_TOOL_NAMES:
+            chosen.add(item)
+        else:
+            unknown.append(item)
+    if unknown:
+        raise ValueError(
+            f"unknown tool or group {', '.join(repr(u) for u in unknown)}; use {', '.join(TOOL_GROUPS)} or "
+            f"tool names: {', '.join(ALL_TOOL_NAMES)}"
+        )
+    if not chosen:
+        raise ValueError(f"no tools chosen; use {', '.join(TOOL_GROUPS)} or tool names")
+    return tuple(name for name in ALL_TOOL_NAMES if name in chosen)
+
+
+def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:
     try:
         chosen = select_tools(value)
     except ValueError as exc:
         raise ConfigError(f"{source}: {exc}") from None
-    return None if len(chosen) == len(TOOL_MODULES) else chosen
+    return None if len(chosen) == len(ALL_TOOL_NAMES) else chosen
 
 
 def _resolve_url(

@@ -9,7 +9,7 @@ import pytest
 from client_harness import MakeClient, MakeSim
 
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.client.client import LOCAL_RECONNECT_MAX, PROMPT_SPACING, reconnect_cap
+from rosbridge_mcp_server.client.reconnect import LOCAL_RECONNECT_MAX, PROMPT_SPACING, reconnect_cap
 from rosbridge_mcp_server.errors import NotConnectedError
 
 

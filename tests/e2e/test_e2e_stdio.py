@@ -69,6 +69,27 @@ async def _start(*args: str) -> StdioServer:
     return StdioServer(process)
 
 
+async def _answers_to_file(
+    tmp_path: Path, lines: list[str]
+) -> tuple[list[dict[str, Any]], bytes, int | None]:
+    """Run the server (no bridge) with stdin a regular file of *lines*: its answers, stderr and exit code."""
+    requests = tmp_path / "requests.jsonl"
+    requests.write_text("\n".join(lines) + "\n")
+    with requests.open("rb") as stdin:
+        process = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-m",
+            "rosbridge_mcp_server",
+            "--url",
+            _closed_port_url(),
+            stdin=stdin,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+        )
+        stdout, stderr = await asyncio.wait_for(process.communicate(), WAIT)
+    return [json.loads(line) for line in stdout.decode().splitlines()], stderr, process.returncode
+
+
 async def _finish(server: StdioServer) -> tuple[bytes, bytes, int]:
     """Close stdin (the client going away) and collect the rest of the output and the exit code."""
     assert server.process.stdin is not None
@@ -226,24 +247,10 @@ async def test_a_request_read_from_a_file_is_answered_through_the_sdk_transport(
             "clientInfo": {"name": "e2e-test", "version": "0"},
         },
     }
-    requests = tmp_path / "requests.jsonl"
-    requests.write_text(json.dumps(initialize) + "\n")
-    with requests.open("rb") as stdin:
-        process = await asyncio.create_subprocess_exec(
-            sys.executable,
-            "-m",
-            "rosbridge_mcp_server",
-            "--url",
-            _closed_port_url(),
-            stdin=stdin,
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.PIPE,
-        )
-        stdout, stderr = await asyncio.wait_for(process.communicate(), WAIT)
-    answers = [json.loads(line) for line in stdout.decode().splitlines()]
+    answers, stderr, code = await _answers_to_file(tmp_path, [json.dumps(initialize)])
     assert len(answers) == 1, stderr.decode()
     assert answers[0]["result"]["serverInfo"]["name"] == "rosbridge"
-    assert process.returncode == 0, stderr.decode()
+    assert code == 0, stderr.decode()
 
 
 async def _initialized(server: StdioServer) -> None:
@@ -350,22 +357,8 @@ async def test_unreadable_lines_read_from_a_file_are_answered_too(tmp_path: Path
         f'{{"jsonrpc": "2.0", "id": 5, "method": "tools/list", "params": {{"x": {deep}}}}}',
         '{"jsonrpc": "2.0", "id": 6, "method": 7}',
     ]
-    requests = tmp_path / "requests.jsonl"
-    requests.write_text("\n".join(lines) + "\n")
-    with requests.open("rb") as stdin:
-        process = await asyncio.create_subprocess_exec(
-            sys.executable,
-            "-m",
-            "rosbridge_mcp_server",
-            "--url",
-            _closed_port_url(),
-            stdin=stdin,
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.PIPE,
-        )
-        stdout, stderr = await asyncio.wait_for(process.communicate(), WAIT)
-    answers = [json.loads(line) for line in stdout.decode().splitlines()]
+    answers, stderr, code = await _answers_to_file(tmp_path, lines)
     assert [(a["id"], a["error"]["code"]) for a in answers] == [(None, -32700), (5, -32700), (6, -32600)], (
         stderr.decode()
     )
-    assert process.returncode == 0, stderr.decode()
+    assert code == 0, stderr.decode()

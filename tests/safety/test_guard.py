@@ -13,8 +13,8 @@ import pytest
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
 from rosbridge_mcp_server.robot.acting import Act, Answer
+from rosbridge_mcp_server.robot.velocity import measure
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard, parse_policy, question
-from rosbridge_mcp_server.safety.velocity import measure
 
 
 class Person:

@@ -77,7 +77,7 @@ async def test_ros2_cancel_ends_the_goal_canceled_with_the_partial_sequence(sim_
 
 
 async def test_ros2_cancel_sent_on_another_connection_reaches_the_goal(sim_ros2: SimulatedRobot) -> None:
-    """The goal table is shared by all connections (§7.2): a cancel on a second socket stops the goal."""
+    """rosbridge keeps one goal table per process: a cancel sent on a second socket stops the goal."""
     async with await RawClient.open(sim_ros2.url) as owner, await RawClient.open(sim_ros2.url) as other:
         await owner.send(goal_op("shared", 40))
         await owner.reply("shared", op="action_feedback")

@@ -548,7 +548,7 @@ async def test_type_inference_needs_the_fully_qualified_name(sim: SimulatedRobot
 
 
 def _decode_png_op(frame: dict[str, Any]) -> dict[str, Any]:
-    """§4.3: base64 → PNG → RGB bytes → text without the newline padding → the publish message."""
+    """png compression: base64 → PNG → RGB bytes → text without the newline padding → the publish message."""
     png = base64.b64decode(frame["data"])
     width, height = struct.unpack(">II", png[16:24])
     idat_len = struct.unpack(">I", png[33:37])[0]

@@ -2,8 +2,9 @@
 
 ``RosbridgeClient`` keeps one shared WebSocket to the bridge (reconnecting in the background), plus
 short-lived lanes for goals and, on bridges that handle a connection in order (Humble), for service
-calls. By job: ``client.py`` (lifecycle, the connect loop, the current ``Session``), ``session.py``
-(one connection and what was learnt on it), ``detect.py`` (ROS version detection), ``services.py``
+calls. By job: ``client.py`` (lifecycle, the connect loop, the current ``Session``), ``reconnect.py``
+(when to try: backoff, attempts prompted by calls), ``session.py`` (one connection and what was learnt on
+it, opened whole), ``detect.py`` (ROS version detection), ``services.py``
 (service calls), ``topics.py`` and ``subscription.py`` (advertisements, subscriptions), ``lanes.py`` and
 ``goal_lane.py`` (extra connections), ``connection.py`` (one WebSocket and its reader).
 """

@@ -4,58 +4,28 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ipaddress
 import itertools
 import logging
-import math
-import random
 import ssl
-from collections.abc import Coroutine, Sequence
+from collections.abc import Callable, Coroutine, Sequence
 from types import TracebackType
-from typing import Any, Final, Protocol, Self
-from urllib.parse import urlsplit
+from typing import Any, Protocol, Self
 
 from rosbridge_mcp_server.client.connection import Connection, open_connection
-from rosbridge_mcp_server.client.detect import detect
-from rosbridge_mcp_server.client.goal_lane import GoalLane
+from rosbridge_mcp_server.client.goal_lane import GoalLane, GoalLanes
 from rosbridge_mcp_server.client.lanes import LanePool
+from rosbridge_mcp_server.client.reconnect import Attempts, reconnect_cap
 from rosbridge_mcp_server.client.services import bridge_timeout, call_on, call_on_lane
-from rosbridge_mcp_server.client.session import Session
+from rosbridge_mcp_server.client.session import Session, open_session
 from rosbridge_mcp_server.client.subscription import Subscription
 from rosbridge_mcp_server.client.topics import Topics
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
 
-__all__ = ["LOCAL_RECONNECT_MAX", "PROMPT_SPACING", "RosbridgeClient", "SessionWatcher", "reconnect_cap"]
+__all__ = ["RosbridgeClient", "SessionWatcher"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
-
-#: Longest wait between connection attempts to a bridge on this machine or the local network. An attempt there
-#: costs a refused connect (or a few packets), so retrying twice a second is cheap, and the robot is back in
-#: use within about half a second of its bridge, however long it was gone.
-LOCAL_RECONNECT_MAX: Final = 0.5
-#: A call that finds no connection prompts an attempt at once, but not sooner than this after the last one
-#: ended: a burst of calls against a dead bridge costs at most ten attempts a second.
-PROMPT_SPACING: Final = 0.1
-
-
-def reconnect_cap(url: str, reconnect_max: float) -> float:
-    """The longest wait between connection attempts for the bridge at *url*.
-
-    Loopback and local-network hosts (private, link-local and unique-local addresses, ``localhost``, names
-    ending in ``.local`` or without a dot) get :data:`LOCAL_RECONNECT_MAX`; other hosts *reconnect_max*, so
-    a remote bridge is not tried more than every few seconds, while a tool call still prompts an attempt at
-    once. Decided from the URL alone (no name lookup).
-    """
-    host = (urlsplit(url).hostname or "").rstrip(".").lower()
-    try:
-        address = ipaddress.ip_address(host)
-    except ValueError:
-        local = host == "localhost" or host.endswith((".localhost", ".local")) or "." not in host
-    else:
-        local = address.is_loopback or address.is_private or address.is_link_local
-    return min(reconnect_max, LOCAL_RECONNECT_MAX) if local else reconnect_max
 
 
 class SessionWatcher(Protocol):
@@ -106,27 +76,19 @@ class RosbridgeClient:
         self.reconnect_cap = max(reconnect_cap(url, self.reconnect_max), reconnect_min)
         self._ids = protocol.IdMinter()
         self._session: Session | None = None
-        self._last_reason: str | None = "not started"
+        self._attempts = Attempts(reconnect_min, self.reconnect_cap)
         self._runner: asyncio.Task[None] | None = None
         self._closing = False
         self._closed = False
-        self._attempt_done: asyncio.Event | None = None
-        # Set by a call that finds no connection: the connect loop stops waiting and tries at once.
-        self._wake = asyncio.Event()
-        self._last_attempt_end = -math.inf
-        # The last attempt got no WebSocket answer in time (a port that accepts but never completes the
-        # handshake, a host that drops packets): calls then fail at once instead of each waiting out the
-        # connect timeout again, while the loop keeps trying.
-        self._last_attempt_timed_out = False
         self._connected_event = asyncio.Event()
         self._disconnected_event = asyncio.Event()
         self._disconnected_event.set()
         self._watchers: list[SessionWatcher] = []
-        self._goal_lanes: set[GoalLane] = set()
         self._background: set[asyncio.Task[Any]] = set()
         self._lanes = LanePool(
             self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
         )
+        self._goal_lanes = GoalLanes(url, self._open_lane, self._close_in_background)
         self.topics = Topics(url, self._ids, lambda: self.session, self._wait_session)
         self.connections_made = 0
         self._lane_numbers = itertools.count(1)
@@ -164,9 +126,7 @@ class RosbridgeClient:
             raise RuntimeError("this RosbridgeClient is closed")
         if self._runner is not None:
             return
-        # Marks an attempt as in progress before the loop runs, so a call right after start()
-        # waits for the first attempt instead of failing.
-        self._attempt_done = asyncio.Event()
+        self._attempts.start()
         self._runner = asyncio.create_task(self._run(), name=f"rosbridge connect loop ({self.url})")
 
     async def __aenter__(self) -> Self:
@@ -184,6 +144,7 @@ class RosbridgeClient:
             return
         self._closed = True
         self._closing = True
+        self._attempts.stop()
         session = self.session
         for watcher in self._watchers:
             await watcher.client_closing(session)
@@ -193,8 +154,7 @@ class RosbridgeClient:
             self._runner.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._runner
-        lanes = self._lanes.close_all() + [lane.connection for lane in self._goal_lanes]
-        self._goal_lanes.clear()
+        lanes = self._lanes.close_all() + self._goal_lanes.take_all()
         await asyncio.gather(*(lane.aclose() for lane in lanes), return_exceptions=True)
         main = self._session.connection if self._session is not None else None
         if main is not None:
@@ -215,7 +175,7 @@ class RosbridgeClient:
                 await self._connected_event.wait()
         except TimeoutError:
             raise NotConnectedError(
-                self.url, f"no connection within {timeout:g} s; last error: {self._last_reason}"
+                self.url, f"no connection within {timeout:g} s; last error: {self._attempts.last_reason}"
             ) from None
 
     async def wait_disconnected(self, timeout: float) -> None:
@@ -226,42 +186,21 @@ class RosbridgeClient:
     # --- the connect loop ---------------------------------------------------------------------------
 
     async def _run(self) -> None:
-        delay = self.reconnect_min
         failures = 0
-        loop = asyncio.get_running_loop()
         while not self._closing:
-            self._wake.clear()
-            if self._attempt_done is None or self._attempt_done.is_set():
-                self._attempt_done = asyncio.Event()
-            attempt_done = self._attempt_done
-            conn: Connection | None = None
+            attempt_done = self._attempts.begin()
             served = False
             try:
-                conn = await open_connection(
+                session = await open_session(
+                    lambda: self._dial("main", self.connect_timeout, self.topics.deliver),
+                    self._ids,
                     self.url,
-                    "main",
-                    self.connect_timeout,
-                    self.topics.deliver,
-                    self.request_timeout,
-                    ssl_context=self._ssl,
-                    headers=self._headers,
+                    number=self.connections_made + 1,
+                    detect_timeout=min(self.connect_timeout, self.request_timeout),
+                    prepare=self.topics.restore,
                 )
-                info = await detect(
-                    conn, self._ids, self.url, min(self.connect_timeout, self.request_timeout)
-                )
-                session = Session(conn, info, self.connections_made + 1)
-                await self.topics.restore(session)
-            except asyncio.CancelledError:
-                # close() cancelled us mid-setup: the half-set-up socket is not the session's, so
-                # nobody else would close it.
-                if conn is not None:
-                    await conn.aclose()
-                raise
             except NotConnectedError as exc:
-                self._last_reason = exc.reason
-                self._last_attempt_timed_out = exc.timed_out
-                if conn is not None:
-                    await conn.aclose()
+                self._attempts.failed(exc.reason, timed_out=exc.timed_out)
                 failures += 1
                 if failures == 1:
                     logger.warning(
@@ -270,15 +209,13 @@ class RosbridgeClient:
                 else:
                     logger.debug("rosbridge at %s still unreachable (%s)", self.url, exc.reason)
             except Exception as exc:
-                self._last_reason = f"{type(exc).__name__}: {exc}"
-                if conn is not None:
-                    await conn.aclose()
+                reason = f"{type(exc).__name__}: {exc}"
+                self._attempts.failed(reason)
                 failures += 1
-                logger.warning("Setting up the connection to %s failed: %s", self.url, self._last_reason)
+                logger.warning("Setting up the connection to %s failed: %s", self.url, reason)
             else:
                 self._session = session
-                self._last_reason = None
-                self._last_attempt_timed_out = False
+                self._attempts.succeeded()
                 self.connections_made += 1
                 self._disconnected_event.clear()
                 self._connected_event.set()
@@ -287,13 +224,13 @@ class RosbridgeClient:
                     "%s rosbridge at %s: %s",
                     "Reconnected to" if session.number > 1 else "Connected to",
                     self.url,
-                    info.describe(),
+                    session.info.describe(),
                 )
                 failures = 0
                 for watcher in self._watchers:
                     watcher.session_started(session)
-                delay = self.reconnect_min
                 served = True
+                conn = session.connection
                 await conn.closed.wait()
                 reason = conn.close_reason or "the connection closed"
                 self._set_disconnected(conn, reason)
@@ -302,22 +239,13 @@ class RosbridgeClient:
                         "Lost the connection to rosbridge at %s (%s); reconnecting", self.url, reason
                     )
             finally:
-                if not served:
-                    # A failed attempt (not the end of a session): prompts wait a moment before the next.
-                    self._last_attempt_end = loop.time()
-                attempt_done.set()
-            sleep = random.uniform(delay / 2, delay)
-            delay = min(delay * 2, self.reconnect_cap)
-            # No attempt is in progress while we wait; a call that needs the connection wakes us (see
-            # _prompt_attempt) instead of failing until the backoff runs out.
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(sleep):
-                    await self._wake.wait()
+                self._attempts.ended(attempt_done, served=served)
+            await self._attempts.pause()
 
     def _set_disconnected(self, conn: Connection | None, reason: str) -> None:
         if conn is not None and self._session is not None and self._session.connection is conn:
             self._session = None
-            self._last_reason = reason
+            self._attempts.last_reason = reason
         self._connected_event.clear()
         self._disconnected_event.set()
         # Idle lanes belong to the old bridge session; busy ones fail on their own when it is gone.
@@ -336,46 +264,22 @@ class RosbridgeClient:
             return session
         if self._closed:
             raise NotConnectedError(self.url, "the client is closed")
-        if self._last_attempt_timed_out:
+        if self._attempts.timed_out:
             # Waiting out another handshake would cost every call the whole connect timeout: the attempt is
             # prompted, not awaited, so a later call finds the connection if the bridge answers again.
-            self._prompt_attempt()
-            raise NotConnectedError(self.url, self._last_reason)
-        attempt = self._attempt_done
-        if attempt is None or attempt.is_set():
-            attempt = self._prompt_attempt()
-        if attempt is not None and not attempt.is_set():
-            loop = asyncio.get_running_loop()
-            # The attempt is bounded by the connect timeout itself; the margin lets it report why it failed.
-            until = loop.time() + self.connect_timeout + 1.0
-            if deadline is not None:
-                until = min(until, deadline)
-            try:
-                async with asyncio.timeout_at(until):
-                    await attempt.wait()
-            except TimeoutError:
-                pass
-            session = self.session
-            if session is not None:
-                return session
-        raise NotConnectedError(self.url, self._last_reason)
-
-    def _prompt_attempt(self) -> asyncio.Event | None:
-        """Wake the connect loop for an attempt now; the event set when it is done (None: not now)."""
-        if self._runner is None or self._closing:
-            return None
-        if asyncio.get_running_loop().time() - self._last_attempt_end < PROMPT_SPACING:
-            return None
-        if self._attempt_done is None or self._attempt_done.is_set():
-            self._attempt_done = asyncio.Event()
-        self._wake.set()
-        return self._attempt_done
+            self._attempts.prompt()
+            raise NotConnectedError(self.url, self._attempts.last_reason)
+        await self._attempts.wait_for_one(self.connect_timeout, deadline)
+        session = self.session
+        if session is not None:
+            return session
+        raise NotConnectedError(self.url, self._attempts.last_reason)
 
     def require_session(self) -> Session:
         """The open session, or :class:`NotConnectedError` at once (for sends that must never wait)."""
         session = self.session
         if session is None:
-            raise NotConnectedError(self.url, self._last_reason)
+            raise NotConnectedError(self.url, self._attempts.last_reason)
         return session
 
     async def ros_info(self) -> RosInfo:
@@ -395,11 +299,17 @@ class RosbridgeClient:
         self.run_in_background(conn.aclose(), f"close {conn.name}")
 
     async def _open_lane(self, timeout: float) -> Connection:
+        return await self._dial(f"lane {next(self._lane_numbers)}", min(timeout, self.connect_timeout))
+
+    async def _dial(
+        self, name: str, timeout: float, on_publish: Callable[[protocol.PublishEvent], None] | None = None
+    ) -> Connection:
         return await open_connection(
             self.url,
-            f"lane {next(self._lane_numbers)}",
-            min(timeout, self.connect_timeout),
-            send_timeout=self.request_timeout,
+            name,
+            timeout,
+            on_publish,
+            self.request_timeout,
             ssl_context=self._ssl,
             headers=self._headers,
         )
@@ -523,17 +433,7 @@ class RosbridgeClient:
 
     async def open_goal_lane(self, goal_id: str, what: str, timeout: float) -> GoalLane:
         """A connection of its own for goal *goal_id*, opened within *timeout*; ``lane.close()`` after."""
-        try:
-            conn = await self._open_lane(timeout)
-        except NotConnectedError as exc:
-            raise NotConnectedError(self.url, f"could not open a lane for the goal: {exc.reason}") from None
-        lane = GoalLane(conn, goal_id, what, self._forget_goal_lane)
-        self._goal_lanes.add(lane)
-        return lane
-
-    def _forget_goal_lane(self, lane: GoalLane) -> None:
-        self._goal_lanes.discard(lane)
-        self._close_in_background(lane.connection)
+        return await self._goal_lanes.open(goal_id, what, timeout)
 
     async def cancel_action_goal(self, action: str, goal_id: str) -> None:
         """Ask the bridge to cancel goal *goal_id*, on the main connection.

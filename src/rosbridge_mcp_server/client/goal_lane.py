@@ -7,13 +7,14 @@ main connection free. What a goal means (timeouts, cancels, what a drop leaves r
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from rosbridge_mcp_server.client.connection import Connection, GoalStream
 from rosbridge_mcp_server.client.session import send_quietly
+from rosbridge_mcp_server.errors import NotConnectedError
 
-__all__ = ["GoalLane"]
+__all__ = ["GoalLane", "GoalLanes"]
 
 
 class GoalLane:
@@ -50,3 +51,38 @@ class GoalLane:
         """Stop listening and close the lane in the background."""
         self.connection.pending.pop(self.goal_id, None)
         self._on_close(self)
+
+
+class GoalLanes:
+    """The goal lanes open now: opened through *open_lane*, closed through *close* when a goal ends."""
+
+    def __init__(
+        self,
+        url: str,
+        open_lane: Callable[[float], Awaitable[Connection]],
+        close: Callable[[Connection], None],
+    ) -> None:
+        self._url = url
+        self._open_lane = open_lane
+        self._close = close
+        self._open: set[GoalLane] = set()
+
+    async def open(self, goal_id: str, what: str, timeout: float) -> GoalLane:
+        """A connection of its own for goal *goal_id*, opened within *timeout*; ``lane.close()`` after."""
+        try:
+            conn = await self._open_lane(timeout)
+        except NotConnectedError as exc:
+            raise NotConnectedError(self._url, f"could not open a lane for the goal: {exc.reason}") from None
+        lane = GoalLane(conn, goal_id, what, self._forget)
+        self._open.add(lane)
+        return lane
+
+    def _forget(self, lane: GoalLane) -> None:
+        self._open.discard(lane)
+        self._close(lane.connection)
+
+    def take_all(self) -> list[Connection]:
+        """Every open lane's connection, for the caller to close; the lanes are forgotten."""
+        connections = [lane.connection for lane in self._open]
+        self._open.clear()
+        return connections

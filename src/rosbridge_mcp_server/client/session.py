@@ -8,13 +8,16 @@ can never inherit a fact about the old one: the client swaps the whole object.
 from __future__ import annotations
 
 import logging
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from rosbridge_mcp_server.client.connection import Connection
+from rosbridge_mcp_server.client.detect import detect
 from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
 
-__all__ = ["Session"]
+__all__ = ["Session", "open_session", "send_quietly"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
@@ -82,3 +85,28 @@ async def send_quietly(conn: Connection | None, op: dict[str, Any]) -> bool:
         logger.debug("sending %s failed", op.get("op"), exc_info=True)
         return False
     return True
+
+
+async def open_session(
+    connect: Callable[[], Awaitable[Connection]],
+    ids: protocol.IdMinter,
+    url: str,
+    *,
+    number: int,
+    detect_timeout: float,
+    prepare: Callable[[Session], Awaitable[None]],
+) -> Session:
+    """Connect, learn what the bridge is, and let *prepare* restore what is still wanted on the new session.
+
+    On any failure, cancellation included, the half-set-up socket is closed here: it is nobody's session yet,
+    so nobody else would close it.
+    """
+    conn = await connect()
+    try:
+        info = await detect(conn, ids, url, detect_timeout)
+        session = Session(conn, info, number)
+        await prepare(session)
+    except BaseException:
+        await conn.aclose()
+        raise
+    return session

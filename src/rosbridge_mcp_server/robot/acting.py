@@ -21,17 +21,16 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol
 from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
-from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
+from rosbridge_mcp_server.robot.messages import require_fit, same_type, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
-from rosbridge_mcp_server.safety.velocity import clamp_text
+from rosbridge_mcp_server.robot.velocity import clamp_text
 from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.activity import SessionActivity
     from rosbridge_mcp_server.robot.graph import RosGraph
-    from rosbridge_mcp_server.safety.activity import SessionActivity
 
 __all__ = [
     "ALLOW_ALL",
@@ -113,13 +112,20 @@ async def nobody_to_ask(question: str) -> Answer:
     return "unsupported"
 
 
+class Timeouts(Protocol):
+    """The one setting an act reads (the server's ``Config`` is one)."""
+
+    @property
+    def request_timeout(self) -> float: ...
+
+
 class Acting(Protocol):
     """What an act needs (a tool's ``ToolContext`` is one)."""
 
     @property
     def client(self) -> RosbridgeClient: ...
     @property
-    def config(self) -> Config: ...
+    def config(self) -> Timeouts: ...
     @property
     def graph(self) -> RosGraph: ...
     @property
@@ -196,7 +202,7 @@ async def _checked_message(
     typedefs = await ctx.graph.message_typedefs(message_type)
 
     graph_type = await ctx.graph.publishing_type(name)
-    if graph_type and short_type_name(graph_type) != short_type_name(bridge_type):
+    if graph_type and not same_type(graph_type, bridge_type):
         raise NotSentError(
             f"Topic {name} has type {graph_type}, not {bridge_type}; rosbridge would drop the message. "
             f"Publish a {graph_type} message, or choose another topic (list_topics shows each topic's type)."
@@ -363,10 +369,10 @@ async def call_service(
     given_type = normalize_type(service_type, info.version, "srv")
 
     graph_type = await ctx.graph.service_type(name, cached=True)
-    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
+    if graph_type and not same_type(graph_type, given_type):
         # The cached type may be stale (the service was offered anew with another type): ask once more.
         graph_type = await ctx.graph.service_type(name)
-    if graph_type and short_type_name(graph_type) != short_type_name(given_type):
+    if graph_type and not same_type(graph_type, given_type):
         raise NotSentError(
             f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
             "and call again with that service_type."

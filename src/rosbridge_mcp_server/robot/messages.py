@@ -39,6 +39,7 @@ __all__ = [
     "example_message",
     "find_problems",
     "require_fit",
+    "same_type",
     "short_type_name",
     "typedefs_from_rosapi",
 ]
@@ -113,6 +114,11 @@ def short_type_name(name: str) -> str:
     if len(parts) == 3 and parts[1] in ("msg", "srv", "action"):
         return f"{parts[0]}/{parts[2]}"
     return name.strip()
+
+
+def same_type(a: str, b: str) -> bool:
+    """Whether two spellings name the same type (``pkg/msg/Type`` and ``pkg/Type`` do)."""
+    return short_type_name(a) == short_type_name(b)
 
 
 def _split_array(raw: str) -> tuple[str, int | None]:

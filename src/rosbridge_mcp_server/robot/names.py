@@ -85,7 +85,7 @@ def _shown(name: str) -> str:
     return repr(name) if len(name) <= 80 else repr(name[:77]) + "..."
 
 
-def did_you_mean(name: str, known: list[str]) -> str:
+def did_you_mean(name: str, known: list[str], cutoff: float = 0.8) -> str:
     """`` Did you mean /a or /b?`` for the names closest to a misspelt one, or ``""``."""
-    close = difflib.get_close_matches(name, known, n=3, cutoff=0.8)
+    close = difflib.get_close_matches(name, known, n=3, cutoff=cutoff)
     return f" Did you mean {' or '.join(close)}?" if close else ""

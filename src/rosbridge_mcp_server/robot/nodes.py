@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.names import did_you_mean
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.graph import RosGraph
@@ -22,12 +23,14 @@ _LOOKUPS_AT_ONCE = 8
 
 
 class UnknownNodeError(LookupError):
-    """The node is not in the graph; carries the names that are."""
+    """The node is not in the graph; carries the names that are, and says which of them were likely meant."""
 
     def __init__(self, node: str, known: list[str]) -> None:
         self.node = node
         self.known = known
-        super().__init__(node)
+        super().__init__(
+            f"Node {node} is not running.{did_you_mean(node, known)} Call list_nodes to see the nodes."
+        )
 
 
 @dataclass(frozen=True)

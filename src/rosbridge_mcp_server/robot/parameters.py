@@ -17,12 +17,13 @@ Values travel as JSON text both ways.
 from __future__ import annotations
 
 import asyncio
-import difflib
 import json
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.names import did_you_mean
+from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_names
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -103,13 +104,13 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
         if not found:
             # ROS 1 parameters belong to namespaces, not nodes: suggest the namespaces that have some.
             spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
-            raise ParameterError(f"No parameters under {prefix}.{_close(node, spaces)}")
+            raise ParameterError(f"No parameters under {prefix}.{did_you_mean(node, spaces, cutoff=0.7)}")
         return found
     services = set(await graph.service_names())
-    nodes = [node] if node is not None else await _ros2_nodes(graph)
+    nodes = [node] if node is not None else await node_names(graph)
     offering = [n for n in nodes if f"{n.rstrip('/')}/list_parameters" in services]
     if node is not None and not offering:
-        raise ParameterError(_no_parameter_service(node, nodes=await _ros2_nodes(graph)))
+        raise ParameterError(_no_parameter_service(node, nodes=await node_names(graph)))
     gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE)
 
     async def one(name: str) -> list[str]:
@@ -203,12 +204,14 @@ async def _require_existing(
         if values.get("exists") is True:
             return
         names = await list_parameters(graph, client, None)
-        raise ParameterError(f"Parameter {parsed.full} does not exist.{_close(parsed.full, names)}")
+        raise ParameterError(
+            f"Parameter {parsed.full} does not exist.{did_you_mean(parsed.full, names, cutoff=0.7)}"
+        )
     assert parsed.node is not None
     assert parsed.local is not None
     services = set(await graph.service_names())
     if f"{parsed.node.rstrip('/')}/list_parameters" not in services:
-        raise ParameterError(_no_parameter_service(parsed.node, nodes=await _ros2_nodes(graph)))
+        raise ParameterError(_no_parameter_service(parsed.node, nodes=await node_names(graph)))
     names = await _node_parameter_names(client, parsed.node)
     if parsed.local not in names:
         shown = ", ".join(sorted(names)) or "none"
@@ -226,20 +229,10 @@ async def _node_parameter_names(client: RosbridgeClient, node: str) -> list[str]
     return [n for n in names or () if isinstance(n, str)]
 
 
-async def _ros2_nodes(graph: RosGraph) -> list[str]:
-    values = await graph.rosapi("nodes")
-    return sorted({n for n in values.get("nodes") or () if isinstance(n, str)})
-
-
 def _no_parameter_service(node: str, *, nodes: list[str]) -> str:
     if node not in nodes:
-        return f"Node {node} is not running.{_close(node, nodes)} list_nodes shows the nodes."
+        return str(UnknownNodeError(node, nodes))
     return f"Node {node} offers no parameter services (it has no parameters to read or set)."
-
-
-def _close(name: str, known: list[str]) -> str:
-    close = difflib.get_close_matches(name, known, n=3, cutoff=0.7)
-    return f" Did you mean {' or '.join(close)}?" if close else ""
 
 
 def _same(after: Any, wanted: Any) -> bool:

@@ -4,7 +4,8 @@ Domain-level: nothing here knows MCP. The server gives each tool a guard (:class
 ask the person; the acting layer calls the guard before anything is sent.
 """
 
-from rosbridge_mcp_server.safety.activity import SessionActivity, Stream, VelocityTopic
+from rosbridge_mcp_server.robot.activity import SessionActivity, Stream, VelocityTopic
+from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure
 from rosbridge_mcp_server.safety.estop import StopReport, emergency_stop
 from rosbridge_mcp_server.safety.guard import Audit, PolicyGuard, question
 from rosbridge_mcp_server.safety.policy import (
@@ -16,7 +17,6 @@ from rosbridge_mcp_server.safety.policy import (
     load_policy,
     parse_policy,
 )
-from rosbridge_mcp_server.safety.velocity import clamp_text, is_velocity_type, measure
 
 __all__ = [
     "Audit",

@@ -12,11 +12,11 @@ from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.goals import cancel_goals, running_goals
-from rosbridge_mcp_server.safety.velocity import zero_command
+from rosbridge_mcp_server.robot.velocity import zero_command
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.safety.activity import SessionActivity
+    from rosbridge_mcp_server.robot.activity import SessionActivity
 
 __all__ = ["STREAM_STOP_SECONDS", "StopReport", "emergency_stop"]
 

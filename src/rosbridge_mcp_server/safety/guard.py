@@ -20,8 +20,8 @@ import logging
 from typing import IO, TYPE_CHECKING, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
 from rosbridge_mcp_server.safety.policy import Policy
-from rosbridge_mcp_server.safety.velocity import clamp_text, is_velocity_type, measure, scaled
 
 if TYPE_CHECKING:
     # Only for annotations: the acting layer imports this package's velocity rules, so a runtime import here

@@ -46,7 +46,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
-from rosbridge_mcp_server.safety.activity import SessionActivity
+from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
@@ -56,7 +56,7 @@ if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.config import Config
     from rosbridge_mcp_server.robot.graph import RosGraph
 
-__all__ = ["error_text", "inline_refs", "tool_from_module"]
+__all__ = ["error_text", "inline_refs", "tool_from_module", "without_name_titles"]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
 
@@ -210,8 +210,8 @@ def tool_from_module(
         argument_check=argument_problem,
     )
     # What argument_problem holds every call to, said where clients read it.
-    tool.parameters["additionalProperties"] = False
-    replace_output_schema(tool, inline_refs)
+    tool.parameters = {**without_name_titles(tool.parameters), "additionalProperties": False}
+    replace_output_schema(tool, lambda schema: without_name_titles(inline_refs(schema)))
     return tool
 
 
@@ -237,6 +237,34 @@ def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:
 
     resolved: dict[str, Any] = resolve(schema)
     return resolved
+
+
+def without_name_titles(schema: dict[str, Any]) -> dict[str, Any]:
+    """``schema`` without the ``title`` pydantic gives each property (``goal_id`` → "Goal Id").
+
+    Such a title only restates the property's name, and every host pays for it in context on every session;
+    a model's own title and every description stay.
+    """
+
+    def strip(node: Any) -> Any:
+        if isinstance(node, list):
+            return [strip(item) for item in node]
+        if not isinstance(node, dict):
+            return node
+        out = {key: strip(value) for key, value in node.items()}
+        properties = node.get("properties")
+        if isinstance(properties, dict):
+            out["properties"] = {name: _untitled(name, strip(prop)) for name, prop in properties.items()}
+        return out
+
+    stripped: dict[str, Any] = strip(schema)
+    return stripped
+
+
+def _untitled(name: str, prop: Any) -> Any:
+    if isinstance(prop, dict) and prop.get("title") == name.title().replace("_", " "):
+        return {key: value for key, value in prop.items() if key != "title"}
+    return prop
 
 
 class _Confirmation(BaseModel):

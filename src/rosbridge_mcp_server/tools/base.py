@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel
 
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, AskPerson, Guard, nobody_to_ask
+from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.robot.messages import compact_json
-from rosbridge_mcp_server.robot.names import absolute_name, did_you_mean
-from rosbridge_mcp_server.safety.activity import SessionActivity
+from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.wire.protocol import BRIDGE_MAX_FRAME_BYTES
 
 if TYPE_CHECKING:
@@ -41,7 +41,6 @@ __all__ = [
     "ToolSpec",
     "absolute_name",
     "compact_json",
-    "did_you_mean",
     "parse_json_object",
     "payload_problem",
 ]

@@ -23,7 +23,7 @@ _EXAMPLE_PART = {"message": "message", "service": "request", "action": "goal"}
 
 
 class TypePart(BaseModel):
-    """One part of a type: the message itself, or a service's request/response, or an action's goal/…."""
+    """One part of the type."""
 
     part: str = Field(description="message, request, response, goal, result or feedback")
     type: str

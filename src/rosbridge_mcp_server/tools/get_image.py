@@ -26,7 +26,6 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
     absolute_name,
-    did_you_mean,
 )
 
 __all__ = ["SPEC", "ImageAnswer", "run"]
@@ -41,10 +40,10 @@ class ImageAnswer(BaseModel):
     topic: str
     message_type: str
     encoding: str = Field(description="The frame's encoding (rgb8, 16UC1, jpeg, ...)")
-    width: int = Field(description="Width of the frame as received, pixels")
-    height: int = Field(description="Height of the frame as received, pixels")
-    sent_width: int = Field(description="Width of the returned picture, pixels")
-    sent_height: int = Field(description="Height of the returned picture, pixels")
+    width: int = Field(description="Pixels, as received")
+    height: int = Field(description="Pixels, as received")
+    sent_width: int = Field(description="Pixels, as returned")
+    sent_height: int = Field(description="Pixels, as returned")
     format: ImageFormat
     frame_id: str
     stamp: float | None = Field(description="header.stamp in seconds (None when zero)")
@@ -79,9 +78,9 @@ async def run(
     name = absolute_name(topic, "topic")
     msg_type = await ctx.graph.topic_type(name)
     if not msg_type:
-        known = [entry.name for entry in await ctx.graph.topics() if _is_image(entry.type)]
+        missing, known = await ctx.graph.unknown_topic(name, among=_is_image)
         listing = f" Image topics: {', '.join(known)}." if known else " The graph has no image topics."
-        raise ToolFailure(f"Topic {name} is not in the ROS graph.{did_you_mean(name, known)}{listing}")
+        raise ToolFailure(f"{missing}{listing}")
     if not _is_image(msg_type):
         raise ToolFailure(
             f"Topic {name} carries {msg_type}, not a sensor_msgs Image or CompressedImage; subscribe_topic "

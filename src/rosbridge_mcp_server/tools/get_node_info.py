@@ -14,14 +14,13 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolSpec,
     absolute_name,
-    did_you_mean,
 )
 
 __all__ = ["SPEC", "NodeInfoAnswer", "run"]
 
 
 class NamedType(BaseModel):
-    """A topic or service and its type ("" when unknown)."""
+    """Name and type ("" when unknown)."""
 
     name: str
     type: str
@@ -57,9 +56,7 @@ async def run(
     try:
         details = await node_details(ctx.graph, name)
     except UnknownNodeError as exc:
-        raise ToolFailure(
-            f"Node {name} is not running.{did_you_mean(name, exc.known)} Call list_nodes to see the nodes."
-        ) from None
+        raise ToolFailure(str(exc)) from None
     answer = NodeInfoAnswer(
         node=name,
         publications=[NamedType(name=n, type=t) for n, t in details.publishes],

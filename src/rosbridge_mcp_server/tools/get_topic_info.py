@@ -13,7 +13,6 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolSpec,
     absolute_name,
-    did_you_mean,
 )
 
 __all__ = ["SPEC", "TopicInfoAnswer", "run"]
@@ -48,12 +47,8 @@ async def run(
     name = absolute_name(topic, "topic")
     details = await ctx.graph.topic_details(name)
     if not details.type and not details.publishers and not details.subscribers:
-        known = [entry.name for entry in await ctx.graph.topics()]
-        hint = did_you_mean(name, known)
-        raise ToolFailure(
-            f"Topic {name} is not in the ROS graph (nothing publishes or subscribes to it).{hint} Call "
-            "list_topics to see the topics that exist."
-        )
+        missing, _ = await ctx.graph.unknown_topic(name, " (nothing publishes or subscribes to it)")
+        raise ToolFailure(f"{missing} Call list_topics to see the topics that exist.")
     answer = TopicInfoAnswer(
         topic=name,
         type=details.type,

@@ -58,11 +58,10 @@ SPEC = ToolSpec(
     description=(
         "Send a goal to a ROS action server and wait until it finishes; this can move the robot "
         "(navigation, rotation, arm motion). Example: action_name /fibonacci, action_type "
-        "example_interfaces/action/Fibonacci (also written example_interfaces/Fibonacci or, on ROS 1, "
-        f"actionlib_tutorials/FibonacciAction), goal {_EXAMPLE}, timeout 30. Feedback is sent as progress "
-        "notifications (naming the goal id) while the goal runs. If it does not finish within timeout "
-        "seconds, or the call is cancelled, the goal is cancelled on the robot. The answer has the goal "
-        "id, the final status, the result and the last feedback. Use list_actions to find actions."
+        "example_interfaces/action/Fibonacci (ROS 1: actionlib_tutorials/FibonacciAction), goal "
+        f"{_EXAMPLE}, timeout 30. Feedback is sent as progress notifications (naming the goal id) while the "
+        "goal runs. If it does not finish within timeout seconds, or the call is cancelled, the goal is "
+        "cancelled on the robot. Use list_actions to find actions."
     ),
     hints=ACTS_ON_ROBOT,
     output=GoalAnswer,

@@ -52,9 +52,9 @@ SPEC = ToolSpec(
         f"message_type geometry_msgs/msg/Twist, message {_EXAMPLE} drives forward at 0.5 m/s while turning "
         "at 0.3 rad/s (velocity commands usually act only briefly; publish again to keep moving, publish "
         "zeros to stop). The message is checked against the type first; a field that does not fit is an "
-        "error naming it. Omitted fields are zero/empty; {} is a valid message for std_msgs/msg/Empty. "
-        "Use list_topics and get_topic_info to find topics and types. With rate_hz and duration it "
-        "publishes repeatedly (e.g. 10 Hz for 3 s keeps a robot moving) and ends a Twist stream with zeros."
+        "error naming it. Use list_topics and get_topic_info to find topics and types. With rate_hz and "
+        "duration it publishes repeatedly (e.g. 10 Hz for 3 s keeps a robot moving) and ends a Twist "
+        "stream with zeros."
     ),
     hints=ACTS_ON_ROBOT,
     output=PublishAnswer,
@@ -73,8 +73,8 @@ async def run(
         dict[str, Any] | str,
         Field(
             description=(
-                f"The message as a JSON object, e.g. {_EXAMPLE} for a Twist (units: m/s and rad/s); omitted "
-                "fields are 0/empty; {} for std_msgs/msg/Empty"
+                f"The message as a JSON object, e.g. {_EXAMPLE} for a Twist; omitted fields are 0/empty; "
+                "{} for std_msgs/msg/Empty"
             )
         ),
     ] = "{}",

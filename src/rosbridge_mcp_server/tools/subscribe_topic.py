@@ -8,7 +8,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.listening import byte_array_paths, listen, unknown_field_path
-from rosbridge_mcp_server.robot.messages import TypeDef, short_type_name
+from rosbridge_mcp_server.robot.messages import TypeDef, same_type
 from rosbridge_mcp_server.robot.summary import FieldPathError, select_fields, summarize
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
@@ -18,7 +18,6 @@ from rosbridge_mcp_server.tools.base import (
     ToolSpec,
     absolute_name,
     compact_json,
-    did_you_mean,
 )
 from rosbridge_mcp_server.wire.dialect import normalize_type
 
@@ -101,7 +100,7 @@ async def run(
     graph_type = await ctx.graph.topic_type(name)
     if message_type:
         wanted = normalize_type(message_type, info.version, "msg")
-        if graph_type and short_type_name(graph_type) != short_type_name(wanted):
+        if graph_type and not same_type(graph_type, wanted):
             raise ToolFailure(
                 f"Topic {name} has type {graph_type}, not {wanted}; rosbridge would not subscribe. Leave "
                 "message_type out to use the topic's own type."
@@ -110,11 +109,10 @@ async def run(
     elif graph_type:
         msg_type = graph_type
     else:
-        known = [entry.name for entry in await ctx.graph.topics()]
+        missing, _ = await ctx.graph.unknown_topic(name, " (nothing publishes it)")
         raise ToolFailure(
-            f"Topic {name} is not in the ROS graph (nothing publishes it).{did_you_mean(name, known)} Call "
-            "list_topics to see the topics, or give message_type to wait for a publisher that has not "
-            "started yet."
+            f"{missing} Call list_topics to see the topics, or give message_type to wait for a publisher "
+            "that has not started yet."
         )
     typedefs = await _typedefs(ctx, msg_type)
     if fields and typedefs and (problem := unknown_field_path(msg_type, typedefs, fields)):

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from rosbridge_mcp_server.safety.velocity import is_velocity_type, stamped
+from rosbridge_mcp_server.robot.velocity import is_velocity_type, stamped
 
 __all__ = ["SessionActivity", "Stream", "VelocityTopic"]
 
