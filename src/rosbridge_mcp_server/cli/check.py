@@ -159,23 +159,21 @@ async def call_ordering(url: str, info: RosInfo, timeout: float) -> bool:
                 )
                 await _next(caller, _with_id("slow"))
             finally:
-                await _unadvertise(host, name, info)
+                await _unadvertise(host, name)
     return queued
 
 
-async def _unadvertise(host: ClientConnection, name: str, info: RosInfo) -> None:
+async def _unadvertise(host: ClientConnection, name: str) -> None:
     """Take the probe's service away for good before the connection closes.
 
     Both rosbridge 0.11.17 and 2.1.0 keep a client's advertised services after it disconnects (a call to one
-    never gets an answer), and 2.1.0 drops the frames of a connection it has not handled yet when the
-    connection closes: an ``unadvertise_service`` sent just before the close can be lost on a busy bridge. A
-    reply to a call sent after it on the same connection proves it was handled. 0.11.17 handles each frame as
-    it arrives, before it sees the close (and its unadvertise_service holds the connection for 1 s).
+    never gets an answer), and both drop the frames of a connection they have not handled yet when it
+    closes: an ``unadvertise_service`` sent just before the close can be lost on a busy bridge (0.11.17's
+    takes 1 s, so one is always busy there). A reply to a call sent after it on the same connection proves
+    it was handled.
     """
     try:
         await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
-        if info.version == 1:
-            return
         barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
         await host.send(json.dumps(barrier))
         async with asyncio.timeout(_UNADVERTISE_SECONDS):
