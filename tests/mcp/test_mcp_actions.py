@@ -262,3 +262,16 @@ async def test_cancelling_every_goal_does_not_read_as_if_ours_went_on(
     text = text_of(cancel)
     assert "a goal already being canceled, as ours may be, is not listed" in text
     await _the_goal_ended_cancelled(robot)
+
+
+async def test_a_goal_running_when_the_server_stops_is_cancelled_on_a_busy_bridge(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]],
+) -> None:
+    """The server's last cancel is handled before it closes, though a bridge drops a closing link's frames."""
+    robot = await make_sim(dialect="ros2", in_order=True, distro="kilted", rosapi="2.1.0", action_step=0.2)
+    robot.bridge.incoming_delay = 0.05
+    async with open_session(robot.url) as session:
+        goal_call = asyncio.create_task(session.call("publish_action", _long_goal(robot)))
+        await robot.world.wait_for(lambda w: bool(session.progress), WAIT)
+    goal_call.cancel()
+    await _the_goal_ended_cancelled(robot)
