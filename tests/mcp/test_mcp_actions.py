@@ -264,11 +264,13 @@ async def test_cancelling_every_goal_does_not_read_as_if_ours_went_on(
     await _the_goal_ended_cancelled(robot)
 
 
+@pytest.mark.parametrize("line", ["2.1.0", "ros1"])
 async def test_a_goal_running_when_the_server_stops_is_cancelled_on_a_busy_bridge(
-    make_sim: Callable[..., Awaitable[SimulatedRobot]],
+    make_sim: Callable[..., Awaitable[SimulatedRobot]], line: str
 ) -> None:
     """The server's last cancel is handled before it closes, though a bridge drops a closing link's frames."""
-    robot = await make_sim(dialect="ros2", in_order=True, distro="kilted", rosapi="2.1.0", action_step=0.2)
+    kilted = {"dialect": "ros2", "in_order": True, "distro": "kilted", "rosapi": "2.1.0"}
+    robot = await make_sim(**({"dialect": "ros1"} if line == "ros1" else kilted), action_step=0.2)
     robot.bridge.incoming_delay = 0.05
     async with open_session(robot.url) as session:
         goal_call = asyncio.create_task(session.call("publish_action", _long_goal(robot)))
