@@ -38,6 +38,8 @@ LOCAL_RECONNECT_MAX: Final = 0.5
 #: A call that finds no connection prompts an attempt at once, but not sooner than this after the last one
 #: ended: a burst of calls against a dead bridge costs at most ten attempts a second.
 PROMPT_SPACING: Final = 0.1
+#: How long :meth:`RosbridgeClient.close` waits for the bridge to handle what acted last.
+_CLOSE_HANDLED_SECONDS: Final = 1.0
 
 
 def reconnect_cap(url: str, reconnect_max: float) -> float:
@@ -110,6 +112,9 @@ class RosbridgeClient:
         self._runner: asyncio.Task[None] | None = None
         self._closing = False
         self._closed = False
+        #: Something that acts (a publish, a goal cancel) went out on the main connection, and the bridge may
+        #: not have handled it yet: :meth:`close` waits for it first.
+        self.unhandled_acts = False
         self._attempt_done: asyncio.Event | None = None
         # Set by a call that finds no connection: the connect loop stops waiting and tries at once.
         self._wake = asyncio.Event()
@@ -187,6 +192,10 @@ class RosbridgeClient:
         session = self.session
         for watcher in self._watchers:
             await watcher.client_closing(session)
+        if session is not None and self.unhandled_acts:
+            # Both rosbridge lines drop the frames of a closing connection they have not handled yet: the
+            # last zero velocity or goal cancel would never act.
+            await session.handled(_CLOSE_HANDLED_SECONDS)
         if session is not None:
             await self.topics.unadvertise_all(session)
         if self._runner is not None:
@@ -471,6 +480,7 @@ class RosbridgeClient:
         await self.topics.publish(
             session or self.require_session(), topic, msg_type, msg, latch=latch, queue_size=queue_size
         )
+        self.unhandled_acts = True
 
     async def unadvertise(self, topic: str) -> None:
         """Stop advertising *topic* (our advertisement only)."""
@@ -542,3 +552,4 @@ class RosbridgeClient:
         on another client's connection) too. No reply comes; the goal's result says what happened.
         """
         await self.require_session().send(protocol.cancel_action_goal(action, id=goal_id))
+        self.unhandled_acts = True

@@ -65,8 +65,6 @@ class GoalRegistry:
         self._client_ref = weakref.ref(client)
         self._running: dict[str, Goal] = {}
         self._cut_off: dict[str, _CutOff] = {}
-        #: A cancel went out on the main connection that the bridge may not have handled yet.
-        self.cancel_unconfirmed = False
         client.watch(self)
 
     @property
@@ -142,14 +140,11 @@ class GoalRegistry:
     async def client_closing(self, session: Session | None) -> None:
         """Cancel our running ROS 2 goals while the connection is there; log the cut-off goals left."""
         if session is not None:
-            sent = self.cancel_unconfirmed
             for goal in self.running():
-                if goal.dialect == 2:
-                    sent |= await session.try_send(protocol.cancel_action_goal(goal.action, id=goal.goal_id))
-            # The connection closes next, and a bridge drops the frames of a closing connection it has not
-            # handled yet: wait until the cancels were handled (bounded).
-            if sent:
-                await session.handled(CANCEL_CONFIRM_SECONDS)
+                if goal.dialect == 2 and await session.try_send(
+                    protocol.cancel_action_goal(goal.action, id=goal.goal_id)
+                ):
+                    self._client.unhandled_acts = True  # the client waits for them before it closes
         for entry in self._cut_off.values():
             logger.warning(
                 "The client is closing; goal %s on %s, left running by a drop, was not cancelled",

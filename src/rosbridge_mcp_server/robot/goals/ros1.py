@@ -180,5 +180,4 @@ async def send_cancel(
         else:
             logger.warning("Could not send a cancel for goal %r on %s: %s", goal_id, ns, exc)
         return False
-    registry.cancel_unconfirmed = True
     return True
