@@ -12,9 +12,10 @@ from collections.abc import Iterator
 import pytest
 
 from rosbridge_mcp_server.cli import PROG, run
-from rosbridge_mcp_server.cli.check import run_check, unreachable_advice
+from rosbridge_mcp_server.cli.check import call_ordering, run_check, unreachable_advice
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.wire.dialect import RosInfo
 
 
 @pytest.fixture(autouse=True)
@@ -182,3 +183,15 @@ async def test_check_fails_a_bridge_whose_calls_queue_though_it_says_they_do_not
     assert code == 1, out.getvalue()
     assert "[FAIL] a slow service call holds up later calls on its connection" in out.getvalue()
     assert "Not healthy" in out.getvalue()
+
+
+async def test_check_leaves_no_service_behind_on_a_busy_bridge() -> None:
+    """check's probe service is gone after check, also where the bridge drops frames unhandled at a close."""
+    robot = SimulatedRobot(dialect="ros2", in_order=True, distro="kilted", rosapi="2.1.0", port=0)
+    async with robot:
+        robot.bridge.incoming_delay = 0.05
+        info = RosInfo(version=2, distro="kilted")
+        queued = await call_ordering(robot.url, info, timeout=10.0)
+        left = [name for name in robot.graph.services if name.startswith("/rosbridge_mcp_check_")]
+    assert queued
+    assert left == []

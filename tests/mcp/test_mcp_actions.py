@@ -247,3 +247,33 @@ async def test_the_2026_protocol_carries_progress_and_cancellation_too(
     cancelled = [g for g in robot.world.goals.values() if g.cancel_requested]
     assert len(cancelled) == 1
     assert cancelled[0].status == 5
+
+
+async def test_cancelling_every_goal_does_not_read_as_if_ours_went_on(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]],
+) -> None:
+    """The cancel-all answer may leave out our goal (already being canceled, on 2.1.0): the text says so."""
+    robot = await make_sim(dialect="ros2", action_step=0.2)
+    async with open_session(robot.url) as session:
+        goal_call = asyncio.create_task(session.call("publish_action", _long_goal(robot)))
+        await robot.world.wait_for(lambda w: bool(session.progress), WAIT)
+        cancel = await session.ok("cancel_action", {"action_name": FIB})
+        await asyncio.wait_for(goal_call, WAIT)
+    text = text_of(cancel)
+    assert "a goal already being canceled, as ours may be, is not listed" in text
+    await _the_goal_ended_cancelled(robot)
+
+
+@pytest.mark.parametrize("line", ["2.1.0", "ros1"])
+async def test_a_goal_running_when_the_server_stops_is_cancelled_on_a_busy_bridge(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]], line: str
+) -> None:
+    """The server's last cancel is handled before it closes, though a bridge drops a closing link's frames."""
+    kilted = {"dialect": "ros2", "in_order": True, "distro": "kilted", "rosapi": "2.1.0"}
+    robot = await make_sim(**({"dialect": "ros1"} if line == "ros1" else kilted), action_step=0.2)
+    robot.bridge.incoming_delay = 0.05
+    async with open_session(robot.url) as session:
+        goal_call = asyncio.create_task(session.call("publish_action", _long_goal(robot)))
+        await robot.world.wait_for(lambda w: bool(session.progress), WAIT)
+    goal_call.cancel()
+    await _the_goal_ended_cancelled(robot)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+from collections.abc import Awaitable, Callable
 
 import pytest
 from mcp_harness import Session, open_session, text_of, types_for
@@ -151,3 +152,16 @@ async def test_a_twist_stamped_stream_ends_with_a_zero_keeping_its_frame(
     assert last["twist"] == STILL
     assert last["header"]["frame_id"] == "base_link"
     assert sim.world.published[topic][0].msg["twist"]["linear"]["x"] == 0.4
+
+
+async def test_a_stream_running_when_the_server_stops_ends_with_zero_on_a_busy_bridge(
+    make_sim: Callable[..., Awaitable[SimulatedRobot]],
+) -> None:
+    """The stream's zero goes out as the server stops, and is handled before the connection closes."""
+    robot = await make_sim(dialect="ros2", in_order=True, distro="kilted", rosapi="2.1.0")
+    robot.bridge.incoming_delay = 0.02
+    async with open_session(robot.url) as session:
+        call = asyncio.create_task(session.call("publish_topic", _stream(robot, 10, 30)))
+        await robot.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 3, WAIT)
+    call.cancel()
+    await robot.world.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)

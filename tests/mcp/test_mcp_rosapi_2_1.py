@@ -87,3 +87,11 @@ async def test_check_says_what_the_tools_will_meet(jazzy_2_1: SimulatedRobot) ->
     assert "rosapi names fields _linear, _angular: read as linear, angular" in text
     assert "[ok  ] a slow service call holds up later calls on its connection" in text
     assert "action types: known (/fibonacci is example_interfaces/action/Fibonacci)" in text
+
+
+async def test_a_goal_with_a_wrong_field_is_refused_in_whole_sentences(old: Session) -> None:
+    """Without action details the bridge itself refuses the goal; its text ends before the advice starts."""
+    fibonacci = "example_interfaces/action/Fibonacci"
+    arguments = {"action_name": "/fibonacci", "action_type": fibonacci, "goal": {"ordr": 5}}
+    text = await old.error("publish_action", arguments)
+    assert "does not have a field ordr. Check the action name" in text

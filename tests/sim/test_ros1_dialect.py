@@ -549,6 +549,19 @@ async def test_a_goal_without_id_gets_actionlibs_generated_id(url: str) -> None:
 # --- 9. services hosted by a client ---------------------------------------------------------------------
 
 
+async def _take_away(url: str, host: RawClient, services: list[str]) -> None:
+    """On a real bridge, unadvertise the services a test advertised, and wait until the bridge did.
+
+    0.11.17 keeps a client's services after it disconnects, and drops the frames it has not handled yet when a
+    connection closes (each unadvertise_service takes it 1 s): without this, every run leaves services behind.
+    """
+    if url != REAL_URL:
+        return
+    for service in services:
+        await host.send({"op": "unadvertise_service", "service": service})
+    await host.frames_before_barrier()  # bounded: 5 s
+
+
 async def test_request_ids_count_per_advertised_service(url: str) -> None:
     """Each advertisement counts its own requests from 1: service_request:/svc:1 for every service."""
     names = [f"/probe_count_{uuid.uuid4().hex[:8]}" for _ in range(2)]
@@ -573,6 +586,7 @@ async def test_request_ids_count_per_advertised_service(url: str) -> None:
                 }
             )
             assert (await caller.reply(name))["values"] == {"sum": 3}
+        await _take_away(url, host, names)
     assert ids == [f"service_request:{name}:1" for name in names]
 
 
@@ -612,6 +626,7 @@ async def test_rosapi_lists_come_in_registration_order(url: str) -> None:
         services = (await client.values("/rosapi/services"))["services"]
         names = (await client.values("/rosapi/get_param_names"))["names"]
         await client.values("/rosapi/delete_param", {"name": param})
+        await _take_away(url, client, [service])
     assert topics[-1] == topic
     assert services[-1] == service
     assert names[-1] == param

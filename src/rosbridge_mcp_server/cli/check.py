@@ -159,8 +159,31 @@ async def call_ordering(url: str, info: RosInfo, timeout: float) -> bool:
                 )
                 await _next(caller, _with_id("slow"))
             finally:
-                await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
+                await _unadvertise(host, name)
     return queued
+
+
+async def _unadvertise(host: ClientConnection, name: str) -> None:
+    """Take the probe's service away for good before the connection closes.
+
+    Both rosbridge 0.11.17 and 2.1.0 keep a client's advertised services after it disconnects (a call to one
+    never gets an answer), and both drop the frames of a connection they have not handled yet when it
+    closes: an ``unadvertise_service`` sent just before the close can be lost on a busy bridge (0.11.17's
+    takes 1 s, so one is always busy there). A reply to a call sent after it on the same connection proves
+    it was handled.
+    """
+    try:
+        await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
+        barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
+        await host.send(json.dumps(barrier))
+        async with asyncio.timeout(_UNADVERTISE_SECONDS):
+            await _next(host, _with_id("unadvertised"))
+    except (TimeoutError, WebSocketException, OSError):
+        pass  # the probe's own outcome (or failure) is what check reports
+
+
+#: How long check waits for the bridge to confirm its probe service is gone.
+_UNADVERTISE_SECONDS = 3.0
 
 
 #: How long the probe's service holds its caller: far above a rosapi round trip (3-100 ms on the labs).

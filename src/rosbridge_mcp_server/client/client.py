@@ -9,7 +9,7 @@ import logging
 import ssl
 from collections.abc import Callable, Coroutine, Sequence
 from types import TracebackType
-from typing import Any, Protocol, Self
+from typing import Any, Final, Protocol, Self
 
 from rosbridge_mcp_server.client.connection import Connection, open_connection
 from rosbridge_mcp_server.client.goal_lane import GoalLane, GoalLanes
@@ -26,6 +26,9 @@ from rosbridge_mcp_server.wire.dialect import RosInfo
 __all__ = ["RosbridgeClient", "SessionWatcher"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
+
+#: How long :meth:`RosbridgeClient.close` waits for the bridge to handle what acted last.
+_CLOSE_HANDLED_SECONDS: Final = 1.0
 
 
 class SessionWatcher(Protocol):
@@ -80,6 +83,9 @@ class RosbridgeClient:
         self._runner: asyncio.Task[None] | None = None
         self._closing = False
         self._closed = False
+        #: Something that acts (a publish, a goal cancel) went out on the main connection, and the bridge may
+        #: not have handled it yet: :meth:`close` waits for it first.
+        self.unhandled_acts = False
         self._connected_event = asyncio.Event()
         self._disconnected_event = asyncio.Event()
         self._disconnected_event.set()
@@ -148,6 +154,10 @@ class RosbridgeClient:
         session = self.session
         for watcher in self._watchers:
             await watcher.client_closing(session)
+        if session is not None and self.unhandled_acts:
+            # Both rosbridge lines drop the frames of a closing connection they have not handled yet: the
+            # last zero velocity or goal cancel would never act.
+            await session.handled(_CLOSE_HANDLED_SECONDS)
         if session is not None:
             await self.topics.unadvertise_all(session)
         if self._runner is not None:
@@ -381,6 +391,7 @@ class RosbridgeClient:
         await self.topics.publish(
             session or self.require_session(), topic, msg_type, msg, latch=latch, queue_size=queue_size
         )
+        self.unhandled_acts = True
 
     async def unadvertise(self, topic: str) -> None:
         """Stop advertising *topic* (our advertisement only)."""
@@ -442,3 +453,4 @@ class RosbridgeClient:
         on another client's connection) too. No reply comes; the goal's result says what happened.
         """
         await self.require_session().send(protocol.cancel_action_goal(action, id=goal_id))
+        self.unhandled_acts = True

@@ -7,6 +7,7 @@ can never inherit a fact about the old one: the client swaps the whole object.
 
 from __future__ import annotations
 
+import itertools
 import logging
 from collections.abc import Awaitable, Callable
 from typing import Any
@@ -20,6 +21,8 @@ from rosbridge_mcp_server.wire.dialect import RosInfo
 __all__ = ["Session", "open_session", "send_quietly"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
+
+_barrier_ids = itertools.count(1)
 
 
 class Session:
@@ -58,6 +61,21 @@ class Session:
     async def try_send(self, op: dict[str, Any]) -> bool:
         """Send one op if the connection is open; False (and nothing raised) when it could not be sent."""
         return await send_quietly(self.connection, op)
+
+    async def handled(self, timeout: float) -> bool:
+        """Whether the bridge has handled (not only read) everything sent on this session so far.
+
+        Both rosbridge lines (0.11.17, 2.1.0) pass a connection's frames to an incoming thread one at a time,
+        and a close drops those it has not handled yet: a frame sent just before closing may never act. A
+        reply to a call sent now comes only after the frames before it were handled; a pong does not.
+        """
+        rid = f"handled:{next(_barrier_ids)}"
+        op = protocol.call_service("/rosapi/get_time", None, id=rid)
+        try:
+            await self.connection.request(rid, op, "a call to see earlier frames handled", timeout)
+        except RosbridgeError:
+            return False
+        return True
 
     async def confirm(self, timeout: float) -> bool:
         """Whether the bridge has read everything sent on this session so far (a pong came back in time)."""

@@ -89,7 +89,7 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
 
 def error_text(exc: RosbridgeError | ToolFailure) -> str:
     """The sentence a model sees for a failed tool call: the error's own text, plus what to try."""
-    text = str(exc)
+    text = _sentence(str(exc))
     if isinstance(exc, ConnectionLostError) and exc.goal_cancel is not None:
         return f"{text} Check the robot's state (e.g. with list_actions) before sending the goal again."
     if isinstance(exc, RosbridgeError):
@@ -97,6 +97,12 @@ def error_text(exc: RosbridgeError | ToolFailure) -> str:
             if isinstance(exc, kind):
                 return f"{text} {hint}"
     return text
+
+
+def _sentence(text: str) -> str:
+    """End the text as a sentence: the bridge's own texts (quoted in errors) end without a full stop."""
+    stripped = text.rstrip()
+    return stripped if not stripped or stripped[-1] in ".!?" else stripped + "."
 
 
 def _arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:

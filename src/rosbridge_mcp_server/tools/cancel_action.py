@@ -88,7 +88,16 @@ def _answer(report: CancelReport) -> ToolAnswer:
             text += f" Goals started by publish_action: {', '.join(report.canceled_ours)}."
         if report.goals_canceling is not None:
             count = len(report.goals_canceling)
-            text += f" The action server is canceling {count} goal{'s' if count != 1 else ''}."
+            goals = f"{count} goal{'s' if count != 1 else ''}"
+            if report.canceled_ours:
+                # Our goals' own cancels usually reach the server first, and a goal already being canceled
+                # is not listed again: "0 goals" would read as if ours went on.
+                text += (
+                    f" The action server's answer to the cancel of every goal lists {goals} it began "
+                    "canceling (a goal already being canceled, as ours may be, is not listed)."
+                )
+            else:
+                text += f" The action server is canceling {goals}."
         elif not report.canceled_ours:
             text += " None of them was started by publish_action."
     if report.note:

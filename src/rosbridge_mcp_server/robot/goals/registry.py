@@ -141,8 +141,10 @@ class GoalRegistry:
         """Cancel our running ROS 2 goals while the connection is there; log the cut-off goals left."""
         if session is not None:
             for goal in self.running():
-                if goal.dialect == 2:
-                    await session.try_send(protocol.cancel_action_goal(goal.action, id=goal.goal_id))
+                if goal.dialect == 2 and await session.try_send(
+                    protocol.cancel_action_goal(goal.action, id=goal.goal_id)
+                ):
+                    self._client.unhandled_acts = True  # the client waits for them before it closes
         for entry in self._cut_off.values():
             logger.warning(
                 "The client is closing; goal %s on %s, left running by a drop, was not cancelled",

@@ -130,6 +130,7 @@ async def _cancel_quietly(
     # The main connection first: on an in-order bridge the goal's own lane is blocked by the goal.
     session = client.session
     if session is not None and await session.try_send(op):
+        client.unhandled_acts = True
         return
     on_lane = lane is not None and await lane.try_send(op)
     # close() has already sent cancels for every running goal on the main connection.

@@ -33,6 +33,10 @@ class Bridge(BridgeCore):
         self.connection_count = 0
         self._next_cid = 0
         self._readers: set[asyncio.Task[None]] = set()
+        #: How long each client frame waits before it is handled (0 = at once): a busy bridge's incoming
+        #: thread. rosbridge 2.x drops a connection's frames not yet handled when the connection closes, so
+        #: with a delay a frame sent just before a close is lost, as on a loaded real bridge.
+        self.incoming_delay = 0.0
         self.clients = ClientManager(self)
         self.topics = Topics(self)
         self.services = Services(self)
@@ -109,6 +113,8 @@ class Bridge(BridgeCore):
     async def _read(self, conn: Connection) -> None:
         try:
             async for raw in conn.ws:
+                if self.incoming_delay > 0:
+                    await asyncio.sleep(self.incoming_delay)
                 if conn.closed:
                     break  # cleaned up already: frames still buffered would register things nobody removes
                 await self.protocol.incoming(conn, raw)
