@@ -20,11 +20,20 @@ PARAMETER_SERVICES = (
     ("set_parameters_atomically", "rcl_interfaces/srv/SetParametersAtomically"),
 )
 
-_ARRAY_TYPES = (
-    (bool, 6, "bool_array_value"),
-    (int, 7, "integer_array_value"),
-    (float, 8, "double_array_value"),
-)
+_ARRAY_TYPES = ((bool, 6), (int, 7), (float, 8))
+
+#: rcl_interfaces/msg/ParameterType: the field of ParameterValue that holds each type's value.
+_VALUE_FIELDS = {
+    1: "bool_value",
+    2: "integer_value",
+    3: "double_value",
+    4: "string_value",
+    5: "byte_array_value",
+    6: "bool_array_value",
+    7: "integer_array_value",
+    8: "double_array_value",
+    9: "string_array_value",
+}
 
 
 def parameter_type(value: Any) -> int:
@@ -38,7 +47,7 @@ def parameter_type(value: Any) -> int:
     if isinstance(value, str):
         return 4
     if isinstance(value, list):
-        for kind, code, _ in _ARRAY_TYPES:
+        for kind, code in _ARRAY_TYPES:
             if value and all(
                 isinstance(v, kind) and (kind is bool or not isinstance(v, bool)) for v in value
             ):
@@ -51,32 +60,13 @@ def parameter_type(value: Any) -> int:
 def parameter_value_msg(value: Any) -> dict[str, Any]:
     """A stored value as a ``rcl_interfaces/msg/ParameterValue`` (other fields take their defaults)."""
     code = parameter_type(value)
-    field = {
-        1: "bool_value",
-        2: "integer_value",
-        3: "double_value",
-        4: "string_value",
-        6: "bool_array_value",
-        7: "integer_array_value",
-        8: "double_array_value",
-        9: "string_array_value",
-    }.get(code)
+    field = _VALUE_FIELDS.get(code)
     return {"type": code} if field is None else {"type": code, field: value}
 
 
 def _from_msg(value: dict[str, Any]) -> tuple[int, Any]:
     code = int(value.get("type", 0))
-    field = {
-        1: "bool_value",
-        2: "integer_value",
-        3: "double_value",
-        4: "string_value",
-        5: "byte_array_value",
-        6: "bool_array_value",
-        7: "integer_array_value",
-        8: "double_array_value",
-        9: "string_array_value",
-    }.get(code)
+    field = _VALUE_FIELDS.get(code)
     return code, (value.get(field) if field is not None else None)
 
 
