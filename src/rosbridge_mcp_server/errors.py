@@ -18,6 +18,8 @@ The tree::
     │   └── FrameTooLargeError      a frame larger than the bridge accepts (the bridge would drop the
     │                               connection)
     ├── PolicyRefusal               the safety policy (or the person asked) refused an act; names the rule
+    ├── NotOnRobotError             what a question names is not on the robot or cannot be read there (a
+    │                               node, a parameter, a frame, a type rosapi cannot describe); says what is
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
@@ -36,6 +38,7 @@ __all__ = [
     "GoalTimeoutError",
     "InvalidMessageError",
     "NotConnectedError",
+    "NotOnRobotError",
     "NotSentError",
     "PolicyRefusal",
     "ProtocolError",
@@ -203,6 +206,10 @@ class PolicyRefusal(RosbridgeError):
 
     ``str()`` names the rule (e.g. ``[velocity] max_linear 0.5 m/s; you asked 2``) or the person's answer.
     """
+
+
+class NotOnRobotError(RosbridgeError, LookupError):
+    """What a question names is not on the robot, or cannot be read there; ``str()`` says what is."""
 
 
 class ProtocolError(RosbridgeError):

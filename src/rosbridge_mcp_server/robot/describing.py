@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
-from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
+from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.type_outline import TypeOutline, clean_typedefs, outline_type
 from rosbridge_mcp_server.wire.dialect import action_type_names, normalize_type, split_type
 
@@ -29,7 +29,7 @@ __all__ = ["CannotDescribe", "Description", "Kind", "describe_type"]
 Kind = Literal["message", "service", "action"]
 
 
-class CannotDescribe(LookupError):
+class CannotDescribe(NotOnRobotError):
     """This bridge's rosapi cannot describe the type safely; ``str()`` says why and what to use instead."""
 
 

@@ -10,7 +10,7 @@ import asyncio
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.names import did_you_mean
 
 if TYPE_CHECKING:
@@ -22,7 +22,7 @@ __all__ = ["NodeDetails", "UnknownNodeError", "node_details", "node_names"]
 _LOOKUPS_AT_ONCE = 8
 
 
-class UnknownNodeError(LookupError):
+class UnknownNodeError(NotOnRobotError):
     """The node is not in the graph; carries the names that are, and says which of them were likely meant."""
 
     def __init__(self, node: str, known: list[str]) -> None:

@@ -21,7 +21,7 @@ import json
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.names import did_you_mean
 from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_names
 
@@ -44,7 +44,7 @@ __all__ = [
 _LOOKUPS_AT_ONCE = 8
 
 
-class ParameterError(LookupError):
+class ParameterError(NotOnRobotError):
     """A parameter request that cannot be answered; ``str()`` says why and what exists."""
 
 

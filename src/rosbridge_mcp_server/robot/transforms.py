@@ -17,12 +17,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from rosbridge_mcp_server.errors import NotOnRobotError
+
 __all__ = ["FrameTree", "Lookup", "Transform", "TransformError", "frame_name"]
 
 _MAX_DEPTH = 1000
 
 
-class TransformError(LookupError):
+class TransformError(NotOnRobotError):
     """A look-up that cannot be answered; ``str()`` says why and lists the frames seen."""
 
 

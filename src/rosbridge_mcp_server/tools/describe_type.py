@@ -6,12 +6,11 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.describing import CannotDescribe, describe_type
+from rosbridge_mcp_server.robot.describing import describe_type
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
     ToolContext,
-    ToolFailure,
     ToolSpec,
     compact_json,
 )
@@ -61,10 +60,7 @@ async def run(
     ],
 ) -> ToolAnswer:
     """Ask rosapi for the type's definitions and outline them."""
-    try:
-        found = await describe_type(ctx.graph, type_name)
-    except CannotDescribe as exc:
-        raise ToolFailure(str(exc)) from None
+    found = await describe_type(ctx.graph, type_name)
     parts = [
         TypePart(
             part=title,

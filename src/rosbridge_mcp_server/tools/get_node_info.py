@@ -6,12 +6,11 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_details
+from rosbridge_mcp_server.robot.nodes import node_details
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
     ToolContext,
-    ToolFailure,
     ToolSpec,
     absolute_name,
 )
@@ -53,10 +52,7 @@ async def run(
 ) -> ToolAnswer:
     """Ask rosapi for the node's topics and services, then their types."""
     name = absolute_name(node, "node")
-    try:
-        details = await node_details(ctx.graph, name)
-    except UnknownNodeError as exc:
-        raise ToolFailure(str(exc)) from None
+    details = await node_details(ctx.graph, name)
     answer = NodeInfoAnswer(
         node=name,
         publications=[NamedType(name=n, type=t) for n, t in details.publishes],

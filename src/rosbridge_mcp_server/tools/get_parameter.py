@@ -6,12 +6,11 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.parameters import ParameterError, get_parameter
+from rosbridge_mcp_server.robot.parameters import get_parameter
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
     ToolContext,
-    ToolFailure,
     ToolSpec,
     compact_json,
 )
@@ -45,10 +44,7 @@ async def run(
     ],
 ) -> ToolAnswer:
     """Check the parameter exists, then read it."""
-    try:
-        parsed, value = await get_parameter(ctx.graph, ctx.client, name)
-    except ParameterError as exc:
-        raise ToolFailure(str(exc)) from None
+    parsed, value = await get_parameter(ctx.graph, ctx.client, name)
     return ToolAnswer(
         text=f"{parsed.full} = {compact_json(value)}", data=ParameterAnswer(name=parsed.full, value=value)
     )

@@ -7,8 +7,7 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.frames import look_up_transform
-from rosbridge_mcp_server.robot.transforms import TransformError
-from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
 
 __all__ = ["SPEC", "TransformAnswer", "run"]
 
@@ -65,10 +64,7 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to listen, e.g. 3")] = 3.0,
 ) -> ToolAnswer:
     """Listen to /tf and /tf_static until the frames connect, then compose the links."""
-    try:
-        found = await look_up_transform(ctx.client, ctx.graph, target_frame, source_frame, timeout=timeout)
-    except TransformError as exc:
-        raise ToolFailure(str(exc)) from None
+    found = await look_up_transform(ctx.client, ctx.graph, target_frame, source_frame, timeout=timeout)
     lookup = found.lookup
     t = lookup.transform.translation
     q = lookup.transform.rotation

@@ -6,12 +6,11 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.parameters import ParameterError, list_parameters
+from rosbridge_mcp_server.robot.parameters import list_parameters
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
     ToolContext,
-    ToolFailure,
     ToolSpec,
     absolute_name,
 )
@@ -44,10 +43,7 @@ async def run(
 ) -> ToolAnswer:
     """Ask the graph (ROS 1 parameter server, ROS 2 nodes) for the names."""
     name = absolute_name(node, "node") if node else None
-    try:
-        names = await list_parameters(ctx.graph, ctx.client, name)
-    except ParameterError as exc:
-        raise ToolFailure(str(exc)) from None
+    names = await list_parameters(ctx.graph, ctx.client, name)
     where = f" of {name}" if name else ""
     text = f"{len(names)} parameters{where}:\n" + "\n".join(names) if names else f"No parameters{where}."
     return ToolAnswer(text=text, data=ParametersAnswer(node=name, parameters=names))
