@@ -18,6 +18,7 @@ from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import Policy
 from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -70,16 +71,20 @@ async def open_session(
     guard: Guard | None = ALLOW_ALL,
     elicitation_callback: Any = None,
     policy: Policy | None = None,
+    tools: tuple[str, ...] | None = None,
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
 
     ``mode="auto"`` speaks the 2026-07-28 protocol instead (in-process: direct dispatch, no JSON-RPC framing).
-    With ``policy`` the server runs under that safety policy (``guard=None``: the server's own PolicyGuard).
+    With ``policy`` the server runs under that safety policy (``guard=None``: the server's own PolicyGuard);
+    ``tools`` picks the tools as ``--tools`` does.
 
     The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
     pytest-asyncio sets a fixture up and tears it down in different tasks.
     """
-    config = Config(url=url, request_timeout=request_timeout, connect_timeout=2.0, policy=policy or Policy())
+    config = Config(
+        url=url, request_timeout=request_timeout, connect_timeout=2.0, policy=policy or Policy(), tools=tools
+    )
     ros = RosbridgeClient(
         url,
         connect_timeout=config.connect_timeout,
@@ -106,10 +111,18 @@ async def open_session(
         session = await ready
         if wait:
             await ros.wait_connected(CONNECT_WAIT)
+            await warmed_up(ros)
         yield session
     finally:
         stop.set()
         await hosting
+
+
+async def warmed_up(ros: RosbridgeClient) -> None:
+    """Wait until the server has learnt the service types after connecting (tests then count only theirs)."""
+    for watcher in ros.watchers:
+        if isinstance(watcher, ServiceTypeWarmUp):
+            await asyncio.wait_for(watcher.done.wait(), CONNECT_WAIT)
 
 
 def types_for(robot: SimulatedRobot) -> dict[str, str]:

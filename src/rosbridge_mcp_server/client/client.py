@@ -122,6 +122,11 @@ class RosbridgeClient:
         """The pool of single-call lanes (for diagnostics)."""
         return self._lanes
 
+    @property
+    def watchers(self) -> tuple[SessionWatcher, ...]:
+        """Who is told of new sessions and of ``close()`` (diagnostics and tests)."""
+        return tuple(self._watchers)
+
     def watch(self, watcher: SessionWatcher) -> None:
         """Tell *watcher* of every new session and of ``close()``."""
         self._watchers.append(watcher)

@@ -251,24 +251,44 @@ class RosGraph:
         their names (:func:`infrastructure_types`) without asking.
         """
         info = await self.ros_info()
-        if info.version == 2:
-            # Asked side by side: the check is answered once per connection, then kept.
-            names, probing = await asyncio.gather(self.service_names(), self._refuses_unknown_fields())
-        else:
-            names, probing = await self.service_names(), False
+        names = await self.service_names()
         known, listed = self._known.service_types, self._known.listed_types
         for cache in (known, listed):
             for gone in cache.keys() - set(names):
                 del cache[gone]
         fixed = infrastructure_types(names, info.version)
-        missing = [name for name in names if name not in known and name not in listed and name not in fixed]
-        if missing and probing:
+        missing = self._untyped(names, fixed)
+        if missing and info.version == 2 and await self._refuses_unknown_fields():
             await _bounded_map(self._listed_type, missing, PROBE_CONCURRENCY)
-        else:
+        elif missing:
             await _bounded_map(self._service_type_or_blank, missing)
         return [
             ServiceEntry(name, fixed.get(name) or known.get(name) or listed.get(name, "")) for name in names
         ]
+
+    async def learn_service_types(self, limit: int = 256) -> int:
+        """Ask rosapi, one service at a time, for the types a first listing would look up; how many it learnt.
+
+        Run in the background when a connection opens (:mod:`.warm_up`), so the model's first
+        ``list_services`` finds them known, and ``publish_service`` skips its type look-up. One call at a
+        time keeps out of the way of the model's own calls (rosapi answers one call at a time; 0.11.17 is
+        slower with several), and rosapi's ``service_type`` leaves nothing in the bridge's log, where a probe
+        call leaves an error line.
+        """
+        info = await self.ros_info()
+        names = await self.service_names()
+        learnt = 0
+        for name in self._untyped(names, infrastructure_types(names, info.version))[:limit]:
+            # Re-checked each time: a listing running meanwhile may have typed it already.
+            untyped = name not in self._known.service_types and name not in self._known.listed_types
+            if untyped and await self._service_type_or_blank(name):
+                learnt += 1
+        return learnt
+
+    def _untyped(self, names: list[str], fixed: dict[str, str]) -> list[str]:
+        """The services among *names* whose type neither their name fixes nor this connection knows."""
+        known, listed = self._known.service_types, self._known.listed_types
+        return [name for name in names if name not in known and name not in listed and name not in fixed]
 
     async def _refuses_unknown_fields(self) -> bool:
         """Whether this bridge refuses a request with a field no message has, before calling anything.

@@ -18,10 +18,11 @@ from mcp.types import CallToolResult, TextContent
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.robot.acting import Act, Guard
 from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import tool_from_module
 from rosbridge_mcp_server.server.sdk import server_answering_unlisted
-from rosbridge_mcp_server.tools import TOOL_MODULES, stop_robot
+from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -83,6 +84,8 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None
         # Whoever can set the robot going can stop it, whatever --tools picked.
         chosen.append(stop_robot)
     modules = [m for m in chosen if m.SPEC.hints.read_only or not policy.read_only]
+    if list_services in modules:
+        client.watch(ServiceTypeWarmUp(client, graph))
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:

@@ -107,6 +107,9 @@ class World:
     goals: dict[str, GoalRecord] = field(default_factory=dict)
     #: How many times each service was called (by name).
     service_calls: dict[str, int] = field(default_factory=dict)
+    #: Calls refused before reaching the service because the request did not fit its type (by name); a real
+    #: bridge logs an error line for each.
+    refused_calls: dict[str, int] = field(default_factory=dict)
     #: Counters of the periodic publishers.
     chatter_count: int = 0
     fast_count: int = 0
@@ -132,6 +135,10 @@ class World:
         """Count one call of ``service``."""
         self.service_calls[service] = self.service_calls.get(service, 0) + 1
         self.notify()
+
+    def count_refused(self, service: str) -> None:
+        """Count one call of ``service`` refused for a request that does not fit its type."""
+        self.refused_calls[service] = self.refused_calls.get(service, 0) + 1
 
     async def wait_for(
         self,

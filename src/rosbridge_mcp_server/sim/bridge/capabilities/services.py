@@ -78,6 +78,7 @@ class Services(Capability):
                 # The request travels over TCPROS too: float32 rounded, times canonical.
                 request = core.registry.ros1_wire(request_type, request)
         except (InterfaceError, ConversionError) as exc:
+            core.world.count_refused(entry.name)
             raise CallFailed(str(exc)) from exc
         core.world.count_call(entry.name)
         try:
