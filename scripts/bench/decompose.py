@@ -2,6 +2,7 @@
 
     uv run python scripts/bench/decompose.py               # our stdio transport (asyncio pipes)
     uv run python scripts/bench/decompose.py --sdk-stdio   # the MCP SDK's (worker threads)
+    uv run python scripts/bench/decompose.py --url ws://127.0.0.1:9090   # a running bridge instead
 
 It starts a simulated robot and ``timed_server.py`` (our unchanged server with stopwatches around
 ``MCPServer._handle_call_tool`` and ``RosbridgeClient.call_service``), then makes the same tool call
@@ -106,30 +107,31 @@ async def decompose(
 
 
 async def run(arguments: argparse.Namespace, errlog: Any) -> list[dict[str, Any]]:
+    if arguments.url:
+        return await run_on(arguments.url, arguments, errlog)
     async with bench.simulated_robot(errlog) as url:
-        async with connect(url, compression=None) as ws:
-            found = await bench.RawBridge(ws).call("/rosapi/service_type", {"service": bench.ADD_TWO_INTS})
-        add = {"a": 2, "b": 3}
-        cases = [
-            ("list_topics", {}, "/rosapi/topics", {}),
-            (
-                "publish_service",
-                {"service": bench.ADD_TWO_INTS, "service_type": found["type"], "request": add},
-                bench.ADD_TWO_INTS,
-                add,
-            ),
-        ]
-        return [
-            await decompose(
-                *case,
-                calls=arguments.calls,
-                block=50,
-                sdk_stdio=arguments.sdk_stdio,
-                url=url,
-                errlog=errlog,
-            )
-            for case in cases
-        ]
+        return await run_on(url, arguments, errlog)
+
+
+async def run_on(url: str, arguments: argparse.Namespace, errlog: Any) -> list[dict[str, Any]]:
+    async with connect(url, compression=None) as ws:
+        found = await bench.RawBridge(ws).call("/rosapi/service_type", {"service": bench.ADD_TWO_INTS})
+    add = {"a": 2, "b": 3}
+    cases = [
+        ("list_topics", {}, "/rosapi/topics", {}),
+        (
+            "publish_service",
+            {"service": bench.ADD_TWO_INTS, "service_type": found["type"], "request": add},
+            bench.ADD_TWO_INTS,
+            add,
+        ),
+    ]
+    return [
+        await decompose(
+            *case, calls=arguments.calls, block=50, sdk_stdio=arguments.sdk_stdio, url=url, errlog=errlog
+        )
+        for case in cases
+    ]
 
 
 def main() -> int:
@@ -138,6 +140,7 @@ def main() -> int:
     parser.add_argument(
         "--sdk-stdio", action="store_true", help="serve stdio through the MCP SDK's transport"
     )
+    parser.add_argument("--url", help="a running rosbridge to use instead of a simulated robot")
     arguments = parser.parse_args()
     with open(Path(tempfile.gettempdir()) / "bench-decompose.log", "w") as errlog:
         results = asyncio.run(run(arguments, errlog))
