@@ -512,6 +512,62 @@ async def serve_mcp(
         )
 
 
+class RawPipeClient:
+    """An MCP client reduced to JSON-RPC lines on the server's pipes: no SDK, no validation on this side."""
+
+    def __init__(self, process: asyncio.subprocess.Process) -> None:
+        self._process = process
+        self._ids = 0
+
+    async def request(self, method: str, params: dict[str, Any]) -> dict[str, Any]:
+        assert self._process.stdin is not None
+        assert self._process.stdout is not None
+        self._ids += 1
+        line = {"jsonrpc": "2.0", "id": self._ids, "method": method, "params": params}
+        self._process.stdin.write(json.dumps(line).encode() + b"\n")
+        while True:
+            answer = json.loads(await self._process.stdout.readline())
+            if answer.get("id") == self._ids:
+                return answer  # notifications (progress, logging) are skipped
+
+    async def tool(self, name: str, arguments: dict[str, Any]) -> dict[str, Any]:
+        answer = await self.request("tools/call", {"name": name, "arguments": arguments})
+        if "error" in answer or answer["result"].get("isError"):
+            raise RuntimeError(f"tool {name} failed: {answer}")
+        return answer
+
+
+@contextlib.asynccontextmanager
+async def raw_pipe_client(
+    command: list[str], errlog: Any, env: dict[str, str]
+) -> AsyncIterator[RawPipeClient]:
+    """Spawn the server and do the initialize handshake by hand."""
+    process = await asyncio.create_subprocess_exec(
+        *command,
+        stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=errlog,
+        env={**os.environ, **env},
+        limit=64 * 1024 * 1024,
+    )
+    client = RawPipeClient(process)
+    try:
+        info = {"name": "bench", "version": "0"}
+        hello = {"protocolVersion": "2025-06-18", "capabilities": {}, "clientInfo": info}
+        await client.request("initialize", hello)
+        assert process.stdin is not None
+        process.stdin.write(b'{"jsonrpc": "2.0", "method": "notifications/initialized"}\n')
+        yield client
+    finally:
+        if process.stdin is not None:
+            process.stdin.close()
+        try:
+            await asyncio.wait_for(process.wait(), 5)
+        except TimeoutError:
+            process.kill()
+            await process.wait()
+
+
 def publish_service_arguments(
     served: Served, service: str, service_type: str, request: dict[str, Any]
 ) -> dict[str, Any]:
@@ -767,6 +823,8 @@ FIRST_CALL_SERVERS = {"full": 6, "quick": 1}
 #: model turn. The server learns the service types meanwhile (robot/warm_up.py).
 FIRST_TURN = 1.0
 GRAPH_TOPIC = "/rosout"
+#: The rows of tool calls made by JSON-RPC lines on the pipes instead of the MCP SDK's client.
+BARE = "the same called by JSON-RPC lines (the server alone, without the MCP client SDK's work)"
 #: An MCP round trip's worth of idle before a floor call (the no-op tool's median on this machine).
 TOOL_PAUSE = 0.001
 
@@ -792,6 +850,8 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
             RawBridge(await stack.enter_async_context(connect(url, max_size=None, compression=None)))
             for _ in range(2)
         ]
+        # The same server called by JSON-RPC lines: what the server alone adds, without the client SDK's work.
+        bare = await stack.enter_async_context(raw_pipe_client(our_server_command(url), ctx.errlog, {}))
 
         async def info_in_a_row() -> None:
             for service in queries:
@@ -815,6 +875,9 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
             Subject("g_get_topic_info", lambda: ours.tool("get_topic_info", topic_args), ours.process),
             *floor("g_floor_actions", lambda: raw.call("/rosapi/action_servers")),
             Subject("g_list_actions", lambda: ours.tool("list_actions", {}), ours.process),
+            Subject("g_list_topics_bare", lambda: bare.tool("list_topics", {})),
+            Subject("g_get_topic_info_bare", lambda: bare.tool("get_topic_info", topic_args)),
+            Subject("g_list_actions_bare", lambda: bare.tool("list_actions", {})),
         ]
         await interleave(subjects, Plan(**{**dataclasses.asdict(plan), "block": max(2, plan.block // 4)}))
     first, at_once, first_floor = await first_listings(ctx)
@@ -890,6 +953,14 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
             paused=by_key["g_floor_topics_paused"],
             floor_name="its floor",
         ),
+        floor_row(
+            "8a′",
+            BARE,
+            "g_list_topics_bare",
+            hot=by_key["g_floor_topics"],
+            paused=by_key["g_floor_topics_paused"],
+            floor_name="its floor",
+        ),
         timing_row(
             "8·",
             "floor: a fresh raw client asks `services`, then the types as our server does (ROS 2: a "
@@ -916,11 +987,27 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
             paused=by_key[f"{info_key}_paused"],
             floor_name=info_name,
         ),
+        floor_row(
+            "8d′",
+            BARE,
+            "g_get_topic_info_bare",
+            hot=by_key[info_key],
+            paused=by_key[f"{info_key}_paused"],
+            floor_name=info_name,
+        ),
         *floor_rows("raw `call_service /rosapi/action_servers`", "g_floor_actions"),
         floor_row(
             "8e",
             "tool `list_actions` (types known on the connection)",
             "g_list_actions",
+            hot=by_key["g_floor_actions"],
+            paused=by_key["g_floor_actions_paused"],
+            floor_name="its floor",
+        ),
+        floor_row(
+            "8e′",
+            BARE,
+            "g_list_actions_bare",
             hot=by_key["g_floor_actions"],
             paused=by_key["g_floor_actions_paused"],
             floor_name="its floor",

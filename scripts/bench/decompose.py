@@ -3,6 +3,7 @@
     uv run python scripts/bench/decompose.py               # our stdio transport (asyncio pipes)
     uv run python scripts/bench/decompose.py --sdk-stdio   # the MCP SDK's (worker threads)
     uv run python scripts/bench/decompose.py --url ws://127.0.0.1:9090   # a running bridge instead
+    uv run python scripts/bench/decompose.py --raw-client  # JSON-RPC lines on the pipes, no client SDK
 
 It starts a simulated robot and ``timed_server.py`` (our unchanged server with stopwatches around
 ``MCPServer._handle_call_tool`` and ``RosbridgeClient.call_service``), then makes the same tool call
@@ -57,6 +58,7 @@ async def decompose(
     calls: int,
     block: int,
     sdk_stdio: bool,
+    raw_client: bool,
     url: str,
     errlog: Any,
 ) -> dict[str, Any]:
@@ -70,9 +72,15 @@ async def decompose(
     ]
     observed: list[float] = []
     floor: list[float] = []
+    env = {"BENCH_TIMINGS": str(timings)}
+    serving = (
+        bench.raw_pipe_client(command, errlog, env)
+        if raw_client
+        else bench.serve_mcp(command, errlog, env=env)
+    )
     async with connect(url, compression=None) as ws:
         raw = bench.RawBridge(ws)
-        async with bench.serve_mcp(command, errlog, env={"BENCH_TIMINGS": str(timings)}) as served:
+        async with serving as served:
             for _ in range(100):  # warm-up, dropped below by keeping only the last `calls` server samples
                 await served.tool(tool, arguments)
                 await raw.call(floor_service, floor_args)
@@ -128,7 +136,13 @@ async def run_on(url: str, arguments: argparse.Namespace, errlog: Any) -> list[d
     ]
     return [
         await decompose(
-            *case, calls=arguments.calls, block=50, sdk_stdio=arguments.sdk_stdio, url=url, errlog=errlog
+            *case,
+            calls=arguments.calls,
+            block=50,
+            sdk_stdio=arguments.sdk_stdio,
+            raw_client=arguments.raw_client,
+            url=url,
+            errlog=errlog,
         )
         for case in cases
     ]
@@ -141,11 +155,17 @@ def main() -> int:
         "--sdk-stdio", action="store_true", help="serve stdio through the MCP SDK's transport"
     )
     parser.add_argument("--url", help="a running rosbridge to use instead of a simulated robot")
+    parser.add_argument(
+        "--raw-client",
+        action="store_true",
+        help="call through JSON-RPC lines on the pipes instead of the MCP SDK's client (no client-side cost)",
+    )
     arguments = parser.parse_args()
     with open(Path(tempfile.gettempdir()) / "bench-decompose.log", "w") as errlog:
         results = asyncio.run(run(arguments, errlog))
     transport = "the SDK's stdio (worker threads)" if arguments.sdk_stdio else "our stdio (asyncio pipes)"
-    print(f"medians over {arguments.calls} calls per tool; our server on {transport}")
+    client = "JSON-RPC lines on the pipes (no client SDK)" if arguments.raw_client else "the MCP SDK's client"
+    print(f"medians over {arguments.calls} calls per tool; our server on {transport}; called by {client}")
     print("| tool | observed | floor | rosbridge round trips in the server | our code | MCP SDK + stdio |")
     print("|---|--:|--:|--:|--:|--:|")
     for r in results:
