@@ -81,6 +81,29 @@ def test_the_console_module_reports_a_bad_port_without_a_traceback() -> None:
     )
 
 
+def test_check_into_a_pipe_closed_early_ends_without_a_traceback() -> None:
+    """`check --demo | head -1`: the first line arrives, then the command stops quietly as the pipe closes."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rosbridge_mcp_server", "check", "--demo"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert process.stdout is not None
+    assert process.stderr is not None
+    first = process.stdout.readline()
+    process.stdout.close()
+    try:
+        errors = process.stderr.read()
+        code = process.wait(timeout=30)
+    finally:
+        process.kill()
+        process.stderr.close()
+    assert first.startswith(f"{PROG} ")
+    assert "Traceback" not in errors, errors
+    assert code == 1
+
+
 def test_check_with_nothing_listening_says_what_to_try_and_exits_1(
     capsys: pytest.CaptureFixture[str],
 ) -> None:

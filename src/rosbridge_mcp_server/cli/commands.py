@@ -162,6 +162,10 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         asyncio.run(serve(config, audit_file))
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:
+        # `check | head`: the reader left. Stop quietly, and keep the interpreter's last flush off the pipe.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except asyncio.CancelledError:
         # A signal after stdin was closed: the server unwound and cleaned up by itself.
         return 0
