@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
+from rosbridge_mcp_server.tools.list_services import ServiceRow, listing_text
 
 PARAMETERS = [
     "describe_parameters",
@@ -49,3 +50,35 @@ def test_ros1_logger_services_and_rosapi_services_are_typed() -> None:
     assert ros2 == {"/rosapi/get_ros_version": "rosapi_msgs/srv/GetROSVersion"}, (
         "unknown rosapi names are asked"
     )
+
+
+def listed(names_and_types: dict[str, str], version: int) -> list[str]:
+    """list_services' text for these services, as lines."""
+    rows = [ServiceRow(name=name, type=kind) for name, kind in sorted(names_and_types.items())]
+    return listing_text(rows, version).splitlines()
+
+
+def test_the_listing_text_groups_what_every_node_offers_and_keeps_the_robots_own_a_line_each() -> None:
+    """Nodes with the same set share a line; a managed node's set is a line of its own; nothing is lost."""
+    services = {f"/{node}/{leaf}": "x" for node in ("camera", "lidar", "map_server") for leaf in PARAMETERS}
+    services |= {f"/map_server/{leaf}": "x" for leaf in LIFECYCLE}
+    services |= {"/spawn": "turtlesim/srv/Spawn", "/mystery": "", "/rosapi/topics": "rosapi_msgs/srv/Topics"}
+    lines = listed(services, 2)
+    assert lines[0] == "26 services: the robot's 2, then 24 that every node and rosapi offer, grouped:"
+    assert lines[1:3] == ["/mystery (type unknown)", "/spawn (turtlesim/srv/Spawn)"]
+    assert lines[3].startswith("On 2 nodes (/camera, /lidar): <node>/describe_parameters (rcl_interfaces/")
+    assert lines[4].startswith(
+        "On 1 node (/map_server): <node>/change_state (lifecycle_msgs/srv/ChangeState),"
+    )
+    assert "<node>/set_parameters_atomically (rcl_interfaces/srv/SetParametersAtomically)" in lines[4]
+    assert lines[5] == "rosapi's own, /rosapi/<name> (rosapi_msgs/srv/<Type>): topics (Topics)"
+    assert len(lines) == 6
+
+
+def test_a_listing_with_only_the_robots_own_services_is_a_plain_list() -> None:
+    """No grouping to announce when there is nothing to group (ROS 1 spelling)."""
+    assert listed({"/reset": "std_srvs/Empty", "/spawn": "turtlesim/Spawn"}, 1) == [
+        "2 services:",
+        "/reset (std_srvs/Empty)",
+        "/spawn (turtlesim/Spawn)",
+    ]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 from mcp_harness import Session, open_session, text_of, types_for
 
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -70,6 +72,26 @@ async def test_list_services_shows_every_service_with_its_type(session: Session,
     assert services["/add_two_ints"] == types_for(sim)["add_two_ints"]
     assert services["/reset"] == types_for(sim)["empty_srv"]
     assert all(services.values()), "every simulated service has a known type"
+
+
+async def test_list_services_text_is_short_yet_names_every_service_and_type(session: Session) -> None:
+    """The per-node and rosapi services are grouped in the text; each row can still be read from it."""
+    result = await session.ok("list_services")
+    assert result.structured_content is not None
+    rows = result.structured_content["services"]
+    lines = text_of(result).splitlines()
+    assert len(lines) < len(rows) / 2, lines
+    readable = set(lines)  # "/name (type)" lines, then what the grouped lines stand for
+    for line in lines:
+        if grouped := re.fullmatch(r"On \d+ nodes? \((.*?)\): (.*)", line):
+            for node in grouped[1].split(", "):
+                readable |= {entry.replace("<node>", node) for entry in grouped[2].split(", ")}
+        elif rosapi := re.fullmatch(r"rosapi's own, /rosapi/<name> \((.*)/<Type>\): (.*)", line):
+            for entry in rosapi[2].split(", "):
+                leaf, short_type = entry.rstrip(")").split(" (")
+                readable.add(f"/rosapi/{leaf} ({rosapi[1]}/{short_type})")
+    missing = [row for row in rows if f"{row['name']} ({row['type']})" not in readable]
+    assert not missing, lines
 
 
 async def test_list_services_looks_each_type_up_once_and_never_for_per_node_services(

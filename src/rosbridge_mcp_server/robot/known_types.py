@@ -18,7 +18,9 @@ __all__ = [
     "PROBE_SECONDS",
     "action_type_from_refusal",
     "infrastructure_types",
+    "per_node_types",
     "ros1_load_failure",
+    "rosapi_types",
     "service_type_from_refusal",
 ]
 
@@ -89,32 +91,44 @@ _ROSAPI_SERVICES_ROS2: Final = {"get_ros_version": "GetROSVersion"}
 
 
 def infrastructure_types(names: Iterable[str], version: int) -> dict[str, str]:
-    """The types of the per-node and rosapi services among *names*, told from the names alone.
+    """The types of the per-node and rosapi services among *names*, told from the names alone."""
+    listed = list(names)
+    return {**per_node_types(listed, version), **rosapi_types(listed, version)}
+
+
+def per_node_types(names: Iterable[str], version: int) -> dict[str, str]:
+    """The types of the services among *names* that every node offers (parameters, loggers, lifecycle).
 
     A node's set counts only when it is complete (all six parameter services, or all five lifecycle services,
     under one prefix on ROS 2; both logger services on ROS 1), so a single service that merely shares a leaf
     name is looked up as usual.
     """
-    listed = set(names)
-    by_prefix: dict[str, set[str]] = {}
-    for name in listed:
-        prefix, _, leaf = name.rpartition("/")
-        by_prefix.setdefault(prefix, set()).add(leaf)
     found: dict[str, str] = {}
     sets = (_ROS2_PARAMETER_SERVICES, _ROS2_LIFECYCLE_SERVICES) if version == 2 else (_ROS1_LOGGER_SERVICES,)
-    for prefix, leaves in by_prefix.items():
+    for prefix, leaves in _by_prefix(names).items():
         for per_node in sets:
             if per_node.keys() <= leaves:
                 found.update({f"{prefix}/{leaf}": kind for leaf, kind in per_node.items()})
         leaf, kind = _ROS2_TYPE_DESCRIPTION
         if version == 2 and leaf in leaves:
             found[f"{prefix}/{leaf}"] = kind
+    return found
+
+
+def rosapi_types(names: Iterable[str], version: int) -> dict[str, str]:
+    """The types of rosapi's own services among *names* (``/rosapi/topics`` and the like)."""
     rosapi = {**_ROSAPI_SERVICES, **(_ROSAPI_SERVICES_ROS2 if version == 2 else _ROSAPI_SERVICES_ROS1)}
     package = "rosapi_msgs/srv" if version == 2 else "rosapi"
-    for leaf in by_prefix.get("/rosapi", set()):
-        if leaf in rosapi:
-            found[f"/rosapi/{leaf}"] = f"{package}/{rosapi[leaf]}"
-    return found
+    leaves = _by_prefix(names).get("/rosapi", set())
+    return {f"/rosapi/{leaf}": f"{package}/{rosapi[leaf]}" for leaf in leaves if leaf in rosapi}
+
+
+def _by_prefix(names: Iterable[str]) -> dict[str, set[str]]:
+    by_prefix: dict[str, set[str]] = {}
+    for name in set(names):
+        prefix, _, leaf = name.rpartition("/")
+        by_prefix.setdefault(prefix, set()).add(leaf)
+    return by_prefix
 
 
 #: A field name no ROS message has (ROS field names start with a letter): a request carrying it is refused.
