@@ -7,6 +7,7 @@ do, so requests, progress and cancellation travel as JSON-RPC messages over in-m
 from __future__ import annotations
 
 import asyncio
+import re
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass, field
@@ -123,6 +124,28 @@ async def warmed_up(ros: RosbridgeClient) -> None:
     for watcher in ros.watchers:
         if isinstance(watcher, ServiceTypeWarmUp):
             await asyncio.wait_for(watcher.done.wait(), CONNECT_WAIT)
+
+
+def unreadable_services(result: CallToolResult) -> list[dict[str, str]]:
+    """The rows of a list_services answer that its text does not name with their type.
+
+    The text lists the robot's own services a line each (``/name (type)``) and groups the rest:
+    ``On 2 nodes (/a, /b): <node>/get_parameters (rcl_interfaces/srv/GetParameters), ...`` and
+    ``rosapi's own, /rosapi/<name> (rosapi_msgs/srv/<Type>): topics (Topics), ...``.
+    """
+    assert result.structured_content is not None
+    lines = text_of(result).splitlines()
+    readable = set(lines)
+    for line in lines:
+        if grouped := re.fullmatch(r"On \d+ nodes? \((.*?)\): (.*)", line):
+            for node in grouped[1].split(", "):
+                readable |= {entry.replace("<node>", node) for entry in grouped[2].split(", ")}
+        elif rosapi := re.fullmatch(r"rosapi's own, /rosapi/<name> \((.*)/<Type>\): (.*)", line):
+            for entry in rosapi[2].split(", "):
+                leaf, short_type = entry.rstrip(")").split(" (")
+                readable.add(f"/rosapi/{leaf} ({rosapi[1]}/{short_type})")
+    rows: list[dict[str, str]] = result.structured_content["services"]
+    return [row for row in rows if f"{row['name']} ({row['type'] or 'type unknown'})" not in readable]
 
 
 def types_for(robot: SimulatedRobot) -> dict[str, str]:

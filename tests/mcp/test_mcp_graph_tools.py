@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import re
-
-from mcp_harness import Session, open_session, text_of, types_for
+from mcp_harness import Session, open_session, text_of, types_for, unreadable_services
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -81,17 +79,7 @@ async def test_list_services_text_is_short_yet_names_every_service_and_type(sess
     rows = result.structured_content["services"]
     lines = text_of(result).splitlines()
     assert len(lines) < len(rows) / 2, lines
-    readable = set(lines)  # "/name (type)" lines, then what the grouped lines stand for
-    for line in lines:
-        if grouped := re.fullmatch(r"On \d+ nodes? \((.*?)\): (.*)", line):
-            for node in grouped[1].split(", "):
-                readable |= {entry.replace("<node>", node) for entry in grouped[2].split(", ")}
-        elif rosapi := re.fullmatch(r"rosapi's own, /rosapi/<name> \((.*)/<Type>\): (.*)", line):
-            for entry in rosapi[2].split(", "):
-                leaf, short_type = entry.rstrip(")").split(" (")
-                readable.add(f"/rosapi/{leaf} ({rosapi[1]}/{short_type})")
-    missing = [row for row in rows if f"{row['name']} ({row['type']})" not in readable]
-    assert not missing, lines
+    assert unreadable_services(result) == []
 
 
 async def test_list_services_looks_each_type_up_once_and_never_for_per_node_services(

@@ -27,7 +27,7 @@ from typing import Any
 import pytest
 import websockets
 from mcp.types import CallToolResult
-from mcp_harness import Session, open_session, text_of
+from mcp_harness import Session, open_session, text_of, unreadable_services
 
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.config import Config
@@ -154,9 +154,11 @@ async def test_a_message_that_does_not_fit_its_type_is_refused(real: Session) ->
 
 
 async def test_list_services_includes_rosapi_topics_with_its_type(real: Session) -> None:
-    """list_services lists /rosapi/topics, typed, each service once."""
-    data = (await real.ok("list_services")).structured_content
+    """list_services lists /rosapi/topics, typed, each service once; its text names every service and type."""
+    result = await real.ok("list_services")
+    data = result.structured_content
     assert data is not None
+    assert unreadable_services(result) == []
     names = [row["name"] for row in data["services"]]
     assert len(names) == len(set(names))
     assert "/rosapi/topics" in names
