@@ -273,16 +273,21 @@ class RosGraph:
         ``list_services`` finds them known, and ``publish_service`` skips its type look-up. One call at a
         time keeps out of the way of the model's own calls (rosapi answers one call at a time; 0.11.17 is
         slower with several), and rosapi's ``service_type`` leaves nothing in the bridge's log, where a probe
-        call leaves an error line.
+        call leaves an error line. A look-up that times out ends it (:class:`RequestTimeoutError`).
         """
         info = await self.ros_info()
         names = await self.service_names()
         learnt = 0
         for name in self._untyped(names, infrastructure_types(names, info.version))[:limit]:
             # Re-checked each time: a listing running meanwhile may have typed it already.
-            untyped = name not in self._known.service_types and name not in self._known.listed_types
-            if untyped and await self._service_type_or_blank(name):
-                learnt += 1
+            if name in self._known.service_types or name in self._known.listed_types:
+                continue
+            # A refusal is passed over; a timeout ends it all (rosapi is stuck: the next would wait as long).
+            try:
+                if await self.service_type(name):
+                    learnt += 1
+            except ServiceError as exc:
+                _log.info("no type for service %s: %s", name, exc)
         return learnt
 
     def _untyped(self, names: list[str], fixed: dict[str, str]) -> list[str]:
