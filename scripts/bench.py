@@ -922,6 +922,14 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
         row.figures["over_paused_floor_s"] = over_paused
         return row
 
+    def tool_rows(item: str, what: str, key: str, floor_key: str, floor_name: str) -> list[Row]:
+        """The tool through the SDK's client, then the same by JSON-RPC lines, each against its floor."""
+        hot, paused = by_key[floor_key], by_key[f"{floor_key}_paused"]
+        return [
+            floor_row(item, what, key, hot=hot, paused=paused, floor_name=floor_name),
+            floor_row(f"{item}′", BARE, f"{key}_bare", hot=hot, paused=paused, floor_name=floor_name),
+        ]
+
     def floor_rows(what: str, key: str) -> list[Row]:
         return [
             timing_row("8·", f"floor: {what}", by_key[key], versus="reference"),
@@ -945,22 +953,7 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
     at_once_row.target, at_once_row.verdict = "", "info"
     return [
         *floor_rows("raw `call_service /rosapi/topics`", "g_floor_topics"),
-        floor_row(
-            "8a",
-            "tool `list_topics`",
-            "g_list_topics",
-            hot=by_key["g_floor_topics"],
-            paused=by_key["g_floor_topics_paused"],
-            floor_name="its floor",
-        ),
-        floor_row(
-            "8a′",
-            BARE,
-            "g_list_topics_bare",
-            hot=by_key["g_floor_topics"],
-            paused=by_key["g_floor_topics_paused"],
-            floor_name="its floor",
-        ),
+        *tool_rows("8a", "tool `list_topics`", "g_list_topics", "g_floor_topics", "its floor"),
         timing_row(
             "8·",
             "floor: a fresh raw client asks `services`, then the types as our server does (ROS 2: a "
@@ -979,38 +972,14 @@ async def measure_graph_tools(ctx: Context) -> list[Row]:
         ratio_row("8c", "tool `list_services`, later calls", by_key["g_list_services"], 1.5),
         *floor_rows("raw topic_type + publishers + subscribers, in a row", "g_floor_info_row"),
         *floor_rows("the same three side by side on three connections", "g_floor_info_wide"),
-        floor_row(
-            "8d",
-            f"tool `get_topic_info` {GRAPH_TOPIC}",
-            "g_get_topic_info",
-            hot=by_key[info_key],
-            paused=by_key[f"{info_key}_paused"],
-            floor_name=info_name,
-        ),
-        floor_row(
-            "8d′",
-            BARE,
-            "g_get_topic_info_bare",
-            hot=by_key[info_key],
-            paused=by_key[f"{info_key}_paused"],
-            floor_name=info_name,
-        ),
+        *tool_rows("8d", f"tool `get_topic_info` {GRAPH_TOPIC}", "g_get_topic_info", info_key, info_name),
         *floor_rows("raw `call_service /rosapi/action_servers`", "g_floor_actions"),
-        floor_row(
+        *tool_rows(
             "8e",
             "tool `list_actions` (types known on the connection)",
             "g_list_actions",
-            hot=by_key["g_floor_actions"],
-            paused=by_key["g_floor_actions_paused"],
-            floor_name="its floor",
-        ),
-        floor_row(
-            "8e′",
-            BARE,
-            "g_list_actions_bare",
-            hot=by_key["g_floor_actions"],
-            paused=by_key["g_floor_actions_paused"],
-            floor_name="its floor",
+            "g_floor_actions",
+            "its floor",
         ),
     ]
 
