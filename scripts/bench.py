@@ -526,7 +526,7 @@ class RawPipeClient:
         line = {"jsonrpc": "2.0", "id": self._ids, "method": method, "params": params}
         self._process.stdin.write(json.dumps(line).encode() + b"\n")
         while True:
-            answer = json.loads(await self._process.stdout.readline())
+            answer: dict[str, Any] = json.loads(await self._process.stdout.readline())
             if answer.get("id") == self._ids:
                 return answer  # notifications (progress, logging) are skipped
 
