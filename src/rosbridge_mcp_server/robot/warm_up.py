@@ -62,4 +62,6 @@ class ServiceTypeWarmUp:
                 (loop.time() - began) * 1e3,
             )
         finally:
-            self.done.set()
+            # A run cancelled by a newer connection's does not speak for that one.
+            if self._task is asyncio.current_task():
+                self.done.set()
