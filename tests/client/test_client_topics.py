@@ -202,3 +202,18 @@ async def test_a_second_concurrent_consumer_of_one_subscription_is_refused(clien
         first.cancel()
         with pytest.raises(asyncio.CancelledError):
             await first
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_a_latched_publish_says_latch_so_the_bridge_keeps_it_latched_without_a_warning(
+    dialect: str, make_sim: MakeSim, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Both rosbridge lines register the publisher again with each publish's latch flag; ours says true."""
+    robot = await make_sim(dialect=dialect)
+    msg_type = "std_msgs/msg/String" if dialect == "ros2" else "std_msgs/String"
+    async with RosbridgeClient(robot.url) as client:
+        await client.wait_connected(5.0)
+        for text in ("first", "second"):
+            await client.publish("/latched_note", msg_type, {"data": text}, latch=True)
+        await robot.world.wait_for(lambda w: len(w.published.get("/latched_note", ())) == 2)
+    assert "non-latched publisher registration" not in caplog.text

@@ -109,7 +109,7 @@ class Topics:
         ):
             await self.advertise(session, topic, msg_type, latch=latch, queue_size=queue_size)
         payload = adapt_message(msg, info.version) if info.version == 1 else msg
-        await conn.send(protocol.publish(topic, payload))
+        await conn.send(protocol.publish(topic, payload, latch=latch))
 
     async def unadvertise(self, topic: str) -> None:
         """Stop advertising *topic* (our advertisement only)."""

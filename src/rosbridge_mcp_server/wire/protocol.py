@@ -107,11 +107,18 @@ def unadvertise(topic: str, *, id: str | None = None) -> dict[str, Any]:
     return op
 
 
-def publish(topic: str, msg: dict[str, Any], *, id: str | None = None) -> dict[str, Any]:
-    """``publish``: one message on an advertised topic."""
+def publish(topic: str, msg: dict[str, Any], *, id: str | None = None, latch: bool = False) -> dict[str, Any]:
+    """``publish``: one message on an advertised topic.
+
+    A publish on a latched advertisement must say ``latch`` too: both rosbridge lines register the publisher
+    again with the publish's own flag, and a non-latched registration of a latched topic logs two warnings
+    per message (on Kilted's 2.1.0, where a warning can raise, the message is then lost).
+    """
     op: dict[str, Any] = {"op": "publish", "topic": topic, "msg": msg}
     if id is not None:
         op["id"] = id
+    if latch:
+        op["latch"] = True
     return op
 
 

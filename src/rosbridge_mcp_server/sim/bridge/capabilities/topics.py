@@ -51,6 +51,8 @@ class Topics(Capability):
         #: ROS 1 publishers without clients, waiting out unregister_timeout.
         self._lingering: dict[str, asyncio.TimerHandle] = {}
         self.unregister_timeout = UNREGISTER_TIMEOUT
+        #: Topics a client registered latched (the publisher manager's ``latched_client_id``).
+        self._latched_by_client: set[str] = set()
 
     def ops(self) -> dict[str, OpHandler]:
         return {
@@ -100,6 +102,7 @@ class Topics(Capability):
         conn.advertised_types[topic] = msg_type
         if latch:
             self.core.graph.latched.setdefault(topic, None)
+            self._latched_by_client.add(topic)
 
     def unadvertise(self, conn: Connection, msg: dict[str, Any]) -> None:
         check_fields(msg, [(True, "topic", (str,))])
@@ -136,12 +139,14 @@ class Topics(Capability):
         graph.remove_publisher(ROSBRIDGE_NODE, topic)
         if topic not in graph.node(ROSBRIDGE_NODE).publishes:
             self.core.forget_header_seq(topic)
+            self._latched_by_client.discard(topic)
 
     def _unregister_publisher(self, topic: str) -> None:
         if self._lingering.pop(topic, None) is None:
             return
         self.core.graph.remove_publisher(ROSBRIDGE_NODE, topic)
         self.core.forget_header_seq(topic)
+        self._latched_by_client.discard(topic)
         self.core.world.notify()
 
     # --- publish ------------------------------------------------------------------------------------------
@@ -170,6 +175,13 @@ class Topics(Capability):
                 raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
             self._register_publisher(
                 conn, topic, msg_type, msg.get("id"), latch=bool(msg.get("latch", False))
+            )
+        if topic in self._latched_by_client and msg.get("latch") is not True:
+            # Both lines register the publisher again with the publish's own latch flag, and say so.
+            log.warning(
+                "New non-latched publisher registration for topic [%s] which is already registered as "
+                "latched. but this topic was previously registered.",
+                topic,
             )
         if msg.get("latch") is True and not core.ros2:
             # 0.11.17 registers the publisher again with the publish's latch flag: the topic latches.
