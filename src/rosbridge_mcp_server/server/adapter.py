@@ -47,8 +47,9 @@ from rosbridge_mcp_server.errors import (
 )
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
 from rosbridge_mcp_server.robot.activity import SessionActivity
-from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
-from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
+from rosbridge_mcp_server.server.checks import CheckedTool
+from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler
+from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
 if typing.TYPE_CHECKING:
@@ -56,7 +57,7 @@ if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.config import Config
     from rosbridge_mcp_server.robot.graph import RosGraph
 
-__all__ = ["error_text", "inline_refs", "tool_from_module", "without_name_titles"]
+__all__ = ["arguments_text", "error_text", "inline_refs", "tool_from_module", "without_name_titles"]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
 
@@ -105,7 +106,7 @@ def _sentence(text: str) -> str:
     return stripped if not stripped or stripped[-1] in ".!?" else stripped + "."
 
 
-def _arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
+def arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
     problems: list[str] = []
     union_kinds: dict[str, list[str]] = {}
     union_inputs: dict[str, Any] = {}
@@ -146,10 +147,11 @@ def tool_from_module(
     *,
     guard: Guard = ALLOW_ALL,
     activity: SessionActivity | None = None,
-) -> Tool:
+) -> tuple[Tool, CheckedTool]:
     """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`.
 
     ``activity`` is shared by every tool of one server, so that stop_robot sees what the others started.
+    With the tool comes what the server's checks (``checks.py``) need to check its arguments first.
     """
     session_activity = activity if activity is not None else SessionActivity()
     spec: ToolSpec = module.SPEC
@@ -198,7 +200,7 @@ def tool_from_module(
             structured_content=answer.data.model_dump(mode="json"),
         )
 
-    tool = tool_with_own_argument_errors(
+    tool = tool_from_handler(
         call_tool,
         parameters,
         spec.output,
@@ -212,13 +214,11 @@ def tool_from_module(
             idempotent_hint=spec.hints.idempotent,
             open_world_hint=spec.hints.open_world,
         ),
-        argument_error=_arguments_text,
-        argument_check=argument_problem,
     )
-    # What argument_problem holds every call to, said where clients read it.
+    # What the argument checks hold every call to, said where clients read it.
     tool.parameters = {**without_name_titles(tool.parameters), "additionalProperties": False}
     replace_output_schema(tool, lambda schema: without_name_titles(inline_refs(schema)))
-    return tool
+    return tool, CheckedTool.of(spec.name, tool.parameters, parameters)
 
 
 def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:

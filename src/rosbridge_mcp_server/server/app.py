@@ -13,16 +13,16 @@ from contextlib import asynccontextmanager
 from typing import Any, Literal
 
 from mcp.server.mcpserver import MCPServer
-from mcp.types import CallToolResult, TextContent
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.robot.acting import Act, Guard
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
-from rosbridge_mcp_server.server.adapter import tool_from_module
-from rosbridge_mcp_server.server.sdk import server_answering_unlisted
+from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
+from rosbridge_mcp_server.server.checks import ToolCallChecks
 from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
+from rosbridge_mcp_server.tools.arguments import argument_problem
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -69,11 +69,15 @@ This server is read-only: it lists only tools that read the robot, and refuses a
 """
 
 
-def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None = None) -> MCPServer[None]:
+def build_server(
+    client: RosbridgeClient, config: Config, *, guard: Guard | None = None, **transport: Any
+) -> MCPServer[None]:
     """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
 
     Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
-    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools.
+    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools. Every tool call
+    first goes through the checks of ``checks.py`` (the SDK's server middleware), on any transport.
+    *transport* goes to ``MCPServer`` as it is (``auth`` and ``token_verifier`` for HTTP).
     """
     graph = RosGraph(client)
     policy = config.policy
@@ -96,34 +100,40 @@ def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None
         finally:
             await client.close()
 
-    tools = [
+    adapted = [
         tool_from_module(module, client, config, graph, guard=approver, activity=activity)
         for module in modules
     ]
     # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
     withheld = {m.SPEC.name for m in chosen} - {m.SPEC.name for m in modules}
 
-    def unlisted(name: str, arguments: dict[str, Any]) -> CallToolResult | None:
+    def unlisted(name: str, arguments: dict[str, Any]) -> str | None:
         """A withheld acting tool called by name anyway: refused, and audited like any refusal."""
         if name not in withheld:
             return None
         approver.record(Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only")
-        text = (
+        return (
             f"{name} is not available: this server is read-only (its operator started it with --read-only or "
             "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
         )
-        return CallToolResult(content=[TextContent(type="text", text=text)], is_error=True)
 
-    return server_answering_unlisted(
-        unlisted,
+    checks = ToolCallChecks(
+        [checked for _, checked in adapted],
+        argument_check=argument_problem,
+        argument_error=arguments_text,
+        unlisted=unlisted,
+    )
+    return MCPServer(
         name=SERVER_NAME,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
         instructions=INSTRUCTIONS + (_READ_ONLY_NOTE if policy.read_only else ""),
         version=__version__,
-        tools=tools,
+        tools=[tool for tool, _ in adapted],
         lifespan=lifespan,
         log_level=config.log_level,
+        middleware=[checks],
+        **transport,
     )
 
 
