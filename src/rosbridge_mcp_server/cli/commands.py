@@ -1,4 +1,5 @@
-"""Command line: ``rosbridge-mcp-server [serve] [flags]`` (the MCP server on stdio) and ``... check [flags]``.
+"""Command line: ``rosbridge-mcp-server [serve] [flags]`` (the MCP server on stdio, or Streamable HTTP with
+``--transport http``) and ``... check [flags]``.
 
 Exit codes: 0 done (or healthy, for ``check``), 1 ``check`` found a problem, 2 bad command line or
 configuration (one line on stderr, never a traceback), 130 interrupted.
@@ -23,6 +24,7 @@ from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.http_config import DEFAULT_BIND, HttpSettings, load_http_settings
 from rosbridge_mcp_server.safety import Audit, PolicyGuard
 from rosbridge_mcp_server.server import build_server, serve_stdio
 
@@ -106,6 +108,8 @@ def _parser(command: str) -> _Parser:
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
+    if command == "serve":
+        _transport_flags(parser)
     demo = parser.add_argument_group("demo")
     demo.add_argument(
         "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
@@ -117,6 +121,53 @@ def _parser(command: str) -> _Parser:
         help="which rosbridge the simulated robot imitates (default ros2)",
     )
     return parser
+
+
+def _transport_flags(parser: _Parser) -> None:
+    http = parser.add_argument_group("MCP transport (see docs/deployment.md)")
+    http.add_argument(
+        "--transport",
+        choices=("stdio", "http"),
+        help="stdio (default, started by the host) or http: Streamable HTTP (env ROSBRIDGE_MCP_TRANSPORT)",
+    )
+    http.add_argument(
+        "--bind",
+        metavar="HOST:PORT",
+        help=f"HTTP address, path /mcp (env ROSBRIDGE_MCP_BIND, default {DEFAULT_BIND})",
+    )
+    http.add_argument(
+        "--auth-tokens",
+        metavar="FILE",
+        help="bearer tokens, one 'name token' per line (env ROSBRIDGE_MCP_AUTH_TOKENS: the pairs themselves)",
+    )
+    http.add_argument(
+        "--allow-host",
+        action="append",
+        metavar="NAME[:PORT]",
+        help="another Host clients use (a DNS name, a proxy's), repeatable (env ROSBRIDGE_MCP_ALLOWED_HOSTS)",
+    )
+    http.add_argument(
+        "--allow-origin",
+        action="append",
+        metavar="URL",
+        help="another browser Origin to accept, repeatable (env ROSBRIDGE_MCP_ALLOWED_ORIGINS)",
+    )
+    http.add_argument("--tls-cert", metavar="FILE", help="serve HTTPS with this certificate (PEM)")
+    http.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
+    oauth = parser.add_argument_group("OAuth 2.1 resource server (JWT access tokens)")
+    oauth.add_argument("--oauth-issuer", metavar="URL", help="the authorization server (the tokens' iss)")
+    oauth.add_argument("--oauth-audience", help="the tokens' aud (default: --oauth-resource)")
+    oauth.add_argument(
+        "--oauth-jwks",
+        metavar="URL|FILE",
+        help="the issuer's signing keys (default ISSUER/.well-known/jwks.json)",
+    )
+    oauth.add_argument(
+        "--oauth-resource",
+        metavar="URL",
+        help="this server's public URL, e.g. https://robot.example.com/mcp (default: the bind address)",
+    )
+    oauth.add_argument("--oauth-scopes", metavar="A,B", help="scopes every token must carry")
 
 
 def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = None) -> int:
@@ -146,6 +197,25 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             headers=options.header,
             tools=options.tools,
         )
+        http = (
+            load_http_settings(
+                env,
+                transport=options.transport,
+                bind=options.bind,
+                auth_tokens=options.auth_tokens,
+                allow_hosts=options.allow_host,
+                allow_origins=options.allow_origin,
+                tls_cert=options.tls_cert,
+                tls_key=options.tls_key,
+                oauth_issuer=options.oauth_issuer,
+                oauth_audience=options.oauth_audience,
+                oauth_jwks=options.oauth_jwks,
+                oauth_resource=options.oauth_resource,
+                oauth_scopes=options.oauth_scopes,
+            )
+            if command == "serve"
+            else HttpSettings()
+        )
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (_UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -154,12 +224,12 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     # `check` prints its own findings; the client's warnings would only repeat them.
     configure_logging(
         config.log_level if command == "serve" or config.log_level == "DEBUG" else "ERROR",
-        secrets=[value for _, value in config.headers],
+        secrets=[value for _, value in config.headers] + [token for _, token in http.tokens],
     )
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout))
-        asyncio.run(serve(config, audit_file))
+        asyncio.run(serve(config, audit_file, http))
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
@@ -282,8 +352,9 @@ async def check(config: Config, out: TextIO) -> int:
         return await run_check(effective, out)
 
 
-async def serve(config: Config, audit_file: TextIO | None = None) -> None:
-    """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM / Ctrl-C)."""
+async def serve(config: Config, audit_file: TextIO | None = None, http: HttpSettings | None = None) -> None:
+    """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
+    Ctrl-C either way."""
     async with demo_robot(config) as effective:
         warning = plain_text_warning(effective.url)
         if warning:
@@ -298,6 +369,15 @@ async def serve(config: Config, audit_file: TextIO | None = None) -> None:
             headers=effective.headers,
         )
         guard = PolicyGuard(effective.policy, Audit(audit_file))
+        if http is not None and http.transport == "http":
+            # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
+            from rosbridge_mcp_server.server.http import auth_options, serve_http  # noqa: PLC0415
+
+            server = build_server(client, effective, guard=guard, **auth_options(http))
+            # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
+            # calls and goals), then the server's lifespan closes the client.
+            await serve_http(server, http)
+            return
         server = build_server(client, effective, guard=guard)
         _stop_on_signals(client)
         if sys.stdin.isatty():
