@@ -1,4 +1,4 @@
-"""Lines the SDK's stdio transport cannot read: the error replies JSON-RPC requires, under the request's id."""
+"""Lines the SDK's stdio transport cannot read: the error replies JSON-RPC requires, under their id."""
 
 from __future__ import annotations
 

@@ -202,8 +202,8 @@ def parse_bind(value: str, *, source: str) -> tuple[str, int]:
         raise ConfigError(f"{source}: {value!r} is not HOST:PORT (e.g. 127.0.0.1:8765 or [::1]:8765)")
     host = match.group(1) or match.group(3)
     port = int(match.group(2) or match.group(4))
-    if not 0 < port < 65536:
-        raise ConfigError(f"{source}: port {port} is not between 1 and 65535")
+    if not 0 <= port < 65536:
+        raise ConfigError(f"{source}: port {port} is not between 0 (any free port) and 65535")
     return host, port
 
 
@@ -314,12 +314,14 @@ def _check_http_url(value: str, source: str) -> None:
 def allowed_hosts(host: str, port: int, extra: Sequence[str]) -> tuple[str, ...]:
     """``Host`` header values the server answers (DNS-rebinding protection): loopback, the bound address,
     the machine's own names when bound to every interface, and *extra* (a bare name allows any port)."""
-    names = ["127.0.0.1", "localhost", "[::1]"]
+    # Any port on loopback names (as the SDK's own default): a rebinding attack needs a name of its own.
+    out = ["127.0.0.1:*", "localhost:*", "[::1]:*"]
+    names: list[str] = []
     if host in ("0.0.0.0", "::"):
         names += _own_names()
     elif not is_loopback(host):
         names.append(f"[{host}]" if ":" in host else host)
-    out = [f"{name}:{port}" for name in names]
+    out += [f"{name}:{port or '*'}" for name in names]
     for item in extra:
         out.append(item if re.search(r":(\d+|\*)$", item) and not item.endswith("]") else f"{item}:*")
         if not re.search(r":(\d+|\*)$", item):

@@ -177,13 +177,29 @@ async def serve_http(
         timeout_graceful_shutdown=2,
     )
     http = uvicorn.Server(config)
+    if sock is None:
+        # Bound before serving, so the line below can name the port (--bind HOST:0 picks a free one) and a
+        # client that read it finds the port open: connections wait in the backlog until uvicorn accepts.
+        sock = config.bind_socket()
+        # uvicorn's bind_socket only binds; listen now, so that a connection made before uvicorn serves
+        # waits instead of being refused.
+        sock.listen(config.backlog)
     auth = "bearer tokens" if settings.tokens else "OAuth JWTs" if settings.oauth else "no authentication"
-    _log.info("serving MCP on %s (%s)", settings.url if sock is None else _sock_url(sock, settings), auth)
+    _log.info("serving MCP on %s (%s)", _sock_url(sock, settings), auth)
     started = time.monotonic()
-    await http.serve(sockets=[sock] if sock is not None else None)
+    serving = asyncio.ensure_future(http.serve(sockets=[sock]))
+    try:
+        await asyncio.shield(serving)
+    except asyncio.CancelledError:
+        # Cancelled (a test, an embedding program): shut down as on SIGTERM, so the sessions' tool calls are
+        # cancelled and the lifespan closes the robot's client.
+        http.should_exit = True
+        await serving
+        raise
     _log.info("HTTP server stopped after %.0f s", time.monotonic() - started)
 
 
 def _sock_url(sock: socket.socket, settings: HttpSettings) -> str:
     host, port = sock.getsockname()[:2]
-    return f"{settings.scheme}://{host}:{port}{MCP_PATH}"
+    shown = f"[{host}]" if ":" in host else host
+    return f"{settings.scheme}://{shown}:{port}{MCP_PATH}"
