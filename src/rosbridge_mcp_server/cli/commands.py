@@ -375,8 +375,14 @@ async def serve(config: Config, audit_file: TextIO | None = None, http: HttpSett
 
             server = build_server(client, effective, guard=guard, **auth_options(http))
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
-            # calls and goals), then the server's lifespan closes the client.
-            await serve_http(server, http)
+            # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
+            # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as
+            # on stdio (Ctrl-C still ends in KeyboardInterrupt, exit 130).
+            previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+            try:
+                await serve_http(server, http)
+            finally:
+                signal.signal(signal.SIGTERM, previous)
             return
         server = build_server(client, effective, guard=guard)
         _stop_on_signals(client)
