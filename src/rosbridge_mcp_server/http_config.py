@@ -290,6 +290,8 @@ def _oauth(
             raise ConfigError(f"--oauth-{others[0]} needs --oauth-issuer")
         return None
     _check_http_url(issuer, issuer_source)
+    if resource is None and settings.port == 0:
+        raise ConfigError("--oauth-issuer with --bind on port 0 needs --oauth-resource (this server's URL)")
     resource_url = resource or settings.url
     _check_http_url(resource_url, resource_source)
     if jwks is None:
