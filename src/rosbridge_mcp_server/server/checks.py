@@ -9,7 +9,9 @@ the SDK validates the parameters, so stdio and HTTP share each check here:
   sizes) before the SDK's lenient conversion would drop or convert them;
 * arguments that do not fit the tool's parameters are one sentence naming each, instead of pydantic's dump
   (validated against our own model of the parameters, the same annotations the SDK's model is built from);
-* the caller the transport authenticated (a token's name, a JWT's subject) is named for the audit.
+* the caller the transport authenticated (a token's name, a JWT's subject) is named for the audit;
+* with several robots, the ``robot`` argument is taken off the call and chooses the robot it runs on
+  (``fleet.py``); a missing or unknown one is refused with the robots' names.
 
 A refusal is the ``isError`` result the tool itself would give; nothing reaches the tool.
 """
@@ -18,8 +20,8 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 from mcp.server.auth.middleware.auth_context import get_access_token
 from mcp.server.context import CallNext, HandlerResult, ServerRequestContext
@@ -27,6 +29,10 @@ from mcp.types import CallToolResult, TextContent
 from pydantic import BaseModel, ConfigDict, ValidationError, create_model
 
 from rosbridge_mcp_server.safety import calling_as
+from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT, selecting
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.server.fleet import Fleet, Robot
 
 __all__ = ["ArgumentCheck", "ArgumentErrorText", "CheckedTool", "ToolCallChecks", "refusal_result"]
 
@@ -74,7 +80,9 @@ class ToolCallChecks:
         argument_check: ArgumentCheck,
         argument_error: ArgumentErrorText,
         unlisted: UnlistedAnswer | None = None,
+        fleet: Fleet | None = None,
     ) -> None:
+        self._fleet = fleet
         self._tools = {tool.name: tool for tool in tools}
         self._argument_check = argument_check
         self._argument_error = argument_error
@@ -90,10 +98,17 @@ class ToolCallChecks:
         if not isinstance(name, str) or not isinstance(arguments, dict):
             # Malformed params: the SDK's own validation answers them.
             return await call_next(ctx)
+        robots: tuple[Robot, ...] = ()
+        if self._fleet is not None and self._fleet.several and name in self._tools and name != LIST_ROBOTS:
+            arguments = dict(arguments)
+            robots, refusal = self._fleet.choose(name, arguments.pop(ROBOT_ARGUMENT, None))
+            if refusal is not None:
+                return refusal_result(refusal)
+            ctx = replace(ctx, params={**ctx.params, "arguments": arguments})
         refusal = self.refusal(name, arguments)
         if refusal is not None:
             return refusal_result(refusal)
-        with calling_as(caller()):
+        with calling_as(caller()), selecting(robots):
             return await call_next(ctx)
 
     def refusal(self, name: str, arguments: dict[str, Any]) -> str | None:
