@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from e2e_transports import serving
@@ -109,3 +110,38 @@ def _policy(tmp_path: Path) -> Path:
     path = tmp_path / "policy.toml"
     path.write_text('[topics]\ndeny = ["/forbidden"]\n')
     return path
+
+
+async def test_a_fleet_file_drives_two_robots_each_under_its_policy(
+    transport: str, make_sim: Any, tmp_path: Path
+) -> None:
+    """--robots FILE: a ROS 1 and a ROS 2 robot; a policy on one refuses there only; the audit names both."""
+    ros2 = await make_sim(dialect="ros2")
+    ros1 = await make_sim(dialect="ros1")
+    (tmp_path / "careful.toml").write_text('[velocity]\nmax_linear = 0.2\nmode = "refuse"\n')
+    fleet = tmp_path / "fleet.toml"
+    fleet.write_text(
+        f'[robots.jazzy]\nurl = "{ros2.url}"\npolicy = "careful.toml"\n\n'
+        f'[robots.noetic]\nurl = "{ros1.url}"\n'
+    )
+    audit = tmp_path / "audit.jsonl"
+    fast = {"topic": CMD_VEL, "message_type": "geometry_msgs/Twist", "message": TWIST}
+    async with (
+        serving(transport, "--robots", str(fleet), "--audit-log", str(audit)) as served,
+        served.connect() as client,
+    ):
+        refused = await client.call_tool("publish_topic", {**fast, "robot": "jazzy"})
+        allowed = await client.call_tool("publish_topic", {**fast, "robot": "noetic"})
+        robots = await client.call_tool("list_robots", {})
+    assert refused.is_error
+    assert "max_linear" in _text(refused)
+    assert not allowed.is_error, _text(allowed)
+    await ros1.wait_for(lambda world: CMD_VEL in world.published, 10)
+    assert CMD_VEL not in ros2.world.published
+    assert "jazzy: connected, ROS 2" in _text(robots)
+    assert "noetic: connected, ROS 1" in _text(robots)
+    lines = [json.loads(line) for line in audit.read_text().splitlines()]
+    assert [(line["robot"], line["outcome"]) for line in lines] == [
+        ("jazzy", "refused"),
+        ("noetic", "allowed"),
+    ]

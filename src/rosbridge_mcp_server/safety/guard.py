@@ -81,8 +81,10 @@ def calling_as(caller: str | None) -> Iterator[None]:
 class Audit:
     """One line per acting decision on stderr, and a JSON line in ``stream`` (the audit file) when given."""
 
-    def __init__(self, stream: IO[str] | None = None) -> None:
+    def __init__(self, stream: IO[str] | None = None, robot: str | None = None) -> None:
         self._stream = stream
+        #: The robot this audit is for, when the server drives several (named in every line).
+        self.robot = robot
 
     def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
         extra = f" ({detail})" if detail else ""
@@ -91,7 +93,8 @@ class Audit:
         caller = current_caller()
         _log.log(
             level,
-            "audit: %s %s %s %s%s: %s%s%s",
+            "audit: %s%s %s %s %s%s: %s%s%s",
+            f"[{self.robot}] " if self.robot else "",
             act.tool,
             act.kind,
             act.name,
@@ -117,6 +120,8 @@ class Audit:
         }
         if caller is not None:
             entry["caller"] = caller
+        if self.robot is not None:
+            entry["robot"] = self.robot
         line = json.dumps(entry, ensure_ascii=False, default=str)
         if len(line) > AUDIT_PAYLOAD_LIMIT:
             # A camera frame in every line would bury the audit; its size and start are enough.
