@@ -8,7 +8,8 @@ from typing import Any
 
 import pytest
 from e2e_transports import serving
-from mcp.types import TextContent
+from mcp.client.context import ClientRequestContext
+from mcp.types import ElicitRequestParams, ElicitResult, TextContent
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.tools import TOOL_MODULES
@@ -145,3 +146,31 @@ async def test_a_fleet_file_drives_two_robots_each_under_its_policy(
         ("jazzy", "refused"),
         ("noetic", "allowed"),
     ]
+
+
+async def test_the_person_is_asked_over_either_transport(
+    transport: str, sim_ros2: SimulatedRobot, tmp_path: Path
+) -> None:
+    """confirm = "motion": the question reaches the client mid-call (over HTTP on the call's event stream)."""
+    asked: list[str] = []
+    answers = iter([True, False])
+
+    async def person(context: ClientRequestContext, params: ElicitRequestParams) -> ElicitResult:
+        asked.append(params.message)
+        return ElicitResult(action="accept", content={"approve": next(answers)})
+
+    policy = tmp_path / "confirm.toml"
+    policy.write_text('confirm = "motion"\n')
+    publish = {"topic": CMD_VEL, "message_type": "geometry_msgs/msg/Twist", "message": TWIST}
+    async with (
+        serving(transport, "--url", sim_ros2.url, "--policy", str(policy)) as served,
+        served.connect(elicitation_callback=person) as client,
+    ):
+        approved = await client.call_tool("publish_topic", publish)
+        declined = await client.call_tool("publish_topic", publish)
+    assert len(asked) == 2
+    assert CMD_VEL in asked[0]
+    assert not approved.is_error, _text(approved)
+    assert declined.is_error
+    await sim_ros2.wait_for(lambda world: CMD_VEL in world.published, 10)
+    assert len(sim_ros2.world.published[CMD_VEL]) == 1
