@@ -139,17 +139,9 @@ def load_http_settings(
     for path, name in ((cert, "--tls-cert"), (key, "--tls-key")):
         if path and not Path(path).is_file():
             raise ConfigError(f"{name}: {path!r} is not a readable file")
-    settings = HttpSettings(
-        transport="http",
-        host=host,
-        port=port,
-        tokens=tokens,
-        tls_cert=cert,
-        tls_key=key,
-    )
     oauth = _oauth(
         environ,
-        settings,
+        HttpSettings(transport="http", host=host, port=port, tls_cert=cert),
         issuer=oauth_issuer,
         audience=oauth_audience,
         jwks=oauth_jwks,

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import asyncio
 import json
+import ssl
 import sys
 from pathlib import Path
 from typing import Any
 
 import httpx2
 import pytest
+import trustme
 from e2e_transports import TOKEN, WAIT, serving, stop
 
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -173,3 +175,23 @@ async def test_tokens_are_not_logged_even_at_debug_level(sim_ros2: SimulatedRobo
     assert TOKEN not in log
     assert wrong not in log
     assert json.dumps(TOKEN)[1:-1] not in log
+
+
+async def test_tls_serves_https_with_the_given_certificate(sim_ros2: SimulatedRobot, tmp_path: Path) -> None:
+    """--tls-cert/--tls-key: the server speaks HTTPS; a client trusting the CA initializes with its token."""
+    authority = trustme.CA()
+    certificate = authority.issue_cert("127.0.0.1", "localhost")
+    cert, key = tmp_path / "cert.pem", tmp_path / "key.pem"
+    certificate.cert_chain_pems[0].write_to_path(str(cert))
+    certificate.private_key_pem.write_to_path(str(key))
+    context = ssl.create_default_context()
+    authority.configure_trust(context)
+    flags = ("--url", sim_ros2.url, "--tls-cert", str(cert), "--tls-key", str(key))
+    async with serving("http", *flags) as served:
+        assert served.url.startswith("https://127.0.0.1:")
+        async with httpx2.AsyncClient(timeout=WAIT, verify=context) as http:
+            response = await http.post(served.url, json=INITIALIZE, headers=_headers(TOKEN))
+        async with httpx2.AsyncClient(timeout=WAIT) as untrusting:
+            with pytest.raises(httpx2.ConnectError):
+                await untrusting.post(served.url, json=INITIALIZE, headers=_headers(TOKEN))
+    assert response.status_code == 200
