@@ -60,7 +60,7 @@ class Served:
 
 
 def _env(extra: Mapping[str, str] | None) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("ROSBRIDGE_", "COVERAGE"))}
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROSBRIDGE_")}
     return {**env, **(extra or {})}
 
 

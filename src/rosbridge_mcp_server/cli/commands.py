@@ -56,8 +56,8 @@ def _parser(command: str) -> _Parser:
         )
     else:
         description = (
-            "MCP server (stdio) that lets an AI assistant watch and drive a ROS robot through rosbridge. "
-            "Use `check` to diagnose the connection."
+            "MCP server (stdio, or Streamable HTTP) that lets an AI assistant watch and drive a ROS robot "
+            "through rosbridge. Use `check` to diagnose the connection."
         )
     parser = _Parser(prog=PROG if command == "serve" else f"{PROG} check", description=description)
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
@@ -137,7 +137,8 @@ def _fleet_flags(parser: _Parser) -> None:
     fleet.add_argument(
         "--robots",
         metavar="FILE",
-        help="robots in TOML: [robots.NAME] with url, headers, ca_file, client_cert, client_key, policy",
+        help="robots in TOML: [robots.NAME] with url and optional headers, ca_file, client_cert, client_key, "
+        "policy, read_only",
     )
 
 
@@ -174,7 +175,7 @@ def _transport_flags(parser: _Parser) -> None:
     http.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
     oauth = parser.add_argument_group("OAuth 2.1 resource server (JWT access tokens)")
     oauth.add_argument("--oauth-issuer", metavar="URL", help="the authorization server (the tokens' iss)")
-    oauth.add_argument("--oauth-audience", help="the tokens' aud (default: --oauth-resource)")
+    oauth.add_argument("--oauth-audience", metavar="AUD", help="the tokens' aud (default: --oauth-resource)")
     oauth.add_argument(
         "--oauth-jwks",
         metavar="URL|FILE",
