@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import ipaddress
+import logging
 import os
 import re
 import socket
@@ -43,6 +44,8 @@ __all__ = [
     "load_http_settings",
     "parse_tokens",
 ]
+
+_log = logging.getLogger(__name__)
 
 Transport = Literal["stdio", "http"]
 DEFAULT_BIND = "127.0.0.1:8765"
@@ -218,11 +221,7 @@ def _tokens(environ: Mapping[str, str], path: str | None) -> tuple[tuple[str, st
             raise ConfigError(f"--auth-tokens: cannot read {path!r}: {exc}") from None
         if info.st_mode & (stat.S_IRWXG | stat.S_IRWXO):
             # Not fatal (a container may mount it so), but worth a line: it holds the keys to the robot.
-            import logging  # noqa: PLC0415
-
-            logging.getLogger(__name__).warning(
-                "the token file %s can be read by other users (chmod 600 it)", path
-            )
+            _log.warning("the token file %s can be read by other users (chmod 600 it)", path)
         return parse_tokens(text.splitlines(), source=f"--auth-tokens {path}")
     value = environ.get("ROSBRIDGE_MCP_AUTH_TOKENS", "")
     if not value.strip():
