@@ -1,4 +1,4 @@
-"""What the robot's pictures share: colours, a font, "nice" tick steps, a scale bar, a robot marker, PNG bytes.
+"""What the robot's pictures share: colours, a font, round tick steps, a scale bar, a robot marker, PNG bytes.
 
 The maps, scans and charts of ``robot/maps.py``, ``robot/scans.py`` and ``robot/charts.py`` are drawn with
 Pillow only. Pure: no I/O; the tools run the drawing in a worker thread.
@@ -22,8 +22,10 @@ __all__ = [
     "draw_robot",
     "draw_scale_bar",
     "font",
+    "label",
     "nice_step",
     "png_bytes",
+    "round_down",
     "ticks",
 ]
 
@@ -65,6 +67,17 @@ def nice_step(span: float, parts: int = 5) -> float:
     return float(10 * power)
 
 
+def round_down(value: float) -> float:
+    """The largest 1, 2 or 5 × 10^k not above ``value`` (``value`` itself when not positive and finite)."""
+    if not math.isfinite(value) or value <= 0:
+        return value
+    power = 10 ** math.floor(math.log10(value))
+    for factor in (5, 2, 1):
+        if factor * power <= value * (1 + 1e-9):
+            return float(factor * power)
+    return float(power)
+
+
 def ticks(low: float, high: float, parts: int = 5) -> list[float]:
     """Round values from ``low`` to ``high`` (inclusive) a :func:`nice_step` apart."""
     step = nice_step(high - low, parts)
@@ -87,9 +100,7 @@ def draw_scale_bar(draw: ImageDraw.ImageDraw, pixels_per_metre: float, corner: t
     """A labelled bar of a round length (about a fifth of the picture) with its left end at ``corner``
     (bottom-left of the bar); returns the length in metres."""
     width = draw.im.size[0]
-    metres = nice_step(width / 5 / pixels_per_metre, 1)
-    if metres * pixels_per_metre > width * 0.4:
-        metres /= 2
+    metres = round_down(width * 0.25 / pixels_per_metre)
     length = max(1, round(metres * pixels_per_metre))
     x, y = corner
     text = label(metres, "m")
@@ -110,7 +121,7 @@ def draw_scale_bar(draw: ImageDraw.ImageDraw, pixels_per_metre: float, corner: t
 def draw_robot(draw: ImageDraw.ImageDraw, centre: tuple[float, float], heading: float, radius: float) -> None:
     """The robot as a filled arrow pointing along ``heading`` (radians, counter-clockwise from the picture's
     +x axis, which points right), ``radius`` pixels from centre to tip, with a white rim."""
-    radius = max(radius, 7.0)
+    radius = max(radius, 9.0)
     cx, cy = centre
 
     def at(angle: float, r: float) -> tuple[float, float]:
@@ -121,9 +132,9 @@ def draw_robot(draw: ImageDraw.ImageDraw, centre: tuple[float, float], heading: 
 
 
 def png_bytes(image: Image.Image) -> bytes:
-    """The picture as a small PNG: few colours, so a palette of at most 64 keeps it a fraction of RGB's size."""
+    """The picture as a small PNG: drawings have few colours, so a 64-colour palette keeps them small."""
     if image.mode == "RGB":
-        image = image.quantize(colors=64, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+        image = image.quantize(colors=64, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE)
     out = io.BytesIO()
     image.save(out, "PNG", optimize=False, compress_level=6)
     return out.getvalue()
