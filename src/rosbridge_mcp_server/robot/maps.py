@@ -32,6 +32,8 @@ from rosbridge_mcp_server.robot.drawing import (
 )
 
 __all__ = [
+    "MARGIN_BOTTOM",
+    "MARGIN_LEFT",
     "Grid",
     "MapError",
     "MapPicture",
@@ -45,8 +47,10 @@ __all__ = [
 
 #: Occupied from this value on (map_server's occupied_thresh 0.65).
 OCCUPIED_FROM = 65
-_MARGIN_LEFT = 44
-_MARGIN_BOTTOM = 20
+#: Pixels left of and below the map for the axes' labels: map point (x, y) is drawn at
+#: (MARGIN_LEFT + (x - x_min) · px/m, map height in pixels - (y - y_min) · px/m) for an unrotated grid.
+MARGIN_LEFT = 44
+MARGIN_BOTTOM = 20
 
 
 class MapError(ValueError):
@@ -236,8 +240,8 @@ def draw_map(
     else:
         col0, col1, row0, row1 = 0, grid.width, 0, grid.height
     cells_w, cells_h = col1 - col0, row1 - row0
-    plot = max(16, max_size - _MARGIN_LEFT)
-    scale = min(plot / cells_w, (max_size - _MARGIN_BOTTOM) / cells_h)  # pixels per cell
+    plot = max(16, max_size - MARGIN_LEFT)
+    scale = min(plot / cells_w, (max_size - MARGIN_BOTTOM) / cells_h)  # pixels per cell
     out_w, out_h = max(1, round(cells_w * scale)), max(1, round(cells_h * scale))
     cropped = raw.crop((col0, row0, col1, row1))
     ranked = cropped.point(_RANKS).resize((out_w, out_h), Image.Resampling.NEAREST)
@@ -249,13 +253,13 @@ def draw_map(
     ranked = ranked.transpose(Image.Transpose.FLIP_TOP_BOTTOM)
     coloured = Image.frombuffer("P", ranked.size, ranked.tobytes(), "raw", "P", 0, 1)
     coloured.putpalette(_PALETTE)
-    image = Image.new("RGB", (out_w + _MARGIN_LEFT, out_h + _MARGIN_BOTTOM), (255, 255, 255))
-    image.paste(coloured.convert("RGB"), (_MARGIN_LEFT, 0))
+    image = Image.new("RGB", (out_w + MARGIN_LEFT, out_h + MARGIN_BOTTOM), (255, 255, 255))
+    image.paste(coloured.convert("RGB"), (MARGIN_LEFT, 0))
     draw = ImageDraw.Draw(image)
 
     def pixel(x: float, y: float) -> tuple[float, float]:
         col, row = grid.to_cell(x, y)
-        return (_MARGIN_LEFT + (col - col0) * scale, out_h - (row - row0) * scale)
+        return (MARGIN_LEFT + (col - col0) * scale, out_h - (row - row0) * scale)
 
     pixels_per_metre = scale / grid.resolution
     _draw_axes(draw, grid, cells=(col0, col1, row0, row1), out_w=out_w, out_h=out_h)
@@ -271,7 +275,7 @@ def draw_map(
     if overlay.robot is not None:
         robot = overlay.robot
         draw_robot(draw, pixel(robot.x, robot.y), robot.yaw - grid.origin.yaw, 0.25 * pixels_per_metre)
-    bar = draw_scale_bar(draw, pixels_per_metre, (_MARGIN_LEFT + 10, out_h - 10))
+    bar = draw_scale_bar(draw, pixels_per_metre, (MARGIN_LEFT + 10, out_h - 10))
     x_min, y_min = grid.to_map(col0, row0)
     x_max, y_max = grid.to_map(col1, row1)
     return MapPicture(image, found, (x_min, y_min, x_max, y_max), pixels_per_metre, bar)
@@ -295,14 +299,14 @@ def _draw_axes(
     shift_x, shift_y = (ox, oy) if plain else (0.0, 0.0)
     small = font(11)
     for value in ticks(x_low + shift_x, x_high + shift_x, max(2, out_w // 90)):
-        px = _MARGIN_LEFT + ((value - shift_x) / grid.resolution - col0) * (out_w / max(1, col1 - col0))
+        px = MARGIN_LEFT + ((value - shift_x) / grid.resolution - col0) * (out_w / max(1, col1 - col0))
         draw.line((px, out_h, px, out_h + 4), fill=TEXT_COLOUR)
         draw.text((px, out_h + 4), label(value), fill=TEXT_COLOUR, font=small, anchor="ma")
     for value in ticks(y_low + shift_y, y_high + shift_y, max(2, out_h // 70)):
         py = out_h - ((value - shift_y) / grid.resolution - row0) * (out_h / max(1, row1 - row0))
-        draw.line((_MARGIN_LEFT - 4, py, _MARGIN_LEFT, py), fill=TEXT_COLOUR)
-        draw.text((_MARGIN_LEFT - 6, py), label(value), fill=TEXT_COLOUR, font=small, anchor="rm")
-    draw.text((_MARGIN_LEFT + out_w - 2, out_h + 4), "x m", fill=TEXT_COLOUR, font=small, anchor="ra")
+        draw.line((MARGIN_LEFT - 4, py, MARGIN_LEFT, py), fill=TEXT_COLOUR)
+        draw.text((MARGIN_LEFT - 6, py), label(value), fill=TEXT_COLOUR, font=small, anchor="rm")
+    draw.text((MARGIN_LEFT + out_w - 2, out_h + 4), "x m", fill=TEXT_COLOUR, font=small, anchor="ra")
     draw.text((2, 2), "y m", fill=TEXT_COLOUR, font=small)
 
 
