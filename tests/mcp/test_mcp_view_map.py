@@ -27,13 +27,13 @@ def picture_of(result: CallToolResult) -> Image.Image:
     return Image.open(io.BytesIO(base64.b64decode(images[0].data))).convert("RGB")
 
 
-def pixel_of(data: dict[str, Any], x: float, y: float) -> tuple[int, int]:
+def pixel_of(data: dict[str, Any], image: Image.Image, x: float, y: float) -> tuple[int, int]:
     """Where map point (x, y) is on the picture, from the answer's window and scale."""
     x_min, y_min = data["window"][0], data["window"][1]
     ppm = data["pixels_per_metre"]
     return (
         round(MARGIN_LEFT + (x - x_min) * ppm),
-        round(data["image_height"] - MARGIN_BOTTOM - (y - y_min) * ppm),
+        round(image.height - MARGIN_BOTTOM - (y - y_min) * ppm),
     )
 
 
@@ -55,12 +55,12 @@ async def test_the_robot_is_drawn_at_its_pose_from_tf(session: Session, sim: Sim
     result = await session.ok("view_map", {})
     data = result.structured_content
     assert data is not None
-    assert data["robot"] == pytest.approx({"x": 3.0, "y": 7.0, "yaw": 60.0}, abs=0.01)
-    assert (data["width"], data["height"], data["frame_id"]) == (242, 242, "map")
-    assert data["known"] == pytest.approx(0.89, abs=0.01)
+    assert data["robot"] == pytest.approx([3.0, 7.0, 60.0], abs=0.01)
+    assert (data["cells"], data["frame_id"]) == ([242, 242], "map")
+    assert data["shares"]["known"] == pytest.approx(0.89, abs=0.01)
     image = picture_of(result)
-    assert colour_near(image, pixel_of(data, 3.0, 7.0), ROBOT_COLOUR, reach=0)
-    assert not colour_near(image, pixel_of(data, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=3)
+    assert colour_near(image, pixel_of(data, image, 3.0, 7.0), ROBOT_COLOUR, reach=0)
+    assert not colour_near(image, pixel_of(data, image, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=3)
     assert "robot base_link at x=3 y=7 yaw=60°" in text_of(result)
 
 
@@ -72,9 +72,9 @@ async def test_the_scan_lands_on_the_walls_and_the_plan_reaches_its_goal(session
     assert data["scan_hits"] > 300
     assert data["path_poses"] > 10
     image = picture_of(result)
-    assert colour_near(image, pixel_of(data, TURTLE_ARENA, TURTLE_HOME), OBSTACLE_COLOUR)
-    assert colour_near(image, pixel_of(data, *PLAN_GOAL), PATH_COLOUR)
-    assert not colour_near(image, pixel_of(data, 3.0, 3.0), OBSTACLE_COLOUR, reach=3)
+    assert colour_near(image, pixel_of(data, image, TURTLE_ARENA, TURTLE_HOME), OBSTACLE_COLOUR)
+    assert colour_near(image, pixel_of(data, image, *PLAN_GOAL), PATH_COLOUR)
+    assert not colour_near(image, pixel_of(data, image, 3.0, 3.0), OBSTACLE_COLOUR, reach=3)
 
 
 async def test_around_robot_shows_a_window_centred_on_the_robot(session: Session) -> None:
@@ -86,8 +86,9 @@ async def test_around_robot_shows_a_window_centred_on_the_robot(session: Session
     assert (x_min + x_max) / 2 == pytest.approx(TURTLE_HOME, abs=0.1)
     assert (y_min + y_max) / 2 == pytest.approx(TURTLE_HOME, abs=0.1)
     assert x_max - x_min == pytest.approx(4.0, abs=0.15)
-    assert max(data["image_width"], data["image_height"]) <= 300
-    assert colour_near(picture_of(result), pixel_of(data, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=0)
+    image = picture_of(result)
+    assert max(image.size) == 300
+    assert colour_near(image, pixel_of(data, image, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=0)
 
 
 async def test_a_frame_tf_does_not_know_is_a_note_not_a_failure(session: Session) -> None:
@@ -142,10 +143,10 @@ async def test_a_costmap_in_the_odom_frame_is_shaded_and_places_the_robot_throug
             result = await session.ok("view_map", {"topic": "/test/costmap"})
     data = result.structured_content
     assert data is not None
-    assert data["cost"] == pytest.approx(0.25)
-    assert data["robot"] == pytest.approx({"x": 0.0, "y": 0.0, "yaw": 0.0}, abs=0.01)
+    assert data["shares"]["cost"] == pytest.approx(0.25)
+    assert data["robot"] == pytest.approx([0.0, 0.0, 0.0], abs=0.01)
     image = picture_of(result)
-    red, green, blue = image.getpixel(pixel_of(data, 0.5, 0.5))  # type: ignore[misc]
+    red, green, blue = image.getpixel(pixel_of(data, image, 0.5, 0.5))  # type: ignore[misc]
     assert (red, green, blue) != (254, 254, 254)
     assert red > green
     assert "cost 25%" in text_of(result)
@@ -158,8 +159,8 @@ async def test_a_2000_cell_map_is_drawn_with_its_walls(make_sim: Any) -> None:
         result = await session.ok("view_map", {"timeout": 20})
     data = result.structured_content
     assert data is not None
-    assert (data["width"], data["height"]) == (2000, 2000)
+    assert data["cells"] == [2000, 2000]
     image = picture_of(result)
     assert max(image.size) == 800
-    assert colour_near(image, pixel_of(data, -0.05, 3.0), (0, 0, 0), reach=1)
-    assert colour_near(image, pixel_of(data, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=0)
+    assert colour_near(image, pixel_of(data, image, -0.05, 3.0), (0, 0, 0), reach=1)
+    assert colour_near(image, pixel_of(data, image, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=0)

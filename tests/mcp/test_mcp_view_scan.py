@@ -52,10 +52,9 @@ async def test_the_wall_ahead_is_drawn_where_the_laser_hits_it(session: Session)
     assert not red_near(image, top_view_pixel(data, 500, ahead / 2, 0.0), reach=4)
     cx, cy, radius = PILLAR
     to_pillar = math.hypot(cx - TURTLE_HOME, cy - TURTLE_HOME) - radius
-    assert data["nearest"]["range"] == pytest.approx(to_pillar, abs=0.02)
-    assert data["nearest"]["bearing"] == pytest.approx(45.0, abs=1.0)
+    assert data["nearest"] == pytest.approx([to_pillar, 45.0], abs=0.02)
     assert data["frame_id"] == "base_scan"
-    assert f"nearest obstacle {data['nearest']['range']:g} m at bearing 45°" in text_of(result)
+    assert f"nearest obstacle {data['nearest'][0]:g} m at bearing 45°" in text_of(result)
 
 
 async def test_free_sectors_leave_out_the_blocked_directions(session: Session, sim: SimulatedRobot) -> None:
@@ -64,7 +63,7 @@ async def test_free_sectors_leave_out_the_blocked_directions(session: Session, s
     result = await session.ok("view_scan", {"clearance": 1.0})
     data = result.structured_content
     assert data is not None
-    sectors = [(s["start"], s["end"]) for s in data["free_sectors"]]
+    sectors = data["free_sectors"]
     assert any(start <= 0 <= end for start, end in sectors)
     assert not any(start <= -90 <= end for start, end in sectors)
 
@@ -93,7 +92,7 @@ async def test_a_point_cloud_is_drawn_from_above(sim: SimulatedRobot) -> None:
     answer = result.structured_content
     assert answer is not None
     assert answer["points"] == 3
-    assert answer["nearest"] == {"range": 2.0, "bearing": 0.0}
+    assert answer["nearest"] == [2.0, 0.0]
     assert red_near(picture_of(result), top_view_pixel(answer, 400, 2.0, 0.0))
 
 

@@ -27,7 +27,7 @@ _EXAMPLE = '["/cmd_vel linear.x", "/odom twist.twist.linear.x"]'
 
 
 class SeriesFigures(BaseModel):
-    """One plotted field: its samples' figures."""
+    """One field's samples."""
 
     topic: str
     field: str
@@ -37,24 +37,23 @@ class SeriesFigures(BaseModel):
     max: float | None
     mean: float | None
     last: float | None
-    rate_hz: float | None = Field(description="The topic's observed message rate")
+    rate_hz: float | None
 
 
 class PlotAnswer(BaseModel):
-    """What was collected and drawn."""
+    """What was collected and drawn over ``duration`` seconds."""
 
-    duration: float = Field(description="Seconds listened")
+    duration: float
     series: list[SeriesFigures]
     notes: list[str]
-    image_bytes: int
 
 
 SPEC = ToolSpec(
     name="plot_topic",
     title="Plot topics over time",
     description=(
-        "Listen for some seconds and chart numeric fields (dotted paths) of one or more topics against "
-        "time, with min/max/mean/last and rate per series. Read-only. Example: "
+        "Chart numeric fields (dotted paths) of topics against time for some seconds, with min/max/mean/"
+        "last and rate. Read-only. Example: "
         f'{{"series": {_EXAMPLE}, "duration": 5}}'
     ),
     hints=READS_ROBOT,
@@ -70,11 +69,11 @@ async def run(
         Field(
             min_length=1,
             max_length=MAX_SERIES,
-            description=f'"TOPIC FIELD [FIELD...]" each, e.g. {_EXAMPLE}',
+            description=f'"TOPIC FIELD [FIELD...]", e.g. {_EXAMPLE}',
         ),
     ],
-    duration: Annotated[float, Field(gt=0, le=60, description="Seconds to listen, e.g. 5")] = 5.0,
-    max_size: Annotated[int, Field(ge=200, le=2048, description="Chart width in pixels, e.g. 800")] = 800,
+    duration: Annotated[float, Field(gt=0, le=60, description="Seconds, e.g. 5")] = 5.0,
+    max_size: Annotated[int, Field(ge=200, le=2048, description="Width in pixels, e.g. 800")] = 800,
 ) -> ToolAnswer:
     """Subscribe to every topic at once, collect the fields, chart them off the event loop."""
     wanted: dict[str, list[str]] = {}
@@ -105,7 +104,7 @@ async def run(
         )
     image = await asyncio.to_thread(_draw, lines, duration, max_size)
     figures = [_figures(line, counts[line.topic], duration) for line in lines]
-    answer = PlotAnswer(duration=duration, series=figures, notes=notes, image_bytes=len(image))
+    answer = PlotAnswer(duration=duration, series=figures, notes=notes)
     return ToolAnswer(text=_text(answer), data=answer, images=(ToolImage(image, "image/png"),))
 
 

@@ -39,47 +39,30 @@ _SCAN = is_type("sensor_msgs/LaserScan")
 _TF_WAIT = 2.0
 
 
-class PlanarPose(BaseModel):
-    """A pose in the map's frame: metres and yaw in degrees."""
-
-    x: float
-    y: float
-    yaw: float = Field(description="Degrees, counter-clockwise from +x")
-
-
 class MapAnswer(BaseModel):
-    """The map that was drawn and what is on the picture."""
+    """The map drawn; metres and degrees in the map's frame."""
 
     topic: str
     frame_id: str
-    width: int = Field(description="Cells")
-    height: int = Field(description="Cells")
-    resolution: float = Field(description="Metres per cell")
-    size_m: list[float] = Field(description="[width, height] in metres")
-    origin: PlanarPose = Field(description="Cell (0, 0)'s corner in the map frame")
-    known: float = Field(description="Share of cells known (0-1)")
-    free: float
-    occupied: float
-    cost: float = Field(description="Share of cells with a cost between free and occupied (costmaps)")
-    robot: PlanarPose | None = Field(description="base_frame in the map frame, when /tf knows it")
-    notes: list[str] = Field(description="What could not be drawn, and why")
+    cells: list[int] = Field(description="[width, height]")
+    resolution: float
+    origin: list[float] = Field(description="[x, y, yaw]")
+    shares: dict[str, float] = Field(description="known, free, occupied, cost: 0-1")
+    robot: list[float] | None = Field(description="[x, y, yaw]")
     path_poses: int | None = None
     scan_hits: int | None = None
-    window: list[float] = Field(description="[x_min, y_min, x_max, y_max] shown, metres")
-    image_width: int
-    image_height: int
+    window: list[float] = Field(description="[x_min, y_min, x_max, y_max]")
     pixels_per_metre: float
-    image_bytes: int
+    notes: list[str]
 
 
 SPEC = ToolSpec(
     name="view_map",
     title="Map picture",
     description=(
-        "Draw an OccupancyGrid (map or costmap) as a picture: free white, occupied black, unknown grey, "
-        "costs yellow to purple; the robot (blue arrow, from /tf), optionally a plan (green) and a scan "
-        'projected onto it (red). Read-only. Example: {"topic": "/map", "path_topic": "/plan", "scan_topic": '
-        '"/scan", "around_robot": 4}'
+        "An OccupancyGrid (map or costmap) as a picture with the robot (blue, from /tf), optionally a plan "
+        '(green) and a scan (red) on it. Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
+        '"around_robot": 4}'
     ),
     hints=READS_ROBOT,
     output=MapAnswer,
@@ -89,21 +72,13 @@ SPEC = ToolSpec(
 async def run(
     ctx: ToolContext,
     *,
-    topic: Annotated[
-        str, Field(description="OccupancyGrid topic, e.g. /map or /global_costmap/costmap")
-    ] = "/map",
-    base_frame: Annotated[
-        str, Field(description='Robot frame to draw, e.g. base_link; "" for none')
-    ] = "base_link",
-    path_topic: Annotated[str | None, Field(description="nav_msgs/Path to draw, e.g. /plan")] = None,
-    scan_topic: Annotated[str | None, Field(description="LaserScan to project, e.g. /scan")] = None,
-    around_robot: Annotated[
-        float | None, Field(gt=0, le=1000, description="Show only this many metres around the robot, e.g. 3")
-    ] = None,
-    max_size: Annotated[int, Field(ge=64, le=2048, description="Longest side in pixels, e.g. 800")] = 800,
-    timeout: Annotated[
-        float, Field(gt=0, le=60, description="Seconds to wait for each message, e.g. 5")
-    ] = 5.0,
+    topic: Annotated[str, Field(description="e.g. /map or /global_costmap/costmap")] = "/map",
+    base_frame: Annotated[str, Field(description='Robot frame, e.g. base_link; "" for none')] = "base_link",
+    path_topic: Annotated[str, Field(description="nav_msgs/Path, e.g. /plan")] = "",
+    scan_topic: Annotated[str, Field(description="LaserScan, e.g. /scan")] = "",
+    around_robot: Annotated[float, Field(ge=0, le=1000, description="Metres around the robot, e.g. 3")] = 0.0,
+    max_size: Annotated[int, Field(ge=64, le=2048, description="Pixels, e.g. 800")] = 800,
+    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds per message, e.g. 5")] = 5.0,
 ) -> ToolAnswer:
     """Take one grid (and plan and scan), place them with /tf, draw off the event loop."""
     name, msg_type = await typed_topic(
@@ -156,7 +131,7 @@ async def run(
         tf_wait=min(_TF_WAIT, timeout),
     )
     window = None
-    if around_robot is not None:
+    if around_robot:
         if robot is None:
             notes.append("around_robot needs the robot's pose: the whole map is shown.")
         else:
@@ -171,13 +146,13 @@ async def run(
         name,
         grid,
         picture,
-        data,
         robot=robot,
         overlay=overlay,
         notes=notes,
         path_heard=path_message is not None,
     )
-    return ToolAnswer(text=_text(answer, base_frame), data=answer, images=(ToolImage(data, "image/png"),))
+    text = _text(answer, base_frame, picture.image.size)
+    return ToolAnswer(text=text, data=answer, images=(ToolImage(data, "image/png"),))
 
 
 async def _overlay(
@@ -231,63 +206,61 @@ def _answer(
     name: str,
     grid: Grid,
     picture: MapPicture,
-    data: bytes,
     *,
     robot: Pose2D | None,
     overlay: Overlay,
     notes: list[str],
     path_heard: bool,
 ) -> MapAnswer:
+    shares = picture.shares
     return MapAnswer(
         topic=name,
         frame_id=grid.frame_id,
-        width=grid.width,
-        height=grid.height,
+        cells=[grid.width, grid.height],
         resolution=round(grid.resolution, 6),
-        size_m=[round(grid.width * grid.resolution, 3), round(grid.height * grid.resolution, 3)],
-        origin=PlanarPose(
-            x=round(grid.origin.x, 3), y=round(grid.origin.y, 3), yaw=round(math.degrees(grid.origin.yaw), 1)
-        ),
-        known=round(picture.shares.known, 4),
-        free=round(picture.shares.free, 4),
-        occupied=round(picture.shares.occupied, 4),
-        cost=round(picture.shares.cost, 4),
-        robot=None
-        if robot is None
-        else PlanarPose(x=round(robot.x, 3), y=round(robot.y, 3), yaw=round(math.degrees(robot.yaw), 1)),
-        notes=notes,
+        origin=_planar(grid.origin),
+        shares={
+            "known": round(shares.known, 4),
+            "free": round(shares.free, 4),
+            "occupied": round(shares.occupied, 4),
+            "cost": round(shares.cost, 4),
+        },
+        robot=None if robot is None else _planar(robot),
         path_poses=len(overlay.path) if path_heard else None,
         scan_hits=len(overlay.hits) if overlay.hits or any(n.startswith("scan") for n in notes) else None,
         window=[round(v, 3) for v in picture.window],
-        image_width=picture.image.width,
-        image_height=picture.image.height,
         pixels_per_metre=round(picture.pixels_per_metre, 3),
-        image_bytes=len(data),
+        notes=notes,
     )
 
 
-def _text(answer: MapAnswer, base_frame: str) -> str:
+def _planar(pose: Pose2D) -> list[float]:
+    return [round(pose.x, 3), round(pose.y, 3), round(math.degrees(pose.yaw), 1)]
+
+
+def _text(answer: MapAnswer, base_frame: str, size: tuple[int, int]) -> str:
+    (width, height), resolution = answer.cells, answer.resolution
+    x, y, yaw = answer.origin
+    shares = answer.shares
     parts = [
-        f"{answer.topic} (frame {answer.frame_id or '?'}): {answer.width}x{answer.height} cells of "
-        f"{answer.resolution:g} m = {answer.size_m[0]:g} x {answer.size_m[1]:g} m, origin "
-        f"({answer.origin.x:g}, {answer.origin.y:g}, yaw {answer.origin.yaw:g}°)",
-        f"known {answer.known:.0%} (free {answer.free:.0%}, occupied {answer.occupied:.0%}"
-        + (f", cost {answer.cost:.0%}" if answer.cost else "")
+        f"{answer.topic} (frame {answer.frame_id or '?'}): {width}x{height} cells of {resolution:g} m = "
+        f"{round(width * resolution, 2):g} x {round(height * resolution, 2):g} m, origin ({x:g}, {y:g}, "
+        f"yaw {yaw:g}°)",
+        f"known {shares['known']:.0%} (free {shares['free']:.0%}, occupied {shares['occupied']:.0%}"
+        + (f", cost {shares['cost']:.0%}" if shares["cost"] else "")
         + ")",
     ]
     if answer.robot is not None:
-        parts.append(
-            f"robot {base_frame} at x={answer.robot.x:g} y={answer.robot.y:g} yaw={answer.robot.yaw:g}° "
-            "(blue arrow)"
-        )
+        rx, ry, ryaw = answer.robot
+        parts.append(f"robot {base_frame} at x={rx:g} y={ry:g} yaw={ryaw:g}° (blue arrow)")
     if answer.path_poses is not None:
         parts.append(f"path {answer.path_poses} poses (green)")
     if answer.scan_hits is not None:
         parts.append(f"scan {answer.scan_hits} hits (red)")
     window = answer.window
     parts.append(
-        f"picture {answer.image_width}x{answer.image_height} px, {answer.pixels_per_metre:g} px/m, showing "
-        f"x {window[0]:g}..{window[2]:g}, y {window[1]:g}..{window[3]:g} m"
+        f"picture {size[0]}x{size[1]} px, {answer.pixels_per_metre:g} px/m, showing x "
+        f"{window[0]:g}..{window[2]:g}, y {window[1]:g}..{window[3]:g} m"
     )
     text = "; ".join(parts) + "."
     if answer.notes:

@@ -37,42 +37,26 @@ _RANGE_SENSOR = is_type("sensor_msgs/LaserScan", "sensor_msgs/PointCloud2")
 _SECTORS_LISTED = 4
 
 
-class Obstacle(BaseModel):
-    """The nearest hit."""
-
-    range: float = Field(description="Metres from the sensor")
-    bearing: float = Field(description="Degrees: 0 ahead, positive to the left")
-
-
-class FreeSector(BaseModel):
-    """Bearings with nothing within the clearance."""
-
-    start: float = Field(description="Degrees")
-    end: float = Field(description="Degrees (counter-clockwise from start)")
-
-
 class ScanAnswer(BaseModel):
-    """The scan or cloud that was drawn and what it shows."""
+    """The scan drawn; metres, and bearings in degrees (0 ahead, + left)."""
 
     topic: str
     message_type: str
     frame_id: str
-    points: int = Field(description="Hits drawn")
-    nearest: Obstacle | None
-    clearance: float = Field(description="Metres a free sector is clear for")
-    free_sectors: list[FreeSector] = Field(description="Widest first")
-    radius: float = Field(description="Metres shown around the sensor")
-    ring_spacing: float = Field(description="Metres between range rings")
-    image_bytes: int
+    points: int
+    nearest: list[float] | None = Field(description="[range, bearing]")
+    clearance: float
+    free_sectors: list[list[float]] = Field(description="[from, to] bearings, widest first")
+    radius: float
+    ring_spacing: float
 
 
 SPEC = ToolSpec(
     name="view_scan",
     title="Scan from above",
     description=(
-        "Draw a LaserScan or PointCloud2 from above around the sensor (forward up, left left) with range "
-        "rings and the robot's footprint; says the nearest obstacle and the free directions. Read-only. "
-        'Example: {"topic": "/scan", "clearance": 1.0}'
+        "A LaserScan or PointCloud2 from above (forward up) with range rings and the footprint; gives the "
+        'nearest obstacle and free directions. Read-only. Example: {"topic": "/scan", "clearance": 1.0}'
     ),
     hints=READS_ROBOT,
     output=ScanAnswer,
@@ -82,16 +66,11 @@ SPEC = ToolSpec(
 async def run(
     ctx: ToolContext,
     *,
-    topic: Annotated[str, Field(description="LaserScan or PointCloud2 topic, e.g. /scan")] = "/scan",
-    radius: Annotated[
-        float | None,
-        Field(gt=0, le=1000, description="Metres to show around the sensor, e.g. 5 (default: fits)"),
-    ] = None,
-    clearance: Annotated[
-        float, Field(gt=0, le=100, description="Metres a free direction is clear, e.g. 1")
-    ] = 1.0,
-    max_size: Annotated[int, Field(ge=64, le=2048, description="Picture side in pixels, e.g. 600")] = 600,
-    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to wait for a message, e.g. 5")] = 5.0,
+    topic: Annotated[str, Field(description="e.g. /scan")] = "/scan",
+    radius: Annotated[float, Field(ge=0, le=1000, description="Metres shown (0: fit), e.g. 5")] = 0.0,
+    clearance: Annotated[float, Field(gt=0, le=100, description="Metres free, e.g. 1")] = 1.0,
+    max_size: Annotated[int, Field(ge=64, le=2048, description="Pixels, e.g. 600")] = 600,
+    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds, e.g. 5")] = 5.0,
 ) -> ToolAnswer:
     """Take one scan or cloud, find the nearest hit and free sectors, draw it off the event loop."""
     name, msg_type = await typed_topic(
@@ -116,14 +95,11 @@ async def run(
         message_type=msg_type,
         frame_id=scan.frame_id,
         points=len(scan.points),
-        nearest=None
-        if found is None
-        else Obstacle(range=round(found.range, 3), bearing=round(found.bearing, 1)),
+        nearest=None if found is None else [round(found.range, 3), round(found.bearing, 1)],
         clearance=clearance,
-        free_sectors=[FreeSector(start=round(s.start, 1), end=round(s.end, 1)) for s in sectors],
+        free_sectors=[[round(s.start, 1), round(s.end, 1)] for s in sectors],
         radius=round(shown, 3),
         ring_spacing=ring,
-        image_bytes=len(image),
     )
     return ToolAnswer(text=_text(answer), data=answer, images=(ToolImage(image, "image/png"),))
 
@@ -153,11 +129,11 @@ def _text(answer: ScanAnswer) -> str:
         parts.append("nothing hit")
     else:
         parts.append(
-            f"nearest obstacle {answer.nearest.range:g} m at bearing {answer.nearest.bearing:g}° "
+            f"nearest obstacle {answer.nearest[0]:g} m at bearing {answer.nearest[1]:g}° "
             "(0 ahead, + left; orange circle)"
         )
     if answer.free_sectors:
-        listed = ", ".join(f"{s.start:g}° to {s.end:g}°" for s in answer.free_sectors[:_SECTORS_LISTED])
+        listed = ", ".join(f"{start:g}° to {end:g}°" for start, end in answer.free_sectors[:_SECTORS_LISTED])
         more = len(answer.free_sectors) - _SECTORS_LISTED
         parts.append(
             f"free beyond {answer.clearance:g} m: {listed}" + (f" (+{more} narrower)" if more > 0 else "")
