@@ -1495,7 +1495,8 @@ async def raw_whole_message(url: str, topic: str, msg_type: str) -> int:
                 if frame["num"] == 0:
                     parts = []
                 parts.append(frame["data"])
-                if len(parts) < frame["total"]:
+                # rosbridge's total is a float (true division): 2.28 for two parts.
+                if len(parts) < int(frame["total"]):
                     continue
                 text = "".join(parts)
                 size = len(text)
