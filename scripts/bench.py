@@ -1478,8 +1478,10 @@ async def _tools_list_rows(ctx: Context) -> list[Row]:
 
 # --------------------------------------------------------------------------------- item 10: picture tools
 
-#: The side of the benchmark's map in cells (4 M cells: ~12 MB of JSON, fragmented by ROS 2 bridges).
+#: The side of the benchmark's map in cells (4 M cells: ~12 MB of JSON, fragmented by ROS 2 bridges); a
+#: --quick run uses a small one, to stay a smoke test.
 BIG_MAP_CELLS = 2000
+QUICK_MAP_CELLS = 300
 
 
 async def raw_whole_message(url: str, topic: str, msg_type: str) -> int:
@@ -1519,13 +1521,14 @@ def image_bytes(result: mcp_types.CallToolResult) -> int:
 async def measure_view(ctx: Context) -> list[Row]:
     """Item 10: view_map on a large map and view_scan against the raw socket; picture sizes."""
     trials = 6 if ctx.plan.name == "full" else 1
+    cells = BIG_MAP_CELLS if ctx.plan.name == "full" else QUICK_MAP_CELLS
     rows: list[Row] = []
     sizes: dict[str, int] = {}
     async with contextlib.AsyncExitStack() as stack:
         if ctx.bridge.simulated:
-            url = await stack.enter_async_context(simulated_robot(ctx.errlog, map_cells=BIG_MAP_CELLS))
+            url = await stack.enter_async_context(simulated_robot(ctx.errlog, map_cells=cells))
             served = await stack.enter_async_context(serve_mcp(our_server_command(url), ctx.errlog))
-            label = f"{BIG_MAP_CELLS}×{BIG_MAP_CELLS}"
+            label = f"{cells}×{cells}"
         else:
             url, served, label = ctx.bridge.url, ctx.ours, "the bridge's"
         # The large-map robot is a ROS 2 simulated robot of its own.
