@@ -51,15 +51,17 @@ def cloud(points: list[tuple[float, float, float]], *, datatype: int = 7) -> dic
 
 
 def test_beams_become_points_and_inf_nan_and_out_of_range_are_not_hits() -> None:
-    """360 beams from -180°: index 180 is straight ahead; null/NaN unknown, inf and beyond range_max free."""
+    """360 beams from -180°: index 180 is straight ahead; null, inf, NaN, too near and too far are not hits."""
     ranges: list[Any] = [math.inf] * 360
     ranges[180] = 2.0  # ahead
     ranges[270] = 1.0  # left (+90°)
     ranges[0] = None
+    ranges[5] = math.nan
     ranges[10] = 0.05  # below range_min
     ranges[20] = 50.0  # beyond range_max
     scan = decode_scan(laser(ranges))
     assert scan.frame_id == "laser"
+    assert scan.nulls == 1
     assert scan.points == [pytest.approx((2.0, 0.0)), pytest.approx((0.0, 1.0), abs=1e-9)]
     found = nearest(scan)
     assert found is not None
@@ -85,11 +87,11 @@ def test_free_sectors_are_widest_first_and_join_across_the_back() -> None:
     assert [(round(s.start), round(s.end)) for s in sectors] == [(21, 239), (-80, -21)]
 
 
-def test_unknown_beams_are_not_free() -> None:
-    """A run of NaN beams splits a free sector."""
-    ranges: list[Any] = [math.inf] * 360
+def test_nan_beams_are_not_free_but_null_ones_are() -> None:
+    """A run of NaN beams splits a free sector; null (inf or NaN after JSON) is taken as nothing in range."""
+    ranges: list[Any] = [None] * 360
     for index in range(170, 191):
-        ranges[index] = None
+        ranges[index] = math.nan
     widths = [round(s.width) for s in free_sectors(decode_scan(laser(ranges)), 1.0)]
     assert widths == [338]
 

@@ -121,7 +121,7 @@ def draw_scale_bar(draw: ImageDraw.ImageDraw, pixels_per_metre: float, corner: t
 def draw_robot(draw: ImageDraw.ImageDraw, centre: tuple[float, float], heading: float, radius: float) -> None:
     """The robot as a filled arrow pointing along ``heading`` (radians, counter-clockwise from the picture's
     +x axis, which points right), ``radius`` pixels from centre to tip, with a white rim."""
-    radius = max(radius, 9.0)
+    radius = max(radius, 12.0)
     cx, cy = centre
 
     def at(angle: float, r: float) -> tuple[float, float]:

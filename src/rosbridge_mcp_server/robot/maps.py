@@ -301,11 +301,13 @@ def _draw_axes(
     for value in ticks(x_low + shift_x, x_high + shift_x, max(2, out_w // 90)):
         px = MARGIN_LEFT + ((value - shift_x) / grid.resolution - col0) * (out_w / max(1, col1 - col0))
         draw.line((px, out_h, px, out_h + 4), fill=TEXT_COLOUR)
-        draw.text((px, out_h + 4), label(value), fill=TEXT_COLOUR, font=small, anchor="ma")
+        if px < MARGIN_LEFT + out_w - 30:  # room for the axis name
+            draw.text((px, out_h + 4), label(value), fill=TEXT_COLOUR, font=small, anchor="ma")
     for value in ticks(y_low + shift_y, y_high + shift_y, max(2, out_h // 70)):
         py = out_h - ((value - shift_y) / grid.resolution - row0) * (out_h / max(1, row1 - row0))
         draw.line((MARGIN_LEFT - 4, py, MARGIN_LEFT, py), fill=TEXT_COLOUR)
-        draw.text((MARGIN_LEFT - 6, py), label(value), fill=TEXT_COLOUR, font=small, anchor="rm")
+        if py > 18:  # room for the axis name
+            draw.text((MARGIN_LEFT - 6, py), label(value), fill=TEXT_COLOUR, font=small, anchor="rm")
     draw.text((MARGIN_LEFT + out_w - 2, out_h + 4), "x m", fill=TEXT_COLOUR, font=small, anchor="ra")
     draw.text((2, 2), "y m", fill=TEXT_COLOUR, font=small)
 

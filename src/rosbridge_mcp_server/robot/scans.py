@@ -2,8 +2,10 @@
 
 Points are in the sensor's frame, metres, x forward and y left (REP 103). A bearing is measured from x
 towards y (left is positive), in degrees. A laser reading counts when it is finite and within
-``[range_min, range_max]``; ``+inf`` (nothing within range, REP 117) is free space, NaN or ``null`` (no valid
-reading) is unknown. A point cloud counts its finite points with x, y (and z when given) as FLOAT32/FLOAT64.
+``[range_min, range_max]``; ``+inf`` (nothing within range, REP 117) is free space, NaN (no valid reading) is
+unknown. rosbridge's JSON sends both as ``null``, which cannot tell them apart: a ``null`` is taken as
+"nothing within range" (lasers report that far more often than an error) and counted, so the text can say so.
+A point cloud counts its finite points with x, y (and z when given) as FLOAT32/FLOAT64.
 
 The top view puts the sensor in the middle, forward up and left to the left, as a driver sees it. Pure: no
 I/O.
@@ -62,6 +64,8 @@ class ScanPoints:
     beams: list[tuple[float, float]]
     #: The field of view covered, in radians (from, to); None for a point cloud (all around).
     field_of_view: tuple[float, float] | None
+    #: Laser readings that came as JSON ``null`` (inf or NaN), taken as nothing within range.
+    nulls: int = 0
 
 
 @dataclass(frozen=True)
@@ -102,9 +106,14 @@ def decode_scan(message: Mapping[str, Any]) -> ScanPoints:
     range_max = _float(high) if _finite(high) else math.inf
     points: list[tuple[float, float]] = []
     beams: list[tuple[float, float]] = []
+    nulls = 0
     for i, value in enumerate(ranges):
         bearing = angle_min + i * step
-        if value is None or (isinstance(value, float) and math.isnan(value)):
+        if value is None:
+            nulls += 1
+            beams.append((bearing, math.inf))
+            continue
+        if isinstance(value, float) and math.isnan(value):
             beams.append((bearing, math.nan))
             continue
         if not isinstance(value, int | float) or isinstance(value, bool):
@@ -125,6 +134,7 @@ def decode_scan(message: Mapping[str, Any]) -> ScanPoints:
         range_max=range_max if math.isfinite(range_max) else None,
         beams=beams,
         field_of_view=(min(angle_min, end), max(angle_min, end)),
+        nulls=nulls,
     )
 
 
@@ -257,7 +267,7 @@ def draw_scan(
             end=270 - math.degrees(high),
             fill=(225, 225, 225),
         )
-    ring = nice_step(radius, 4)
+    ring = nice_step(radius, 5)
     small = font(11)
     r = ring
     while r <= radius + 1e-9:

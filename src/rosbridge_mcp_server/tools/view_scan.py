@@ -44,6 +44,7 @@ class ScanAnswer(BaseModel):
     message_type: str
     frame_id: str
     points: int
+    nulls: int = Field(description="Readings sent as null (inf or NaN), taken as free")
     nearest: list[float] | None = Field(description="[range, bearing]")
     clearance: float
     free_sectors: list[list[float]] = Field(description="[from, to] bearings, widest first")
@@ -95,6 +96,7 @@ async def run(
         message_type=msg_type,
         frame_id=scan.frame_id,
         points=len(scan.points),
+        nulls=scan.nulls,
         nearest=None if found is None else [round(found.range, 3), round(found.bearing, 1)],
         clearance=clearance,
         free_sectors=[[round(s.start, 1), round(s.end, 1)] for s in sectors],
@@ -125,6 +127,10 @@ def _fitting_radius(scan: ScanPoints) -> float:
 
 def _text(answer: ScanAnswer) -> str:
     parts = [f"{answer.topic} ({answer.message_type}, frame {answer.frame_id or '?'}): {answer.points} hits"]
+    if answer.nulls:
+        parts.append(
+            f"{answer.nulls} readings null (beyond range or invalid: JSON cannot tell; taken as free)"
+        )
     if answer.nearest is None:
         parts.append("nothing hit")
     else:
@@ -132,7 +138,9 @@ def _text(answer: ScanAnswer) -> str:
             f"nearest obstacle {answer.nearest[0]:g} m at bearing {answer.nearest[1]:g}° "
             "(0 ahead, + left; orange circle)"
         )
-    if answer.free_sectors:
+    if answer.free_sectors and answer.free_sectors[0][1] - answer.free_sectors[0][0] >= 358:
+        parts.append(f"free beyond {answer.clearance:g} m all around")
+    elif answer.free_sectors:
         listed = ", ".join(f"{start:g}° to {end:g}°" for start, end in answer.free_sectors[:_SECTORS_LISTED])
         more = len(answer.free_sectors) - _SECTORS_LISTED
         parts.append(
