@@ -164,3 +164,20 @@ async def test_a_2000_cell_map_is_drawn_with_its_walls(make_sim: Any) -> None:
     assert max(image.size) == 800
     assert colour_near(image, pixel_of(data, image, -0.05, 3.0), (0, 0, 0), reach=1)
     assert colour_near(image, pixel_of(data, image, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=0)
+
+
+async def test_a_path_without_a_frame_is_drawn_in_the_maps(sim: SimulatedRobot) -> None:
+    """A nav_msgs/Path whose header names no frame is taken to be in the map's frame."""
+    path_type = "nav_msgs/msg/Path" if sim.dialect == "ros2" else "nav_msgs/Path"
+    poses = [{"pose": {"position": {"x": x, "y": 2.0}, "orientation": {"w": 1.0}}} for x in (2.0, 4.0, 6.0)]
+    async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
+        await publisher.wait_connected(5.0)
+        await publisher.publish("/test/path", path_type, {"poses": poses}, latch=True)
+        async with open_session(sim.url) as session:
+            result = await session.ok("view_map", {"path_topic": "/test/path"})
+    data = result.structured_content
+    assert data is not None
+    assert data["path_poses"] == 3
+    assert data["notes"] == []
+    image = picture_of(result)
+    assert colour_near(image, pixel_of(data, image, 6.0, 2.0), PATH_COLOUR)

@@ -51,7 +51,7 @@ def cloud(points: list[tuple[float, float, float]], *, datatype: int = 7) -> dic
 
 
 def test_beams_become_points_and_inf_nan_and_out_of_range_are_not_hits() -> None:
-    """360 beams from -180°: index 180 is straight ahead; null, inf, NaN, too near and too far are not hits."""
+    """360 beams from -180°, index 180 ahead: null, inf, NaN, too near and too far are not hits."""
     ranges: list[Any] = [math.inf] * 360
     ranges[180] = 2.0  # ahead
     ranges[270] = 1.0  # left (+90°)

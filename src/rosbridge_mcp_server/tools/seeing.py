@@ -32,9 +32,8 @@ async def typed_topic(
     msg_type = await ctx.graph.topic_type(name)
     if not msg_type:
         missing, known = await ctx.graph.unknown_topic(name, among=accepts)
-        listing = (
-            f" {kind} topics: {', '.join(known[:20])}." if known else f" The graph has no {kind} topics."
-        )
+        kinds = f"{kind} topics" if kind else "Topics"
+        listing = f" {kinds}: {', '.join(known[:20])}." if known else f" The graph has no {kinds.lower()}."
         raise ToolFailure(f"{argument}: {missing}{listing}")
     if not accepts(msg_type):
         raise ToolFailure(f"{argument}: {name} carries {msg_type}, not {kind}. {hint}".rstrip())

@@ -175,23 +175,27 @@ async def _overlay(
             notes.append(f"scan not drawn: {exc}")
 
     async def pose(source: str, what: str) -> Pose2D | None:
-        if not source or source == frame:
-            return Pose2D(0.0, 0.0, 0.0) if source else None
+        if source == frame:
+            return Pose2D(0.0, 0.0, 0.0)
         found = await planar_pose(ctx, frame, source, tf_wait)
         if isinstance(found, str):
             notes.append(f"{what} not drawn: {found}")
             return None
         return found
 
+    async def nothing() -> None:
+        return None
+
+    if scan is not None and scan.points and not scan.frame_id:
+        notes.append("scan not drawn: its header has no frame_id to place it by.")
     robot, path_pose, scan_pose = await asyncio.gather(
-        pose(base_frame, "robot"),
-        pose(path_frame if path else "", "path"),
-        pose(scan.frame_id if scan is not None and scan.points else "", "scan"),
+        pose(base_frame, "robot") if base_frame and base_frame != frame else nothing(),
+        # A path without a frame is taken to be in the map's.
+        pose(path_frame or frame, "path") if path else nothing(),
+        pose(scan.frame_id, "scan") if scan is not None and scan.points and scan.frame_id else nothing(),
     )
     placed_path = to_frame(path, path_pose.x, path_pose.y, path_pose.yaw) if path and path_pose else []
     hits = to_frame(scan.points, scan_pose.x, scan_pose.y, scan_pose.yaw) if scan and scan_pose else []
-    if robot is not None and base_frame == frame:
-        robot = None
     return Overlay(robot=robot, path=placed_path, hits=hits), robot
 
 
