@@ -181,3 +181,17 @@ async def test_a_path_without_a_frame_is_drawn_in_the_maps(sim: SimulatedRobot) 
     assert data["notes"] == []
     image = picture_of(result)
     assert colour_near(image, pixel_of(data, image, 6.0, 2.0), PATH_COLOUR)
+
+
+async def test_a_silent_path_topic_is_a_note_and_the_map_still_comes(sim: SimulatedRobot) -> None:
+    """A Path topic that is advertised but never published: the map is drawn, the note names the topic."""
+    path_type = "nav_msgs/msg/Path" if sim.dialect == "ros2" else "nav_msgs/Path"
+    async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
+        await publisher.wait_connected(5.0)
+        await publisher.advertise("/test/silent_plan", path_type)
+        async with open_session(sim.url) as session:
+            result = await session.ok("view_map", {"path_topic": "/test/silent_plan", "timeout": 0.5})
+    data = result.structured_content
+    assert data is not None
+    assert data["path_poses"] is None
+    assert data["notes"] == ["path not drawn: nothing arrived on /test/silent_plan within 0.5 s."]

@@ -106,15 +106,22 @@ async def run(
             return None
         try:
             return await first_message(ctx, topic_name, topic_type, timeout, what)
-        except ToolFailure as exc:
-            notes.append(str(exc).split(" Is its publisher")[0])
+        except ToolFailure:
+            notes.append(f"{what} not drawn: nothing arrived on {topic_name} within {timeout:g} s.")
             return None
 
-    message, path_message, scan_message = await asyncio.gather(
-        first_message(ctx, name, msg_type, timeout, "map"),
-        optional(path_name, path_type, "path"),
-        optional(scan_name, scan_type, "scan"),
-    )
+    # The plan and the scan are awaited alongside the map, and given up with it when it fails.
+    extras = [
+        asyncio.create_task(optional(path_name, path_type, "path")),
+        asyncio.create_task(optional(scan_name, scan_type, "scan")),
+    ]
+    try:
+        message = await first_message(ctx, name, msg_type, timeout, "map")
+        path_message, scan_message = await asyncio.gather(*extras)
+    finally:
+        for task in extras:
+            task.cancel()
+        await asyncio.gather(*extras, return_exceptions=True)
     try:
         grid = await asyncio.to_thread(decode_grid, message)
     except MapError as exc:
