@@ -46,6 +46,7 @@ def test_a_path_that_is_not_a_number_says_what_is_there(path: str, complaint: st
         ("sensor_msgs/msg/Imu", "linear_acceleration.x", "m/s²"),
         ("geometry_msgs/msg/AccelStamped", "accel.linear.x", "m/s²"),
         ("turtlesim/Pose", "x", "m"),
+        ("geometry_msgs/msg/Pose2D", "y", "m"),
         ("turtlesim/msg/Pose", "theta", "rad"),
         ("sensor_msgs/msg/LaserScan", "ranges.0", "m"),
         ("std_msgs/msg/Float64", "data", ""),

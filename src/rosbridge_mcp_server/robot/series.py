@@ -126,7 +126,7 @@ def unit_of(msg_type: str, path: str) -> str:
         return _UNIT_BY_PARENT[parent]
     if name in _UNIT_BY_NAME:
         return _UNIT_BY_NAME[name]
-    if msg_type.endswith(("turtlesim/msg/Pose", "turtlesim/Pose")):
+    if msg_type.endswith(("turtlesim/msg/Pose", "turtlesim/Pose", "Pose2D")):
         return "m" if name in ("x", "y") else ""
     return ""
 
