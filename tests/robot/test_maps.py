@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from array import array
 from typing import Any
@@ -174,3 +175,15 @@ def test_a_path_decodes_to_its_frame_and_points_skipping_malformed_poses() -> No
         ],
     }
     assert decode_path(message) == ("odom", [(1.0, 2.0), (3.5, -1.0)])
+
+
+def test_a_rotated_grid_places_points_in_its_own_axes() -> None:
+    """A grid turned 90° in its frame: map point (-2.5, 3.5) is cell (3.5, 2.5), and back."""
+    unturned = decode_grid(grid_message(10, 10, [0] * 100, resolution=1.0))
+    grid = dataclasses.replace(unturned, origin=Pose2D(0.0, 0.0, math.pi / 2))
+    assert grid.to_cell(-2.5, 3.5) == pytest.approx((3.5, 2.5))
+    assert grid.to_map(3.5, 2.5) == pytest.approx((-2.5, 3.5))
+    picture = draw_map(grid, max_size=400, overlay=Overlay(robot=Pose2D(-2.5, 3.5, math.pi / 2)))
+    scale = picture.pixels_per_metre
+    at = (round(MARGIN_LEFT + 3.5 * scale), round(picture.image.height - MARGIN_BOTTOM - 2.5 * scale))
+    assert colour_near(picture.image, at, ROBOT_COLOUR, reach=0)
