@@ -51,6 +51,8 @@ async def test_a_moving_turtle_shows_in_pose_and_odometry(session: Session, sim:
     assert has_colour(image, SERIES_COLOURS[0])
     assert has_colour(image, SERIES_COLOURS[1])
     assert "/odom twist.twist.linear.x (m/s): min 0 max 1" in text_of(result)
+    assert session.progress
+    assert all(total == 1.5 and 0 < done <= 1.5 for done, total, _ in session.progress)
 
 
 async def test_several_fields_of_one_topic_come_from_the_same_messages(session: Session) -> None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import asyncio
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +23,8 @@ __all__ = ["FieldError", "Series", "TopicFields", "collect", "unit_of", "value_a
 
 #: Samples kept per series (a 1 kHz topic for 60 s); later ones are dropped and counted.
 MAX_SAMPLES = 60_000
+#: Seconds between progress reports.
+PROGRESS_EVERY = 1.0
 
 
 class FieldError(ValueError):
@@ -132,18 +134,24 @@ def unit_of(msg_type: str, path: str) -> str:
 
 
 async def collect(
-    client: RosbridgeClient, topics: Sequence[TopicFields], duration: float
+    client: RosbridgeClient,
+    topics: Sequence[TopicFields],
+    duration: float,
+    on_progress: Callable[[float], Awaitable[None]] | None = None,
 ) -> tuple[list[Series], dict[str, int]]:
     """Every path of every topic for ``duration`` seconds; also how many messages each topic sent.
 
-    Raises :class:`FieldError` as soon as a topic's first message lacks one of its paths.
+    Raises :class:`FieldError` as soon as a topic's first message lacks one of its paths. ``on_progress`` is
+    told the seconds listened so far, at most every :data:`PROGRESS_EVERY` seconds, as messages arrive.
     """
     start = time.monotonic()
     end = start + duration
     series = {(t.topic, p): Series(t.topic, p, unit_of(t.msg_type, p)) for t in topics for p in t.paths}
     counts = {t.topic: 0 for t in topics}
+    reported = 0.0
 
     async def pump(spec: TopicFields) -> None:
+        nonlocal reported
         async with client.subscribe(spec.topic, spec.msg_type, max_queue=MAX_SAMPLES) as sub:
             while True:
                 left = end - time.monotonic()
@@ -157,6 +165,9 @@ async def collect(
                 if now > duration:
                     return
                 counts[spec.topic] += 1
+                if on_progress is not None and now - reported >= PROGRESS_EVERY:
+                    reported = now
+                    await on_progress(now)
                 for path in spec.paths:
                     value = value_at(message, path)
                     line = series[(spec.topic, path)]

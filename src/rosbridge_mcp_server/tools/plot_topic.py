@@ -93,7 +93,11 @@ async def run(
         name, msg_type = await typed_topic(ctx, topic, "series", accepts=lambda _t: True, kind="")
         topics.append(TopicFields(name, msg_type, tuple(fields)))
     try:
-        lines, counts = await collect(ctx.client, topics, duration)
+
+        async def progress(listened: float) -> None:
+            await ctx.report_progress(round(listened, 1), duration, f"{listened:.0f} of {duration:g} s")
+
+        lines, counts = await collect(ctx.client, topics, duration, on_progress=progress)
     except FieldError as exc:
         raise ToolFailure(f"{exc} Nothing was plotted; fix the field and call again.") from None
     notes = [f"No message on {t} in {duration:g} s." for t, n in counts.items() if n == 0]
