@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parent.parent
 BENCH = REPO / "scripts" / "bench.py"
 
@@ -34,8 +36,8 @@ TARGET_ROWS = (
     "9d",
     "9e",
     "9f",
-    "10a",
-    "10b",
+    "11a",
+    "11b",
 )
 
 
