@@ -82,7 +82,7 @@ async def test_an_unknown_frame_lists_the_frames_seen(session: Session) -> None:
         "get_transform", {"target_frame": "world", "source_frame": "base_lnk", "timeout": 0.5}
     )
     assert "'base_lnk' has not been seen" in text
-    assert "Frames seen: base_link, base_scan, camera, odom, world." in text
+    assert "Frames seen: base_link, base_scan, camera, map, odom, world." in text
 
 
 async def test_the_robots_own_frames_give_the_turtles_pose(session: Session, sim: SimulatedRobot) -> None:
