@@ -140,6 +140,13 @@ def service_rows(data: dict[str, Any] | None) -> list[dict[str, str]]:
     return sorted(rows, key=lambda row: row["name"])
 
 
+def parameter_names(data: dict[str, Any] | None) -> list[str]:
+    """The full parameter names of a list_parameters answer's page (/node:name on ROS 2, /ns/name on
+    ROS 1)."""
+    assert data is not None
+    return [f"{group['node']}{data['separator']}{name}" for group in data["nodes"] for name in group["names"]]
+
+
 def unreadable_services(result: CallToolResult) -> list[dict[str, str]]:
     """The rows of a list_services answer that its text does not name with their type.
 

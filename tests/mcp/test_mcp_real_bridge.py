@@ -27,7 +27,7 @@ from typing import Any
 import pytest
 import websockets
 from mcp.types import CallToolResult
-from mcp_harness import Session, open_session, service_rows, text_of, unreadable_services
+from mcp_harness import Session, open_session, parameter_names, service_rows, text_of, unreadable_services
 
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.config import Config
@@ -442,8 +442,8 @@ async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
     if await _version(real) == 1:
         names = (await real.ok("list_parameters")).structured_content
         assert names is not None
-        assert names["parameters"]
-        first = names["parameters"][0]
+        assert parameter_names(names)
+        first = parameter_names(names)[0]
         value = (await real.ok("get_parameter", {"name": first})).structured_content
         assert value is not None
         assert value["name"] == first
@@ -452,7 +452,7 @@ async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
         return
     names = (await real.ok("list_parameters", {"node": "/rosapi"})).structured_content
     assert names is not None
-    assert "/rosapi:use_sim_time" in names["parameters"]
+    assert "/rosapi:use_sim_time" in parameter_names(names)
     value = (await real.ok("get_parameter", {"name": "/rosapi:use_sim_time"})).structured_content
     assert value is not None
     assert value["value"] is False
