@@ -9,6 +9,7 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.robot.known_types import per_node_types, rosapi_types
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
 from rosbridge_mcp_server.tools.paging import (
+    FRAME_RESERVE,
     TEXT_BUDGET,
     FilterArg,
     OffsetArg,
@@ -21,8 +22,6 @@ from rosbridge_mcp_server.tools.paging import (
 __all__ = ["DEFAULT_LIMIT", "SPEC", "ServiceGroup", "ServiceRow", "ServicesAnswer", "listing_text", "run"]
 
 DEFAULT_LIMIT = 100
-#: Room kept for the closing note of a paged text.
-NOTE_RESERVE = 200
 #: How much of a group's node list the text spells out.
 MAX_GROUP_NODES_CHARS = 1_500
 
@@ -96,7 +95,7 @@ async def run(
         group_lines = [_group_line(group) for group in groups]
         head = _head(len(rows), len(own))
         # What the head, the groups and the closing note take; the robot's own services get the rest.
-        budget = TEXT_BUDGET - len(head) - sum(len(line) + 1 for line in group_lines) - NOTE_RESERVE
+        budget = TEXT_BUDGET - FRAME_RESERVE - sum(len(line) + 1 for line in group_lines)
         page = page_of(own, offset=offset, limit=limit, line=_line, budget=max(budget, 1_000))
         body = [head, *map(_line, page.rows), *group_lines]
         count = len(rows)

@@ -18,6 +18,7 @@ from typing import Annotated, Generic, TypeVar
 from pydantic import Field
 
 __all__ = [
+    "FRAME_RESERVE",
     "TEXT_BUDGET",
     "FilterArg",
     "OffsetArg",
@@ -30,6 +31,8 @@ __all__ = [
 
 #: The most characters a list tool's text holds (~2,000 tokens).
 TEXT_BUDGET = 8_000
+#: What a page's heading and closing note may take: the rows get the rest.
+FRAME_RESERVE = 400
 
 FilterArg = Annotated[
     str | None,
@@ -76,7 +79,7 @@ def page_of(
     offset: int,
     limit: int,
     line: Callable[[T], str],
-    budget: int = TEXT_BUDGET,
+    budget: int = TEXT_BUDGET - FRAME_RESERVE,
 ) -> Page[T]:
     """The page of ``rows`` from ``offset``: at most ``limit`` rows, and no more than fit ``budget``
     characters of text when each is rendered by ``line`` (always at least one row)."""
