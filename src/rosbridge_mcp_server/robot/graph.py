@@ -365,6 +365,10 @@ class RosGraph:
             self._known.action_types[action] = found
         return found
 
+    def known_action_type(self, action: str) -> str | None:
+        """The action's type if this connection has learnt it (no round trip), else ``None``."""
+        return self._known.action_types.get(action)
+
     async def _action_type_or_none(self, action: str) -> str | None:
         try:
             return await self.action_type(action)
