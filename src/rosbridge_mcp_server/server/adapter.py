@@ -50,6 +50,7 @@ from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
+from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -206,7 +207,6 @@ def tool_from_module(
         title=spec.title,
         description=spec.description,
         annotations=ToolAnnotations(
-            title=spec.title,
             read_only_hint=spec.hints.read_only,
             destructive_hint=spec.hints.destructive,
             idempotent_hint=spec.hints.idempotent,
@@ -216,8 +216,8 @@ def tool_from_module(
         argument_check=argument_problem,
     )
     # What argument_problem holds every call to, said where clients read it.
-    tool.parameters = {**without_name_titles(tool.parameters), "additionalProperties": False}
-    replace_output_schema(tool, lambda schema: without_name_titles(inline_refs(schema)))
+    tool.parameters = {**compact_input_schema(tool.parameters), "additionalProperties": False}
+    replace_output_schema(tool, lambda schema: compact_output_schema(inline_refs(schema)))
     return tool
 
 

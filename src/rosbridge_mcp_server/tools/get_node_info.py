@@ -39,7 +39,7 @@ SPEC = ToolSpec(
     title="Node details",
     description=(
         "Show what one ROS node publishes, subscribes to and serves, with types. Read-only. "
-        'Example: {"node": "/turtlesim"}. list_nodes shows the nodes.'
+        'Example: {"node": "/turtlesim"}.'
     ),
     hints=READS_ROBOT,
     output=NodeInfoAnswer,

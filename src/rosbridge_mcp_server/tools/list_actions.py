@@ -36,10 +36,8 @@ SPEC = ToolSpec(
     name="list_actions",
     title="List actions",
     description=(
-        "List every ROS action server (long-running goals such as navigation or rotation), each once, with "
-        "its action type where the bridge can tell (e.g. /fibonacci of type "
-        "example_interfaces/action/Fibonacci). Read-only; use it before publish_action. Takes no "
-        "arguments: call it with {}."
+        "List the action servers (navigation, rotation, ...) with their types. Read-only; use before "
+        'publish_action. Example: {"filter": "navigate"}.'
     ),
     hints=READS_ROBOT,
     output=ActionsAnswer,

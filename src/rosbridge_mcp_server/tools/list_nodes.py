@@ -28,8 +28,7 @@ SPEC = ToolSpec(
     name="list_nodes",
     title="List nodes",
     description=(
-        'List the running ROS nodes. Read-only. e.g. {} or {"filter": "costmap"}; get_node_info shows '
-        "one node's topics and services."
+        'List the running nodes. Read-only. Example: {"filter": "costmap"}; get_node_info shows one.'
     ),
     hints=READS_ROBOT,
     output=NodesAnswer,

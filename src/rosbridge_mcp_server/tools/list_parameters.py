@@ -53,8 +53,8 @@ SPEC = ToolSpec(
     name="list_parameters",
     title="List parameters",
     description=(
-        "List ROS parameter names by node. Read-only. Full names are /node:name on ROS 2 "
-        '(/turtlesim:background_r), /ns/name on ROS 1. e.g. {"node": "/turtlesim"}, {"filter": "*vel*"}.'
+        "List parameter names by node. Read-only. Full names: /node:name (ROS 2), /ns/name (ROS 1). "
+        'Example: {"node": "/turtlesim"} or {"filter": "*vel*"}.'
     ),
     hints=READS_ROBOT,
     output=ParametersAnswer,

@@ -55,8 +55,8 @@ SPEC = ToolSpec(
     name="list_services",
     title="List services",
     description=(
-        "List the robot's ROS services with their types (e.g. /reset std_srvs/srv/Empty); the ones every "
-        'node has are grouped. Read-only; use before publish_service. e.g. {"filter": "costmap"}.'
+        "List the services with their types; those every node has are grouped. Read-only; use before "
+        'publish_service. Example: {"filter": "costmap"}.'
     ),
     hints=READS_ROBOT,
     output=ServicesAnswer,

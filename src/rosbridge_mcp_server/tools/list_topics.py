@@ -34,8 +34,8 @@ SPEC = ToolSpec(
     name="list_topics",
     title="List topics",
     description=(
-        "List the robot's ROS topics with their message types (sensors, state, commands such as /cmd_vel). "
-        'Read-only; start here. filter matches names and types, e.g. {"filter": "scan"}.'
+        "List the robot's topics with their message types. Read-only; start here. Example: "
+        '{"filter": "scan"} (names and types).'
     ),
     hints=READS_ROBOT,
     output=TopicsAnswer,

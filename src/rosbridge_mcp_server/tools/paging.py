@@ -36,14 +36,14 @@ FRAME_RESERVE = 400
 
 FilterArg = Annotated[
     str | None,
-    Field(description="Only names (or types) matching this glob or substring, e.g. *costmap* or nav2_msgs"),
+    Field(description="Glob or substring of names (or types), e.g. *costmap*"),
 ]
-OffsetArg = Annotated[int, Field(ge=0, description="Skip this many matches, to page on (default 0)")]
+OffsetArg = Annotated[int, Field(ge=0, description="Matches to skip, e.g. 100")]
 
 
 def limit_arg(default: int) -> object:
     """The ``limit`` parameter's annotation metadata, with the tool's default in its description."""
-    return Field(ge=1, le=1000, description=f"At most this many (default {default})")
+    return Field(ge=1, le=1000, description=f"Most rows, e.g. {default // 2}")
 
 
 def matcher(pattern: str | None) -> Callable[[str], bool]:
