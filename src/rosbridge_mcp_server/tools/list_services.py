@@ -64,7 +64,11 @@ SPEC = ToolSpec(
 
 
 def _line(row: ServiceRow) -> str:
-    return f"{row.name} ({row.type or 'type unknown'})"
+    return _pair_line((row.name, row.type))
+
+
+def _pair_line(row: tuple[str, str]) -> str:
+    return f"{row[0]} ({row[1] or 'type unknown'})"
 
 
 async def run(
@@ -80,13 +84,14 @@ async def run(
             text="The robot offers no services right now.",
             data=ServicesAnswer(count=0, offset=offset, more=0, services=[]),
         )
-    rows = [ServiceRow(name=service.name, type=service.type) for service in services]
+    # Rows are (name, type) pairs until the page is known: a real graph has hundreds.
+    rows = [(service.name, service.type) for service in services]
     if filter:
         wanted = matcher(filter)
-        matching = [row for row in rows if wanted(row.name) or wanted(row.type)]
-        page = page_of(matching, offset=offset, limit=limit, line=_line)
+        matching = [row for row in rows if wanted(row[0]) or wanted(row[1])]
+        page = page_of(matching, offset=offset, limit=limit, line=_pair_line)
         head = f"{len(matching)} services:" if page.rows else f"No services on this page match {filter!r}."
-        body = [head, *map(_line, page.rows)]
+        body = [head, *map(_pair_line, page.rows)]
         groups: list[ServiceGroup] = []
         count = len(matching)
     else:
@@ -96,25 +101,26 @@ async def run(
         head = _head(len(rows), len(own))
         # What the head, the groups and the closing note take; the robot's own services get the rest.
         budget = TEXT_BUDGET - FRAME_RESERVE - sum(len(line) + 1 for line in group_lines)
-        page = page_of(own, offset=offset, limit=limit, line=_line, budget=max(budget, 1_000))
-        body = [head, *map(_line, page.rows), *group_lines]
+        page = page_of(own, offset=offset, limit=limit, line=_pair_line, budget=max(budget, 1_000))
+        body = [head, *map(_pair_line, page.rows), *group_lines]
         count = len(rows)
     note = page_note(page, "services", filter, len(rows))
     text = "\n".join([*body, note] if note else body)
-    data = ServicesAnswer(count=count, offset=offset, more=page.more, services=page.rows, groups=groups)
+    shown = [ServiceRow.model_construct(name=name, type=kind) for name, kind in page.rows]
+    data = ServicesAnswer(count=count, offset=offset, more=page.more, services=shown, groups=groups)
     return ToolAnswer(text=text, data=data)
 
 
-def _split(rows: list[ServiceRow], version: int) -> tuple[list[ServiceRow], list[ServiceGroup]]:
+def _split(rows: list[tuple[str, str]], version: int) -> tuple[list[tuple[str, str]], list[ServiceGroup]]:
     """The robot's own services, and the services every node (and rosapi) offers, grouped by their set.
 
     A ROS 2 node offers seven services of its own (parameters, type description) and a lifecycle node five
     more, so on a real graph most rows are those: grouped, the text stays short, and every name and type can
     still be read from it.
     """
-    names = [row.name for row in rows]
+    names = [name for name, _ in rows]
     per_node, rosapi = per_node_types(names, version), rosapi_types(names, version)
-    own = [row for row in rows if row.name not in per_node and row.name not in rosapi]
+    own = [row for row in rows if row[0] not in per_node and row[0] not in rosapi]
     offered: dict[str, list[tuple[str, str]]] = {}
     for name, kind in sorted(per_node.items()):
         node, _, leaf = name.rpartition("/")
@@ -163,8 +169,8 @@ def _group_line(group: ServiceGroup) -> str:
 
 def listing_text(rows: list[ServiceRow], version: int) -> str:
     """The unfiltered listing's text of ``rows`` (all on one page)."""
-    own, groups = _split(rows, version)
-    return "\n".join([_head(len(rows), len(own)), *map(_line, own), *map(_group_line, groups)])
+    own, groups = _split([(row.name, row.type) for row in rows], version)
+    return "\n".join([_head(len(rows), len(own)), *map(_pair_line, own), *map(_group_line, groups)])
 
 
 def _count(n: int, noun: str) -> str:

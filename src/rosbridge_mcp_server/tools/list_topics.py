@@ -55,7 +55,9 @@ async def run(
     """Ask rosapi for the topics and their types; keep the page asked for."""
     topics = await ctx.graph.topics()
     wanted = matcher(filter)
-    rows = [TopicRow(name=t.name, type=t.type) for t in topics if wanted(t.name) or wanted(t.type)]
+    rows = [
+        TopicRow.model_construct(name=t.name, type=t.type) for t in topics if wanted(t.name) or wanted(t.type)
+    ]
     page = page_of(rows, offset=offset, limit=limit, line=_line)
     note = page_note(page, "topics", filter, len(topics))
     if page.rows:
