@@ -168,3 +168,21 @@ async def test_a_bad_page_argument_is_an_error_naming_it(session: Session) -> No
     """A negative offset or a zero limit is refused before anything is asked."""
     assert "offset" in await session.error("list_topics", {"offset": -1})
     assert "limit" in await session.error("list_nodes", {"limit": 0})
+
+
+async def test_publish_action_navigates_the_robot_in_either_dialect(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    """NavigateToPose through publish_action: the goal succeeds and the robot stands at the goal."""
+    ns = prefix(nav2)
+    action_type = (
+        "nav2_msgs/action/NavigateToPose" if nav2.dialect == "ros2" else "nav2_msgs/NavigateToPoseAction"
+    )
+    goal = {"pose": {"header": {"frame_id": "map"}, "pose": {"position": {"x": 3.0, "y": 4.0}}}}
+    result = await session.ok(
+        "publish_action",
+        {"action_name": f"{ns}/navigate_to_pose", "action_type": action_type, "goal": goal, "timeout": 10},
+    )
+    assert (result.structured_content or {})["succeeded"] is True
+    robot = nav2.nav2.robots[0]
+    assert (robot.x, robot.y) == (3.0, 4.0)

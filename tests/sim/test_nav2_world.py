@@ -40,6 +40,29 @@ async def test_ros2_nav2_graph_has_the_size_of_a_real_nav2_robot(make_sim: MakeS
     assert sorted(actions) == sorted(f"/{name}" for name, _, _ in NAV2_ACTIONS)
 
 
+async def test_ros1_actionlib_goal_of_a_nav2_action_is_served(make_sim: MakeSim) -> None:
+    """ROS 1: a goal published on /spin/goal gets feedback, then a SUCCEEDED result on /spin/result."""
+    robot = await make_sim(dialect="ros1", world="nav2")
+    async with await RawClient.open(robot.url) as client:
+        await client.send({"op": "subscribe", "topic": "/spin/feedback", "id": "f"})
+        await client.send({"op": "subscribe", "topic": "/spin/result", "id": "r"})
+        await client.send(
+            {"op": "advertise", "topic": "/spin/goal", "type": "nav2_msgs/SpinActionGoal", "id": "a"}
+        )
+        await client.send(
+            {
+                "op": "publish",
+                "topic": "/spin/goal",
+                "msg": {"goal_id": {"id": "spin-1"}, "goal": {"target_yaw": 1.0}},
+            }
+        )
+        feedback = (await client.next_publish("/spin/feedback"))["msg"]
+        result = (await client.next_publish("/spin/result"))["msg"]
+    assert feedback["status"]["goal_id"]["id"] == "spin-1"
+    assert result["status"]["status"] == 3  # SUCCEEDED
+    assert robot.nav2.robots[0].yaw == pytest.approx(1.0)
+
+
 async def test_ros1_nav2_graph_lists_the_same_nodes_and_the_actions_as_actionlib_topics(
     make_sim: MakeSim,
 ) -> None:

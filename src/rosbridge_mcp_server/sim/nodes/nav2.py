@@ -12,13 +12,14 @@ as a grid and rays; a richer room plugs in by giving ``Nav2World(surroundings=..
 :attr:`Nav2World.surroundings` before the robot starts).
 
 On ROS 1 the same nodes, topics and parameters are there in ROS 1 form (no lifecycle services, each node's
-logger services, the actions as actionlib topics that nothing serves).
+logger services, the actions as actionlib servers over their five topics).
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -29,6 +30,7 @@ from rosbridge_mcp_server.sim.actions import ActionServer, GoalHandle
 from rosbridge_mcp_server.sim.actions.ros2 import FeedbackFn
 from rosbridge_mcp_server.sim.graph import ServiceEntry
 from rosbridge_mcp_server.sim.nodes.kit import NodeKit, quaternion_from_yaw
+from rosbridge_mcp_server.sim.nodes.nav2_actionlib import ActionlibServer
 from rosbridge_mcp_server.sim.nodes.nav2_params import NODE_PARAMETERS, common_parameters
 from rosbridge_mcp_server.sim.nodes.room import PILLAR, ray_distance
 from rosbridge_mcp_server.sim.world import TURTLE_ARENA, TURTLE_HOME
@@ -657,9 +659,17 @@ class Nav2World:
         for leaf, srv in _LIFECYCLE_SERVICES:
             self._service(node, f"{node}/{leaf}", srv, handlers[leaf])
 
-    def _actions(self, robot: Nav2Robot) -> None:
-        ns = robot.namespace
-        behaviours: dict[str, Callable[[Nav2Robot, dict[str, Any]], dict[str, Any]]] = {
+    @staticmethod
+    def _succeed(
+        behaviour: Callable[[Nav2Robot, dict[str, Any]], dict[str, Any]],
+        robot: Nav2Robot,
+        goal: dict[str, Any],
+    ) -> None:
+        behaviour(robot, goal)
+
+    def _behaviours(self) -> dict[str, Callable[[Nav2Robot, dict[str, Any]], dict[str, Any]]]:
+        """What a succeeding goal of each action does to the robot (and answers)."""
+        return {
             "navigate_to_pose": self._arrive,
             "navigate_through_poses": self._arrive,
             "follow_waypoints": self._arrive,
@@ -667,6 +677,10 @@ class Nav2World:
             "compute_path_through_poses": self._plan,
             "spin": self._spin,
         }
+
+    def _actions(self, robot: Nav2Robot) -> None:
+        ns = robot.namespace
+        behaviours = self._behaviours()
         for name, leaf, node in NAV2_ACTIONS:
             action_type = self._type(f"nav2_msgs/action/{leaf}", "action")
             if action_type is None:
@@ -683,20 +697,25 @@ class Nav2World:
             )
 
     def _actionlib_topics(self, robot: Nav2Robot) -> None:
-        """ROS 1: each action's five actionlib topics (listed; nothing serves the goals)."""
+        """ROS 1: each action as an actionlib server over its five topics."""
         ns = robot.namespace
-        graph = self.kit.graph
         for name, leaf, node in NAV2_ACTIONS:
-            base = f"{ns}/{name}"
-            owner = f"{ns}/{node}"
-            goal_type = self._type(f"nav2_msgs/msg/{leaf}ActionGoal")
-            if goal_type is None:
+            if self._type(f"nav2_msgs/msg/{leaf}ActionGoal") is None:
                 continue
-            graph.add_subscriber(owner, f"{base}/goal", goal_type)
-            graph.add_subscriber(owner, f"{base}/cancel", "actionlib_msgs/GoalID")
-            graph.add_publisher(owner, f"{base}/status", "actionlib_msgs/GoalStatusArray")
-            graph.add_publisher(owner, f"{base}/feedback", f"nav2_msgs/{leaf}ActionFeedback")
-            graph.add_publisher(owner, f"{base}/result", f"nav2_msgs/{leaf}ActionResult")
+            behaviour = self._behaviours().get(name)
+            on_success: Callable[[dict[str, Any]], None] | None = None
+            if behaviour is not None:
+                on_success = functools.partial(self._succeed, behaviour, robot)
+            ActionlibServer(
+                self.kit,
+                name=f"{ns}/{name}",
+                node=f"{ns}/{node}",
+                package="nav2_msgs",
+                action=leaf,
+                steps=GOAL_STEPS,
+                step=self.action_step,
+                on_success=on_success,
+            )
 
     def _parameters(self, robot: Nav2Robot) -> None:
         params = self.kit.world.params
