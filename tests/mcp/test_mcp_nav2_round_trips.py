@@ -113,3 +113,22 @@ async def test_later_listings_of_services_and_actions_ask_only_for_names(
     await session.ok("list_actions")
     assert await asked(nav2, session, "list_services", {}) == {"/rosapi/services": 1}
     assert await asked(nav2, session, "list_actions", {}) == {"/rosapi/action_servers": 1}
+
+
+async def test_describe_type_asks_once_per_connection(session: Session, nav2: SimulatedRobot) -> None:
+    """A type's definition (and, on ROS 2, the installed types) is kept for the connection: asked once."""
+    name = "nav_msgs/msg/OccupancyGrid" if nav2.dialect == "ros2" else "nav_msgs/OccupancyGrid"
+    first = await asked(nav2, session, "describe_type", {"type_name": name})
+    assert first["/rosapi/message_details"] == 1
+    assert await asked(nav2, session, "describe_type", {"type_name": name}) == {}
+
+
+async def test_a_type_missing_from_the_kept_list_is_looked_up_again(make_sim: MakeSim) -> None:
+    """ROS 2: an unknown type is refused only after the installed types were asked afresh."""
+    robot = await make_sim(dialect="ros2", world="nav2")
+    async with open_session(robot.url) as session:
+        await session.ok("describe_type", {"type_name": "nav_msgs/msg/OccupancyGrid"})
+        before = robot.world.service_calls.get("/rosapi/interfaces", 0)
+        text = await session.error("describe_type", {"type_name": "nav_msgs/msg/OccupancyGridd"})
+    assert "OccupancyGridd" in text
+    assert robot.world.service_calls["/rosapi/interfaces"] == before + 1
