@@ -4,14 +4,16 @@ lifecycle and action servers, and a fleet under ``/robotN``; all seen through ro
 from __future__ import annotations
 
 import math
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
 from rawclient import RawClient
 
-from conftest import MakeSim
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.nodes.nav2 import LIFECYCLE_NODES, NAV2_ACTIONS, Grid
+
+MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 
 @pytest.fixture(params=["ros2", "ros1"])
