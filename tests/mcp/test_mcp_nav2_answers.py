@@ -4,12 +4,14 @@ filter and paging."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
 import pytest
 from mcp_harness import Session, open_session, parameter_names, service_rows, text_of
+from websockets.asyncio.client import connect
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.graph import is_hidden
@@ -186,3 +188,31 @@ async def test_publish_action_navigates_the_robot_in_either_dialect(
     assert (result.structured_content or {})["succeeded"] is True
     robot = nav2.nav2.robots[0]
     assert (robot.x, robot.y) == (3.0, 4.0)
+
+
+async def test_get_node_info_filters_and_keeps_a_large_node_within_the_budget(
+    session_ros2: Session, sim_ros2: SimulatedRobot
+) -> None:
+    """A node with 400 topics: the text stays within 8,000 characters and says how many more; a filter
+    narrows to what matches."""
+    async with connect(sim_ros2.url) as client:
+        for i in range(400):
+            topic = f"/fleet_status/robot_{i:03d}/battery_percentage"
+            advertise = {"op": "advertise", "topic": topic, "type": "std_msgs/msg/Float32", "id": f"a{i}"}
+            await client.send(json.dumps(advertise))
+        # An advertise takes effect as it arrives: once this later call is answered, every topic is there.
+        await client.send(json.dumps({"op": "call_service", "id": "barrier", "service": "/rosapi/get_time"}))
+        async with asyncio.timeout(5):
+            while json.loads(await client.recv()).get("id") != "barrier":
+                pass
+        whole = await session_ros2.ok("get_node_info", {"node": "/rosbridge_websocket"})
+        narrow = await session_ros2.ok(
+            "get_node_info", {"node": "/rosbridge_websocket", "filter": "*robot_01?/*"}
+        )
+    assert len(text_of(whole)) <= TEXT_BUDGET
+    assert (whole.structured_content or {})["more"] > 0
+    assert "more not shown" in text_of(whole)
+    rows = (narrow.structured_content or {})["publications"]
+    assert [row["name"] for row in rows] == [
+        f"/fleet_status/robot_{i:03d}/battery_percentage" for i in range(10, 20)
+    ]

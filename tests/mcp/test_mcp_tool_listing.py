@@ -27,7 +27,7 @@ EXPECTED_PARAMETERS = {
     "get_image": ["topic", "max_size", "format", "timeout"],
     "describe_type": ["type_name"],
     "list_nodes": ["filter", "limit", "offset"],
-    "get_node_info": ["node"],
+    "get_node_info": ["node", "filter"],
     "list_parameters": ["node", "filter", "limit", "offset"],
     "get_parameter": ["name"],
     "set_parameter": ["name", "value"],

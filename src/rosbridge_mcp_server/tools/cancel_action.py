@@ -37,7 +37,7 @@ SPEC = ToolSpec(
     title="Cancel action goals",
     description=(
         'Cancel an action\'s running goals, or one by goal_id. Example: {"action_name": "/fibonacci"}. '
-        "Also ends a publish_action still waiting."
+        "A waiting publish_action ends too."
     ),
     hints=ACTS_ON_ROBOT,
     output=CancelAnswer,

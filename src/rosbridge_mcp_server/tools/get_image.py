@@ -58,7 +58,7 @@ SPEC = ToolSpec(
     title="Camera frame",
     description=(
         "One camera frame (Image or CompressedImage) as a picture. Read-only. Example: "
-        '{"topic": "/camera/image_raw"}. Depth comes as grey, nearer darker.'
+        '{"topic": "/camera/image_raw"}. Depth comes as grey (nearer darker).'
     ),
     hints=READS_ROBOT,
     output=ImageAnswer,

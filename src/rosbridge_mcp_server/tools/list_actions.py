@@ -36,8 +36,8 @@ SPEC = ToolSpec(
     name="list_actions",
     title="List actions",
     description=(
-        "List the action servers (navigation, rotation, ...) with their types. Read-only; use before "
-        'publish_action. Example: {"filter": "navigate"}.'
+        "List the action servers with their types. Read-only; use before publish_action. "
+        'Example: {"filter": "navigate"}.'
     ),
     hints=READS_ROBOT,
     output=ActionsAnswer,

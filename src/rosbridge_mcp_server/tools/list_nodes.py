@@ -27,9 +27,7 @@ class NodesAnswer(BaseModel):
 SPEC = ToolSpec(
     name="list_nodes",
     title="List nodes",
-    description=(
-        'List the running nodes. Read-only. Example: {"filter": "costmap"}; get_node_info shows one.'
-    ),
+    description=('List the running nodes. Read-only. Example: {"filter": "map"}; get_node_info shows one.'),
     hints=READS_ROBOT,
     output=NodesAnswer,
 )

@@ -55,8 +55,8 @@ SPEC = ToolSpec(
     name="list_services",
     title="List services",
     description=(
-        "List the services with their types; those every node has are grouped. Read-only; use before "
-        'publish_service. Example: {"filter": "costmap"}.'
+        "List the services with their types (those every node has, grouped). Read-only; use before "
+        'publish_service. Example: {"filter": "map"}.'
     ),
     hints=READS_ROBOT,
     output=ServicesAnswer,

@@ -49,8 +49,8 @@ SPEC = ToolSpec(
     title="Publish a message",
     description=(
         "Publish on a topic; can move the robot. Example: topic /cmd_vel, message_type "
-        f"geometry_msgs/msg/Twist, message {_EXAMPLE} (checked against the type). A command acts briefly: "
-        "rate_hz with duration keeps publishing, ending a Twist stream with zeros."
+        f"geometry_msgs/msg/Twist, message {_EXAMPLE}. A command acts briefly: rate_hz with duration keeps "
+        "publishing, ending a Twist stream with zeros."
     ),
     hints=ACTS_ON_ROBOT,
     output=PublishAnswer,

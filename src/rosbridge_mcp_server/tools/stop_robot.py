@@ -23,7 +23,7 @@ class StopAnswer(BaseModel):
 
 SPEC = ToolSpec(
     name="stop_robot",
-    title="Stop everything this server started",
+    title="Stop what this server started",
     description=(
         "Emergency stop for what this server started: ends streams, sends zero velocity, cancels goals. "
         "Never asks; call it with {} whenever the robot must stop."
