@@ -53,7 +53,7 @@ IDEMPOTENT_ACTS = {"set_parameter"}
 ORIGINAL = list(EXPECTED_PARAMETERS)[:8]
 #: Budgets for the tools/list answer (compact JSON): what a host pays in context for every session, at most
 #: 1 KB per tool on average (it was 29 KB for the 18 tools before issue 16).
-ALL_TOOLS_BUDGET = 18 * 1_000
+ALL_TOOLS_BUDGET = len(EXPECTED_PARAMETERS) * 1_000
 #: The original eight come with the e-stop (stop_robot), which is listed wherever acting tools are.
 ORIGINAL_TOOLS_BUDGET = 9 * 1_024
 
