@@ -50,6 +50,8 @@ def _free_port() -> int:
         (["--timeout", "-3"], {}, "--timeout must be more than 0"),
         (["--no-such-flag"], {}, "unrecognized arguments: --no-such-flag"),
         (["--demo-dialect", "ros3"], {}, "invalid choice: 'ros3'"),
+        (["--demo-world", "mars"], {}, "invalid choice: 'mars'"),
+        (["--demo-robots", "2"], {}, "--demo-robots must be 1-100 and more than 1 needs --demo-world nav2"),
         (["check", "--port", "abc"], {}, "--port must be a port number"),
     ],
 )
@@ -162,6 +164,12 @@ def test_check_demo_runs_against_the_built_in_robot(capsys: pytest.CaptureFixtur
     out = capsys.readouterr().out
     assert "demo mode: this is the built-in simulated ROS 2 robot" in out
     assert "Healthy" in out
+
+
+def test_check_demo_runs_against_the_nav2_world(capsys: pytest.CaptureFixture[str]) -> None:
+    """`check --demo --demo-world nav2` starts the Nav2-scale robot and finds it healthy."""
+    assert run(["check", "--demo", "--demo-world", "nav2"], {}) == 0
+    assert "Healthy" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -59,6 +59,7 @@ MAX_TIMEOUT = 300.0
 LogLevel = Literal["DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL"]
 LOG_LEVELS: tuple[LogLevel, ...] = ("DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL")
 DemoDialect = Literal["ros1", "ros2"]
+DemoWorld = Literal["turtle", "nav2"]
 
 
 class ConfigError(ValueError):
@@ -79,6 +80,9 @@ class Config:
     log_level: LogLevel = "INFO"
     demo: bool = False
     demo_dialect: DemoDialect = "ros2"
+    #: The demo robot's world: the turtle (default) or a Nav2-scale mobile robot, ``demo_robots`` of them.
+    demo_world: DemoWorld = "turtle"
+    demo_robots: int = 1
     policy: Policy = field(default_factory=Policy)
     audit_log: str | None = None
     ca_file: str | None = None
@@ -121,6 +125,8 @@ def load_config(
     log_level: str | None = None,
     demo: bool = False,
     demo_dialect: str = "ros2",
+    demo_world: str = "turtle",
+    demo_robots: int = 1,
     policy: str | None = None,
     read_only: bool = False,
     audit_log: str | None = None,
@@ -147,6 +153,12 @@ def load_config(
     level = _parse_log_level(level_text, source=level_source) if level_text else "INFO"
     if demo_dialect not in ("ros1", "ros2"):
         raise ConfigError(f"--demo-dialect must be ros1 or ros2, not {demo_dialect!r}")
+    if demo_world not in ("turtle", "nav2"):
+        raise ConfigError(f"--demo-world must be turtle or nav2, not {demo_world!r}")
+    if not 1 <= demo_robots <= 100 or (demo_robots > 1 and demo_world != "nav2"):
+        raise ConfigError(
+            f"--demo-robots must be 1-100 and more than 1 needs --demo-world nav2, not {demo_robots}"
+        )
     tools_text = tools if tools is not None else environ.get("ROSBRIDGE_MCP_TOOLS", "").strip() or None
     tools_source = "--tools" if tools is not None else "ROSBRIDGE_MCP_TOOLS"
     chosen = _parse_tools(tools_text, source=tools_source) if tools_text is not None else None
@@ -156,6 +168,8 @@ def load_config(
         log_level=level,
         demo=demo,
         demo_dialect="ros1" if demo_dialect == "ros1" else "ros2",
+        demo_world="nav2" if demo_world == "nav2" else "turtle",
+        demo_robots=demo_robots,
         policy=_load_policy(environ, policy, read_only),
         audit_log=_path(environ, audit_log, "--audit-log", "ROSBRIDGE_MCP_AUDIT_LOG"),
         ca_file=_path(environ, ca_file, "--ca-file", "ROSBRIDGE_CA_FILE"),

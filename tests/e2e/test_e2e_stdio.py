@@ -190,7 +190,8 @@ async def _watch_the_robot(server: StdioServer) -> None:
     frame = await call("get_transform", {"target_frame": "world", "source_frame": "base_link"})
     assert frame["structuredContent"]["chain"] == ["world", "odom", "base_link"]
     parameters = await call("list_parameters", {"node": "/turtlesim"})
-    assert "/turtlesim:background_r" in parameters["structuredContent"]["parameters"]
+    assert parameters["structuredContent"]["nodes"][0]["node"] == "/turtlesim"
+    assert "background_r" in parameters["structuredContent"]["nodes"][0]["names"]
     described = await call("describe_type", {"type_name": "sensor_msgs/msg/LaserScan"})
     assert "ranges: float32[]" in described["structuredContent"]["parts"][0]["outline"]
     streamed = await call(
@@ -366,3 +367,43 @@ async def test_unreadable_lines_read_from_a_file_are_answered_too(tmp_path: Path
         stderr.decode()
     )
     assert code == 0, stderr.decode()
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_nav2_demo_over_stdio_answers_every_graph_tool_within_the_budget(dialect: str) -> None:
+    """--demo --demo-world nav2 over stdio: tools/list within 1 KB a tool; every graph tool's text within
+    8,000 characters; a page that holds less says the offset of the next."""
+    server = await _start("--demo", "--demo-dialect", dialect, "--demo-world", "nav2")
+    try:
+        hello = {
+            "protocolVersion": "2025-06-18",
+            "capabilities": {},
+            "clientInfo": {"name": "e2e", "version": "0"},
+        }
+        await server.request("initialize", hello)
+        await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
+        tools = (await server.request("tools/list"))["result"]["tools"]
+        assert len(json.dumps(tools, separators=(",", ":"))) <= 1_000 * len(tools)
+        sep = ":" if dialect == "ros2" else "/"
+        calls: list[tuple[str, dict[str, Any]]] = [
+            ("list_topics", {}),
+            ("list_services", {}),
+            ("list_actions", {}),
+            ("list_nodes", {}),
+            ("list_parameters", {}),
+            ("get_node_info", {"node": "/controller_server"}),
+            ("get_topic_info", {"topic": "/scan"}),
+            ("get_parameter", {"name": f"/amcl{sep}max_particles"}),
+        ]
+        for name, arguments in calls:
+            answer = (await server.request("tools/call", {"name": name, "arguments": arguments}))["result"]
+            assert answer["isError"] is False, (name, answer)
+            assert len(answer["content"][0]["text"]) <= 8_000, name
+        paged = (await server.request("tools/call", {"name": "list_topics", "arguments": {"limit": 10}}))[
+            "result"
+        ]
+        assert paged["structuredContent"]["more"] > 0
+        assert "offset=10" in paged["content"][0]["text"]
+    finally:
+        _, _, code = await _finish(server)
+    assert code == 0

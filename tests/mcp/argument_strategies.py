@@ -123,6 +123,9 @@ def _value_for(vocabulary: Vocabulary, key: str, prop: dict[str, Any]) -> st.Sea
     kinds: set[str] = set()
     if isinstance(prop.get("type"), str):
         kinds.add(prop["type"])
+    elif isinstance(prop.get("type"), list):
+        # An optional value is written type: [X, "null"] (tools/schemas.py).
+        kinds.update(kind for kind in prop["type"] if isinstance(kind, str))
     for arm in prop.get("anyOf", []):
         if isinstance(arm, dict) and isinstance(arm.get("type"), str):
             kinds.add(arm["type"])
@@ -196,14 +199,13 @@ _MISSING = _Missing()
 def tool_calls(
     schemas: dict[str, dict[str, Any]], vocabulary: Vocabulary
 ) -> st.SearchStrategy[tuple[str, dict[str, Any]]]:
-    """``(tool name, arguments)`` for any of the tools whose input schemas are given.
-
-    The tool is drawn first, evenly: ``one_of`` over 21 tools' strategies left one tool out of 200 examples.
-    """
-    strategies = {name: _arguments(schema, vocabulary) for name, schema in schemas.items()}
-    return st.sampled_from(sorted(strategies)).flatmap(
-        lambda name: strategies[name].map(lambda args: (name, args))
-    )
+    """``(tool name, arguments)`` for any of the tools whose input schemas are given."""
+    # The tool is drawn first, evenly (one_of favours its first branches), so every tool is reached.
+    strategies = {
+        name: _arguments(schema, vocabulary).map(lambda args, name=name: (name, args))
+        for name, schema in schemas.items()
+    }
+    return st.sampled_from(list(strategies)).flatmap(strategies.__getitem__)
 
 
 _TIME_WORDS = ("timeout", "duration", "seconds", "period", "wait")

@@ -126,6 +126,27 @@ async def warmed_up(ros: RosbridgeClient) -> None:
             await asyncio.wait_for(watcher.done.wait(), CONNECT_WAIT)
 
 
+def service_rows(data: dict[str, Any] | None) -> list[dict[str, str]]:
+    """Every row of a list_services answer's structured content: the page's own rows and the grouped ones
+    spelled out (a group's node + "/" + leaf), sorted by name."""
+    assert data is not None
+    rows: list[dict[str, str]] = list(data["services"])
+    for group in data.get("groups", []):
+        rows += [
+            {"name": f"{node}/{row['name']}", "type": row["type"]}
+            for node in group["nodes"]
+            for row in group["services"]
+        ]
+    return sorted(rows, key=lambda row: row["name"])
+
+
+def parameter_names(data: dict[str, Any] | None) -> list[str]:
+    """The full parameter names of a list_parameters answer's page (/node:name on ROS 2, /ns/name on
+    ROS 1)."""
+    assert data is not None
+    return [f"{group['node']}{data['separator']}{name}" for group in data["nodes"] for name in group["names"]]
+
+
 def unreadable_services(result: CallToolResult) -> list[dict[str, str]]:
     """The rows of a list_services answer that its text does not name with their type.
 
@@ -144,7 +165,7 @@ def unreadable_services(result: CallToolResult) -> list[dict[str, str]]:
             for entry in rosapi[2].split(", "):
                 leaf, short_type = entry.rstrip(")").split(" (")
                 readable.add(f"/rosapi/{leaf} ({rosapi[1]}/{short_type})")
-    rows: list[dict[str, str]] = result.structured_content["services"]
+    rows = service_rows(result.structured_content)
     return [row for row in rows if f"{row['name']} ({row['type'] or 'type unknown'})" not in readable]
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from mcp_harness import Session, open_session, text_of, types_for, unreadable_services
+from mcp_harness import Session, open_session, service_rows, text_of, types_for, unreadable_services
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -66,7 +66,7 @@ async def test_list_services_shows_every_service_with_its_type(session: Session,
     """/add_two_ints and /reset are listed with their types."""
     data = (await session.ok("list_services")).structured_content
     assert data is not None
-    services = {row["name"]: row["type"] for row in data["services"]}
+    services = {row["name"]: row["type"] for row in service_rows(data)}
     assert services["/add_two_ints"] == types_for(sim)["add_two_ints"]
     assert services["/reset"] == types_for(sim)["empty_srv"]
     assert all(services.values()), "every simulated service has a known type"
@@ -76,7 +76,7 @@ async def test_list_services_text_is_short_yet_names_every_service_and_type(sess
     """The per-node and rosapi services are grouped in the text; each row can still be read from it."""
     result = await session.ok("list_services")
     assert result.structured_content is not None
-    rows = result.structured_content["services"]
+    rows = service_rows(result.structured_content)
     lines = text_of(result).splitlines()
     assert len(lines) < len(rows) / 2, lines
     assert unreadable_services(result) == []
@@ -88,7 +88,7 @@ async def test_list_services_looks_each_type_up_once_and_never_for_per_node_serv
     """Per-node and rosapi services are typed by name; the next listing only asks for the names again."""
     first = (await session.ok("list_services")).structured_content
     assert first is not None
-    services = {row["name"]: row["type"] for row in first["services"]}
+    services = {row["name"]: row["type"] for row in service_rows(first)}
     per_node = "/turtlesim/get_parameters" if sim.dialect == "ros2" else "/turtlesim/get_loggers"
     assert services[per_node] in ("rcl_interfaces/srv/GetParameters", "roscpp/GetLoggers")
     assert services["/rosapi/topics"] in ("rosapi_msgs/srv/Topics", "rosapi/Topics")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from mcp_harness import Session, open_session, text_of
+from mcp_harness import Session, open_session, parameter_names, text_of
 
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.acting import Act, AskPerson
@@ -18,17 +18,19 @@ async def test_a_nodes_parameters_are_listed_in_the_dialects_naming(
 ) -> None:
     """/turtlesim lists background_r as /turtlesim:background_r (ROS 2) or /turtlesim/background_r (ROS 1)."""
     result = await session.ok("list_parameters", {"node": "/turtlesim"})
-    names = (result.structured_content or {})["parameters"]
+    names = parameter_names(result.structured_content)
     assert background_r(sim) in names
     assert all(name.startswith("/turtlesim") for name in names)
 
 
 async def test_all_parameters_are_listed_without_a_node(session: Session, sim: SimulatedRobot) -> None:
-    """Without a node every node's parameters are listed, sorted."""
+    """Without a node every node's parameters are listed, grouped by node, sorted."""
     result = await session.ok("list_parameters")
-    names = (result.structured_content or {})["parameters"]
+    names = parameter_names(result.structured_content)
     assert background_r(sim) in names
-    assert names == sorted(names)
+    groups = (result.structured_content or {})["nodes"]
+    assert [g["node"] for g in groups] == sorted(g["node"] for g in groups)
+    assert all(g["names"] == sorted(g["names"]) for g in groups)
 
 
 async def test_a_parameter_is_read_as_json(session: Session, sim: SimulatedRobot) -> None:

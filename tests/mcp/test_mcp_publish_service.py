@@ -6,7 +6,7 @@ import asyncio
 import json
 
 import websockets
-from mcp_harness import Session, types_for
+from mcp_harness import Session, service_rows, types_for
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -125,7 +125,7 @@ async def test_a_hidden_ros2_service_that_rosapi_does_not_list_can_still_be_call
     """/fibonacci/_action/cancel_goal is hidden from list_services, yet publish_service reaches it."""
     listed = (await session_ros2.ok("list_services")).structured_content
     assert listed is not None
-    assert "/fibonacci/_action/cancel_goal" not in [row["name"] for row in listed["services"]]
+    assert "/fibonacci/_action/cancel_goal" not in [row["name"] for row in service_rows(listed)]
     result = await session_ros2.ok(
         "publish_service",
         {

@@ -27,7 +27,7 @@ from typing import Any
 import pytest
 import websockets
 from mcp.types import CallToolResult
-from mcp_harness import Session, open_session, text_of, unreadable_services
+from mcp_harness import Session, open_session, parameter_names, service_rows, text_of, unreadable_services
 
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.config import Config
@@ -159,10 +159,10 @@ async def test_list_services_includes_rosapi_topics_with_its_type(real: Session)
     data = result.structured_content
     assert data is not None
     assert unreadable_services(result) == []
-    names = [row["name"] for row in data["services"]]
+    names = [row["name"] for row in service_rows(data)]
     assert len(names) == len(set(names))
     assert "/rosapi/topics" in names
-    topics_type = next(row["type"] for row in data["services"] if row["name"] == "/rosapi/topics")
+    topics_type = next(row["type"] for row in service_rows(data) if row["name"] == "/rosapi/topics")
     assert topics_type in ("rosapi/Topics", "rosapi_msgs/srv/Topics")
 
 
@@ -170,7 +170,7 @@ async def test_publish_service_calls_rosapi_topics_and_returns_the_response(real
     """Calling /rosapi/topics with its listed type answers the topics, /rosout among them."""
     services = (await real.ok("list_services")).structured_content
     assert services is not None
-    srv_type = next(row["type"] for row in services["services"] if row["name"] == "/rosapi/topics")
+    srv_type = next(row["type"] for row in service_rows(services) if row["name"] == "/rosapi/topics")
     data = (
         await real.ok(
             "publish_service", {"service": "/rosapi/topics", "service_type": srv_type, "request": {}}
@@ -185,7 +185,7 @@ async def test_publish_service_refuses_a_request_field_the_type_lacks(real: Sess
     """A request field /rosapi/topics does not have is refused before the call, naming the field."""
     services = (await real.ok("list_services")).structured_content
     assert services is not None
-    srv_type = next(row["type"] for row in services["services"] if row["name"] == "/rosapi/topics")
+    srv_type = next(row["type"] for row in service_rows(services) if row["name"] == "/rosapi/topics")
     text = await real.error(
         "publish_service",
         {"service": "/rosapi/topics", "service_type": srv_type, "request": {"no_such_field": 1}},
@@ -442,8 +442,8 @@ async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
     if await _version(real) == 1:
         names = (await real.ok("list_parameters")).structured_content
         assert names is not None
-        assert names["parameters"]
-        first = names["parameters"][0]
+        assert parameter_names(names)
+        first = parameter_names(names)[0]
         value = (await real.ok("get_parameter", {"name": first})).structured_content
         assert value is not None
         assert value["name"] == first
@@ -452,7 +452,7 @@ async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
         return
     names = (await real.ok("list_parameters", {"node": "/rosapi"})).structured_content
     assert names is not None
-    assert "/rosapi:use_sim_time" in names["parameters"]
+    assert "/rosapi:use_sim_time" in parameter_names(names)
     value = (await real.ok("get_parameter", {"name": "/rosapi:use_sim_time"})).structured_content
     assert value is not None
     assert value["value"] is False

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Awaitable, Callable
 
-from mcp_harness import Session, open_session, types_for, warmed_up
+from mcp_harness import Session, open_session, service_rows, types_for, warmed_up
 
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
@@ -28,7 +28,7 @@ async def listing(session: Session) -> dict[str, str]:
     """list_services as {name: type}."""
     data = (await session.ok("list_services")).structured_content
     assert data is not None
-    return {row["name"]: row["type"] for row in data["services"]}
+    return {row["name"]: row["type"] for row in service_rows(data)}
 
 
 def own_services(types: dict[str, str], version: int) -> list[str]:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import AsyncIterator, Awaitable, Callable
 
 import pytest
-from mcp_harness import Session, open_session
+from mcp_harness import Session, open_session, parameter_names
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -70,7 +70,7 @@ async def test_parameters_never_deadlock_rosapi(old: Session, old_robot: Simulat
     assert written["value"] == 10
     names = (await old.ok("list_parameters", {"node": "/turtlesim"})).structured_content
     assert names is not None
-    assert "/turtlesim:background_g" in names["parameters"]
+    assert "/turtlesim:background_g" in parameter_names(names)
     assert not old_robot.rosapi_node.dead
     await old.ok("list_nodes")
 

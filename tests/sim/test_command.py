@@ -71,6 +71,9 @@ async def test_command_serves_the_robot_and_stops_cleanly_on_a_signal(
         ["--rosapi", "1.0"],
         ["--rosapi-latency", "-1"],
         ["--rosapi-latency", "0.005,x"],
+        ["--world", "mars"],
+        ["--robots", "2"],
+        ["--world", "nav2", "--robots", "0"],
     ],
 )
 async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str]) -> None:

@@ -123,6 +123,19 @@ def _parser(command: str) -> _Parser:
         default="ros2",
         help="which rosbridge the simulated robot imitates (default ros2)",
     )
+    demo.add_argument(
+        "--demo-world",
+        choices=("turtle", "nav2"),
+        default="turtle",
+        help="the simulated robot: turtle (default) or nav2 (a Nav2 mobile robot's graph, ~36 nodes)",
+    )
+    demo.add_argument(
+        "--demo-robots",
+        type=int,
+        default=1,
+        metavar="N",
+        help="with --demo-world nav2: N robots under /robot1 ... /robotN (default 1)",
+    )
     return parser
 
 
@@ -207,6 +220,8 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             log_level=options.log_level,
             demo=options.demo,
             demo_dialect=options.demo_dialect,
+            demo_world=options.demo_world,
+            demo_robots=options.demo_robots,
             policy=options.policy,
             read_only=options.read_only,
             audit_log=options.audit_log,
@@ -365,8 +380,15 @@ async def demo_robot(config: Config) -> AsyncIterator[Config]:
     # /rosapi/get_ros_version); that log belongs to the robot, so it is shown only when debugging.
     if config.log_level != "DEBUG":
         logging.getLogger("rosbridge_mcp_server.sim").setLevel(logging.CRITICAL)
-    async with SimulatedRobot(dialect=config.demo_dialect, port=0) as robot:
-        _log.info("demo mode: simulated ROS %s robot at %s", config.demo_dialect[-1], robot.url)
+    async with SimulatedRobot(
+        dialect=config.demo_dialect, port=0, world=config.demo_world, robots=config.demo_robots
+    ) as robot:
+        _log.info(
+            "demo mode: simulated ROS %s %s robot at %s",
+            config.demo_dialect[-1],
+            config.demo_world,
+            robot.url,
+        )
         yield replace(config, url=robot.url)
 
 

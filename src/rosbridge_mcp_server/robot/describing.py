@@ -85,15 +85,15 @@ async def _installed_kinds(graph: RosGraph, type_name: str, kinds: tuple[Kind, .
     2.1.0. Such a rosapi has no action details either.
     """
     package, _, name = split_type(type_name)
-    try:
-        values = await graph.rosapi("interfaces")
-    except (ServiceError, RequestTimeoutError):
-        values = {}
-    listed = values.get("interfaces")
-    if isinstance(listed, list) and listed:
-        installed = {item for item in listed if isinstance(item, str)}
+    installed = await graph.installed_interfaces()
+    if installed is not None:
         folders: dict[Kind, str] = {"message": "msg", "service": "srv", "action": "action"}
-        return tuple(kind for kind in kinds if f"{package}/{folders[kind]}/{name}" in installed)
+        found = tuple(kind for kind in kinds if f"{package}/{folders[kind]}/{name}" in installed)
+        if not found:
+            # The list is kept per connection: ask again before saying the type is not installed.
+            installed = await graph.installed_interfaces(fresh=True) or frozenset()
+            found = tuple(kind for kind in kinds if f"{package}/{folders[kind]}/{name}" in installed)
+        return found
     safe: list[Kind] = []
     for kind in kinds:
         if kind == "message":
@@ -150,7 +150,7 @@ async def _describe_as(graph: RosGraph, type_name: str, kind: Kind, version: int
 
 async def _part(graph: RosGraph, service: str, bridge_name: str, version: int) -> TypeOutline | None:
     try:
-        values = await graph.rosapi(service, {"type": bridge_name})
+        values = await graph.type_details(service, bridge_name)
     except ServiceError as exc:
         if "does not exist" in exc.message and service.startswith("action_"):
             raise CannotDescribe(

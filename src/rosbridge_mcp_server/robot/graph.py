@@ -117,6 +117,7 @@ class _ConnectionKnowledge:
     typedefs: dict[tuple[str, str], dict[str, TypeDef]] = field(default_factory=dict)
     interfaces: frozenset[str] | None = None
     interfaces_asked: bool = False
+    details_values: dict[tuple[str, str], dict[str, Any]] = field(default_factory=dict)
     publishing: dict[str, str] = field(default_factory=dict)
     service_types: dict[str, str] = field(default_factory=dict)
     action_types: dict[str, str] = field(default_factory=dict)
@@ -365,6 +366,10 @@ class RosGraph:
             self._known.action_types[action] = found
         return found
 
+    def known_action_type(self, action: str) -> str | None:
+        """The action's type if this connection has learnt it (no round trip), else ``None``."""
+        return self._known.action_types.get(action)
+
     async def _action_type_or_none(self, action: str) -> str | None:
         try:
             return await self.action_type(action)
@@ -490,11 +495,15 @@ class RosGraph:
             self._known.typedefs[key] = typedefs
         return typedefs
 
-    async def _check_installed(self, type_name: str, bridge_name: str, info: RosInfo) -> None:
-        """On ROS 2, ask ``/rosapi/interfaces`` (Humble 2.0.1+) first: it lists every installed type."""
-        if info.version != 2:
-            return
-        if not self._known.interfaces_asked:
+    async def installed_interfaces(self, *, fresh: bool = False) -> frozenset[str] | None:
+        """Every interface type the bridge's machine has installed (ROS 2 ``/rosapi/interfaces``, Humble
+        2.0.1+), asked once per connection (``fresh`` asks again); ``None`` when rosapi cannot list them.
+
+        What is installed changes only when someone installs a package, so a type missing from the kept list
+        is looked up again (``fresh``) before anything is refused for it.
+        """
+        await self.ros_info()  # forgets what an earlier connection knew
+        if fresh or not self._known.interfaces_asked:
             self._known.interfaces_asked = True
             try:
                 values = await self.rosapi("interfaces")
@@ -503,7 +512,29 @@ class RosGraph:
             else:
                 listed = _strings(values.get("interfaces"))
                 self._known.interfaces = frozenset(listed) if listed else None
-        if self._known.interfaces is not None and bridge_name not in self._known.interfaces:
+        return self._known.interfaces
+
+    async def type_details(self, service: str, bridge_name: str) -> dict[str, Any]:
+        """``/rosapi/<service>`` of a type (``message_details``, ``action_goal_details``, ...), kept for the
+        connection once it described the type: a type's definition cannot change while the bridge runs."""
+        await self.ros_info()
+        key = (service, bridge_name)
+        kept = self._known.details_values.get(key)
+        if kept is not None:
+            return kept
+        values = await self.rosapi(service, {"type": bridge_name})
+        if values.get("typedefs"):
+            self._known.details_values[key] = values
+        return values
+
+    async def _check_installed(self, type_name: str, bridge_name: str, info: RosInfo) -> None:
+        """On ROS 2, check ``/rosapi/interfaces`` first: rosapi never answers about a type it cannot load."""
+        if info.version != 2:
+            return
+        installed = await self.installed_interfaces()
+        if installed is not None and bridge_name not in installed:
+            installed = await self.installed_interfaces(fresh=True)
+        if installed is not None and bridge_name not in installed:
             raise UnknownTypeError(type_name, _type_hint(info))
 
 

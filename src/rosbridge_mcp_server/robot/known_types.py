@@ -8,6 +8,7 @@ What was seen on which bridge: docs/rosbridge-behaviour.md.
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Iterable
 from typing import Final
@@ -124,6 +125,12 @@ def rosapi_types(names: Iterable[str], version: int) -> dict[str, str]:
 
 
 def _by_prefix(names: Iterable[str]) -> dict[str, set[str]]:
+    # A listing asks several of these helpers about the same few hundred names: split them once.
+    return _split_by_prefix(tuple(names))
+
+
+@functools.lru_cache(maxsize=4)
+def _split_by_prefix(names: tuple[str, ...]) -> dict[str, set[str]]:
     by_prefix: dict[str, set[str]] = {}
     for name in set(names):
         prefix, _, leaf = name.rpartition("/")

@@ -1,7 +1,8 @@
 """Nodes of the ROS graph and what each one publishes, subscribes and serves, with types.
 
 ``/rosapi/nodes`` lists full node names on both lines. ``/rosapi/node_details`` answers an unknown node with
-empty lists on ROS 1, and not at all on ROS 2 (its handler fails), so a node is looked up in the list first.
+empty lists on ROS 1, and not at all on ROS 2 (its handler fails), so on ROS 2 a node is looked up in the list
+first.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.known_types import infrastructure_types
 from rosbridge_mcp_server.robot.names import did_you_mean
 
 if TYPE_CHECKING:
@@ -50,16 +52,27 @@ async def node_names(graph: RosGraph) -> list[str]:
 
 
 async def node_details(graph: RosGraph, node: str) -> NodeDetails:
-    """What ``node`` publishes, subscribes and serves; :class:`UnknownNodeError` when it is not running."""
-    known = await node_names(graph)
-    if node not in known:
-        raise UnknownNodeError(node, known)
+    """What ``node`` publishes, subscribes and serves; :class:`UnknownNodeError` when it is not running.
+
+    ROS 1 answers an unknown node with empty lists, so the node list is asked only then, to word the error.
+    ROS 2's rosapi never answers for an unknown node (and an in-order bridge would wait on it), so there the
+    node list comes first.
+    """
+    info = await graph.ros_info()
+    if info.version == 2:
+        known = await node_names(graph)
+        if node not in known:
+            raise UnknownNodeError(node, known)
     details, topics = await asyncio.gather(graph.rosapi("node_details", {"node": node}), graph.topics())
-    topic_types = {entry.name: entry.type for entry in topics}
     publishes = sorted(_strings(details.get("publishing")))
     subscribes = sorted(_strings(details.get("subscribing")))
     served = sorted(set(_strings(details.get("services"))))
-    service_types = await _service_types(graph, served)
+    if info.version == 1 and not (publishes or subscribes or served):
+        known = await node_names(graph)
+        if node not in known:
+            raise UnknownNodeError(node, known)
+    topic_types = {entry.name: entry.type for entry in topics}
+    service_types = await _service_types(graph, served, info.version)
     return NodeDetails(
         name=node,
         publishes=tuple((name, topic_types.get(name, "")) for name in publishes),
@@ -68,11 +81,17 @@ async def node_details(graph: RosGraph, node: str) -> NodeDetails:
     )
 
 
-async def _service_types(graph: RosGraph, services: list[str]) -> list[str]:
-    """Each service's type, looked up side by side (a few at a time); ``""`` where the look-up failed."""
+async def _service_types(graph: RosGraph, services: list[str], version: int) -> list[str]:
+    """Each service's type: told by its name (the services every node offers, an action's hidden services
+    whose action type this connection knows) or looked up side by side, a few at a time; ``""`` where the
+    look-up failed."""
+    fixed = infrastructure_types(services, version)
     gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE)
 
     async def one(service: str) -> str:
+        told = fixed.get(service) or _action_service_type(graph, service)
+        if told:
+            return told
         async with gate:
             try:
                 return await graph.service_type(service, cached=True)
@@ -80,6 +99,21 @@ async def _service_types(graph: RosGraph, services: list[str]) -> list[str]:
                 return ""
 
     return list(await asyncio.gather(*(one(service) for service in services)))
+
+
+_ACTION_SERVICES = {"send_goal": "_SendGoal", "get_result": "_GetResult"}
+
+
+def _action_service_type(graph: RosGraph, service: str) -> str:
+    """The type of a ROS 2 action's hidden service (``<action>/_action/<leaf>``), when it is told."""
+    action, marker, leaf = service.rpartition("/_action/")
+    if not marker:
+        return ""
+    if leaf == "cancel_goal":
+        return "action_msgs/srv/CancelGoal"
+    suffix = _ACTION_SERVICES.get(leaf)
+    action_type = graph.known_action_type(action) if suffix else None
+    return f"{action_type}{suffix}" if action_type and "/action/" in action_type else ""
 
 
 def _strings(value: Any) -> list[str]:

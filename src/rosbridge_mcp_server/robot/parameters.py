@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.names import did_you_mean
 from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_names
 
@@ -106,11 +107,18 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
             spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
             raise ParameterError(f"No parameters under {prefix}.{did_you_mean(node, spaces, cutoff=0.7)}")
         return found
-    services = set(await graph.service_names())
-    nodes = [node] if node is not None else await node_names(graph)
-    offering = [n for n in nodes if f"{n.rstrip('/')}/list_parameters" in services]
-    if node is not None and not offering:
-        raise ParameterError(_no_parameter_service(node, nodes=await node_names(graph)))
+    if node is not None:
+        # Asked directly: the graph is consulted only to word a failure.
+        try:
+            local_names = await _node_parameter_names(client, node)
+        except ServiceError as exc:
+            if not is_missing_service(exc):
+                raise
+            raise ParameterError(_no_parameter_service(node, nodes=await node_names(graph))) from None
+        return sorted(f"{node}:{local}" for local in local_names)
+    # Every node with parameters offers <node>/list_parameters: the service list names them all.
+    suffix = "/list_parameters"
+    offering = sorted(name[: -len(suffix)] for name in await graph.service_names() if name.endswith(suffix))
     gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE)
 
     async def one(name: str) -> list[str]:
@@ -118,8 +126,6 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
             try:
                 return [f"{name}:{local}" for local in await _node_parameter_names(client, name)]
             except (ServiceError, RequestTimeoutError):
-                if node is not None:
-                    raise
                 return []  # a node that does not answer does not hide the others
 
     per_node = await asyncio.gather(*(one(name) for name in offering))
@@ -127,11 +133,32 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
 
 
 async def get_parameter(graph: RosGraph, client: RosbridgeClient, name: str) -> tuple[ParameterName, Any]:
-    """The parameter's value (decoded JSON); :class:`ParameterError` when it does not exist."""
+    """The parameter's value (decoded JSON); :class:`ParameterError` when it does not exist.
+
+    One call on the happy path (ROS 2: the node's ``get_parameters``; ROS 1: ``get_param`` with a default no
+    parameter holds); what exists is asked only to word the error when the value is not there.
+    """
     info = await graph.ros_info()
     parsed = parse_name(name, info.version)
-    await _require_existing(graph, client, parsed, info.version)
-    return parsed, await _read(graph, client, parsed, info.version)
+    return parsed, await _read_existing(graph, client, parsed, info.version)
+
+
+async def _read_existing(
+    graph: RosGraph, client: RosbridgeClient, parsed: ParameterName, version: int
+) -> Any:
+    """The value of a parameter that must exist; the error says what exists when it does not."""
+    try:
+        value = await _read(graph, client, parsed, version, missing=_MISSING)
+    except _NotDeclared:
+        value = _MISSING
+    except ServiceError as exc:
+        if version == 1 or not is_missing_service(exc):
+            raise
+        value = _MISSING  # the node offers no get_parameters (or is not running)
+    if value is _MISSING:
+        await _require_existing(graph, client, parsed, version)
+        raise ParameterError(f"Parameter {parsed.full} does not exist.")
+    return value
 
 
 @dataclass(frozen=True)
@@ -149,8 +176,9 @@ async def plan_set(graph: RosGraph, client: RosbridgeClient, name: str, value: A
     parsed = parse_name(name, info.version)
     if info.version == 2:
         # A ROS 2 node only has the parameters it declared; rosapi cannot add one.
-        await _require_existing(graph, client, parsed, info.version)
-    before = await _read(graph, client, parsed, info.version)
+        before = await _read_existing(graph, client, parsed, info.version)
+    else:
+        before = await _read(graph, client, parsed, info.version)
     return PlannedSet(parsed, before, _like(before, value))
 
 
@@ -178,11 +206,26 @@ async def apply_set(graph: RosGraph, client: RosbridgeClient, planned: PlannedSe
     return SetOutcome(parsed.full, planned.before, after, applied, reason, value)
 
 
-async def _read(graph: RosGraph, client: RosbridgeClient, parsed: ParameterName, version: int) -> Any:
+class _NotDeclared(ParameterError):
+    """A ROS 2 node answered no value: it has not declared the name."""
+
+
+#: What ROS 1 ``get_param`` answers for a missing name when asked with this default (JSON text): no
+#: parameter holds it, so one call both reads a value and tells that it is missing.
+_ABSENT_TEXT = json.dumps("\u2400 rosbridge-mcp-server: no such parameter")
+_MISSING: Any = object()
+
+
+async def _read(
+    graph: RosGraph, client: RosbridgeClient, parsed: ParameterName, version: int, *, missing: Any = None
+) -> Any:
+    """The value; ``missing`` (ROS 1) when the name is not set, :class:`_NotDeclared` (ROS 2)."""
     if version == 2:
         return await _ros2_read(client, parsed)
-    args = {"name": parsed.full, ("default" if version == 1 else "default_value"): ""}
+    args = {"name": parsed.full, "default": _ABSENT_TEXT if missing is not None else ""}
     values = await graph.rosapi("get_param", args)
+    if missing is not None and values.get("value") == _ABSENT_TEXT:
+        return missing
     if values.get("successful") is False:
         raise ParameterError(
             f"rosapi could not read {parsed.full}: {values.get('reason') or 'no reason given'}."
@@ -273,7 +316,7 @@ async def _ros2_read(client: RosbridgeClient, parsed: ParameterName) -> Any:
     values = reply.get("values") if isinstance(reply, dict) else None
     if not isinstance(values, list) or not values or not isinstance(values[0], dict):
         # rclpy answers an empty list when a name is not declared.
-        raise ParameterError(f"Node {parsed.node} has no parameter {parsed.local!r}.")
+        raise _NotDeclared(f"Node {parsed.node} has no parameter {parsed.local!r}.")
     return _from_parameter_value(values[0])
 
 

@@ -51,9 +51,16 @@ from rosbridge_mcp_server.server.checks import CheckedTool
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler
 from rosbridge_mcp_server.tools.arguments import parameter_listing
-from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
+from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
+from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema
 
-__all__ = ["arguments_text", "error_text", "inline_refs", "tool_from_module", "without_name_titles"]
+__all__ = [
+    "arguments_text",
+    "error_text",
+    "inline_refs",
+    "tool_annotations",
+    "tool_from_module",
+]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
 
@@ -205,18 +212,12 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
         name=spec.name,
         title=spec.title,
         description=spec.description,
-        annotations=ToolAnnotations(
-            title=spec.title,
-            read_only_hint=spec.hints.read_only,
-            destructive_hint=spec.hints.destructive,
-            idempotent_hint=spec.hints.idempotent,
-            open_world_hint=spec.hints.open_world,
-        ),
+        annotations=tool_annotations(spec.hints),
     )
     # What the argument checks hold every call to, said where clients read it.
-    own = {**without_name_titles(tool.parameters), "additionalProperties": False}
+    own = {**compact_input_schema(tool.parameters), "additionalProperties": False}
     tool.parameters = fleet.schema_with_robot(own, spec.name)
-    replace_output_schema(tool, lambda schema: without_name_titles(inline_refs(schema)))
+    replace_output_schema(tool, lambda schema: compact_output_schema(inline_refs(schema)))
     return tool, CheckedTool.of(spec.name, own, parameters)
 
 
@@ -245,6 +246,19 @@ def _merged(names: list[str], answers: list[CallToolResult | InputRequiredResult
     )
 
 
+def tool_annotations(hints: ToolHints) -> ToolAnnotations:
+    """The hints that differ from MCP's defaults, which a client assumes for a hint not given (read-only
+    false, destructive true, idempotent false, open world true); destructive and idempotent mean something
+    only for a tool that acts. Each hint left out saves some 20 bytes of tools/list in every conversation."""
+    if hints.read_only:
+        return ToolAnnotations(read_only_hint=True, open_world_hint=None if hints.open_world else False)
+    return ToolAnnotations(
+        destructive_hint=None if hints.destructive else False,
+        idempotent_hint=True if hints.idempotent else None,
+        open_world_hint=None if hints.open_world else False,
+    )
+
+
 def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:
     """``schema`` with every ``$ref`` into ``$defs`` replaced by the definition itself, and no ``$defs``.
 
@@ -267,34 +281,6 @@ def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:
 
     resolved: dict[str, Any] = resolve(schema)
     return resolved
-
-
-def without_name_titles(schema: dict[str, Any]) -> dict[str, Any]:
-    """``schema`` without the ``title`` pydantic gives each property (``goal_id`` → "Goal Id").
-
-    Such a title only restates the property's name, and every host pays for it in context on every session;
-    a model's own title and every description stay.
-    """
-
-    def strip(node: Any) -> Any:
-        if isinstance(node, list):
-            return [strip(item) for item in node]
-        if not isinstance(node, dict):
-            return node
-        out = {key: strip(value) for key, value in node.items()}
-        properties = node.get("properties")
-        if isinstance(properties, dict):
-            out["properties"] = {name: _untitled(name, strip(prop)) for name, prop in properties.items()}
-        return out
-
-    stripped: dict[str, Any] = strip(schema)
-    return stripped
-
-
-def _untitled(name: str, prop: Any) -> Any:
-    if isinstance(prop, dict) and prop.get("title") == name.title().replace("_", " "):
-        return {key: value for key, value in prop.items() if key != "title"}
-    return prop
 
 
 class _Confirmation(BaseModel):

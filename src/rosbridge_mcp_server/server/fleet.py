@@ -166,13 +166,7 @@ def list_robots_tool(fleet: Fleet) -> Tool:
             "The robots this server drives, with their connection, ROS version and safety policy. Every "
             "other tool takes one of these names as its robot argument."
         ),
-        annotations=ToolAnnotations(
-            title="List the robots",
-            read_only_hint=True,
-            destructive_hint=False,
-            idempotent_hint=True,
-            open_world_hint=False,
-        ),
+        annotations=ToolAnnotations(read_only_hint=True, open_world_hint=False),
     )
 
 

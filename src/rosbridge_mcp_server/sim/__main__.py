@@ -9,7 +9,7 @@ import signal
 import sys
 from typing import NoReturn
 
-from rosbridge_mcp_server.sim.robot import ROS2_DISTROS, SimulatedRobot
+from rosbridge_mcp_server.sim.robot import ROS2_DISTROS, WORLDS, SimulatedRobot
 
 __all__ = ["build_parser", "main", "run"]
 
@@ -46,6 +46,16 @@ def _latencies(text: str) -> tuple[float, ...]:
     return tuple(_non_negative_float(part) for part in text.split(","))
 
 
+def _robots(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if not 1 <= value <= 100:
+        raise argparse.ArgumentTypeError(f"must be 1-100: {value}")
+    return value
+
+
 def _port(text: str) -> int:
     try:
         value = int(text)
@@ -69,6 +79,19 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["ros2", "ros1"],
         default="ros2",
         help="ros2 (Jazzy-like, default) or ros1 (Noetic)",
+    )
+    parser.add_argument(
+        "--world",
+        choices=WORLDS,
+        default="turtle",
+        help="turtle (the small demo, default) or nav2 (a Nav2-scale mobile robot: ~36 nodes, 14 actions)",
+    )
+    parser.add_argument(
+        "--robots",
+        type=_robots,
+        default=1,
+        metavar="N",
+        help="nav2 only: N robots on one graph, under /robot1 ... /robotN (default 1, no namespace)",
     )
     parser.add_argument(
         "--in-order",
@@ -140,6 +163,8 @@ def run(argv: list[str] | None = None) -> int:
         parser.error("--in-order models Humble's rosbridge and needs --dialect ros2")
     if args.dialect != "ros2" and (args.distro is not None or args.rosapi != "newest"):
         parser.error("--distro and --rosapi are ROS 2 settings and need --dialect ros2")
+    if args.robots > 1 and args.world != "nav2":
+        parser.error("--robots needs --world nav2")
     try:
         width_text, height_text = args.camera_size.lower().split("x")
         width, height = int(width_text), int(height_text)
@@ -167,6 +192,8 @@ def run(argv: list[str] | None = None) -> int:
         camera_width=width,
         camera_height=height,
         map_cells=args.map_cells,
+        world=args.world,
+        robots=args.robots,
     )
     try:
         asyncio.run(_serve(robot))

@@ -16,11 +16,12 @@ from rosbridge_mcp_server.sim.bridge import Bridge, BridgeConfig
 from rosbridge_mcp_server.sim.graph import Graph
 from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
 from rosbridge_mcp_server.sim.nodes import CameraSettings, WorldNodes
+from rosbridge_mcp_server.sim.nodes.nav2 import Nav2World
 from rosbridge_mcp_server.sim.nodes.room import ROOM_MAP_CELLS
 from rosbridge_mcp_server.sim.rosapi import ROSAPI_RELEASES, Rosapi, RosapiOptions
 from rosbridge_mcp_server.sim.world import World
 
-__all__ = ["DEFAULT_MAX_MESSAGE_SIZE", "ROS2_DISTROS", "SimulatedRobot"]
+__all__ = ["DEFAULT_MAX_MESSAGE_SIZE", "ROS2_DISTROS", "WORLDS", "SimulatedRobot"]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
 
@@ -30,6 +31,8 @@ DEFAULT_MAX_MESSAGE_SIZE = 10_000_000
 MAX_INCOMING_FRAME = 10 * 1024 * 1024
 #: ROS 2 distros the simulated robot can say it runs (``get_ros_version``; Humble has no type descriptions).
 ROS2_DISTROS = ("humble", "jazzy", "kilted", "rolling")
+#: The worlds the simulated robot can run: the turtle demo (default) and a Nav2-scale mobile robot.
+WORLDS = ("turtle", "nav2")
 
 
 class SimulatedRobot:
@@ -48,6 +51,9 @@ class SimulatedRobot:
     at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter / type
     description (ROS 2) and logger (ROS 1) services every real node has. ``map_cells`` is the side of
     ``/map`` in cells (the same room, finer; e.g. 2000 for benchmarks).
+
+    ``world="nav2"`` runs a Nav2-scale mobile robot instead of the turtle (see :mod:`.nodes.nav2`);
+    ``robots=N`` runs N of them under ``/robot1``, ``/robot2``, ...
     """
 
     def __init__(
@@ -69,6 +75,8 @@ class SimulatedRobot:
         map_cells: int = ROOM_MAP_CELLS,
         max_message_size: int | None = None,
         ssl: _ssl.SSLContext | None = None,
+        world: Literal["turtle", "nav2"] = "turtle",
+        robots: int = 1,
     ) -> None:
         if dialect not in ("ros1", "ros2"):
             raise ValueError(f"dialect must be 'ros1' or 'ros2', not {dialect!r}")
@@ -76,6 +84,10 @@ class SimulatedRobot:
             raise ValueError("in_order models Humble's rosbridge, so it needs dialect='ros2'")
         if map_cells < 8:
             raise ValueError("map_cells must be at least 8")
+        if world not in WORLDS:
+            raise ValueError(f"world must be one of {', '.join(WORLDS)}, not {world!r}")
+        if robots < 1 or (robots > 1 and world != "nav2"):
+            raise ValueError(f"robots must be >= 1, and more than one needs world='nav2' (not {robots!r})")
         if action_step <= 0 or slow_service_seconds < 0:
             raise ValueError("action_step must be > 0 and slow_service_seconds >= 0")
         if distro is not None and (dialect != "ros2" or distro not in ROS2_DISTROS):
@@ -125,14 +137,25 @@ class SimulatedRobot:
             rosapi=RosapiOptions(release=rosapi, latency=latencies),
             node_services=node_services,
             map_cells=map_cells,
+            world=world,
+            robots=robots,
         )
         self._nodes.build()
+        self.world_name = world
         self._server: Server | None = None
 
     @property
     def url(self) -> str:
         """``ws://host:port`` of the running server (``wss://`` when it serves TLS)."""
         return f"{'wss' if self.ssl is not None else 'ws'}://{self.host}:{self.port}"
+
+    @property
+    def nav2(self) -> Nav2World:
+        """The Nav2 world (robots' poses, lifecycle states, the :class:`Surroundings` hook); only with
+        ``world="nav2"``."""
+        if self._nodes.nav2 is None:
+            raise AttributeError("this robot runs the turtle world (world='nav2' has a Nav2 world)")
+        return self._nodes.nav2
 
     @property
     def rosapi_node(self) -> Rosapi:

@@ -36,10 +36,8 @@ SPEC = ToolSpec(
     name="cancel_action",
     title="Cancel action goals",
     description=(
-        "Cancel a running action goal, or every goal of an action when no goal_id is given; the robot stops "
-        'what the goal was doing. Example: {"action_name": "/fibonacci"} cancels all its goals; '
-        '{"action_name": "/fibonacci", "goal_id": "<id from publish_action>"} cancels one. Works while '
-        "publish_action is still waiting for that goal (it then reports the goal as cancelled)."
+        'Cancel an action\'s running goals, or one by goal_id. Example: {"action_name": "/fibonacci"}. '
+        "A waiting publish_action ends too."
     ),
     hints=ACTS_ON_ROBOT,
     output=CancelAnswer,
@@ -48,13 +46,12 @@ SPEC = ToolSpec(
 
 async def run(
     ctx: ToolContext,
-    action_name: Annotated[str, Field(description="Action server name, e.g. /fibonacci")],
+    action_name: Annotated[str, Field(description="e.g. /fibonacci")],
     goal_id: Annotated[
         str | None,
         Field(
             description=(
-                "Id of one goal to cancel, as publish_action reports it (e.g. goal:/fibonacci:0d95c87b-5); "
-                "omit to cancel every goal of the action"
+                "One goal's id from publish_action, e.g. goal:/fibonacci:0d95c87b-5 (omit: all goals)"
             )
         ),
     ] = None,

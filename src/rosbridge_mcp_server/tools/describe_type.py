@@ -44,9 +44,8 @@ SPEC = ToolSpec(
     name="describe_type",
     title="Describe a type",
     description=(
-        "Show the fields of a message, service or action type as a nested outline, with an example JSON "
-        'object to send. Read-only. Examples: {"type_name": "geometry_msgs/msg/Twist"}, '
-        '{"type_name": "std_srvs/srv/SetBool"}, {"type_name": "example_interfaces/action/Fibonacci"}.'
+        "Show a message, service or action type's fields as an outline, with an example to send. "
+        'Read-only. Example: {"type_name": "geometry_msgs/msg/Twist"}.'
     ),
     hints=READS_ROBOT,
     output=TypeAnswer,

@@ -57,9 +57,8 @@ SPEC = ToolSpec(
     name="get_image",
     title="Camera frame",
     description=(
-        "Take one frame from a camera topic (sensor_msgs/Image or CompressedImage) and return it as a "
-        'picture. Read-only. Example: {"topic": "/camera/image_raw", "max_size": 640}. Depth images '
-        "(16UC1, 32FC1) come as grey, nearer darker, with the range in the text."
+        "One camera frame (Image or CompressedImage) as a picture. Read-only. Example: "
+        '{"topic": "/camera/image_raw"}. Depth comes as grey (nearer darker).'
     ),
     hints=READS_ROBOT,
     output=ImageAnswer,

@@ -29,8 +29,8 @@ SPEC = ToolSpec(
     name="get_parameter",
     title="Read a parameter",
     description=(
-        'Read one ROS parameter. Read-only. Example: {"name": "/turtlesim:background_r"} on ROS 2, '
-        '{"name": "/turtlesim/background_r"} on ROS 1. list_parameters shows the names.'
+        'Read one parameter. Read-only. Example: {"name": "/turtlesim:background_r"} (ROS 2) or '
+        '"/turtlesim/background_r" (ROS 1).'
     ),
     hints=READS_ROBOT,
     output=ParameterAnswer,

@@ -31,8 +31,8 @@ SPEC = ToolSpec(
     name="get_topic_info",
     title="Topic details",
     description=(
-        "Show a topic's message type and which nodes publish and subscribe to it. Read-only. "
-        'Example: {"topic": "/turtle1/pose"}. An unknown topic is an error; list_topics shows the topics.'
+        "Show a topic's type and the nodes publishing and subscribing. Read-only. "
+        'Example: {"topic": "/turtle1/pose"}.'
     ),
     hints=READS_ROBOT,
     output=TopicInfoAnswer,

@@ -48,9 +48,8 @@ SPEC = ToolSpec(
     name="get_transform",
     title="Frame transform",
     description=(
-        "Where source_frame is in target_frame (tf2 lookupTransform), from /tf and /tf_static, over any "
-        'number of frames. Read-only. Example: {"target_frame": "odom", "source_frame": "base_link"} gives '
-        "the robot's position in odom: translation (m) and rotation (quaternion and roll/pitch/yaw, degrees)."
+        "Where source_frame is in target_frame, from /tf and /tf_static. Read-only. Example: "
+        '{"target_frame": "odom", "source_frame": "base_link"}: translation (m), rotation.'
     ),
     hints=READS_ROBOT,
     output=TransformAnswer,

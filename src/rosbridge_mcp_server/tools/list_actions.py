@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+from typing import Annotated
+
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
+from rosbridge_mcp_server.tools.paging import FilterArg, OffsetArg, limit_arg, matcher, page_note, page_of
 
-__all__ = ["SPEC", "ActionRow", "ActionsAnswer", "run"]
+__all__ = ["DEFAULT_LIMIT", "SPEC", "ActionRow", "ActionsAnswer", "run"]
+
+DEFAULT_LIMIT = 100
 
 
 class ActionRow(BaseModel):
@@ -19,9 +24,11 @@ class ActionRow(BaseModel):
 
 
 class ActionsAnswer(BaseModel):
-    """Every action server, sorted by name."""
+    """One page of the matching action servers, sorted by name."""
 
-    count: int
+    count: int = Field(description="Action servers matching")
+    offset: int = 0
+    more: int = Field(default=0, description="Matches after this page")
     actions: list[ActionRow]
 
 
@@ -29,23 +36,39 @@ SPEC = ToolSpec(
     name="list_actions",
     title="List actions",
     description=(
-        "List every ROS action server (long-running goals such as navigation or rotation), each once, with "
-        "its action type where the bridge can tell (e.g. /fibonacci of type "
-        "example_interfaces/action/Fibonacci). Read-only; use it before publish_action. Takes no "
-        "arguments: call it with {}."
+        "List the action servers with their types. Read-only; use before publish_action. "
+        'Example: {"filter": "navigate"}.'
     ),
     hints=READS_ROBOT,
     output=ActionsAnswer,
 )
 
 
-async def run(ctx: ToolContext) -> ToolAnswer:
+def _line(row: ActionRow) -> str:
+    return f"{row.name} ({row.type or 'type unknown'})"
+
+
+async def run(
+    ctx: ToolContext,
+    filter: FilterArg = None,
+    limit: Annotated[int, limit_arg(DEFAULT_LIMIT)] = DEFAULT_LIMIT,
+    offset: OffsetArg = 0,
+) -> ToolAnswer:
     """Ask rosapi for the action servers, then for each one's type."""
     actions = await ctx.graph.actions()
-    rows = [ActionRow(name=action.name, type=action.type) for action in actions]
-    if rows:
-        lines = [f"{row.name} ({row.type or 'type unknown'})" for row in rows]
-        text = f"{len(rows)} action servers:\n" + "\n".join(lines)
+    wanted = matcher(filter)
+    rows = [
+        ActionRow(name=action.name, type=action.type)
+        for action in actions
+        if wanted(action.name) or wanted(action.type or "")
+    ]
+    page = page_of(rows, offset=offset, limit=limit, line=_line)
+    if page.rows:
+        text = f"{len(rows)} action servers:\n" + "\n".join(map(_line, page.rows))
+    elif actions:
+        text = f"No action servers match {filter!r}." if filter else "No action servers on this page."
     else:
         text = "The robot has no action servers right now."
-    return ToolAnswer(text=text, data=ActionsAnswer(count=len(rows), actions=rows))
+    note = page_note(page, "action servers", filter, len(actions))
+    data = ActionsAnswer(count=len(rows), offset=offset, more=page.more, actions=page.rows)
+    return ToolAnswer(text=f"{text}\n{note}" if note else text, data=data)

@@ -1,84 +1,176 @@
-"""``list_services``: every service in the ROS graph with its type."""
+"""``list_services``: the services in the ROS graph with their types, grouped, filtered and paged."""
 
 from __future__ import annotations
+
+from typing import Annotated
 
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.known_types import per_node_types, rosapi_types
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
+from rosbridge_mcp_server.tools.paging import (
+    FRAME_RESERVE,
+    TEXT_BUDGET,
+    FilterArg,
+    OffsetArg,
+    limit_arg,
+    matcher,
+    page_note,
+    page_of,
+)
 
-__all__ = ["SPEC", "ServiceRow", "ServicesAnswer", "listing_text", "run"]
+__all__ = ["DEFAULT_LIMIT", "SPEC", "ServiceGroup", "ServiceRow", "ServicesAnswer", "listing_text", "run"]
+
+DEFAULT_LIMIT = 100
+#: How much of a group's node list the text spells out.
+MAX_GROUP_NODES_CHARS = 1_500
 
 
 class ServiceRow(BaseModel):
     """One service."""
 
-    name: str = Field(description="Service name, e.g. /spawn")
-    type: str = Field(description='Service type, e.g. turtlesim/srv/Spawn ("" if rosapi could not tell)')
+    name: str
+    type: str = Field(description='"" if rosapi could not tell')
+
+
+class ServiceGroup(BaseModel):
+    """Services several nodes offer alike: each node has every one (name = node + "/" + leaf)."""
+
+    nodes: list[str]
+    services: list[ServiceRow] = Field(description="Leaf names, e.g. get_parameters")
 
 
 class ServicesAnswer(BaseModel):
-    """Every service, sorted by name."""
+    """One page of the matching services, sorted by name; without a filter the services every node offers
+    (parameters, lifecycle, rosapi's) are in groups."""
 
-    count: int
+    count: int = Field(description="Services matching (all of them without a filter)")
+    offset: int
+    more: int = Field(description="Rows after this page")
     services: list[ServiceRow]
+    groups: list[ServiceGroup] = Field(default_factory=list)
 
 
 SPEC = ToolSpec(
     name="list_services",
     title="List services",
     description=(
-        "List every ROS service the robot offers, with its service type (e.g. /reset of type "
-        "std_srvs/srv/Empty). Read-only; use it before publish_service. Takes no arguments: call it with "
-        "{}."
+        "List the services with their types (those every node has, grouped). Read-only; use before "
+        'publish_service. Example: {"filter": "map"}.'
     ),
     hints=READS_ROBOT,
     output=ServicesAnswer,
 )
 
 
-async def run(ctx: ToolContext) -> ToolAnswer:
+def _line(row: ServiceRow) -> str:
+    return _pair_line((row.name, row.type))
+
+
+def _pair_line(row: tuple[str, str]) -> str:
+    return f"{row[0]} ({row[1] or 'type unknown'})"
+
+
+async def run(
+    ctx: ToolContext,
+    filter: FilterArg = None,
+    limit: Annotated[int, limit_arg(DEFAULT_LIMIT)] = DEFAULT_LIMIT,
+    offset: OffsetArg = 0,
+) -> ToolAnswer:
     """Ask rosapi for the services (their types are known once per connection)."""
     services = await ctx.graph.services()
-    rows = [ServiceRow(name=service.name, type=service.type) for service in services]
-    if rows:
-        text = listing_text(rows, (await ctx.graph.ros_info()).version)
+    if not services:
+        return ToolAnswer(
+            text="The robot offers no services right now.",
+            data=ServicesAnswer(count=0, offset=offset, more=0, services=[]),
+        )
+    # Rows are (name, type) pairs until the page is known: a real graph has hundreds.
+    rows = [(service.name, service.type) for service in services]
+    if filter:
+        wanted = matcher(filter)
+        matching = [row for row in rows if wanted(row[0]) or wanted(row[1])]
+        page = page_of(matching, offset=offset, limit=limit, line=_pair_line)
+        head = f"{len(matching)} services:" if page.rows else f"No services on this page match {filter!r}."
+        body = [head, *map(_pair_line, page.rows)]
+        groups: list[ServiceGroup] = []
+        count = len(matching)
     else:
-        text = "The robot offers no services right now."
-    return ToolAnswer(text=text, data=ServicesAnswer(count=len(rows), services=rows))
+        version = (await ctx.graph.ros_info()).version
+        own, groups = _split(rows, version)
+        group_lines = [_group_line(group) for group in groups]
+        head = _head(len(rows), len(own))
+        # What the head, the groups and the closing note take; the robot's own services get the rest.
+        budget = TEXT_BUDGET - FRAME_RESERVE - sum(len(line) + 1 for line in group_lines)
+        page = page_of(own, offset=offset, limit=limit, line=_pair_line, budget=max(budget, 1_000))
+        body = [head, *map(_pair_line, page.rows), *group_lines]
+        count = len(rows)
+    note = page_note(page, "services", filter, len(rows))
+    text = "\n".join([*body, note] if note else body)
+    shown = [ServiceRow.model_construct(name=name, type=kind) for name, kind in page.rows]
+    data = ServicesAnswer(count=count, offset=offset, more=page.more, services=shown, groups=groups)
+    return ToolAnswer(text=text, data=data)
+
+
+def _split(rows: list[tuple[str, str]], version: int) -> tuple[list[tuple[str, str]], list[ServiceGroup]]:
+    """The robot's own services, and the services every node (and rosapi) offers, grouped by their set.
+
+    A ROS 2 node offers seven services of its own (parameters, type description) and a lifecycle node five
+    more, so on a real graph most rows are those: grouped, the text stays short, and every name and type can
+    still be read from it.
+    """
+    names = [name for name, _ in rows]
+    per_node, rosapi = per_node_types(names, version), rosapi_types(names, version)
+    own = [row for row in rows if row[0] not in per_node and row[0] not in rosapi]
+    offered: dict[str, list[tuple[str, str]]] = {}
+    for name, kind in sorted(per_node.items()):
+        node, _, leaf = name.rpartition("/")
+        offered.setdefault(node or "/", []).append((leaf, kind))
+    nodes_by_set: dict[tuple[tuple[str, str], ...], list[str]] = {}
+    for node, leaves in offered.items():
+        nodes_by_set.setdefault(tuple(leaves), []).append(node)
+    groups = [
+        ServiceGroup(nodes=nodes, services=[ServiceRow(name=leaf, type=kind) for leaf, kind in leaves])
+        for leaves, nodes in nodes_by_set.items()
+    ]
+    if rosapi:
+        groups.append(
+            ServiceGroup(
+                nodes=["/rosapi"],
+                services=[
+                    ServiceRow(name=name.rpartition("/")[2], type=kind)
+                    for name, kind in sorted(rosapi.items())
+                ],
+            )
+        )
+    return own, groups
+
+
+def _head(total: int, own: int) -> str:
+    head = _count(total, "service")
+    if total - own:
+        head += f": the robot's {own}, then {total - own} that every node and rosapi offer, grouped"
+    return head + ":"
+
+
+def _group_line(group: ServiceGroup) -> str:
+    if group.nodes == ["/rosapi"]:
+        package = group.services[0].type.rpartition("/")[0]
+        api = ", ".join(f"{row.name} ({row.type.rpartition('/')[2]})" for row in group.services)
+        return f"rosapi's own, /rosapi/<name> ({package}/<Type>): {api}"
+    leaves = ", ".join(f"<node>/{row.name} ({row.type})" for row in group.services)
+    nodes = ", ".join(group.nodes)
+    if len(nodes) > MAX_GROUP_NODES_CHARS:
+        # A fleet's node list: the first nodes, then how to see the rest (the structured content has them).
+        nodes = nodes[:MAX_GROUP_NODES_CHARS].rpartition(", ")[0]
+        shown = nodes.count(", ") + 1
+        nodes += f", ... {len(group.nodes) - shown} more (filter by node name lists their services)"
+    return f"On {_count(len(group.nodes), 'node')} ({nodes}): {leaves}"
 
 
 def listing_text(rows: list[ServiceRow], version: int) -> str:
-    """The robot's own services a line each; the services every node offers, and rosapi's, grouped.
-
-    A ROS 2 node offers seven services of its own (its parameters and its type descriptions), so on a real
-    graph most rows are those: grouped, the text a model reads stays short, and every name and type can still
-    be read from it. The structured content lists every row.
-    """
-    names = [row.name for row in rows]
-    per_node, rosapi = per_node_types(names, version), rosapi_types(names, version)
-    own = [row for row in rows if row.name not in per_node and row.name not in rosapi]
-    lines = [f"{row.name} ({row.type or 'type unknown'})" for row in own]
-    offered: dict[str, list[str]] = {}
-    for name, kind in sorted(per_node.items()):
-        node, _, leaf = name.rpartition("/")
-        offered.setdefault(node or "/", []).append(f"<node>/{leaf} ({kind})")
-    nodes_by_set: dict[tuple[str, ...], list[str]] = {}
-    for node, services in offered.items():
-        nodes_by_set.setdefault(tuple(services), []).append(node)
-    for common, nodes in nodes_by_set.items():
-        lines.append(f"On {_count(len(nodes), 'node')} ({', '.join(nodes)}): {', '.join(common)}")
-    if rosapi:
-        package = next(iter(rosapi.values())).rpartition("/")[0]
-        api = ", ".join(
-            f"{name.rpartition('/')[2]} ({kind.rpartition('/')[2]})" for name, kind in sorted(rosapi.items())
-        )
-        lines.append(f"rosapi's own, /rosapi/<name> ({package}/<Type>): {api}")
-    grouped = len(rows) - len(own)
-    head = _count(len(rows), "service")
-    if grouped:
-        head += f": the robot's {len(own)}, then {grouped} that every node and rosapi offer, grouped"
-    return f"{head}:\n" + "\n".join(lines)
+    """The unfiltered listing's text of ``rows`` (all on one page)."""
+    own, groups = _split([(row.name, row.type) for row in rows], version)
+    return "\n".join([_head(len(rows), len(own)), *map(_pair_line, own), *map(_group_line, groups)])
 
 
 def _count(n: int, noun: str) -> str:

@@ -1,27 +1,32 @@
-"""``list_topics``: every topic in the ROS graph with its type."""
+"""``list_topics``: the topics in the ROS graph with their types, filtered and paged."""
 
 from __future__ import annotations
+
+from typing import Annotated
 
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
+from rosbridge_mcp_server.tools.paging import FilterArg, OffsetArg, limit_arg, matcher, page_note, page_of
 
-__all__ = ["SPEC", "TopicRow", "TopicsAnswer", "run"]
+__all__ = ["DEFAULT_LIMIT", "SPEC", "TopicRow", "TopicsAnswer", "run"]
+
+DEFAULT_LIMIT = 100
 
 
 class TopicRow(BaseModel):
     """One topic."""
 
-    name: str = Field(description="Topic name, e.g. /turtle1/cmd_vel")
-    type: str = Field(
-        description='Message type, e.g. geometry_msgs/msg/Twist ("" if the graph does not know it)'
-    )
+    name: str
+    type: str = Field(description='"" if unknown')
 
 
 class TopicsAnswer(BaseModel):
-    """Every topic, sorted by name."""
+    """One page of the matching topics, sorted by name."""
 
-    count: int
+    count: int = Field(description="Topics matching (all of them without a filter)")
+    offset: int
+    more: int = Field(description="Matches after this page")
     topics: list[TopicRow]
 
 
@@ -29,22 +34,38 @@ SPEC = ToolSpec(
     name="list_topics",
     title="List topics",
     description=(
-        "List every ROS topic the robot has, with its message type. Read-only; start here to learn what "
-        "the robot publishes (sensors, state) and what it listens to (commands such as /turtle1/cmd_vel of "
-        "type geometry_msgs/msg/Twist). Takes no arguments: call it with {}."
+        "List the robot's topics with their message types. Read-only; start here. Example: "
+        '{"filter": "scan"} (names and types).'
     ),
     hints=READS_ROBOT,
     output=TopicsAnswer,
 )
 
 
-async def run(ctx: ToolContext) -> ToolAnswer:
-    """Ask rosapi for the topics and their types."""
+def _line(row: TopicRow) -> str:
+    return f"{row.name} ({row.type or 'type unknown'})"
+
+
+async def run(
+    ctx: ToolContext,
+    filter: FilterArg = None,
+    limit: Annotated[int, limit_arg(DEFAULT_LIMIT)] = DEFAULT_LIMIT,
+    offset: OffsetArg = 0,
+) -> ToolAnswer:
+    """Ask rosapi for the topics and their types; keep the page asked for."""
     topics = await ctx.graph.topics()
-    rows = [TopicRow(name=topic.name, type=topic.type) for topic in topics]
-    if rows:
-        lines = [f"{row.name} ({row.type or 'type unknown'})" for row in rows]
-        text = f"{len(rows)} topics:\n" + "\n".join(lines)
-    else:
+    wanted = matcher(filter)
+    rows = [
+        TopicRow.model_construct(name=t.name, type=t.type) for t in topics if wanted(t.name) or wanted(t.type)
+    ]
+    page = page_of(rows, offset=offset, limit=limit, line=_line)
+    note = page_note(page, "topics", filter, len(topics))
+    if page.rows:
+        text = f"{len(rows)} topics:\n" + "\n".join(map(_line, page.rows))
+    elif not topics:
         text = "The robot has no topics right now (nothing publishes or subscribes)."
-    return ToolAnswer(text=text, data=TopicsAnswer(count=len(rows), topics=rows))
+    else:
+        text = f"No topics on this page{' match ' + repr(filter) if filter and not rows else ''}."
+    text = f"{text}\n{note}" if note else text
+    data = TopicsAnswer(count=len(rows), offset=offset, more=page.more, topics=page.rows)
+    return ToolAnswer(text=text, data=data)

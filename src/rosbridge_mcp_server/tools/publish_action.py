@@ -56,12 +56,9 @@ SPEC = ToolSpec(
     name="publish_action",
     title="Run an action goal",
     description=(
-        "Send a goal to a ROS action server and wait until it finishes; this can move the robot "
-        "(navigation, rotation, arm motion). Example: action_name /fibonacci, action_type "
-        "example_interfaces/action/Fibonacci (ROS 1: actionlib_tutorials/FibonacciAction), goal "
-        f"{_EXAMPLE}, timeout 30. Feedback is sent as progress notifications (naming the goal id) while the "
-        "goal runs. If it does not finish within timeout seconds, or the call is cancelled, the goal is "
-        "cancelled on the robot. Use list_actions to find actions."
+        "Send a goal to an action server and wait for its result; can move the robot. Example: action_name "
+        f"/fibonacci, action_type example_interfaces/action/Fibonacci, goal {_EXAMPLE}. Feedback comes as "
+        "progress; on timeout the goal is cancelled."
     ),
     hints=ACTS_ON_ROBOT,
     output=GoalAnswer,
@@ -70,15 +67,10 @@ SPEC = ToolSpec(
 
 async def run(
     ctx: ToolContext,
-    action_name: Annotated[str, Field(description="Action server name, e.g. /fibonacci")],
+    action_name: Annotated[str, Field(description="e.g. /fibonacci")],
     action_type: Annotated[
         str,
-        Field(
-            description=(
-                "Action type: pkg/action/Name, pkg/Name or pkg/NameAction, e.g. "
-                "example_interfaces/action/Fibonacci"
-            )
-        ),
+        Field(description=("e.g. example_interfaces/action/Fibonacci (ROS 1: pkg/NameAction)")),
     ],
     goal: Annotated[
         dict[str, Any] | str,
@@ -89,10 +81,7 @@ async def run(
         Field(
             gt=0,
             le=MAX_GOAL_TIMEOUT,
-            description=(
-                "Seconds to wait for the result before cancelling the goal (more than 0, at most "
-                f"{MAX_GOAL_TIMEOUT:g}), e.g. 30"
-            ),
+            description=("Seconds to wait before cancelling, e.g. 30"),
         ),
     ] = 30.0,
 ) -> ToolAnswer:

@@ -34,11 +34,8 @@ SPEC = ToolSpec(
     name="publish_service",
     title="Call a service",
     description=(
-        "Call a ROS service and return its response. Services can change the robot (reset, spawn, set "
-        "parameters). Example: service /add_two_ints, service_type example_interfaces/srv/AddTwoInts, "
-        f"request {_EXAMPLE}; or service /reset, service_type std_srvs/srv/Empty, request {{}}. The request "
-        "is checked against the type when rosapi can describe it; a failing service returns the bridge's "
-        "error text. Use list_services to find services and their types."
+        "Call a ROS service and return its response; services can change the robot. Example: service "
+        f"/add_two_ints, service_type example_interfaces/srv/AddTwoInts, request {_EXAMPLE}."
     ),
     hints=ACTS_ON_ROBOT,
     output=ServiceAnswer,
@@ -47,10 +44,10 @@ SPEC = ToolSpec(
 
 async def run(
     ctx: ToolContext,
-    service: Annotated[str, Field(description="Service name, e.g. /add_two_ints")],
+    service: Annotated[str, Field(description="e.g. /add_two_ints")],
     service_type: Annotated[
         str,
-        Field(description="Service type, pkg/srv/Type or pkg/Type, e.g. example_interfaces/srv/AddTwoInts"),
+        Field(description="e.g. example_interfaces/srv/AddTwoInts"),
     ],
     request: Annotated[
         dict[str, Any] | str,
@@ -61,9 +58,7 @@ async def run(
         Field(
             gt=0,
             le=MAX_SERVICE_TIMEOUT,
-            description=(
-                f"Seconds to wait for the response (more than 0, at most {MAX_SERVICE_TIMEOUT:g}), e.g. 10"
-            ),
+            description=("Seconds to wait for the response, e.g. 10"),
         ),
     ] = 10.0,
 ) -> ToolAnswer:

@@ -48,13 +48,9 @@ SPEC = ToolSpec(
     name="publish_topic",
     title="Publish a message",
     description=(
-        "Publish one message on a ROS topic. This can move the robot. Example: topic /turtle1/cmd_vel, "
-        f"message_type geometry_msgs/msg/Twist, message {_EXAMPLE} drives forward at 0.5 m/s while turning "
-        "at 0.3 rad/s (velocity commands usually act only briefly; publish again to keep moving, publish "
-        "zeros to stop). The message is checked against the type first; a field that does not fit is an "
-        "error naming it. Use list_topics and get_topic_info to find topics and types. With rate_hz and "
-        "duration it publishes repeatedly (e.g. 10 Hz for 3 s keeps a robot moving) and ends a Twist "
-        "stream with zeros."
+        "Publish on a topic; can move the robot. Example: topic /cmd_vel, message_type "
+        f"geometry_msgs/msg/Twist, message {_EXAMPLE}. A command acts briefly: rate_hz with duration keeps "
+        "publishing, ending a Twist stream with zeros."
     ),
     hints=ACTS_ON_ROBOT,
     output=PublishAnswer,
@@ -64,19 +60,14 @@ SPEC = ToolSpec(
 async def run(
     ctx: ToolContext,
     *,
-    topic: Annotated[str, Field(description="Topic to publish on, e.g. /turtle1/cmd_vel")],
+    topic: Annotated[str, Field(description="e.g. /turtle1/cmd_vel")],
     message_type: Annotated[
         str,
-        Field(description="ROS message type, pkg/msg/Type or pkg/Type, e.g. geometry_msgs/msg/Twist"),
+        Field(description="e.g. geometry_msgs/msg/Twist (ROS 1: geometry_msgs/Twist)"),
     ],
     message: Annotated[
         dict[str, Any] | str,
-        Field(
-            description=(
-                f"The message as a JSON object, e.g. {_EXAMPLE} for a Twist; omitted fields are 0/empty; "
-                "{} for std_msgs/msg/Empty"
-            )
-        ),
+        Field(description=(f"JSON object, e.g. {_EXAMPLE}; omitted fields are 0/empty")),
     ] = "{}",
     rate_hz: Annotated[
         float | None,

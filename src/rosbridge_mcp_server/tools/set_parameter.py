@@ -36,9 +36,8 @@ SPEC = ToolSpec(
     name="set_parameter",
     title="Set a parameter",
     description=(
-        "Set one ROS parameter; this can change how the robot behaves. The value is read back to confirm. "
-        'Example: {"name": "/turtlesim:background_r", "value": 200} (ROS 2; ROS 1 /turtlesim/background_r). '
-        "A ROS 2 parameter keeps its type: send 2.0, not 2, for a double."
+        "Set one ROS parameter (read back to confirm); can change the robot. Example: "
+        '{"name": "/turtlesim:background_r", "value": 200}. ROS 2 keeps the type: 2.0 for a double.'
     ),
     hints=_SETS_PARAMETER,
     output=SetParameterAnswer,

@@ -23,11 +23,10 @@ class StopAnswer(BaseModel):
 
 SPEC = ToolSpec(
     name="stop_robot",
-    title="Stop everything this server started",
+    title="Stop what this server started",
     description=(
-        "Emergency stop for what this server started: ends every publish_topic stream, publishes one zero "
-        "velocity on every topic it sent a Twist/TwistStamped to, cancels every running publish_action goal. "
-        "Never asks for confirmation; call it with {} whenever the robot must stop now."
+        "Emergency stop for what this server started: ends streams, sends zero velocity, cancels goals. "
+        "Never asks; call it with {} whenever the robot must stop."
     ),
     # It acts on the robot, but only ever takes motion away; repeating it is harmless.
     hints=ToolHints(read_only=False, destructive=False, idempotent=True),

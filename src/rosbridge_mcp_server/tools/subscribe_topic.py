@@ -59,10 +59,9 @@ SPEC = ToolSpec(
     name="subscribe_topic",
     title="Read a topic",
     description=(
-        "Read messages from a ROS topic (one by default) and return them. Read-only. Examples: "
-        '{"topic": "/turtle1/pose"}; {"topic": "/scan", "count": 3, "fields": ["ranges", "header.stamp"]}; '
-        '{"topic": "/chatter", "duration": 2} collects for 2 s. Long arrays are summarised (length, first '
-        "values, min/max/mean) and byte arrays omitted. A silent topic ends at the timeout."
+        "Read messages from a topic (one by default). Read-only. Example: "
+        '{"topic": "/scan", "count": 3, "fields": ["ranges"]}. Long arrays are summarised; a silent topic '
+        "ends at the timeout."
     ),
     hints=READS_ROBOT,
     output=SubscribeAnswer,
@@ -74,14 +73,14 @@ async def run(
     *,
     topic: Annotated[str, Field(description="Topic name, e.g. /turtle1/pose")],
     message_type: Annotated[
-        str | None, Field(description="Message type, e.g. sensor_msgs/msg/LaserScan; default: the graph's")
+        str | None, Field(description="e.g. sensor_msgs/msg/LaserScan (default: the graph's)")
     ] = None,
     count: Annotated[
         int | None, Field(ge=1, le=MAX_COUNT, description="Messages to read, e.g. 10 (default 1)")
     ] = None,
     duration: Annotated[
         float | None,
-        Field(gt=0, le=MAX_DURATION, description="Collect for this long (up to count), seconds, e.g. 2"),
+        Field(gt=0, le=MAX_DURATION, description="Seconds to collect (up to count), e.g. 2"),
     ] = None,
     timeout: Annotated[
         float, Field(gt=0, le=MAX_DURATION, description="Seconds to wait for a message, e.g. 5")
@@ -91,7 +90,7 @@ async def run(
     ] = None,
     qos: Annotated[
         QosRequest | None,
-        Field(description='ROS 2 QoS, e.g. {"reliability": "reliable", "durability": "transient_local"}'),
+        Field(description='ROS 2 QoS, e.g. {"durability": "transient_local"}'),
     ] = None,
 ) -> ToolAnswer:
     """Subscribe, collect, unsubscribe; shorten each message."""

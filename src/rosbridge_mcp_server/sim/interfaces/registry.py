@@ -32,6 +32,7 @@ from .base import (
     split_seconds,
 )
 from .definitions import COMMON, ROS1_ONLY, ROS2_ONLY, ROSAPI_2_1, to_ros1_text
+from .definitions_nav2 import NAV2
 from .ros1 import Ros1Conversion
 from .ros2 import Ros2Conversion
 from .specs import Cat, FieldSpec, MessageSpec, ParsedTable, parse_table
@@ -52,7 +53,7 @@ def _table_for(dialect: Dialect, rosapi: str) -> ParsedTable:
         table = _tables.get((dialect, rosapi))
         if table is None:
             if dialect == "ros2":
-                texts = {**COMMON, **ROS2_ONLY}
+                texts = {**COMMON, **NAV2, **ROS2_ONLY}
                 if rosapi == "2.1.0":
                     for key, text in ROSAPI_2_1.items():
                         if text is None:
@@ -60,7 +61,7 @@ def _table_for(dialect: Dialect, rosapi: str) -> ParsedTable:
                         else:
                             texts[key] = text
             else:
-                texts = {key: to_ros1_text(text) for key, text in COMMON.items()}
+                texts = {key: to_ros1_text(text) for key, text in {**COMMON, **NAV2}.items()}
                 texts.update(ROS1_ONLY)
             table = parse_table(dialect, texts)
             _tables[(dialect, rosapi)] = table

@@ -17,6 +17,7 @@ from rosbridge_mcp_server.sim.bridge import Bridge
 from rosbridge_mcp_server.sim.graph import ROSBRIDGE_NODE, ServiceEntry
 from rosbridge_mcp_server.sim.nodes.camera import CAMERA, Camera, CameraSettings
 from rosbridge_mcp_server.sim.nodes.kit import Loop, NodeKit
+from rosbridge_mcp_server.sim.nodes.nav2 import Nav2World
 from rosbridge_mcp_server.sim.nodes.navigation import MAP_SERVER, PLANNER, MapServer, Planner
 from rosbridge_mcp_server.sim.nodes.parameter_services import PARAMETER_SERVICES, ParameterServices
 from rosbridge_mcp_server.sim.nodes.room import ROOM_MAP_CELLS
@@ -61,6 +62,8 @@ class WorldNodes:
         rosapi: RosapiOptions | None = None,
         node_services: bool = True,
         map_cells: int = ROOM_MAP_CELLS,
+        world: str = "turtle",
+        robots: int = 1,
     ) -> None:
         self.bridge = bridge
         self.kit = NodeKit(bridge)
@@ -83,11 +86,26 @@ class WorldNodes:
         self._tasks: list[asyncio.Task[None]] = []
         self.fibonacci2: FibonacciServer | None = None
         self.fibonacci1: ActionlibFibonacciServer | None = None
+        #: The Nav2 world when the robot runs it (``world="nav2"``), else ``None``.
+        self.nav2: Nav2World | None = None
+        if world == "nav2":
+            self.nav2 = Nav2World(
+                self.kit, robots=robots, action_step=action_step, type_descriptions=self.type_descriptions
+            )
+        elif world != "turtle" or robots != 1:
+            raise ValueError(f"world must be 'turtle' or 'nav2' (robots only with nav2), not {world!r}")
 
     # --- building -------------------------------------------------------------------------------------------
 
     def build(self) -> None:
         """Register every node, topic, service, action and parameter of the world."""
+        if self.nav2 is not None:
+            self.nav2.build()
+            self._plumbing()
+            self.bridge.add_client_topics()
+            self.rosapi = Rosapi(self.bridge, self.rosapi_options)
+            self._parameters()
+            return
         self._plumbing()
         self.bridge.add_client_topics()
         self.turtlesim.build()
@@ -105,6 +123,8 @@ class WorldNodes:
         self._parameters()
 
     def _node_names(self) -> list[str]:
+        if self.nav2 is not None:
+            return [*self.nav2.node_names, ROSAPI_NODE, ROSBRIDGE_NODE]
         nodes = [
             TURTLESIM,
             TALKER,
@@ -234,11 +254,16 @@ class WorldNodes:
                     if self.type_descriptions:
                         # Declared by every node since Iron (what the Jazzy and Kilted labs list second).
                         params[f"{node}:start_type_description_service"] = True
+            if self.nav2 is None:
+                params.update(
+                    {
+                        "/turtlesim:background_r": 69,
+                        "/turtlesim:background_g": 86,
+                        "/turtlesim:background_b": 255,
+                    }
+                )
             params.update(
                 {
-                    "/turtlesim:background_r": 69,
-                    "/turtlesim:background_g": 86,
-                    "/turtlesim:background_b": 255,
                     # rosbridge_websocket's parameters in the order 2.1.0 declares them (its launch
                     # defaults, as the Kilted lab lists them), then the newer service timeout.
                     "/rosbridge_websocket:use_compression": False,
@@ -264,16 +289,21 @@ class WorldNodes:
                     "/rosapi:topics_glob": "[*]",
                     "/rosapi:services_glob": "[*]",
                     "/rosapi:params_glob": "[*]",
-                    "/robot_controller:slow_service_seconds": self.slow_service_seconds,
-                    "/fibonacci_server:step_seconds": self.action_step,
-                    "/robot_state_publisher:robot_description": robot_description(),
-                    "/robot_state_publisher:publish_frequency": 20.0,
-                    "/odometry:odom_frame": "odom",
-                    "/odometry:base_frame": "base_link",
-                    "/lidar:frame_id": "base_scan",
-                    "/lidar:range_max": RANGE_MAX,
                 }
             )
+            if self.nav2 is None:
+                params.update(
+                    {
+                        "/robot_controller:slow_service_seconds": self.slow_service_seconds,
+                        "/fibonacci_server:step_seconds": self.action_step,
+                        "/robot_state_publisher:robot_description": robot_description(),
+                        "/robot_state_publisher:publish_frequency": 20.0,
+                        "/odometry:odom_frame": "odom",
+                        "/odometry:base_frame": "base_link",
+                        "/lidar:frame_id": "base_scan",
+                        "/lidar:range_max": RANGE_MAX,
+                    }
+                )
             if self.rosapi_options.release == "newest":
                 # rosbridge 2.2.0+ (2.1.0 has no service timeout).
                 params["/rosbridge_websocket:default_call_service_timeout"] = config.default_service_timeout
@@ -318,6 +348,19 @@ class WorldNodes:
                     "/rosapi/params_glob": "[*]",
                 }
             )
+            if self.nav2 is not None:
+                # The turtle world's own parameters are not on the Nav2 robot.
+                turtle_nodes = (
+                    "/robot_controller/",
+                    "/turtlesim/",
+                    "/fibonacci_server/",
+                    "/odometry/",
+                    "/lidar/",
+                )
+                for key in [k for k in params if k.startswith(turtle_nodes)]:
+                    del params[key]
+                params["/robot_description"] = params.pop("/robot_description")
+                params.pop("/robot_state_publisher/publish_frequency", None)
 
     def background(self) -> tuple[int, int, int]:
         """turtlesim's background colour from its parameters."""
@@ -348,6 +391,8 @@ class WorldNodes:
         self._tasks.clear()
         if self.fibonacci2 is not None:
             await self.fibonacci2.close()
+        if self.nav2 is not None:
+            await self.nav2.close()
 
     # --- other nodes ----------------------------------------------------------------------------------------
 

@@ -1,0 +1,134 @@
+"""Fewest round trips on the happy path, on the Nav2 world in both dialects: each graph tool asks only what
+its answer needs (counted by the simulated robot), and checks that only word an error run after a failure."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
+
+import pytest
+from mcp_harness import Session, open_session, warmed_up
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+MakeSim = Callable[..., Awaitable[SimulatedRobot]]
+
+
+@pytest.fixture(params=["ros2", "ros1"])
+async def nav2(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
+    """A Nav2 robot of each dialect."""
+    return await make_sim(dialect=request.param, world="nav2")
+
+
+@pytest.fixture
+async def session(nav2: SimulatedRobot) -> AsyncIterator[Session]:
+    """An MCP session on it, once the server has learnt the service types (so only the tools' calls count)."""
+    async with open_session(nav2.url) as opened:
+        await warmed_up(opened.ros)
+        yield opened
+
+
+async def asked(
+    robot: SimulatedRobot, session: Session, tool: str, arguments: dict[str, Any]
+) -> dict[str, int]:
+    """The services one successful tool call asked, with how often."""
+    before = dict(robot.world.service_calls)
+    await session.ok(tool, arguments)
+    return {
+        name: count - before.get(name, 0)
+        for name, count in robot.world.service_calls.items()
+        if count != before.get(name, 0)
+    }
+
+
+def param(robot: SimulatedRobot, node: str, name: str) -> str:
+    """A parameter's full name in the robot's dialect."""
+    return f"{node}:{name}" if robot.dialect == "ros2" else f"{node}/{name.replace('.', '/')}"
+
+
+async def test_get_parameter_is_one_call(session: Session, nav2: SimulatedRobot) -> None:
+    """ROS 2 asks the node's get_parameters alone; ROS 1 rosapi's get_param alone (no has_param first)."""
+    calls = await asked(nav2, session, "get_parameter", {"name": param(nav2, "/amcl", "max_particles")})
+    expected = "/amcl/get_parameters" if nav2.dialect == "ros2" else "/rosapi/get_param"
+    assert calls == {expected: 1}
+
+
+async def test_a_missing_parameter_is_explained_after_the_failed_read(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    """The error still says the parameter does not exist and offers what does."""
+    text = await session.error("get_parameter", {"name": param(nav2, "/amcl", "max_particle")})
+    assert "max_particle" in text
+    assert "max_particles" in text
+
+
+async def test_list_parameters_of_a_node_is_one_call(session: Session, nav2: SimulatedRobot) -> None:
+    """ROS 2 asks the node's list_parameters alone (no service list first); ROS 1 get_param_names."""
+    calls = await asked(nav2, session, "list_parameters", {"node": "/controller_server"})
+    expected = "/controller_server/list_parameters" if nav2.dialect == "ros2" else "/rosapi/get_param_names"
+    assert calls == {expected: 1}
+
+
+async def test_list_parameters_of_an_unknown_node_still_names_the_likely_one(session: Session) -> None:
+    """A misspelt node: the answer is an error that suggests the node meant."""
+    text = await session.error("list_parameters", {"node": "/controler_server"})
+    assert "/controller_server" in text
+
+
+async def test_get_node_info_asks_no_service_types_it_can_tell(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    """Parameter, lifecycle and (after list_actions) action services are typed by name; ROS 1 asks no node
+    list unless the node turns out unknown."""
+    await session.ok("list_actions")
+    calls = await asked(nav2, session, "get_node_info", {"node": "/controller_server"})
+    expected = {"/rosapi/node_details": 1, "/rosapi/topics": 1}
+    if nav2.dialect == "ros2":
+        expected["/rosapi/nodes"] = 1  # rosapi 2.x never answers node_details for an unknown node
+    assert calls == expected
+
+
+async def test_get_node_info_of_an_unknown_node_says_so(session: Session) -> None:
+    """An unknown node is still an error naming the likely meant one."""
+    text = await session.error("get_node_info", {"node": "/controler_server"})
+    assert "Did you mean /controller_server?" in text
+
+
+@pytest.mark.parametrize(
+    ("tool", "service"),
+    [("list_topics", "/rosapi/topics"), ("list_nodes", "/rosapi/nodes")],
+)
+async def test_one_call_listings_ask_once(
+    session: Session, nav2: SimulatedRobot, tool: str, service: str
+) -> None:
+    """list_topics and list_nodes each ask rosapi one question, whatever the page."""
+    assert await asked(nav2, session, tool, {"filter": "costmap", "limit": 5, "offset": 2}) == {service: 1}
+
+
+async def test_later_listings_of_services_and_actions_ask_only_for_names(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    """Types learnt on this connection are kept while listed: the next listing is one call."""
+    await session.ok("list_services")
+    await session.ok("list_actions")
+    assert await asked(nav2, session, "list_services", {}) == {"/rosapi/services": 1}
+    assert await asked(nav2, session, "list_actions", {}) == {"/rosapi/action_servers": 1}
+
+
+async def test_describe_type_asks_once_per_connection(session: Session, nav2: SimulatedRobot) -> None:
+    """A type's definition (and, on ROS 2, the installed types) is kept for the connection: asked once."""
+    name = "nav_msgs/msg/OccupancyGrid" if nav2.dialect == "ros2" else "nav_msgs/OccupancyGrid"
+    first = await asked(nav2, session, "describe_type", {"type_name": name})
+    assert first["/rosapi/message_details"] == 1
+    assert await asked(nav2, session, "describe_type", {"type_name": name}) == {}
+
+
+async def test_a_type_missing_from_the_kept_list_is_looked_up_again(make_sim: MakeSim) -> None:
+    """ROS 2: an unknown type is refused only after the installed types were asked afresh."""
+    robot = await make_sim(dialect="ros2", world="nav2")
+    async with open_session(robot.url) as session:
+        await session.ok("describe_type", {"type_name": "nav_msgs/msg/OccupancyGrid"})
+        before = robot.world.service_calls.get("/rosapi/interfaces", 0)
+        text = await session.error("describe_type", {"type_name": "nav_msgs/msg/OccupancyGridd"})
+    assert "OccupancyGridd" in text
+    assert robot.world.service_calls["/rosapi/interfaces"] == before + 1
