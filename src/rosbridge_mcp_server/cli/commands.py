@@ -23,7 +23,8 @@ from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
-from rosbridge_mcp_server.safety import Audit, PolicyGuard
+from rosbridge_mcp_server.console import ConsoleSettings, RobotView, console_settings, open_console
+from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server import build_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
@@ -106,6 +107,21 @@ def _parser(command: str) -> _Parser:
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
+    if command == "serve":
+        console = parser.add_argument_group("operator console (docs/console.md)")
+        console.add_argument(
+            "--console",
+            metavar="[HOST:]PORT",
+            help="serve a web page for the person beside the robot (default host 127.0.0.1); its URL is "
+            "written on stderr (env ROSBRIDGE_MCP_CONSOLE)",
+        )
+        console.add_argument("--console-cert", help="TLS certificate for the console (PEM)")
+        console.add_argument("--console-key", help="the TLS certificate's key (PEM)")
+        console.add_argument(
+            "--console-insecure",
+            action="store_true",
+            help="allow plain HTTP on a non-loopback --console address (a trusted network only)",
+        )
     demo = parser.add_argument_group("demo")
     demo.add_argument(
         "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
@@ -146,6 +162,15 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             headers=options.header,
             tools=options.tools,
         )
+        console = None
+        if command == "serve":
+            console = console_settings(
+                options.console if options.console is not None else env.get("ROSBRIDGE_MCP_CONSOLE") or None,
+                cert=options.console_cert,
+                key=options.console_key,
+                insecure=options.console_insecure,
+                source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
+            )
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (_UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -159,7 +184,10 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout))
-        asyncio.run(serve(config, audit_file))
+        asyncio.run(serve(config, audit_file, console))
+    except ConfigError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
@@ -282,8 +310,11 @@ async def check(config: Config, out: TextIO) -> int:
         return await run_check(effective, out)
 
 
-async def serve(config: Config, audit_file: TextIO | None = None) -> None:
-    """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM / Ctrl-C)."""
+async def serve(
+    config: Config, audit_file: TextIO | None = None, console: ConsoleSettings | None = None
+) -> None:
+    """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM / Ctrl-C); with ``console``, the
+    operator console beside it."""
     async with demo_robot(config) as effective:
         warning = plain_text_warning(effective.url)
         if warning:
@@ -297,8 +328,11 @@ async def serve(config: Config, audit_file: TextIO | None = None) -> None:
             ssl_context=effective.ssl_context(),
             headers=effective.headers,
         )
-        guard = PolicyGuard(effective.policy, Audit(audit_file))
-        server = build_server(client, effective, guard=guard)
+        operator = Operator(present=console is not None)
+        audit = Audit(audit_file)
+        guard = PolicyGuard(effective.policy, audit, operator)
+        activity = SessionActivity()
+        server = build_server(client, effective, guard=guard, activity=activity)
         _stop_on_signals(client)
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
@@ -309,4 +343,30 @@ async def serve(config: Config, audit_file: TextIO | None = None) -> None:
                 PROG,
                 " --demo" if config.demo else "",
             )
-        await serve_stdio(server)
+        async with _console(console, RobotView("robot", client, activity), operator, audit):
+            await serve_stdio(server)
+
+
+@contextlib.asynccontextmanager
+async def _console(
+    settings: ConsoleSettings | None, robot: RobotView, operator: Operator, audit: Audit
+) -> AsyncIterator[None]:
+    """The operator console beside the MCP server, when asked for; its one-time URL goes to stderr."""
+    if settings is None:
+        yield
+        return
+    try:
+        opened = open_console(settings, [robot], operator, audit)
+        running = await opened.__aenter__()
+    except OSError as exc:
+        raise ConfigError(
+            f"--console: cannot listen on {settings.host}:{settings.port}: {exc.strerror or exc}"
+        ) from None
+    # The URL alone on its line, to copy; it carries the session secret, so it is not a log line either.
+    sys.stderr.write(f"{running.url}\n")
+    sys.stderr.write("operator console: open the URL above in a browser beside the robot\n")
+    sys.stderr.flush()
+    try:
+        yield
+    finally:
+        await opened.__aexit__(None, None, None)

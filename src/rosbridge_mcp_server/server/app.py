@@ -69,16 +69,23 @@ This server is read-only: it lists only tools that read the robot, and refuses a
 """
 
 
-def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None = None) -> MCPServer[None]:
+def build_server(
+    client: RosbridgeClient,
+    config: Config,
+    *,
+    guard: Guard | None = None,
+    activity: SessionActivity | None = None,
+) -> MCPServer[None]:
     """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
 
     Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
-    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools.
+    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools. *activity*
+    (default: a new one) is what the tools record they set going; pass one to share it (the console's E-STOP).
     """
     graph = RosGraph(client)
     policy = config.policy
     approver: Guard = guard if guard is not None else PolicyGuard(policy)
-    activity = SessionActivity()
+    activity = activity if activity is not None else SessionActivity()
     chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
     if any(not m.SPEC.hints.read_only for m in chosen) and stop_robot not in chosen:
         # Whoever can set the robot going can stop it, whatever --tools picked.
