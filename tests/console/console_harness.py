@@ -21,7 +21,7 @@ from mcp.types import CallToolResult, TextContent
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
-from rosbridge_mcp_server.console import ConsoleSettings, RobotView, RunningConsole, open_console
+from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, RunningConsole, open_console
 from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server import build_server
 
@@ -87,12 +87,13 @@ async def served_console(url: str, policy: Policy | None = None) -> AsyncIterato
     audit = Audit()
     guard = PolicyGuard(config.policy, audit, operator)
     activity = SessionActivity()
+    hub = ConsoleHub([RobotView("robot", ros, activity)], operator, audit)
     ready: asyncio.Future[Client] = asyncio.get_running_loop().create_future()
     stop = asyncio.Event()
 
     async def host() -> None:
         try:
-            server = build_server(ros, config, guard=guard, activity=activity)
+            server = build_server(ros, config, guard=guard, activity=activity, console_view=hub.snapshot)
             async with Client(server, mode="legacy") as mcp:
                 ready.set_result(mcp)
                 await stop.wait()
@@ -105,9 +106,7 @@ async def served_console(url: str, policy: Policy | None = None) -> AsyncIterato
     try:
         mcp = await ready
         await ros.wait_connected(CONNECT_WAIT)
-        async with open_console(
-            ConsoleSettings(port=0), [RobotView("robot", ros, activity)], operator, audit
-        ) as running:
+        async with open_console(ConsoleSettings(port=0), hub) as running:
             yield Console(running, mcp, operator, activity)
     finally:
         stop.set()

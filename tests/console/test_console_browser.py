@@ -129,8 +129,9 @@ async def test_the_camera_frame_appears(sim_ros2: SimulatedRobot) -> None:
         image = page.locator("#camera")
         await expect(image).to_be_visible(timeout=WAIT_MS)
         await expect(image).to_have_attribute("data-topic", "/camera/image_raw")
-        width = await image.evaluate("img => img.naturalWidth")
-        assert width > 0
+        await page.wait_for_function(
+            "() => document.getElementById('camera').naturalWidth > 0", timeout=WAIT_MS
+        )
         source = await image.get_attribute("src")
         assert source is not None
         assert source.startswith("data:image/jpeg;base64,")

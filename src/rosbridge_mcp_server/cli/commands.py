@@ -23,7 +23,13 @@ from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
-from rosbridge_mcp_server.console import ConsoleSettings, RobotView, console_settings, open_console
+from rosbridge_mcp_server.console import (
+    ConsoleHub,
+    ConsoleSettings,
+    RobotView,
+    console_settings,
+    open_console,
+)
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server import build_server, serve_stdio
 
@@ -332,7 +338,10 @@ async def serve(
         audit = Audit(audit_file)
         guard = PolicyGuard(effective.policy, audit, operator)
         activity = SessionActivity()
-        server = build_server(client, effective, guard=guard, activity=activity)
+        hub = ConsoleHub([RobotView("robot", client, activity)], operator, audit) if console else None
+        server = build_server(
+            client, effective, guard=guard, activity=activity, console_view=hub.snapshot if hub else None
+        )
         _stop_on_signals(client)
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
@@ -343,20 +352,18 @@ async def serve(
                 PROG,
                 " --demo" if config.demo else "",
             )
-        async with _console(console, RobotView("robot", client, activity), operator, audit):
+        async with _console(console, hub):
             await serve_stdio(server)
 
 
 @contextlib.asynccontextmanager
-async def _console(
-    settings: ConsoleSettings | None, robot: RobotView, operator: Operator, audit: Audit
-) -> AsyncIterator[None]:
+async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> AsyncIterator[None]:
     """The operator console beside the MCP server, when asked for; its one-time URL goes to stderr."""
-    if settings is None:
+    if settings is None or hub is None:
         yield
         return
     try:
-        opened = open_console(settings, [robot], operator, audit)
+        opened = open_console(settings, hub)
         running = await opened.__aenter__()
     except OSError as exc:
         raise ConfigError(

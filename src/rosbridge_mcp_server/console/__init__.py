@@ -6,7 +6,7 @@ and the confirmations waiting for the person, with Approve / Deny, E-STOP and Re
 and below ``cli/``; it imports no ``mcp``.
 """
 
-from rosbridge_mcp_server.console.hub import ConsoleHub, Frame, RobotView
+from rosbridge_mcp_server.console.hub import ConsoleHub, Frame, RobotView, summary_text
 from rosbridge_mcp_server.console.serve import RunningConsole, open_console
 from rosbridge_mcp_server.console.settings import ConsoleSettings, console_settings
 from rosbridge_mcp_server.console.web import SECRET_HEADER, console_app, static_text
@@ -22,4 +22,5 @@ __all__ = [
     "console_settings",
     "open_console",
     "static_text",
+    "summary_text",
 ]

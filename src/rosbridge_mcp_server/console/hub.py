@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.activity import SessionActivity
 
-__all__ = ["AUDIT_KEPT", "CAMERA_FPS", "CAMERA_MAX_SIZE", "ConsoleHub", "Frame", "RobotView"]
+__all__ = ["AUDIT_KEPT", "CAMERA_FPS", "CAMERA_MAX_SIZE", "ConsoleHub", "Frame", "RobotView", "summary_text"]
 
 _log = logging.getLogger("rosbridge_mcp_server.console")
 
@@ -320,3 +320,22 @@ def _encode(message: dict[str, Any], compressed: bool) -> tuple[str, int, int]:
 def _short(value: Any) -> str:
     text = json.dumps(value, ensure_ascii=False, default=str)
     return text if len(text) <= PAYLOAD_SHOWN else f"{text[:PAYLOAD_SHOWN]}… ({len(text)} characters)"
+
+
+def summary_text(snapshot: dict[str, Any], audit_lines: int = 5) -> str:
+    """The snapshot as a few lines for a model: connection, the latch, what waits and runs, the last calls."""
+    lines = []
+    for robot in snapshot["robots"]:
+        state = f"connected ({robot['ros']})" if robot["connected"] else "not connected"
+        running = f"; {len(robot['streams'])} stream(s), {len(robot['goals'])} goal(s) running"
+        lines.append(f"{robot['name']} at {robot['url']}: {state}{running}")
+    if snapshot["estop"]["latched"]:
+        lines.append("E-STOP is latched on the operator console: acting calls are refused until released.")
+    if snapshot["pending"]:
+        waiting = ", ".join(f"{p['tool']} on {p['name']}" for p in snapshot["pending"])
+        lines.append(f"Waiting for the person's confirmation: {waiting}.")
+    for entry in snapshot["audit"][:audit_lines]:
+        lines.append(f"{entry['time']} {entry['tool']} {entry['name'] or '-'}: {entry['outcome']}")
+    if not snapshot["audit"]:
+        lines.append("No acting call yet.")
+    return "\n".join(lines)

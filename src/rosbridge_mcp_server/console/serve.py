@@ -12,15 +12,14 @@ import contextlib
 import logging
 import secrets
 import socket
-from collections.abc import AsyncIterator, Generator, Sequence
+from collections.abc import AsyncIterator, Generator
 from dataclasses import dataclass
 
 import uvicorn
 
-from rosbridge_mcp_server.console.hub import ConsoleHub, RobotView
+from rosbridge_mcp_server.console.hub import ConsoleHub
 from rosbridge_mcp_server.console.settings import ConsoleSettings
 from rosbridge_mcp_server.console.web import console_app
-from rosbridge_mcp_server.safety import Audit, Operator
 
 __all__ = ["RunningConsole", "open_console"]
 
@@ -52,11 +51,8 @@ class _Server(uvicorn.Server):
 
 
 @contextlib.asynccontextmanager
-async def open_console(
-    settings: ConsoleSettings, robots: Sequence[RobotView], operator: Operator, audit: Audit
-) -> AsyncIterator[RunningConsole]:
-    """Serve the console for ``robots`` until the block ends; yields where it is and its URL."""
-    hub = ConsoleHub(robots, operator, audit)
+async def open_console(settings: ConsoleSettings, hub: ConsoleHub) -> AsyncIterator[RunningConsole]:
+    """Serve the console of ``hub`` until the block ends; yields where it is and its URL."""
     secret = secrets.token_urlsafe(32)
     sock = _bind(settings.host, settings.port)
     port = sock.getsockname()[1]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import logging
 import typing
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from typing import Any, Literal
 
@@ -21,6 +21,7 @@ from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import tool_from_module
+from rosbridge_mcp_server.server.console_app import console_app
 from rosbridge_mcp_server.server.sdk import server_answering_unlisted
 from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
 
@@ -75,12 +76,15 @@ def build_server(
     *,
     guard: Guard | None = None,
     activity: SessionActivity | None = None,
+    console_view: Callable[[], dict[str, Any]] | None = None,
 ) -> MCPServer[None]:
     """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
 
     Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
     ``config.policy``, audited on stderr). A read-only policy lists only the reading tools. *activity*
     (default: a new one) is what the tools record they set going; pass one to share it (the console's E-STOP).
+    With *console_view* (the operator console's snapshot) the server also offers the console's read-only view
+    as an MCP App: the ``show_console`` tool and its ``ui://`` resource (``server/console_app.py``).
     """
     graph = RosGraph(client)
     policy = config.policy
@@ -129,6 +133,7 @@ def build_server(
         instructions=INSTRUCTIONS + (_READ_ONLY_NOTE if policy.read_only else ""),
         version=__version__,
         tools=tools,
+        extensions=[console_app(console_view)] if console_view is not None else None,
         lifespan=lifespan,
         log_level=config.log_level,
     )
