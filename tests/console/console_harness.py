@@ -21,7 +21,8 @@ from mcp.types import CallToolResult, TextContent
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
-from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, RunningConsole, open_console
+from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView
+from rosbridge_mcp_server.console.serve import RunningConsole, open_console
 from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server import build_server
 

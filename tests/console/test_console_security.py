@@ -18,7 +18,8 @@ import pytest
 from console_harness import Console, served_console, text_of
 
 from rosbridge_mcp_server.config import ConfigError
-from rosbridge_mcp_server.console import SECRET_HEADER, console_settings
+from rosbridge_mcp_server.console import console_settings
+from rosbridge_mcp_server.console.web import SECRET_HEADER
 from rosbridge_mcp_server.safety import parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 

@@ -23,13 +23,7 @@ from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
-from rosbridge_mcp_server.console import (
-    ConsoleHub,
-    ConsoleSettings,
-    RobotView,
-    console_settings,
-    open_console,
-)
+from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server import build_server, serve_stdio
 
@@ -362,6 +356,9 @@ async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> 
     if settings is None or hub is None:
         yield
         return
+    # Imported here: uvicorn and Starlette are only needed with --console.
+    from rosbridge_mcp_server.console.serve import open_console  # noqa: PLC0415
+
     try:
         opened = open_console(settings, hub)
         running = await opened.__aenter__()

@@ -20,7 +20,6 @@ import hmac
 import json
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable
-from importlib import resources
 from typing import Any
 
 from starlette.applications import Starlette
@@ -29,6 +28,7 @@ from starlette.responses import JSONResponse, Response, StreamingResponse
 from starlette.routing import Route
 
 from rosbridge_mcp_server.console.hub import ConsoleHub
+from rosbridge_mcp_server.console.pages import static_text
 from rosbridge_mcp_server.errors import RosbridgeError
 
 __all__ = ["SECRET_HEADER", "console_app"]
@@ -55,11 +55,6 @@ _STATIC = {
 }
 
 Handler = Callable[[Request], Awaitable[Response]]
-
-
-def static_text(name: str) -> str:
-    """One of the page's files, from the package."""
-    return resources.files("rosbridge_mcp_server.console").joinpath("static", name).read_text("utf-8")
 
 
 def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starlette:
