@@ -88,7 +88,7 @@ async def served_console(url: str, policy: Policy | None = None) -> AsyncIterato
     audit = Audit()
     guard = PolicyGuard(config.policy, audit, operator)
     activity = SessionActivity()
-    hub = ConsoleHub([RobotView("robot", ros, activity)], operator, audit)
+    hub = ConsoleHub([RobotView("robot", ros, activity, audit)], operator)
     ready: asyncio.Future[Client] = asyncio.get_running_loop().create_future()
     stop = asyncio.Event()
 

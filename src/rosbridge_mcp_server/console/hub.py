@@ -50,11 +50,12 @@ _IMAGE_TYPES = ("sensor_msgs/Image", "sensor_msgs/CompressedImage")
 
 @dataclass
 class RobotView:
-    """One robot as the console sees it: its client and what this server set going on it."""
+    """One robot as the console sees it: its client, what this server set going on it, and its audit."""
 
     name: str
     client: RosbridgeClient
     activity: SessionActivity
+    audit: Audit
 
 
 @dataclass(frozen=True)
@@ -79,14 +80,16 @@ class Frame:
 
 
 class ConsoleHub:
-    """The console's state and actions for ``robots`` (one today), the ``operator`` and the ``audit``."""
+    """The console's state and actions for ``robots`` (their audits merged) and the ``operator``.
 
-    def __init__(self, robots: Sequence[RobotView], operator: Operator, audit: Audit) -> None:
+    E-STOP stops every robot; the camera and the image-topic picker use the first robot.
+    """
+
+    def __init__(self, robots: Sequence[RobotView], operator: Operator) -> None:
         if not robots:
             raise ValueError("the console needs at least one robot")
         self.robots = list(robots)
         self.operator = operator
-        self.audit = audit
         self._entries: deque[dict[str, Any]] = deque(maxlen=AUDIT_KEPT)
         self._version = 0
         self._changed = asyncio.Event()
@@ -98,7 +101,8 @@ class ConsoleHub:
         self.frame: Frame | None = None
         self._frames = 0
         self._camera_task: asyncio.Task[None] | None = None
-        audit.listen(self._on_audit)
+        for robot in self.robots:
+            robot.audit.listen(self._on_audit)
         operator.listen(self.changed)
 
     # --- changes -------------------------------------------------------------------------------------------
@@ -210,7 +214,8 @@ class ConsoleHub:
         return robots
 
     def _on_audit(self, entry: AuditEntry) -> None:
-        shown = {key: entry.get(key) for key in ("time", "tool", "kind", "name", "type", "outcome", "detail")}
+        keys = ("time", "robot", "caller", "tool", "kind", "name", "type", "outcome", "detail")
+        shown = {key: entry.get(key) for key in keys}
         shown["payload"] = None if entry.get("payload") is None else _short(entry["payload"])
         shown["rate_hz"] = entry.get("rate_hz")
         shown["duration"] = entry.get("duration")
@@ -226,11 +231,11 @@ class ConsoleHub:
         for robot in self.robots:
             report = await emergency_stop(robot.client, robot.activity)
             for topic, type_name, message in report.zero_messages:
-                self.audit.write(Act("console", "topic", topic, type_name, message), "e-stop")
+                robot.audit.write(Act("console", "topic", topic, type_name, message), "e-stop")
             for action, goal_id in report.goals:
-                self.audit.write(Act("console", "action", action, "", {"cancel": goal_id}), "e-stop")
+                robot.audit.write(Act("console", "action", action, "", {"cancel": goal_id}), "e-stop")
             if not report.did_anything:
-                self.audit.write(Act("console", "topic", "", "", None), "e-stop: nothing to stop")
+                robot.audit.write(Act("console", "topic", "", "", None), "e-stop: nothing to stop")
             reports.append(
                 {
                     "robot": robot.name,
@@ -247,7 +252,8 @@ class ConsoleHub:
         """Release the latched e-stop; ``False`` when it was not latched."""
         released = self.operator.release("console")
         if released:
-            self.audit.write(Act("console", "topic", "", "", None), "e-stop released")
+            for robot in self.robots:
+                robot.audit.write(Act("console", "topic", "", "", None), "e-stop released")
         return released
 
     # --- the camera ----------------------------------------------------------------------------------------

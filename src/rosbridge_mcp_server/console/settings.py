@@ -71,16 +71,16 @@ def console_settings(
 
 def _split(address: str, source: str) -> tuple[str, int]:
     if not address:
-        raise ConfigError(f"{source}: give a port or HOST:PORT, e.g. 8765 or 127.0.0.1:8765")
-    if address.startswith("["):  # [::1]:8765
+        raise ConfigError(f"{source}: give a port or HOST:PORT, e.g. 8770 or 127.0.0.1:8770")
+    if address.startswith("["):  # [::1]:8770
         host, _, rest = address[1:].partition("]")
         if not rest.startswith(":"):
-            raise ConfigError(f"{source}: {address!r} is not [IPv6]:PORT, e.g. [::1]:8765")
+            raise ConfigError(f"{source}: {address!r} is not [IPv6]:PORT, e.g. [::1]:8770")
         port_text = rest[1:]
     elif address.count(":") == 1:
         host, port_text = address.split(":")
     elif ":" in address:
-        raise ConfigError(f"{source}: write an IPv6 address in brackets, e.g. [::1]:8765")
+        raise ConfigError(f"{source}: write an IPv6 address in brackets, e.g. [::1]:8770")
     else:
         host, port_text = DEFAULT_CONSOLE_HOST, address
     host = host or DEFAULT_CONSOLE_HOST

@@ -13,11 +13,13 @@ is one audit line (:class:`Audit`): on stderr, and as JSON in the audit file whe
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import contextvars
 import dataclasses
 import datetime
 import json
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
@@ -37,6 +39,8 @@ __all__ = [
     "Audit",
     "AuditEntry",
     "PolicyGuard",
+    "calling_as",
+    "current_caller",
     "question",
 ]
 
@@ -64,11 +68,32 @@ _VERBS = {
 }
 
 
+#: Who is making the current call (a token's name or a JWT's subject), for the audit; None on stdio.
+_CALLER: contextvars.ContextVar[str | None] = contextvars.ContextVar("rosbridge_mcp_caller", default=None)
+
+
+def current_caller() -> str | None:
+    """The caller the server named for the call being handled (``None``: not known, e.g. stdio)."""
+    return _CALLER.get()
+
+
+@contextlib.contextmanager
+def calling_as(caller: str | None) -> Iterator[None]:
+    """Name the caller of everything audited inside the block (the server sets it around each tool call)."""
+    token = _CALLER.set(caller)
+    try:
+        yield
+    finally:
+        _CALLER.reset(token)
+
+
 class Audit:
     """One line per acting decision on stderr, and a JSON line in ``stream`` (the audit file) when given."""
 
-    def __init__(self, stream: IO[str] | None = None) -> None:
+    def __init__(self, stream: IO[str] | None = None, robot: str | None = None) -> None:
         self._stream = stream
+        #: The robot this audit is for, when the server drives several (named in every line).
+        self.robot = robot
         self._listeners: list[Callable[[AuditEntry], None]] = []
 
     def listen(self, callback: Callable[[AuditEntry], None]) -> None:
@@ -79,9 +104,11 @@ class Audit:
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
         level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
+        caller = current_caller()
         _log.log(
             level,
-            "audit: %s %s %s %s%s: %s%s",
+            "audit: %s%s %s %s %s%s: %s%s%s",
+            f"[{self.robot}] " if self.robot else "",
             act.tool,
             act.kind,
             act.name,
@@ -89,6 +116,7 @@ class Audit:
             stream,
             outcome,
             extra,
+            f" [caller {caller}]" if caller else "",
         )
         if self._stream is None and not self._listeners:
             return
@@ -104,6 +132,10 @@ class Audit:
             "rate_hz": act.rate_hz,
             "duration": act.duration,
         }
+        if caller is not None:
+            entry["caller"] = caller
+        if self.robot is not None:
+            entry["robot"] = self.robot
         for callback in self._listeners:
             try:
                 callback(entry)

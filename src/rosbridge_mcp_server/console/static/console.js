@@ -111,7 +111,9 @@ function renderAudit(entries) {
     const outcome = String(entry.outcome || "");
     item.append(el("span", outcome, `outcome ${outcome.split(/[: ]/)[0]}`), " ");
     item.append(el("span", (entry.time || "").slice(11, 23), "mono"), " ");
+    if (entry.robot) item.append(el("span", `[${entry.robot}] `));
     item.append(el("strong", entry.tool), " ", el("span", entry.name || "", "mono"), " ");
+    if (entry.caller) item.append(el("span", `(by ${entry.caller}) `));
     if (entry.type) item.append(el("span", entry.type));
     if (entry.rate_hz) item.append(` at ${entry.rate_hz} Hz` + (entry.duration ? ` for ${entry.duration} s` : ""));
     if (entry.detail) item.append(el("div", entry.detail));
