@@ -104,6 +104,7 @@ async def test_estop_stops_a_running_stream_and_refuses_acting_calls_until_relea
         await page.get_by_role("button", name="E-STOP").click()
         result = await asyncio.wait_for(streaming, 10)
         assert not result.is_error, text_of(result)
+        assert text_of(result).startswith("E-STOP on the operator console ended the stream")
         # The stream's closing zero and the e-stop's own zero reach the robot last.
         await sim_ros2.wait_for(lambda world: moving(sim_ros2)[-2:] == [0.0, 0.0], timeout=5)
         after = moving(sim_ros2)[at_latch[0] :]

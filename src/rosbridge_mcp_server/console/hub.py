@@ -45,6 +45,8 @@ CAMERA_MAX_SIZE = 480
 LOOK_EVERY = 0.25
 #: Longest payload text in an audit line on the page.
 PAYLOAD_SHOWN = 240
+#: Who stopped a stream, in its answer to the model.
+ESTOP_BY = "E-STOP on the operator console"
 _IMAGE_TYPES = ("sensor_msgs/Image", "sensor_msgs/CompressedImage")
 
 
@@ -229,7 +231,7 @@ class ConsoleHub:
         self.operator.latch("console")
         reports = []
         for robot in self.robots:
-            report = await emergency_stop(robot.client, robot.activity)
+            report = await emergency_stop(robot.client, robot.activity, by=ESTOP_BY)
             for topic, type_name, message in report.zero_messages:
                 robot.audit.write(Act("console", "topic", topic, type_name, message), "e-stop")
             for action, goal_id in report.goals:
