@@ -19,7 +19,26 @@ REPO = Path(__file__).resolve().parent.parent
 BENCH = REPO / "scripts" / "bench.py"
 
 #: The rows that carry a target, one per measurement docs/performance.md holds to a target.
-TARGET_ROWS = ("2a", "2b", "3a", "3b", "4a", "5a", "5b", "6a", "7a", "7b", "9a", "9b", "9c", "9d", "9e", "9f")
+TARGET_ROWS = (
+    "2a",
+    "2b",
+    "3a",
+    "3b",
+    "4a",
+    "5a",
+    "5b",
+    "6a",
+    "7a",
+    "7b",
+    "9a",
+    "9b",
+    "9c",
+    "9d",
+    "9e",
+    "9f",
+    "11a",
+    "11b",
+)
 
 
 @pytest.fixture(scope="module")

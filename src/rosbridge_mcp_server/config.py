@@ -282,12 +282,15 @@ WATCH_TOOL_NAMES = (
     "set_parameter",
     "get_transform",
 )
+#: Pictures of the robot's world: its map, its scan, a topic over time.
+VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
 SAFETY_TOOL_NAMES = ("stop_robot",)
-ALL_TOOL_NAMES = ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + SAFETY_TOOL_NAMES
+ALL_TOOL_NAMES = ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + VIEW_TOOL_NAMES + SAFETY_TOOL_NAMES
 TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "all": ALL_TOOL_NAMES,
     "original": ORIGINAL_TOOL_NAMES,
     "watch": WATCH_TOOL_NAMES,
+    "view": VIEW_TOOL_NAMES,
     "safety": SAFETY_TOOL_NAMES,
 }
 
@@ -295,8 +298,8 @@ TOOL_GROUPS: dict[str, tuple[str, ...]] = {
 def select_tools(spec: str) -> tuple[str, ...]:
     """The tool names a ``--tools`` value stands for, in registration order.
 
-    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``safety``) and tool
-    names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
+    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``)
+    and tool names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
     """
     chosen: set[str] = set()
     unknown: list[str] = []

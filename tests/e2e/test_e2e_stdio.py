@@ -116,7 +116,7 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
 
         tools = await server.request("tools/list")
-        assert len(tools["result"]["tools"]) == 18
+        assert len(tools["result"]["tools"]) == 21
 
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
         assert topics["result"]["isError"] is False
@@ -170,7 +170,7 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
 
 
 async def _watch_the_robot(server: StdioServer) -> None:
-    """The tools that watch: a scan, a camera frame as an image, a transform, parameters, a type."""
+    """The tools that watch: a scan, a camera frame and a map as images, a transform, parameters, a type."""
 
     async def call(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
         answer = await server.request("tools/call", {"name": name, "arguments": arguments})
@@ -183,6 +183,10 @@ async def _watch_the_robot(server: StdioServer) -> None:
     image = await call("get_image", {"topic": "/camera/image_raw"})
     assert [block["type"] for block in image["content"]] == ["text", "image"]
     assert image["content"][1]["mimeType"] == "image/jpeg"
+    drawn = await call("view_map", {"scan_topic": "/scan"})
+    assert [block["type"] for block in drawn["content"]] == ["text", "image"]
+    assert drawn["content"][1]["mimeType"] == "image/png"
+    assert drawn["structuredContent"]["scan_hits"] > 0
     frame = await call("get_transform", {"target_frame": "world", "source_frame": "base_link"})
     assert frame["structuredContent"]["chain"] == ["world", "odom", "base_link"]
     parameters = await call("list_parameters", {"node": "/turtlesim"})

@@ -196,12 +196,13 @@ _MISSING = _Missing()
 def tool_calls(
     schemas: dict[str, dict[str, Any]], vocabulary: Vocabulary
 ) -> st.SearchStrategy[tuple[str, dict[str, Any]]]:
-    """``(tool name, arguments)`` for any of the tools whose input schemas are given."""
-    return st.one_of(
-        *(
-            _arguments(schema, vocabulary).map(lambda args, name=name: (name, args))
-            for name, schema in schemas.items()
-        )
+    """``(tool name, arguments)`` for any of the tools whose input schemas are given.
+
+    The tool is drawn first, evenly: ``one_of`` over 21 tools' strategies left one tool out of 200 examples.
+    """
+    strategies = {name: _arguments(schema, vocabulary) for name, schema in schemas.items()}
+    return st.sampled_from(sorted(strategies)).flatmap(
+        lambda name: strategies[name].map(lambda args: (name, args))
     )
 
 

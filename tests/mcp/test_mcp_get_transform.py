@@ -31,16 +31,20 @@ def link(
 
 @asynccontextmanager
 async def broadcaster(robot: SimulatedRobot) -> AsyncIterator[None]:
-    """Another client: world → odom on /tf_static; odom → base_link (turned 90°) → laser on /tf."""
+    """Another client: dock → cart on /tf_static; cart → arm (turned 90°) → tool on /tf.
+
+    Frames of its own: the simulated robot publishes world, odom and base_link itself, and the newest of two
+    publishers of one link would win.
+    """
     msg_type = "tf2_msgs/msg/TFMessage" if robot.dialect == "ros2" else "tf2_msgs/TFMessage"
     async with RosbridgeClient(robot.url, connect_timeout=2.0, request_timeout=5.0) as tf:
         await tf.wait_connected(5.0)
-        static = {"transforms": [link(robot, "world", "odom", x=1.0, y=0.0, yaw_deg=0.0)]}
+        static = {"transforms": [link(robot, "dock", "cart", x=1.0, y=0.0, yaw_deg=0.0)]}
         await tf.publish("/tf_static", msg_type, static, latch=True)
         moving = {
             "transforms": [
-                link(robot, "odom", "base_link", x=0.0, y=2.0, yaw_deg=90.0),
-                link(robot, "base_link", "laser", x=0.1, y=0.0, yaw_deg=0.0),
+                link(robot, "cart", "arm", x=0.0, y=2.0, yaw_deg=90.0),
+                link(robot, "arm", "tool", x=0.1, y=0.0, yaw_deg=0.0),
             ]
         }
         # Latched here so a late subscriber hears it without a publishing loop in the test.
@@ -49,23 +53,23 @@ async def broadcaster(robot: SimulatedRobot) -> AsyncIterator[None]:
 
 
 async def test_a_transform_over_several_frames(session: Session, sim: SimulatedRobot) -> None:
-    """laser in world: three links composed, 90° of yaw, the chain named."""
+    """tool in dock: three links composed, 90° of yaw, the chain named."""
     async with broadcaster(sim):
-        result = await session.ok("get_transform", {"target_frame": "world", "source_frame": "laser"})
+        result = await session.ok("get_transform", {"target_frame": "dock", "source_frame": "tool"})
     data = result.structured_content
     assert data is not None
     assert data["translation"] == pytest.approx({"x": 1.0, "y": 2.1, "z": 0.0})
     assert data["rotation"]["yaw"] == pytest.approx(90.0)
-    assert data["chain"] == ["world", "odom", "base_link", "laser"]
+    assert data["chain"] == ["dock", "cart", "arm", "tool"]
     assert data["static"] is False
     assert 0 <= data["age"] < 5
-    assert "chain world → odom → base_link → laser" in text_of(result)
+    assert "chain dock → cart → arm → tool" in text_of(result)
 
 
 async def test_the_reverse_direction_inverts(session: Session, sim: SimulatedRobot) -> None:
-    """world in base_link: the inverse, turned -90°."""
+    """dock in arm: the inverse, turned -90°."""
     async with broadcaster(sim):
-        result = await session.ok("get_transform", {"target_frame": "base_link", "source_frame": "world"})
+        result = await session.ok("get_transform", {"target_frame": "arm", "source_frame": "dock"})
     data = result.structured_content
     assert data is not None
     assert data["rotation"]["yaw"] == pytest.approx(-90.0)
@@ -78,7 +82,7 @@ async def test_an_unknown_frame_lists_the_frames_seen(session: Session) -> None:
         "get_transform", {"target_frame": "world", "source_frame": "base_lnk", "timeout": 0.5}
     )
     assert "'base_lnk' has not been seen" in text
-    assert "Frames seen: base_link, base_scan, camera, odom, world." in text
+    assert "Frames seen: base_link, base_scan, camera, map, odom, world." in text
 
 
 async def test_the_robots_own_frames_give_the_turtles_pose(session: Session, sim: SimulatedRobot) -> None:

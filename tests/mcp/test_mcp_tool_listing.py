@@ -32,6 +32,9 @@ EXPECTED_PARAMETERS = {
     "get_parameter": ["name"],
     "set_parameter": ["name", "value"],
     "get_transform": ["target_frame", "source_frame", "timeout"],
+    "view_map": ["topic", "base_frame", "path_topic", "scan_topic", "around_robot", "max_size", "timeout"],
+    "view_scan": ["topic", "radius", "clearance", "max_size", "timeout"],
+    "plot_topic": ["series", "duration", "max_size"],
     "stop_robot": [],
 }
 READ_ONLY = {
@@ -47,12 +50,15 @@ READ_ONLY = {
     "list_parameters",
     "get_parameter",
     "get_transform",
+    "view_map",
+    "view_scan",
+    "plot_topic",
 }
 #: Acting tools that leave the robot as they found it when called twice with the same arguments.
 IDEMPOTENT_ACTS = {"set_parameter"}
 ORIGINAL = list(EXPECTED_PARAMETERS)[:8]
 #: Budgets for the tools/list answer (compact JSON): what a host pays in context for every session.
-ALL_TOOLS_BUDGET = 30_000
+ALL_TOOLS_BUDGET = 35_400
 #: The original eight come with the e-stop (stop_robot), which is listed wherever acting tools are.
 ORIGINAL_TOOLS_BUDGET = 15_400
 

@@ -85,7 +85,13 @@ async def test_tf_static_is_latched_a_new_subscriber_gets_it_at_once(sim: Simula
         (t["header"]["frame_id"], t["child_frame_id"]): t["transform"]["translation"]
         for t in static["msg"]["transforms"]
     }
-    assert set(pairs) == {("world", "odom"), ("base_link", "base_scan"), ("base_link", "camera")}
+    assert set(pairs) == {
+        ("map", "world"),
+        ("world", "odom"),
+        ("base_link", "base_scan"),
+        ("base_link", "camera"),
+    }
+    assert pairs[("map", "world")] == {"x": 0.0, "y": 0.0, "z": 0.0}
     assert pairs[("world", "odom")]["x"] == pytest.approx(TURTLE_HOME)
 
 

@@ -112,6 +112,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--camera-size", default="160x120", help="camera frame WIDTHxHEIGHT (default 160x120)"
     )
     parser.add_argument(
+        "--map-cells", type=int, default=242, help="/map side in cells (default 242: 0.05 m cells)"
+    )
+    parser.add_argument(
         "--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"], help="stderr log level"
     )
     return parser
@@ -144,6 +147,8 @@ def run(argv: list[str] | None = None) -> int:
             raise ValueError
     except ValueError:
         parser.error(f"--camera-size must look like 160x120, not {args.camera_size!r}")
+    if args.map_cells < 8:
+        parser.error(f"--map-cells must be at least 8, not {args.map_cells}")
     logging.basicConfig(
         level=args.log_level, stream=sys.stderr, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
@@ -161,6 +166,7 @@ def run(argv: list[str] | None = None) -> int:
         slow_service_seconds=args.slow_service_seconds,
         camera_width=width,
         camera_height=height,
+        map_cells=args.map_cells,
     )
     try:
         asyncio.run(_serve(robot))

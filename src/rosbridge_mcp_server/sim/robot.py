@@ -16,6 +16,7 @@ from rosbridge_mcp_server.sim.bridge import Bridge, BridgeConfig
 from rosbridge_mcp_server.sim.graph import Graph
 from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
 from rosbridge_mcp_server.sim.nodes import CameraSettings, WorldNodes
+from rosbridge_mcp_server.sim.nodes.room import ROOM_MAP_CELLS
 from rosbridge_mcp_server.sim.rosapi import ROSAPI_RELEASES, Rosapi, RosapiOptions
 from rosbridge_mcp_server.sim.world import World
 
@@ -45,7 +46,8 @@ class SimulatedRobot:
     ``in_order=True, distro="kilted"`` that is the real 2.1.0 bridge with its default settings.
     ``rosapi_latency`` (seconds, or several taken in turn) makes every rosapi call take that long, one call
     at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter / type
-    description (ROS 2) and logger (ROS 1) services every real node has.
+    description (ROS 2) and logger (ROS 1) services every real node has. ``map_cells`` is the side of
+    ``/map`` in cells (the same room, finer; e.g. 2000 for benchmarks).
     """
 
     def __init__(
@@ -64,6 +66,7 @@ class SimulatedRobot:
         slow_service_seconds: float = 3.0,
         camera_width: int = 160,
         camera_height: int = 120,
+        map_cells: int = ROOM_MAP_CELLS,
         max_message_size: int | None = None,
         ssl: _ssl.SSLContext | None = None,
     ) -> None:
@@ -71,6 +74,8 @@ class SimulatedRobot:
             raise ValueError(f"dialect must be 'ros1' or 'ros2', not {dialect!r}")
         if in_order and dialect != "ros2":
             raise ValueError("in_order models Humble's rosbridge, so it needs dialect='ros2'")
+        if map_cells < 8:
+            raise ValueError("map_cells must be at least 8")
         if action_step <= 0 or slow_service_seconds < 0:
             raise ValueError("action_step must be > 0 and slow_service_seconds >= 0")
         if distro is not None and (dialect != "ros2" or distro not in ROS2_DISTROS):
@@ -119,6 +124,7 @@ class SimulatedRobot:
             port=port,
             rosapi=RosapiOptions(release=rosapi, latency=latencies),
             node_services=node_services,
+            map_cells=map_cells,
         )
         self._nodes.build()
         self._server: Server | None = None

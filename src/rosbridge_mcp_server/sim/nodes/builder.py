@@ -17,7 +17,9 @@ from rosbridge_mcp_server.sim.bridge import Bridge
 from rosbridge_mcp_server.sim.graph import ROSBRIDGE_NODE, ServiceEntry
 from rosbridge_mcp_server.sim.nodes.camera import CAMERA, Camera, CameraSettings
 from rosbridge_mcp_server.sim.nodes.kit import Loop, NodeKit
+from rosbridge_mcp_server.sim.nodes.navigation import MAP_SERVER, PLANNER, MapServer, Planner
 from rosbridge_mcp_server.sim.nodes.parameter_services import PARAMETER_SERVICES, ParameterServices
+from rosbridge_mcp_server.sim.nodes.room import ROOM_MAP_CELLS
 from rosbridge_mcp_server.sim.nodes.sensors import (
     LIDAR,
     ODOMETRY,
@@ -58,6 +60,7 @@ class WorldNodes:
         port: int,
         rosapi: RosapiOptions | None = None,
         node_services: bool = True,
+        map_cells: int = ROOM_MAP_CELLS,
     ) -> None:
         self.bridge = bridge
         self.kit = NodeKit(bridge)
@@ -75,6 +78,8 @@ class WorldNodes:
         self.camera = Camera(self.kit, camera, self.turtlesim.background)
         self.robot_state = RobotState(self.kit)
         self.lidar = Lidar(self.kit)
+        self.map_server = MapServer(self.kit, map_cells)
+        self.planner = Planner(self.kit)
         self._tasks: list[asyncio.Task[None]] = []
         self.fibonacci2: FibonacciServer | None = None
         self.fibonacci1: ActionlibFibonacciServer | None = None
@@ -91,6 +96,8 @@ class WorldNodes:
         self.camera.build()
         self.robot_state.build()
         self.lidar.build()
+        self.map_server.build()
+        self.planner.build()
         if self.fast_topic:
             self._fast()
         self._fibonacci()
@@ -107,6 +114,8 @@ class WorldNodes:
             ROBOT_STATE_PUBLISHER,
             ODOMETRY,
             LIDAR,
+            MAP_SERVER,
+            PLANNER,
             FIBONACCI_NODE,
             ROSAPI_NODE,
             ROSBRIDGE_NODE,

@@ -1,8 +1,9 @@
 """The robot's state and range sensors: ``/tf``, ``/tf_static``, ``/robot_description`` and ``/scan``.
 
-The frame tree is ``world → odom → base_link → {base_scan, camera}``: ``odom`` sits where the turtle starts,
-so ``world → base_link`` is the turtle's pose in turtlesim's coordinates and ``odom → base_link`` its pose
-relative to the start. Frame ids carry no leading slash (tf2).
+The frame tree is ``map → world → odom → base_link → {base_scan, camera}``: ``map`` (the frame of ``/map``)
+coincides with turtlesim's ``world``; ``odom`` sits where the turtle starts, so ``world → base_link`` is the
+turtle's pose in turtlesim's coordinates and ``odom → base_link`` its pose relative to the start (also on
+``/odom``). Frame ids carry no leading slash (tf2).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import math
 from typing import Any
 
 from rosbridge_mcp_server.sim.nodes.kit import NodeKit, quaternion_from_yaw
+from rosbridge_mcp_server.sim.nodes.navigation import odometry
 from rosbridge_mcp_server.sim.nodes.room import ray_distance
 from rosbridge_mcp_server.sim.world import TURTLE_HOME
 
@@ -42,6 +44,7 @@ MAST_HALF_WIDTH = 2
 #: (parent, child, x, y, z, yaw) of every fixed transform, as robot_state_publisher and a world->odom
 #: static broadcaster publish them on /tf_static.
 STATIC_TRANSFORMS: tuple[tuple[str, str, float, float, float, float], ...] = (
+    ("map", "world", 0.0, 0.0, 0.0, 0.0),
     ("world", "odom", TURTLE_HOME, TURTLE_HOME, 0.0, 0.0),
     ("base_link", "base_scan", 0.0, 0.0, 0.1, 0.0),
     ("base_link", "camera", 0.1, 0.0, 0.2, 0.0),
@@ -66,7 +69,8 @@ def robot_description() -> str:
 
 
 class RobotState:
-    """``/tf`` (odom → base_link from the turtle's pose), latched ``/tf_static``, ``/robot_description``."""
+    """``/tf`` and ``/odom`` (odom → base_link from the turtle's pose), latched ``/tf_static``,
+    ``/robot_description``."""
 
     def __init__(self, kit: NodeKit) -> None:
         self.kit = kit
@@ -75,6 +79,7 @@ class RobotState:
         kit = self.kit
         tf_type = kit.msg_type("tf2_msgs", "TFMessage")
         kit.publisher(ODOMETRY, "/tf", tf_type)
+        kit.publisher(ODOMETRY, "/odom", kit.msg_type("nav_msgs", "Odometry"))
         kit.publisher(ROBOT_STATE_PUBLISHER, "/tf_static", tf_type, latched=True)
         kit.publisher(
             ROBOT_STATE_PUBLISHER, "/robot_description", kit.msg_type("std_msgs", "String"), latched=True
@@ -107,6 +112,8 @@ class RobotState:
                     ("odom", "base_link"), turtle.x - TURTLE_HOME, turtle.y - TURTLE_HOME, 0.0, turtle.theta
                 )
                 self.kit.publish("/tf", {"transforms": [moved]})
+            if self.kit.wants("/odom"):
+                self.kit.publish("/odom", odometry(self.kit))
             await asyncio.sleep(TF_PERIOD)
 
 

@@ -1,0 +1,279 @@
+"""``view_map``: an occupancy grid (a map or a costmap) as a picture, with the robot, a plan, a scan on it."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from typing import Annotated, Any
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.robot.drawing import png_bytes
+from rosbridge_mcp_server.robot.maps import (
+    Grid,
+    MapError,
+    MapPicture,
+    Overlay,
+    Pose2D,
+    decode_grid,
+    decode_path,
+    draw_map,
+)
+from rosbridge_mcp_server.robot.scans import ScanError, decode_scan, to_frame
+from rosbridge_mcp_server.tools.base import (
+    READS_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolImage,
+    ToolSpec,
+)
+from rosbridge_mcp_server.tools.seeing import first_message, is_type, planar_pose, typed_topic
+
+__all__ = ["SPEC", "MapAnswer", "run"]
+
+_GRID = is_type("nav_msgs/OccupancyGrid")
+_PATH = is_type("nav_msgs/Path")
+_SCAN = is_type("sensor_msgs/LaserScan")
+#: The longest the robot's, the path's and the scan's frames are waited for on /tf.
+_TF_WAIT = 2.0
+
+
+class MapAnswer(BaseModel):
+    """The map drawn; metres and degrees in the map's frame."""
+
+    topic: str
+    frame_id: str
+    cells: list[int] = Field(description="[width, height]")
+    resolution: float
+    origin: list[float] = Field(description="[x, y, yaw]")
+    shares: dict[str, float] = Field(description="known, free, occupied, cost: 0-1")
+    robot: list[float] | None = Field(description="[x, y, yaw]")
+    path_poses: int | None = None
+    scan_hits: int | None = None
+    window: list[float] = Field(description="[x_min, y_min, x_max, y_max]")
+    pixels_per_metre: float
+    notes: list[str]
+
+
+SPEC = ToolSpec(
+    name="view_map",
+    title="Map picture",
+    description=(
+        "An OccupancyGrid (map or costmap) as a picture with the robot (blue, from /tf), optionally a plan "
+        '(green) and a scan (red) on it. Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
+        '"around_robot": 4}'
+    ),
+    hints=READS_ROBOT,
+    output=MapAnswer,
+)
+
+
+async def run(
+    ctx: ToolContext,
+    *,
+    topic: Annotated[str, Field(description="e.g. /map or /global_costmap/costmap")] = "/map",
+    base_frame: Annotated[str, Field(description='Robot frame, e.g. base_link; "" for none')] = "base_link",
+    path_topic: Annotated[str, Field(description="nav_msgs/Path, e.g. /plan")] = "",
+    scan_topic: Annotated[str, Field(description="LaserScan, e.g. /scan")] = "",
+    around_robot: Annotated[float, Field(ge=0, le=1000, description="Metres around the robot, e.g. 3")] = 0.0,
+    max_size: Annotated[int, Field(ge=64, le=2048, description="Pixels, e.g. 800")] = 800,
+    timeout: Annotated[float, Field(gt=0, le=60, description="Seconds per message, e.g. 5")] = 5.0,
+) -> ToolAnswer:
+    """Take one grid (and plan and scan), place them with /tf, draw off the event loop."""
+    name, msg_type = await typed_topic(
+        ctx,
+        topic,
+        "topic",
+        accepts=_GRID,
+        kind="nav_msgs/OccupancyGrid",
+        hint="view_scan shows scans; subscribe_topic reads other topics.",
+    )
+    path_name = scan_name = None
+    path_type = scan_type = ""
+    if path_topic:
+        path_name, path_type = await typed_topic(
+            ctx, path_topic, "path_topic", accepts=_PATH, kind="nav_msgs/Path"
+        )
+    if scan_topic:
+        scan_name, scan_type = await typed_topic(
+            ctx, scan_topic, "scan_topic", accepts=_SCAN, kind="sensor_msgs/LaserScan"
+        )
+    notes: list[str] = []
+
+    async def optional(topic_name: str | None, topic_type: str, what: str) -> dict[str, Any] | None:
+        if topic_name is None:
+            return None
+        try:
+            return await first_message(ctx, topic_name, topic_type, timeout, what)
+        except ToolFailure:
+            notes.append(f"{what} not drawn: nothing arrived on {topic_name} within {timeout:g} s.")
+            return None
+
+    # The plan and the scan are awaited alongside the map, and given up with it when it fails.
+    extras = [
+        asyncio.create_task(optional(path_name, path_type, "path")),
+        asyncio.create_task(optional(scan_name, scan_type, "scan")),
+    ]
+    try:
+        message = await first_message(ctx, name, msg_type, timeout, "map")
+        path_message, scan_message = await asyncio.gather(*extras)
+    finally:
+        for task in extras:
+            task.cancel()
+        await asyncio.gather(*extras, return_exceptions=True)
+    try:
+        grid = await asyncio.to_thread(decode_grid, message)
+    except MapError as exc:
+        raise ToolFailure(f"{exc} (topic {name}).") from None
+    del message  # the decoded cells are the one copy kept
+    frame = grid.frame_id or "map"
+    overlay, robot = await _overlay(
+        ctx,
+        frame,
+        base_frame=base_frame.strip(),
+        path_message=path_message,
+        scan_message=scan_message,
+        notes=notes,
+        tf_wait=min(_TF_WAIT, timeout),
+    )
+    window = None
+    if around_robot:
+        if robot is None:
+            notes.append("around_robot needs the robot's pose: the whole map is shown.")
+        else:
+            window = (
+                robot.x - around_robot,
+                robot.y - around_robot,
+                robot.x + around_robot,
+                robot.y + around_robot,
+            )
+    picture, data = await asyncio.to_thread(_draw, grid, max_size, overlay, window)
+    answer = _answer(
+        name,
+        grid,
+        picture,
+        robot=robot,
+        overlay=overlay,
+        notes=notes,
+        path_heard=path_message is not None,
+    )
+    text = _text(answer, base_frame, picture.image.size)
+    return ToolAnswer(text=text, data=answer, images=(ToolImage(data, "image/png"),))
+
+
+async def _overlay(
+    ctx: ToolContext,
+    frame: str,
+    *,
+    base_frame: str,
+    path_message: dict[str, Any] | None,
+    scan_message: dict[str, Any] | None,
+    notes: list[str],
+    tf_wait: float,
+) -> tuple[Overlay, Pose2D | None]:
+    """The robot's pose, the path and the scan hits in the map's frame (each placed through /tf)."""
+    path_frame, path = decode_path(path_message) if path_message is not None else ("", [])
+    scan = None
+    if scan_message is not None:
+        try:
+            scan = decode_scan(scan_message)
+        except ScanError as exc:
+            notes.append(f"scan not drawn: {exc}")
+
+    async def pose(source: str, what: str) -> Pose2D | None:
+        if source == frame:
+            return Pose2D(0.0, 0.0, 0.0)
+        found = await planar_pose(ctx, frame, source, tf_wait)
+        if isinstance(found, str):
+            notes.append(f"{what} not drawn: {found}")
+            return None
+        return found
+
+    async def nothing() -> None:
+        return None
+
+    if scan is not None and scan.points and not scan.frame_id:
+        notes.append("scan not drawn: its header has no frame_id to place it by.")
+    robot, path_pose, scan_pose = await asyncio.gather(
+        pose(base_frame, "robot") if base_frame and base_frame != frame else nothing(),
+        # A path without a frame is taken to be in the map's.
+        pose(path_frame or frame, "path") if path else nothing(),
+        pose(scan.frame_id, "scan") if scan is not None and scan.points and scan.frame_id else nothing(),
+    )
+    placed_path = to_frame(path, path_pose.x, path_pose.y, path_pose.yaw) if path and path_pose else []
+    hits = to_frame(scan.points, scan_pose.x, scan_pose.y, scan_pose.yaw) if scan and scan_pose else []
+    return Overlay(robot=robot, path=placed_path, hits=hits), robot
+
+
+def _draw(
+    grid: Grid, max_size: int, overlay: Overlay, window: tuple[float, float, float, float] | None
+) -> tuple[MapPicture, bytes]:
+    picture = draw_map(grid, max_size=max_size, overlay=overlay, window=window)
+    return picture, png_bytes(picture.image)
+
+
+def _answer(
+    name: str,
+    grid: Grid,
+    picture: MapPicture,
+    *,
+    robot: Pose2D | None,
+    overlay: Overlay,
+    notes: list[str],
+    path_heard: bool,
+) -> MapAnswer:
+    shares = picture.shares
+    return MapAnswer(
+        topic=name,
+        frame_id=grid.frame_id,
+        cells=[grid.width, grid.height],
+        resolution=round(grid.resolution, 6),
+        origin=_planar(grid.origin),
+        shares={
+            "known": round(shares.known, 4),
+            "free": round(shares.free, 4),
+            "occupied": round(shares.occupied, 4),
+            "cost": round(shares.cost, 4),
+        },
+        robot=None if robot is None else _planar(robot),
+        path_poses=len(overlay.path) if path_heard else None,
+        scan_hits=len(overlay.hits) if overlay.hits or any(n.startswith("scan") for n in notes) else None,
+        window=[round(v, 3) for v in picture.window],
+        pixels_per_metre=round(picture.pixels_per_metre, 3),
+        notes=notes,
+    )
+
+
+def _planar(pose: Pose2D) -> list[float]:
+    return [round(pose.x, 3), round(pose.y, 3), round(math.degrees(pose.yaw), 1)]
+
+
+def _text(answer: MapAnswer, base_frame: str, size: tuple[int, int]) -> str:
+    (width, height), resolution = answer.cells, answer.resolution
+    x, y, yaw = answer.origin
+    shares = answer.shares
+    parts = [
+        f"{answer.topic} (frame {answer.frame_id or '?'}): {width}x{height} cells of {resolution:g} m = "
+        f"{round(width * resolution, 2):g} x {round(height * resolution, 2):g} m, origin ({x:g}, {y:g}, "
+        f"yaw {yaw:g}°)",
+        f"known {shares['known']:.0%} (free {shares['free']:.0%}, occupied {shares['occupied']:.0%}"
+        + (f", cost {shares['cost']:.0%}" if shares["cost"] else "")
+        + ")",
+    ]
+    if answer.robot is not None:
+        rx, ry, ryaw = answer.robot
+        parts.append(f"robot {base_frame} at x={rx:g} y={ry:g} yaw={ryaw:g}° (blue arrow)")
+    if answer.path_poses is not None:
+        parts.append(f"path {answer.path_poses} poses (green)")
+    if answer.scan_hits is not None:
+        parts.append(f"scan {answer.scan_hits} hits (red)")
+    window = answer.window
+    parts.append(
+        f"picture {size[0]}x{size[1]} px, {answer.pixels_per_metre:g} px/m, showing x "
+        f"{window[0]:g}..{window[2]:g}, y {window[1]:g}..{window[3]:g} m"
+    )
+    text = "; ".join(parts) + "."
+    if answer.notes:
+        text += " " + " ".join(answer.notes)
+    return text
