@@ -24,10 +24,11 @@ from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
 from rosbridge_mcp_server.fleet_config import load_fleet
 from rosbridge_mcp_server.http_config import DEFAULT_BIND, HttpSettings, load_http_settings
 from rosbridge_mcp_server.robot.acting import Guard
-from rosbridge_mcp_server.safety import Audit, PolicyGuard
+from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server import build_fleet_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
@@ -46,6 +47,23 @@ class _Parser(argparse.ArgumentParser):
     # argparse prints usage plus the message and exits; we want one line and our own exit code.
     def error(self, message: str) -> NoReturn:
         raise _UsageError(message)
+
+
+def _console_flags(parser: argparse.ArgumentParser) -> None:
+    console = parser.add_argument_group("operator console (docs/console.md)")
+    console.add_argument(
+        "--console",
+        metavar="[HOST:]PORT",
+        help="serve a web page for the person beside the robot (default host 127.0.0.1); its URL is "
+        "written on stderr (env ROSBRIDGE_MCP_CONSOLE)",
+    )
+    console.add_argument("--console-cert", help="TLS certificate for the console (PEM)")
+    console.add_argument("--console-key", help="the TLS certificate's key (PEM)")
+    console.add_argument(
+        "--console-insecure",
+        action="store_true",
+        help="allow plain HTTP on a non-loopback --console address (a trusted network only)",
+    )
 
 
 def _parser(command: str) -> _Parser:
@@ -113,6 +131,7 @@ def _parser(command: str) -> _Parser:
     if command == "serve":
         _fleet_flags(parser)
         _transport_flags(parser)
+        _console_flags(parser)
     demo = parser.add_argument_group("demo")
     demo.add_argument(
         "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
@@ -253,6 +272,15 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         fleet = (
             load_fleet(config, robots=options.robot, robots_file=options.robots) if command == "serve" else ()
         )
+        console = None
+        if command == "serve":
+            console = console_settings(
+                options.console if options.console is not None else env.get("ROSBRIDGE_MCP_CONSOLE") or None,
+                cert=options.console_cert,
+                key=options.console_key,
+                insecure=options.console_insecure,
+                source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
+            )
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (_UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -268,7 +296,10 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout))
-        asyncio.run(serve(config, audit_file, http, fleet))
+        asyncio.run(serve(config, audit_file, http, fleet, console))
+    except ConfigError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
@@ -403,12 +434,16 @@ async def serve(
     audit_file: TextIO | None = None,
     http: HttpSettings | None = None,
     fleet: Sequence[tuple[str, Config]] = (),
+    console: ConsoleSettings | None = None,
 ) -> None:
     """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
-    Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names)."""
+    Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names). With
+    *console*, the operator console beside it (one person, one E-STOP for every robot)."""
     async with demo_robot(config) as effective:
         robots = list(fleet) or [("robot", effective)]
         entries: list[tuple[str, RosbridgeClient, Config, Guard | None]] = []
+        operator = Operator(present=console is not None)
+        views: list[RobotView] = []
         for name, robot_config in robots:
             where = f"{name}: " if fleet else ""
             warning = plain_text_warning(robot_config.url)
@@ -423,24 +458,32 @@ async def serve(
                 ssl_context=robot_config.ssl_context(),
                 headers=robot_config.headers,
             )
-            guard = PolicyGuard(robot_config.policy, Audit(audit_file, robot=name if fleet else None))
+            audit = Audit(audit_file, robot=name if fleet else None)
+            guard = PolicyGuard(robot_config.policy, audit, operator)
             entries.append((name, client, robot_config, guard))
+            views.append(RobotView(name, client, SessionActivity(), audit))
+        hub = ConsoleHub(views, operator) if console is not None else None
+        activities = {view.name: view.activity for view in views}
+        console_view = hub.snapshot if hub is not None else None
         if http is not None and http.transport == "http":
             # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
             from rosbridge_mcp_server.server.http import auth_options, serve_http  # noqa: PLC0415
 
-            server = build_fleet_server(entries, effective, **auth_options(http))
+            server = build_fleet_server(
+                entries, effective, activities=activities, console_view=console_view, **auth_options(http)
+            )
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
             # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
             # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as
             # on stdio (Ctrl-C still ends in KeyboardInterrupt, exit 130).
             previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
             try:
-                await serve_http(server, http)
+                async with _console(console, hub):
+                    await serve_http(server, http)
             finally:
                 signal.signal(signal.SIGTERM, previous)
             return
-        server = build_fleet_server(entries, effective)
+        server = build_fleet_server(entries, effective, activities=activities, console_view=console_view)
         _stop_on_signals([client for _, client, _, _ in entries])
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
@@ -451,4 +494,31 @@ async def serve(
                 PROG,
                 " --demo" if config.demo else "",
             )
-        await serve_stdio(server)
+        async with _console(console, hub):
+            await serve_stdio(server)
+
+
+@contextlib.asynccontextmanager
+async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> AsyncIterator[None]:
+    """The operator console beside the MCP server, when asked for; its one-time URL goes to stderr."""
+    if settings is None or hub is None:
+        yield
+        return
+    # Imported here: uvicorn and Starlette are only needed with --console.
+    from rosbridge_mcp_server.console.serve import open_console  # noqa: PLC0415
+
+    try:
+        opened = open_console(settings, hub)
+        running = await opened.__aenter__()
+    except OSError as exc:
+        raise ConfigError(
+            f"--console: cannot listen on {settings.host}:{settings.port}: {exc.strerror or exc}"
+        ) from None
+    # The URL alone on its line, to copy; it carries the session secret, so it is not a log line either.
+    sys.stderr.write(f"{running.url}\n")
+    sys.stderr.write("operator console: open the URL above in a browser beside the robot\n")
+    sys.stderr.flush()
+    try:
+        yield
+    finally:
+        await opened.__aexit__(None, None, None)

@@ -238,9 +238,11 @@ class Streamed:
     sent: int
     cancelled: bool  #: stopped early (an MCP cancel, or the server stopping)
     zero: dict[str, Any] | None  #: the all-zero message sent at the end (velocity types), else None
-    stopped: bool = False  #: ended early because stop_robot asked
+    stopped: bool = False  #: ended early because stop_robot (or the operator's E-STOP) asked
     #: How the safety policy changed the message before it was sent (velocity caps in clamp mode), or None.
     adjusted: str | None = None
+    #: Who stopped it early, when ``stopped``.
+    stopped_by: str = "stop_robot"
 
 
 async def publish_stream(
@@ -273,6 +275,7 @@ async def publish_stream(
     every = max(1, round(rate / 5))  # progress about five times a second at most
     loop = asyncio.get_running_loop()
     stopped = False
+    stopped_by = "stop_robot"
     try:
         await _bridge_is_reading(ctx)
         start = loop.time()
@@ -280,7 +283,7 @@ async def publish_stream(
         with ctx.activity.stream(act.name, act.type) as running:
             for index in range(planned):
                 if await running.pause(start + index / rate - loop.time()):
-                    stopped = True
+                    stopped, stopped_by = True, running.stopped_by
                     break
                 await ctx.client.publish(act.name, act.type, act.payload)
                 if sent == 0:
@@ -301,10 +304,21 @@ async def publish_stream(
             await asyncio.shield(_publish_quietly(ctx, act, zero))
         if cancelled:
             ctx.guard.record(act, f"cancelled after {sent} of {planned}")
-    ctx.guard.record(act, f"{'stopped by stop_robot after' if stopped else 'sent'} {sent} of {planned}")
+    ctx.guard.record(act, f"{f'stopped by {stopped_by} after' if stopped else 'sent'} {sent} of {planned}")
     adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
     return Streamed(
-        act.name, act.type, act.payload, rate, length, planned, sent, cancelled, zero, stopped, adjusted
+        act.name,
+        act.type,
+        act.payload,
+        rate,
+        length,
+        planned,
+        sent,
+        cancelled,
+        zero,
+        stopped,
+        adjusted,
+        stopped_by,
     )
 
 

@@ -44,6 +44,8 @@ class Stream:
     task: asyncio.Task[Any]
     stop_requested: asyncio.Event = field(default_factory=asyncio.Event)
     ended: asyncio.Event = field(default_factory=asyncio.Event)
+    #: Who asked it to stop, for its answer ("stop_robot", or "E-STOP on the operator console").
+    stopped_by: str = "stop_robot"
 
     @property
     def stopped_by_estop(self) -> bool:
@@ -102,14 +104,16 @@ class SessionActivity:
     def streams(self) -> list[Stream]:
         return list(self._streams)
 
-    async def stop_streams(self, timeout: float) -> tuple[list[Stream], list[Stream]]:
-        """Ask every stream to stop and wait up to ``timeout`` s; returns (ended, still running).
+    async def stop_streams(self, timeout: float, by: str = "stop_robot") -> tuple[list[Stream], list[Stream]]:
+        """Ask every stream to stop (``by`` is who asks) and wait up to ``timeout`` s; returns (ended, still
+        running).
 
         A stream that has not ended when asked is cancelled halfway through the wait: stopping must not
         depend on the stream's loop looking at the request.
         """
         streams = self.streams
         for entry in streams:
+            entry.stopped_by = by
             entry.stop_requested.set()
         if streams:
             await self._wait_ended(streams, timeout / 2)

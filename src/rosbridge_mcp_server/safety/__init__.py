@@ -7,7 +7,16 @@ ask the person; the acting layer calls the guard before anything is sent.
 from rosbridge_mcp_server.robot.activity import SessionActivity, Stream, VelocityTopic
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure
 from rosbridge_mcp_server.safety.estop import StopReport, emergency_stop
-from rosbridge_mcp_server.safety.guard import Audit, PolicyGuard, calling_as, current_caller, question
+from rosbridge_mcp_server.safety.guard import (
+    LATCH_RULE,
+    Audit,
+    AuditEntry,
+    PolicyGuard,
+    calling_as,
+    current_caller,
+    question,
+)
+from rosbridge_mcp_server.safety.operator import Operator, PendingConfirmation
 from rosbridge_mcp_server.safety.policy import (
     NameRules,
     Policy,
@@ -19,8 +28,12 @@ from rosbridge_mcp_server.safety.policy import (
 )
 
 __all__ = [
+    "LATCH_RULE",
     "Audit",
+    "AuditEntry",
     "NameRules",
+    "Operator",
+    "PendingConfirmation",
     "Policy",
     "PolicyError",
     "PolicyGuard",

@@ -45,11 +45,16 @@ class StopReport:
         )
 
 
-async def emergency_stop(client: RosbridgeClient, activity: SessionActivity) -> StopReport:
-    """End every stream, publish one zero command on every velocity topic used, cancel every running goal."""
+async def emergency_stop(
+    client: RosbridgeClient, activity: SessionActivity, *, by: str = "stop_robot"
+) -> StopReport:
+    """End every stream, publish one zero command on every velocity topic used, cancel every running goal.
+
+    ``by`` (who stops: ``stop_robot``, or the operator's E-STOP) is what each ended stream's answer names.
+    """
     report = StopReport()
     # Streams first: a stream still running after the zero message would set the robot moving again.
-    ended, running = await activity.stop_streams(STREAM_STOP_SECONDS)
+    ended, running = await activity.stop_streams(STREAM_STOP_SECONDS, by=by)
     report.streams_stopped = [entry.topic for entry in ended]
     report.streams_still_running = [entry.topic for entry in running]
 

@@ -19,11 +19,12 @@ import dataclasses
 import datetime
 import json
 import logging
-from collections.abc import Iterator
-from typing import IO, TYPE_CHECKING, NoReturn
+from collections.abc import Callable, Iterator
+from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
+from rosbridge_mcp_server.safety.operator import Operator
 from rosbridge_mcp_server.safety.policy import Policy
 
 if TYPE_CHECKING:
@@ -33,8 +34,10 @@ if TYPE_CHECKING:
 
 __all__ = [
     "AUDIT_PAYLOAD_LIMIT",
+    "LATCH_RULE",
     "QUESTION_LIMIT",
     "Audit",
+    "AuditEntry",
     "PolicyGuard",
     "calling_as",
     "current_caller",
@@ -48,6 +51,12 @@ QUESTION_LIMIT = 4000
 #: Longest audit file line; beyond it the payload is cut, with its full length noted.
 AUDIT_PAYLOAD_LIMIT = 16_000
 
+
+#: The rule a refusal names while the operator's e-stop is latched.
+LATCH_RULE = "e-stop latched by the operator"
+
+#: One audit line as a dict (the audit file's JSON, before the payload is cut).
+AuditEntry = dict[str, Any]
 
 _NOUNS = {"topic": "topic", "service": "service", "action": "action", "parameter": "parameter"}
 _PAYLOADS = {"topic": "message", "service": "request", "action": "goal", "parameter": "value"}
@@ -85,6 +94,11 @@ class Audit:
         self._stream = stream
         #: The robot this audit is for, when the server drives several (named in every line).
         self.robot = robot
+        self._listeners: list[Callable[[AuditEntry], None]] = []
+
+    def listen(self, callback: Callable[[AuditEntry], None]) -> None:
+        """Also hand every entry to ``callback`` (e.g. the operator console); it must not block."""
+        self._listeners.append(callback)
 
     def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
         extra = f" ({detail})" if detail else ""
@@ -104,9 +118,9 @@ class Audit:
             extra,
             f" [caller {caller}]" if caller else "",
         )
-        if self._stream is None:
+        if self._stream is None and not self._listeners:
             return
-        entry = {
+        entry: AuditEntry = {
             "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds"),
             "tool": act.tool,
             "kind": act.kind,
@@ -122,6 +136,13 @@ class Audit:
             entry["caller"] = caller
         if self.robot is not None:
             entry["robot"] = self.robot
+        for callback in self._listeners:
+            try:
+                callback(entry)
+            except Exception:
+                _log.exception("an audit listener failed")
+        if self._stream is None:
+            return
         line = json.dumps(entry, ensure_ascii=False, default=str)
         if len(line) > AUDIT_PAYLOAD_LIMIT:
             # A camera frame in every line would bury the audit; its size and start are enough.
@@ -139,18 +160,26 @@ class Audit:
 class PolicyGuard:
     """Applies a :class:`Policy` to each acting call (see the module docstring for the order)."""
 
-    def __init__(self, policy: Policy, audit: Audit | None = None) -> None:
+    def __init__(self, policy: Policy, audit: Audit | None = None, operator: Operator | None = None) -> None:
         self.policy = policy
         self.audit = audit if audit is not None else Audit()
+        #: The person beside the robot (the operator console), when one is served: asked when the MCP client
+        #: cannot ask, and their latched e-stop refuses every acting call.
+        self.operator = operator
 
     async def approve(self, act: Act, ask: AskPerson) -> Act:
         """``act`` as it may be sent (perhaps clamped), or :class:`PolicyRefusal` naming the rule."""
+        if self.operator is not None and self.operator.latched:
+            self._refuse(act, LATCH_RULE, _LATCHED_TEXT)
         rule = self._rule_refusal(act)
         if rule is not None:
             self._refuse(act, rule, f"Refused by the safety policy ({rule}); nothing was sent.")
         approved, clamp = self._capped(act)
         if self._needs_person(approved):
             answer = await self._ask(approved, ask, clamp)
+            if self.operator is not None and self.operator.latched:
+                # E-STOP pressed while the person was being asked: the stop wins over any yes.
+                self._refuse(approved, LATCH_RULE, _LATCHED_TEXT)
             if answer != "accept":
                 self._refuse(approved, f"person: {answer}", _answer_text(approved, answer, self.policy))
             self.audit.write(approved, "confirmed", clamp)
@@ -232,15 +261,27 @@ class PolicyGuard:
         return False
 
     async def _ask(self, act: Act, ask: AskPerson, clamp: str | None) -> Answer | str:
+        text = question(act, clamp)
         try:
             async with asyncio.timeout(self.policy.confirm_timeout):
-                return await ask(question(act, clamp))
+                answer = await ask(text)
+                if answer == "unsupported" and self.operator is not None and self.operator.present:
+                    # The MCP client cannot ask: the person at the console can, within the same timeout.
+                    answer = await self.operator.ask(text, act)
+                return answer
         except TimeoutError:
             return "timeout"
         except Exception as exc:
             # A client that fails the request (or never answers in time) has not said yes.
             _log.warning("asking the person failed: %s", exc)
             return "error"
+
+
+_LATCHED_TEXT = (
+    "Refused: the robot's operator pressed E-STOP on the operator console, and every acting call is refused "
+    "until they release it there; nothing was sent. Tell the user; do not try to reach the same effect "
+    "another way."
+)
 
 
 def question(act: Act, clamp: str | None = None) -> str:

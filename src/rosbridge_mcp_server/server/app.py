@@ -9,7 +9,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import typing
-from collections.abc import AsyncIterator, Sequence
+from collections.abc import AsyncIterator, Callable, Mapping, Sequence
 from contextlib import asynccontextmanager
 from typing import Any, Literal
 
@@ -22,6 +22,7 @@ from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
+from rosbridge_mcp_server.server.console_app import console_app
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, Fleet, Robot, list_robots_tool
 from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
 from rosbridge_mcp_server.tools.arguments import argument_problem
@@ -78,27 +79,51 @@ This server is read-only: it lists only tools that read the robot, and refuses a
 
 
 def build_server(
-    client: RosbridgeClient, config: Config, *, guard: Guard | None = None, **transport: Any
+    client: RosbridgeClient,
+    config: Config,
+    *,
+    guard: Guard | None = None,
+    activity: SessionActivity | None = None,
+    console_view: Callable[[], dict[str, Any]] | None = None,
+    **transport: Any,
 ) -> MCPServer[None]:
     """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
 
     Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
     ``config.policy``, audited on stderr). A read-only policy lists only the reading tools. Every tool call
     first goes through the checks of ``checks.py`` (the SDK's server middleware), on any transport.
-    *transport* goes to ``MCPServer`` as it is (``auth`` and ``token_verifier`` for HTTP).
+    *transport* goes to ``MCPServer`` as it is (``auth`` and ``token_verifier`` for HTTP). *activity* and
+    *console_view*: see :func:`build_fleet_server`.
     """
-    return build_fleet_server([("robot", client, config, guard)], config, **transport)
+    return build_fleet_server(
+        [("robot", client, config, guard)],
+        config,
+        activities={"robot": activity} if activity is not None else None,
+        console_view=console_view,
+        **transport,
+    )
 
 
 def build_fleet_server(
-    robots: Sequence[tuple[str, RosbridgeClient, Config, Guard | None]], config: Config, **transport: Any
+    robots: Sequence[tuple[str, RosbridgeClient, Config, Guard | None]],
+    config: Config,
+    *,
+    activities: Mapping[str, SessionActivity] | None = None,
+    console_view: Callable[[], dict[str, Any]] | None = None,
+    **transport: Any,
 ) -> MCPServer[None]:
     """An ``MCPServer`` driving each ``(name, client, config, guard)`` robot; with one, :func:`build_server`.
 
     *config* chooses the tools and, when read-only, withholds the acting ones; each robot's own config
     holds its policy, which its guard (default: a :class:`PolicyGuard` for it) applies. With several robots
     every tool takes a ``robot`` argument and ``list_robots`` is listed (``fleet.py``).
+
+    *activities* (by robot name; default a new one each) is what the tools record they set going: pass them
+    to share them with the operator console's E-STOP. With *console_view* (the console's snapshot) the server
+    also offers the console's read-only view as an MCP App: ``show_console`` and its ``ui://`` resource
+    (``server/console_app.py``).
     """
+    shared = activities or {}
     fleet = Fleet(
         [
             Robot(
@@ -107,7 +132,7 @@ def build_fleet_server(
                 config=robot_config,
                 graph=RosGraph(client),
                 guard=guard if guard is not None else PolicyGuard(robot_config.policy),
-                activity=SessionActivity(),
+                activity=shared.get(name) or SessionActivity(),
             )
             for name, client, robot_config, guard in robots
         ]
@@ -176,6 +201,7 @@ def build_fleet_server(
         + (_READ_ONLY_NOTE if policy.read_only else ""),
         version=__version__,
         tools=tools,
+        extensions=[console_app(console_view)] if console_view is not None else None,
         lifespan=lifespan,
         log_level=config.log_level,
         middleware=[checks],

@@ -132,8 +132,8 @@ async def _stream(
     )
     if streamed.stopped:
         text = (
-            f"stop_robot ended the stream on {streamed.topic} after {streamed.sent} of {streamed.planned} "
-            f"{streamed.type} messages ({compact_json(streamed.message)})"
+            f"{streamed.stopped_by} ended the stream on {streamed.topic} after {streamed.sent} of "
+            f"{streamed.planned} {streamed.type} messages ({compact_json(streamed.message)})"
         )
     if streamed.zero is not None:
         text += "; then one all-zero message to stop"

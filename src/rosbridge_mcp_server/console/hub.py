@@ -1,0 +1,349 @@
+"""What the console shows and what its buttons do, without the web: state snapshots, changes, E-STOP, camera.
+
+:class:`ConsoleHub` gathers each robot's connection, streams and goals, the audit (newest first), the
+confirmations waiting for the person and the latched e-stop into one JSON-ready snapshot, and tells waiters
+(the page's event streams) when it changes. Audit lines and the operator's changes are pushed at once; the
+connection, streams and goals are looked at four times a second and pushed when they differ.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import base64
+import contextlib
+import json
+import logging
+import time
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.robot.acting import Act
+from rosbridge_mcp_server.robot.goals import running_goals
+from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.robot.images import ImageError, decode_compressed, decode_raw, encode_picture
+from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.names import absolute_name
+from rosbridge_mcp_server.safety import Audit, AuditEntry, Operator, emergency_stop
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.robot.activity import SessionActivity
+
+__all__ = ["AUDIT_KEPT", "CAMERA_FPS", "CAMERA_MAX_SIZE", "ConsoleHub", "Frame", "RobotView", "summary_text"]
+
+_log = logging.getLogger("rosbridge_mcp_server.console")
+
+#: Audit lines the page shows (and a new page gets at once).
+AUDIT_KEPT = 50
+#: The camera's frame budget: at most this many frames a second, at most this many pixels on the long side.
+CAMERA_FPS = 4.0
+CAMERA_MAX_SIZE = 480
+#: How often the connection, streams and goals are looked at (they have no change signal of their own).
+LOOK_EVERY = 0.25
+#: Longest payload text in an audit line on the page.
+PAYLOAD_SHOWN = 240
+#: Who stopped a stream, in its answer to the model.
+ESTOP_BY = "E-STOP on the operator console"
+_IMAGE_TYPES = ("sensor_msgs/Image", "sensor_msgs/CompressedImage")
+
+
+@dataclass
+class RobotView:
+    """One robot as the console sees it: its client, what this server set going on it, and its audit."""
+
+    name: str
+    client: RosbridgeClient
+    activity: SessionActivity
+    audit: Audit
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The camera's latest frame, ready for the page."""
+
+    seq: int
+    topic: str
+    mime: str
+    data: str  #: base64
+    width: int
+    height: int
+
+    def event(self) -> dict[str, Any]:
+        return {
+            "seq": self.seq,
+            "topic": self.topic,
+            "src": f"data:{self.mime};base64,{self.data}",
+            "width": self.width,
+            "height": self.height,
+        }
+
+
+class ConsoleHub:
+    """The console's state and actions for ``robots`` (their audits merged) and the ``operator``.
+
+    E-STOP stops every robot; the camera and the image-topic picker use the first robot.
+    """
+
+    def __init__(self, robots: Sequence[RobotView], operator: Operator) -> None:
+        if not robots:
+            raise ValueError("the console needs at least one robot")
+        self.robots = list(robots)
+        self.operator = operator
+        self._entries: deque[dict[str, Any]] = deque(maxlen=AUDIT_KEPT)
+        self._version = 0
+        self._changed = asyncio.Event()
+        self._closed = False
+        self._live: Any = None
+        self._graph = RosGraph(self.robots[0].client)
+        self.camera_topic: str | None = None
+        self.camera_status = "off"
+        self.frame: Frame | None = None
+        self._frames = 0
+        self._camera_task: asyncio.Task[None] | None = None
+        for robot in self.robots:
+            robot.audit.listen(self._on_audit)
+        operator.listen(self.changed)
+
+    # --- changes -------------------------------------------------------------------------------------------
+
+    @property
+    def version(self) -> int:
+        return self._version
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def changed(self) -> None:
+        """Something the page shows changed: wake every waiter."""
+        self._version += 1
+        event, self._changed = self._changed, asyncio.Event()
+        event.set()
+
+    async def wait_changed(self, seen_version: int, seen_frame: int, timeout: float) -> bool:
+        """Wait until the state or the frame is newer than what was seen; ``False`` after ``timeout``."""
+        event = self._changed
+        if self._version != seen_version or self._frames != seen_frame or self._closed:
+            return True
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(timeout):
+                await event.wait()
+                return True
+        return False
+
+    def close(self) -> None:
+        """The console is going away: end the event streams and the camera."""
+        self._closed = True
+        if self._camera_task is not None:
+            self._camera_task.cancel()
+        self.changed()
+
+    async def look(self) -> None:
+        """Push the connection, streams and goals when they change; runs until cancelled."""
+        while not self._closed:
+            live = self._live_state()
+            if live != self._live:
+                self._live = live
+                self.changed()
+            await asyncio.sleep(LOOK_EVERY)
+
+    # --- the snapshot --------------------------------------------------------------------------------------
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything the page shows but the camera frame, JSON-ready."""
+        latched = self.operator.latched
+        return {
+            "robots": self._live_state(),
+            "estop": {"latched": latched is not None, "by": latched},
+            "pending": [
+                {
+                    "id": pending.id,
+                    "tool": pending.act.tool,
+                    "kind": pending.act.kind,
+                    "name": pending.act.name,
+                    "type": pending.act.type,
+                    "question": pending.question,
+                    "asked_at": pending.asked_at,
+                }
+                for pending in self.operator.pending
+            ],
+            "audit": list(reversed(self._entries)),
+            "camera": {"topic": self.camera_topic, "status": self.camera_status},
+        }
+
+    def frame_event(self) -> dict[str, Any] | None:
+        return None if self.frame is None else self.frame.event()
+
+    @property
+    def frames(self) -> int:
+        return self._frames
+
+    def _live_state(self) -> list[dict[str, Any]]:
+        now = time.monotonic()
+        robots = []
+        for robot in self.robots:
+            session = robot.client.session
+            info = session.info if session is not None and robot.client.connected else None
+            ros = None
+            if info is not None:
+                ros = f"ROS {info.version}" + (f" {info.distro}" if info.distro else "")
+            robots.append(
+                {
+                    "name": robot.name,
+                    "url": robot.client.url,
+                    "connected": info is not None,
+                    "ros": ros,
+                    "streams": [
+                        {"topic": s.topic, "type": s.type, "stopping": s.stop_requested.is_set()}
+                        for s in robot.activity.streams
+                    ],
+                    "goals": [
+                        {
+                            "action": goal.action,
+                            "goal_id": goal.goal_id,
+                            "seconds": round(now - goal.started, 1),
+                            "feedback_count": goal.feedback_count,
+                            "last_feedback": _short(goal.last_feedback[-1]) if goal.last_feedback else None,
+                            "cancel_requested": goal.cancel_requested,
+                        }
+                        for goal in running_goals(robot.client)
+                    ],
+                }
+            )
+        return robots
+
+    def _on_audit(self, entry: AuditEntry) -> None:
+        keys = ("time", "robot", "caller", "tool", "kind", "name", "type", "outcome", "detail")
+        shown = {key: entry.get(key) for key in keys}
+        shown["payload"] = None if entry.get("payload") is None else _short(entry["payload"])
+        shown["rate_hz"] = entry.get("rate_hz")
+        shown["duration"] = entry.get("duration")
+        self._entries.append(shown)
+        self.changed()
+
+    # --- what the buttons do -------------------------------------------------------------------------------
+
+    async def estop(self) -> list[dict[str, Any]]:
+        """E-STOP: latch first (nothing new is approved), then stop_robot on every robot; audited."""
+        self.operator.latch("console")
+        reports = []
+        for robot in self.robots:
+            report = await emergency_stop(robot.client, robot.activity, by=ESTOP_BY)
+            for topic, type_name, message in report.zero_messages:
+                robot.audit.write(Act("console", "topic", topic, type_name, message), "e-stop")
+            for action, goal_id in report.goals:
+                robot.audit.write(Act("console", "action", action, "", {"cancel": goal_id}), "e-stop")
+            if not report.did_anything:
+                robot.audit.write(Act("console", "topic", "", "", None), "e-stop: nothing to stop")
+            reports.append(
+                {
+                    "robot": robot.name,
+                    "streams_stopped": report.streams_stopped,
+                    "zeroed_topics": report.zeroed_topics,
+                    "goals_cancelled": report.goals_cancelled,
+                    "failures": report.failures,
+                }
+            )
+        self.changed()
+        return reports
+
+    def release(self) -> bool:
+        """Release the latched e-stop; ``False`` when it was not latched."""
+        released = self.operator.release("console")
+        if released:
+            for robot in self.robots:
+                robot.audit.write(Act("console", "topic", "", "", None), "e-stop released")
+        return released
+
+    # --- the camera ----------------------------------------------------------------------------------------
+
+    async def image_topics(self) -> list[str]:
+        """The image topics the first robot's graph lists (for the page's picker)."""
+        topics = await self._graph.topics()
+        return sorted(t.name for t in topics if short_type_name(t.type) in _IMAGE_TYPES)
+
+    def show_camera(self, topic: str | None) -> None:
+        """Show ``topic`` (``None``: no camera); a bad name is refused with :class:`RosbridgeError`."""
+        name = absolute_name(topic, "topic") if topic else None
+        if self._camera_task is not None:
+            self._camera_task.cancel()
+            self._camera_task = None
+        self.camera_topic = name
+        self.frame = None
+        self.camera_status = "off" if name is None else "starting"
+        if name is not None:
+            self._camera_task = asyncio.create_task(self._camera(name), name=f"console camera {name}")
+        self.changed()
+
+    async def _camera(self, topic: str) -> None:
+        client = self.robots[0].client
+        while True:
+            try:
+                await self._frames_of(client, topic)
+            except RosbridgeError as exc:
+                self._camera_said(f"{exc} (trying again)")
+            except ImageError as exc:
+                self._camera_said(f"cannot show this frame: {exc}")
+            # Not a sync: how soon to try again after the robot or the topic failed.
+            await asyncio.sleep(2.0)
+
+    async def _frames_of(self, client: RosbridgeClient, topic: str) -> None:
+        msg_type = await self._graph.topic_type(topic)
+        if not msg_type:
+            self._camera_said(f"{topic} is not in the robot's graph yet")
+            return
+        compressed = short_type_name(msg_type) == _IMAGE_TYPES[1]
+        if short_type_name(msg_type) not in _IMAGE_TYPES:
+            self._camera_said(f"{topic} carries {msg_type}, not an image")
+            return
+        throttle = int(1000 / CAMERA_FPS)
+        async with client.subscribe(
+            topic, msg_type, throttle_rate=throttle, queue_length=1, max_queue=1
+        ) as subscription:
+            self._camera_said("waiting for a frame")
+            while True:
+                message = await subscription.get()
+                frame = await asyncio.to_thread(_encode, message, compressed)
+                self._frames += 1
+                self.frame = Frame(self._frames, topic, "image/jpeg", *frame)
+                self.camera_status = "live"
+                self.changed()
+                # The frame budget: the bridge throttles too, but a bridge that ignores it must not flood.
+                await asyncio.sleep(1 / CAMERA_FPS)
+
+    def _camera_said(self, status: str) -> None:
+        self.camera_status = status
+        self.changed()
+
+
+def _encode(message: dict[str, Any], compressed: bool) -> tuple[str, int, int]:
+    picture = decode_compressed(message) if compressed else decode_raw(message)
+    encoded = encode_picture(picture, CAMERA_MAX_SIZE, "jpeg")
+    return base64.b64encode(encoded.data).decode("ascii"), encoded.width, encoded.height
+
+
+def _short(value: Any) -> str:
+    text = json.dumps(value, ensure_ascii=False, default=str)
+    return text if len(text) <= PAYLOAD_SHOWN else f"{text[:PAYLOAD_SHOWN]}… ({len(text)} characters)"
+
+
+def summary_text(snapshot: dict[str, Any], audit_lines: int = 5) -> str:
+    """The snapshot as a few lines for a model: connection, the latch, what waits and runs, the last calls."""
+    lines = []
+    for robot in snapshot["robots"]:
+        state = f"connected ({robot['ros']})" if robot["connected"] else "not connected"
+        running = f"; {len(robot['streams'])} stream(s), {len(robot['goals'])} goal(s) running"
+        lines.append(f"{robot['name']} at {robot['url']}: {state}{running}")
+    if snapshot["estop"]["latched"]:
+        lines.append("E-STOP is latched on the operator console: acting calls are refused until released.")
+    if snapshot["pending"]:
+        waiting = ", ".join(f"{p['tool']} on {p['name']}" for p in snapshot["pending"])
+        lines.append(f"Waiting for the person's confirmation: {waiting}.")
+    for entry in snapshot["audit"][:audit_lines]:
+        lines.append(f"{entry['time']} {entry['tool']} {entry['name'] or '-'}: {entry['outcome']}")
+    if not snapshot["audit"]:
+        lines.append("No acting call yet.")
+    return "\n".join(lines)

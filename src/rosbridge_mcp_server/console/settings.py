@@ -1,0 +1,101 @@
+"""Where the operator console listens, and whether it may: ``--console [HOST:]PORT`` and its TLS options.
+
+Loopback by default. Any other address shows the robot's camera and its stop button to a network, so it needs
+TLS (``--console-cert`` / ``--console-key``) or an explicit ``--console-insecure``; the session secret still
+guards every request either way.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+from dataclasses import dataclass
+from pathlib import Path
+
+from rosbridge_mcp_server.config import ConfigError, parse_port
+
+__all__ = ["DEFAULT_CONSOLE_HOST", "ConsoleSettings", "console_settings"]
+
+DEFAULT_CONSOLE_HOST = "127.0.0.1"
+
+
+@dataclass(frozen=True)
+class ConsoleSettings:
+    """The console's address and TLS files, checked."""
+
+    host: str = DEFAULT_CONSOLE_HOST
+    port: int = 0
+    cert: str | None = None
+    key: str | None = None
+    insecure: bool = False
+
+    @property
+    def scheme(self) -> str:
+        return "https" if self.cert else "http"
+
+    @property
+    def loopback(self) -> bool:
+        return is_loopback(self.host)
+
+
+def console_settings(
+    address: str | None,
+    *,
+    cert: str | None = None,
+    key: str | None = None,
+    insecure: bool = False,
+    source: str = "--console",
+) -> ConsoleSettings | None:
+    """The settings from ``--console [HOST:]PORT`` and its options; ``None`` when no console was asked for.
+
+    :class:`ConfigError` names what is wrong: a bad address, a key without a certificate, a missing file, or a
+    non-loopback address without TLS or ``--console-insecure``.
+    """
+    if address is None:
+        if cert or key or insecure:
+            raise ConfigError("--console-cert, --console-key and --console-insecure need --console PORT")
+        return None
+    host, port = _split(address.strip(), source)
+    if key and not cert:
+        raise ConfigError("--console-key needs --console-cert (the certificate it belongs to)")
+    for flag, path in (("--console-cert", cert), ("--console-key", key)):
+        if path is not None and not Path(path).is_file():
+            raise ConfigError(f"{flag}: file {path!r} does not exist")
+    settings = ConsoleSettings(host=host, port=port, cert=cert, key=key, insecure=insecure)
+    if not settings.loopback and not cert and not insecure:
+        raise ConfigError(
+            f"{source}: {host} is not a loopback address, so the console would be plain HTTP on a network; "
+            "give --console-cert and --console-key (TLS), or --console-insecure if the network is trusted"
+        )
+    return settings
+
+
+def _split(address: str, source: str) -> tuple[str, int]:
+    if not address:
+        raise ConfigError(f"{source}: give a port or HOST:PORT, e.g. 8770 or 127.0.0.1:8770")
+    if address.startswith("["):  # [::1]:8770
+        host, _, rest = address[1:].partition("]")
+        if not rest.startswith(":"):
+            raise ConfigError(f"{source}: {address!r} is not [IPv6]:PORT, e.g. [::1]:8770")
+        port_text = rest[1:]
+    elif address.count(":") == 1:
+        host, port_text = address.split(":")
+    elif ":" in address:
+        raise ConfigError(f"{source}: write an IPv6 address in brackets, e.g. [::1]:8770")
+    else:
+        host, port_text = DEFAULT_CONSOLE_HOST, address
+    host = host or DEFAULT_CONSOLE_HOST
+    if any(ch.isspace() or ch in "/?#@" for ch in host):
+        raise ConfigError(f"{source}: {host!r} is not a host name or address")
+    if port_text.strip() == "0":
+        return host, 0  # any free port; the URL printed names the one taken
+    return host, parse_port(port_text, source=source)
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` names this machine only (``localhost``, 127.0.0.0/8, ::1)."""
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False

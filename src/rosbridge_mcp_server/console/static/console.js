@@ -1,0 +1,211 @@
+// The operator console: one event stream in, four kinds of request out (approve, deny, stop, release, and
+// the camera's topic). The secret comes in the URL's fragment once, and is then kept for this tab only.
+"use strict";
+
+const SECRET_HEADER = "X-Console-Secret";
+const secret = (() => {
+  const match = location.hash.match(/secret=([A-Za-z0-9_-]+)/);
+  if (match) {
+    sessionStorage.setItem("consoleSecret", match[1]);
+    history.replaceState(null, "", location.pathname);
+  }
+  return sessionStorage.getItem("consoleSecret") || "";
+})();
+
+const $ = (id) => document.getElementById(id);
+
+function el(tag, text, className) {
+  const node = document.createElement(tag);
+  if (text !== undefined && text !== null) node.textContent = String(text);
+  if (className) node.className = className;
+  return node;
+}
+
+function problem(text) {
+  $("problem").textContent = text || "";
+  $("problem").hidden = !text;
+}
+
+async function post(path, body) {
+  try {
+    const response = await fetch(path, {
+      method: "POST",
+      headers: { [SECRET_HEADER]: secret, "Content-Type": "application/json" },
+      body: JSON.stringify(body || {}),
+    });
+    const answer = await response.json().catch(() => ({}));
+    problem(response.ok ? "" : answer.error || `${path}: HTTP ${response.status}`);
+    return answer;
+  } catch (error) {
+    problem(`The console server did not answer: ${error}`);
+    return {};
+  }
+}
+
+function renderRobots(robots) {
+  const list = $("robots");
+  list.replaceChildren();
+  for (const robot of robots) {
+    const item = el("li");
+    item.dataset.robot = robot.name;
+    item.append(el("strong", robot.name), " ");
+    item.append(el("span", robot.connected ? "connected" : "not connected", robot.connected ? "ok" : "bad"));
+    if (robot.ros) item.append(" · ", el("span", robot.ros, "ros"));
+    item.append(el("div", robot.url, "mono"));
+    list.append(item);
+  }
+}
+
+function renderPending(pending) {
+  const list = $("pending");
+  list.replaceChildren();
+  $("pending-empty").hidden = pending.length > 0;
+  for (const entry of pending) {
+    const item = el("li");
+    item.dataset.id = entry.id;
+    item.append(el("strong", `${entry.tool} → ${entry.name}`));
+    item.append(el("div", entry.question, "question"));
+    const approve = el("button", "Approve", "approve");
+    approve.type = "button";
+    approve.addEventListener("click", () => post(`/api/confirmations/${entry.id}/approve`));
+    const deny = el("button", "Deny", "deny");
+    deny.type = "button";
+    deny.addEventListener("click", () => post(`/api/confirmations/${entry.id}/deny`));
+    item.append(approve, " ", deny);
+    list.append(item);
+  }
+}
+
+function renderRunning(robots) {
+  const list = $("running");
+  list.replaceChildren();
+  let count = 0;
+  for (const robot of robots) {
+    for (const stream of robot.streams) {
+      count += 1;
+      const item = el("li");
+      item.dataset.stream = stream.topic;
+      item.append(el("strong", "stream "), el("span", stream.topic, "mono"), ` ${stream.type}`);
+      if (stream.stopping) item.append(el("span", " stopping", "bad"));
+      list.append(item);
+    }
+    for (const goal of robot.goals) {
+      count += 1;
+      const item = el("li");
+      item.dataset.goal = goal.goal_id;
+      item.append(el("strong", "goal "), el("span", goal.action, "mono"));
+      item.append(` ${goal.seconds} s, ${goal.feedback_count} feedback`);
+      if (goal.last_feedback) item.append(el("div", goal.last_feedback, "mono"));
+      list.append(item);
+    }
+  }
+  $("running-empty").hidden = count > 0;
+}
+
+function renderAudit(entries) {
+  const list = $("audit");
+  list.replaceChildren();
+  $("audit-empty").hidden = entries.length > 0;
+  for (const entry of entries) {
+    const item = el("li");
+    const outcome = String(entry.outcome || "");
+    item.append(el("span", outcome, `outcome ${outcome.split(/[: ]/)[0]}`), " ");
+    item.append(el("span", (entry.time || "").slice(11, 23), "mono"), " ");
+    if (entry.robot) item.append(el("span", `[${entry.robot}] `));
+    item.append(el("strong", entry.tool), " ", el("span", entry.name || "", "mono"), " ");
+    if (entry.caller) item.append(el("span", `(by ${entry.caller}) `));
+    if (entry.type) item.append(el("span", entry.type));
+    if (entry.rate_hz) item.append(` at ${entry.rate_hz} Hz` + (entry.duration ? ` for ${entry.duration} s` : ""));
+    if (entry.detail) item.append(el("div", entry.detail));
+    if (entry.payload) item.append(el("div", entry.payload, "mono"));
+    list.append(item);
+  }
+}
+
+function renderState(state) {
+  renderRobots(state.robots);
+  renderPending(state.pending);
+  renderRunning(state.robots);
+  renderAudit(state.audit);
+  const latched = state.estop.latched;
+  $("latched").hidden = !latched;
+  $("release").hidden = !latched;
+  document.body.classList.toggle("is-latched", latched);
+  const camera = state.camera;
+  $("camera-status").textContent = camera.topic ? `${camera.topic}: ${camera.status}` : "off";
+  if (!camera.topic) $("camera").hidden = true;
+}
+
+function renderFrame(frame) {
+  const image = $("camera");
+  image.src = frame.src;
+  image.dataset.seq = frame.seq;
+  image.dataset.topic = frame.topic;
+  image.width = frame.width;
+  image.height = frame.height;
+  image.hidden = false;
+}
+
+// Server-sent events read through fetch, so the secret travels in a header (EventSource cannot send one).
+async function listen() {
+  for (;;) {
+    try {
+      const response = await fetch("/api/events", { headers: { [SECRET_HEADER]: secret } });
+      if (!response.ok) {
+        const answer = await response.json().catch(() => ({}));
+        throw new Error(answer.error || `HTTP ${response.status}`);
+      }
+      $("link").textContent = "live";
+      $("link").classList.remove("off");
+      problem("");
+      const reader = response.body.pipeThrough(new TextDecoderStream()).getReader();
+      let buffer = "";
+      for (;;) {
+        const { value, done } = await reader.read();
+        if (done) break;
+        buffer += value;
+        let end;
+        while ((end = buffer.indexOf("\n\n")) >= 0) {
+          const block = buffer.slice(0, end);
+          buffer = buffer.slice(end + 2);
+          let name = "message";
+          let data = "";
+          for (const line of block.split("\n")) {
+            if (line.startsWith("event: ")) name = line.slice(7);
+            else if (line.startsWith("data: ")) data += line.slice(6);
+          }
+          if (!data) continue;
+          if (name === "state") renderState(JSON.parse(data));
+          else if (name === "frame") renderFrame(JSON.parse(data));
+        }
+      }
+      throw new Error("the console server closed the stream");
+    } catch (error) {
+      $("link").textContent = "not connected";
+      $("link").classList.add("off");
+      problem(`Not connected to the console server: ${error.message}. Trying again…`);
+      await new Promise((resolve) => setTimeout(resolve, 1000));
+    }
+  }
+}
+
+async function loadImageTopics() {
+  try {
+    const response = await fetch("/api/image-topics", { headers: { [SECRET_HEADER]: secret } });
+    if (!response.ok) return;
+    const { topics } = await response.json();
+    $("camera-topics").replaceChildren(...topics.map((topic) => { const o = el("option"); o.value = topic; return o; }));
+    if (!$("camera-topic").value && topics.length) $("camera-topic").value = topics[0];
+  } catch (error) { /* the picker stays empty; typing a topic still works */ }
+}
+
+$("estop").addEventListener("click", () => post("/api/estop"));
+$("release").addEventListener("click", () => post("/api/release"));
+$("camera-form").addEventListener("submit", (event) => {
+  event.preventDefault();
+  post("/api/camera", { topic: $("camera-topic").value.trim() });
+});
+$("camera-off").addEventListener("click", () => post("/api/camera", { topic: "" }));
+if (!secret) problem("Open the console with the URL the server printed on stderr (it carries the session secret).");
+listen();
+loadImageTopics();

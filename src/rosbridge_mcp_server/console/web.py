@@ -1,0 +1,170 @@
+"""The console's web side: a static page, one event stream, and the four things a person may do.
+
+Routes (everything under ``/api`` needs the session secret in the ``X-Console-Secret`` header):
+
+* ``GET /`` (and its script and style): the page; it holds no robot data, only code;
+* ``GET /api/events``: server-sent events, ``state`` (the hub's snapshot) and ``frame`` (the camera);
+* ``GET /api/image-topics``: the image topics, for the camera picker;
+* ``POST /api/confirmations/{id}/approve`` and ``.../deny``, ``POST /api/estop``, ``POST /api/release``,
+  ``POST /api/camera`` (``{"topic": "/camera/image_raw"}``, ``""`` for none).
+
+There is no route that publishes, calls or sends anything of its own: the console approves, denies, stops
+and releases, and nothing else. A header (not a cookie) carries the secret, so another page in the same
+browser cannot make a request that counts, and a request whose ``Host`` is not the console's own address is
+refused (a DNS-rebinding page would otherwise reach a loopback console).
+"""
+
+from __future__ import annotations
+
+import hmac
+import json
+import logging
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import JSONResponse, Response, StreamingResponse
+from starlette.routing import Route
+
+from rosbridge_mcp_server.console.hub import ConsoleHub
+from rosbridge_mcp_server.console.pages import static_text
+from rosbridge_mcp_server.errors import RosbridgeError
+
+__all__ = ["SECRET_HEADER", "console_app"]
+
+_log = logging.getLogger("rosbridge_mcp_server.console")
+
+SECRET_HEADER = "X-Console-Secret"
+#: A comment line on an idle event stream, so proxies and the browser keep it open.
+KEEP_ALIVE_SECONDS = 15.0
+_SECURITY_HEADERS = {
+    "Content-Security-Policy": (
+        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; connect-src 'self'; "
+        "frame-ancestors 'none'; base-uri 'none'; form-action 'none'"
+    ),
+    "X-Frame-Options": "DENY",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+    "Cache-Control": "no-store",
+}
+_STATIC = {
+    "/": ("console.html", "text/html; charset=utf-8"),
+    "/console.js": ("console.js", "text/javascript; charset=utf-8"),
+    "/console.css": ("console.css", "text/css; charset=utf-8"),
+}
+
+Handler = Callable[[Request], Awaitable[Response]]
+
+
+def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starlette:
+    """The console as an ASGI app, for ``hub``, guarded by ``secret``; ``allowed_hosts`` are Host values."""
+
+    def guarded(handler: Handler) -> Handler:
+        async def check(request: Request) -> Response:
+            refusal = _refusal(request, secret, allowed_hosts, need_secret=True)
+            return refusal if refusal is not None else await handler(request)
+
+        return check
+
+    async def page(request: Request) -> Response:
+        refusal = _refusal(request, secret, allowed_hosts, need_secret=False)
+        if refusal is not None:
+            return refusal
+        name, media_type = _STATIC[request.url.path]
+        return Response(static_text(name), media_type=media_type, headers=_SECURITY_HEADERS)
+
+    async def events(request: Request) -> Response:
+        return StreamingResponse(
+            _event_stream(hub),
+            media_type="text/event-stream",
+            headers={**_SECURITY_HEADERS, "X-Accel-Buffering": "no"},
+        )
+
+    async def image_topics(request: Request) -> Response:
+        try:
+            topics = await hub.image_topics()
+        except RosbridgeError as exc:
+            return _json({"error": str(exc)}, 503)
+        return _json({"topics": topics})
+
+    async def approve(request: Request) -> Response:
+        return _answered(hub, request.path_params["id"], approve=True)
+
+    async def deny(request: Request) -> Response:
+        return _answered(hub, request.path_params["id"], approve=False)
+
+    async def estop(request: Request) -> Response:
+        reports = await hub.estop()
+        return _json({"latched": True, "robots": reports})
+
+    async def release(request: Request) -> Response:
+        return _json({"released": hub.release(), "latched": False})
+
+    async def camera(request: Request) -> Response:
+        try:
+            body = json.loads(await request.body() or b"{}")
+        except ValueError:
+            return _json({"error": 'the body must be JSON, e.g. {"topic": "/camera/image_raw"}'}, 400)
+        topic = body.get("topic") if isinstance(body, dict) else None
+        if topic is not None and (not isinstance(topic, str) or len(topic) > 256):
+            return _json({"error": "topic must be a topic name (at most 256 characters) or empty"}, 400)
+        try:
+            hub.show_camera(topic or None)
+        except RosbridgeError as exc:
+            return _json({"error": str(exc)}, 400)
+        return _json({"topic": hub.camera_topic})
+
+    routes = [Route(path, page, methods=["GET"]) for path in _STATIC]
+    routes += [
+        Route("/api/events", guarded(events), methods=["GET"]),
+        Route("/api/image-topics", guarded(image_topics), methods=["GET"]),
+        Route("/api/confirmations/{id}/approve", guarded(approve), methods=["POST"]),
+        Route("/api/confirmations/{id}/deny", guarded(deny), methods=["POST"]),
+        Route("/api/estop", guarded(estop), methods=["POST"]),
+        Route("/api/release", guarded(release), methods=["POST"]),
+        Route("/api/camera", guarded(camera), methods=["POST"]),
+    ]
+    return Starlette(routes=routes)
+
+
+def _refusal(request: Request, secret: str, allowed_hosts: set[str], *, need_secret: bool) -> Response | None:
+    host = request.headers.get("host", "")
+    if host.lower() not in allowed_hosts:
+        return _json({"error": "this console answers only at its own address"}, 421)
+    if not need_secret:
+        return None
+    given = request.headers.get(SECRET_HEADER, "")
+    if not hmac.compare_digest(given.encode(), secret.encode()):
+        _log.warning("console: refused %s %s without the session secret", request.method, request.url.path)
+        return _json({"error": f"this request needs the console's session secret in {SECRET_HEADER}"}, 403)
+    return None
+
+
+def _answered(hub: ConsoleHub, pending_id: str, *, approve: bool) -> Response:
+    if not hub.operator.answer(pending_id, approve):
+        return _json({"error": f"confirmation {pending_id} is no longer waiting"}, 409)
+    return _json({"id": pending_id, "answer": "approved" if approve else "denied"})
+
+
+async def _event_stream(hub: ConsoleHub) -> AsyncIterator[str]:
+    version = frame = -1
+    while not hub.closed:
+        if hub.version != version:
+            version = hub.version
+            yield _event("state", hub.snapshot())
+        if hub.frames != frame:
+            frame = hub.frames
+            shown = hub.frame_event()
+            if shown is not None:
+                yield _event("frame", shown)
+        if not await hub.wait_changed(version, frame, KEEP_ALIVE_SECONDS):
+            yield ": keep-alive\n\n"
+
+
+def _event(name: str, data: Any) -> str:
+    return f"event: {name}\ndata: {json.dumps(data, ensure_ascii=False, separators=(',', ':'))}\n\n"
+
+
+def _json(data: Any, status: int = 200) -> JSONResponse:
+    return JSONResponse(data, status_code=status, headers={"Cache-Control": "no-store"})

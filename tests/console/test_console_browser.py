@@ -1,0 +1,167 @@
+"""The operator console in a real headless Chromium: what the person sees, and what their buttons do.
+
+Each test drives the page as a person would (clicks on Approve, Deny, E-STOP, Release) while an MCP client
+calls tools on the same server; what reached the robot is read on the simulated robot's side.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any
+
+import pytest
+from console_harness import browser_page, need_chromium, served_console, text_of
+from playwright.async_api import expect
+
+from rosbridge_mcp_server.safety import parse_policy
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+CMD_VEL = "/turtle1/cmd_vel"
+TWIST = "geometry_msgs/msg/Twist"
+#: The issue's bound for an acting call to show on the page (a bounded wait on the DOM, in milliseconds).
+SHOWS_WITHIN_MS = 1_000
+#: Longer waits: a browser starting on a busy two-core machine.
+WAIT_MS = 10_000
+
+pytestmark = pytest.mark.usefixtures("chromium")
+
+
+@pytest.fixture
+def chromium() -> str:
+    return need_chromium()
+
+
+def twist_call(x: float, **extra: Any) -> dict[str, Any]:
+    return {"topic": CMD_VEL, "message_type": TWIST, "message": {"linear": {"x": x}}, **extra}
+
+
+def moving(sim: SimulatedRobot) -> list[float]:
+    return [m.msg["linear"]["x"] for m in sim.world.published.get(CMD_VEL, [])]
+
+
+async def test_an_acting_call_shows_on_the_page_as_it_happens(sim_ros2: SimulatedRobot) -> None:
+    """A publish_topic call appears at the top of the acting calls within a second, pushed, not polled."""
+    async with served_console(sim_ros2.url) as console, browser_page(console) as page:
+        await expect(page.locator("#robots")).to_contain_text("connected", timeout=WAIT_MS)
+        await expect(page.locator("#robots")).to_contain_text("ROS 2")
+        result = await console.call("publish_topic", twist_call(0.3))
+        assert not result.is_error, text_of(result)
+        newest = page.locator("#audit li").first
+        await expect(newest).to_contain_text(CMD_VEL, timeout=SHOWS_WITHIN_MS)
+        await expect(newest).to_contain_text("publish_topic")
+        await expect(newest).to_contain_text("allowed")
+
+
+async def test_approve_lets_a_waiting_motion_through(sim_ros2: SimulatedRobot) -> None:
+    """confirm = "motion" with a client that cannot ask: the call waits for the console; Approve sends it."""
+    policy = parse_policy({"confirm": "motion", "confirm_timeout": 30})
+    async with served_console(sim_ros2.url, policy) as console, browser_page(console) as page:
+        calling = asyncio.create_task(console.call("publish_topic", twist_call(0.4)))
+        waiting = page.locator("#pending li")
+        await expect(waiting).to_contain_text(CMD_VEL, timeout=WAIT_MS)
+        assert moving(sim_ros2) == []
+        await waiting.get_by_role("button", name="Approve").click()
+        result = await asyncio.wait_for(calling, 10)
+        assert not result.is_error, text_of(result)
+        await sim_ros2.wait_for(lambda world: moving(sim_ros2) == [0.4], timeout=5)
+        await expect(page.locator("#pending li")).to_have_count(0, timeout=WAIT_MS)
+        await expect(page.locator("#audit li").first).to_contain_text("confirmed", timeout=WAIT_MS)
+
+
+async def test_deny_refuses_a_waiting_motion(sim_ros2: SimulatedRobot) -> None:
+    """Deny is a no: the model is told the person declined, and nothing reaches the robot."""
+    policy = parse_policy({"confirm": "motion", "confirm_timeout": 30})
+    async with served_console(sim_ros2.url, policy) as console, browser_page(console) as page:
+        calling = asyncio.create_task(console.call("publish_topic", twist_call(0.4)))
+        waiting = page.locator("#pending li")
+        await expect(waiting).to_contain_text(CMD_VEL, timeout=WAIT_MS)
+        await waiting.get_by_role("button", name="Deny").click()
+        result = await asyncio.wait_for(calling, 10)
+        assert result.is_error
+        assert "declined" in text_of(result)
+        assert moving(sim_ros2) == []
+        await expect(page.locator("#audit li").first).to_contain_text("refused", timeout=WAIT_MS)
+
+
+async def test_estop_stops_a_running_stream_and_refuses_acting_calls_until_release(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """E-STOP ends a 10 Hz stream with a zero (at most two more commands once pressed), then latches."""
+    async with served_console(sim_ros2.url) as console, browser_page(console) as page:
+        streaming = asyncio.create_task(
+            console.call("publish_topic", twist_call(0.5, rate_hz=10, duration=30))
+        )
+        await sim_ros2.wait_for(lambda world: len(world.published.get(CMD_VEL, [])) >= 3, timeout=10)
+        await expect(page.locator("#running li")).to_contain_text(CMD_VEL, timeout=WAIT_MS)
+        # Counted from the moment the server latched (its first step), not from the click: a loaded
+        # machine's browser may take a while to send the request, which is not the stop's doing.
+        at_latch: list[int] = []
+        console.operator.listen(
+            lambda: (
+                at_latch.append(len(moving(sim_ros2))) if console.operator.latched and not at_latch else None
+            )
+        )
+        await page.get_by_role("button", name="E-STOP").click()
+        result = await asyncio.wait_for(streaming, 10)
+        assert not result.is_error, text_of(result)
+        assert text_of(result).startswith("E-STOP on the operator console ended the stream")
+        # The stream's closing zero and the e-stop's own zero reach the robot last.
+        await sim_ros2.wait_for(lambda world: moving(sim_ros2)[-2:] == [0.0, 0.0], timeout=5)
+        after = moving(sim_ros2)[at_latch[0] :]
+        # 200 ms at 10 Hz is two commands: the stream must end within that.
+        assert len([x for x in after if x != 0.0]) <= 2
+        await expect(page.locator("#latched")).to_be_visible(timeout=WAIT_MS)
+        await expect(page.locator("#running li")).to_have_count(0, timeout=WAIT_MS)
+
+        sent = len(moving(sim_ros2))
+        refused = await console.call("publish_topic", twist_call(0.2))
+        assert refused.is_error
+        assert "E-STOP" in text_of(refused)
+        refused_service = await console.call(
+            "publish_service", {"service": "/reset", "service_type": "std_srvs/srv/Empty", "request": {}}
+        )
+        assert refused_service.is_error
+        assert len(moving(sim_ros2)) == sent
+
+        await page.get_by_role("button", name="Release").click()
+        await expect(page.locator("#latched")).to_be_hidden(timeout=WAIT_MS)
+        allowed = await console.call("publish_topic", twist_call(0.2))
+        assert not allowed.is_error, text_of(allowed)
+        await sim_ros2.wait_for(lambda world: moving(sim_ros2)[-1] == 0.2, timeout=5)
+
+
+async def test_the_camera_frame_appears(sim_ros2: SimulatedRobot) -> None:
+    """The operator picks a camera topic, and a JPEG frame of the robot's camera shows."""
+    async with served_console(sim_ros2.url) as console, browser_page(console) as page:
+        await page.locator("#camera-topic").fill("/camera/image_raw")
+        await page.get_by_role("button", name="Show").click()
+        image = page.locator("#camera")
+        await expect(image).to_be_visible(timeout=WAIT_MS)
+        await expect(image).to_have_attribute("data-topic", "/camera/image_raw")
+        await page.wait_for_function(
+            "() => document.getElementById('camera').naturalWidth > 0", timeout=WAIT_MS
+        )
+        source = await image.get_attribute("src")
+        assert source is not None
+        assert source.startswith("data:image/jpeg;base64,")
+
+
+async def test_the_page_without_the_secret_shows_nothing_and_can_change_nothing(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """Opened without the URL's secret, the page says how to open it, and its E-STOP changes nothing."""
+    from console_harness import CHROMIUM_ARGS
+    from playwright.async_api import async_playwright
+
+    async with served_console(sim_ros2.url) as console, async_playwright() as playwright:
+        browser = await playwright.chromium.launch(executable_path=need_chromium(), args=CHROMIUM_ARGS)
+        try:
+            page = await browser.new_page()
+            await page.goto(console.running.base_url)
+            await expect(page.locator("#problem")).to_contain_text("session secret", timeout=WAIT_MS)
+            await page.get_by_role("button", name="E-STOP").click()
+            await expect(page.locator("#problem")).to_contain_text("session secret", timeout=WAIT_MS)
+            assert console.operator.latched is None
+            await expect(page.locator("#audit li")).to_have_count(0)
+        finally:
+            await browser.close()

@@ -1,0 +1,73 @@
+"""``--console`` on the command line: the one-time URL on stderr, and the refusals before anything starts."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import sys
+
+import pytest
+
+from rosbridge_mcp_server.cli import run
+from rosbridge_mcp_server.cli.commands import PROG
+
+WAIT = 30.0
+
+
+@pytest.mark.parametrize(
+    ("argv", "env", "fragment"),
+    [
+        (["--console", "0.0.0.0:8765"], {}, "not a loopback address"),
+        (["--console", "abc"], {}, "--console must be a port number"),
+        ([], {"ROSBRIDGE_MCP_CONSOLE": "10.1.2.3:80"}, "ROSBRIDGE_MCP_CONSOLE: 10.1.2.3 is not a loopback"),
+        (["--console-insecure"], {}, "need --console"),
+        (["check", "--console", "8765"], {}, "unrecognized arguments: --console"),
+    ],
+)
+def test_a_bad_console_option_exits_2_with_one_line(
+    argv: list[str], env: dict[str, str], fragment: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A console on a network without TLS, a bad port or a lone option: one line, exit code 2."""
+    assert run(argv, env) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith(f"{PROG}: error: ")
+    assert fragment in captured.err
+
+
+async def test_the_server_writes_the_console_url_on_stderr_and_serves_the_page() -> None:
+    """`--demo --console 0`: a line http://127.0.0.1:PORT/#secret=..., and the page answers there."""
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        "-m",
+        "rosbridge_mcp_server",
+        "--demo",
+        "--console",
+        "0",
+        stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    assert process.stderr is not None
+    assert process.stdin is not None
+    try:
+        url = None
+        async with asyncio.timeout(WAIT):
+            while url is None:
+                line = (await process.stderr.readline()).decode()
+                assert line, "the server ended before writing the console's URL"
+                url = re.match(r"http://127\.0\.0\.1:(\d+)/#secret=[A-Za-z0-9_-]{40,}$", line.strip())
+        port = int(url.group(1))
+        reader, writer = await asyncio.open_connection("127.0.0.1", port)
+        writer.write(f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n".encode())
+        async with asyncio.timeout(WAIT):
+            page = (await reader.read()).decode()
+        writer.close()
+        assert page.startswith("HTTP/1.1 200")
+        assert "E-STOP" in page
+    finally:
+        process.stdin.close()
+        async with asyncio.timeout(WAIT):
+            stdout, _ = await process.communicate()
+    assert stdout == b""
+    assert process.returncode == 0
