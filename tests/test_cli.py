@@ -226,3 +226,15 @@ async def test_check_leaves_no_service_behind_on_a_busy_bridge() -> None:
         left = [name for name in robot.graph.services if name.startswith("/rosbridge_mcp_check_")]
     assert queued
     assert left == []
+
+
+def test_help_names_both_commands_and_the_tool_groups(capsys: pytest.CaptureFixture[str]) -> None:
+    """--help shows that `check` exists and what each --tools group holds (original comes with stop_robot)."""
+    with pytest.raises(SystemExit) as exited:
+        run(["--help"], {})
+    assert exited.value.code == 0
+    shown = " ".join(capsys.readouterr().out.split())
+    assert f"{PROG} check [options]" in shown
+    assert "check diagnoses the connection" in shown
+    assert "original (the first eight, with stop_robot whenever a tool acts)" in shown
+    assert "view (pictures: map, scan, charts)" in shown

@@ -77,7 +77,18 @@ def _parser(command: str) -> _Parser:
             "MCP server (stdio, or Streamable HTTP) that lets an AI assistant watch and drive a ROS robot "
             "through rosbridge. Use `check` to diagnose the connection."
         )
-    parser = _Parser(prog=PROG if command == "serve" else f"{PROG} check", description=description)
+    if command == "check":
+        parser = _Parser(prog=f"{PROG} check", description=description)
+    else:
+        parser = _Parser(
+            prog=PROG,
+            usage=f"{PROG} [serve] [options]\n       {PROG} check [options]",
+            description=description,
+            epilog=(
+                "commands: serve (the default) runs the MCP server; check diagnoses the connection to "
+                f"rosbridge with the same connection flags (`{PROG} check --help`)."
+            ),
+        )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     connection = parser.add_argument_group("connection (flags win over the environment)")
     connection.add_argument("--host", help="rosbridge host (env ROSBRIDGE_HOST, default localhost)")
@@ -120,8 +131,9 @@ def _parser(command: str) -> _Parser:
     parser.add_argument(
         "--tools",
         help=(
-            "tools the host sees: all, original (the first eight), watch, or a comma list of groups and tool "
-            "names (env ROSBRIDGE_MCP_TOOLS, default all)"
+            "tools the host sees: all; original (the first eight, with stop_robot whenever a tool acts); "
+            "watch (reading topics, types, nodes, parameters, frames); view (pictures: map, scan, charts); "
+            "or a comma list of groups and tool names (env ROSBRIDGE_MCP_TOOLS, default all)"
         ),
     )
     parser.add_argument(
