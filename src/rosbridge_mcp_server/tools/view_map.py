@@ -116,7 +116,9 @@ async def run(
         asyncio.create_task(optional(scan_name, scan_type, "scan")),
     ]
     try:
-        message = await first_message(ctx, name, msg_type, timeout, "map")
+        # CBOR: the cells arrive as one binary frame of bytes (2.25 M cells: 44 ms against 1.7 s as JSON on
+        # rosbridge 2.1.0); a bridge that ignores the request sends JSON, decoded the same.
+        message = await first_message(ctx, name, msg_type, timeout, "map", compression="cbor")
         path_message, scan_message = await asyncio.gather(*extras)
     finally:
         for task in extras:

@@ -65,6 +65,8 @@ class BridgeConfig:
     distro: str
     #: Whether ``call_service`` reads a ``timeout`` field (ROS 2; rosbridge_suite 2.1.0 ignores it).
     timeout_field: bool = True
+    #: Whether ``compression: "cbor"`` is honoured; ``False`` is a bridge that ignores the key (JSON).
+    cbor: bool = True
 
 
 def check_fields(msg: dict[str, Any], fields: list[FieldSpec]) -> None:
@@ -176,7 +178,7 @@ class BridgeCore:
                 log.exception("subscriber of %s failed", topic)
         if topic in self.graph.latched:
             self.graph.latched[topic] = msg
-        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json)
+        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json, self.registry.to_cbor)
         for conn in list(self.connections.values()):
             if topic in conn.subscriptions:
                 try:
