@@ -166,6 +166,18 @@ async def test_a_2000_cell_map_is_drawn_with_its_walls(make_sim: Any) -> None:
     assert colour_near(image, pixel_of(data, image, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=0)
 
 
+async def test_a_large_map_through_cbor_draws_the_same_picture_as_through_json(make_sim: Any) -> None:
+    """A 1000x1000 map: view_map on a bridge that answers CBOR and on one that ignores it, pixel for pixel."""
+    answers = []
+    for cbor in (True, False):
+        robot = await make_sim(map_cells=1000, cbor=cbor)
+        async with open_session(robot.url) as session:
+            answers.append(await session.ok("view_map", {"timeout": 20}))
+    through_cbor, through_json = answers
+    assert through_cbor.structured_content == through_json.structured_content
+    assert picture_of(through_cbor).tobytes() == picture_of(through_json).tobytes()
+
+
 async def test_a_path_without_a_frame_is_drawn_in_the_maps(sim: SimulatedRobot) -> None:
     """A nav_msgs/Path whose header names no frame is taken to be in the map's frame."""
     path_type = "nav_msgs/msg/Path" if sim.dialect == "ros2" else "nav_msgs/Path"
