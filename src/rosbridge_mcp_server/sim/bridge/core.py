@@ -104,6 +104,9 @@ class BridgeCore:
         self._tasks: set[asyncio.Task[Any]] = set()
         #: rospy's per-publisher header seq counters: (published by rosbridge?, topic) -> last seq.
         self._header_seq: dict[tuple[bool, str], int] = {}
+        #: The last latched message of each topic with its frames, serialised once for every late subscriber
+        #: (a 2000² map is ~1 s of JSON conversion per subscribe otherwise).
+        self._latched_out: dict[str, OutgoingMessage] = {}
 
     # --- names and types ----------------------------------------------------------------------------------
 
@@ -176,9 +179,10 @@ class BridgeCore:
                 callback(msg, source)
             except Exception:
                 log.exception("subscriber of %s failed", topic)
+        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json, self.registry.to_cbor)
         if topic in self.graph.latched:
             self.graph.latched[topic] = msg
-        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json, self.registry.to_cbor)
+            self._latched_out[topic] = outgoing
         for conn in list(self.connections.values()):
             if topic in conn.subscriptions:
                 try:
@@ -186,6 +190,18 @@ class BridgeCore:
                 except (ConversionError, InterfaceError) as exc:
                     log.error("cannot send %s on %s: %s", msg_type, topic, exc)
                     return
+
+    def latched_message(self, topic: str, msg_type: str) -> OutgoingMessage | None:
+        """The topic's latched message for a new subscriber (its frames made once), if it has one."""
+        latched = self.graph.latched.get(topic)
+        if latched is None:
+            return None
+        outgoing = self._latched_out.get(topic)
+        if outgoing is None or outgoing.msg is not latched or outgoing.type != msg_type:
+            outgoing = self._latched_out[topic] = OutgoingMessage(
+                topic, msg_type, latched, self.registry.to_json, self.registry.to_cbor
+            )
+        return outgoing
 
     def publish_json(self, topic: str, msg_type: str, partial: dict[str, Any]) -> None:
         """Publish a world message given in JSON form (missing fields take defaults)."""

@@ -21,7 +21,6 @@ from rosbridge_mcp_server.sim.bridge.core import (
 )
 from rosbridge_mcp_server.sim.connection import (
     Connection,
-    OutgoingMessage,
     SubscriptionOptions,
     TopicSubscription,
 )
@@ -242,13 +241,10 @@ class Topics(Capability):
         sub.by_id[sid] = SubscriptionOptions(
             msg.get("throttle_rate", 0), msg.get("queue_length", 0), compression
         )
-        latched = core.graph.latched.get(topic)
+        latched = core.latched_message(topic, msg_type)
         if latched is not None:
             try:
-                conn.deliver(
-                    OutgoingMessage(topic, msg_type, latched, core.registry.to_json, core.registry.to_cbor),
-                    core.fragment_id,
-                )
+                conn.deliver(latched, core.fragment_id)
             except ConversionError as exc:  # rosbridge's CBOR converter (fixed-size arrays): logged, not sent
                 log.error("cannot send %s on %s: %s", msg_type, topic, exc)
 
