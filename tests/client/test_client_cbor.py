@@ -84,3 +84,18 @@ async def test_json_and_cbor_listeners_on_one_connection_both_get_the_message(
     ):
         a, b = await plain.get(5.0), await compact.get(5.0)
     assert as_lists(a)["data"] == as_lists(b)["data"]
+
+
+async def test_a_cbor_subscription_asks_for_cbor_again_after_the_robot_restarts(
+    sim_ros2: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """The restored subscribe keeps its compression: /map arrives as a typed array after the outage too."""
+    client = await make_client(sim_ros2)
+    async with client.subscribe("/map", max_queue=1, compression="cbor") as sub:
+        assert isinstance((await sub.get(5.0))["data"], array)
+        await sim_ros2.stop()
+        await client.wait_disconnected(5.0)
+        await sim_ros2.start()
+        await client.wait_connected(5.0)
+        again = await sub.get(5.0)
+    assert isinstance(again["data"], array)
