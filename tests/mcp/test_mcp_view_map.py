@@ -207,3 +207,14 @@ async def test_a_silent_path_topic_is_a_note_and_the_map_still_comes(sim: Simula
     assert data is not None
     assert data["path_poses"] is None
     assert data["notes"] == ["path not drawn: nothing arrived on /test/silent_plan within 0.5 s."]
+
+
+async def test_a_map_too_large_for_one_cbor_frame_is_read_as_json_with_a_note(make_sim: Any) -> None:
+    """A bridge fragmenting above 100 kB drops the 250 kB CBOR frame: view_map waits once more, for JSON."""
+    robot = await make_sim(dialect="ros2", map_cells=500, max_message_size=100_000)
+    async with open_session(robot.url) as session:
+        result = await session.ok("view_map", {"timeout": 1})
+    data = result.structured_content
+    assert data is not None
+    assert data["cells"] == [500, 500]
+    assert any("did not arrive as CBOR within 1 s" in note for note in data["notes"])

@@ -214,8 +214,20 @@ class Connection:
     def _enqueue(self, text: str | bytes, *, droppable: bool, fragment_id: Any) -> None:
         if self.closed:
             return
-        # A binary CBOR frame is never fragmented (rosbridge's fragmenting measures the op dict there).
-        frames = [text] if isinstance(text, bytes) else self._fragments(text, fragment_id)
+        if isinstance(text, bytes):
+            # rosbridge cannot fragment a CBOR frame: above the connection's fragment size its send fails
+            # (``message.get("id")`` on bytes) and the message is lost (ROS 2: 10 MB by default).
+            size = self.fragment_size
+            if isinstance(size, int | float) and len(text) > size:
+                log.error(
+                    "client %d: send failed: a CBOR frame of %d bytes cannot be fragmented",
+                    self.id,
+                    len(text),
+                )
+                return
+            frames: list[str] | list[bytes] | None = [text]
+        else:
+            frames = self._fragments(text, fragment_id)
         if frames is None:
             return
         self.frames_queued += len(frames)
