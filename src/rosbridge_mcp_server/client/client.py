@@ -454,8 +454,35 @@ class RosbridgeClient:
     async def cancel_action_goal(self, action: str, goal_id: str) -> None:
         """Ask the bridge to cancel goal *goal_id*, on the main connection.
 
-        rosbridge keeps one goal table per process, so this reaches a goal running on a lane (or
-        on another client's connection) too. No reply comes; the goal's result says what happened.
+        rosbridge_suite keeps one goal table per process, so there this reaches a goal running on a lane
+        (or on another client's connection) too; rosbridge-server-rs only lets the connection that started
+        a goal cancel it (``robot/goals`` also sends the cancel on the goal's own lane). No reply comes; the
+        goal's result says what happened.
         """
         await self.require_session().send(protocol.cancel_action_goal(action, id=goal_id))
         self.unhandled_acts = True
+
+    async def cancel_action_goal_heard(self, action: str, goal_id: str, timeout: float) -> str | None:
+        """Cancel goal *goal_id* on the main connection and tell whether the bridge refused it.
+
+        Returns the bridge's refusal (an error ``status`` naming the goal: rosbridge-server-rs answers
+        "unknown active goal" for a goal another connection started) if it came before the answer to a call
+        sent after the cancel, else ``None``: rosbridge_suite cancels silently, and ignores an id it does
+        not know just as silently. A refusal is also kept on the session (:attr:`Session.cancel_owner_only`).
+        """
+        session = self.require_session()
+        conn = session.connection
+        heard = conn.expect(goal_id, f"a refusal of the cancel of goal {goal_id}", timeout)
+        try:
+            await session.send(protocol.cancel_action_goal(action, id=goal_id))
+            self.unhandled_acts = True
+            if not heard.done():
+                await session.handled(timeout)
+            if not heard.done() or heard.cancelled() or heard.exception() is not None:
+                return None
+            frame = heard.result()
+        finally:
+            conn.forget(goal_id)
+        text = str(frame.get("msg") or "the bridge refused the cancel")
+        session.cancel_owner_only = True
+        return text

@@ -29,6 +29,7 @@ class Session:
     """The main connection to the bridge, with the bridge's :class:`RosInfo` detected on it."""
 
     __slots__ = (
+        "cancel_owner_only",
         "connection",
         "goals_block",
         "info",
@@ -48,6 +49,9 @@ class Session:
         self.goals_block = info.goals_may_block
         self.spread_calls = info.one_call_per_connection
         self.send_service_timeout = info.honours_service_timeout
+        #: The bridge refused to cancel a goal another connection started (rosbridge-server-rs does); None
+        #: until a cancel of such a goal has been answered or not.
+        self.cancel_owner_only: bool | None = info.cancel_owner_only
 
     @property
     def is_open(self) -> bool:

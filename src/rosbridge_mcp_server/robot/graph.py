@@ -106,8 +106,8 @@ class ActionEntry:
 
 
 def is_missing_service(error: ServiceError) -> bool:
-    """The bridge said the service is not in the graph (its wording in 0.11 and every ROS 2 line)."""
-    return "does not exist" in error.message
+    """The bridge said the service is not in the graph (rosbridge_suite 0.11 and 2.x, rosbridge-server-rs)."""
+    return error.not_in_graph
 
 
 @dataclass

@@ -139,12 +139,15 @@ class GoalRegistry:
 
     async def client_closing(self, session: Session | None) -> None:
         """Cancel our running ROS 2 goals while the connection is there; log the cut-off goals left."""
-        if session is not None:
-            for goal in self.running():
-                if goal.dialect == 2 and await session.try_send(
-                    protocol.cancel_action_goal(goal.action, id=goal.goal_id)
-                ):
-                    self._client.unhandled_acts = True  # the client waits for them before it closes
+        for goal in self.running():
+            if goal.dialect != 2:
+                continue
+            op = protocol.cancel_action_goal(goal.action, id=goal.goal_id)
+            if session is not None and await session.try_send(op):
+                self._client.unhandled_acts = True  # the client waits for them before it closes
+            # rosbridge-server-rs cancels only on the connection that started the goal.
+            if goal.send_on_owner is not None:
+                await goal.send_on_owner(op)
         for entry in self._cut_off.values():
             logger.warning(
                 "The client is closing; goal %s on %s, left running by a drop, was not cancelled",
