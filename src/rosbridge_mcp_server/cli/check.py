@@ -10,18 +10,14 @@ about a second), and whether an action server's type can be found. Exit code 0 w
 from __future__ import annotations
 
 import asyncio
-import itertools
-import json
-import uuid
-from collections.abc import Callable
-from typing import Any, TextIO
+from typing import TextIO
 from urllib.parse import urlsplit
 
-from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import WebSocketException
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config, plain_text_warning
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.graph import RosGraph
@@ -121,106 +117,16 @@ async def _message_check(graph: RosGraph, info: RosInfo) -> tuple[str, str]:
     return _OK, f"messages: a {twist} is checked before it is published{how}"
 
 
-async def call_ordering(url: str, info: RosInfo, timeout: float) -> bool:
-    """Whether a slow service call holds up the next call on its connection, measured on the bridge.
-
-    One connection offers a short-lived Trigger service of its own; a second connection calls it and then
-    ``/rosapi/get_time``. The service answers only after ``get_time`` did, or after a second: when
-    ``get_time`` had to wait, the bridge handles a connection's calls in order. Raises
-    :class:`RosbridgeError` (or ``TimeoutError``/``OSError``) when the probe cannot run.
-    """
-    name = f"/rosbridge_mcp_check_{uuid.uuid4().hex[:8]}"
-    srv_type = normalize_type("std_srvs/Trigger", info.version, "srv")
-    async with asyncio.timeout(timeout):
-        async with connect(url, compression=None) as host, connect(url, compression=None) as caller:
-            await host.send(json.dumps({"op": "advertise_service", "service": name, "type": srv_type}))
-            try:
-                await _wait_listed(caller, name)
-                for rid, service in (("slow", name), ("fast", "/rosapi/get_time")):
-                    await caller.send(json.dumps({"op": "call_service", "id": rid, "service": service}))
-                request = await _next(host, lambda f: f.get("op") == "call_service")
-                try:
-                    async with asyncio.timeout(_HOLD_SECONDS):
-                        await _next(caller, _with_id("fast"))
-                    queued = False
-                except TimeoutError:
-                    queued = True
-                answer = {"success": True, "message": "rosbridge-mcp-server check"}
-                await host.send(
-                    json.dumps(
-                        {
-                            "op": "service_response",
-                            "id": request.get("id"),
-                            "service": name,
-                            "result": True,
-                            "values": answer,
-                        }
-                    )
-                )
-                await _next(caller, _with_id("slow"))
-            finally:
-                await _unadvertise(host, name)
-    return queued
-
-
-async def _unadvertise(host: ClientConnection, name: str) -> None:
-    """Take the probe's service away for good before the connection closes.
-
-    Both rosbridge 0.11.17 and 2.1.0 keep a client's advertised services after it disconnects (a call to one
-    never gets an answer), and both drop the frames of a connection they have not handled yet when it
-    closes: an ``unadvertise_service`` sent just before the close can be lost on a busy bridge (0.11.17's
-    takes 1 s, so one is always busy there). A reply to a call sent after it on the same connection proves
-    it was handled.
-    """
-    try:
-        await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
-        barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
-        await host.send(json.dumps(barrier))
-        async with asyncio.timeout(_UNADVERTISE_SECONDS):
-            await _next(host, _with_id("unadvertised"))
-    except (TimeoutError, WebSocketException, OSError):
-        pass  # the probe's own outcome (or failure) is what check reports
-
-
-#: How long check waits for the bridge to confirm its probe service is gone.
-_UNADVERTISE_SECONDS = 3.0
-
-
-#: How long the probe's service holds its caller: far above a rosapi round trip (3-100 ms on the labs).
-_HOLD_SECONDS = 1.0
-
-
-async def _next(ws: ClientConnection, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
-    """The next frame on ``ws`` that ``wanted`` accepts (others are skipped)."""
-    while True:
-        frame = json.loads(await ws.recv())
-        if isinstance(frame, dict) and wanted(frame):
-            return frame
-
-
-def _with_id(rid: str) -> Callable[[dict[str, Any]], bool]:
-    return lambda frame: frame.get("id") == rid
-
-
-async def _wait_listed(ws: ClientConnection, service: str) -> None:
-    """Until rosapi lists ``service`` (the bridge registers an advertised service with the graph first)."""
-    for attempt in itertools.count():
-        rid = f"listed-{attempt}"
-        args = {"service": service}
-        await ws.send(
-            json.dumps({"op": "call_service", "id": rid, "service": "/rosapi/service_type", "args": args})
-        )
-        reply = await _next(ws, _with_id(rid))
-        values = reply.get("values")
-        if isinstance(values, dict) and values.get("type"):
-            return
-        await asyncio.sleep(0.05)
-
-
 async def _ordering_check(config: Config, info: RosInfo) -> tuple[str, str]:
     """Calls queue behind a slow one or not, measured, and whether the client treats the bridge so."""
     try:
-        queued = await call_ordering(config.url, info, timeout=max(config.request_timeout, 5.0))
+        queued = await call_ordering(
+            config.url,
+            info.version,
+            timeout=max(config.request_timeout, 5.0),
+            ssl_context=config.ssl_context(),
+            headers=config.headers,
+        )
     except (RosbridgeError, TimeoutError, OSError, WebSocketException) as exc:
         return _NOTE, f"could not measure whether calls queue behind a slow one ({type(exc).__name__}: {exc})"
     said = ""

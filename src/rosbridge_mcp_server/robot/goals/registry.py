@@ -98,6 +98,10 @@ class GoalRegistry:
         """Goals cut off by a drop, waiting for the connection to come back to be cancelled."""
         return [entry.goal for entry in self._cut_off.values()]
 
+    def ended(self, goal_id: str) -> None:
+        """The bridge said goal *goal_id* ended: nothing is left to cancel when the connection is back."""
+        self._cut_off.pop(goal_id, None)
+
     def remember_cut_off(
         self, action: str, goal_id: str, dialect: int, *, stale: Session | None = None
     ) -> None:

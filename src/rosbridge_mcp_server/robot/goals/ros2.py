@@ -95,6 +95,8 @@ async def run(
             if late is None:
                 raise GoalTimeoutError(action, gid, timeout, feedback=last) from None
             finished = True
+            # The cancel reached it after all (a lane's cancel on a bridge that handles goals apart).
+            registry.ended(gid)
             status, values = _result(action, late)
             raise GoalTimeoutError(
                 action, gid, timeout, status=status, result=values, feedback=last
