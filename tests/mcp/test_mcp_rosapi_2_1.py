@@ -85,7 +85,7 @@ async def test_check_says_what_the_tools_will_meet(jazzy_2_1: SimulatedRobot) ->
     text = out.getvalue()
     assert code == 0, text
     assert "rosapi names fields _linear, _angular: read as linear, angular" in text
-    assert "[ok  ] a slow service call holds up later calls on its connection" in text
+    assert "[ok  ] concurrency: a slow service call holds up later calls on its connection" in text
     assert "action types: known (/fibonacci is example_interfaces/action/Fibonacci)" in text
 
 

@@ -10,6 +10,7 @@ about a second), and whether an action server's type can be found. Exit code 0 w
 from __future__ import annotations
 
 import asyncio
+import contextlib
 from typing import TextIO
 from urllib.parse import urlsplit
 
@@ -117,7 +118,7 @@ async def _message_check(graph: RosGraph, info: RosInfo) -> tuple[str, str]:
     return _OK, f"messages: a {twist} is checked before it is published{how}"
 
 
-async def _ordering_check(config: Config, info: RosInfo) -> tuple[str, str]:
+async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo) -> tuple[str, str]:
     """Calls queue behind a slow one or not, measured, and whether the client treats the bridge so."""
     try:
         queued = await call_ordering(
@@ -127,25 +128,63 @@ async def _ordering_check(config: Config, info: RosInfo) -> tuple[str, str]:
             ssl_context=config.ssl_context(),
             headers=config.headers,
         )
-    except (RosbridgeError, TimeoutError, OSError, WebSocketException) as exc:
+    except (RosbridgeError, TimeoutError, OSError, LookupError, ValueError, WebSocketException) as exc:
         return _NOTE, f"could not measure whether calls queue behind a slow one ({type(exc).__name__}: {exc})"
-    said = ""
-    if info.version == 2:
-        told = {True: "true", False: "false", None: "not readable"}
-        said = f"; its call_services_in_new_thread: {told[info.calls_threaded]}"
-    if queued and not info.may_be_in_order:
+    session = client.session
+    if session is not None:
+        # The client measures the same in the background after connecting; compare with its conclusion.
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(session.ordering_known.wait(), max(config.request_timeout, 5.0))
+    lanes = session.lanes_by_default if session is not None else info.may_be_in_order
+    how = "told by its status answers" if info.calls_threaded else "measured"
+    if queued and not lanes:
         return (
             _BAD,
-            "a slow service call holds up later calls on its connection, yet this bridge was taken to run "
-            f"them side by side{said}: its tools would wait behind a slow call",
+            "a slow service call holds up later calls on its connection, yet this server took the bridge to "
+            "run them side by side: its tools would wait behind a slow call",
         )
     if queued:
         return (
             _OK,
-            "a slow service call holds up later calls on its connection (the bridge handles one connection "
-            f"strictly in order{said}): this server gives each call a connection of its own",
+            "concurrency: a slow service call holds up later calls on its connection (the bridge handles one "
+            "connection strictly in order): this server gives each call a connection of its own",
         )
-    return _OK, f"calls on one connection run side by side (measured{said})"
+    if lanes:
+        return (
+            _NOTE,
+            "concurrency: calls on one connection run side by side (measured now), but this server could not "
+            "tell and gives each call a connection of its own (safe, a little slower)",
+        )
+    return _OK, f"concurrency: calls on one connection run side by side (measured; the server {how})"
+
+
+def _bridge_lines(info: RosInfo) -> list[tuple[str, str]]:
+    """Which bridge this looks like, and how goals are cancelled on it, as judged from its answers."""
+    if info.version == 1:
+        return [(_NOTE, "cancel path: a goal's cancel is published on <action>/cancel (actionlib)")]
+    if info.status_replies:
+        implementation = (
+            "implementation: answers a refused op with an error status (rosbridge-server-rs does; "
+            "rosbridge_suite never)"
+        )
+        foreign = (
+            "it refused to cancel a goal this connection did not start, so another client's goal is "
+            "cancelled by its UUID through <action>/_action/cancel_goal, not by its rosbridge id"
+        )
+    else:
+        implementation = "implementation: answers like rosbridge_suite (no status ops)"
+        foreign = (
+            "a goal another client started is cancelled by its rosbridge id from any connection, or by its "
+            "UUID through <action>/_action/cancel_goal"
+        )
+    return [
+        (_NOTE, implementation),
+        (
+            _NOTE,
+            "cancel path: a goal publish_action started is cancelled on the main connection and on its own "
+            f"(each bridge acts on one of them); {foreign}",
+        ),
+    ]
 
 
 async def _action_check(graph: RosGraph, info: RosInfo, actions: list[str]) -> tuple[str, str]:
@@ -211,15 +250,8 @@ async def run_check(config: Config, out: TextIO) -> int:
         say(_OK, "rosapi answers")
         results = _features(info)
         results.append(await _message_check(graph, info))
-        results.append(await _ordering_check(config, info))
-        if info.version == 2 and info.goals_may_block:
-            results.append(
-                (
-                    _NOTE,
-                    "a goal holds up its connection until it ends (send_action_goals_in_new_thread is not "
-                    "true): each goal runs on a connection of its own and cancels go on another",
-                )
-            )
+        results += _bridge_lines(info)
+        results.append(await _ordering_check(config, client, info))
         results.append(await _action_check(graph, info, actions))
         for mark, text in results:
             say(mark, text)

@@ -12,7 +12,6 @@ is taken away before its connection closes (rosbridge keeps a departed client's 
 from __future__ import annotations
 
 import asyncio
-import itertools
 import json
 import ssl
 import uuid
@@ -33,6 +32,8 @@ PROBE_SERVICE_PREFIX: Final = "/rosbridge_mcp_check_"
 HOLD_SECONDS: Final = 1.0
 #: How long the probe waits for the bridge to confirm its service is gone.
 _UNADVERTISE_SECONDS: Final = 3.0
+#: How often the probe asks rosapi whether its service is listed yet (every 50 ms).
+_LISTED_ATTEMPTS: Final = 40
 
 
 async def call_ordering(
@@ -56,32 +57,48 @@ async def call_ordering(
         options["ssl"] = ssl_context
     if headers:
         options["additional_headers"] = list(headers)
-    async with asyncio.timeout(timeout):
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + timeout
+    failure: BaseException | None = None
+    async with asyncio.timeout_at(deadline):
         async with connect(url, **options) as host, connect(url, **options) as caller:
-            await host.send(json.dumps({"op": "advertise_service", "service": name, "type": srv_type}))
+            # Failures are caught inside, so both sockets close politely (an exception leaving `async with`
+            # closes them with 1011, which a bridge may log as an error of its own).
             try:
-                await _wait_listed(caller, name)
-                for rid, service in (("slow", name), ("fast", "/rosapi/get_time")):
-                    await caller.send(json.dumps({"op": "call_service", "id": rid, "service": service}))
-                request = await _next(host, lambda f: f.get("op") == "call_service")
+                await host.send(json.dumps({"op": "advertise_service", "service": name, "type": srv_type}))
                 try:
-                    async with asyncio.timeout(hold):
-                        await _next(caller, _with_id("fast"))
-                    queued = False
-                except TimeoutError:
-                    queued = True
-                answer = {"success": True, "message": "rosbridge-mcp-server probe"}
-                response = {
-                    "op": "service_response",
-                    "id": request.get("id"),
-                    "service": name,
-                    "result": True,
-                    "values": answer,
-                }
-                await host.send(json.dumps(response))
-                await _next(caller, _with_id("slow"))
-            finally:
-                await _unadvertise(host, name)
+                    async with asyncio.timeout_at(deadline - _UNADVERTISE_SECONDS / 3):
+                        queued = await _measure(host, caller, name, hold)
+                finally:
+                    await _unadvertise(host, name)
+            except (TimeoutError, LookupError, ValueError, WebSocketException) as exc:
+                failure = exc
+    if failure is not None:
+        raise failure
+    return queued
+
+
+async def _measure(host: ClientConnection, caller: ClientConnection, name: str, hold: float) -> bool:
+    await _wait_listed(caller, name)
+    for rid, service in (("slow", name), ("fast", "/rosapi/get_time")):
+        await caller.send(json.dumps({"op": "call_service", "id": rid, "service": service}))
+    request = await _next(host, lambda f: f.get("op") == "call_service")
+    try:
+        async with asyncio.timeout(hold):
+            await _next(caller, _with_id("fast"))
+        queued = False
+    except TimeoutError:
+        queued = True
+    answer = {"success": True, "message": "rosbridge-mcp-server probe"}
+    response = {
+        "op": "service_response",
+        "id": request.get("id"),
+        "service": name,
+        "result": True,
+        "values": answer,
+    }
+    await host.send(json.dumps(response))
+    await _next(caller, _with_id("slow"))
     return queued
 
 
@@ -118,7 +135,7 @@ def _with_id(rid: str) -> Callable[[dict[str, Any]], bool]:
 
 async def _wait_listed(ws: ClientConnection, service: str) -> None:
     """Until rosapi lists ``service`` (the bridge registers an advertised service with the graph first)."""
-    for attempt in itertools.count():
+    for attempt in range(_LISTED_ATTEMPTS):
         rid = f"listed-{attempt}"
         args = {"service": service}
         await ws.send(
@@ -129,3 +146,4 @@ async def _wait_listed(ws: ClientConnection, service: str) -> None:
         if isinstance(values, dict) and values.get("type"):
             return
         await asyncio.sleep(0.05)
+    raise LookupError(f"the bridge never listed the probe's service {service}")
