@@ -4,14 +4,16 @@ rosbridge_suite 2.x runs a connection's calls in order or each in a thread of it
 settings say (2.1.0's defaults and Humble's: in order); rosbridge-server-rs 0.1.6 never holds one up. The
 settings of the node named ``/rosbridge_websocket`` are no guide: that node may be another bridge on the same
 graph. So it is measured: one connection offers a short-lived ``std_srvs/Trigger`` service of its own, a
-second calls it and then ``/rosapi/get_time``; the service answers only after ``get_time`` did, or after
-*hold* seconds. When ``get_time`` had to wait, the bridge handles a connection's calls in order. The service
-is taken away before its connection closes (rosbridge keeps a departed client's services).
+second calls it and then ``/rosapi/get_time`` (no other rosapi call); the service answers only after
+``get_time`` did, or after *hold* seconds. When ``get_time`` had to wait, the bridge handles a connection's
+calls in order. The service is taken away before its connection closes (rosbridge keeps a departed client's
+services).
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import ssl
 import uuid
@@ -32,8 +34,10 @@ PROBE_SERVICE_PREFIX: Final = "/rosbridge_mcp_check_"
 HOLD_SECONDS: Final = 1.0
 #: How long the probe waits for the bridge to confirm its service is gone.
 _UNADVERTISE_SECONDS: Final = 3.0
-#: How often the probe asks rosapi whether its service is listed yet (every 50 ms).
-_LISTED_ATTEMPTS: Final = 40
+#: At most this many unawaited frames are kept per connection (the bridge may publish; ours are few).
+_KEPT_FRAMES: Final = 64
+#: How often the probe calls its service before giving up (the bridge may not reach it at once).
+_CALL_ATTEMPTS: Final = 20
 
 
 async def call_ordering(
@@ -61,11 +65,12 @@ async def call_ordering(
     deadline = loop.time() + timeout
     failure: BaseException | None = None
     async with asyncio.timeout_at(deadline):
-        async with connect(url, **options) as host, connect(url, **options) as caller:
+        async with connect(url, **options) as host_ws, connect(url, **options) as caller_ws:
+            host, caller = _Frames(host_ws), _Frames(caller_ws)
             # Failures are caught inside, so both sockets close politely (an exception leaving `async with`
             # closes them with 1011, which a bridge may log as an error of its own).
             try:
-                await host.send(json.dumps({"op": "advertise_service", "service": name, "type": srv_type}))
+                await host.send({"op": "advertise_service", "service": name, "type": srv_type})
                 try:
                     async with asyncio.timeout_at(deadline - _UNADVERTISE_SECONDS / 3):
                         queued = await _measure(host, caller, name, hold)
@@ -78,14 +83,34 @@ async def call_ordering(
     return queued
 
 
-async def _measure(host: ClientConnection, caller: ClientConnection, name: str, hold: float) -> bool:
-    await _wait_listed(caller, name)
-    for rid, service in (("slow", name), ("fast", "/rosapi/get_time")):
-        await caller.send(json.dumps({"op": "call_service", "id": rid, "service": service}))
-    request = await _next(host, lambda f: f.get("op") == "call_service")
+async def _measure(host: _Frames, caller: _Frames, name: str, hold: float) -> bool:
+    # A reply on the host's own connection says its advertisement was handled (both lines handle a
+    # connection's ops in turn); the caller may still find the service missing for a moment: then again.
+    await host.send({"op": "call_service", "id": "advertised", "service": "/rosapi/get_time"})
+    await host.next(_with_id("advertised"))
+    for attempt in range(_CALL_ATTEMPTS):
+        slow, fast = f"slow-{attempt}", f"fast-{attempt}"
+        for rid, service in ((slow, name), (fast, "/rosapi/get_time")):
+            await caller.send({"op": "call_service", "id": rid, "service": service})
+        hosted = asyncio.ensure_future(host.next(lambda f: f.get("op") == "call_service"))
+        refused = asyncio.ensure_future(caller.next(_with_id(slow)))
+        done, _ = await asyncio.wait({hosted, refused}, return_when=asyncio.FIRST_COMPLETED)
+        # Cancelling recv() loses no frame (websockets keeps it for the next recv()).
+        for task in (hosted, refused):
+            if task not in done:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+        if hosted in done:
+            request = hosted.result()
+            break
+        await caller.next(_with_id(fast))
+        await asyncio.sleep(0.05)
+    else:
+        raise LookupError(f"the bridge never reached the probe's service {name}")
     try:
         async with asyncio.timeout(hold):
-            await _next(caller, _with_id("fast"))
+            await caller.next(_with_id(fast))
         queued = False
     except TimeoutError:
         queued = True
@@ -97,12 +122,12 @@ async def _measure(host: ClientConnection, caller: ClientConnection, name: str, 
         "result": True,
         "values": answer,
     }
-    await host.send(json.dumps(response))
-    await _next(caller, _with_id("slow"))
+    await host.send(response)
+    await caller.next(_with_id(slow))
     return queued
 
 
-async def _unadvertise(host: ClientConnection, name: str) -> None:
+async def _unadvertise(host: _Frames, name: str) -> None:
     """Take the probe's service away for good before the connection closes.
 
     Both rosbridge 0.11.17 and 2.1.0 keep a client's advertised services after it disconnects (a call to one
@@ -112,38 +137,40 @@ async def _unadvertise(host: ClientConnection, name: str) -> None:
     it was handled.
     """
     try:
-        await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
+        await host.send({"op": "unadvertise_service", "service": name})
         barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
-        await host.send(json.dumps(barrier))
+        await host.send(barrier)
         async with asyncio.timeout(_UNADVERTISE_SECONDS):
-            await _next(host, _with_id("unadvertised"))
+            await host.next(_with_id("unadvertised"))
     except (TimeoutError, WebSocketException, OSError):
         pass  # the probe's own outcome (or failure) is what matters
 
 
-async def _next(ws: ClientConnection, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
-    """The next frame on ``ws`` that ``wanted`` accepts (others are skipped)."""
-    while True:
-        frame = json.loads(await ws.recv())
-        if isinstance(frame, dict) and wanted(frame):
-            return frame
+class _Frames:
+    """One probe socket: frames read while waiting for another one are kept for a later wait, not lost."""
+
+    def __init__(self, ws: ClientConnection) -> None:
+        self.ws = ws
+        self._kept: list[dict[str, Any]] = []
+
+    async def send(self, op: dict[str, Any]) -> None:
+        await self.ws.send(json.dumps(op))
+
+    async def next(self, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
+        """The next frame that ``wanted`` accepts."""
+        for index, frame in enumerate(self._kept):
+            if wanted(frame):
+                del self._kept[index]
+                return frame
+        while True:
+            frame = json.loads(await self.ws.recv())
+            if not isinstance(frame, dict):
+                continue
+            if wanted(frame):
+                return frame
+            if len(self._kept) < _KEPT_FRAMES:
+                self._kept.append(frame)
 
 
 def _with_id(rid: str) -> Callable[[dict[str, Any]], bool]:
     return lambda frame: frame.get("id") == rid
-
-
-async def _wait_listed(ws: ClientConnection, service: str) -> None:
-    """Until rosapi lists ``service`` (the bridge registers an advertised service with the graph first)."""
-    for attempt in range(_LISTED_ATTEMPTS):
-        rid = f"listed-{attempt}"
-        args = {"service": service}
-        await ws.send(
-            json.dumps({"op": "call_service", "id": rid, "service": "/rosapi/service_type", "args": args})
-        )
-        reply = await _next(ws, _with_id(rid))
-        values = reply.get("values")
-        if isinstance(values, dict) and values.get("type"):
-            return
-        await asyncio.sleep(0.05)
-    raise LookupError(f"the bridge never listed the probe's service {service}")
