@@ -68,6 +68,31 @@ async def _version(session: Session) -> int:
     return (await session.ros.ros_info()).version
 
 
+async def _rosapi_node(session: Session) -> str:
+    """The node that serves /rosapi/topics: /rosapi for rosbridge_suite, the bridge itself for
+    rosbridge-server-rs (its rosapi is built in: /rosbridge_rs on the lab)."""
+    nodes = (await session.ok("list_nodes")).structured_content
+    assert nodes is not None
+    ordered = sorted(nodes["nodes"], key=lambda node: (node != "/rosapi", "ros" not in node, node))
+    for node in ordered:
+        info = (await session.call("get_node_info", {"node": node})).structured_content or {}
+        if "/rosapi/topics" in {s["name"] for s in info.get("services", [])}:
+            return str(node)
+    raise AssertionError(f"no node serves /rosapi/topics among {ordered}")
+
+
+async def _node_with_parameters(session: Session) -> str:
+    """A node with parameter services: rosapi's where it has them (not rosbridge-server-rs's bridge node)."""
+    rosapi = await _rosapi_node(session)
+    nodes = (await session.ok("list_nodes")).structured_content
+    assert nodes is not None
+    for node in [rosapi, *sorted(nodes["nodes"])]:
+        info = (await session.call("get_node_info", {"node": node})).structured_content or {}
+        if f"{node}/list_parameters" in {s["name"] for s in info.get("services", [])}:
+            return node
+    raise AssertionError("no node offers parameter services")
+
+
 async def test_list_topics_finds_rosout_with_its_type(real: Session) -> None:
     """list_topics answers a non-empty, sorted list that includes /rosout with a type."""
     data = (await real.ok("list_topics")).structured_content
@@ -417,7 +442,7 @@ async def test_describe_type_outlines_twist_and_a_rosapi_service(real: Session) 
     assert described is not None
     assert described["parts"][0]["outline"][:2] == ["linear: geometry_msgs/Vector3", "  x: float64"]
     assert described["parts"][0]["constants"] == {}
-    service_type = (await real.ok("get_node_info", {"node": "/rosapi"})).structured_content
+    service_type = (await real.ok("get_node_info", {"node": await _rosapi_node(real)})).structured_content
     assert service_type is not None
     topics_type = next(s["type"] for s in service_type["services"] if s["name"] == "/rosapi/topics")
     service = (await real.ok("describe_type", {"type_name": topics_type})).structured_content
@@ -427,18 +452,20 @@ async def test_describe_type_outlines_twist_and_a_rosapi_service(real: Session) 
 
 
 async def test_list_nodes_and_node_info_show_rosapi(real: Session) -> None:
-    """/rosapi is a running node, and serves /rosapi/topics."""
+    """The node serving /rosapi/topics is running (/rosapi, or the bridge whose rosapi is built in)."""
+    rosapi = await _rosapi_node(real)
     nodes = (await real.ok("list_nodes")).structured_content
     assert nodes is not None
-    assert "/rosapi" in nodes["nodes"]
-    info = (await real.ok("get_node_info", {"node": "/rosapi"})).structured_content
+    assert rosapi in nodes["nodes"]
+    info = (await real.ok("get_node_info", {"node": rosapi})).structured_content
     assert info is not None
     assert "/rosapi/topics" in {s["name"] for s in info["services"]}
-    assert "Did you mean /rosapi?" in await real.error("get_node_info", {"node": "/rosapii"})
+    assert f"Did you mean {rosapi}?" in await real.error("get_node_info", {"node": rosapi + "i"})
 
 
 async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
-    """ROS 2: /rosapi's own parameters (never get_param_names: it kills rosapi 2.1.0); ROS 1: the server's."""
+    """ROS 2: a node's own parameters, rosapi's where it has them (never get_param_names: it kills rosapi
+    2.1.0); ROS 1: the server's."""
     if await _version(real) == 1:
         names = (await real.ok("list_parameters")).structured_content
         assert names is not None
@@ -450,13 +477,14 @@ async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
         written = await real.ok("set_parameter", {"name": "/mcp_test/param", "value": [1, 2.5, "x"]})
         assert (written.structured_content or {})["value"] == [1, 2.5, "x"]
         return
-    names = (await real.ok("list_parameters", {"node": "/rosapi"})).structured_content
+    node = await _node_with_parameters(real)
+    names = (await real.ok("list_parameters", {"node": node})).structured_content
     assert names is not None
-    assert "/rosapi:use_sim_time" in names["parameters"]
-    value = (await real.ok("get_parameter", {"name": "/rosapi:use_sim_time"})).structured_content
+    assert f"{node}:use_sim_time" in names["parameters"]
+    value = (await real.ok("get_parameter", {"name": f"{node}:use_sim_time"})).structured_content
     assert value is not None
     assert value["value"] is False
-    assert "has no parameter" in await real.error("get_parameter", {"name": "/rosapi:no_such_parameter"})
+    assert "has no parameter" in await real.error("get_parameter", {"name": f"{node}:no_such_parameter"})
 
 
 async def test_get_transform_explains_what_it_heard(real: Session) -> None:
