@@ -139,6 +139,14 @@ class Actions(Capability):
         if handle is not None:
             handle.request_cancel()
 
+    def client_gone(self, conn: Connection) -> None:
+        """rosbridge_suite lets a departed client's goals run on; rosbridge-server-rs cancels them."""
+        if not self.core.config.rs:
+            return
+        for key, handle in list(self.goal_table.items()):
+            if isinstance(key, tuple) and key[0] == conn.id:
+                handle.request_cancel()
+
     # --- action servers hosted by clients -----------------------------------------------------------------
 
     def _hosted(self, conn: Connection, action: str) -> HostedActionServer:
