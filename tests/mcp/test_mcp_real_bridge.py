@@ -17,6 +17,7 @@ they offer themselves under ``/mcp_test/``.
 from __future__ import annotations
 
 import asyncio
+import base64
 import io
 import json
 import os
@@ -371,6 +372,116 @@ async def test_a_goal_past_its_timeout_is_cancelled_on_the_robot(real: Session) 
         assert data is not None
         assert data["succeeded"] is False
         assert data["canceled_by"] == "timeout"
+
+
+class _StatusWatch:
+    """A side channel: another WebSocket following the action's status topic (ROS 2 ``_action/status``,
+    ROS 1 actionlib's ``status``), each goal's last status by its id (ROS 2: the UUID in hex)."""
+
+    def __init__(self, ws: Any, version: int) -> None:
+        self.ws = ws
+        self.version = version
+        self.latest: dict[str, int] = {}
+
+    @classmethod
+    async def open(cls, action: str, version: int) -> _StatusWatch:
+        assert REAL_URL is not None
+        ws = await websockets.connect(REAL_URL, compression=None, max_size=None)
+        if version == 2:
+            topic, msg_type = f"{action}/_action/status", "action_msgs/msg/GoalStatusArray"
+        else:
+            topic, msg_type = f"{action}/status", "actionlib_msgs/GoalStatusArray"
+        await ws.send(json.dumps({"op": "subscribe", "id": "side", "topic": topic, "type": msg_type}))
+        return cls(ws, version)
+
+    def _key(self, entry: dict[str, Any]) -> str:
+        if self.version == 1:
+            return str(entry["goal_id"]["id"])
+        uuid = entry["goal_info"]["goal_id"]["uuid"]
+        return base64.b64decode(uuid).hex() if isinstance(uuid, str) else bytes(uuid).hex()
+
+    async def until(self, wanted: Any) -> None:
+        """Read status messages until ``wanted(latest)`` holds (bounded by WAIT)."""
+        async with asyncio.timeout(WAIT):
+            while not wanted(self.latest):
+                frame = json.loads(await self.ws.recv())
+                if frame.get("op") == "publish":
+                    for entry in frame["msg"]["status_list"]:
+                        self.latest[self._key(entry)] = int(entry["status"])
+
+    def active(self) -> set[str]:
+        return {key for key, code in self.latest.items() if code in ((1, 2) if self.version == 2 else (1,))}
+
+    def canceled(self, key: str) -> bool:
+        return self.latest.get(key) in ((5,) if self.version == 2 else (2, 8))
+
+
+async def test_a_goal_publish_action_started_is_seen_cancelled_on_the_status_topic(real: Session) -> None:
+    """cancel_action by the goal's id stops it on the robot: the action server's own status topic, read on
+    another connection, shows the goal cancelled (every bridge: rosbridge-server-rs cancels only on the
+    connection that started the goal)."""
+    action, action_type = _needs_action()
+    watch = await _StatusWatch.open(action, await _version(real))
+    try:
+        await watch.until(lambda latest: True)
+        before = set(watch.latest)
+        running, first_feedback = _start_goal(real, action, action_type)
+        try:
+            goal_id = await asyncio.wait_for(first_feedback, WAIT)
+            await watch.until(lambda latest: bool(watch.active() - before))
+            (ours,) = watch.active() - before
+            await real.ok("cancel_action", {"action_name": action, "goal_id": goal_id})
+            await watch.until(lambda latest: watch.canceled(ours))
+            result = await asyncio.wait_for(running, WAIT)
+        finally:
+            running.cancel()
+    finally:
+        await watch.ws.close()
+    data = result.structured_content
+    assert data is not None, text_of(result)
+    assert data["canceled_by"] == "cancel_action"
+
+
+async def test_a_goal_another_client_started_is_cancelled_by_its_id_or_the_answer_says_why(
+    real: Session,
+) -> None:
+    """ROS 2: a goal a plain WebSocket client started is cancelled by its rosbridge id (rosbridge_suite), or
+    the answer says the bridge refused and names the goal's UUID as the way, which then cancels it."""
+    action, action_type = _needs_action()
+    if await _version(real) == 1:
+        pytest.skip("ROS 1 cancels any actionlib goal by its GoalID on <action>/cancel; no action ops")
+    watch = await _StatusWatch.open(action, 2)
+    assert REAL_URL is not None
+    other = await websockets.connect(REAL_URL, compression=None, max_size=None)
+    try:
+        await watch.until(lambda latest: True)
+        before = set(watch.latest)
+        rid = f"mcp_test_foreign:{os.getpid()}:{id(other)}"
+        wire_type = action_type_names(action_type).ros2
+        await other.send(
+            json.dumps(
+                {
+                    "op": "send_action_goal",
+                    "id": rid,
+                    "action": action,
+                    "action_type": wire_type,
+                    "args": ACTION_GOAL,
+                    "feedback": True,
+                }
+            )
+        )
+        await watch.until(lambda latest: bool(watch.active() - before))
+        (theirs,) = watch.active() - before
+        result = await real.call("cancel_action", {"action_name": action, "goal_id": rid})
+        if result.is_error:
+            text = text_of(result)
+            assert "was not cancelled: the bridge refused" in text, text
+            assert "Give the goal's UUID instead" in text
+            await real.ok("cancel_action", {"action_name": action, "goal_id": theirs})
+        await watch.until(lambda latest: watch.canceled(theirs))
+    finally:
+        await other.close()
+        await watch.ws.close()
 
 
 async def test_check_finds_the_bridge_healthy() -> None:
