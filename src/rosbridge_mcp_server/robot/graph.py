@@ -394,10 +394,14 @@ class RosGraph:
             try:
                 values = await self.rosapi("action_type", {"action": action})
             except ServiceError as exc:
-                # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0.
+                # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0. Listed yet
+                # failing (another bridge's newer rosapi on the graph, called through 2.1.0, which cannot load
+                # its type): the other way below still works, so this connection stops asking.
                 if not is_missing_service(exc):
-                    raise
+                    _log.info("/rosapi/action_type failed (%s); reading action types another way", exc)
                 self._known.no_action_type_service = True
+            except RequestTimeoutError as exc:
+                _log.info("/rosapi/action_type did not answer (%s); reading the type another way", exc)
             else:
                 answer = values.get("type")
                 found = answer if isinstance(answer, str) and answer else None
