@@ -181,3 +181,17 @@ async def test_check_says_what_it_judged_of_the_bridge(rs_robot: SimulatedRobot)
     assert (
         "[ok  ] concurrency: calls on one connection run side by side (measured; the server told by" in text
     )
+
+
+async def test_every_parameter_is_listed_with_one_rosapi_call_where_that_is_safe(
+    rs: Session, rs_robot: SimulatedRobot
+) -> None:
+    """On it rosapi's get_param_names answers (on rosapi 2.1.0 it kills rosapi): one call lists them all."""
+    before = dict(rs_robot.world.service_calls)
+    names = (await rs.ok("list_parameters")).structured_content
+    assert names is not None
+    assert "/turtlesim:background_r" in names["parameters"]
+    asked = {
+        k: v - before.get(k, 0) for k, v in rs_robot.world.service_calls.items() if v != before.get(k, 0)
+    }
+    assert asked == {"/rosapi/get_param_names": 1}

@@ -106,6 +106,17 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
             spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
             raise ParameterError(f"No parameters under {prefix}.{did_you_mean(node, spaces, cutoff=0.7)}")
         return found
+    if node is None and info.status_replies:
+        # rosbridge-server-rs's built-in rosapi answers get_param_names safely (it kills rosapi 2.1.0, which
+        # never answers with a status): one call instead of one per node.
+        try:
+            values = await graph.rosapi("get_param_names")
+        except (ServiceError, RequestTimeoutError):
+            pass
+        else:
+            listed = values.get("names") if isinstance(values, dict) else None
+            if isinstance(listed, list):
+                return sorted({n for n in listed if isinstance(n, str)})
     services = set(await graph.service_names())
     nodes = [node] if node is not None else await node_names(graph)
     offering = [n for n in nodes if f"{n.rstrip('/')}/list_parameters" in services]
