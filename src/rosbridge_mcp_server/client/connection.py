@@ -141,6 +141,14 @@ class Connection:
                         waiting = pending.get(event.id)
                         if waiting is not None:
                             waiting.deliver(event.op, event.frame)
+                        elif event.op == "status":
+                            # A refused op nobody waits on (a subscribe, a publish): its only trace.
+                            logger.warning(
+                                "%s: the bridge refused %s: %.300s",
+                                self.name,
+                                event.id,
+                                event.frame.get("msg"),
+                            )
                         elif logger.isEnabledFor(logging.DEBUG):
                             logger.debug(
                                 "%s: %s for %s, which nobody awaits any more", self.name, event.op, event.id
