@@ -26,6 +26,8 @@ What is measured:
    ``subscribe_topic`` count 1 on a live topic, each against a raw subscribe → first message → unsubscribe
    started at the same point of the publisher's cycle; a 10 Hz × 5 s ``publish_topic`` stream as the robot
    receives it; the size of ``tools/list`` with every tool and with the original eight.
+10. Streamable HTTP (``--only http``): ``list_topics`` over HTTP with a bearer token against the same call
+    over stdio, interleaved, and 100 HTTP sessions opened at once (initialize + one call each), all working.
 
 The table goes to stdout (Markdown, so it can be pasted into docs/performance.md), progress to stderr.
 The exit status is 0 when every measurement ran, whatever the figures; 1 when something errored.
@@ -59,11 +61,13 @@ from pathlib import Path
 from typing import IO, Any
 from urllib.parse import urlsplit
 
+import httpx2
 import mcp_types
 import psutil
 import roslibpy
 from mcp.client.session import ClientSession
 from mcp.client.stdio import StdioServerParameters, stdio_client
+from mcp.client.streamable_http import streamable_http_client
 from websockets.asyncio.client import ClientConnection, connect
 
 from rosbridge_mcp_server.client import RosbridgeClient
@@ -1116,6 +1120,119 @@ async def measure_concurrency(ctx: Context) -> list[Row]:
     ]
 
 
+# ------------------------------------------------------------------------------- item 10: Streamable HTTP
+
+HTTP_TOKEN = "bench-token-0123456789abcdef0123"
+
+
+@contextlib.asynccontextmanager
+async def http_server(url: str, errlog: IO[str]) -> AsyncIterator[tuple[str, psutil.Process]]:
+    """Our console script on Streamable HTTP (loopback, a free port, a bearer token): its URL and process."""
+    command = [*our_server_command(url), "--transport", "http", "--bind", "127.0.0.1:0"]
+    env = {**os.environ, "ROSBRIDGE_MCP_AUTH_TOKENS": f"bench {HTTP_TOKEN}"}
+    process = await asyncio.create_subprocess_exec(
+        *command, cwd=str(REPO), env=env, stdin=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.PIPE
+    )
+    assert process.stderr is not None
+    draining: asyncio.Task[None] | None = None
+    try:
+        async with asyncio.timeout(60):
+            while True:
+                line = (await process.stderr.readline()).decode(errors="replace")
+                if not line:
+                    raise RuntimeError("the HTTP server exited before it listened")
+                errlog.write(line)
+                if "serving MCP on " in line:
+                    served_at = line.split("serving MCP on ", 1)[1].split()[0]
+                    break
+
+        async def drain() -> None:
+            assert process.stderr is not None
+            while chunk := await process.stderr.readline():
+                errlog.write(chunk.decode(errors="replace"))
+
+        draining = asyncio.get_running_loop().create_task(drain())
+        yield served_at, psutil.Process(process.pid)
+    finally:
+        if process.returncode is None:
+            process.terminate()
+        await asyncio.wait_for(process.wait(), 30)
+        if draining is not None:
+            await draining
+
+
+@contextlib.asynccontextmanager
+async def http_session(url: str) -> AsyncIterator[ClientSession]:
+    """An initialized MCP session over the SDK's Streamable HTTP client, with the bench token."""
+    headers = {"Authorization": f"Bearer {HTTP_TOKEN}"}
+    async with (
+        httpx2.AsyncClient(headers=headers, timeout=httpx2.Timeout(60, read=300)) as http,
+        streamable_http_client(url, http_client=http) as (read, write),
+        ClientSession(read, write) as session,
+    ):
+        await session.initialize()
+        yield session
+
+
+async def measure_http(ctx: Context) -> list[Row]:
+    """Item 10: ``list_topics`` over Streamable HTTP against stdio (interleaved); N HTTP sessions at once."""
+    ours, plan = ctx.ours, ctx.plan
+    async with http_server(ctx.bridge.url, ctx.errlog) as (url, process), http_session(url) as session:
+
+        async def over_http() -> None:
+            result = await session.call_tool("list_topics", {})
+            if result.is_error:
+                raise RuntimeError(f"list_topics over HTTP failed: {result.content}")
+
+        subjects = [
+            Subject("list_topics_stdio", lambda: ours.tool("list_topics", {}), ours.process),
+            Subject("list_topics_http", over_http, process),
+        ]
+        await interleave(subjects, plan, ctx.bridge_process)
+        n = plan.parallel_calls
+        errors: list[str] = []
+
+        async def one_session() -> None:
+            try:
+                async with http_session(url) as own:
+                    result = await own.call_tool("list_topics", {})
+                    if result.is_error:
+                        errors.append("list_topics answered with an error")
+            except Exception as error:
+                errors.append(f"{type(error).__name__}: {error}")
+
+        began = time.perf_counter()
+        await asyncio.gather(*(one_session() for _ in range(n)))
+        sessions_s = time.perf_counter() - began
+    ctx.samples.update({subject.key: subject.samples for subject in subjects})
+    ctx.cpu_per_call.update({subject.key: subject.cpu_per_call() for subject in subjects})
+    stdio, http = subjects[0].stats, subjects[1].stats
+    per_call = timing_row(
+        "10a",
+        "`list_topics` over Streamable HTTP (SDK client, bearer token, loopback)",
+        http,
+        versus=f"{(http.median - stdio.median) * 1e3:+.2f} ms over stdio ({ms(stdio.median)})",
+        verdict="info",
+    )
+    per_call.figures["over_stdio_s"] = http.median - stdio.median
+    stdio_row = timing_row(
+        "10·", "`list_topics` over stdio, same run", stdio, versus="reference", verdict="info"
+    )
+    if errors:
+        log.error("HTTP sessions failed: %s", "; ".join(sorted(set(errors))[:5]))
+    sessions = Row(
+        "10b",
+        f"{n} HTTP sessions at once: initialize + `list_topics` each",
+        n=n,
+        median=ms(sessions_s),
+        versus=f"{len(errors)} errors",
+        target="0 errors",
+        verdict=verdict(not errors) if n >= 100 else f"n/a ({n} sessions); {len(errors)} errors",
+        figures={"errors": len(errors), "wall_s": sessions_s},
+    )
+    return [per_call, stdio_row, sessions]
+
+
 # ------------------------------------------------------------------------------------- item 5: throughput
 
 
@@ -1638,6 +1755,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("startup", "6-7", "startup and RSS", measure_startup, 180.0),
     ("memory", "7", "memory growth", measure_memory, 300.0),
     ("watch", "9", "watch tools", measure_watch, 240.0),
+    ("http", "10", "Streamable HTTP", measure_http, 240.0),
 ]
 
 

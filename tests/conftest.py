@@ -8,6 +8,7 @@ suite stays fast; pass other values to ``make_sim`` when a test needs them.
 
 from __future__ import annotations
 
+import os
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
@@ -19,6 +20,13 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 TEST_ROBOT_DEFAULTS: dict[str, Any] = {"action_step": 0.05, "slow_service_seconds": 1.0}
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_cmdline_main(config: pytest.Config) -> None:
+    """Against a real bridge the tests run one at a time (no xdist workers): they share its one graph."""
+    if os.environ.get("ROSBRIDGE_TEST_URL") and getattr(config.option, "numprocesses", None):
+        config.option.numprocesses = 0
 
 
 @pytest.fixture

@@ -1,9 +1,9 @@
-"""``rosbridge-mcp-server`` served through the MCP SDK's own stdio transport instead of ours.
+"""``rosbridge-mcp-server`` served by ``MCPServer.run_stdio_async`` (the SDK's stdio transport, bare).
 
-Our server reads and writes stdio through asyncio pipes (``rosbridge_mcp_server.server.stdio``); the SDK's
-transport hands every line read and every write and flush to an anyio worker thread instead. This runs
-our unchanged server with that one choice reverted, so the benchmark keeps showing what the hand-offs cost
-(the "SDK's stdio" comparison rows) and would notice if an SDK release made them cheap.
+Since #18 our server also serves stdio through the SDK's transport, wrapped only to answer the lines it cannot
+read (``rosbridge_mcp_server.server.stdio``); before, it read the pipes itself to save the transport's worker
+thread hand-offs. The "SDK's stdio" rows of the benchmark now show what the wrapper costs (nothing measurable
+expected) and would notice if either changed.
 """
 
 from __future__ import annotations

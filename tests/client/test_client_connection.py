@@ -64,17 +64,15 @@ async def test_during_a_connection_attempt_publish_fails_at_once_but_reads_wait_
     try:
         client = await make_client(f"ws://127.0.0.1:{port}", connected=False, connect_timeout=0.6)
         await asyncio.wait_for(accepted.wait(), 5.0)
-        started = time.monotonic()
-        with pytest.raises(NotConnectedError):
+        # The publish fails while the attempt it would have waited for is still under way: the read made
+        # next still finds that attempt running and ends with its timeout, not with a refusal at once.
+        with pytest.raises(NotConnectedError) as refused:
             await client.publish("/turtle1/cmd_vel", "geometry_msgs/Twist", {})
-        publish_took = time.monotonic() - started
+        assert "within" not in str(refused.value), "publish must never wait for a connection"
         started = time.monotonic()
-        with pytest.raises(NotConnectedError):
+        with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 0\.6 s"):
             await client.call_service("/rosapi/topics")
-        read_took = time.monotonic() - started
-        assert publish_took < 0.3, "publish must never wait for a connection"
-        assert read_took >= 0.2, "a read waits for the attempt in progress"
-        assert read_took < 3.0
+        assert time.monotonic() - started >= 0.2, "a read waits for the attempt in progress"
     finally:
         server.close()
         for writer in writers:
@@ -132,11 +130,9 @@ async def test_a_call_in_flight_fails_fast_with_connection_lost_when_the_connect
     client = await make_client(sim)
     call = asyncio.create_task(client.call_service("/slow_service", timeout=20.0))
     await sim.wait_for(lambda world: world.service_calls.get("/slow_service", 0) >= 1)
-    started = time.monotonic()
     await sim.drop_connections()
     with pytest.raises(ConnectionLostError, match="/slow_service"):
-        await asyncio.wait_for(call, 5.0)
-    assert time.monotonic() - started < 5.0
+        await asyncio.wait_for(call, 5.0)  # the call's own timeout is 20 s
     await client.wait_connected(5.0)
     assert (await client.call_service("/add_two_ints", {"a": 1, "b": 1}))["sum"] == 2
 

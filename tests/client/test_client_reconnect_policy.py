@@ -89,19 +89,21 @@ async def silent_port() -> AsyncIterator[str]:
 async def test_a_port_that_never_completes_the_handshake_costs_one_wait_not_one_per_call(
     silent_port: str,
 ) -> None:
-    """The first call waits for the attempt under way (the connect timeout); later calls fail at once."""
+    """The first call waits for the attempt under way (the connect timeout); later calls fail at once.
+
+    "At once" is held as "well before another connect timeout": a call that waited for the next attempt would
+    need the whole 2 s, so the 1 s bound cannot be met by waiting, however loaded the machine.
+    """
     loop = asyncio.get_running_loop()
     async with RosbridgeClient(
-        silent_port, connect_timeout=0.5, reconnect_min=0.05, reconnect_max=0.2
+        silent_port, connect_timeout=2.0, reconnect_min=0.05, reconnect_max=0.2
     ) as client:
         start = loop.time()
-        with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 0\.5 s"):
+        with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 2 s"):
             await client.call_service("/rosapi/topics", timeout=5.0)
-        assert 0.3 < loop.time() - start < 1.5
-        start = loop.time()
-        with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 0\.5 s"):
-            await client.call_service("/rosapi/topics", timeout=5.0)
-        assert loop.time() - start < 0.1
+        assert loop.time() - start >= 1.5
+        with pytest.raises(NotConnectedError, match=r"no WebSocket answer within 2 s"):
+            await asyncio.wait_for(client.call_service("/rosapi/topics", timeout=5.0), 1.0)
 
 
 async def test_after_a_silent_port_a_call_still_prompts_the_next_attempt(make_sim: MakeSim) -> None:

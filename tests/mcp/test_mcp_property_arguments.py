@@ -84,6 +84,9 @@ def hosted(request: pytest.FixtureRequest) -> Iterator[SessionThread]:
         hosted.close()
 
 
+@pytest.mark.slow
+# A failing example can hold megabytes of arguments: report the failure, not a warning about its size.
+@pytest.mark.filterwarnings("ignore:Generating overly large repr")
 def test_every_generated_call_ends_in_time_and_the_session_keeps_working(hosted: SessionThread) -> None:
     """Any tool, any arguments: a result within the call's timeout, then list_topics still succeeds."""
     calls: Counter[str] = Counter()

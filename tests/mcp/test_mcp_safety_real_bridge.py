@@ -152,13 +152,9 @@ async def test_stop_robot_cancels_a_running_goal_on_the_real_action_server() -> 
             session.mcp.call_tool("publish_action", arguments, progress_callback=on_progress)
         )
         await asyncio.wait_for(running.wait(), WAIT)  # the first feedback: the goal runs
-        loop = asyncio.get_running_loop()
-        started = loop.time()
         stopped = await session.ok("stop_robot")
         ended = await asyncio.wait_for(goal, WAIT)
-        took = loop.time() - started
     assert len((stopped.structured_content or {})["goals_cancelled"]) == 1
     assert ended.structured_content is not None
     assert ended.structured_content["canceled_by"] == "stop_robot"
     assert ended.structured_content["status"] in ("canceled", "preempted")
-    assert took < 2.0

@@ -16,12 +16,8 @@ from mcp.types import CallToolResult, TextContent, ToolAnnotations
 from pydantic import BaseModel, Field, ValidationError
 
 from mcp import Client
-from rosbridge_mcp_server.server.sdk import (
-    replace_output_schema,
-    serve_streams,
-    server_answering_unlisted,
-    tool_with_own_argument_errors,
-)
+from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
+from rosbridge_mcp_server.server.sdk import replace_output_schema, serve_streams, tool_from_handler
 
 
 class _Doubled(BaseModel):
@@ -50,8 +46,8 @@ def _reword(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
     return f"{tool} wants {', '.join(schema['properties'])} ({error.error_count()} wrong)"
 
 
-def _tool(**extra: Any) -> Any:
-    return tool_with_own_argument_errors(
+def _tool() -> Any:
+    return tool_from_handler(
         _double,
         PARAMETERS,
         _Doubled,
@@ -59,14 +55,25 @@ def _tool(**extra: Any) -> Any:
         title="Double",
         description="Doubles a number.",
         annotations=ToolAnnotations(title="Double", read_only_hint=True),
-        argument_error=_reword,
-        **extra,
     )
+
+
+def _checked_server(
+    check: Any = lambda tool, arguments, schema: None, unlisted: Any = None, **kwargs: Any
+) -> MCPServer[Any]:
+    tool = _tool()
+    checks = ToolCallChecks(
+        [CheckedTool.of("double", tool.parameters, PARAMETERS)],
+        argument_check=check,
+        argument_error=_reword,
+        unlisted=unlisted,
+    )
+    return MCPServer("seam", tools=[tool], middleware=[checks], **kwargs)
 
 
 async def test_argument_errors_are_worded_by_our_function() -> None:
     """A call whose arguments do not fit is an isError result with our sentence, not pydantic's dump."""
-    async with Client(MCPServer("seam", tools=[_tool()])) as client:
+    async with Client(_checked_server()) as client:
         result = await client.call_tool("double", {"number": "many"})
     assert result.is_error
     assert isinstance(result.content[0], TextContent)
@@ -81,7 +88,7 @@ async def test_the_argument_check_sees_the_arguments_as_sent_before_the_sdk_conv
         seen.append(dict(arguments))
         return f"{tool}: no" if "extra" in arguments else None
 
-    async with Client(MCPServer("seam", tools=[_tool(argument_check=check)])) as client:
+    async with Client(_checked_server(check)) as client:
         refused = await client.call_tool("double", {"number": True, "extra": 1})
         accepted = await client.call_tool("double", {"number": 2})
     assert seen == [{"number": True, "extra": 1}, {"number": 2}]
@@ -144,18 +151,13 @@ async def test_serve_streams_serves_an_mcp_server_on_the_streams_it_is_given() -
     assert result.structured_content == {"value": 4}
 
 
-async def test_a_server_answering_unlisted_tools_answers_those_it_knows_and_no_others() -> None:
+async def test_the_checks_answer_unlisted_tools_they_know_and_leave_others_to_the_sdk() -> None:
     """A withheld tool gets our answer; any other unknown name still gets the SDK's "Unknown tool"."""
 
-    def unlisted(name: str, arguments: dict[str, Any]) -> CallToolResult | None:
-        if name != "withheld":
-            return None
-        text = f"withheld, arguments {sorted(arguments)}"
-        return CallToolResult(content=[TextContent(type="text", text=text)], is_error=True)
+    def unlisted(name: str, arguments: dict[str, Any]) -> str | None:
+        return f"withheld, arguments {sorted(arguments)}" if name == "withheld" else None
 
-    server = server_answering_unlisted(unlisted, name="seam")
-    async with Client(server, mode="legacy") as client:
-        assert (await client.list_tools()).tools == []
+    async with Client(_checked_server(unlisted=unlisted), mode="legacy") as client:
         ours = await client.call_tool("withheld", {"a": 1})
         theirs = await client.call_tool("other", {})
     assert ours.is_error

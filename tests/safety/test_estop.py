@@ -9,6 +9,7 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.errors import NotConnectedError
 from rosbridge_mcp_server.safety import SessionActivity, emergency_stop
 from rosbridge_mcp_server.safety.estop import STREAM_STOP_SECONDS
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -23,15 +24,29 @@ def twist_type(sim: SimulatedRobot, stamped: bool = False) -> str:
 
 
 async def stream(
-    client: RosbridgeClient, activity: SessionActivity, topic: str, type_name: str, message: dict[str, Any]
+    client: RosbridgeClient,
+    activity: SessionActivity,
+    topic: str,
+    type_name: str,
+    message: dict[str, Any],
+    *,
+    through_outages: bool = False,
 ) -> int:
-    """A publish stream as a tool runs it: registered for its whole life, 50 Hz until asked to stop."""
+    """A publish stream as a tool runs it: registered for its whole life, 50 Hz until asked to stop.
+
+    ``through_outages`` keeps it going while the robot is unreachable, so that only the stop can end it.
+    """
     sent = 0
     with activity.stream(topic, type_name) as running:
         while True:
-            await client.publish(topic, type_name, message)
-            activity.published(topic, type_name, message)
-            sent += 1
+            try:
+                await client.publish(topic, type_name, message)
+            except NotConnectedError:
+                if not through_outages:
+                    raise
+            else:
+                activity.published(topic, type_name, message)
+                sent += 1
             if await running.pause(0.02):
                 return sent
 
@@ -149,7 +164,9 @@ async def test_without_a_connection_the_stop_still_ends_the_streams_and_says_wha
     async with RosbridgeClient(sim.url, reconnect_min=5.0) as client:
         await client.wait_connected(WAIT)
         activity.published(CMD_VEL, "geometry_msgs/msg/Twist", {})
-        task = asyncio.create_task(stream(client, activity, CMD_VEL, "geometry_msgs/msg/Twist", {}))
+        task = asyncio.create_task(
+            stream(client, activity, CMD_VEL, "geometry_msgs/msg/Twist", {}, through_outages=True)
+        )
         await sim.world.wait_for(lambda w: CMD_VEL in w.published, WAIT)
         await sim.stop()
         await client.wait_disconnected(WAIT)

@@ -1,4 +1,5 @@
-"""Command line: ``rosbridge-mcp-server [serve] [flags]`` (the MCP server on stdio) and ``... check [flags]``.
+"""Command line: ``rosbridge-mcp-server [serve] [flags]`` (the MCP server on stdio, or Streamable HTTP with
+``--transport http``) and ``... check [flags]``.
 
 Exit codes: 0 done (or healthy, for ``check``), 1 ``check`` found a problem, 2 bad command line or
 configuration (one line on stderr, never a traceback), 130 interrupted.
@@ -23,8 +24,11 @@ from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.fleet_config import load_fleet
+from rosbridge_mcp_server.http_config import DEFAULT_BIND, HttpSettings, load_http_settings
+from rosbridge_mcp_server.robot.acting import Guard
 from rosbridge_mcp_server.safety import Audit, PolicyGuard
-from rosbridge_mcp_server.server import build_server, serve_stdio
+from rosbridge_mcp_server.server import build_fleet_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 
@@ -52,8 +56,8 @@ def _parser(command: str) -> _Parser:
         )
     else:
         description = (
-            "MCP server (stdio) that lets an AI assistant watch and drive a ROS robot through rosbridge. "
-            "Use `check` to diagnose the connection."
+            "MCP server (stdio, or Streamable HTTP) that lets an AI assistant watch and drive a ROS robot "
+            "through rosbridge. Use `check` to diagnose the connection."
         )
     parser = _Parser(prog=PROG if command == "serve" else f"{PROG} check", description=description)
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
@@ -106,6 +110,9 @@ def _parser(command: str) -> _Parser:
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
+    if command == "serve":
+        _fleet_flags(parser)
+        _transport_flags(parser)
     demo = parser.add_argument_group("demo")
     demo.add_argument(
         "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
@@ -117,6 +124,69 @@ def _parser(command: str) -> _Parser:
         help="which rosbridge the simulated robot imitates (default ros2)",
     )
     return parser
+
+
+def _fleet_flags(parser: _Parser) -> None:
+    fleet = parser.add_argument_group("several robots (every tool then takes a robot argument)")
+    fleet.add_argument(
+        "--robot",
+        action="append",
+        metavar="NAME=URL",
+        help="a robot and its rosbridge URL, repeatable; the other flags apply to each",
+    )
+    fleet.add_argument(
+        "--robots",
+        metavar="FILE",
+        help="robots in TOML: [robots.NAME] with url and optional headers, ca_file, client_cert, client_key, "
+        "policy, read_only",
+    )
+
+
+def _transport_flags(parser: _Parser) -> None:
+    http = parser.add_argument_group("MCP transport (see docs/deployment.md)")
+    http.add_argument(
+        "--transport",
+        choices=("stdio", "http"),
+        help="stdio (default, started by the host) or http: Streamable HTTP (env ROSBRIDGE_MCP_TRANSPORT)",
+    )
+    http.add_argument(
+        "--bind",
+        metavar="HOST:PORT",
+        help=f"HTTP address, path /mcp (env ROSBRIDGE_MCP_BIND, default {DEFAULT_BIND})",
+    )
+    http.add_argument(
+        "--auth-tokens",
+        metavar="FILE",
+        help="bearer tokens, one 'name token' per line (env ROSBRIDGE_MCP_AUTH_TOKENS: the pairs themselves)",
+    )
+    http.add_argument(
+        "--allow-host",
+        action="append",
+        metavar="NAME[:PORT]",
+        help="another Host clients use (a DNS name, a proxy's), repeatable (env ROSBRIDGE_MCP_ALLOWED_HOSTS)",
+    )
+    http.add_argument(
+        "--allow-origin",
+        action="append",
+        metavar="URL",
+        help="another browser Origin to accept, repeatable (env ROSBRIDGE_MCP_ALLOWED_ORIGINS)",
+    )
+    http.add_argument("--tls-cert", metavar="FILE", help="serve HTTPS with this certificate (PEM)")
+    http.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
+    oauth = parser.add_argument_group("OAuth 2.1 resource server (JWT access tokens)")
+    oauth.add_argument("--oauth-issuer", metavar="URL", help="the authorization server (the tokens' iss)")
+    oauth.add_argument("--oauth-audience", metavar="AUD", help="the tokens' aud (default: --oauth-resource)")
+    oauth.add_argument(
+        "--oauth-jwks",
+        metavar="URL|FILE",
+        help="the issuer's signing keys (default ISSUER/.well-known/jwks.json)",
+    )
+    oauth.add_argument(
+        "--oauth-resource",
+        metavar="URL",
+        help="this server's public URL, e.g. https://robot.example.com/mcp (default: the bind address)",
+    )
+    oauth.add_argument("--oauth-scopes", metavar="A,B", help="scopes every token must carry")
 
 
 def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = None) -> int:
@@ -146,6 +216,28 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             headers=options.header,
             tools=options.tools,
         )
+        http = (
+            load_http_settings(
+                env,
+                transport=options.transport,
+                bind=options.bind,
+                auth_tokens=options.auth_tokens,
+                allow_hosts=options.allow_host,
+                allow_origins=options.allow_origin,
+                tls_cert=options.tls_cert,
+                tls_key=options.tls_key,
+                oauth_issuer=options.oauth_issuer,
+                oauth_audience=options.oauth_audience,
+                oauth_jwks=options.oauth_jwks,
+                oauth_resource=options.oauth_resource,
+                oauth_scopes=options.oauth_scopes,
+            )
+            if command == "serve"
+            else HttpSettings()
+        )
+        fleet = (
+            load_fleet(config, robots=options.robot, robots_file=options.robots) if command == "serve" else ()
+        )
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (_UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -154,12 +246,14 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     # `check` prints its own findings; the client's warnings would only repeat them.
     configure_logging(
         config.log_level if command == "serve" or config.log_level == "DEBUG" else "ERROR",
-        secrets=[value for _, value in config.headers],
+        secrets=[value for _, value in config.headers]
+        + [value for _, robot in fleet for _, value in robot.headers]
+        + [token for _, token in http.tokens],
     )
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout))
-        asyncio.run(serve(config, audit_file))
+        asyncio.run(serve(config, audit_file, http, fleet))
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
@@ -222,7 +316,7 @@ class _Redact(logging.Filter):
         return True
 
 
-def _stop_on_signals(client: RosbridgeClient) -> None:
+def _stop_on_signals(clients: Sequence[RosbridgeClient]) -> None:
     """Make SIGTERM (how MCP clients stop a server that ignores EOF) and Ctrl-C clean up, then exit.
 
     Cancelling the server cancels every tool call in flight, and each running goal is cancelled on the robot
@@ -242,7 +336,7 @@ def _stop_on_signals(client: RosbridgeClient) -> None:
             return
         _log.info("%s: cancelling tool calls and goals, then exiting", name)
         main.cancel()
-        pending.add(loop.create_task(_exit_after_cleanup(client, exit_code)))
+        pending.add(loop.create_task(_exit_after_cleanup(clients, exit_code)))
 
     # Windows event loops have no add_signal_handler; there the default handling applies.
     with contextlib.suppress(NotImplementedError, RuntimeError):
@@ -250,10 +344,10 @@ def _stop_on_signals(client: RosbridgeClient) -> None:
         loop.add_signal_handler(signal.SIGINT, stop, "SIGINT", 130)
 
 
-async def _exit_after_cleanup(client: RosbridgeClient, exit_code: int) -> None:
+async def _exit_after_cleanup(clients: Sequence[RosbridgeClient], exit_code: int) -> None:
     await asyncio.sleep(SIGNAL_GRACE)
     with contextlib.suppress(Exception):
-        await asyncio.wait_for(client.close(), SIGNAL_GRACE)
+        await asyncio.wait_for(asyncio.gather(*(client.close() for client in clients)), SIGNAL_GRACE)
     logging.shutdown()
     os._exit(exit_code)
 
@@ -282,24 +376,50 @@ async def check(config: Config, out: TextIO) -> int:
         return await run_check(effective, out)
 
 
-async def serve(config: Config, audit_file: TextIO | None = None) -> None:
-    """Serve MCP on stdin/stdout until the client closes stdin (or SIGTERM / Ctrl-C)."""
+async def serve(
+    config: Config,
+    audit_file: TextIO | None = None,
+    http: HttpSettings | None = None,
+    fleet: Sequence[tuple[str, Config]] = (),
+) -> None:
+    """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
+    Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names)."""
     async with demo_robot(config) as effective:
-        warning = plain_text_warning(effective.url)
-        if warning:
-            _log.warning("%s", warning)
-        for line in effective.policy.describe():
-            _log.info("safety %s", line.strip())
-        client = RosbridgeClient(
-            effective.url,
-            connect_timeout=effective.connect_timeout,
-            request_timeout=effective.request_timeout,
-            ssl_context=effective.ssl_context(),
-            headers=effective.headers,
-        )
-        guard = PolicyGuard(effective.policy, Audit(audit_file))
-        server = build_server(client, effective, guard=guard)
-        _stop_on_signals(client)
+        robots = list(fleet) or [("robot", effective)]
+        entries: list[tuple[str, RosbridgeClient, Config, Guard | None]] = []
+        for name, robot_config in robots:
+            where = f"{name}: " if fleet else ""
+            warning = plain_text_warning(robot_config.url)
+            if warning:
+                _log.warning("%s%s", where, warning)
+            for line in robot_config.policy.describe():
+                _log.info("%ssafety %s", where, line.strip())
+            client = RosbridgeClient(
+                robot_config.url,
+                connect_timeout=robot_config.connect_timeout,
+                request_timeout=robot_config.request_timeout,
+                ssl_context=robot_config.ssl_context(),
+                headers=robot_config.headers,
+            )
+            guard = PolicyGuard(robot_config.policy, Audit(audit_file, robot=name if fleet else None))
+            entries.append((name, client, robot_config, guard))
+        if http is not None and http.transport == "http":
+            # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
+            from rosbridge_mcp_server.server.http import auth_options, serve_http  # noqa: PLC0415
+
+            server = build_fleet_server(entries, effective, **auth_options(http))
+            # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
+            # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
+            # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as
+            # on stdio (Ctrl-C still ends in KeyboardInterrupt, exit 130).
+            previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+            try:
+                await serve_http(server, http)
+            finally:
+                signal.signal(signal.SIGTERM, previous)
+            return
+        server = build_fleet_server(entries, effective)
+        _stop_on_signals([client for _, client, _, _ in entries])
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
             _log.warning(

@@ -7,7 +7,7 @@ ask the person; the acting layer calls the guard before anything is sent.
 from rosbridge_mcp_server.robot.activity import SessionActivity, Stream, VelocityTopic
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure
 from rosbridge_mcp_server.safety.estop import StopReport, emergency_stop
-from rosbridge_mcp_server.safety.guard import Audit, PolicyGuard, question
+from rosbridge_mcp_server.safety.guard import Audit, PolicyGuard, calling_as, current_caller, question
 from rosbridge_mcp_server.safety.policy import (
     NameRules,
     Policy,
@@ -30,7 +30,9 @@ __all__ = [
     "Stream",
     "VelocityCaps",
     "VelocityTopic",
+    "calling_as",
     "clamp_text",
+    "current_caller",
     "emergency_stop",
     "is_velocity_type",
     "load_policy",

@@ -13,10 +13,13 @@ is one audit line (:class:`Audit`): on stderr, and as JSON in the audit file whe
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import contextvars
 import dataclasses
 import datetime
 import json
 import logging
+from collections.abc import Iterator
 from typing import IO, TYPE_CHECKING, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
@@ -28,7 +31,15 @@ if TYPE_CHECKING:
     # would be circular.
     from rosbridge_mcp_server.robot.acting import Act, Answer, AskPerson
 
-__all__ = ["AUDIT_PAYLOAD_LIMIT", "QUESTION_LIMIT", "Audit", "PolicyGuard", "question"]
+__all__ = [
+    "AUDIT_PAYLOAD_LIMIT",
+    "QUESTION_LIMIT",
+    "Audit",
+    "PolicyGuard",
+    "calling_as",
+    "current_caller",
+    "question",
+]
 
 _log = logging.getLogger("rosbridge_mcp_server.audit")
 
@@ -48,19 +59,42 @@ _VERBS = {
 }
 
 
+#: Who is making the current call (a token's name or a JWT's subject), for the audit; None on stdio.
+_CALLER: contextvars.ContextVar[str | None] = contextvars.ContextVar("rosbridge_mcp_caller", default=None)
+
+
+def current_caller() -> str | None:
+    """The caller the server named for the call being handled (``None``: not known, e.g. stdio)."""
+    return _CALLER.get()
+
+
+@contextlib.contextmanager
+def calling_as(caller: str | None) -> Iterator[None]:
+    """Name the caller of everything audited inside the block (the server sets it around each tool call)."""
+    token = _CALLER.set(caller)
+    try:
+        yield
+    finally:
+        _CALLER.reset(token)
+
+
 class Audit:
     """One line per acting decision on stderr, and a JSON line in ``stream`` (the audit file) when given."""
 
-    def __init__(self, stream: IO[str] | None = None) -> None:
+    def __init__(self, stream: IO[str] | None = None, robot: str | None = None) -> None:
         self._stream = stream
+        #: The robot this audit is for, when the server drives several (named in every line).
+        self.robot = robot
 
     def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
         level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
+        caller = current_caller()
         _log.log(
             level,
-            "audit: %s %s %s %s%s: %s%s",
+            "audit: %s%s %s %s %s%s: %s%s%s",
+            f"[{self.robot}] " if self.robot else "",
             act.tool,
             act.kind,
             act.name,
@@ -68,6 +102,7 @@ class Audit:
             stream,
             outcome,
             extra,
+            f" [caller {caller}]" if caller else "",
         )
         if self._stream is None:
             return
@@ -83,6 +118,10 @@ class Audit:
             "rate_hz": act.rate_hz,
             "duration": act.duration,
         }
+        if caller is not None:
+            entry["caller"] = caller
+        if self.robot is not None:
+            entry["robot"] = self.robot
         line = json.dumps(entry, ensure_ascii=False, default=str)
         if len(line) > AUDIT_PAYLOAD_LIMIT:
             # A camera frame in every line would bury the audit; its size and start are enough.

@@ -12,6 +12,7 @@ failures become ``isError`` results:
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import hashlib
 import inspect
@@ -45,18 +46,14 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Answer, AskPerson, Guard
-from rosbridge_mcp_server.robot.activity import SessionActivity
-from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_with_own_argument_errors
-from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing
+from rosbridge_mcp_server.robot.acting import Answer, AskPerson
+from rosbridge_mcp_server.server.checks import CheckedTool
+from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
+from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler
+from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
-if typing.TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.config import Config
-    from rosbridge_mcp_server.robot.graph import RosGraph
-
-__all__ = ["error_text", "inline_refs", "tool_from_module", "without_name_titles"]
+__all__ = ["arguments_text", "error_text", "inline_refs", "tool_from_module", "without_name_titles"]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
 
@@ -105,7 +102,7 @@ def _sentence(text: str) -> str:
     return stripped if not stripped or stripped[-1] in ".!?" else stripped + "."
 
 
-def _arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
+def arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
     problems: list[str] = []
     union_kinds: dict[str, list[str]] = {}
     union_inputs: dict[str, Any] = {}
@@ -138,20 +135,14 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def tool_from_module(
-    module: ModuleType,
-    client: RosbridgeClient,
-    config: Config,
-    graph: RosGraph,
-    *,
-    guard: Guard = ALLOW_ALL,
-    activity: SessionActivity | None = None,
-) -> Tool:
+def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedTool]:
     """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`.
 
-    ``activity`` is shared by every tool of one server, so that stop_robot sees what the others started.
+    A call runs on the robot the server's checks chose for it (the only one, without a fleet), with that
+    robot's client, guard and activity (shared by every tool of the robot, so that stop_robot sees what the
+    others started); stop_robot chosen for every robot runs on each and says what it did on each.
+    With the tool comes what the server's checks (``checks.py``) need to check its arguments first.
     """
-    session_activity = activity if activity is not None else SessionActivity()
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
 
@@ -164,6 +155,15 @@ def tool_from_module(
     async def call_tool(
         mcp_context: Context[Any, Any], **arguments: Any
     ) -> CallToolResult | InputRequiredResult:
+        robots = selected(fleet)
+        if len(robots) == 1:
+            return await call_on(robots[0], mcp_context, arguments)
+        answers = await asyncio.gather(*(call_on(robot, mcp_context, arguments) for robot in robots))
+        return _merged([robot.name for robot in robots], answers)
+
+    async def call_on(
+        robot: Robot, mcp_context: Context[Any, Any], arguments: dict[str, Any]
+    ) -> CallToolResult | InputRequiredResult:
         async def report_progress(progress: float, total: float | None, message: str | None) -> None:
             try:
                 await mcp_context.report_progress(progress, total, message)
@@ -172,13 +172,13 @@ def tool_from_module(
                 _log.debug("could not send a progress notification", exc_info=True)
 
         ctx = ToolContext(
-            client=client,
-            config=config,
-            graph=graph,
+            client=robot.client,
+            config=robot.config,
+            graph=robot.graph,
             report_progress=report_progress,
-            guard=guard,
+            guard=robot.guard,
             ask_person=_asker(mcp_context),
-            activity=session_activity,
+            activity=robot.activity,
         )
         try:
             answer = await run(ctx, **arguments)
@@ -198,7 +198,7 @@ def tool_from_module(
             structured_content=answer.data.model_dump(mode="json"),
         )
 
-    tool = tool_with_own_argument_errors(
+    tool = tool_from_handler(
         call_tool,
         parameters,
         spec.output,
@@ -212,13 +212,37 @@ def tool_from_module(
             idempotent_hint=spec.hints.idempotent,
             open_world_hint=spec.hints.open_world,
         ),
-        argument_error=_arguments_text,
-        argument_check=argument_problem,
     )
-    # What argument_problem holds every call to, said where clients read it.
-    tool.parameters = {**without_name_titles(tool.parameters), "additionalProperties": False}
+    # What the argument checks hold every call to, said where clients read it.
+    own = {**without_name_titles(tool.parameters), "additionalProperties": False}
+    tool.parameters = fleet.schema_with_robot(own, spec.name)
     replace_output_schema(tool, lambda schema: without_name_titles(inline_refs(schema)))
-    return tool
+    return tool, CheckedTool.of(spec.name, own, parameters)
+
+
+def _merged(names: list[str], answers: list[CallToolResult | InputRequiredResult]) -> CallToolResult:
+    """One answer for a call made on several robots: each robot's text under its name, and every list of
+    the structured content joined with each entry prefixed by its robot (stop_robot's answer is lists)."""
+    texts: list[str] = []
+    data: dict[str, Any] = {}
+    failed = False
+    for name, answer in zip(names, answers, strict=True):
+        if not isinstance(answer, CallToolResult):
+            # Only stop_robot runs on several robots, and it never asks the person.
+            texts.append(f"{name}: could not run here")
+            failed = True
+            continue
+        failed = failed or bool(answer.is_error)
+        text = "\n".join(block.text for block in answer.content if isinstance(block, TextContent))
+        texts.append(f"{name}: {text}")
+        for key, value in (answer.structured_content or {}).items():
+            if isinstance(value, list):
+                data.setdefault(key, []).extend(f"{name}: {item}" for item in value)
+    return CallToolResult(
+        content=[TextContent(type="text", text="\n".join(texts))],
+        structured_content=None if failed else data,
+        is_error=failed,
+    )
 
 
 def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:

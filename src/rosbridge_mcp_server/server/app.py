@@ -6,29 +6,31 @@ The rosbridge client connects in the background from the server's lifespan, so `
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import typing
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Sequence
 from contextlib import asynccontextmanager
 from typing import Any, Literal
 
 from mcp.server.mcpserver import MCPServer
-from mcp.types import CallToolResult, TextContent
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.robot.acting import Act, Guard
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
-from rosbridge_mcp_server.server.adapter import tool_from_module
-from rosbridge_mcp_server.server.sdk import server_answering_unlisted
+from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
+from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
+from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, Fleet, Robot, list_robots_tool
 from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
+from rosbridge_mcp_server.tools.arguments import argument_problem
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
 
-__all__ = ["INSTRUCTIONS", "SERVER_NAME", "build_server"]
+__all__ = ["INSTRUCTIONS", "SERVER_NAME", "build_fleet_server", "build_server"]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
 
@@ -63,67 +65,121 @@ request that timed out may still take effect later: check the robot's state befo
 """
 
 
+_FLEET_NOTE = """
+
+This server drives several robots: list_robots names them, and every other tool needs the robot argument \
+saying which one (stop_robot without it stops every robot).\
+"""
+
 _READ_ONLY_NOTE = """
 
 This server is read-only: it lists only tools that read the robot, and refuses any other.\
 """
 
 
-def build_server(client: RosbridgeClient, config: Config, *, guard: Guard | None = None) -> MCPServer[None]:
+def build_server(
+    client: RosbridgeClient, config: Config, *, guard: Guard | None = None, **transport: Any
+) -> MCPServer[None]:
     """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
 
     Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
-    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools.
+    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools. Every tool call
+    first goes through the checks of ``checks.py`` (the SDK's server middleware), on any transport.
+    *transport* goes to ``MCPServer`` as it is (``auth`` and ``token_verifier`` for HTTP).
     """
-    graph = RosGraph(client)
+    return build_fleet_server([("robot", client, config, guard)], config, **transport)
+
+
+def build_fleet_server(
+    robots: Sequence[tuple[str, RosbridgeClient, Config, Guard | None]], config: Config, **transport: Any
+) -> MCPServer[None]:
+    """An ``MCPServer`` driving each ``(name, client, config, guard)`` robot; with one, :func:`build_server`.
+
+    *config* chooses the tools and, when read-only, withholds the acting ones; each robot's own config
+    holds its policy, which its guard (default: a :class:`PolicyGuard` for it) applies. With several robots
+    every tool takes a ``robot`` argument and ``list_robots`` is listed (``fleet.py``).
+    """
+    fleet = Fleet(
+        [
+            Robot(
+                name=name,
+                client=client,
+                config=robot_config,
+                graph=RosGraph(client),
+                guard=guard if guard is not None else PolicyGuard(robot_config.policy),
+                activity=SessionActivity(),
+            )
+            for name, client, robot_config, guard in robots
+        ]
+    )
     policy = config.policy
-    approver: Guard = guard if guard is not None else PolicyGuard(policy)
-    activity = SessionActivity()
     chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
     if any(not m.SPEC.hints.read_only for m in chosen) and stop_robot not in chosen:
         # Whoever can set the robot going can stop it, whatever --tools picked.
         chosen.append(stop_robot)
     modules = [m for m in chosen if m.SPEC.hints.read_only or not policy.read_only]
     if list_services in modules:
-        client.watch(ServiceTypeWarmUp(client, graph))
+        for robot in fleet.robots:
+            robot.client.watch(ServiceTypeWarmUp(robot.client, robot.graph))
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
-        await client.start()
-        _log.info("rosbridge-mcp-server %s: connecting to %s in the background", __version__, client.url)
-        try:
+        async with contextlib.AsyncExitStack() as started:
+            for robot in fleet.robots:
+                await robot.client.start()
+                started.push_async_callback(robot.client.close)
+                where = f"{robot.name} at " if fleet.several else ""
+                _log.info(
+                    "rosbridge-mcp-server %s: connecting to %s%s in the background",
+                    __version__,
+                    where,
+                    robot.client.url,
+                )
             yield None
-        finally:
-            await client.close()
 
-    tools = [
-        tool_from_module(module, client, config, graph, guard=approver, activity=activity)
-        for module in modules
-    ]
+    adapted = [tool_from_module(module, fleet) for module in modules]
+    tools = [tool for tool, _ in adapted]
+    checked = [check for _, check in adapted]
+    if fleet.several:
+        listing = list_robots_tool(fleet)
+        tools.append(listing)
+        checked.append(CheckedTool.of(LIST_ROBOTS, listing.parameters, []))
     # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
     withheld = {m.SPEC.name for m in chosen} - {m.SPEC.name for m in modules}
 
-    def unlisted(name: str, arguments: dict[str, Any]) -> CallToolResult | None:
+    def unlisted(name: str, arguments: dict[str, Any]) -> str | None:
         """A withheld acting tool called by name anyway: refused, and audited like any refusal."""
         if name not in withheld:
             return None
-        approver.record(Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only")
-        text = (
+        for robot in fleet.robots:
+            robot.guard.record(
+                Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only"
+            )
+        return (
             f"{name} is not available: this server is read-only (its operator started it with --read-only or "
             "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
         )
-        return CallToolResult(content=[TextContent(type="text", text=text)], is_error=True)
 
-    return server_answering_unlisted(
-        unlisted,
+    checks = ToolCallChecks(
+        checked,
+        argument_check=argument_problem,
+        argument_error=arguments_text,
+        unlisted=unlisted,
+        fleet=fleet,
+    )
+    return MCPServer(
         name=SERVER_NAME,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
-        instructions=INSTRUCTIONS + (_READ_ONLY_NOTE if policy.read_only else ""),
+        instructions=INSTRUCTIONS
+        + (_FLEET_NOTE if fleet.several else "")
+        + (_READ_ONLY_NOTE if policy.read_only else ""),
         version=__version__,
         tools=tools,
         lifespan=lifespan,
         log_level=config.log_level,
+        middleware=[checks],
+        **transport,
     )
 
 

@@ -1,20 +1,18 @@
 """Every use of the MCP SDK beyond its documented API, each behind one named function.
 
-The SDK (``mcp`` 2.3) has no public way to do these three things; each function here says what it relies on,
-and ``tests/mcp/test_sdk_seam.py`` holds each to its effect, so an SDK upgrade that changes one fails there,
-by name, instead of somewhere in a tool call:
+The SDK (``mcp`` 2.3) documents ``MCPServer(tools=..., middleware=...)``, the stdio and Streamable HTTP
+transports and the auth settings, which is what the rest of ``server/`` uses. Three things have no documented
+way; each function here says what it relies on, and ``tests/mcp/test_sdk_seam.py`` holds each to its effect,
+so an SDK upgrade that changes one fails there, by name, instead of somewhere in a tool call:
 
-* :func:`tool_with_own_argument_errors`: a ``Tool`` for a handler that takes ``**arguments``, with the
-  parameters we give it, whose argument validation errors are reworded. The SDK reads a tool's parameters
-  from ``inspect.signature`` of the function (so we hand it one) and finds the ``Context`` parameter by its
-  annotation; it turns a ``ValidationError`` into ``ToolError("Error executing tool <name>: <pydantic
-  dump>")`` inside ``Tool.run``, and a subclass is the only place to catch it with the tool's schema at hand.
+* :func:`tool_from_handler`: a ``Tool`` for a handler that takes ``**arguments``, with the parameters we give
+  it. The SDK reads a tool's parameters from ``inspect.signature`` of the function (which honours
+  ``__signature__``, so we hand it one) and finds the ``Context`` parameter by its annotation.
 * :func:`replace_output_schema`: the output schema the SDK derived from the return annotation, replaced
   (``Tool.output_schema`` reads ``Tool.fn_metadata.output_schema``).
-* :func:`serve_streams`: ``MCPServer`` on streams we give it. ``MCPServer.run_stdio_async`` only serves the
-  SDK's own stdio transport; what it runs is its low-level server's ``run`` with the streams.
-* :func:`server_answering_unlisted`: an ``MCPServer`` that answers calls of some tools it does not list with
-  an answer of ours (a read-only server saying why, not "Unknown tool").
+* :func:`serve_streams`: ``MCPServer`` on streams we give it (the SDK's stdio transport's, with unreadable
+  lines answered). ``MCPServer.run_stdio_async`` opens the transport itself; what it runs is its low-level
+  server's ``run`` with the streams.
 """
 
 from __future__ import annotations
@@ -24,27 +22,14 @@ from collections.abc import Awaitable, Callable
 from typing import Annotated, Any
 
 from mcp.server.mcpserver import Context, MCPServer
-from mcp.server.mcpserver.exceptions import ToolError
 from mcp.server.mcpserver.tools import Tool
 from mcp.types import CallToolResult, InputRequiredResult, ToolAnnotations
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel
 
-__all__ = [
-    "ArgumentCheck",
-    "ArgumentErrorText",
-    "replace_output_schema",
-    "serve_streams",
-    "server_answering_unlisted",
-    "tool_with_own_argument_errors",
-]
-
-#: Rewords an argument error: (tool name, the pydantic error, the tool's input schema) -> one sentence.
-ArgumentErrorText = Callable[[str, ValidationError, dict[str, Any]], str]
-#: Checks arguments before the SDK converts them: (tool name, arguments, input schema) -> a refusal or None.
-ArgumentCheck = Callable[[str, dict[str, Any], dict[str, Any]], str | None]
+__all__ = ["replace_output_schema", "serve_streams", "tool_from_handler"]
 
 
-def tool_with_own_argument_errors(
+def tool_from_handler(
     handler: Callable[..., Awaitable[CallToolResult | InputRequiredResult]],
     parameters: list[inspect.Parameter],
     output: type[BaseModel],
@@ -53,19 +38,12 @@ def tool_with_own_argument_errors(
     title: str,
     description: str,
     annotations: ToolAnnotations,
-    argument_error: ArgumentErrorText,
-    argument_check: ArgumentCheck | None = None,
 ) -> Tool:
     """A structured-output ``Tool``: ``await handler(mcp_context=<the SDK's Context>, **arguments)``.
 
     *parameters* (annotations resolved) are the tool's input schema; *output* is the model of its structured
-    content. Argument errors read as *argument_error* words them. Relies on the SDK taking the parameters
-    from ``inspect.signature`` (which honours ``__signature__``) and leaving a ``Context``-annotated one out
-    of the schema, on ``Tool.run`` raising ``ToolError`` with the ``ValidationError`` as its ``__cause__``
-    when the arguments do not fit, and on ``MCPServer`` sending a ``ToolError``'s text as an error result.
-
-    ``argument_check`` sees the arguments as the client sent them, before the SDK's lenient conversion (which
-    drops unknown keys and takes ``true`` for 1); its refusal is the error result.
+    content. Relies on the SDK taking the parameters from ``inspect.signature`` (which honours
+    ``__signature__``) and leaving a ``Context``-annotated one out of the schema.
     An ``InputRequiredResult`` from the handler (a question for the person, 2026-07-28) goes out unchanged.
     """
     returns = Annotated[CallToolResult, output]
@@ -78,24 +56,7 @@ def tool_with_own_argument_errors(
     handler.__doc__ = description
     setattr(handler, "__signature__", inspect.Signature(every, return_annotation=returns))  # noqa: B010
     handler.__annotations__ = {p.name: p.annotation for p in every} | {"return": returns}
-
-    class _Tool(Tool):
-        async def run(
-            self, arguments: dict[str, Any], context: Context[Any, Any], convert_result: bool = False
-        ) -> Any:
-            if argument_check is not None:
-                refusal = argument_check(self.name, arguments, self.parameters)
-                if refusal is not None:
-                    raise ToolError(refusal)
-            try:
-                return await super().run(arguments, context, convert_result)
-            except ToolError as exc:
-                cause = exc.__cause__
-                if isinstance(cause, ValidationError):
-                    raise ToolError(argument_error(self.name, cause, self.parameters)) from cause
-                raise
-
-    return _Tool.from_function(
+    return Tool.from_function(
         handler,
         name=name,
         title=title,
@@ -124,24 +85,3 @@ async def serve_streams(server: MCPServer[Any], read_stream: Any, write_stream: 
     """
     lowlevel = server._lowlevel_server
     await lowlevel.run(read_stream, write_stream, lowlevel.create_initialization_options())
-
-
-def server_answering_unlisted(
-    unlisted: Callable[[str, dict[str, Any]], CallToolResult | None], **kwargs: Any
-) -> MCPServer[None]:
-    """``MCPServer(**kwargs)`` whose calls of a tool it lacks go to ``unlisted(name, arguments)`` first.
-
-    ``unlisted`` returns the answer for a name it knows, ``None`` for the SDK's own "Unknown tool". Relies on
-    the SDK's ``tools/call`` handler calling ``MCPServer.call_tool`` for every call, and on
-    ``MCPServer._tool_manager.get_tool`` telling whether a tool is registered.
-    """
-
-    class _Server(MCPServer[None]):
-        async def call_tool(self, name: str, arguments: dict[str, Any], context: Any = None) -> Any:
-            if self._tool_manager.get_tool(name) is None:
-                answer = unlisted(name, arguments)
-                if answer is not None:
-                    return answer
-            return await super().call_tool(name, arguments, context)
-
-    return _Server(**kwargs)

@@ -1,43 +1,23 @@
-"""MCP over stdin/stdout through asyncio pipes: the SDK's stdio transport without its worker threads.
+"""MCP over stdin/stdout: the SDK's own stdio transport, with every line it cannot read answered.
 
-The SDK's own transport (``mcp.server.stdio``) hands every line it reads and every write and flush to an
-anyio worker thread: three thread hand-offs per tool call, measured at 0.3-0.7 ms of a call's latency on
-our machines (``docs/performance.md``). When the MCP host gives us pipes or sockets, as every host does, we
-read and write them from the event loop instead, with our own framing: every line gets an answer, and one the
-SDK cannot read (not JSON, JSON nested deeper than its parser allows, not JSON-RPC, longer than we read) gets
-the JSON-RPC error reply (-32700 / -32600) under the request's id when the text shows it, where the SDK only
-logs it at debug level and the client waits forever. Anything else (a terminal, a regular file) goes through
-the SDK's transport (a person typing JSON needs no speed, and a terminal's file description is shared with the
-shell, which must not be left non-blocking), with the lines it cannot read answered the same way.
-
-Like the SDK, we keep stray output off the wire: while serving, fd 1 points at stderr and fd 0 at the null
-device; the wire is served from private duplicates, and both descriptors are restored on the way out.
+The SDK's transport (``mcp.server.stdio.stdio_server``) hands a line it cannot read (not JSON, JSON nested
+deeper than its parser allows, not JSON-RPC) on as an exception, which the SDK only logs at debug level: the
+client would wait forever. Here each gets the JSON-RPC error reply (-32700 / -32600) under the request's id
+when the text shows it, so every line gets an answer. The transport also keeps stray output off the wire
+(fd 1 points at stderr and fd 0 at the null device while serving).
 """
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
-import fcntl
 import json
 import logging
-import os
 import re
-import stat
-from collections.abc import AsyncIterator, Iterator
 from typing import TYPE_CHECKING, Any, cast
 
 import anyio
 from mcp.server.stdio import stdio_server
 from mcp.shared.message import SessionMessage
-from mcp.types import (
-    INVALID_REQUEST,
-    PARSE_ERROR,
-    ErrorData,
-    JSONRPCError,
-    JSONRPCMessage,
-    jsonrpc_message_adapter,
-)
+from mcp.types import INVALID_REQUEST, PARSE_ERROR, ErrorData, JSONRPCError
 from pydantic import ValidationError
 
 from rosbridge_mcp_server.server.sdk import serve_streams
@@ -45,24 +25,10 @@ from rosbridge_mcp_server.server.sdk import serve_streams
 if TYPE_CHECKING:
     from mcp.server.mcpserver import MCPServer
 
-__all__ = [
-    "MAX_LINE_BYTES",
-    "Overlong",
-    "parse_line",
-    "read_lines",
-    "reply_for_unreadable",
-    "serve_lines",
-    "serve_stdio",
-]
+__all__ = ["reply_for_unreadable", "serve_stdio"]
 
 _log = logging.getLogger(__name__)
 
-#: One JSON-RPC message per line; a tool call carrying a large message (an image, a map) can be long. A longer
-#: line is answered with an error and dropped as it is read, so memory stays bounded.
-MAX_LINE_BYTES = 64 * 1024 * 1024
-_CHUNK = 64 * 1024
-#: How much of an overlong line is kept to find its id (clients write "id" before "params").
-_HEAD_BYTES = 4096
 _ID_VALUE = re.compile(r'\s*("(?:[^"\\]|\\.)*"|-?\d+)\s*[,}]')
 #: How much of an unreadable line is scanned for its id from the start (clients write "id" early).
 _SCAN_CHARS = 64 * 1024
@@ -71,141 +37,8 @@ _TRAILING_ID = re.compile(r'[,{]\s*"id"\s*:\s*("(?:[^"\\]|\\.)*"|-?\d+)\s*}\s*$'
 
 async def serve_stdio(server: MCPServer[Any]) -> None:
     """Serve ``server`` on this process's stdin/stdout until stdin closes."""
-    if not (_is_pipe_or_socket(0) and _is_pipe_or_socket(1)):
-        async with stdio_server() as (read_stream, write_stream):
-            await serve_streams(server, _Answering(read_stream, write_stream), write_stream)
-        return
-    with _claim_std_fds() as (wire_in, wire_out):
-        loop = asyncio.get_running_loop()
-        reader = asyncio.StreamReader(limit=_CHUNK)
-        read_transport, _ = await loop.connect_read_pipe(
-            lambda: asyncio.StreamReaderProtocol(reader), os.fdopen(wire_in, "rb", buffering=0, closefd=False)
-        )
-        write_transport, write_protocol = await loop.connect_write_pipe(
-            asyncio.streams.FlowControlMixin, os.fdopen(wire_out, "wb", buffering=0, closefd=False)
-        )
-        writer = asyncio.StreamWriter(write_transport, write_protocol, None, loop)
-        try:
-            await serve_lines(server, read_lines(reader), writer)
-        finally:
-            read_transport.close()
-            write_transport.close()
-
-
-def _is_pipe_or_socket(fd: int) -> bool:
-    try:
-        mode = os.fstat(fd).st_mode
-    except OSError:
-        return False
-    return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
-
-
-@contextlib.contextmanager
-def _claim_std_fds() -> Iterator[tuple[int, int]]:
-    """Private duplicates of fd 0 and 1 for the wire; fd 0 → /dev/null and fd 1 → stderr meanwhile."""
-    wire_in = fcntl.fcntl(0, fcntl.F_DUPFD_CLOEXEC, 3)
-    wire_out = fcntl.fcntl(1, fcntl.F_DUPFD_CLOEXEC, 3)
-    null = os.open(os.devnull, os.O_RDONLY)
-    try:
-        os.dup2(null, 0)
-        os.dup2(2, 1)
-    finally:
-        os.close(null)
-    try:
-        yield wire_in, wire_out
-    finally:
-        # The event loop made the wire non-blocking; the host's end of a socket pair shares that flag.
-        for fd in (wire_in, wire_out):
-            with contextlib.suppress(OSError):
-                os.set_blocking(fd, True)
-        os.dup2(wire_in, 0)
-        os.dup2(wire_out, 1)
-        os.close(wire_in)
-        os.close(wire_out)
-
-
-class Overlong:
-    """A line longer than the limit: only its first bytes are kept (enough to find the request's id)."""
-
-    __slots__ = ("head",)
-
-    def __init__(self, head: bytes) -> None:
-        self.head = head
-
-
-async def read_lines(
-    reader: asyncio.StreamReader, limit: int = MAX_LINE_BYTES
-) -> AsyncIterator[bytes | Overlong]:
-    """Lines of ``reader`` without their newline; a line over ``limit`` bytes becomes an :class:`Overlong`.
-
-    Memory stays bounded by ``limit``: the rest of an overlong line is read and dropped, and the lines
-    after it are read as usual.
-    """
-    pending: list[bytes] = []
-    size = 0
-    overlong: bytes | None = None
-    while chunk := await reader.read(_CHUNK):
-        start = 0
-        while True:
-            newline = chunk.find(b"\n", start)
-            piece = chunk[start:] if newline < 0 else chunk[start:newline]
-            if overlong is None:
-                if size + len(piece) > limit:
-                    overlong = _head([*pending, piece])
-                    pending.clear()
-                    size = 0
-                elif piece:
-                    pending.append(piece)
-                    size += len(piece)
-            if newline < 0:
-                break
-            if overlong is not None:
-                yield Overlong(overlong)
-                overlong = None
-            else:
-                yield pending[0] if len(pending) == 1 else b"".join(pending)
-                pending.clear()
-                size = 0
-            start = newline + 1
-    if overlong is not None:
-        yield Overlong(overlong)
-    elif pending:
-        yield b"".join(pending)
-
-
-def _head(pieces: list[bytes]) -> bytes:
-    head = bytearray()
-    for piece in pieces:
-        head += piece[: _HEAD_BYTES - len(head)]
-        if len(head) >= _HEAD_BYTES:
-            break
-    return bytes(head)
-
-
-def parse_line(line: bytes | Overlong) -> JSONRPCMessage | JSONRPCError | None:
-    """The JSON-RPC message on one line, or the error reply JSON-RPC requires for it (``None``: a blank line).
-
-    A line that is not JSON (or nests deeper than the parser allows) is a parse error (-32700); JSON that is
-    not a JSON-RPC message, or a line too long to read, is an invalid request (-32600). The reply carries the
-    request's id when the text shows it, so the client does not wait forever for an answer; otherwise null.
-    """
-    if isinstance(line, Overlong):
-        return _error_reply(
-            INVALID_REQUEST,
-            f"Invalid request: the line is longer than {MAX_LINE_BYTES // (1024 * 1024)} MiB, the most this "
-            "server reads as one message",
-            _recover_id(line.head.decode("utf-8", errors="replace")),
-        )
-    try:
-        return jsonrpc_message_adapter.validate_json(line, by_name=False)
-    except ValidationError as exc:
-        text = line.decode("utf-8", errors="replace")
-        if not text.strip():
-            return None
-        first = exc.errors(include_url=False)[0]
-        if first["type"] == "json_invalid":
-            return _parse_error(first["msg"], _recover_id(text))
-        return _not_json_rpc(_parsed_id(text))
+    async with stdio_server() as (read_stream, write_stream):
+        await serve_streams(server, _Answering(read_stream, write_stream), write_stream)
 
 
 def reply_for_unreadable(exc: Exception) -> JSONRPCError | None:
@@ -324,45 +157,6 @@ def _string_end(text: str, start: int) -> int:
         if backslashes % 2 == 0:
             return i
         i += 1
-
-
-async def serve_lines(
-    server: MCPServer[Any], lines: AsyncIterator[bytes | Overlong], writer: asyncio.StreamWriter
-) -> None:
-    """Run ``server`` on JSON-RPC ``lines``, writing its messages (and our error replies) to ``writer``.
-
-    The SDK's stdio framing, plus what it leaves out: a line it cannot read gets the error reply JSON-RPC
-    requires instead of a log line at debug level and a client waiting forever.
-    """
-    to_server, from_lines = anyio.create_memory_object_stream[SessionMessage | Exception](0)
-    to_wire, from_server = anyio.create_memory_object_stream[SessionMessage](0)
-    replies = to_wire.clone()
-
-    async def read() -> None:
-        async with to_server, replies:
-            async for line in lines:
-                message = parse_line(line)
-                if message is None:
-                    continue
-                if isinstance(message, JSONRPCError):
-                    await replies.send(SessionMessage(message))
-                else:
-                    await to_server.send(SessionMessage(message))
-
-    async def write() -> None:
-        async with from_server:
-            async for session_message in from_server:
-                text = session_message.message.model_dump_json(by_alias=True, exclude_unset=True)
-                writer.write(text.encode("utf-8") + b"\n")
-                await writer.drain()
-
-    async with anyio.create_task_group() as tasks:
-        tasks.start_soon(read)
-        tasks.start_soon(write)
-        try:
-            await serve_streams(server, from_lines, to_wire)
-        finally:
-            await to_wire.aclose()
 
 
 class _Answering:

@@ -1,0 +1,141 @@
+"""Several robots from one server: ``--robot NAME=URL`` (repeatable) and ``--robots FILE`` (TOML).
+
+Without either, the server drives the one robot the connection flags name, exactly as before. With them, each
+robot is a :class:`~rosbridge_mcp_server.config.Config` of its own (URL, handshake headers, TLS files, safety
+policy); what a robot's entry leaves out comes from the command line (``--robot`` entries take everything but
+the URL from it). The fleet file::
+
+    [robots.base]
+    url = "ws://10.0.0.5:9090"
+    policy = "base-policy.toml"           # relative to this file
+    headers = { Authorization = "Bearer …" }
+
+    [robots.arm]
+    url = "wss://arm.local:9090"
+    ca_file = "ca.pem"
+    read_only = true
+
+Robot names are what a model passes as ``robot``: letters, digits, ``_`` and ``-``.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from rosbridge_mcp_server.config import Config, ConfigError, parse_url
+from rosbridge_mcp_server.safety.policy import PolicyError, load_policy
+
+__all__ = ["NAME_PATTERN", "load_fleet"]
+
+NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,31}$")
+_KEYS = {"url", "headers", "ca_file", "client_cert", "client_key", "policy", "read_only"}
+
+
+def load_fleet(
+    base: Config, *, robots: Sequence[str] | None = None, robots_file: str | None = None
+) -> tuple[tuple[str, Config], ...]:
+    """``(name, config)`` per robot, in the order given; empty when no robot was named (one-robot mode)."""
+    fleet: dict[str, Config] = {}
+    if robots_file:
+        for name, config in _from_file(base, Path(robots_file)):
+            fleet[name] = config
+    for entry in robots or ():
+        name, equals, url = entry.partition("=")
+        name = name.strip()
+        if not equals or not url.strip():
+            raise ConfigError(f"--robot {entry!r}: give NAME=URL, e.g. base=ws://10.0.0.5:9090")
+        _check_name(name, "--robot")
+        if name in fleet:
+            raise ConfigError(f"--robot: the robot {name!r} is named twice")
+        fleet[name] = replace(base, url=parse_url(url.strip(), source=f"--robot {name}"))
+    if base.demo and fleet:
+        raise ConfigError("--demo runs one simulated robot; it cannot be combined with --robot / --robots")
+    return tuple(fleet.items())
+
+
+def _check_name(name: str, source: str) -> None:
+    if not NAME_PATTERN.match(name):
+        raise ConfigError(
+            f"{source}: robot name {name!r} must start with a letter and use letters, digits, _ and - "
+            "(at most 32)"
+        )
+
+
+def _from_file(base: Config, path: Path) -> list[tuple[str, Config]]:
+    source = f"--robots {path}"
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError(f"{source}: cannot read it: {exc.strerror or exc}") from None
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ConfigError(f"{source}: not valid TOML: {exc}") from None
+    unknown = set(data) - {"robots"}
+    if unknown:
+        raise ConfigError(f"{source}: unknown key {sorted(unknown)[0]!r}; robots go under [robots.NAME]")
+    table = data.get("robots")
+    if not isinstance(table, dict) or not table:
+        raise ConfigError(f"{source}: no robots; add a [robots.NAME] table with a url")
+    out = []
+    for name, entry in table.items():
+        _check_name(name, source)
+        where = f"{source} [robots.{name}]"
+        if not isinstance(entry, dict):
+            raise ConfigError(f"{where}: must be a table with a url")
+        out.append((name, _robot(base, entry, where, path.parent)))
+    return out
+
+
+def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> Config:
+    unknown = set(entry) - _KEYS
+    if unknown:
+        raise ConfigError(f"{where}: unknown key {sorted(unknown)[0]!r}; known: {', '.join(sorted(_KEYS))}")
+    url = entry.get("url")
+    if not isinstance(url, str):
+        raise ConfigError(f"{where}: url (a ws:// or wss:// URL) is required")
+    config = replace(base, url=parse_url(url, source=f"{where} url"))
+
+    def file(key: str) -> str | None:
+        value = entry.get(key)
+        if value is None:
+            return getattr(base, key) if key != "policy" else None
+        if not isinstance(value, str) or not value:
+            raise ConfigError(f"{where}: {key} must be a file path")
+        resolved = folder / value
+        if not resolved.is_file():
+            raise ConfigError(f"{where}: {key} {str(resolved)!r} does not exist")
+        return str(resolved)
+
+    policy_path = file("policy")
+    if policy_path is not None:
+        try:
+            policy = load_policy(policy_path, source=f"{where} policy")
+        except PolicyError as exc:
+            raise ConfigError(str(exc)) from None
+    else:
+        policy = base.policy
+    read_only = entry.get("read_only", False)
+    if not isinstance(read_only, bool):
+        raise ConfigError(f"{where}: read_only must be true or false")
+    if read_only or base.policy.read_only:
+        policy = policy.with_read_only()
+    headers = base.headers
+    if "headers" in entry:
+        raw = entry["headers"]
+        if not isinstance(raw, dict) or not all(isinstance(v, str) for v in raw.values()):
+            raise ConfigError(f'{where}: headers must be a table of strings, e.g. {{ Authorization = "…" }}')
+        headers = tuple((str(k), v) for k, v in raw.items())
+    config = replace(
+        config,
+        policy=policy,
+        headers=headers,
+        ca_file=file("ca_file"),
+        client_cert=file("client_cert"),
+        client_key=file("client_key"),
+    )
+    config.ssl_context()
+    return config

@@ -1,0 +1,339 @@
+"""How the MCP server is reached: stdio, or Streamable HTTP with its address, authentication and TLS.
+
+Read once by the CLI, like :mod:`~rosbridge_mcp_server.config` (flags win over the environment):
+
+* ``--transport stdio|http`` / ``ROSBRIDGE_MCP_TRANSPORT`` (default stdio);
+* ``--bind HOST:PORT`` / ``ROSBRIDGE_MCP_BIND`` (default ``127.0.0.1:8765``; the path is ``/mcp``);
+* ``--auth-tokens FILE`` (one ``name token`` per line, ``#`` comments) / ``ROSBRIDGE_MCP_AUTH_TOKENS`` (the
+  same pairs, separated by newlines or commas, for hosts that pass secrets in the environment);
+* ``--oauth-issuer URL``, ``--oauth-audience``, ``--oauth-jwks URL|FILE``, ``--oauth-resource URL``,
+  ``--oauth-scopes a,b`` / ``ROSBRIDGE_MCP_OAUTH_*``: JWT access tokens from an OAuth 2.1 server;
+* ``--allow-host NAME[:PORT]`` / ``--allow-origin URL`` (repeatable) / ``ROSBRIDGE_MCP_ALLOWED_HOSTS``,
+  ``ROSBRIDGE_MCP_ALLOWED_ORIGINS`` (comma lists): the DNS-rebinding protection's extra names (a reverse
+  proxy's, the robot's DNS name);
+* ``--tls-cert FILE`` / ``--tls-key FILE`` / ``ROSBRIDGE_MCP_TLS_CERT``, ``ROSBRIDGE_MCP_TLS_KEY``.
+
+The server refuses to listen beyond loopback without authentication: that is a :class:`ConfigError` (exit 2).
+Tokens are secrets: they are kept as given only to compare with, and never shown (``repr`` hides them).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ipaddress
+import logging
+import os
+import re
+import socket
+import stat
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+from urllib.parse import urlsplit
+
+from rosbridge_mcp_server.config import ConfigError
+
+__all__ = [
+    "DEFAULT_BIND",
+    "MCP_PATH",
+    "MIN_TOKEN_LENGTH",
+    "HttpSettings",
+    "OAuthSettings",
+    "Transport",
+    "load_http_settings",
+    "parse_tokens",
+]
+
+_log = logging.getLogger(__name__)
+
+Transport = Literal["stdio", "http"]
+DEFAULT_BIND = "127.0.0.1:8765"
+MCP_PATH = "/mcp"
+#: Shortest bearer token accepted: a guessable token on a robot's network is no authentication.
+MIN_TOKEN_LENGTH = 16
+_NAME = re.compile(r"^[A-Za-z0-9_.@-]{1,64}$")
+
+
+@dataclass(frozen=True)
+class OAuthSettings:
+    """JWT access tokens checked against an issuer's keys (``jwks``: a URL or a file) and an audience."""
+
+    issuer: str
+    audience: str
+    jwks: str
+    resource: str
+    scopes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class HttpSettings:
+    """The transport and, for HTTP, where it listens and whom it lets in."""
+
+    transport: Transport = "stdio"
+    host: str = "127.0.0.1"
+    port: int = 8765
+    #: ``(name, token)`` pairs: the name is what the audit shows for the caller.
+    tokens: tuple[tuple[str, str], ...] = field(default=(), repr=False)
+    oauth: OAuthSettings | None = None
+    allowed_hosts: tuple[str, ...] = ()
+    allowed_origins: tuple[str, ...] = ()
+    tls_cert: str | None = None
+    tls_key: str | None = None
+
+    @property
+    def authenticated(self) -> bool:
+        """Whether every HTTP request must carry a valid bearer token."""
+        return bool(self.tokens) or self.oauth is not None
+
+    @property
+    def scheme(self) -> str:
+        return "https" if self.tls_cert else "http"
+
+    @property
+    def url(self) -> str:
+        """Where a client on this machine reaches the server (the bind address, path included)."""
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"{self.scheme}://{host}:{self.port}{MCP_PATH}"
+
+
+def load_http_settings(
+    environ: Mapping[str, str],
+    *,
+    transport: str | None = None,
+    bind: str | None = None,
+    auth_tokens: str | None = None,
+    allow_hosts: Sequence[str] | None = None,
+    allow_origins: Sequence[str] | None = None,
+    tls_cert: str | None = None,
+    tls_key: str | None = None,
+    oauth_issuer: str | None = None,
+    oauth_audience: str | None = None,
+    oauth_jwks: str | None = None,
+    oauth_resource: str | None = None,
+    oauth_scopes: str | None = None,
+) -> HttpSettings:
+    """:class:`HttpSettings` from flags (``None``: not given) and the environment, or :class:`ConfigError`."""
+    chosen = (transport or environ.get("ROSBRIDGE_MCP_TRANSPORT", "").strip() or "stdio").lower()
+    if chosen not in ("stdio", "http"):
+        source = "--transport" if transport else "ROSBRIDGE_MCP_TRANSPORT"
+        raise ConfigError(f"{source}: {chosen!r} is not a transport; use stdio or http")
+    if chosen == "stdio":
+        given = [
+            name
+            for name, value in (
+                ("--bind", bind),
+                ("--auth-tokens", auth_tokens),
+                ("--tls-cert", tls_cert),
+                ("--oauth-issuer", oauth_issuer),
+            )
+            if value
+        ]
+        if given:
+            raise ConfigError(f"{given[0]} needs --transport http (stdio has no address and no tokens)")
+        return HttpSettings()
+    bind_value, bind_source = _pick(bind, "--bind", environ, "ROSBRIDGE_MCP_BIND")
+    host, port = parse_bind(bind_value or DEFAULT_BIND, source=bind_source)
+    tokens = _tokens(environ, auth_tokens)
+    cert, _ = _pick(tls_cert, "--tls-cert", environ, "ROSBRIDGE_MCP_TLS_CERT")
+    key, _ = _pick(tls_key, "--tls-key", environ, "ROSBRIDGE_MCP_TLS_KEY")
+    if key and not cert:
+        raise ConfigError("--tls-key needs --tls-cert")
+    for path, name in ((cert, "--tls-cert"), (key, "--tls-key")):
+        if path and not Path(path).is_file():
+            raise ConfigError(f"{name}: {path!r} is not a readable file")
+    oauth = _oauth(
+        environ,
+        HttpSettings(transport="http", host=host, port=port, tls_cert=cert),
+        issuer=oauth_issuer,
+        audience=oauth_audience,
+        jwks=oauth_jwks,
+        resource=oauth_resource,
+        scopes=oauth_scopes,
+    )
+    if oauth is not None and tokens:
+        raise ConfigError("give either --auth-tokens or --oauth-issuer, not both")
+    hosts = _list(allow_hosts, environ, "ROSBRIDGE_MCP_ALLOWED_HOSTS")
+    origins = _list(allow_origins, environ, "ROSBRIDGE_MCP_ALLOWED_ORIGINS")
+    settings = HttpSettings(
+        transport="http",
+        host=host,
+        port=port,
+        tokens=tokens,
+        oauth=oauth,
+        allowed_hosts=allowed_hosts(host, port, hosts),
+        allowed_origins=allowed_origins(host, port, hosts, origins),
+        tls_cert=cert,
+        tls_key=key,
+    )
+    if not settings.authenticated and not is_loopback(host):
+        raise ConfigError(
+            f"refusing to listen on {host}:{port} without authentication: anyone on the network could drive "
+            "the robot. Give --auth-tokens FILE (or ROSBRIDGE_MCP_AUTH_TOKENS) or --oauth-issuer URL, or "
+            "bind to 127.0.0.1"
+        )
+    return settings
+
+
+def _pick(
+    flag: str | None, flag_name: str, environ: Mapping[str, str], env_name: str
+) -> tuple[str | None, str]:
+    if flag:
+        return flag, flag_name
+    value = environ.get(env_name, "").strip()
+    return (value or None), env_name
+
+
+def _list(flags: Sequence[str] | None, environ: Mapping[str, str], env_name: str) -> list[str]:
+    if flags:
+        return [item.strip() for item in flags if item.strip()]
+    return [item.strip() for item in environ.get(env_name, "").split(",") if item.strip()]
+
+
+def parse_bind(value: str, *, source: str) -> tuple[str, int]:
+    """``HOST:PORT`` (``[::1]:8765`` for IPv6) as a host and a port."""
+    match = re.fullmatch(r"\[([0-9A-Fa-f:.]+)\]:(\d+)|([^:\[\]\s]+):(\d+)", value.strip())
+    if match is None:
+        raise ConfigError(f"{source}: {value!r} is not HOST:PORT (e.g. 127.0.0.1:8765 or [::1]:8765)")
+    host = match.group(1) or match.group(3)
+    port = int(match.group(2) or match.group(4))
+    if not 0 <= port < 65536:
+        raise ConfigError(f"{source}: port {port} is not between 0 (any free port) and 65535")
+    return host, port
+
+
+def is_loopback(host: str) -> bool:
+    """Whether *host* is this machine only (127.0.0.0/8, ::1, ``localhost``)."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _tokens(environ: Mapping[str, str], path: str | None) -> tuple[tuple[str, str], ...]:
+    if path:
+        try:
+            info = os.stat(path)
+            text = Path(path).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ConfigError(f"--auth-tokens: cannot read {path!r}: {exc}") from None
+        if info.st_mode & (stat.S_IRWXG | stat.S_IRWXO):
+            # Not fatal (a container may mount it so), but worth a line: it holds the keys to the robot.
+            _log.warning("the token file %s can be read by other users (chmod 600 it)", path)
+        return parse_tokens(text.splitlines(), source=f"--auth-tokens {path}")
+    value = environ.get("ROSBRIDGE_MCP_AUTH_TOKENS", "")
+    if not value.strip():
+        return ()
+    return parse_tokens(re.split(r"[\n,]", value), source="ROSBRIDGE_MCP_AUTH_TOKENS")
+
+
+def parse_tokens(lines: Sequence[str], *, source: str) -> tuple[tuple[str, str], ...]:
+    """``name token`` pairs, one per entry (blank entries and ``#`` comments skipped); the error never shows
+    a token."""
+    pairs: list[tuple[str, str]] = []
+    for number, raw in enumerate(lines, 1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        parts = line.split()
+        if len(parts) != 2:
+            raise ConfigError(f"{source}: entry {number} is not 'name token' (two words)")
+        name, token = parts
+        if not _NAME.match(name):
+            raise ConfigError(f"{source}: entry {number}: the name may use letters, digits and _.@- only")
+        if len(token) < MIN_TOKEN_LENGTH:
+            raise ConfigError(
+                f"{source}: the token of {name!r} is shorter than {MIN_TOKEN_LENGTH} characters; make "
+                "one with `openssl rand -hex 32`"
+            )
+        if any(name == seen for seen, _ in pairs):
+            raise ConfigError(f"{source}: the name {name!r} is given twice")
+        if any(token == seen for _, seen in pairs):
+            raise ConfigError(f"{source}: {name!r} has the same token as another name")
+        pairs.append((name, token))
+    if not pairs:
+        raise ConfigError(f"{source}: no tokens in it")
+    return tuple(pairs)
+
+
+def _oauth(
+    environ: Mapping[str, str],
+    settings: HttpSettings,
+    *,
+    issuer: str | None,
+    audience: str | None,
+    jwks: str | None,
+    resource: str | None,
+    scopes: str | None,
+) -> OAuthSettings | None:
+    issuer, issuer_source = _pick(issuer, "--oauth-issuer", environ, "ROSBRIDGE_MCP_OAUTH_ISSUER")
+    audience, _ = _pick(audience, "--oauth-audience", environ, "ROSBRIDGE_MCP_OAUTH_AUDIENCE")
+    jwks, jwks_source = _pick(jwks, "--oauth-jwks", environ, "ROSBRIDGE_MCP_OAUTH_JWKS")
+    resource, resource_source = _pick(resource, "--oauth-resource", environ, "ROSBRIDGE_MCP_OAUTH_RESOURCE")
+    scopes, _ = _pick(scopes, "--oauth-scopes", environ, "ROSBRIDGE_MCP_OAUTH_SCOPES")
+    if issuer is None:
+        others = [
+            name for name, value in (("audience", audience), ("jwks", jwks), ("resource", resource)) if value
+        ]
+        if others:
+            raise ConfigError(f"--oauth-{others[0]} needs --oauth-issuer")
+        return None
+    _check_http_url(issuer, issuer_source)
+    if resource is None and settings.port == 0:
+        raise ConfigError("--oauth-issuer with --bind on port 0 needs --oauth-resource (this server's URL)")
+    resource_url = resource or settings.url
+    _check_http_url(resource_url, resource_source)
+    if jwks is None:
+        jwks = issuer.rstrip("/") + "/.well-known/jwks.json"
+    elif not jwks.startswith(("https://", "http://")) and not Path(jwks).is_file():
+        raise ConfigError(f"{jwks_source}: {jwks!r} is neither an http(s) URL nor a readable file")
+    return OAuthSettings(
+        issuer=issuer,
+        audience=audience or resource_url,
+        jwks=jwks,
+        resource=resource_url,
+        scopes=tuple(s.strip() for s in (scopes or "").split(",") if s.strip()),
+    )
+
+
+def _check_http_url(value: str, source: str) -> None:
+    parts = urlsplit(value)
+    if parts.scheme not in ("http", "https") or not parts.hostname:
+        raise ConfigError(f"{source}: {value!r} is not an http(s) URL")
+
+
+def allowed_hosts(host: str, port: int, extra: Sequence[str]) -> tuple[str, ...]:
+    """``Host`` header values the server answers (DNS-rebinding protection): loopback, the bound address,
+    the machine's own names when bound to every interface, and *extra* (a bare name allows any port)."""
+    # Any port on loopback names (as the SDK's own default): a rebinding attack needs a name of its own.
+    out = ["127.0.0.1:*", "localhost:*", "[::1]:*"]
+    names: list[str] = []
+    if host in ("0.0.0.0", "::"):
+        names += _own_names()
+    elif not is_loopback(host):
+        names.append(f"[{host}]" if ":" in host else host)
+    out += [f"{name}:{port or '*'}" for name in names]
+    for item in extra:
+        out.append(item if re.search(r":(\d+|\*)$", item) and not item.endswith("]") else f"{item}:*")
+        if not re.search(r":(\d+|\*)$", item):
+            # Behind a reverse proxy on the default port, Host carries no port at all.
+            out.append(item)
+    return tuple(dict.fromkeys(out))
+
+
+def allowed_origins(host: str, port: int, hosts: Sequence[str], extra: Sequence[str]) -> tuple[str, ...]:
+    """``Origin`` values accepted from browsers: the allowed hosts' own, over http and https, and *extra*."""
+    out: list[str] = []
+    for entry in allowed_hosts(host, port, hosts):
+        out += [f"http://{entry}", f"https://{entry}"]
+    out += [item.rstrip("/") for item in extra]
+    return tuple(dict.fromkeys(out))
+
+
+def _own_names() -> list[str]:
+    names = [socket.gethostname()]
+    with contextlib.suppress(OSError):
+        names += socket.gethostbyname_ex(socket.gethostname())[2]
+    return names

@@ -1,0 +1,137 @@
+"""The checks every tool call gets before the SDK reads its arguments, as the SDK's server middleware.
+
+Middleware runs on every inbound message whatever the transport (stdio, Streamable HTTP, in-memory), before
+the SDK validates the parameters, so stdio and HTTP share each check here:
+
+* a tool the server withholds (acting tools of a read-only server) is refused with a sentence saying why,
+  and audited, instead of the SDK's "Unknown tool";
+* the arguments as the client sent them go through ``tools/arguments.py`` (unknown keys, booleans for numbers,
+  sizes) before the SDK's lenient conversion would drop or convert them;
+* arguments that do not fit the tool's parameters are one sentence naming each, instead of pydantic's dump
+  (validated against our own model of the parameters, the same annotations the SDK's model is built from);
+* the caller the transport authenticated (a token's name, a JWT's subject) is named for the audit;
+* with several robots, the ``robot`` argument is taken off the call and chooses the robot it runs on
+  (``fleet.py``); a missing or unknown one is refused with the robots' names.
+
+A refusal is the ``isError`` result the tool itself would give; nothing reaches the tool.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+from mcp.server.auth.middleware.auth_context import get_access_token
+from mcp.server.context import CallNext, HandlerResult, ServerRequestContext
+from mcp.types import CallToolResult, TextContent
+from pydantic import BaseModel, ConfigDict, ValidationError, create_model
+
+from rosbridge_mcp_server.safety import calling_as
+from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT, selecting
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.server.fleet import Fleet, Robot
+
+__all__ = ["ArgumentCheck", "ArgumentErrorText", "CheckedTool", "ToolCallChecks", "refusal_result"]
+
+#: Rewords an argument error: (tool name, the pydantic error, the tool's input schema) -> one sentence.
+ArgumentErrorText = Callable[[str, ValidationError, dict[str, Any]], str]
+#: Checks arguments before any conversion: (tool name, arguments, input schema) -> a refusal or None.
+ArgumentCheck = Callable[[str, dict[str, Any], dict[str, Any]], str | None]
+#: Answers a call of a tool the server does not list: (name, arguments) -> a refusal, or None.
+UnlistedAnswer = Callable[[str, dict[str, Any]], str | None]
+
+
+@dataclass(frozen=True)
+class CheckedTool:
+    """What the checks need of one listed tool: its input schema and a model of its parameters."""
+
+    name: str
+    schema: dict[str, Any]
+    arguments: type[BaseModel]
+
+    @classmethod
+    def of(cls, name: str, schema: dict[str, Any], parameters: list[inspect.Parameter]) -> CheckedTool:
+        """The tool named *name* whose parameters (annotations resolved) are *parameters*."""
+        fields: dict[str, Any] = {
+            p.name: (p.annotation, ... if p.default is inspect.Parameter.empty else p.default)
+            for p in parameters
+        }
+        model = create_model(
+            f"{name}_arguments", __config__=ConfigDict(arbitrary_types_allowed=True), **fields
+        )
+        return cls(name, schema, model)
+
+
+def refusal_result(text: str) -> CallToolResult:
+    """A tool's error answer: ``isError`` with the sentence as its text."""
+    return CallToolResult(content=[TextContent(type="text", text=text)], is_error=True)
+
+
+class ToolCallChecks:
+    """``ServerMiddleware`` running the checks above on every ``tools/call``; other messages pass by."""
+
+    def __init__(
+        self,
+        tools: Iterable[CheckedTool],
+        *,
+        argument_check: ArgumentCheck,
+        argument_error: ArgumentErrorText,
+        unlisted: UnlistedAnswer | None = None,
+        fleet: Fleet | None = None,
+    ) -> None:
+        self._fleet = fleet
+        self._tools = {tool.name: tool for tool in tools}
+        self._argument_check = argument_check
+        self._argument_error = argument_error
+        self._unlisted = unlisted
+
+    async def __call__(self, ctx: ServerRequestContext[Any, Any], call_next: CallNext) -> HandlerResult:
+        if ctx.method != "tools/call" or not isinstance(ctx.params, Mapping):
+            return await call_next(ctx)
+        name = ctx.params.get("name")
+        arguments = ctx.params.get("arguments")
+        if arguments is None:
+            arguments = {}
+        if not isinstance(name, str) or not isinstance(arguments, dict):
+            # Malformed params: the SDK's own validation answers them.
+            return await call_next(ctx)
+        robots: tuple[Robot, ...] = ()
+        if self._fleet is not None and self._fleet.several and name in self._tools and name != LIST_ROBOTS:
+            arguments = dict(arguments)
+            robots, refusal = self._fleet.choose(name, arguments.pop(ROBOT_ARGUMENT, None))
+            if refusal is not None:
+                return refusal_result(refusal)
+            ctx = replace(ctx, params={**ctx.params, "arguments": arguments})
+        refusal = self.refusal(name, arguments)
+        if refusal is not None:
+            return refusal_result(refusal)
+        with calling_as(caller()), selecting(robots):
+            return await call_next(ctx)
+
+    def refusal(self, name: str, arguments: dict[str, Any]) -> str | None:
+        """Why a call of *name* with *arguments* must not reach the tool, or ``None``."""
+        tool = self._tools.get(name)
+        if tool is None:
+            if self._unlisted is None:
+                return None
+            with calling_as(caller()):
+                return self._unlisted(name, arguments)
+        problem = self._argument_check(name, arguments, tool.schema)
+        if problem is not None:
+            return problem
+        try:
+            tool.arguments.model_validate(arguments)
+        except ValidationError as exc:
+            return self._argument_error(name, exc, tool.schema)
+        return None
+
+
+def caller() -> str | None:
+    """The authenticated caller of the request being handled: a token's name or a JWT's subject (HTTP)."""
+    token = get_access_token()
+    if token is None:
+        return None
+    return token.subject or token.client_id

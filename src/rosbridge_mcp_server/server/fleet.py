@@ -1,0 +1,209 @@
+"""The robots one server drives: each with its own client, graph, guard (policy) and session activity.
+
+With one robot nothing here shows: tools take no ``robot`` argument and ``tools/list`` is as before. With
+several, the server's checks (``checks.py``) take the ``robot`` argument off every call before the SDK sees it
+(:meth:`Fleet.choose`) and the call runs on that robot (:func:`selected`, a context variable the tool adapter
+reads); ``stop_robot`` without one stops every robot. ``list_robots`` says what each robot is.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import typing
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+from urllib.parse import urlsplit, urlunsplit
+
+from mcp.server.mcpserver.tools import Tool
+from mcp.types import CallToolResult, TextContent, ToolAnnotations
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.server.sdk import tool_from_handler
+
+if typing.TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.acting import Guard
+    from rosbridge_mcp_server.robot.graph import RosGraph
+
+__all__ = ["LIST_ROBOTS", "ROBOT_ARGUMENT", "STOP_ALL", "Fleet", "Robot", "list_robots_tool", "selected"]
+
+ROBOT_ARGUMENT = "robot"
+#: The tool about the fleet itself: it runs on no robot and takes no ``robot`` argument.
+LIST_ROBOTS = "list_robots"
+#: The one tool that, called without ``robot`` on a fleet, acts on every robot.
+STOP_ALL = "stop_robot"
+
+
+@dataclass(frozen=True)
+class Robot:
+    """One robot and everything a tool call on it needs."""
+
+    name: str
+    client: RosbridgeClient
+    config: Config
+    graph: RosGraph
+    guard: Guard
+    activity: SessionActivity
+
+
+_SELECTED: contextvars.ContextVar[tuple[Robot, ...] | None] = contextvars.ContextVar(
+    "rosbridge_mcp_robots", default=None
+)
+
+
+class Fleet:
+    """The robots of one server, in the order they were configured."""
+
+    def __init__(self, robots: Sequence[Robot]) -> None:
+        if not robots:
+            raise ValueError("a server needs at least one robot")
+        self.robots = tuple(robots)
+        self._by_name = {robot.name: robot for robot in robots}
+
+    @property
+    def several(self) -> bool:
+        return len(self.robots) > 1
+
+    @property
+    def names(self) -> list[str]:
+        return [robot.name for robot in self.robots]
+
+    def choose(self, tool: str, name: object) -> tuple[tuple[Robot, ...], str | None]:
+        """The robots a call of *tool* with ``robot=name`` runs on, or a refusal naming the robots."""
+        if name is None:
+            if tool == STOP_ALL:
+                return self.robots, None
+            return (), (
+                f"{tool} needs the robot argument: this server drives {len(self.robots)} robots "
+                f"({', '.join(self.names)}); nothing was sent. list_robots describes each."
+            )
+        if not isinstance(name, str) or name not in self._by_name:
+            shown = repr(name) if len(repr(name)) <= 40 else repr(name)[:37] + "..."
+            return (), (
+                f"Invalid arguments for {tool}: robot {shown} is not one of {', '.join(self.names)}; nothing "
+                "was sent."
+            )
+        return (self._by_name[name],), None
+
+    def schema_with_robot(self, schema: dict[str, Any], tool: str) -> dict[str, Any]:
+        """*schema* with the ``robot`` property (required, except for stop_robot) when there are several."""
+        if not self.several:
+            return schema
+        description = "Which robot: " + ", ".join(self.names)
+        if tool == STOP_ALL:
+            description += " (omit to stop every robot)"
+        properties = {
+            **schema.get("properties", {}),
+            ROBOT_ARGUMENT: {"type": "string", "enum": self.names, "description": description},
+        }
+        required = list(schema.get("required", []))
+        if tool != STOP_ALL:
+            required.append(ROBOT_ARGUMENT)
+        return {**schema, "properties": properties, "required": required}
+
+
+@contextlib.contextmanager
+def selecting(robots: tuple[Robot, ...]) -> Iterator[None]:
+    """Run the calls inside the block on *robots* (the checks set it around each tool call)."""
+    token = _SELECTED.set(robots)
+    try:
+        yield
+    finally:
+        _SELECTED.reset(token)
+
+
+def selected(fleet: Fleet) -> tuple[Robot, ...]:
+    """The robots the current call runs on: those chosen for it, else the only one."""
+    chosen = _SELECTED.get()
+    if chosen:
+        return chosen
+    return fleet.robots[:1]
+
+
+class RobotRow(BaseModel):
+    """One robot as list_robots shows it."""
+
+    name: str
+    url: str = Field(description="The robot's rosbridge URL (credentials left out)")
+    connected: bool
+    ros: str | None = Field(description="ROS version and distribution, once connected, e.g. 'ROS 2 jazzy'")
+    policy: str = Field(description="The robot's safety policy in one line")
+
+
+class RobotsAnswer(BaseModel):
+    """Every robot this server drives."""
+
+    robots: list[RobotRow]
+
+
+def list_robots_tool(fleet: Fleet) -> Tool:
+    """The ``list_robots`` tool: each robot's connection, ROS version and policy summary."""
+
+    async def handler(mcp_context: Any) -> CallToolResult:
+        rows = [_row(robot) for robot in fleet.robots]
+        lines = [
+            f"{row.name}: {'connected' if row.connected else 'not connected'}"
+            f"{f', {row.ros}' if row.ros else ''}, {row.url}; policy: {row.policy}"
+            for row in rows
+        ]
+        text = f"{len(rows)} robots (pass one as the robot argument):\n" + "\n".join(lines)
+        return CallToolResult(
+            content=[TextContent(type="text", text=text)],
+            structured_content=RobotsAnswer(robots=rows).model_dump(mode="json"),
+        )
+
+    return tool_from_handler(
+        handler,
+        [],
+        RobotsAnswer,
+        name=LIST_ROBOTS,
+        title="List the robots",
+        description=(
+            "The robots this server drives, with their connection, ROS version and safety policy. Every "
+            "other tool takes one of these names as its robot argument."
+        ),
+        annotations=ToolAnnotations(
+            title="List the robots",
+            read_only_hint=True,
+            destructive_hint=False,
+            idempotent_hint=True,
+            open_world_hint=False,
+        ),
+    )
+
+
+def _row(robot: Robot) -> RobotRow:
+    session = robot.client.session
+    ros = None
+    if robot.client.connected and session is not None:
+        info = session.info
+        ros = f"ROS {info.version}" + (f" {info.distro}" if info.distro else "")
+    return RobotRow(
+        name=robot.name,
+        url=_without_credentials(robot.client.url),
+        connected=robot.client.connected,
+        ros=ros,
+        policy=_policy_line(robot.config),
+    )
+
+
+def _policy_line(config: Config) -> str:
+    lines = [line.strip() for line in config.policy.describe()]
+    if len(lines) == 1:
+        return lines[0]
+    return "; ".join([lines[0].rstrip(":"), *lines[1:]])
+
+
+def _without_credentials(url: str) -> str:
+    parts = urlsplit(url)
+    if parts.username is None and parts.password is None:
+        return url
+    host = parts.hostname or ""
+    netloc = f"[{host}]" if ":" in host else host
+    if parts.port is not None:
+        netloc += f":{parts.port}"
+    return urlunsplit(parts._replace(netloc=netloc))

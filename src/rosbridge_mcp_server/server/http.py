@@ -1,0 +1,205 @@
+"""MCP over Streamable HTTP (the SDK's transport), with bearer-token or OAuth 2.1 authentication.
+
+Everything here is the SDK's documented surface: ``MCPServer(auth=AuthSettings, token_verifier=...)`` puts
+its bearer middleware in front of ``/mcp`` (401 with ``WWW-Authenticate: Bearer ...`` for a missing or bad
+token, 403 for a missing scope) and, in OAuth mode, serves the protected-resource metadata (RFC 9728) the MCP
+spec asks for at ``/.well-known/oauth-protected-resource/mcp``; ``streamable_http_app`` checks ``Host`` and
+``Origin`` against the allowed lists (DNS-rebinding protection); uvicorn serves the app, with TLS when given
+a certificate.
+
+Two verifiers: :class:`StaticTokens` (``name token`` pairs; the caller is the token's name) and
+:class:`JwtVerifier` (signature against the issuer's JWKS, ``iss``, ``aud``, ``exp``; the caller is the
+subject). A token is compared in constant time and is never logged; neither is an ``Authorization`` header.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import hmac
+import json
+import logging
+import socket
+import time
+from pathlib import Path
+from typing import Any
+
+import jwt
+import uvicorn
+from mcp.server.auth.provider import AccessToken
+from mcp.server.auth.settings import AuthSettings
+from mcp.server.mcpserver import MCPServer
+from mcp.server.transport_security import TransportSecuritySettings
+
+from rosbridge_mcp_server.http_config import MCP_PATH, HttpSettings, OAuthSettings
+
+__all__ = ["JwtVerifier", "StaticTokens", "auth_options", "serve_http"]
+
+_log = logging.getLogger(__name__)
+
+#: Algorithms accepted for JWT access tokens: asymmetric only (a shared secret lets the server mint them).
+JWT_ALGORITHMS = ["RS256", "RS384", "RS512", "PS256", "PS384", "PS512", "ES256", "ES384", "ES512", "EdDSA"]
+
+
+class StaticTokens:
+    """``TokenVerifier`` for named bearer tokens; the caller is the name."""
+
+    def __init__(self, tokens: tuple[tuple[str, str], ...]) -> None:
+        # Digests, compared in constant time: neither the token's length nor its prefix leaks.
+        self._digests = [(name, hashlib.sha256(token.encode()).digest()) for name, token in tokens]
+
+    async def verify_token(self, token: str) -> AccessToken | None:
+        digest = hashlib.sha256(token.encode("utf-8", errors="replace")).digest()
+        found = None
+        for name, known in self._digests:
+            if hmac.compare_digest(digest, known):
+                found = name
+        if found is None:
+            return None
+        return AccessToken(token=token, client_id=found, scopes=[])
+
+
+class JwtVerifier:
+    """``TokenVerifier`` for JWT access tokens: signed by a key of the issuer's JWKS, for this audience, not
+    expired. The caller is the token's subject (``sub``), else its client (``client_id`` / ``azp``)."""
+
+    def __init__(self, settings: OAuthSettings) -> None:
+        self._settings = settings
+        self._jwks_client: jwt.PyJWKClient | None = None
+        self._keys: jwt.PyJWKSet | None = None
+        if settings.jwks.startswith(("http://", "https://")):
+            self._jwks_client = jwt.PyJWKClient(settings.jwks, cache_keys=True, lifespan=300)
+        else:
+            self._keys = jwt.PyJWKSet.from_dict(json.loads(Path(settings.jwks).read_text(encoding="utf-8")))
+
+    async def verify_token(self, token: str) -> AccessToken | None:
+        try:
+            key = await self._signing_key(token)
+            claims: dict[str, Any] = jwt.decode(
+                token,
+                key,
+                algorithms=JWT_ALGORITHMS,
+                audience=self._settings.audience,
+                issuer=self._settings.issuer,
+                options={"require": ["exp", "iss", "aud"]},
+                leeway=30,
+            )
+        except (jwt.PyJWTError, ValueError, KeyError) as exc:
+            # The reason, never the token.
+            _log.info("refused a JWT access token: %s", type(exc).__name__)
+            return None
+        scope = claims.get("scope", claims.get("scp", ""))
+        scopes = scope.split() if isinstance(scope, str) else [str(s) for s in scope]
+        client = str(claims.get("client_id") or claims.get("azp") or claims.get("sub") or "unknown")
+        subject = claims.get("sub")
+        return AccessToken(
+            token=token,
+            client_id=client,
+            scopes=scopes,
+            expires_at=int(claims["exp"]),
+            resource=self._settings.resource,
+            subject=str(subject) if subject is not None else None,
+            claims={"iss": claims.get("iss")},
+        )
+
+    async def _signing_key(self, token: str) -> Any:
+        if self._jwks_client is not None:
+            # PyJWKClient fetches (and caches) the JWKS with urllib: off the event loop.
+            signing = await asyncio.to_thread(self._jwks_client.get_signing_key_from_jwt, token)
+            return signing.key
+        assert self._keys is not None
+        kid = jwt.get_unverified_header(token).get("kid")
+        for candidate in self._keys.keys:
+            if kid is None or candidate.key_id == kid:
+                return candidate.key
+        raise KeyError("no key with the token's kid")
+
+
+def auth_options(settings: HttpSettings) -> dict[str, Any]:
+    """``MCPServer`` keyword arguments for the settings' authentication (none without tokens or OAuth)."""
+    if settings.oauth is not None:
+        oauth = settings.oauth
+        return {
+            "auth": AuthSettings(
+                issuer_url=oauth.issuer,  # type: ignore[arg-type]
+                resource_server_url=oauth.resource,  # type: ignore[arg-type]
+                required_scopes=list(oauth.scopes) or None,
+                # JwtVerifier checks the audience itself.
+                validate_token_resource=False,
+            ),
+            "token_verifier": JwtVerifier(oauth),
+        }
+    if settings.tokens:
+        return {
+            "auth": AuthSettings(
+                # Required by the settings, used only in OAuth metadata, which static tokens do not serve.
+                issuer_url=settings.url,  # type: ignore[arg-type]
+                resource_server_url=None,
+            ),
+            "token_verifier": StaticTokens(settings.tokens),
+        }
+    return {}
+
+
+def http_app(server: MCPServer[Any], settings: HttpSettings) -> Any:
+    """The Starlette app serving *server* at ``/mcp`` with the DNS-rebinding protection of *settings*."""
+    return server.streamable_http_app(
+        streamable_http_path=MCP_PATH,
+        transport_security=TransportSecuritySettings(
+            enable_dns_rebinding_protection=True,
+            allowed_hosts=list(settings.allowed_hosts),
+            allowed_origins=list(settings.allowed_origins),
+        ),
+        host=settings.host,
+    )
+
+
+async def serve_http(
+    server: MCPServer[Any], settings: HttpSettings, *, sock: socket.socket | None = None
+) -> None:
+    """Serve *server* over Streamable HTTP until SIGTERM / Ctrl-C (or cancellation).
+
+    ``sock``: an already listening socket to serve on instead of binding ``settings.host:port`` (tests bind
+    port 0 themselves, so the port is known and connections wait in its backlog until the server accepts).
+    """
+    config = uvicorn.Config(
+        http_app(server, settings),
+        host=settings.host,
+        port=settings.port,
+        ssl_certfile=settings.tls_cert,
+        ssl_keyfile=settings.tls_key,
+        # Our logging (stderr, our format and redaction) stays; uvicorn logs through it.
+        log_config=None,
+        access_log=False,
+        lifespan="on",
+        ws="none",
+        server_header=False,
+        timeout_graceful_shutdown=2,
+    )
+    http = uvicorn.Server(config)
+    if sock is None:
+        # Bound before serving, so the line below can name the port (--bind HOST:0 picks a free one) and a
+        # client that read it finds the port open: connections wait in the backlog until uvicorn accepts.
+        sock = config.bind_socket()
+        # uvicorn's bind_socket only binds; listen now, so that a connection made before uvicorn serves
+        # waits instead of being refused.
+        sock.listen(config.backlog)
+    auth = "bearer tokens" if settings.tokens else "OAuth JWTs" if settings.oauth else "no authentication"
+    _log.info("serving MCP on %s (%s)", _sock_url(sock, settings), auth)
+    started = time.monotonic()
+    serving = asyncio.ensure_future(http.serve(sockets=[sock]))
+    try:
+        await asyncio.shield(serving)
+    except asyncio.CancelledError:
+        # Cancelled (a test, an embedding program): shut down as on SIGTERM, so the sessions' tool calls are
+        # cancelled and the lifespan closes the robot's client.
+        http.should_exit = True
+        await serving
+        raise
+    _log.info("HTTP server stopped after %.0f s", time.monotonic() - started)
+
+
+def _sock_url(sock: socket.socket, settings: HttpSettings) -> str:
+    host, port = sock.getsockname()[:2]
+    shown = f"[{host}]" if ":" in host else host
+    return f"{settings.scheme}://{shown}:{port}{MCP_PATH}"

@@ -1,0 +1,176 @@
+"""Several robots from one server: two simulated robots, one of each dialect, behind one MCP session."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from dataclasses import replace
+from typing import Any
+
+from mcp_harness import text_of
+
+from mcp import Client
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.safety import Policy, parse_policy
+from rosbridge_mcp_server.server import build_fleet_server, build_server
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+WAIT = 10.0
+ROS2_CMD = "/turtle1/cmd_vel"
+TWIST = {"linear": {"x": 0.4}, "angular": {"z": 0.0}}
+
+
+@asynccontextmanager
+async def fleet_session(
+    robots: dict[str, SimulatedRobot], policies: dict[str, Policy] | None = None
+) -> AsyncIterator[Client]:
+    """An MCP session on a server driving *robots* (name → simulated robot), each under its policy."""
+    base = Config()
+    entries = []
+    for name, robot in robots.items():
+        config = replace(base, url=robot.url, policy=(policies or {}).get(name, Policy()))
+        entries.append((name, RosbridgeClient(robot.url, request_timeout=5.0), config, None))
+    server = build_fleet_server(entries, base)
+    async with Client(server, mode="legacy") as client:
+        for _, ros, _, _ in entries:
+            await ros.wait_connected(WAIT)
+        yield client
+
+
+def _publish(robot: str, x: float = 0.4, topic: str = ROS2_CMD) -> dict[str, object]:
+    return {
+        "robot": robot,
+        "topic": topic,
+        "message_type": "geometry_msgs/Twist",
+        "message": {**TWIST, "linear": {"x": x}},
+    }
+
+
+async def test_each_command_lands_on_the_robot_it_names(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """A publish naming one robot reaches that robot only; each answers its own graph."""
+    async with fleet_session({"jazzy": sim_ros2, "noetic": sim_ros1}) as client:
+        to_ros2 = await client.call_tool("publish_topic", _publish("jazzy", 0.3))
+        to_ros1 = await client.call_tool("publish_topic", _publish("noetic", 0.7))
+        topics_ros1 = await client.call_tool("list_topics", {"robot": "noetic"})
+    assert not to_ros2.is_error, text_of(to_ros2)
+    assert not to_ros1.is_error, text_of(to_ros1)
+    await sim_ros2.wait_for(lambda w: ROS2_CMD in w.published, WAIT)
+    await sim_ros1.wait_for(lambda w: ROS2_CMD in w.published, WAIT)
+    assert [m.msg["linear"]["x"] for m in sim_ros2.world.published[ROS2_CMD]] == [0.3]
+    assert [m.msg["linear"]["x"] for m in sim_ros1.world.published[ROS2_CMD]] == [0.7]
+    # ROS 1 names its types pkg/Type; the listing comes from that robot.
+    assert "geometry_msgs/Twist" in text_of(topics_ros1)
+    assert "geometry_msgs/msg/Twist" not in text_of(topics_ros1)
+
+
+async def test_the_robot_argument_is_required_and_checked(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """Without robot, or with an unknown one, the call is refused naming the robots, and nothing is sent."""
+    async with fleet_session({"jazzy": sim_ros2, "noetic": sim_ros1}) as client:
+        missing = await client.call_tool("list_topics", {})
+        unknown = await client.call_tool("publish_topic", _publish("mars"))
+        listed = await client.list_tools()
+    assert missing.is_error
+    assert "needs the robot argument" in text_of(missing)
+    assert "jazzy, noetic" in text_of(missing)
+    assert unknown.is_error
+    assert "'mars' is not one of jazzy, noetic" in text_of(unknown)
+    assert ROS2_CMD not in sim_ros2.world.published
+    assert ROS2_CMD not in sim_ros1.world.published
+    schemas = {tool.name: tool.input_schema for tool in listed.tools}
+    assert schemas["list_topics"]["properties"]["robot"]["enum"] == ["jazzy", "noetic"]
+    assert "robot" in schemas["list_topics"]["required"]
+    assert "robot" not in schemas["stop_robot"].get("required", [])
+    assert "list_robots" in schemas
+
+
+async def test_a_policy_on_one_robot_does_not_touch_the_other(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """A velocity cap on one robot refuses there; the same command goes through on the other."""
+    careful = parse_policy({"velocity": {"max_linear": 0.2, "mode": "refuse"}})
+    async with fleet_session({"jazzy": sim_ros2, "noetic": sim_ros1}, {"jazzy": careful}) as client:
+        refused = await client.call_tool("publish_topic", _publish("jazzy", 1.0))
+        allowed = await client.call_tool("publish_topic", _publish("noetic", 1.0))
+        robots = await client.call_tool("list_robots", {})
+    assert refused.is_error
+    assert "max_linear" in text_of(refused)
+    assert not allowed.is_error, text_of(allowed)
+    await sim_ros1.wait_for(lambda w: ROS2_CMD in w.published, WAIT)
+    assert ROS2_CMD not in sim_ros2.world.published
+    rows = {row["name"]: row for row in robots.structured_content["robots"]}  # type: ignore[index]
+    assert "linear ≤ 0.2 m/s" in rows["jazzy"]["policy"]
+    assert rows["noetic"]["policy"].startswith("no restrictions")
+    assert rows["jazzy"]["ros"].startswith("ROS 2")
+    assert rows["noetic"]["ros"] == "ROS 1"
+    assert rows["jazzy"]["connected"]
+    assert rows["noetic"]["connected"]
+
+
+async def test_one_robots_outage_leaves_the_other_answering(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """With one robot's bridge stopped, its calls fail with its URL and the other robot still answers."""
+    async with fleet_session({"jazzy": sim_ros2, "noetic": sim_ros1}) as client:
+        await sim_ros1.stop()
+        down = await client.call_tool("list_topics", {"robot": "noetic"})
+        up = await client.call_tool("list_topics", {"robot": "jazzy"})
+        robots = await client.call_tool("list_robots", {})
+    assert down.is_error
+    assert sim_ros1.url in text_of(down)
+    assert not up.is_error, text_of(up)
+    assert "noetic: not connected" in text_of(robots)
+    assert "jazzy: connected" in text_of(robots)
+
+
+async def test_stop_robot_without_a_robot_stops_every_robot(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """stop_robot with robot stops that one; without, each robot gets its zero velocity."""
+    async with fleet_session({"jazzy": sim_ros2, "noetic": sim_ros1}) as client:
+        for name in ("jazzy", "noetic"):
+            assert not (await client.call_tool("publish_topic", _publish(name, 0.5))).is_error
+        one = await client.call_tool("stop_robot", {"robot": "noetic"})
+        every = await client.call_tool("stop_robot", {})
+    assert not one.is_error, text_of(one)
+    assert not every.is_error, text_of(every)
+    assert text_of(every).startswith("jazzy: ")
+    assert "\nnoetic: " in text_of(every)
+    assert every.structured_content is not None
+    assert f"jazzy: {ROS2_CMD}" in every.structured_content["zeroed_topics"]
+    await sim_ros2.wait_for(lambda w: w.published[ROS2_CMD][-1].msg["linear"]["x"] == 0.0, WAIT)
+    await sim_ros1.wait_for(lambda w: w.published[ROS2_CMD][-1].msg["linear"]["x"] == 0.0, WAIT)
+
+
+async def test_one_robot_lists_no_robot_argument_and_no_list_robots(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """A server of one robot lists what a fleet lists minus the robot argument and list_robots."""
+    base = replace(Config(), url=sim_ros2.url)
+    single = build_server(RosbridgeClient(sim_ros2.url), base)
+    two = build_fleet_server(
+        [
+            ("a", RosbridgeClient(sim_ros2.url), base, None),
+            ("b", RosbridgeClient(sim_ros1.url), replace(base, url=sim_ros1.url), None),
+        ],
+        base,
+    )
+    async with Client(single, mode="legacy") as one_client, Client(two, mode="legacy") as two_client:
+        listed_one = [tool.model_dump() for tool in (await one_client.list_tools()).tools]
+        listed_two = [tool.model_dump() for tool in (await two_client.list_tools()).tools]
+    assert all("robot" not in tool["input_schema"]["properties"] for tool in listed_one)
+    assert "list_robots" not in {tool["name"] for tool in listed_one}
+    assert [_without_robot(tool) for tool in listed_two if tool["name"] != "list_robots"] == [
+        _without_robot(tool) for tool in listed_one
+    ]
+
+
+def _without_robot(tool: dict[str, Any]) -> dict[str, Any]:
+    schema = dict(tool["input_schema"])
+    schema["properties"] = {k: v for k, v in schema["properties"].items() if k != "robot"}
+    schema["required"] = [name for name in schema.get("required", []) if name != "robot"]
+    return {**tool, "input_schema": schema}
