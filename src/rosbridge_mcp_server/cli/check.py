@@ -136,7 +136,12 @@ async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(session.ordering_known.wait(), max(config.request_timeout, 5.0))
     lanes = session.lanes_by_default if session is not None else info.may_be_in_order
-    how = "told by its status answers" if info.calls_threaded else "measured"
+    if info.version == 1:
+        how = "rosbridge 0.11 runs each call in a thread of its own"
+    elif info.status_replies:
+        how = "from the bridge's status answers"
+    else:
+        how = "measured on connecting"
     if queued and not lanes:
         return (
             _BAD,
@@ -155,7 +160,7 @@ async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo
             "concurrency: calls on one connection run side by side (measured now), but this server could not "
             "tell and gives each call a connection of its own (safe, a little slower)",
         )
-    return _OK, f"concurrency: calls on one connection run side by side (measured; the server {how})"
+    return _OK, f"concurrency: calls on one connection run side by side (measured now; the server knew: {how})"
 
 
 def _bridge_lines(info: RosInfo) -> list[tuple[str, str]]:
