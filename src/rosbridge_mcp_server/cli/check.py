@@ -160,7 +160,10 @@ async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo
             "concurrency: calls on one connection run side by side (measured now), but this server could not "
             "tell and gives each call a connection of its own (safe, a little slower)",
         )
-    return _OK, f"concurrency: calls on one connection run side by side (measured now; the server knew: {how})"
+    return (
+        _OK,
+        f"concurrency: calls on one connection run side by side (measured now; the server knew: {how})",
+    )
 
 
 def _bridge_lines(info: RosInfo) -> list[tuple[str, str]]:
