@@ -87,6 +87,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="ros2 only: which rosapi to behave like (default newest; 2.1.0 as on the Jazzy/Kilted labs)",
     )
     parser.add_argument(
+        "--server",
+        choices=["rosbridge_suite", "rs"],
+        default="rosbridge_suite",
+        help="ros2 only: which bridge to behave like (rs: rosbridge-server-rs 0.1.6)",
+    )
+    parser.add_argument(
         "--rosapi-latency",
         type=_latencies,
         default=(0.0,),
@@ -135,8 +141,12 @@ def run(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.in_order and args.dialect != "ros2":
         parser.error("--in-order models Humble's rosbridge and needs --dialect ros2")
-    if args.dialect != "ros2" and (args.distro is not None or args.rosapi != "newest"):
-        parser.error("--distro and --rosapi are ROS 2 settings and need --dialect ros2")
+    if args.dialect != "ros2" and (
+        args.distro is not None or args.rosapi != "newest" or args.server != "rosbridge_suite"
+    ):
+        parser.error("--distro, --rosapi and --server are ROS 2 settings and need --dialect ros2")
+    if args.server == "rs" and (args.in_order or args.rosapi != "newest"):
+        parser.error("--server rs runs calls side by side with its newer rosapi: no --in-order, no --rosapi")
     try:
         width_text, height_text = args.camera_size.lower().split("x")
         width, height = int(width_text), int(height_text)
@@ -152,6 +162,7 @@ def run(argv: list[str] | None = None) -> int:
         in_order=args.in_order,
         distro=args.distro,
         rosapi=args.rosapi,
+        server=args.server,
         rosapi_latency=args.rosapi_latency,
         node_services=not args.no_node_services,
         host=args.host,
