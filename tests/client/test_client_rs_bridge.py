@@ -7,7 +7,8 @@ import logging
 import pytest
 from client_harness import MakeClient, MakeSim
 
-from rosbridge_mcp_server.errors import ServiceError
+from rosbridge_mcp_server.errors import GoalTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.goals import ros2
 
 
 async def test_a_refused_subscribe_is_logged_with_the_bridges_words(
@@ -37,3 +38,20 @@ async def test_a_missing_service_fails_with_a_sentence_naming_it(
     assert caught.value.not_in_graph
     assert str(caught.value).startswith("Service /no_such_service is not in the ROS graph")
     assert "list_services" in str(caught.value)
+
+
+async def test_a_goal_timing_out_is_cancelled_on_its_own_connection_without_a_warning(
+    make_sim: MakeSim, make_client: MakeClient, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The lane's cancel ends the goal CANCELED; the refusal of the main connection's copy is not logged."""
+    robot = await make_sim(dialect="ros2", server="rs", action_step=0.1)
+    client = await make_client(robot)
+    with caplog.at_level(logging.WARNING, logger="rosbridge_mcp_server"):
+        with pytest.raises(GoalTimeoutError) as caught:
+            await ros2.send_action_goal(
+                client, "/fibonacci", "example_interfaces/Fibonacci", {"order": 40}, timeout=0.5
+            )
+        await client.call_service("/rosapi/get_time")  # a barrier: the refusal came before its answer
+    assert caught.value.status == 5
+    ours = [r for r in caplog.records if not r.name.startswith("rosbridge_mcp_server.sim")]
+    assert not [r.getMessage() for r in ours if r.levelno >= logging.WARNING]

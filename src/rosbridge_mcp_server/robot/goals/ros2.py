@@ -143,11 +143,20 @@ async def cancel_on_both(client: RosbridgeClient, record: Goal) -> tuple[bool, b
     """
     op = protocol.cancel_action_goal(record.action, id=record.goal_id)
     session = client.session
+    if session is not None and session.info.status_replies:
+        # Such a bridge refuses the main connection's copy with an error status: expected, so not logged.
+        conn = session.connection
+        conn.expect(record.goal_id, f"the refusal of goal {record.goal_id}'s cancel", _REFUSAL_SECONDS)
+        asyncio.get_running_loop().call_later(_REFUSAL_SECONDS, conn.forget, record.goal_id)
     on_main = session is not None and await session.try_send(op)
     if on_main:
         client.unhandled_acts = True
     on_lane = record.send_on_owner is not None and await record.send_on_owner(op)
     return on_main, on_lane
+
+
+#: How long the main connection takes a refusal of our own goal's cancel as expected (not logged).
+_REFUSAL_SECONDS = 5.0
 
 
 async def _cancel_quietly(
