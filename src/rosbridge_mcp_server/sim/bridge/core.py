@@ -20,6 +20,7 @@ from rosbridge_mcp_server.sim.interfaces import ConversionError, InterfaceError,
 from rosbridge_mcp_server.sim.world import World
 
 __all__ = [
+    "RS_NOT_IN_GRAPH",
     "BridgeConfig",
     "BridgeCore",
     "CallFailed",
@@ -30,6 +31,7 @@ __all__ = [
     "OpHandler",
     "check_fields",
     "extract_id",
+    "status_frame",
 ]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
@@ -65,6 +67,27 @@ class BridgeConfig:
     distro: str
     #: Whether ``call_service`` reads a ``timeout`` field (ROS 2; rosbridge_suite 2.1.0 ignores it).
     timeout_field: bool = True
+    #: Which server this is: ``rosbridge_suite``, or ``rs`` for rosbridge-server-rs 0.1.6 (an error
+    #: ``status`` for every failed op, goals cancelled only by the connection that started them, a cancelled
+    #: goal's result with ``result: false``, "type is required when interface is absent from ROS graph").
+    server: Literal["rosbridge_suite", "rs"] = "rosbridge_suite"
+
+    @property
+    def rs(self) -> bool:
+        """rosbridge-server-rs 0.1.6's behaviours (see :attr:`server`)."""
+        return self.server == "rs"
+
+
+#: rosbridge-server-rs 0.1.6's refusal of a name it needs the type of and cannot find in the graph.
+RS_NOT_IN_GRAPH = "type is required when interface is absent from ROS graph"
+
+
+def status_frame(msg: str, mid: Any) -> dict[str, Any]:
+    """rosbridge-server-rs's answer to a failed op: ``{"op": "status", "level": "error", "msg", "id"}``."""
+    frame: dict[str, Any] = {"op": "status", "level": "error", "msg": msg}
+    if mid is not None:
+        frame["id"] = mid
+    return frame
 
 
 def check_fields(msg: dict[str, Any], fields: list[FieldSpec]) -> None:
