@@ -8,7 +8,7 @@ import json
 from collections.abc import AsyncIterator
 
 import pytest
-from mcp_harness import Session, open_session, text_of, types_for
+from mcp_harness import Session, open_session, parameter_names, text_of, types_for
 from websockets.asyncio.client import ClientConnection, connect
 
 from rosbridge_mcp_server.cli.check import run_check
@@ -188,7 +188,7 @@ async def test_every_parameter_is_listed_with_one_rosapi_call_where_that_is_safe
     before = dict(rs_robot.world.service_calls)
     names = (await rs.ok("list_parameters")).structured_content
     assert names is not None
-    assert "/turtlesim:background_r" in names["parameters"]
+    assert "/turtlesim:background_r" in parameter_names(names)
     asked = {
         k: v - before.get(k, 0) for k, v in rs_robot.world.service_calls.items() if v != before.get(k, 0)
     }

@@ -108,12 +108,15 @@ async def test_robot_description_is_a_latched_urdf(sim: SimulatedRobot) -> None:
 
 
 async def test_a_topic_that_is_not_latched_sends_nothing_until_its_next_message(sim: SimulatedRobot) -> None:
-    """/chatter (10 Hz, not latched) has no message waiting for a new subscriber."""
+    """/chatter (10 Hz, not latched) has no message waiting for a new subscriber: whatever arrives was
+    published after the subscription (its count is higher than the world's when subscribing)."""
     async with await RawClient.open(sim.url) as client:
         await client.send({"op": "subscribe", "topic": "/turtle1/color_sensor", "id": "color"})
+        published_before = sim.world.chatter_count
         await client.send({"op": "subscribe", "topic": "/chatter", "id": "chatter"})
         frames = await client.frames_before_barrier()
-    assert not [f for f in frames if f.get("topic") == "/chatter"]
+    counts = [int(f["msg"]["data"].rsplit(" ", 1)[1]) for f in frames if f.get("topic") == "/chatter"]
+    assert all(count > published_before for count in counts), (published_before, counts)
 
 
 async def test_depth_image_is_16uc1_millimetres_of_the_wall_ahead_and_the_floor(sim: SimulatedRobot) -> None:
