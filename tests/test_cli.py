@@ -15,6 +15,7 @@ from rosbridge_mcp_server.cli import PROG, run
 from rosbridge_mcp_server.cli.check import run_check, unreachable_advice
 from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.safety.policy import NameRules, Policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 
@@ -239,3 +240,21 @@ def test_help_names_both_commands_and_the_tool_groups(capsys: pytest.CaptureFixt
     assert "check diagnoses the connection" in shown
     assert "original (the first eight, with stop_robot whenever a tool acts)" in shown
     assert "view (pictures: map, scan, charts)" in shown
+
+
+async def test_check_warns_about_policy_names_the_robot_does_not_have() -> None:
+    """A policy allowing only /cmd_vel and /navigate_to_pose on the turtle: check says every motion would be
+    refused and names what is there; a policy naming what exists gets no warning."""
+    absent = Policy(topics=NameRules(allow=("/cmd_vel",)), actions=NameRules(allow=("/navigate_to_pose",)))
+    present = Policy(topics=NameRules(allow=("/turtle1/*",)), actions=NameRules(allow=("/fibonacci",)))
+    async with SimulatedRobot(port=0) as robot:
+        warned, fine = io.StringIO(), io.StringIO()
+        code = await run_check(Config(url=robot.url, policy=absent), warned)
+        assert await run_check(Config(url=robot.url, policy=present), fine) == 0
+    text = warned.getvalue()
+    assert code == 0, text
+    assert "[warn] policy [topics] allow '/cmd_vel' matches no topic on this robot" in text
+    assert "Did you mean /turtle1/cmd_vel?" in text
+    assert "[warn] policy [actions] allow '/navigate_to_pose' matches no action on this robot" in text
+    assert "see the warn lines about the policy" in text
+    assert "[warn]" not in fine.getvalue()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+from fnmatch import fnmatchcase
 from typing import TextIO
 from urllib.parse import urlsplit
 
@@ -23,6 +24,8 @@ from rosbridge_mcp_server.config import Config, plain_text_warning
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.messages import find_problems, typedefs_from_rosapi
+from rosbridge_mcp_server.robot.names import did_you_mean
+from rosbridge_mcp_server.safety.policy import Policy
 from rosbridge_mcp_server.wire.dialect import RosInfo, normalize_type
 
 __all__ = ["run_check", "unreachable_advice"]
@@ -30,6 +33,7 @@ __all__ = ["run_check", "unreachable_advice"]
 _OK = "ok  "
 _BAD = "FAIL"
 _NOTE = "note"
+_WARN = "warn"
 
 
 def unreachable_advice(url: str, reason: str | None) -> list[str]:
@@ -212,6 +216,22 @@ async def _action_check(graph: RosGraph, info: RosInfo, actions: list[str]) -> t
     return _OK, f"action types: known ({actions[0]} is {found})"
 
 
+def policy_names_check(policy: Policy, present: dict[str, list[str]]) -> list[tuple[str, str]]:
+    """A warning for each allow pattern of *policy* that names nothing on this robot (``present``: the
+    names of each kind, e.g. ``{"topics": [...]}``): every act it was written for would be refused.
+    Parameters are left out: listing them all costs a call per node."""
+    lines: list[tuple[str, str]] = []
+    for section, names in present.items():
+        allow = getattr(policy, section).allow
+        for pattern in allow or ():
+            if not any(fnmatchcase(name, pattern) for name in names):
+                noun = section.removesuffix("s")
+                hint = did_you_mean(pattern, names, cutoff=0.6)
+                text = f"policy [{section}] allow {pattern!r} matches no {noun} on this robot"
+                lines.append((_WARN, f"{text}, so acts meant for it will be refused.{hint}"))
+    return lines
+
+
 async def run_check(config: Config, out: TextIO) -> int:
     """Run the diagnosis against ``config.url``, writing to ``out``; 0 when healthy, 1 when not."""
 
@@ -269,8 +289,17 @@ async def run_check(config: Config, out: TextIO) -> int:
             _count(len(actions), "action server"),
         ]
         say(_OK, ", ".join(counts))
+        present = {"topics": [t.name for t in topics], "services": list(services), "actions": list(actions)}
+        warnings = policy_names_check(config.policy, present)
+        for mark, text in warnings:
+            say(mark, text)
         if any(mark == _BAD for mark, _ in results):
             out.write("Not healthy: see the FAIL lines above.\n")
             return 1
-        out.write("Healthy: the MCP server can use this bridge.\n")
+        if warnings:
+            out.write(
+                "Healthy: the MCP server can use this bridge, but see the warn lines about the policy.\n"
+            )
+        else:
+            out.write("Healthy: the MCP server can use this bridge.\n")
         return 0
