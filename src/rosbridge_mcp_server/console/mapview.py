@@ -218,7 +218,7 @@ class MapPanel:
                 del message
                 self._grid_seq += 1
                 grid = self._grid
-                self._say(map_status=f"{topic}: {grid.width}x{grid.height} cells of {grid.resolution:g} m")
+                self._say(map_status=f"{topic}: {grid.width}x{grid.height} cells of {grid.resolution:.3g} m")
 
     async def _poses(self) -> None:
         drawn: tuple[int, Any] | None = None
