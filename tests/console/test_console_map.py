@@ -14,6 +14,8 @@ from console_harness import browser_page, need_chromium, served_console
 from playwright.async_api import expect
 
 from rosbridge_mcp_server.console import ConsoleHub
+from rosbridge_mcp_server.console.mapview import pose_of
+from rosbridge_mcp_server.robot.transforms import FrameTree
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT_MS = 10_000
@@ -115,3 +117,31 @@ async def test_the_camera_and_the_panel_stop_listening_when_the_last_page_closes
             lambda world: not any(subscribed(sim_ros2, topic) for topic in (CAMERA, "/map", "/tf")),
             timeout=10,
         )
+
+
+def link(parent: str, child: str, x: float, y: float, yaw: float) -> dict[str, object]:
+    return {
+        "header": {"frame_id": parent},
+        "child_frame_id": child,
+        "transform": {
+            "translation": {"x": x, "y": y, "z": 0.0},
+            "rotation": {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)},
+        },
+    }
+
+
+def test_the_pose_is_in_map_when_there_is_one_else_in_odom() -> None:
+    """Without a map frame the pose is odom's; once map → odom is heard, it is the map's."""
+    tree = FrameTree()
+    assert "no transform heard" in str(pose_of(tree, "base_link"))
+    tree.add(link("odom", "base_link", 1.0, 2.0, math.radians(90)), static=False, received=1.0)
+    found = pose_of(tree, "base_link")
+    assert not isinstance(found, str), found
+    frame, pose = found
+    assert (frame, round(pose.x, 6), round(pose.y, 6), round(math.degrees(pose.yaw), 6)) == ("odom", 1, 2, 90)
+    tree.add(link("map", "odom", 10.0, 0.0, 0.0), static=True, received=1.0)
+    found = pose_of(tree, "base_link")
+    assert not isinstance(found, str), found
+    frame, pose = found
+    assert (frame, round(pose.x, 6), round(pose.y, 6)) == ("map", 11, 2)
+    assert "'nowhere' has not been seen" in str(pose_of(tree, "nowhere"))

@@ -37,6 +37,7 @@ __all__ = [
     "POSE_HZ",
     "MapImage",
     "MapPanel",
+    "pose_of",
 ]
 
 DEFAULT_MAP_TOPIC = "/map"
@@ -254,25 +255,8 @@ class MapPanel:
             await asyncio.sleep(1 / POSE_HZ)
 
     def _look_up(self) -> tuple[str, Pose2D] | str:
-        """The base frame in the map's frame (``map`` before a map came), else in ``odom``; or why not."""
-        tree = self._tree
-        grid_frame = (self._grid.frame_id if self._grid is not None else "") or "map"
-        frames = [grid_frame] if tree.knows(grid_frame) else []
-        frames += [] if grid_frame == "odom" else ["odom"]
-        problem = ""
-        for frame in frames:
-            try:
-                found = tree.lookup(frame, self.base_frame)
-            except TransformError as exc:
-                problem = str(exc)
-                continue
-            t = found.transform
-            x, y, z, w = t.rotation
-            yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-            return frame, Pose2D(t.translation[0], t.translation[1], yaw)
-        if not tree.frames():
-            return "no pose yet: no transform heard on /tf or /tf_static"
-        return f"no pose: {problem}" if problem else "no pose yet"
+        grid_frame = self._grid.frame_id if self._grid is not None else ""
+        return pose_of(self._tree, self.base_frame, grid_frame or "map")
 
     def _say(self, *, status: str | None = None, map_status: str | None = None) -> None:
         before = (self.status, self.map_status)
@@ -282,6 +266,28 @@ class MapPanel:
             self.map_status = map_status
         if (self.status, self.map_status) != before:
             self._changed()
+
+
+def pose_of(tree: FrameTree, base_frame: str, map_frame: str = "map") -> tuple[str, Pose2D] | str:
+    """``base_frame`` in ``map_frame``, else in ``odom`` (no map frame heard): (frame, pose), or why not."""
+    frames = [map_frame] if tree.knows(map_frame) else []
+    frames += [] if map_frame == "odom" else ["odom"]
+    problem = ""
+    for frame in frames:
+        try:
+            found = tree.lookup(frame, base_frame)
+        except TransformError as exc:
+            problem = str(exc)
+            continue
+        t = found.transform
+        x, y, z, w = t.rotation
+        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return frame, Pose2D(t.translation[0], t.translation[1], yaw)
+    if not tree.frames():
+        return "no pose yet: no transform heard on /tf or /tf_static"
+    return (
+        f"no pose: {problem}" if problem else f"no pose: neither {map_frame} nor odom has been heard on /tf"
+    )
 
 
 def _pose_event(frame: str, base: str, pose: Pose2D) -> dict[str, Any]:
