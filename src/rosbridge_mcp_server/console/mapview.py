@@ -164,8 +164,9 @@ class MapPanel:
                 group.create_task(self._map())
                 group.create_task(self._poses())
         finally:
-            self._tree = FrameTree()
-            self._grid = None
+            if self._task is None:  # stopped, not restarted by choose(): let go of the map's cells
+                self._tree = FrameTree()
+                self._grid = None
 
     async def _transforms(self) -> None:
         while True:
