@@ -4,7 +4,7 @@
 
 Needs Debian's Chromium (/usr/bin/chromium, or CHROMIUM=...). The scene: confirm = "motion", a chatter
 message sent, a velocity command approved, a Fibonacci goal running, another command waiting for Approve,
-the camera on.
+the camera on, the pose and the map.
 """
 
 from __future__ import annotations
@@ -99,6 +99,8 @@ async def main(out: Path) -> None:
             await page.locator("#camera-topic").fill("/camera/image_raw")
             await page.get_by_role("button", name="Show").click()
             await page.wait_for_function("() => document.getElementById('camera').naturalWidth > 0")
+            await page.wait_for_function("() => document.getElementById('map').naturalWidth > 0")
+            await expect(page.locator("#pose")).to_have_attribute("data-frame", "map", timeout=10_000)
             await expect(page.locator("#pending li")).to_have_count(1, timeout=10_000)
             await expect(page.locator("#running li")).to_have_count(1, timeout=10_000)
             png = await page.screenshot(full_page=True)

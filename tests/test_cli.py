@@ -12,10 +12,11 @@ from collections.abc import Iterator
 import pytest
 
 from rosbridge_mcp_server.cli import PROG, run
-from rosbridge_mcp_server.cli.check import call_ordering, run_check, unreachable_advice
+from rosbridge_mcp_server.cli.check import run_check, unreachable_advice
+from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.safety.policy import NameRules, Policy
 from rosbridge_mcp_server.sim import SimulatedRobot
-from rosbridge_mcp_server.wire.dialect import RosInfo
 
 
 @pytest.fixture(autouse=True)
@@ -139,7 +140,10 @@ async def test_check_against_a_robot_reports_version_features_and_counts(dialect
         assert "actions: over actionlib topics" in text
         assert "no timeout field" in text
         assert "[ok  ] messages: a geometry_msgs/Twist is checked before it is published" in text
-    assert "[ok  ] calls on one connection run side by side (measured" in text
+    assert "[ok  ] concurrency: calls on one connection run side by side (measured" in text
+    if dialect == "ros2":
+        assert "implementation: answers like rosbridge_suite" in text
+        assert "cancel path: a goal publish_action started is cancelled on the main connection" in text
     assert "Healthy" in text
     counts = next(line for line in text.splitlines() if "topics," in line)
     topics = int(counts.split("]", 1)[1].split()[0])
@@ -154,8 +158,7 @@ async def test_check_notes_an_in_order_humble_bridge() -> None:
         code = await run_check(Config(url=robot.url), out)
     assert code == 0
     assert "ROS 2 (humble)" in out.getvalue()
-    assert "[ok  ] a slow service call holds up later calls on its connection" in out.getvalue()
-    assert "strictly in order; its call_services_in_new_thread: false" in out.getvalue()
+    assert "[ok  ] concurrency: a slow service call holds up later calls on its connection" in out.getvalue()
 
 
 def test_check_demo_runs_against_the_built_in_robot(capsys: pytest.CaptureFixture[str]) -> None:
@@ -205,15 +208,15 @@ async def test_check_of_a_plain_bridge_over_wss_suggests_ws(sim_ros2: SimulatedR
     assert "use ws:// instead of wss://" in out.getvalue()
 
 
-async def test_check_fails_a_bridge_whose_calls_queue_though_it_says_they_do_not() -> None:
-    """The ordering is measured: a bridge claiming threaded calls but running them in order is unhealthy."""
+async def test_check_does_not_believe_a_bridge_node_that_says_its_calls_are_threaded() -> None:
+    """The ordering is measured: a /rosbridge_websocket node claiming threaded calls on an in-order bridge (it
+    may be another bridge on the graph) changes nothing; each call keeps a connection of its own."""
     async with SimulatedRobot(dialect="ros2", in_order=True, port=0) as robot:
         robot.bridge.world.params["/rosbridge_websocket:call_services_in_new_thread"] = True
         out = io.StringIO()
         code = await run_check(Config(url=robot.url), out)
-    assert code == 1, out.getvalue()
-    assert "[FAIL] a slow service call holds up later calls on its connection" in out.getvalue()
-    assert "Not healthy" in out.getvalue()
+    assert code == 0, out.getvalue()
+    assert "[ok  ] concurrency: a slow service call holds up later calls on its connection" in out.getvalue()
 
 
 async def test_check_leaves_no_service_behind_on_a_busy_bridge() -> None:
@@ -221,8 +224,7 @@ async def test_check_leaves_no_service_behind_on_a_busy_bridge() -> None:
     robot = SimulatedRobot(dialect="ros2", in_order=True, distro="kilted", rosapi="2.1.0", port=0)
     async with robot:
         robot.bridge.incoming_delay = 0.05
-        info = RosInfo(version=2, distro="kilted")
-        queued = await call_ordering(robot.url, info, timeout=10.0)
+        queued = await call_ordering(robot.url, 2, timeout=10.0)
         left = [name for name in robot.graph.services if name.startswith("/rosbridge_mcp_check_")]
     assert queued
     assert left == []
@@ -238,3 +240,21 @@ def test_help_names_both_commands_and_the_tool_groups(capsys: pytest.CaptureFixt
     assert "check diagnoses the connection" in shown
     assert "original (the first eight, with stop_robot whenever a tool acts)" in shown
     assert "view (pictures: map, scan, charts)" in shown
+
+
+async def test_check_warns_about_policy_names_the_robot_does_not_have() -> None:
+    """A policy allowing only /cmd_vel and /navigate_to_pose on the turtle: check says every motion would be
+    refused and names what is there; a policy naming what exists gets no warning."""
+    absent = Policy(topics=NameRules(allow=("/cmd_vel",)), actions=NameRules(allow=("/navigate_to_pose",)))
+    present = Policy(topics=NameRules(allow=("/turtle1/*",)), actions=NameRules(allow=("/fibonacci",)))
+    async with SimulatedRobot(port=0) as robot:
+        warned, fine = io.StringIO(), io.StringIO()
+        code = await run_check(Config(url=robot.url, policy=absent), warned)
+        assert await run_check(Config(url=robot.url, policy=present), fine) == 0
+    text = warned.getvalue()
+    assert code == 0, text
+    assert "[warn] policy [topics] allow '/cmd_vel' matches no topic on this robot" in text
+    assert "Did you mean /turtle1/cmd_vel?" in text
+    assert "[warn] policy [actions] allow '/navigate_to_pose' matches no action on this robot" in text
+    assert "see the warn lines about the policy" in text
+    assert "[warn]" not in fine.getvalue()

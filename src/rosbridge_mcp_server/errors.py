@@ -143,13 +143,30 @@ class GoalTimeoutError(RequestTimeoutError):
         )
 
 
+#: rosbridge-server-rs 0.1.6's refusal of a call without ``type`` to a service it cannot see in the graph.
+_RS_NOT_IN_GRAPH = "type is required when interface is absent from ROS graph"
+
+
 class ServiceError(RosbridgeError):
     """A service call failed; ``message`` is the bridge's own text."""
 
     def __init__(self, service: str, message: str) -> None:
         self.service = service
         self.message = message
-        super().__init__(f"Service call {service} failed: {message}")
+        if _RS_NOT_IN_GRAPH in message:
+            # The bridge's words are about its own needs; the model needs to hear what is wrong.
+            text = (
+                f"Service {service} is not in the ROS graph (the bridge said: {message}); check the name "
+                "with list_services"
+            )
+        else:
+            text = f"Service call {service} failed: {message}"
+        super().__init__(text)
+
+    @property
+    def not_in_graph(self) -> bool:
+        """The bridge said the service is not there (rosbridge_suite 0.11 and 2.x; rosbridge-server-rs)."""
+        return "does not exist" in self.message or _RS_NOT_IN_GRAPH in self.message
 
 
 class ActionError(RosbridgeError):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import AsyncIterator
 from typing import Any
 
@@ -26,6 +27,8 @@ async def make_client() -> AsyncIterator[MakeClient]:
         await client.start()
         if connected:
             await client.wait_connected(5.0)
+            if not isinstance(target, str):
+                await ordering_known(client)
         return client
 
     try:
@@ -39,3 +42,10 @@ async def make_client() -> AsyncIterator[MakeClient]:
 async def client(sim: SimulatedRobot, make_client: MakeClient) -> RosbridgeClient:
     """A connected client of each dialect's robot."""
     return await make_client(sim)
+
+
+async def ordering_known(client: RosbridgeClient) -> None:
+    """Wait until the client knows whether the bridge holds calls up (measured in the background)."""
+    session = client.session
+    if session is not None:
+        await asyncio.wait_for(session.ordering_known.wait(), 10.0)

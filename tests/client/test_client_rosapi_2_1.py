@@ -15,6 +15,7 @@ import pytest
 from client_harness import MakeClient
 from websockets.asyncio.server import ServerConnection, serve
 
+from rosbridge_mcp_server.client.ordering import PROBE_SERVICE_PREFIX
 from rosbridge_mcp_server.robot.graph import RosGraph
 
 Answer = tuple[bool, Any]
@@ -84,41 +85,21 @@ async def serve_bridge() -> AsyncIterator[Callable[[Rosbridge21], Any]]:
         await server.wait_closed()
 
 
-async def test_a_jazzy_bridge_with_the_switches_off_is_taken_as_in_order(
+async def test_the_bridge_nodes_parameters_are_never_taken_for_the_bridges_behaviour(
     serve_bridge: Callable[[Rosbridge21], Any], make_client: MakeClient
 ) -> None:
-    """The bridge's own parameters decide, not the distro: Jazzy 2.1.0 with defaults runs calls in order."""
-    client = await make_client(await serve_bridge(Rosbridge21()))
+    """A /rosbridge_websocket node saying its calls and goals are threaded is not believed (it may be another
+    bridge on the graph): without a measurement the bridge counts as in order, and nothing asks parameters."""
+    bridge = Rosbridge21(calls_threaded=True, goals_threaded=True)
+    client = await make_client(await serve_bridge(bridge))
     info = await client.ros_info()
     assert info.distro == "jazzy"
-    assert (info.calls_threaded, info.goals_threaded) == (False, False)
-    assert info.may_be_in_order
-    assert info.goals_may_block
-
-
-async def test_a_bridge_that_threads_its_calls_is_not_in_order(
-    serve_bridge: Callable[[Rosbridge21], Any], make_client: MakeClient
-) -> None:
-    """call_services_in_new_thread true: calls share the main connection; goals follow their own switch."""
-    bridge = Rosbridge21(calls_threaded=True, goals_threaded=False)
-    client = await make_client(await serve_bridge(bridge))
-    info = await client.ros_info()
-    assert not info.may_be_in_order
-    assert info.goals_may_block
-
-
-async def test_a_bridge_node_of_another_name_counts_as_in_order(
-    serve_bridge: Callable[[Rosbridge21], Any], make_client: MakeClient
-) -> None:
-    """No /rosbridge_websocket/get_parameters: the bridge did not tell, so in-order is assumed; rosapi's
-    get_param (5 s for a node that does not exist) is never asked."""
-    bridge = Rosbridge21(calls_threaded=True, goals_threaded=True)
-    del bridge.services["/rosbridge_websocket/get_parameters"]
-    client = await make_client(await serve_bridge(bridge))
-    info = await client.ros_info()
     assert (info.calls_threaded, info.goals_threaded) == (None, None)
     assert info.may_be_in_order
-    assert not [op for op in bridge.ops if op.get("service") == "/rosapi/get_param"]
+    assert info.goals_may_block
+    asked = [op.get("service") for op in bridge.ops]
+    assert "/rosbridge_websocket/get_parameters" not in asked
+    assert "/rosapi/get_param" not in asked
 
 
 async def test_the_action_type_comes_from_the_bridges_refusal_of_a_send_goal_probe(
@@ -186,7 +167,9 @@ async def test_list_services_reads_types_from_the_bridges_refusals(
         ("/add_two_ints", "example_interfaces/srv/AddTwoInts"),
         ("/rosapi/get_time", "rosapi_msgs/srv/GetTime"),
     ]
-    assert not [op for op in bridge.ops if op.get("service") == "/rosapi/service_type"]
+    asked = [op for op in bridge.ops if op.get("service") == "/rosapi/service_type"]
+    # Only the ordering measurement's look-ups of its own service (see client/ordering.py).
+    assert all(op["args"]["service"].startswith(PROBE_SERVICE_PREFIX) for op in asked)
 
 
 async def test_a_bridge_that_takes_unknown_fields_is_never_probed(

@@ -105,3 +105,12 @@ async def test_show_console_answers_the_model_in_a_few_lines(sim_ros2: Simulated
         assert "No acting call yet." in text_of(result)
         assert result.structured_content is not None
         assert result.structured_content["estop"] == {"latched": False, "by": None}
+
+
+async def test_show_console_refuses_an_argument_it_does_not_take(sim_ros2: SimulatedRobot) -> None:
+    """show_console takes no arguments: an unknown one is refused by name, like any tool's."""
+    async with served_console(sim_ros2.url) as console:
+        result = await console.call("show_console", {"verbose": True})
+        assert result.is_error
+        assert "unknown argument 'verbose'" in text_of(result)
+        assert "no arguments" in text_of(result)

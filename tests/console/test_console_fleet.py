@@ -77,3 +77,32 @@ async def test_one_estop_stops_every_robot_and_latches_them_all(
         assert hub.release()
         for name in sims:
             assert not (await client.call_tool("publish_topic", stream(name))).is_error
+
+
+async def test_show_console_is_about_every_robot_and_needs_no_robot_argument(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """With several robots show_console answers without a robot argument, and still refuses unknown ones."""
+    sims = {"jazzy": sim_ros2, "noetic": sim_ros1}
+    base = Config()
+    operator = Operator()
+    entries: list[tuple[str, RosbridgeClient, Config, Guard | None]] = []
+    views = []
+    for name, sim in sims.items():
+        config = replace(base, url=sim.url)
+        ros = RosbridgeClient(sim.url, request_timeout=5.0, reconnect_min=0.05, reconnect_max=0.2)
+        audit = Audit(robot=name)
+        entries.append((name, ros, config, PolicyGuard(config.policy, audit, operator)))
+        views.append(RobotView(name, ros, SessionActivity(), audit))
+    hub = ConsoleHub(views, operator)
+    server = build_fleet_server(
+        entries, base, activities={view.name: view.activity for view in views}, console_view=hub.snapshot
+    )
+    async with Client(server, mode="legacy") as client:
+        shown = await client.call_tool("show_console", {})
+        assert not shown.is_error, text_of(shown)
+        assert "jazzy at" in text_of(shown)
+        assert "noetic at" in text_of(shown)
+        refused = await client.call_tool("show_console", {"robot": "jazzy"})
+        assert refused.is_error
+        assert "unknown argument 'robot'" in text_of(refused)

@@ -122,12 +122,12 @@ async def first_pending(console: Console) -> str:
 async def test_a_request_without_the_secret_changes_nothing(
     sim_ros2: SimulatedRobot, headers: dict[str, str]
 ) -> None:
-    """E-STOP, approve and the camera are refused (403) without the header's secret; nothing moves."""
+    """E-STOP, approve, the camera and the map panel are refused (403) without the secret; nothing moves."""
     policy = parse_policy({"confirm": "motion", "confirm_timeout": 30})
     async with served_console(sim_ros2.url, policy) as console, http(console) as web:
         calling = asyncio.create_task(console.call("publish_topic", TWIST_CALL))
         pending_id = await first_pending(console)
-        for path in ("/api/estop", f"/api/confirmations/{pending_id}/approve", "/api/camera"):
+        for path in ("/api/estop", f"/api/confirmations/{pending_id}/approve", "/api/camera", "/api/map"):
             answer = await web.post(path, headers=headers, json={"topic": "/camera/image_raw"})
             assert answer.status_code == 403, path
             assert SECRET_HEADER in answer.json()["error"]
@@ -135,6 +135,7 @@ async def test_a_request_without_the_secret_changes_nothing(
         assert console.operator.latched is None
         assert [p.id for p in console.operator.pending] == [pending_id]
         assert console.running.hub.camera_topic is None
+        assert console.running.hub.map.topic == "/map"
         # The secret's owner still decides.
         denied = await web.post(f"/api/confirmations/{pending_id}/deny", headers=secret(console))
         assert denied.status_code == 200
@@ -239,3 +240,28 @@ def test_a_bad_console_setting_is_named(
     """Each wrong console option is one sentence saying which and why."""
     with pytest.raises(ConfigError, match=message):
         console_settings(address, **options)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        ({"topic": 5}, "topic must be a name"),
+        ({"base_frame": ["base_link"]}, "base_frame must be a name"),
+        ({"topic": "x" * 300}, "at most 256 characters"),
+        ({"topic": "/bad topic"}, "bad topic"),
+        ([1, 2], "the body must be JSON"),
+    ],
+)
+async def test_a_bad_map_choice_is_named_and_changes_nothing(
+    sim_ros2: SimulatedRobot, body: object, message: str
+) -> None:
+    """POST /api/map with a wrong field is a 400 naming it; the panel keeps its map topic and base frame."""
+    async with served_console(sim_ros2.url) as console, http(console) as web:
+        answer = await web.post("/api/map", headers=secret(console), json=body)
+        assert answer.status_code == 400
+        assert message in answer.json()["error"]
+        assert (console.running.hub.map.topic, console.running.hub.map.base_frame) == ("/map", "base_link")
+        chosen = await web.post(
+            "/api/map", headers=secret(console), json={"topic": "/costmap", "base_frame": ""}
+        )
+        assert chosen.json() == {"topic": "/costmap", "base_frame": "base_link"}

@@ -101,13 +101,16 @@ async def test_a_goal_that_does_not_fit_names_the_field(session: Session, sim: S
     assert not sim.world.goals
 
 
-@pytest.fixture(params=["ros2", "ros1", "humble"])
+@pytest.fixture(params=["ros2", "ros1", "humble", "rs"])
 async def slow_robot(
     request: pytest.FixtureRequest, make_sim: Callable[..., Awaitable[SimulatedRobot]]
 ) -> SimulatedRobot:
-    """A robot of each dialect (and Humble-like) whose Fibonacci goals take a while (a step every 0.2 s)."""
+    """A robot of each dialect (Humble-like, and like rosbridge-server-rs, which lets only the connection
+    that started a goal cancel it) whose Fibonacci goals take a while (a step every 0.2 s)."""
     if request.param == "humble":
         return await make_sim(dialect="ros2", in_order=True, action_step=0.2)
+    if request.param == "rs":
+        return await make_sim(dialect="ros2", server="rs", action_step=0.2)
     return await make_sim(dialect=request.param, action_step=0.2)
 
 

@@ -17,6 +17,7 @@ they offer themselves under ``/mcp_test/``.
 from __future__ import annotations
 
 import asyncio
+import base64
 import io
 import json
 import os
@@ -66,6 +67,31 @@ def _needs_action() -> tuple[str, str]:
 
 async def _version(session: Session) -> int:
     return (await session.ros.ros_info()).version
+
+
+async def _rosapi_node(session: Session) -> str:
+    """The node that serves /rosapi/topics: /rosapi for rosbridge_suite, the bridge itself for
+    rosbridge-server-rs (its rosapi is built in: /rosbridge_rs on the lab)."""
+    nodes = (await session.ok("list_nodes")).structured_content
+    assert nodes is not None
+    ordered = sorted(nodes["nodes"], key=lambda node: (node != "/rosapi", "ros" not in node, node))
+    for node in ordered:
+        info = (await session.call("get_node_info", {"node": node})).structured_content or {}
+        if "/rosapi/topics" in {s["name"] for s in info.get("services", [])}:
+            return str(node)
+    raise AssertionError(f"no node serves /rosapi/topics among {ordered}")
+
+
+async def _node_with_parameters(session: Session) -> str:
+    """A node with parameter services: rosapi's where it has them (not rosbridge-server-rs's bridge node)."""
+    rosapi = await _rosapi_node(session)
+    nodes = (await session.ok("list_nodes")).structured_content
+    assert nodes is not None
+    for node in [rosapi, *sorted(nodes["nodes"])]:
+        info = (await session.call("get_node_info", {"node": node})).structured_content or {}
+        if f"{node}/list_parameters" in {s["name"] for s in info.get("services", [])}:
+            return node
+    raise AssertionError("no node offers parameter services")
 
 
 async def test_list_topics_finds_rosout_with_its_type(real: Session) -> None:
@@ -348,6 +374,116 @@ async def test_a_goal_past_its_timeout_is_cancelled_on_the_robot(real: Session) 
         assert data["canceled_by"] == "timeout"
 
 
+class _StatusWatch:
+    """A side channel: another WebSocket following the action's status topic (ROS 2 ``_action/status``,
+    ROS 1 actionlib's ``status``), each goal's last status by its id (ROS 2: the UUID in hex)."""
+
+    def __init__(self, ws: Any, version: int) -> None:
+        self.ws = ws
+        self.version = version
+        self.latest: dict[str, int] = {}
+
+    @classmethod
+    async def open(cls, action: str, version: int) -> _StatusWatch:
+        assert REAL_URL is not None
+        ws = await websockets.connect(REAL_URL, compression=None, max_size=None)
+        if version == 2:
+            topic, msg_type = f"{action}/_action/status", "action_msgs/msg/GoalStatusArray"
+        else:
+            topic, msg_type = f"{action}/status", "actionlib_msgs/GoalStatusArray"
+        await ws.send(json.dumps({"op": "subscribe", "id": "side", "topic": topic, "type": msg_type}))
+        return cls(ws, version)
+
+    def _key(self, entry: dict[str, Any]) -> str:
+        if self.version == 1:
+            return str(entry["goal_id"]["id"])
+        uuid = entry["goal_info"]["goal_id"]["uuid"]
+        return base64.b64decode(uuid).hex() if isinstance(uuid, str) else bytes(uuid).hex()
+
+    async def until(self, wanted: Any) -> None:
+        """Read status messages until ``wanted(latest)`` holds (bounded by WAIT)."""
+        async with asyncio.timeout(WAIT):
+            while not wanted(self.latest):
+                frame = json.loads(await self.ws.recv())
+                if frame.get("op") == "publish":
+                    for entry in frame["msg"]["status_list"]:
+                        self.latest[self._key(entry)] = int(entry["status"])
+
+    def active(self) -> set[str]:
+        return {key for key, code in self.latest.items() if code in ((1, 2) if self.version == 2 else (1,))}
+
+    def canceled(self, key: str) -> bool:
+        return self.latest.get(key) in ((5,) if self.version == 2 else (2, 8))
+
+
+async def test_a_goal_publish_action_started_is_seen_cancelled_on_the_status_topic(real: Session) -> None:
+    """cancel_action by the goal's id stops it on the robot: the action server's own status topic, read on
+    another connection, shows the goal cancelled (every bridge: rosbridge-server-rs cancels only on the
+    connection that started the goal)."""
+    action, action_type = _needs_action()
+    watch = await _StatusWatch.open(action, await _version(real))
+    try:
+        await watch.until(lambda latest: True)
+        before = set(watch.latest)
+        running, first_feedback = _start_goal(real, action, action_type)
+        try:
+            goal_id = await asyncio.wait_for(first_feedback, WAIT)
+            await watch.until(lambda latest: bool(watch.active() - before))
+            (ours,) = watch.active() - before
+            await real.ok("cancel_action", {"action_name": action, "goal_id": goal_id})
+            await watch.until(lambda latest: watch.canceled(ours))
+            result = await asyncio.wait_for(running, WAIT)
+        finally:
+            running.cancel()
+    finally:
+        await watch.ws.close()
+    data = result.structured_content
+    assert data is not None, text_of(result)
+    assert data["canceled_by"] == "cancel_action"
+
+
+async def test_a_goal_another_client_started_is_cancelled_by_its_id_or_the_answer_says_why(
+    real: Session,
+) -> None:
+    """ROS 2: a goal a plain WebSocket client started is cancelled by its rosbridge id (rosbridge_suite), or
+    the answer says the bridge refused and names the goal's UUID as the way, which then cancels it."""
+    action, action_type = _needs_action()
+    if await _version(real) == 1:
+        pytest.skip("ROS 1 cancels any actionlib goal by its GoalID on <action>/cancel; no action ops")
+    watch = await _StatusWatch.open(action, 2)
+    assert REAL_URL is not None
+    other = await websockets.connect(REAL_URL, compression=None, max_size=None)
+    try:
+        await watch.until(lambda latest: True)
+        before = set(watch.latest)
+        rid = f"mcp_test_foreign:{os.getpid()}:{id(other)}"
+        wire_type = action_type_names(action_type).ros2
+        await other.send(
+            json.dumps(
+                {
+                    "op": "send_action_goal",
+                    "id": rid,
+                    "action": action,
+                    "action_type": wire_type,
+                    "args": ACTION_GOAL,
+                    "feedback": True,
+                }
+            )
+        )
+        await watch.until(lambda latest: bool(watch.active() - before))
+        (theirs,) = watch.active() - before
+        result = await real.call("cancel_action", {"action_name": action, "goal_id": rid})
+        if result.is_error:
+            text = text_of(result)
+            assert "was not cancelled: the bridge refused" in text, text
+            assert "Give the goal's UUID instead" in text
+            await real.ok("cancel_action", {"action_name": action, "goal_id": theirs})
+        await watch.until(lambda latest: watch.canceled(theirs))
+    finally:
+        await other.close()
+        await watch.ws.close()
+
+
 async def test_check_finds_the_bridge_healthy() -> None:
     """`check` against the bridge reports it reachable with rosapi answering, and exits 0."""
     assert REAL_URL is not None
@@ -417,7 +553,7 @@ async def test_describe_type_outlines_twist_and_a_rosapi_service(real: Session) 
     assert described is not None
     assert described["parts"][0]["outline"][:2] == ["linear: geometry_msgs/Vector3", "  x: float64"]
     assert described["parts"][0]["constants"] == {}
-    service_type = (await real.ok("get_node_info", {"node": "/rosapi"})).structured_content
+    service_type = (await real.ok("get_node_info", {"node": await _rosapi_node(real)})).structured_content
     assert service_type is not None
     topics_type = next(s["type"] for s in service_type["services"] if s["name"] == "/rosapi/topics")
     service = (await real.ok("describe_type", {"type_name": topics_type})).structured_content
@@ -427,18 +563,20 @@ async def test_describe_type_outlines_twist_and_a_rosapi_service(real: Session) 
 
 
 async def test_list_nodes_and_node_info_show_rosapi(real: Session) -> None:
-    """/rosapi is a running node, and serves /rosapi/topics."""
+    """The node serving /rosapi/topics is running (/rosapi, or the bridge whose rosapi is built in)."""
+    rosapi = await _rosapi_node(real)
     nodes = (await real.ok("list_nodes")).structured_content
     assert nodes is not None
-    assert "/rosapi" in nodes["nodes"]
-    info = (await real.ok("get_node_info", {"node": "/rosapi"})).structured_content
+    assert rosapi in nodes["nodes"]
+    info = (await real.ok("get_node_info", {"node": rosapi})).structured_content
     assert info is not None
     assert "/rosapi/topics" in {s["name"] for s in info["services"]}
-    assert "Did you mean /rosapi?" in await real.error("get_node_info", {"node": "/rosapii"})
+    assert f"Did you mean {rosapi}?" in await real.error("get_node_info", {"node": rosapi + "i"})
 
 
 async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
-    """ROS 2: /rosapi's own parameters (never get_param_names: it kills rosapi 2.1.0); ROS 1: the server's."""
+    """ROS 2: a node's own parameters, rosapi's where it has them (never get_param_names: it kills rosapi
+    2.1.0); ROS 1: the server's."""
     if await _version(real) == 1:
         names = (await real.ok("list_parameters")).structured_content
         assert names is not None
@@ -450,13 +588,14 @@ async def test_parameters_of_rosapi_are_listed_and_read(real: Session) -> None:
         written = await real.ok("set_parameter", {"name": "/mcp_test/param", "value": [1, 2.5, "x"]})
         assert (written.structured_content or {})["value"] == [1, 2.5, "x"]
         return
-    names = (await real.ok("list_parameters", {"node": "/rosapi"})).structured_content
+    node = await _node_with_parameters(real)
+    names = (await real.ok("list_parameters", {"node": node})).structured_content
     assert names is not None
-    assert "/rosapi:use_sim_time" in parameter_names(names)
-    value = (await real.ok("get_parameter", {"name": "/rosapi:use_sim_time"})).structured_content
+    assert f"{node}:use_sim_time" in parameter_names(names)
+    value = (await real.ok("get_parameter", {"name": f"{node}:use_sim_time"})).structured_content
     assert value is not None
     assert value["value"] is False
-    assert "has no parameter" in await real.error("get_parameter", {"name": "/rosapi:no_such_parameter"})
+    assert "has no parameter" in await real.error("get_parameter", {"name": f"{node}:no_such_parameter"})
 
 
 async def test_get_transform_explains_what_it_heard(real: Session) -> None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io
 from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
 
 import pytest
 from mcp_harness import Session, open_session, text_of
@@ -15,6 +16,7 @@ from mcp_harness import Session, open_session, text_of
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.sim.graph import ServiceEntry
 
 CMD_VEL = "/turtle1/cmd_vel"
 TWIST = "geometry_msgs/msg/Twist"
@@ -85,7 +87,7 @@ async def test_check_says_what_the_tools_will_meet(jazzy_2_1: SimulatedRobot) ->
     text = out.getvalue()
     assert code == 0, text
     assert "rosapi names fields _linear, _angular: read as linear, angular" in text
-    assert "[ok  ] a slow service call holds up later calls on its connection" in text
+    assert "[ok  ] concurrency: a slow service call holds up later calls on its connection" in text
     assert "action types: known (/fibonacci is example_interfaces/action/Fibonacci)" in text
 
 
@@ -95,3 +97,28 @@ async def test_a_goal_with_a_wrong_field_is_refused_in_whole_sentences(old: Sess
     arguments = {"action_name": "/fibonacci", "action_type": fibonacci, "goal": {"ordr": 5}}
     text = await old.error("publish_action", arguments)
     assert "does not have a field ordr. Check the action name" in text
+
+
+async def test_an_action_type_service_of_another_bridge_that_fails_is_passed_over(
+    jazzy_2_1: SimulatedRobot,
+) -> None:
+    """Two bridges on one graph: rosapi 2.1.0 lists the other's newer /rosapi/action_type, which 2.1.0 cannot
+    call (it cannot load its type). list_actions and publish_action take the way they use on 2.1.0."""
+
+    async def never_reached(request: dict[str, Any]) -> dict[str, Any]:
+        raise AssertionError("2.1.0 cannot load this service's type, so it never calls it")
+
+    jazzy_2_1.graph.add_service(
+        ServiceEntry("/rosapi/action_type", "rosapi_msgs/srv/GetActionType", "/rosapi_rs", never_reached)
+    )
+    fibonacci = "example_interfaces/action/Fibonacci"
+    async with open_session(jazzy_2_1.url) as session:
+        assert "/rosapi/action_type" in (await session.ros.call_service("/rosapi/services"))["services"]
+        actions = (await session.ok("list_actions")).structured_content
+        assert actions is not None
+        assert {"name": "/fibonacci", "type": fibonacci} in actions["actions"]
+        arguments = {"action_name": "/fibonacci", "action_type": fibonacci, "goal": {"order": 2}}
+        result = (await session.ok("publish_action", arguments)).structured_content
+    assert result is not None
+    assert result["succeeded"] is True
+    assert jazzy_2_1.world.refused_calls.get("/rosapi/action_type")

@@ -39,6 +39,22 @@ def test_replies_are_routed_by_id(op: str) -> None:
     assert event.frame == frame
 
 
+def test_an_error_status_naming_a_request_is_routed_to_it() -> None:
+    """rosbridge-server-rs answers a refused op with an error status carrying the op's id: a reply."""
+    frame = {"op": "status", "level": "error", "msg": "unknown active goal", "id": "goal:/f:1"}
+    event = protocol.InboundDecoder().feed(json.dumps(frame))
+    assert isinstance(event, protocol.ReplyEvent)
+    assert (event.op, event.id, event.frame) == ("status", "goal:/f:1", frame)
+
+
+def test_a_status_that_is_not_an_error_stays_a_notice() -> None:
+    """Only an error names a refusal; an info or warning status with an id is logged."""
+    frame = {"op": "status", "level": "warning", "msg": "slow", "id": "call_service:/x:1"}
+    event = protocol.InboundDecoder().feed(json.dumps(frame))
+    assert isinstance(event, protocol.Notice)
+    assert "bridge status (warning): slow" in event.text
+
+
 @pytest.mark.parametrize(
     ("data", "expected"),
     [

@@ -23,7 +23,9 @@ async def test_learning_stops_at_the_first_look_up_that_times_out(make_sim: Make
         await client.wait_connected(5.0)
         graph = RosGraph(client)
         learning = asyncio.create_task(graph.learn_service_types())
-        await robot.world.wait_for(lambda w: w.service_calls.get("/rosapi/service_type") == 1)
+        # The first look-up comes after ros_info and the service list, each 0.2 s of rosapi, and beside the
+        # client's ordering measurement: a loaded machine can take several seconds to get there.
+        await robot.world.wait_for(lambda w: w.service_calls.get("/rosapi/service_type") == 1, 20.0)
         # Queued behind that look-up (rosapi answers one call at a time): after it, rosapi answers nothing.
         hang = asyncio.create_task(
             client.call_service("/rosapi/get_param", {"name": "/rosapi:x", "default_value": ""}, timeout=5.0)

@@ -74,6 +74,9 @@ async def test_command_serves_the_robot_and_stops_cleanly_on_a_signal(
         ["--world", "mars"],
         ["--robots", "2"],
         ["--world", "nav2", "--robots", "0"],
+        ["--dialect", "ros1", "--server", "rs"],
+        ["--server", "rs", "--in-order"],
+        ["--server", "rust"],
     ],
 )
 async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str]) -> None:
@@ -127,3 +130,19 @@ async def test_command_serves_a_bridge_like_the_real_2_1_0_on_kilted() -> None:
     assert version == {"version": 2, "distro": "kilted"}
     assert details["typedefs"][0]["fieldnames"] == ["_linear", "_angular"]
     assert action_type["result"] is False
+
+
+async def test_command_serves_a_bridge_like_rosbridge_server_rs() -> None:
+    """--server rs: an unknown op is answered with an error status naming it and carrying its id."""
+    process, url = await _start("--port", "0", "--server", "rs")
+    try:
+        async with await RawClient.open(url) as client:
+            await client.send({"op": "bogus_op", "id": "bg"})
+            status = await client.reply("bg")
+        process.send_signal(signal.SIGTERM)
+        await asyncio.wait_for(process.communicate(), 20)
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    assert status == {"op": "status", "level": "error", "msg": "unknown operation: bogus_op", "id": "bg"}

@@ -794,3 +794,10 @@ def test_the_cbor_form_fails_on_fixed_size_arrays_as_rosbridges_converter_does(d
     json_form = registry.to_json("nav_msgs/Odometry", {})
     with pytest.raises(ConversionError, match="covariance"):
         registry.to_cbor("nav_msgs/Odometry", json_form)
+
+
+def test_rosbridge_server_rs_sends_fixed_size_arrays_as_cbor_lists() -> None:
+    """rs 0.1.6 (seen on /odom): the covariance is a plain list, the message is sent."""
+    registry = InterfaceRegistry("ros2")
+    form = registry.to_cbor("nav_msgs/Odometry", registry.to_json("nav_msgs/Odometry", {}), fixed_lists=True)
+    assert form["pose"]["covariance"] == [0.0] * 36

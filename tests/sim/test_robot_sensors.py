@@ -59,7 +59,7 @@ async def test_scan_reports_beyond_range_max_as_null_and_range_max_is_a_paramete
 
 
 async def test_tf_follows_the_turtle_from_odom_to_base_link_at_20_hz(sim: SimulatedRobot) -> None:
-    """odom -> base_link is the turtle's pose relative to its start; stamps of 6 messages span <= 0.35 s."""
+    """odom -> base_link is the turtle's pose relative to its start; 6 messages' stamps rise, about 20 Hz."""
     sim.world.turtle.x, sim.world.turtle.theta = TURTLE_HOME + 1.5, math.pi / 2
     async with await RawClient.open(sim.url) as client:
         await client.send({"op": "subscribe", "topic": "/tf", "id": "tf"})
@@ -72,7 +72,10 @@ async def test_tf_follows_the_turtle_from_odom_to_base_link_at_20_hz(sim: Simula
     rotation = transform["transform"]["rotation"]
     assert (rotation["z"], rotation["w"]) == pytest.approx((math.sin(math.pi / 4), math.cos(math.pi / 4)))
     stamps = [seconds(m["transforms"][0]["header"]["stamp"]) for m in messages]
-    assert 0 < stamps[-1] - stamps[0] <= 0.35
+    assert stamps == sorted(set(stamps))
+    # Five periods of a 20 Hz loop are 0.25 s; the bound is four times that, so a loaded machine's late ticks
+    # still pass while a loop at a few hertz (1 s or more) would not.
+    assert stamps[-1] - stamps[0] <= 1.0
 
 
 async def test_tf_static_is_latched_a_new_subscriber_gets_it_at_once(sim: SimulatedRobot) -> None:
@@ -108,12 +111,15 @@ async def test_robot_description_is_a_latched_urdf(sim: SimulatedRobot) -> None:
 
 
 async def test_a_topic_that_is_not_latched_sends_nothing_until_its_next_message(sim: SimulatedRobot) -> None:
-    """/chatter (10 Hz, not latched) has no message waiting for a new subscriber."""
+    """/chatter (10 Hz, not latched) has no message waiting for a new subscriber: whatever arrives was
+    published after the subscription (its count is higher than the world's when subscribing)."""
     async with await RawClient.open(sim.url) as client:
         await client.send({"op": "subscribe", "topic": "/turtle1/color_sensor", "id": "color"})
+        published_before = sim.world.chatter_count
         await client.send({"op": "subscribe", "topic": "/chatter", "id": "chatter"})
         frames = await client.frames_before_barrier()
-    assert not [f for f in frames if f.get("topic") == "/chatter"]
+    counts = [int(f["msg"]["data"].rsplit(" ", 1)[1]) for f in frames if f.get("topic") == "/chatter"]
+    assert all(count > published_before for count in counts), (published_before, counts)
 
 
 async def test_depth_image_is_16uc1_millimetres_of_the_wall_ahead_and_the_floor(sim: SimulatedRobot) -> None:

@@ -40,20 +40,26 @@ class Bridge:
     dialect: str
     distro: str
     robot: SimulatedRobot | None
+    server: str = "rosbridge_suite"
 
 
-async def _detect(url: str) -> tuple[str, str]:
+async def _detect(url: str) -> tuple[str, str, str]:
     async with await RawClient.open(url) as client:
         reply = await client.call("/rosapi/get_ros_version")
-    if reply["result"] is True:
-        return "ros2", str(reply["values"]["distro"])
-    return "ros1", "noetic"
+        if reply["result"] is not True:
+            return "ros1", "noetic", "rosbridge_suite"
+        # rosbridge-server-rs answers a cancel of a goal nobody started with an error status; 2.1.0 is silent.
+        await client.send({"op": "cancel_action_goal", "id": "conformance:probe", "action": "/nobody"})
+        told = any(frame.get("op") == "status" for frame in await client.frames_before_barrier())
+    return "ros2", str(reply["values"]["distro"]), "rs" if told else "rosbridge_suite"
 
 
-def _twin_settings(dialect: str, distro: str) -> dict[str, Any]:
-    """How to set up our robot like the real bridge: 2.1.0's defaults on ROS 2."""
+def _twin_settings(dialect: str, distro: str, server: str = "rosbridge_suite") -> dict[str, Any]:
+    """How to set up our robot like the real bridge: 2.1.0's defaults on ROS 2, or rosbridge-server-rs."""
     if dialect == "ros1":
         return {"dialect": "ros1"}
+    if server == "rs":
+        return {"dialect": "ros2", "distro": distro, "server": "rs"}
     return {"dialect": "ros2", "in_order": True, "distro": distro, "rosapi": "2.1.0"}
 
 
@@ -63,8 +69,8 @@ async def bridge(request: pytest.FixtureRequest) -> AsyncIterator[Bridge]:
     if REAL_URL:
         if request.param != "ros2":
             pytest.skip("the real bridge runs once")
-        dialect, distro = await _detect(REAL_URL)
-        yield Bridge(REAL_URL, dialect, distro, None)
+        dialect, distro, server = await _detect(REAL_URL)
+        yield Bridge(REAL_URL, dialect, distro, None, server)
         return
     settings = _twin_settings(request.param, "kilted")
     async with SimulatedRobot(**settings, rosapi_latency=SIM_LATENCY) as robot:
@@ -76,7 +82,7 @@ async def twin(bridge: Bridge) -> AsyncIterator[SimulatedRobot]:
     """Our robot set up like the real bridge (the comparisons need a real one)."""
     if bridge.robot is not None:
         pytest.skip("set ROSBRIDGE_TEST_URL=ws://host:port to compare with a real rosbridge")
-    async with SimulatedRobot(**_twin_settings(bridge.dialect, bridge.distro)) as robot:
+    async with SimulatedRobot(**_twin_settings(bridge.dialect, bridge.distro, bridge.server)) as robot:
         yield robot
 
 
@@ -113,7 +119,16 @@ async def test_rosapi_serves_calls_sent_side_by_side_one_at_a_time(bridge: Bridg
 async def test_the_twin_answers_rosapi_as_the_real_bridge(bridge: Bridge, twin: SimulatedRobot) -> None:
     """TypeDefs (field names, constnames), parameters, the missing services, hidden names."""
     questions: list[tuple[str, dict[str, Any]]] = []
-    if bridge.dialect == "ros2":
+    if bridge.server == "rs":
+        # What the twin models of rosbridge-server-rs's built-in rosapi (the newer rosbridge_suite formats;
+        # not its TypeDefs, which list only real constants where rosapi also lists SLOT_TYPES and fields).
+        questions += [
+            ("/rosapi/get_param", {"name": "/turtlesim:background_r", "default_value": ""}),
+            ("/rosapi/action_type", {"action": "/fibonacci"}),
+            ("/rosapi/get_ros_version", {}),
+            ("/nobody_has_this_service", {}),
+        ]
+    elif bridge.dialect == "ros2":
         questions += [
             ("/rosapi/action_servers", {}),
             ("/rosapi/message_details", {"type": "geometry_msgs/msg/Twist"}),
@@ -165,7 +180,10 @@ async def test_every_node_offers_the_services_of_the_real_graph(bridge: Bridge, 
     real_nodes, real_types = await graph(bridge.url)
     our_nodes, our_types = await graph(twin.url)
     shared = real_nodes & our_nodes
-    assert {"/rosapi", "/rosbridge_websocket", "/talker"} <= shared
+    # rosbridge-server-rs has no /rosapi node and names its own node /rosbridge_rs.
+    assert (
+        {"/talker"} if bridge.server == "rs" else {"/rosapi", "/rosbridge_websocket", "/talker"}
+    ) <= shared
     for node in shared:
         real_services = {n: t for n, t in real_types.items() if n.startswith(node + "/")}
         our_services = {n: t for n, t in our_types.items() if n.startswith(node + "/")}
@@ -177,6 +195,8 @@ async def test_every_node_offers_the_services_of_the_real_graph(bridge: Bridge, 
 async def test_a_latched_topic_answers_a_new_subscriber_at_once(bridge: Bridge) -> None:
     """rosbridge's /client_count is latched (ROS 1) / transient-local (ROS 2): a count comes without waiting
     for the next connect or disconnect (on 2.1.0 first the one from before this client connected)."""
+    if bridge.server == "rs":
+        pytest.skip("rosbridge-server-rs 0.1.6 has no /client_count")
     async with await RawClient.open(bridge.url) as client:
         await client.send({"op": "subscribe", "topic": "/client_count", "id": "latched"})
         count = (await client.next_publish("/client_count", wait=2.0))["msg"]["data"]
@@ -187,10 +207,14 @@ async def test_a_latched_topic_answers_a_new_subscriber_at_once(bridge: Bridge) 
 async def test_the_twin_waits_out_a_slow_service_despite_a_timeout_field(
     bridge: Bridge, twin: SimulatedRobot
 ) -> None:
-    """2.1.0 and 0.11.17 read no timeout field: /slow_service answers after its 3 s on both."""
+    """2.1.0 and 0.11.17 read no timeout field: /slow_service answers after its 3 s on both;
+    rosbridge-server-rs reads it, and gives up after 0.5 s like our newest-rosbridge twin."""
     answers = []
     for url in (bridge.url, twin.url):
         async with await RawClient.open(url) as client:
             answers.append(await client.call("/slow_service", {}, timeout=0.5))
+    if bridge.server == "rs":
+        assert [a["result"] for a in answers] == [False, False]
+        return
     assert [a["result"] for a in answers] == [True, True]
     assert answers[0]["values"] == answers[1]["values"]

@@ -10,22 +10,22 @@ about a second), and whether an action server's type can be found. Exit code 0 w
 from __future__ import annotations
 
 import asyncio
-import itertools
-import json
-import uuid
-from collections.abc import Callable
-from typing import Any, TextIO
+import contextlib
+from fnmatch import fnmatchcase
+from typing import TextIO
 from urllib.parse import urlsplit
 
-from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import WebSocketException
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config, plain_text_warning
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.messages import find_problems, typedefs_from_rosapi
+from rosbridge_mcp_server.robot.names import did_you_mean
+from rosbridge_mcp_server.safety.policy import Policy
 from rosbridge_mcp_server.wire.dialect import RosInfo, normalize_type
 
 __all__ = ["run_check", "unreachable_advice"]
@@ -33,6 +33,7 @@ __all__ = ["run_check", "unreachable_advice"]
 _OK = "ok  "
 _BAD = "FAIL"
 _NOTE = "note"
+_WARN = "warn"
 
 
 def unreachable_advice(url: str, reason: str | None) -> list[str]:
@@ -121,125 +122,81 @@ async def _message_check(graph: RosGraph, info: RosInfo) -> tuple[str, str]:
     return _OK, f"messages: a {twist} is checked before it is published{how}"
 
 
-async def call_ordering(url: str, info: RosInfo, timeout: float) -> bool:
-    """Whether a slow service call holds up the next call on its connection, measured on the bridge.
-
-    One connection offers a short-lived Trigger service of its own; a second connection calls it and then
-    ``/rosapi/get_time``. The service answers only after ``get_time`` did, or after a second: when
-    ``get_time`` had to wait, the bridge handles a connection's calls in order. Raises
-    :class:`RosbridgeError` (or ``TimeoutError``/``OSError``) when the probe cannot run.
-    """
-    name = f"/rosbridge_mcp_check_{uuid.uuid4().hex[:8]}"
-    srv_type = normalize_type("std_srvs/Trigger", info.version, "srv")
-    async with asyncio.timeout(timeout):
-        async with connect(url, compression=None) as host, connect(url, compression=None) as caller:
-            await host.send(json.dumps({"op": "advertise_service", "service": name, "type": srv_type}))
-            try:
-                await _wait_listed(caller, name)
-                for rid, service in (("slow", name), ("fast", "/rosapi/get_time")):
-                    await caller.send(json.dumps({"op": "call_service", "id": rid, "service": service}))
-                request = await _next(host, lambda f: f.get("op") == "call_service")
-                try:
-                    async with asyncio.timeout(_HOLD_SECONDS):
-                        await _next(caller, _with_id("fast"))
-                    queued = False
-                except TimeoutError:
-                    queued = True
-                answer = {"success": True, "message": "rosbridge-mcp-server check"}
-                await host.send(
-                    json.dumps(
-                        {
-                            "op": "service_response",
-                            "id": request.get("id"),
-                            "service": name,
-                            "result": True,
-                            "values": answer,
-                        }
-                    )
-                )
-                await _next(caller, _with_id("slow"))
-            finally:
-                await _unadvertise(host, name)
-    return queued
-
-
-async def _unadvertise(host: ClientConnection, name: str) -> None:
-    """Take the probe's service away for good before the connection closes.
-
-    Both rosbridge 0.11.17 and 2.1.0 keep a client's advertised services after it disconnects (a call to one
-    never gets an answer), and both drop the frames of a connection they have not handled yet when it
-    closes: an ``unadvertise_service`` sent just before the close can be lost on a busy bridge (0.11.17's
-    takes 1 s, so one is always busy there). A reply to a call sent after it on the same connection proves
-    it was handled.
-    """
-    try:
-        await host.send(json.dumps({"op": "unadvertise_service", "service": name}))
-        barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
-        await host.send(json.dumps(barrier))
-        async with asyncio.timeout(_UNADVERTISE_SECONDS):
-            await _next(host, _with_id("unadvertised"))
-    except (TimeoutError, WebSocketException, OSError):
-        pass  # the probe's own outcome (or failure) is what check reports
-
-
-#: How long check waits for the bridge to confirm its probe service is gone.
-_UNADVERTISE_SECONDS = 3.0
-
-
-#: How long the probe's service holds its caller: far above a rosapi round trip (3-100 ms on the labs).
-_HOLD_SECONDS = 1.0
-
-
-async def _next(ws: ClientConnection, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
-    """The next frame on ``ws`` that ``wanted`` accepts (others are skipped)."""
-    while True:
-        frame = json.loads(await ws.recv())
-        if isinstance(frame, dict) and wanted(frame):
-            return frame
-
-
-def _with_id(rid: str) -> Callable[[dict[str, Any]], bool]:
-    return lambda frame: frame.get("id") == rid
-
-
-async def _wait_listed(ws: ClientConnection, service: str) -> None:
-    """Until rosapi lists ``service`` (the bridge registers an advertised service with the graph first)."""
-    for attempt in itertools.count():
-        rid = f"listed-{attempt}"
-        args = {"service": service}
-        await ws.send(
-            json.dumps({"op": "call_service", "id": rid, "service": "/rosapi/service_type", "args": args})
-        )
-        reply = await _next(ws, _with_id(rid))
-        values = reply.get("values")
-        if isinstance(values, dict) and values.get("type"):
-            return
-        await asyncio.sleep(0.05)
-
-
-async def _ordering_check(config: Config, info: RosInfo) -> tuple[str, str]:
+async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo) -> tuple[str, str]:
     """Calls queue behind a slow one or not, measured, and whether the client treats the bridge so."""
     try:
-        queued = await call_ordering(config.url, info, timeout=max(config.request_timeout, 5.0))
-    except (RosbridgeError, TimeoutError, OSError, WebSocketException) as exc:
+        queued = await call_ordering(
+            config.url,
+            info.version,
+            timeout=max(config.request_timeout, 5.0),
+            ssl_context=config.ssl_context(),
+            headers=config.headers,
+        )
+    except (RosbridgeError, TimeoutError, OSError, LookupError, ValueError, WebSocketException) as exc:
         return _NOTE, f"could not measure whether calls queue behind a slow one ({type(exc).__name__}: {exc})"
-    said = ""
-    if info.version == 2:
-        told = {True: "true", False: "false", None: "not readable"}
-        said = f"; its call_services_in_new_thread: {told[info.calls_threaded]}"
-    if queued and not info.may_be_in_order:
+    session = client.session
+    if session is not None:
+        # The client measures the same in the background after connecting; compare with its conclusion.
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(session.ordering_known.wait(), max(config.request_timeout, 5.0))
+    lanes = session.lanes_by_default if session is not None else info.may_be_in_order
+    if info.version == 1:
+        how = "rosbridge 0.11 runs each call in a thread of its own"
+    elif info.status_replies:
+        how = "from the bridge's status answers"
+    else:
+        how = "measured on connecting"
+    if queued and not lanes:
         return (
             _BAD,
-            "a slow service call holds up later calls on its connection, yet this bridge was taken to run "
-            f"them side by side{said}: its tools would wait behind a slow call",
+            "a slow service call holds up later calls on its connection, yet this server took the bridge to "
+            "run them side by side: its tools would wait behind a slow call",
         )
     if queued:
         return (
             _OK,
-            "a slow service call holds up later calls on its connection (the bridge handles one connection "
-            f"strictly in order{said}): this server gives each call a connection of its own",
+            "concurrency: a slow service call holds up later calls on its connection (the bridge handles one "
+            "connection strictly in order): this server gives each call a connection of its own",
         )
-    return _OK, f"calls on one connection run side by side (measured{said})"
+    if lanes:
+        return (
+            _NOTE,
+            "concurrency: calls on one connection run side by side (measured now), but this server could not "
+            "tell and gives each call a connection of its own (safe, a little slower)",
+        )
+    return (
+        _OK,
+        f"concurrency: calls on one connection run side by side (measured now; the server knew: {how})",
+    )
+
+
+def _bridge_lines(info: RosInfo) -> list[tuple[str, str]]:
+    """Which bridge this looks like, and how goals are cancelled on it, as judged from its answers."""
+    if info.version == 1:
+        return [(_NOTE, "cancel path: a goal's cancel is published on <action>/cancel (actionlib)")]
+    if info.status_replies:
+        implementation = (
+            "implementation: answers a refused op with an error status (rosbridge-server-rs does; "
+            "rosbridge_suite never)"
+        )
+        foreign = (
+            "it refused to cancel a goal this connection did not start, so another client's goal is "
+            "cancelled by its UUID through <action>/_action/cancel_goal, not by its rosbridge id"
+        )
+    else:
+        implementation = "implementation: answers like rosbridge_suite (no status ops)"
+        foreign = (
+            "a goal another client started is cancelled by its rosbridge id from any connection, or by its "
+            "UUID through <action>/_action/cancel_goal"
+        )
+    return [
+        (_NOTE, implementation),
+        (
+            _NOTE,
+            "cancel path: a goal publish_action started is cancelled on the main connection and on its own "
+            f"(each bridge acts on one of them); {foreign}",
+        ),
+    ]
 
 
 async def _action_check(graph: RosGraph, info: RosInfo, actions: list[str]) -> tuple[str, str]:
@@ -257,6 +214,22 @@ async def _action_check(graph: RosGraph, info: RosInfo, actions: list[str]) -> t
             "and publish_action needs the type from the model",
         )
     return _OK, f"action types: known ({actions[0]} is {found})"
+
+
+def policy_names_check(policy: Policy, present: dict[str, list[str]]) -> list[tuple[str, str]]:
+    """A warning for each allow pattern of *policy* that names nothing on this robot (``present``: the
+    names of each kind, e.g. ``{"topics": [...]}``): every act it was written for would be refused.
+    Parameters are left out: listing them all costs a call per node."""
+    lines: list[tuple[str, str]] = []
+    for section, names in present.items():
+        allow = getattr(policy, section).allow
+        for pattern in allow or ():
+            if not any(fnmatchcase(name, pattern) for name in names):
+                noun = section.removesuffix("s")
+                hint = did_you_mean(pattern, names, cutoff=0.6)
+                text = f"policy [{section}] allow {pattern!r} matches no {noun} on this robot"
+                lines.append((_WARN, f"{text}, so acts meant for it will be refused.{hint}"))
+    return lines
 
 
 async def run_check(config: Config, out: TextIO) -> int:
@@ -305,15 +278,8 @@ async def run_check(config: Config, out: TextIO) -> int:
         say(_OK, "rosapi answers")
         results = _features(info)
         results.append(await _message_check(graph, info))
-        results.append(await _ordering_check(config, info))
-        if info.version == 2 and info.goals_may_block:
-            results.append(
-                (
-                    _NOTE,
-                    "a goal holds up its connection until it ends (send_action_goals_in_new_thread is not "
-                    "true): each goal runs on a connection of its own and cancels go on another",
-                )
-            )
+        results += _bridge_lines(info)
+        results.append(await _ordering_check(config, client, info))
         results.append(await _action_check(graph, info, actions))
         for mark, text in results:
             say(mark, text)
@@ -323,8 +289,17 @@ async def run_check(config: Config, out: TextIO) -> int:
             _count(len(actions), "action server"),
         ]
         say(_OK, ", ".join(counts))
+        present = {"topics": [t.name for t in topics], "services": list(services), "actions": list(actions)}
+        warnings = policy_names_check(config.policy, present)
+        for mark, text in warnings:
+            say(mark, text)
         if any(mark == _BAD for mark, _ in results):
             out.write("Not healthy: see the FAIL lines above.\n")
             return 1
-        out.write("Healthy: the MCP server can use this bridge.\n")
+        if warnings:
+            out.write(
+                "Healthy: the MCP server can use this bridge, but see the warn lines about the policy.\n"
+            )
+        else:
+            out.write("Healthy: the MCP server can use this bridge.\n")
         return 0

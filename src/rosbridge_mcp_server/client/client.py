@@ -14,6 +14,7 @@ from typing import Any, Final, Literal, Protocol, Self
 from rosbridge_mcp_server.client.connection import Connection, open_connection
 from rosbridge_mcp_server.client.goal_lane import GoalLane, GoalLanes
 from rosbridge_mcp_server.client.lanes import LanePool
+from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.client.reconnect import Attempts, reconnect_cap
 from rosbridge_mcp_server.client.services import bridge_timeout, call_on, call_on_lane
 from rosbridge_mcp_server.client.session import Session, open_session
@@ -29,6 +30,10 @@ logger = logging.getLogger("rosbridge_mcp_server.client")
 
 #: How long :meth:`RosbridgeClient.close` waits for the bridge to handle what acted last.
 _CLOSE_HANDLED_SECONDS: Final = 1.0
+#: How long the ordering probe's service holds its caller: above a slow rosapi call on 2.1.0 (85-100 ms).
+_ORDERING_HOLD_SECONDS: Final = 0.5
+#: The ordering probe gives up after this long (then every call keeps a connection of its own).
+_ORDERING_LIMIT_SECONDS: Final = 5.0
 
 
 class SessionWatcher(Protocol):
@@ -91,6 +96,7 @@ class RosbridgeClient:
         self._disconnected_event.set()
         self._watchers: list[SessionWatcher] = []
         self._background: set[asyncio.Task[Any]] = set()
+        self._measuring: asyncio.Task[Any] | None = None
         self._lanes = LanePool(
             self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
         )
@@ -156,6 +162,8 @@ class RosbridgeClient:
         self._closed = True
         self._closing = True
         self._attempts.stop()
+        if self._measuring is not None:
+            self._measuring.cancel()
         session = self.session
         for watcher in self._watchers:
             await watcher.client_closing(session)
@@ -242,6 +250,10 @@ class RosbridgeClient:
                     session.info.describe(),
                 )
                 failures = 0
+                if not session.ordering_known.is_set():
+                    self._measuring = self.run_in_background(
+                        self._measure_ordering(session), "measure call ordering"
+                    )
                 for watcher in self._watchers:
                     watcher.session_started(session)
                 served = True
@@ -309,6 +321,43 @@ class RosbridgeClient:
         self._background.add(task)
         task.add_done_callback(self._background.discard)
         return task
+
+    async def _measure_ordering(self, session: Session) -> None:
+        """Measure whether the bridge holds a connection's calls up behind each other; lanes stay until then.
+
+        Only where the bridge's answers did not tell (see :mod:`.ordering`); a failed measurement keeps the
+        safe assumption, in order.
+        """
+        try:
+            queued = await call_ordering(
+                self.url,
+                session.info.version,
+                min(max(self.request_timeout, 2.0), _ORDERING_LIMIT_SECONDS),
+                hold=_ORDERING_HOLD_SECONDS,
+                ssl_context=self._ssl,
+                headers=self._headers,
+            )
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:
+            logger.info(
+                "Could not measure whether %s holds calls up behind each other (%s: %s); every call gets a "
+                "connection of its own",
+                self.url,
+                type(exc).__name__,
+                exc,
+            )
+        else:
+            session.lanes_by_default = queued
+            logger.info(
+                "rosbridge at %s %s",
+                self.url,
+                "holds a connection's calls up behind a slow one: every call gets a connection of its own"
+                if queued
+                else "runs a connection's calls side by side (measured)",
+            )
+        finally:
+            session.ordering_known.set()
 
     def _close_in_background(self, conn: Connection) -> None:
         self.run_in_background(conn.aclose(), f"close {conn.name}")
@@ -458,8 +507,35 @@ class RosbridgeClient:
     async def cancel_action_goal(self, action: str, goal_id: str) -> None:
         """Ask the bridge to cancel goal *goal_id*, on the main connection.
 
-        rosbridge keeps one goal table per process, so this reaches a goal running on a lane (or
-        on another client's connection) too. No reply comes; the goal's result says what happened.
+        rosbridge_suite keeps one goal table per process, so there this reaches a goal running on a lane
+        (or on another client's connection) too; rosbridge-server-rs only lets the connection that started
+        a goal cancel it (``robot/goals`` also sends the cancel on the goal's own lane). No reply comes; the
+        goal's result says what happened.
         """
         await self.require_session().send(protocol.cancel_action_goal(action, id=goal_id))
         self.unhandled_acts = True
+
+    async def cancel_action_goal_heard(self, action: str, goal_id: str, timeout: float) -> str | None:
+        """Cancel goal *goal_id* on the main connection and tell whether the bridge refused it.
+
+        Returns the bridge's refusal (an error ``status`` naming the goal: rosbridge-server-rs answers
+        "unknown active goal" for a goal another connection started) if it came before the answer to a call
+        sent after the cancel, else ``None``: rosbridge_suite cancels silently, and ignores an id it does
+        not know just as silently. A refusal is also kept on the session (:attr:`Session.cancel_owner_only`).
+        """
+        session = self.require_session()
+        conn = session.connection
+        heard = conn.expect(goal_id, f"a refusal of the cancel of goal {goal_id}", timeout)
+        try:
+            await session.send(protocol.cancel_action_goal(action, id=goal_id))
+            self.unhandled_acts = True
+            if not heard.done():
+                await session.handled(timeout)
+            if not heard.done() or heard.cancelled() or heard.exception() is not None:
+                return None
+            frame = heard.result()
+        finally:
+            conn.forget(goal_id)
+        text = str(frame.get("msg") or "the bridge refused the cancel")
+        session.cancel_owner_only = True
+        return text

@@ -141,6 +141,14 @@ class Connection:
                         waiting = pending.get(event.id)
                         if waiting is not None:
                             waiting.deliver(event.op, event.frame)
+                        elif event.op == "status":
+                            # A refused op nobody waits on (a subscribe, a publish): its only trace.
+                            logger.warning(
+                                "%s: the bridge refused %s: %.300s",
+                                self.name,
+                                event.id,
+                                event.frame.get("msg"),
+                            )
                         elif logger.isEnabledFor(logging.DEBUG):
                             logger.debug(
                                 "%s: %s for %s, which nobody awaits any more", self.name, event.op, event.id
@@ -260,6 +268,27 @@ class Connection:
         finally:
             self.pending.pop(rid, None)
 
+    def expect(self, rid: str, what: str, timeout: float) -> asyncio.Future[dict[str, Any]]:
+        """A future for the reply with id *rid* to something sent next (``forget(rid)`` when done).
+
+        For an op that gets no reply unless the bridge refuses it: rosbridge-server-rs answers a refused
+        ``cancel_action_goal`` with an error ``status`` carrying the goal's id.
+        """
+        future: asyncio.Future[dict[str, Any]] = self._loop.create_future()
+        deadline = self._loop.time() + timeout
+        self.pending[rid] = ReplyWaiter(future, what, deadline, timeout)
+        if self._sweep is None or deadline < self._sweep_at:
+            self._arm_sweep(deadline)
+        # Nobody may await it (the usual outcome is silence): its timeout must not be logged as unretrieved.
+        future.add_done_callback(_consume)
+        return future
+
+    def forget(self, rid: str) -> None:
+        """Stop waiting for a reply with id *rid*."""
+        waiting = self.pending.pop(rid, None)
+        if type(waiting) is ReplyWaiter and not waiting.future.done():
+            waiting.future.cancel()
+
     # Deadlines: one timer per connection, armed for the earliest deadline and left armed while
     # later requests come and go. A timer per request (asyncio.timeout, call_later) costs several
     # microseconds per call, which a benchmark against a raw websockets round trip notices.
@@ -304,6 +333,11 @@ class Connection:
             except TimeoutError:
                 self.reader.cancel()
         self.fail_pending()
+
+
+def _consume(future: asyncio.Future[Any]) -> None:
+    if not future.cancelled():
+        future.exception()
 
 
 def frame_bytes(text: str, what: str) -> bytes:

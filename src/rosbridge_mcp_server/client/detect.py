@@ -1,7 +1,9 @@
-"""What the bridge is: ROS version and distro, asked once per connection through rosapi."""
+"""What the bridge is: ROS version and distro (asked of rosapi) and how it behaves (judged from its answers),
+once per connection."""
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from typing import Any
 
@@ -17,8 +19,6 @@ logger = logging.getLogger("rosbridge_mcp_server.client")
 
 #: rosbridge's node name in rosbridge_websocket.launch (ROS 1 0.11); used to tell ROS 1 without rosapi.
 ROS1_BRIDGE_NODE = "rosbridge_websocket"
-#: The node name rosbridge's launch files (ROS 1 and 2) and `ros2 run` give the bridge.
-BRIDGE_NODE = "rosbridge_websocket"
 
 
 async def detect(conn: Connection, ids: protocol.IdMinter, url: str, timeout: float) -> RosInfo:
@@ -41,8 +41,14 @@ async def detect(conn: Connection, ids: protocol.IdMinter, url: str, timeout: fl
         distro = values.get("distro") if isinstance(values, dict) else None
         if version == 1:
             return RosInfo(1, distro or None)
-        calls, goals = await _threading(conn, ids, timeout)
-        return RosInfo(2, str(distro) if distro else None, calls_threaded=calls, goals_threaded=goals)
+        told = await _answers_with_status(conn, ids, timeout)
+        return RosInfo(
+            2,
+            str(distro) if distro else None,
+            calls_threaded=True if told else None,
+            goals_threaded=True if told else None,
+            status_replies=told,
+        )
     try:
         values = await call("/rosapi/topics")
     except ServiceError as exc:
@@ -63,34 +69,30 @@ async def detect(conn: Connection, ids: protocol.IdMinter, url: str, timeout: fl
     return RosInfo(1, None)
 
 
-async def _threading(
-    conn: Connection, ids: protocol.IdMinter, timeout: float
-) -> tuple[bool | None, bool | None]:
-    """Whether a ROS 2 bridge runs each call and each goal in a thread of its own, as its node says.
+#: The action a connection's probe cancel names: a goal nobody can have started.
+PROBE_ACTION = "/rosbridge_mcp_server/probe"
 
-    rosbridge 2.x reads ``call_services_in_new_thread`` and ``send_action_goals_in_new_thread``; 2.1.0's
-    launch file sets both false, on Jazzy and Kilted alike. They are asked of the bridge node's own
-    ``get_parameters`` service: one call of ~6-10 ms on 2.1.0, where rosapi's ``get_param`` takes 60-180 ms
-    per parameter (and 5 s, serving nobody else, for a node that does not exist). ``None`` where the bridge
-    did not tell: a node of another name, or a parameter it does not declare.
+
+async def _answers_with_status(conn: Connection, ids: protocol.IdMinter, timeout: float) -> bool:
+    """Whether the bridge answers a refused op with an error ``status`` (judged from its answer).
+
+    A cancel of a goal nobody started is sent, then a call: rosbridge_suite (every release) ignores the cancel
+    without a word; rosbridge-server-rs 0.1.6 answers it with an error ``status`` ("unknown active goal")
+    before the call's reply. Such a bridge runs each op as a task of its own (calls are never held up behind
+    each other on a connection, measured on 0.1.6) and lets only the connection that started a goal cancel
+    it. Nothing acts: no goal has this id. The bridge node's parameters are not read: the node called
+    ``/rosbridge_websocket`` may be another bridge on the same graph.
     """
-    service = f"/{BRIDGE_NODE}/get_parameters"
-    args = {"names": ["call_services_in_new_thread", "send_action_goals_in_new_thread"]}
+    gid = ids.goal_id(PROBE_ACTION)
+    heard = conn.expect(gid, "a refusal of the probe cancel", timeout)
     try:
-        values = await call_on(conn, ids, service, args, timeout, bridge_timeout=None)
-    except (ServiceError, RequestTimeoutError):
-        return None, None
-    listed = values.get("values") if isinstance(values, dict) else None
-    if not isinstance(listed, list) or len(listed) != 2:
-        return None, None
-    return _bool_parameter(listed[0]), _bool_parameter(listed[1])
-
-
-def _bool_parameter(value: Any) -> bool | None:
-    """A boolean ``rcl_interfaces/ParameterValue`` (type 1), else ``None`` (not set, or another type)."""
-    if isinstance(value, dict) and value.get("type") == 1 and isinstance(value.get("bool_value"), bool):
-        return bool(value["bool_value"])
-    return None
+        await conn.send(protocol.cancel_action_goal(PROBE_ACTION, id=gid))
+        if not heard.done():
+            with contextlib.suppress(ServiceError, RequestTimeoutError):
+                await call_on(conn, ids, "/rosapi/get_time", None, timeout, bridge_timeout=None)
+        return heard.done() and not heard.cancelled() and heard.exception() is None
+    finally:
+        conn.forget(gid)
 
 
 async def _answers(call: Any, service: str) -> bool:

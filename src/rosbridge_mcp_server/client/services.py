@@ -32,9 +32,13 @@ async def call_on(
     rid = ids.mint("call_service", service)
     op = protocol.call_service(service, args, id=rid, timeout=bridge_timeout)
     reply = await conn.request(rid, op, "service " + service, timeout)
-    if reply.get("result") is False:
-        values = reply.get("values")
-        raise ServiceError(service, values if isinstance(values, str) else repr(values))
+    if reply.get("result") is not True:
+        if reply.get("op") == "status":
+            # rosbridge-server-rs refuses a call with an error status rather than a service_response.
+            raise ServiceError(service, str(reply.get("msg")))
+        if reply.get("result") is False:
+            values = reply.get("values")
+            raise ServiceError(service, values if isinstance(values, str) else repr(values))
     return reply.get("values")
 
 

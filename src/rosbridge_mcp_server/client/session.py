@@ -7,6 +7,7 @@ can never inherit a fact about the old one: the client swaps the whole object.
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import logging
 from collections.abc import Awaitable, Callable
@@ -29,11 +30,13 @@ class Session:
     """The main connection to the bridge, with the bridge's :class:`RosInfo` detected on it."""
 
     __slots__ = (
+        "cancel_owner_only",
         "connection",
         "goals_block",
         "info",
         "lanes_by_default",
         "number",
+        "ordering_known",
         "send_service_timeout",
         "spread_calls",
     )
@@ -45,9 +48,17 @@ class Session:
         self.number = number
         # Derived once per connection, so the hot path does not recompute them.
         self.lanes_by_default = info.may_be_in_order
+        #: Set once whether calls hold each other up is known (told by the bridge's answers, measured, or
+        #: given up on: then the connection is taken to be in order). See :mod:`.ordering`.
+        self.ordering_known = asyncio.Event()
+        if info.version == 1 or info.calls_threaded is not None:
+            self.ordering_known.set()
         self.goals_block = info.goals_may_block
         self.spread_calls = info.one_call_per_connection
         self.send_service_timeout = info.honours_service_timeout
+        #: The bridge refused to cancel a goal another connection started (rosbridge-server-rs does); None
+        #: until a cancel of such a goal has been answered or not.
+        self.cancel_owner_only: bool | None = info.cancel_owner_only
 
     @property
     def is_open(self) -> bool:

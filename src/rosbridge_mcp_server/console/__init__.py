@@ -1,9 +1,9 @@
 """The operator console: a web page for the person beside the robot (``--console [HOST:]PORT``).
 
-It shows each robot's connection, the acting calls as they happen, the streams and goals running, the camera
-and the confirmations waiting for the person, with Approve / Deny, E-STOP and Release. It sits above
-``safety/`` (it answers the :class:`~rosbridge_mcp_server.safety.Operator`'s questions and latches its stop)
-and below ``cli/``; it imports no ``mcp``.
+It shows each robot's connection, the acting calls as they happen, the streams and goals running, the camera,
+the robot's pose on its map and the confirmations waiting for the person, with Approve / Deny, E-STOP and
+Release. It sits above ``safety/`` (it answers the :class:`~rosbridge_mcp_server.safety.Operator`'s questions
+and latches its stop) and below ``cli/``; it imports no ``mcp``.
 
 The web side (``serve.py``: uvicorn; ``web.py``: Starlette) is imported from its own modules, only when a
 console is served, so a server without ``--console`` does not load them.

@@ -3,7 +3,9 @@
 :class:`ConsoleHub` gathers each robot's connection, streams and goals, the audit (newest first), the
 confirmations waiting for the person and the latched e-stop into one JSON-ready snapshot, and tells waiters
 (the page's event streams) when it changes. Audit lines and the operator's changes are pushed at once; the
-connection, streams and goals are looked at four times a second and pushed when they differ.
+connection, streams and goals are looked at four times a second and pushed when they differ. The camera and
+the map panel (``mapview.py``) listen only while a page is open: when the last page's event stream closes,
+the camera is turned off and the map panel stops listening.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from rosbridge_mcp_server.console.mapview import MapPanel
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.acting import Act
 from rosbridge_mcp_server.robot.goals import running_goals
@@ -103,6 +106,9 @@ class ConsoleHub:
         self.frame: Frame | None = None
         self._frames = 0
         self._camera_task: asyncio.Task[None] | None = None
+        self._pushes = 0
+        self.viewers = 0
+        self.map = MapPanel(self.robots[0].client, self._graph, self.changed, self._pushed)
         for robot in self.robots:
             robot.audit.listen(self._on_audit)
         operator.listen(self.changed)
@@ -120,13 +126,25 @@ class ConsoleHub:
     def changed(self) -> None:
         """Something the page shows changed: wake every waiter."""
         self._version += 1
+        self._wake()
+
+    def _pushed(self) -> None:
+        """A new pose or map picture (not part of the snapshot): wake every waiter."""
+        self._pushes += 1
+        self._wake()
+
+    def _wake(self) -> None:
         event, self._changed = self._changed, asyncio.Event()
         event.set()
 
-    async def wait_changed(self, seen_version: int, seen_frame: int, timeout: float) -> bool:
-        """Wait until the state or the frame is newer than what was seen; ``False`` after ``timeout``."""
+    def marks(self) -> tuple[int, int, int]:
+        """What a waiter has seen: the state's version, the camera's frames, the pose's and map's pushes."""
+        return (self._version, self._frames, self._pushes)
+
+    async def wait_changed(self, seen: tuple[int, int, int], timeout: float) -> bool:
+        """Wait until anything is newer than ``seen`` (:meth:`marks`); ``False`` after ``timeout``."""
         event = self._changed
-        if self._version != seen_version or self._frames != seen_frame or self._closed:
+        if self.marks() != seen or self._closed:
             return True
         with contextlib.suppress(TimeoutError):
             async with asyncio.timeout(timeout):
@@ -139,7 +157,22 @@ class ConsoleHub:
         self._closed = True
         if self._camera_task is not None:
             self._camera_task.cancel()
+        self.map.stop()
         self.changed()
+
+    def page_opened(self) -> None:
+        """A page's event stream opened: the map panel listens while any is open."""
+        self.viewers += 1
+        if self.viewers == 1 and not self._closed:
+            self.map.start()
+
+    def page_closed(self) -> None:
+        """A page's event stream closed; with the last one the camera and the map panel stop listening."""
+        self.viewers = max(0, self.viewers - 1)
+        if self.viewers == 0:
+            if self.camera_topic is not None:
+                self.show_camera(None)
+            self.map.stop()
 
     async def look(self) -> None:
         """Push the connection, streams and goals when they change; runs until cancelled."""
@@ -172,6 +205,7 @@ class ConsoleHub:
             ],
             "audit": list(reversed(self._entries)),
             "camera": {"topic": self.camera_topic, "status": self.camera_status},
+            "map": self.map.state(),
         }
 
     def frame_event(self) -> dict[str, Any] | None:
@@ -271,6 +305,8 @@ class ConsoleHub:
         if self._camera_task is not None:
             self._camera_task.cancel()
             self._camera_task = None
+        if self.camera_topic is not None or name is not None:
+            self.frame = None
         self.camera_topic = name
         self.frame = None
         self.camera_status = "off" if name is None else "starting"

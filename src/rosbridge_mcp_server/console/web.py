@@ -3,10 +3,12 @@
 Routes (everything under ``/api`` needs the session secret in the ``X-Console-Secret`` header):
 
 * ``GET /`` (and its script and style): the page; it holds no robot data, only code;
-* ``GET /api/events``: server-sent events, ``state`` (the hub's snapshot) and ``frame`` (the camera);
+* ``GET /api/events``: server-sent events, ``state`` (the hub's snapshot), ``frame`` (the camera), ``pose``
+  and ``map`` (the map panel's pose and picture);
 * ``GET /api/image-topics``: the image topics, for the camera picker;
 * ``POST /api/confirmations/{id}/approve`` and ``.../deny``, ``POST /api/estop``, ``POST /api/release``,
-  ``POST /api/camera`` (``{"topic": "/camera/image_raw"}``, ``""`` for none).
+  ``POST /api/camera`` (``{"topic": "/camera/image_raw"}``, ``""`` for none), ``POST /api/map``
+  (``{"topic": "/map", "base_frame": "base_link"}``).
 
 There is no route that publishes, calls or sends anything of its own: the console approves, denies, stops
 and releases, and nothing else. A header (not a cookie) carries the secret, so another page in the same
@@ -115,6 +117,25 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
             return _json({"error": str(exc)}, 400)
         return _json({"topic": hub.camera_topic})
 
+    async def map_panel(request: Request) -> Response:
+        try:
+            body = json.loads(await request.body() or b"{}")
+        except ValueError:
+            body = None
+        if not isinstance(body, dict):
+            return _json(
+                {"error": 'the body must be JSON, e.g. {"topic": "/map", "base_frame": "base_link"}'}, 400
+            )
+        topic, base = body.get("topic") or "", body.get("base_frame") or ""
+        for key, value in (("topic", topic), ("base_frame", base)):
+            if not isinstance(value, str) or len(value) > 256:
+                return _json({"error": f"{key} must be a name (at most 256 characters) or empty"}, 400)
+        try:
+            hub.map.choose(topic, base)
+        except RosbridgeError as exc:
+            return _json({"error": str(exc)}, 400)
+        return _json({"topic": hub.map.topic, "base_frame": hub.map.base_frame})
+
     routes = [Route(path, page, methods=["GET"]) for path in _STATIC]
     routes += [
         Route("/api/events", guarded(events), methods=["GET"]),
@@ -124,6 +145,7 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
         Route("/api/estop", guarded(estop), methods=["POST"]),
         Route("/api/release", guarded(release), methods=["POST"]),
         Route("/api/camera", guarded(camera), methods=["POST"]),
+        Route("/api/map", guarded(map_panel), methods=["POST"]),
     ]
     return Starlette(routes=routes)
 
@@ -148,18 +170,29 @@ def _answered(hub: ConsoleHub, pending_id: str, *, approve: bool) -> Response:
 
 
 async def _event_stream(hub: ConsoleHub) -> AsyncIterator[str]:
-    version = frame = -1
-    while not hub.closed:
-        if hub.version != version:
-            version = hub.version
-            yield _event("state", hub.snapshot())
-        if hub.frames != frame:
-            frame = hub.frames
-            shown = hub.frame_event()
-            if shown is not None:
-                yield _event("frame", shown)
-        if not await hub.wait_changed(version, frame, KEEP_ALIVE_SECONDS):
-            yield ": keep-alive\n\n"
+    version = frame = pose = picture = -1
+    hub.page_opened()
+    try:
+        while not hub.closed:
+            seen = hub.marks()
+            if hub.version != version:
+                version = hub.version
+                yield _event("state", hub.snapshot())
+            if hub.frames != frame:
+                frame = hub.frames
+                shown = hub.frame_event()
+                if shown is not None:
+                    yield _event("frame", shown)
+            if hub.map.poses != pose:
+                pose = hub.map.poses
+                yield _event("pose", {"pose": hub.map.pose_event()})
+            if hub.map.images != picture:
+                picture = hub.map.images
+                yield _event("map", {"image": hub.map.image_event()})
+            if not await hub.wait_changed(seen, KEEP_ALIVE_SECONDS):
+                yield ": keep-alive\n\n"
+    finally:
+        hub.page_closed()
 
 
 def _event(name: str, data: Any) -> str:

@@ -152,12 +152,12 @@ async def _part(graph: RosGraph, service: str, bridge_name: str, version: int) -
     try:
         values = await graph.type_details(service, bridge_name)
     except ServiceError as exc:
-        if "does not exist" in exc.message and service.startswith("action_"):
+        if exc.not_in_graph and service.startswith("action_"):
             raise CannotDescribe(
                 "This bridge's rosapi cannot describe action types (that needs Humble 2.0.2 / Jazzy 2.3.0 or "
                 "later); list_actions shows the action's type, and publish_action checks a goal against it."
             ) from exc
-        if "does not exist" in exc.message:
+        if exc.not_in_graph:
             raise
         # rosapi raised while loading the type (ROS 1 sends the exception text): the type is not there.
         return None

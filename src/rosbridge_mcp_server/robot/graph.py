@@ -106,8 +106,8 @@ class ActionEntry:
 
 
 def is_missing_service(error: ServiceError) -> bool:
-    """The bridge said the service is not in the graph (its wording in 0.11 and every ROS 2 line)."""
-    return "does not exist" in error.message
+    """The bridge said the service is not in the graph (rosbridge_suite 0.11 and 2.x, rosbridge-server-rs)."""
+    return error.not_in_graph
 
 
 @dataclass
@@ -399,10 +399,14 @@ class RosGraph:
             try:
                 values = await self.rosapi("action_type", {"action": action})
             except ServiceError as exc:
-                # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0.
+                # `/rosapi/action_type` arrived in Humble 2.0.2 / Jazzy 2.4.0 / Kilted 3.0.0. Listed yet
+                # failing (another bridge's newer rosapi on the graph, called through 2.1.0, which cannot load
+                # its type): the other way below still works, so this connection stops asking.
                 if not is_missing_service(exc):
-                    raise
+                    _log.info("/rosapi/action_type failed (%s); reading action types another way", exc)
                 self._known.no_action_type_service = True
+            except RequestTimeoutError as exc:
+                _log.info("/rosapi/action_type did not answer (%s); reading the type another way", exc)
             else:
                 answer = values.get("type")
                 found = answer if isinstance(answer, str) and answer else None

@@ -116,6 +116,17 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
                 raise
             raise ParameterError(_no_parameter_service(node, nodes=await node_names(graph))) from None
         return sorted(f"{node}:{local}" for local in local_names)
+    if info.status_replies:
+        # rosbridge-server-rs's built-in rosapi answers get_param_names safely (it kills rosapi 2.1.0, which
+        # never answers with a status): one call instead of one per node.
+        try:
+            values = await graph.rosapi("get_param_names")
+        except (ServiceError, RequestTimeoutError):
+            pass
+        else:
+            listed = values.get("names") if isinstance(values, dict) else None
+            if isinstance(listed, list):
+                return sorted({n for n in listed if isinstance(n, str)})
     # Every node with parameters offers <node>/list_parameters: the service list names them all.
     suffix = "/list_parameters"
     offering = sorted(name[: -len(suffix)] for name in await graph.service_names() if name.endswith(suffix))

@@ -10,8 +10,9 @@ then, one at a time.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Final
 
 from rosbridge_mcp_server.errors import RosbridgeError
 
@@ -23,6 +24,8 @@ if TYPE_CHECKING:
 __all__ = ["ServiceTypeWarmUp"]
 
 _log = logging.getLogger(__name__)
+#: Longest wait for the client's measurement of the bridge's call ordering before learning anyway.
+_ORDERING_WAIT_SECONDS: Final = 6.0
 
 
 class ServiceTypeWarmUp:
@@ -50,6 +53,10 @@ class ServiceTypeWarmUp:
     async def _learn(self, session: Session) -> None:
         loop = asyncio.get_running_loop()
         began = loop.time()
+        # After the client's measurement of the bridge's call ordering: its short-lived probe service is
+        # gone from the graph by then (nothing to learn about it), and rosapi answers one call at a time.
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(session.ordering_known.wait(), _ORDERING_WAIT_SECONDS)
         try:
             learnt = await self._graph.learn_service_types()
         except RosbridgeError as exc:

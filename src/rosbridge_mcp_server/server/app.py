@@ -22,7 +22,7 @@ from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
 from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
-from rosbridge_mcp_server.server.console_app import console_app
+from rosbridge_mcp_server.server.console_app import CONSOLE_APP_TOOL, console_app
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, Fleet, Robot, list_robots_tool
 from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
 from rosbridge_mcp_server.tools.arguments import argument_problem
@@ -169,6 +169,9 @@ def build_fleet_server(
         listing = list_robots_tool(fleet)
         tools.append(listing)
         checked.append(CheckedTool.of(LIST_ROBOTS, listing.parameters, []))
+    if console_view is not None:
+        # The console's app tool takes no arguments: an unknown one is refused like any tool's.
+        checked.append(CheckedTool.of(CONSOLE_APP_TOOL, {"type": "object", "properties": {}}, []))
     # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
     withheld = {m.SPEC.name for m in chosen} - {m.SPEC.name for m in modules}
 
@@ -191,6 +194,7 @@ def build_fleet_server(
         argument_error=arguments_text,
         unlisted=unlisted,
         fleet=fleet,
+        fleet_wide=(CONSOLE_APP_TOOL,),
     )
     return MCPServer(
         name=SERVER_NAME,

@@ -81,8 +81,11 @@ class ToolCallChecks:
         argument_error: ArgumentErrorText,
         unlisted: UnlistedAnswer | None = None,
         fleet: Fleet | None = None,
+        fleet_wide: Iterable[str] = (),
     ) -> None:
         self._fleet = fleet
+        # Tools about every robot at once (list_robots, show_console): no ``robot`` argument is taken off.
+        self._fleet_wide = {LIST_ROBOTS, *fleet_wide}
         self._tools = {tool.name: tool for tool in tools}
         self._argument_check = argument_check
         self._argument_error = argument_error
@@ -99,7 +102,8 @@ class ToolCallChecks:
             # Malformed params: the SDK's own validation answers them.
             return await call_next(ctx)
         robots: tuple[Robot, ...] = ()
-        if self._fleet is not None and self._fleet.several and name in self._tools and name != LIST_ROBOTS:
+        choosing = name in self._tools and name not in self._fleet_wide
+        if self._fleet is not None and self._fleet.several and choosing:
             arguments = dict(arguments)
             robots, refusal = self._fleet.choose(name, arguments.pop(ROBOT_ARGUMENT, None))
             if refusal is not None:

@@ -110,6 +110,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="ros2 only: which rosapi to behave like (default newest; 2.1.0 as on the Jazzy/Kilted labs)",
     )
     parser.add_argument(
+        "--server",
+        choices=["rosbridge_suite", "rs"],
+        default="rosbridge_suite",
+        help="ros2 only: which bridge to behave like (rs: rosbridge-server-rs 0.1.6)",
+    )
+    parser.add_argument(
         "--rosapi-latency",
         type=_latencies,
         default=(0.0,),
@@ -161,8 +167,12 @@ def run(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.in_order and args.dialect != "ros2":
         parser.error("--in-order models Humble's rosbridge and needs --dialect ros2")
-    if args.dialect != "ros2" and (args.distro is not None or args.rosapi != "newest"):
-        parser.error("--distro and --rosapi are ROS 2 settings and need --dialect ros2")
+    if args.dialect != "ros2" and (
+        args.distro is not None or args.rosapi != "newest" or args.server != "rosbridge_suite"
+    ):
+        parser.error("--distro, --rosapi and --server are ROS 2 settings and need --dialect ros2")
+    if args.server == "rs" and (args.in_order or args.rosapi != "newest"):
+        parser.error("--server rs runs calls side by side with its newer rosapi: no --in-order, no --rosapi")
     if args.robots > 1 and args.world != "nav2":
         parser.error("--robots needs --world nav2")
     try:
@@ -182,6 +192,7 @@ def run(argv: list[str] | None = None) -> int:
         in_order=args.in_order,
         distro=args.distro,
         rosapi=args.rosapi,
+        server=args.server,
         rosapi_latency=args.rosapi_latency,
         node_services=not args.no_node_services,
         host=args.host,

@@ -56,6 +56,12 @@ class SimulatedRobot:
 
     ``world="nav2"`` runs a Nav2-scale mobile robot instead of the turtle (see :mod:`.nodes.nav2`);
     ``robots=N`` runs N of them under ``/robot1``, ``/robot2``, ...
+
+    ``server="rs"`` behaves like
+    rosbridge-server-rs 0.1.6 (ROS 2): an error ``status`` answers every failed op, only the connection that
+    started a goal may cancel it ("unknown active goal" elsewhere), a goal that did not succeed ends with
+    ``result: false``, a name missing from the graph without a type is refused with "type is required when
+    interface is absent from ROS graph", and neither the bridge nor rosapi has parameter services.
     """
 
     def __init__(
@@ -67,6 +73,7 @@ class SimulatedRobot:
         rosapi: Literal["newest", "2.1.0"] = "newest",
         rosapi_latency: float | Sequence[float] = 0.0,
         node_services: bool = True,
+        server: Literal["rosbridge_suite", "rs"] = "rosbridge_suite",
         host: str = "127.0.0.1",
         port: int = 0,
         fast_topic: bool = False,
@@ -97,6 +104,12 @@ class SimulatedRobot:
             raise ValueError(f"distro must be one of {', '.join(ROS2_DISTROS)} (ROS 2 only), not {distro!r}")
         if rosapi not in ROSAPI_RELEASES or (rosapi != "newest" and dialect != "ros2"):
             raise ValueError(f"rosapi must be 'newest' or (ROS 2 only) '2.1.0', not {rosapi!r}")
+        if server not in ("rosbridge_suite", "rs") or (
+            server == "rs" and (dialect != "ros2" or in_order or rosapi != "newest")
+        ):
+            raise ValueError(
+                f"server must be 'rosbridge_suite' or 'rs' (ROS 2, not in_order, newest rosapi): {server!r}"
+            )
         latencies = (rosapi_latency,) if isinstance(rosapi_latency, int | float) else tuple(rosapi_latency)
         if not all(latency >= 0 for latency in latencies):
             raise ValueError("rosapi_latency must be >= 0 seconds")
@@ -111,6 +124,7 @@ class SimulatedRobot:
                 # rosbridge_suite 2.1.0's call_service knows no timeout field (it waits as long as it takes).
                 timeout_field=rosapi == "newest",
                 cbor=cbor,
+                server=server,
             )
         else:
             config = BridgeConfig(
@@ -144,6 +158,7 @@ class SimulatedRobot:
             map_cells=map_cells,
             world=world,
             robots=robots,
+            bridge_parameters=server != "rs",
         )
         self._nodes.build()
         self.world_name = world

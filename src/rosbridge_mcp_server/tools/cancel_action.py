@@ -8,7 +8,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import stop_goals
 from rosbridge_mcp_server.robot.goals import CancelReport
-from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolSpec
+from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
 __all__ = ["SPEC", "CancelAnswer", "run"]
 
@@ -23,7 +23,7 @@ class CancelAnswer(BaseModel):
     )
     goals_canceling: list[str] | None = Field(
         description=(
-            "ROS 2, cancel-all: ids (hex UUIDs) the action server says it is canceling, from any client"
+            "ROS 2, cancel-all or a goal UUID: ids (hex UUIDs) the action server says it is canceling"
         )
     )
     unknown_goal_id: bool = Field(
@@ -51,7 +51,8 @@ async def run(
         str | None,
         Field(
             description=(
-                "One goal's id from publish_action, e.g. goal:/fibonacci:0d95c87b-5 (omit: all goals)"
+                "One goal: its id from publish_action (e.g. goal:/fibonacci:0d95c87b-5) or its UUID "
+                "(32 hex digits); omit: all goals"
             )
         ),
     ] = None,
@@ -70,7 +71,23 @@ def _answer(report: CancelReport) -> ToolAnswer:
         unknown_goal_id=report.unknown_goal_id,
         note=report.note,
     )
-    if report.goal_id is not None:
+    if report.refused is not None:
+        raise ToolFailure(
+            f"Goal {report.goal_id} on {report.action} was not cancelled: the bridge refused "
+            f"({report.refused}). This bridge lets only the connection that started a goal cancel it by that "
+            "id. Give the goal's UUID instead (32 hex digits: goal_info.goal_id.uuid in "
+            f"{report.action}/_action/status), or omit goal_id to cancel every goal of the action through "
+            "its action server."
+        )
+    if report.goal_id is not None and report.goals_canceling is not None:
+        text = f"Asked the action server of {report.action} to cancel goal {report.goal_id}."
+        count = len(report.goals_canceling)
+        text += (
+            " It is canceling that goal."
+            if count
+            else " It is canceling no goal (that UUID is not one of its running goals)."
+        )
+    elif report.goal_id is not None:
         text = f"Sent a cancel for goal {report.goal_id} on {report.action}."
         if report.unknown_goal_id:
             text += (

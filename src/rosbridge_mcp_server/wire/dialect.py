@@ -49,17 +49,23 @@ _TYPE_RE: Final = re.compile(rf"^/?({_NAME})/(?:(msg|srv|action)/)?({_NAME})$")
 class RosInfo:
     """What kind of bridge is on the other side, detected once per connection.
 
-    ``calls_threaded`` and ``goals_threaded`` are what a ROS 2 bridge says about itself (its node's
-    ``call_services_in_new_thread`` and ``send_action_goals_in_new_thread`` parameters), ``None`` when it
-    did not tell. The distro says nothing here: rosbridge 2.1.0 runs a connection's calls in order on
-    Jazzy and Kilted alike, later releases changed the launch defaults, and a launch file may override them.
-    What was verified on which release: docs/rosbridge-behaviour.md.
+    ``calls_threaded`` and ``goals_threaded`` say whether a ROS 2 bridge runs each call and each goal apart
+    from the rest of its connection, as judged from its behaviour; ``None`` when that could not be told
+    (then it is taken to handle a connection in order, the safe side). They are never read from a node's
+    parameters: the node named ``/rosbridge_websocket`` may be another bridge on the same graph.
+    ``status_replies``: the bridge answered a refused op with an error ``status`` (rosbridge-server-rs does;
+    rosbridge_suite never). ``cancel_owner_only``: only the connection that started a goal may cancel it.
+    The distro says nothing here: rosbridge 2.1.0 runs a connection's calls in order on Jazzy and Kilted
+    alike, later releases changed the launch defaults, and a launch file may override them. What was
+    verified on which bridge: docs/rosbridge-behaviour.md.
     """
 
     version: Literal[1, 2]
     distro: str | None = None
     calls_threaded: bool | None = None
     goals_threaded: bool | None = None
+    status_replies: bool = False
+    cancel_owner_only: bool | None = None
 
     @property
     def has_action_ops(self) -> bool:

@@ -379,7 +379,7 @@ class PublishEvent:
 
 @dataclass(slots=True)
 class ReplyEvent:
-    """``service_response``, ``action_feedback`` or ``action_result`` for request *id*."""
+    """A reply to request *id*: service_response, action_feedback, action_result or an error status."""
 
     op: str
     id: str
@@ -479,9 +479,14 @@ class InboundDecoder:
                 return Notice("warning", "reassembled fragments are not a rosbridge op; dropped")
             return self.route(whole)
         if op == "status":
-            # rosbridge_suite never sends status (ROS 1 0.11.x, ROS 2 all); other bridges
-            # (ros2-web-bridge) do. Logged, never waited for.
+            # rosbridge_suite never sends status (ROS 1 0.11.x, ROS 2 all); other bridges do:
+            # rosbridge-server-rs 0.1.6 answers a failed op with one (level "error", the op's id).
+            # An error naming a request of ours goes to it (a refused call fails now, not at its
+            # timeout); anything else is logged, never waited for.
             level = frame.get("level")
+            rid = frame.get("id")
+            if level == "error" and rid is not None:
+                return ReplyEvent("status", rid if isinstance(rid, str) else str(rid), frame)
             return Notice("info", f"bridge status ({level}): {frame.get('msg')}", frame)
         if op == "png":
             return Notice("warning", "png frame ignored (we never ask for png compression)", frame)

@@ -1,5 +1,5 @@
-// The operator console: one event stream in, four kinds of request out (approve, deny, stop, release, and
-// the camera's topic). The secret comes in the URL's fragment once, and is then kept for this tab only.
+// The operator console: one event stream in, a few kinds of request out (approve, deny, stop, release, the
+// camera's topic, the map panel's topic and base frame). The secret comes in the URL's fragment once, and is then kept for this tab only.
 "use strict";
 
 const SECRET_HEADER = "X-Console-Secret";
@@ -134,6 +134,49 @@ function renderState(state) {
   const camera = state.camera;
   $("camera-status").textContent = camera.topic ? `${camera.topic}: ${camera.status}` : "off";
   if (!camera.topic) $("camera").hidden = true;
+  renderMapState(state.map);
+}
+
+function renderMapState(panel) {
+  if (!panel) return;
+  const topic = $("map-topic");
+  const base = $("map-base");
+  if (document.activeElement !== topic && document.activeElement !== base) {
+    topic.value = panel.topic;
+    base.value = panel.base_frame;
+  }
+  $("map-status").textContent = panel.map_status;
+  const pose = $("pose");
+  pose.dataset.status = panel.status;
+  if (panel.status !== "live") pose.textContent = panel.status;
+}
+
+function renderPose({ pose }) {
+  const shown = $("pose");
+  if (!pose) {
+    delete shown.dataset.x;
+    shown.textContent = shown.dataset.status || "no pose yet";
+    return;
+  }
+  shown.dataset.x = pose.x;
+  shown.dataset.y = pose.y;
+  shown.dataset.yaw = pose.yaw;
+  shown.dataset.frame = pose.frame;
+  shown.textContent = `${pose.base_frame} in ${pose.frame}: x ${pose.x.toFixed(2)} m, y ${pose.y.toFixed(2)} m, yaw ${pose.yaw.toFixed(1)}°`;
+}
+
+function renderMap({ image }) {
+  const shown = $("map");
+  if (!image) {
+    shown.hidden = true;
+    shown.removeAttribute("src");
+    return;
+  }
+  shown.src = image.src;
+  shown.dataset.seq = image.seq;
+  shown.width = image.width;
+  shown.height = image.height;
+  shown.hidden = false;
 }
 
 function renderFrame(frame) {
@@ -177,6 +220,8 @@ async function listen() {
           if (!data) continue;
           if (name === "state") renderState(JSON.parse(data));
           else if (name === "frame") renderFrame(JSON.parse(data));
+          else if (name === "pose") renderPose(JSON.parse(data));
+          else if (name === "map") renderMap(JSON.parse(data));
         }
       }
       throw new Error("the console server closed the stream");
@@ -204,6 +249,10 @@ $("release").addEventListener("click", () => post("/api/release"));
 $("camera-form").addEventListener("submit", (event) => {
   event.preventDefault();
   post("/api/camera", { topic: $("camera-topic").value.trim() });
+});
+$("map-form").addEventListener("submit", (event) => {
+  event.preventDefault();
+  post("/api/map", { topic: $("map-topic").value.trim(), base_frame: $("map-base").value.trim() });
 });
 $("camera-off").addEventListener("click", () => post("/api/camera", { topic: "" }));
 if (!secret) problem("Open the console with the URL the server printed on stderr (it carries the session secret).");

@@ -91,12 +91,15 @@ async def run_goal(
 async def cancel_goals(
     client: RosbridgeClient, action: str, goal_id: str | None = None, *, by: CanceledBy = "cancel_action"
 ) -> CancelReport:
-    """Cancel one goal (by our id) or every goal of *action* (ours and others'); *by* names who asked.
+    """Cancel one goal (by id) or every goal of *action* (ours and others'); *by* names who asked.
 
-    ROS 2: ``cancel_action_goal`` for our goals (on the main connection, so it reaches a goal
-    running on its own lane), plus, to cancel every goal, the action's hidden
-    ``<action>/_action/cancel_goal`` service with a zero goal id and zero stamp. ROS 1: a
-    ``actionlib_msgs/GoalID`` on ``<ns>/cancel`` (empty id and zero stamp cancels every goal).
+    ROS 2: ``cancel_action_goal`` for our goals, on the main connection and on the goal's own lane (see
+    :mod:`.ros2`). A goal of another client given by its goal UUID goes to the action's own
+    ``<action>/_action/cancel_goal`` service, which every bridge reaches; given by its rosbridge id, it is
+    cancelled on the main connection, and the report carries the bridge's refusal if it sent one
+    (rosbridge-server-rs lets only the starting connection cancel). Every goal: our own cancels plus that
+    service with a zero goal id and zero stamp. ROS 1: a ``actionlib_msgs/GoalID`` on ``<ns>/cancel`` (empty
+    id and zero stamp cancels every goal).
     """
     info = await client.ros_info()
     ns = absolute(action)
@@ -111,28 +114,62 @@ async def cancel_goals(
         if not await ros1.send_cancel(client, registry, ns, goal_id or ""):
             raise NotConnectedError(client.url, f"could not publish on {ns}/cancel")
         return CancelReport(ns, 1, goal_id, canceled_ours, unknown)
-    if goal_id is not None:
-        await client.cancel_action_goal(ns, goal_id)
-        return CancelReport(ns, 2, goal_id, canceled_ours, unknown)
     for entry in ours:
-        await client.cancel_action_goal(ns, entry.goal_id)
+        if not any(await ros2.cancel_on_both(client, entry)):
+            raise NotConnectedError(client.url, f"could not send the cancel of goal {entry.goal_id}")
+    if goal_id is not None and ours:
+        return CancelReport(ns, 2, goal_id, canceled_ours, False)
+    if goal_id is not None:
+        uuid = _uuid_bytes(goal_id)
+        if uuid is None:
+            refused = await client.cancel_action_goal_heard(
+                ns, goal_id, min(client.request_timeout, _REFUSAL_WAIT_SECONDS)
+            )
+            return CancelReport(ns, 2, goal_id, [], True, refused=refused)
+        report = CancelReport(ns, 2, goal_id, [], True)
+        await _cancel_service(client, ns, uuid, report)
+        return report
     report = CancelReport(ns, 2, None, canceled_ours, False)
+    await _cancel_service(client, ns, _ZERO_UUID, report)
+    return report
+
+
+#: Longest wait for a bridge's refusal of a cancel (it comes before the answer to a call sent after it).
+_REFUSAL_WAIT_SECONDS: Final = 3.0
+
+
+async def _cancel_service(client: RosbridgeClient, ns: str, uuid: list[int], report: CancelReport) -> None:
+    """Ask the action server itself (``action_msgs/srv/CancelGoal``): one goal by UUID, or all with zeros."""
     try:
         values = await client.call_service(
             f"{ns}/_action/cancel_goal",
-            {"goal_info": {"goal_id": {"uuid": _ZERO_UUID}, "stamp": {"sec": 0, "nanosec": 0}}},
+            {"goal_info": {"goal_id": {"uuid": uuid}, "stamp": {"sec": 0, "nanosec": 0}}},
         )
     except ServiceError as exc:
-        report.note = f"cancelling goals of other clients failed: {exc.message}"
-        return report
+        whose = "goals of other clients" if report.goal_id is None else f"goal {report.goal_id}"
+        report.note = f"cancelling {whose} through {ns}/_action/cancel_goal failed: {exc.message}"
+        return
     canceling = values.get("goals_canceling") if isinstance(values, dict) else None
     if isinstance(canceling, list):
         report.goals_canceling = [h for h in (_uuid_hex(info_) for info_ in canceling) if h is not None]
     return_code = values.get("return_code") if isinstance(values, dict) else None
     if return_code not in (None, 0):
         # action_msgs/srv/CancelGoal: 1 rejected, 2 unknown goal id, 3 goal terminated.
-        report.note = f"the action server answered the cancel with return_code {return_code}"
-    return report
+        meaning = {1: "rejected", 2: "unknown goal id", 3: "goal already ended"}.get(return_code, "")
+        report.note = f"the action server answered the cancel with return_code {return_code}" + (
+            f" ({meaning})" if meaning else ""
+        )
+
+
+def _uuid_bytes(goal_id: str) -> list[int] | None:
+    """The 16 bytes of a goal UUID written as 32 hex digits (dashes allowed), else None (a rosbridge id)."""
+    digits = goal_id.strip().replace("-", "")
+    if len(digits) != 32:
+        return None
+    try:
+        return list(bytes.fromhex(digits))
+    except ValueError:
+        return None
 
 
 def _uuid_hex(goal_info: Any) -> str | None:

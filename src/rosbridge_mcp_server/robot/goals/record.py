@@ -55,6 +55,11 @@ class Goal:
     succeeded: bool = False
     result: dict[str, Any] | None = None
     canceled_by: CanceledBy | None = None
+    #: Sends an op on the connection that started the goal (ROS 2: its own lane); rosbridge-server-rs lets
+    #: only that connection cancel it. False when it could not be sent.
+    send_on_owner: Callable[[dict[str, Any]], Awaitable[bool]] | None = field(
+        default=None, repr=False, compare=False
+    )
 
     async def take_feedback(self, values: Any, listener: GoalFeedback | None) -> None:
         """Count a feedback message (anything but an object counts as ``{}``), keep it, tell *listener*."""
@@ -94,7 +99,9 @@ class CancelReport:
     unknown_goal_id: bool
     """A goal id was given that is not one of our running goals (a cancel was still sent for it)."""
     goals_canceling: list[str] | None = None
-    """ROS 2, cancel-all: goal UUIDs (hex) the action server said it is canceling, ours or not."""
+    """ROS 2, cancel-all or a goal given by UUID: goal UUIDs (hex) the action server said it is canceling."""
+    refused: str | None = None
+    """The bridge's refusal of the cancel (rosbridge-server-rs: "unknown active goal"), if it sent one."""
     note: str | None = None
 
 

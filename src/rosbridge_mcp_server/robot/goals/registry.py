@@ -98,6 +98,10 @@ class GoalRegistry:
         """Goals cut off by a drop, waiting for the connection to come back to be cancelled."""
         return [entry.goal for entry in self._cut_off.values()]
 
+    def ended(self, goal_id: str) -> None:
+        """The bridge said goal *goal_id* ended: nothing is left to cancel when the connection is back."""
+        self._cut_off.pop(goal_id, None)
+
     def remember_cut_off(
         self, action: str, goal_id: str, dialect: int, *, stale: Session | None = None
     ) -> None:
@@ -139,12 +143,15 @@ class GoalRegistry:
 
     async def client_closing(self, session: Session | None) -> None:
         """Cancel our running ROS 2 goals while the connection is there; log the cut-off goals left."""
-        if session is not None:
-            for goal in self.running():
-                if goal.dialect == 2 and await session.try_send(
-                    protocol.cancel_action_goal(goal.action, id=goal.goal_id)
-                ):
-                    self._client.unhandled_acts = True  # the client waits for them before it closes
+        for goal in self.running():
+            if goal.dialect != 2:
+                continue
+            op = protocol.cancel_action_goal(goal.action, id=goal.goal_id)
+            if session is not None and await session.try_send(op):
+                self._client.unhandled_acts = True  # the client waits for them before it closes
+            # rosbridge-server-rs cancels only on the connection that started the goal.
+            if goal.send_on_owner is not None:
+                await goal.send_on_owner(op)
         for entry in self._cut_off.values():
             logger.warning(
                 "The client is closing; goal %s on %s, left running by a drop, was not cancelled",

@@ -1,7 +1,11 @@
-"""ROS 2 goals: rosbridge's action ops, each goal on a lane of its own, cancels on the main connection.
+"""ROS 2 goals: rosbridge's action ops, each goal on a lane of its own, cancels on both connections.
 
-A goal runs on its own lane so that a Humble bridge that runs it inside the connection's thread still hears
-its cancel, which goes on the main connection: rosbridge keeps one goal table per process, not per connection.
+A goal runs on its own lane so that a bridge that runs it inside the connection's thread (Humble, 2.1.0's
+defaults) still hears its cancel on the main connection: rosbridge_suite keeps one goal table per process.
+rosbridge-server-rs 0.1.6 lets only the connection that started a goal cancel it ("unknown active goal"
+anywhere else) and never holds a connection up behind a goal. So every cancel of our goal goes on both: the
+main connection and the goal's own lane. Each bridge acts on one of the two and ignores (rosbridge_suite: in
+silence; rosbridge-server-rs: with a ``status``) the other.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from rosbridge_mcp_server.wire.dialect import action_type_names
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import GoalLane, RosbridgeClient
 
-__all__ = ["run", "send_action_goal"]
+__all__ = ["cancel_on_both", "run", "send_action_goal"]
 
 
 async def send_action_goal(
@@ -66,29 +70,33 @@ async def run(
         raise ActionError(action, "this bridge runs ROS 1, which has no action ops; use actionlib topics")
     # Whether a cancel on the goal's own lane is read in time depends on the bridge the goal went to.
     in_order = session.goals_block
+    owner_only = bool(session.cancel_owner_only or session.info.status_replies)
     what = f"action goal {gid} on {action}"
     lane: GoalLane | None = None
     sent = False
     finished = False
     try:
         lane = await client.open_goal_lane(gid, what, max(deadline - loop.time(), 0.05))
+        record.send_on_owner = lane.try_send
         await lane.send(protocol.send_action_goal(action, wire_type, goal, id=gid, feedback=True))
         sent = True
         try:
             async with asyncio.timeout_at(deadline):
                 frame = await _follow(lane, record, on_feedback)
         except TimeoutError:
-            await asyncio.shield(_cancel_quietly(client, registry, record, lane, in_order))
+            await asyncio.shield(_cancel_quietly(client, registry, record, in_order, owner_only))
             late: dict[str, Any] | None = None
             try:
                 async with asyncio.timeout(CANCEL_GRACE_SECONDS):
                     late = await _follow(lane, record, None)
-            except (TimeoutError, ConnectionLostError):
+            except (TimeoutError, ConnectionLostError, ActionError):
                 pass
             last = record.last_feedback[-1] if record.last_feedback else None
             if late is None:
                 raise GoalTimeoutError(action, gid, timeout, feedback=last) from None
             finished = True
+            # The cancel reached it after all (a lane's cancel on a bridge that handles goals apart).
+            registry.ended(gid)
             status, values = _result(action, late)
             raise GoalTimeoutError(
                 action, gid, timeout, status=status, result=values, feedback=last
@@ -106,7 +114,7 @@ async def run(
     finally:
         try:
             if sent and not finished:
-                await asyncio.shield(_cancel_quietly(client, registry, record, lane, in_order))
+                await asyncio.shield(_cancel_quietly(client, registry, record, in_order, owner_only))
         finally:
             # Even if we are cancelled again while the cancel is being sent.
             if lane is not None:
@@ -121,23 +129,46 @@ async def _follow(lane: GoalLane, record: Goal, on_feedback: GoalFeedback | None
             return frame
         if op == "action_feedback":
             await record.take_feedback(frame.get("values"), on_feedback)
+        elif op == "status" and not record.cancel_requested:
+            # rosbridge-server-rs refuses a goal with an error status (rosbridge_suite with an action_result).
+            # After our own cancel, one may only say the goal was already over: its result still comes.
+            raise ActionError(record.action, str(frame.get("msg")))
+
+
+async def cancel_on_both(client: RosbridgeClient, record: Goal) -> tuple[bool, bool]:
+    """Send *record*'s cancel on the main connection and on the goal's own lane; whether each was sent.
+
+    The main connection first: on an in-order bridge the goal's own lane is blocked by the goal. The lane's
+    copy is for bridges that let only the starting connection cancel (rosbridge-server-rs).
+    """
+    op = protocol.cancel_action_goal(record.action, id=record.goal_id)
+    session = client.session
+    if session is not None and session.info.status_replies:
+        # Such a bridge refuses the main connection's copy with an error status: expected, so not logged.
+        conn = session.connection
+        conn.expect(record.goal_id, f"the refusal of goal {record.goal_id}'s cancel", _REFUSAL_SECONDS)
+        asyncio.get_running_loop().call_later(_REFUSAL_SECONDS, conn.forget, record.goal_id)
+    on_main = session is not None and await session.try_send(op)
+    if on_main:
+        client.unhandled_acts = True
+    on_lane = record.send_on_owner is not None and await record.send_on_owner(op)
+    return on_main, on_lane
+
+
+#: How long the main connection takes a refusal of our own goal's cancel as expected (not logged).
+_REFUSAL_SECONDS = 5.0
 
 
 async def _cancel_quietly(
-    client: RosbridgeClient, registry: GoalRegistry, record: Goal, lane: GoalLane | None, in_order: bool
+    client: RosbridgeClient, registry: GoalRegistry, record: Goal, in_order: bool, owner_only: bool
 ) -> None:
-    op = protocol.cancel_action_goal(record.action, id=record.goal_id)
-    # The main connection first: on an in-order bridge the goal's own lane is blocked by the goal.
-    session = client.session
-    if session is not None and await session.try_send(op):
-        client.unhandled_acts = True
-        return
-    on_lane = lane is not None and await lane.try_send(op)
-    # close() has already sent cancels for every running goal on the main connection.
+    on_main, on_lane = await cancel_on_both(client, record)
+    # close() has already sent cancels for every running goal.
     if client.closed:
         return
-    # An in-order bridge (2.1.0's and Humble's defaults) reads a lane's cancel only after the goal ended.
-    if not on_lane or in_order:
+    # An in-order bridge (2.1.0's and Humble's defaults) reads a lane's cancel only after the goal ended;
+    # an owner-only bridge (rosbridge-server-rs) acts only on the lane's.
+    if not ((on_main and not owner_only) or (on_lane and not in_order)):
         registry.remember_cut_off(record.action, record.goal_id, 2)
 
 
@@ -161,9 +192,17 @@ async def _cancel_after_drop(client: RosbridgeClient, registry: GoalRegistry, re
     return False
 
 
+#: ``action_msgs/GoalStatus`` codes a goal ends with: SUCCEEDED, CANCELED, ABORTED.
+_TERMINAL = frozenset({4, 5, 6})
+
+
 def _result(action: str, frame: dict[str, Any]) -> tuple[int, Any]:
     values = frame.get("values")
-    if frame.get("result") is False:
-        raise ActionError(action, values if isinstance(values, str) else repr(values))
     status = frame.get("status")
-    return (status if isinstance(status, int) and not isinstance(status, bool) else 0), values
+    code = status if isinstance(status, int) and not isinstance(status, bool) else 0
+    if frame.get("result") is False and not (code in _TERMINAL and isinstance(values, dict)):
+        # rosbridge_suite: result false means the goal never ran (values is its error text).
+        # rosbridge-server-rs 0.1.6 also says false for a goal that ended CANCELED or ABORTED, with its
+        # status and result fields: that goal ran and ended, and is reported as such.
+        raise ActionError(action, values if isinstance(values, str) else repr(values))
+    return code, values

@@ -12,6 +12,7 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable, Coroutine
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, Literal
 
 from rosbridge_mcp_server.sim.connection import Connection, OutgoingMessage
@@ -20,6 +21,7 @@ from rosbridge_mcp_server.sim.interfaces import ConversionError, InterfaceError,
 from rosbridge_mcp_server.sim.world import World
 
 __all__ = [
+    "RS_NOT_IN_GRAPH",
     "BridgeConfig",
     "BridgeCore",
     "CallFailed",
@@ -30,6 +32,7 @@ __all__ = [
     "OpHandler",
     "check_fields",
     "extract_id",
+    "status_frame",
 ]
 
 log = logging.getLogger("rosbridge_mcp_server.sim")
@@ -67,6 +70,27 @@ class BridgeConfig:
     timeout_field: bool = True
     #: Whether ``compression: "cbor"`` is honoured; ``False`` is a bridge that ignores the key (JSON).
     cbor: bool = True
+    #: Which server this is: ``rosbridge_suite``, or ``rs`` for rosbridge-server-rs 0.1.6 (an error
+    #: ``status`` for every failed op, goals cancelled only by the connection that started them, a cancelled
+    #: goal's result with ``result: false``, "type is required when interface is absent from ROS graph").
+    server: Literal["rosbridge_suite", "rs"] = "rosbridge_suite"
+
+    @property
+    def rs(self) -> bool:
+        """rosbridge-server-rs 0.1.6's behaviours (see :attr:`server`)."""
+        return self.server == "rs"
+
+
+#: rosbridge-server-rs 0.1.6's refusal of a name it needs the type of and cannot find in the graph.
+RS_NOT_IN_GRAPH = "type is required when interface is absent from ROS graph"
+
+
+def status_frame(msg: str, mid: Any) -> dict[str, Any]:
+    """rosbridge-server-rs's answer to a failed op: ``{"op": "status", "level": "error", "msg", "id"}``."""
+    frame: dict[str, Any] = {"op": "status", "level": "error", "msg": msg}
+    if mid is not None:
+        frame["id"] = mid
+    return frame
 
 
 def check_fields(msg: dict[str, Any], fields: list[FieldSpec]) -> None:
@@ -107,6 +131,8 @@ class BridgeCore:
         #: The last latched message of each topic with its frames, serialised once for every late subscriber
         #: (a 2000² map is ~1 s of JSON conversion per subscribe otherwise).
         self._latched_out: dict[str, OutgoingMessage] = {}
+        #: rosbridge-server-rs sends fixed-size arrays as CBOR lists; rosbridge_suite fails on them.
+        self._to_cbor = partial(registry.to_cbor, fixed_lists=config.rs)
 
     # --- names and types ----------------------------------------------------------------------------------
 
@@ -179,7 +205,7 @@ class BridgeCore:
                 callback(msg, source)
             except Exception:
                 log.exception("subscriber of %s failed", topic)
-        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json, self.registry.to_cbor)
+        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json, self._to_cbor)
         if topic in self.graph.latched:
             self.graph.latched[topic] = msg
             self._latched_out[topic] = outgoing
@@ -199,7 +225,7 @@ class BridgeCore:
         outgoing = self._latched_out.get(topic)
         if outgoing is None or outgoing.msg is not latched or outgoing.type != msg_type:
             outgoing = self._latched_out[topic] = OutgoingMessage(
-                topic, msg_type, latched, self.registry.to_json, self.registry.to_cbor
+                topic, msg_type, latched, self.registry.to_json, self._to_cbor
             )
         return outgoing
 

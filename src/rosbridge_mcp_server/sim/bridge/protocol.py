@@ -10,7 +10,7 @@ import logging
 from collections.abc import Awaitable
 from typing import Any
 
-from rosbridge_mcp_server.sim.bridge.core import BridgeCore, OpError, OpHandler
+from rosbridge_mcp_server.sim.bridge.core import BridgeCore, OpError, OpHandler, status_frame
 from rosbridge_mcp_server.sim.connection import Connection
 
 __all__ = ["MAX_INPUT_BUFFER", "Protocol", "ReadingDied"]
@@ -146,6 +146,8 @@ class Protocol:
             log.error(
                 "client %d: Unknown operation: %s.  Allowed operations: %s", conn.id, op, list(self.ops)
             )
+            if self.core.config.rs:
+                conn.send(status_frame(f"unknown operation: {op}", mid))
             return False
         if "fragment_size" in msg:
             self._set_fragment_size(conn, msg["fragment_size"])
@@ -166,15 +168,20 @@ class Protocol:
             else:
                 await result
         except Exception as exc:
-            _log_failure(conn, op, mid, exc)
+            self._failed(conn, op, mid, exc)
         return True
 
-    @staticmethod
-    async def _guarded(conn: Connection, op: str, mid: Any, work: Awaitable[None]) -> None:
+    async def _guarded(self, conn: Connection, op: str, mid: Any, work: Awaitable[None]) -> None:
         try:
             await work
         except Exception as exc:
-            _log_failure(conn, op, mid, exc)
+            self._failed(conn, op, mid, exc)
+
+    def _failed(self, conn: Connection, op: str, mid: Any, exc: Exception) -> None:
+        """rosbridge_suite only logs a failed op; rosbridge-server-rs also answers it with an error status."""
+        _log_failure(conn, op, mid, exc)
+        if self.core.config.rs:
+            conn.send(status_frame(str(exc), mid))
 
     def _set_fragment_size(self, conn: Connection, value: Any) -> None:
         """Any message carrying ``fragment_size`` sets it for the whole connection.

@@ -40,24 +40,29 @@ _TAGGED: Final = {
 _SWAP: Final = sys.byteorder == "big"
 
 
-def cbor_form(spec: MessageSpec, json_form: dict[str, Any]) -> dict[str, Any]:
-    """The message's CBOR values from its JSON form; :class:`ConversionError` where rosbridge's fails."""
-    return {f.name: _field(f, json_form[f.name]) for f in spec.fields if f.name in json_form}
+def cbor_form(spec: MessageSpec, json_form: dict[str, Any], *, fixed_lists: bool = False) -> dict[str, Any]:
+    """The message's CBOR values from its JSON form; :class:`ConversionError` where rosbridge's fails.
+
+    ``fixed_lists``: fixed-size primitive arrays as lists (rosbridge-server-rs 0.1.6, seen on ``/odom``).
+    """
+    return {f.name: _field(f, json_form[f.name], fixed_lists) for f in spec.fields if f.name in json_form}
 
 
 def _variable(f: FieldSpec) -> bool:
     return f.wire_type.endswith("[]") or (f.wire_type.startswith("sequence<") and "," not in f.wire_type)
 
 
-def _field(f: FieldSpec, value: Any) -> Any:
+def _field(f: FieldSpec, value: Any, fixed_lists: bool) -> Any:
     if not f.is_array:
         if f.cat == Cat.MSG and f.msg is not None:
-            return cbor_form(f.msg, value)
+            return cbor_form(f.msg, value, fixed_lists=fixed_lists)
         return value
     if f.cat == Cat.MSG and f.msg is not None:
         msg = f.msg
-        return [cbor_form(msg, item) for item in value]
+        return [cbor_form(msg, item, fixed_lists=fixed_lists) for item in value]
     if not _variable(f):
+        if fixed_lists:
+            return value
         raise ConversionError(
             f"rosbridge's CBOR converter cannot encode the array field {f.name} ({f.wire_type})"
         )

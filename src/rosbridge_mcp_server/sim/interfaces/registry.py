@@ -310,9 +310,12 @@ class InterfaceRegistry:
         """
         return self._out_msg(self._spec(msg_type), value)
 
-    def to_cbor(self, msg_type: str, json_form: dict[str, Any]) -> dict[str, Any]:
-        """The values rosbridge encodes as CBOR for a message in its JSON form (typed arrays, bytes)."""
-        return cbor_form(self._spec(msg_type), json_form)
+    def to_cbor(
+        self, msg_type: str, json_form: dict[str, Any], *, fixed_lists: bool = False
+    ) -> dict[str, Any]:
+        """The values rosbridge encodes as CBOR for a message in its JSON form (typed arrays, bytes);
+        ``fixed_lists`` as rosbridge-server-rs does (fixed-size arrays as lists, not a failure)."""
+        return cbor_form(self._spec(msg_type), json_form, fixed_lists=fixed_lists)
 
     def _out_msg(self, spec: MessageSpec, value: Any) -> JsonDict:
         if not isinstance(value, dict):

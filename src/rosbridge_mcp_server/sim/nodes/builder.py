@@ -64,6 +64,7 @@ class WorldNodes:
         map_cells: int = ROOM_MAP_CELLS,
         world: str = "turtle",
         robots: int = 1,
+        bridge_parameters: bool = True,
     ) -> None:
         self.bridge = bridge
         self.kit = NodeKit(bridge)
@@ -74,6 +75,8 @@ class WorldNodes:
         self.port = port
         self.rosapi_options = rosapi or RosapiOptions()
         self.node_services = node_services
+        #: rosbridge_suite's bridge and rosapi nodes have parameter services; rosbridge-server-rs's have none.
+        self.bridge_parameters = bridge_parameters
         #: Since Iron every ROS 2 node offers ~/get_type_description and declares
         #: start_type_description_service; Humble's do not.
         self.type_descriptions = self.ros2 and bridge.config.distro != "humble"
@@ -161,7 +164,9 @@ class WorldNodes:
                     graph.add_publisher(node, "/parameter_events", events_type)
                 if not self.node_services:
                     continue
-                if node != ROSAPI_PARAMS:
+                if node != ROSAPI_PARAMS and (
+                    self.bridge_parameters or node not in (ROSBRIDGE_NODE, ROSAPI_NODE)
+                ):
                     # rosapi's helper node starts without parameter services.
                     services = ParameterServices(self.bridge.world, node)
                     for leaf, service_type in PARAMETER_SERVICES:

@@ -27,6 +27,9 @@ log = logging.getLogger("rosbridge_mcp_server.sim")
 
 #: rosbridge (ROS 2, 2.0.5+/2.5.0+) waits this long for an action server before giving up.
 ACTION_SERVER_WAIT = 1.0
+#: action_msgs/GoalStatus codes.
+SUCCEEDED = 4
+ABORTED = 6
 
 
 class Actions(Capability):
@@ -66,7 +69,15 @@ class Actions(Capability):
         name, cid = extract_id(action, msg.get("id"))
         hash(cid)  # the goal table is keyed by id: an unhashable id fails before anything starts
 
+        owner_only = core.config.rs
+        # rosbridge_suite: one goal table for the process; rosbridge-server-rs: the starting connection's.
+        key = (conn.id, cid) if owner_only else cid
+
         def finish(values: Any, status: int, result: bool) -> None:
+            if owner_only:
+                # rosbridge-server-rs: result true only for a goal that succeeded; a failure is ABORTED.
+                result = result and status == SUCCEEDED
+                status = status or ABORTED
             reply: dict[str, Any] = {
                 "op": "action_result",
                 "action": action,
@@ -106,20 +117,35 @@ class Actions(Capability):
         if handle is None:
             finish("Action goal was rejected", 0, False)
             return
-        self.goal_table[cid] = handle
+        self.goal_table[key] = handle
         try:
             status, partial_result = await handle.outcome()
         finally:
-            if self.goal_table.get(cid) is handle:
-                del self.goal_table[cid]
+            if self.goal_table.get(key) is handle:
+                del self.goal_table[key]
         finish(core.json_form(result_type, partial_result), status, True)
 
     def cancel_action_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
         check_fields(msg, [(True, "action", (str,))])
         _, cid = extract_id(msg["action"], msg.get("id"))
+        if self.core.config.rs:
+            handle = self.goal_table.get((conn.id, cid))
+            if handle is None:
+                # Also for a goal another connection started: only that connection may cancel it.
+                raise OpError("unknown active goal")
+            handle.request_cancel()
+            return
         handle = self.goal_table.get(cid)
         if handle is not None:
             handle.request_cancel()
+
+    def client_gone(self, conn: Connection) -> None:
+        """rosbridge_suite lets a departed client's goals run on; rosbridge-server-rs cancels them."""
+        if not self.core.config.rs:
+            return
+        for key, handle in list(self.goal_table.items()):
+            if isinstance(key, tuple) and key[0] == conn.id:
+                handle.request_cancel()
 
     # --- action servers hosted by clients -----------------------------------------------------------------
 

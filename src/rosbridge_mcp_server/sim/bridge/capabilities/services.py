@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rosbridge_mcp_server.sim.bridge.core import (
+    RS_NOT_IN_GRAPH,
     BridgeCore,
     CallFailed,
     Capability,
@@ -70,7 +71,7 @@ class Services(Capability):
         resolved = core.name(name)
         entry = core.graph.services.get(resolved)
         if entry is None:
-            raise CallFailed(f"Service {resolved} does not exist")
+            raise CallFailed(RS_NOT_IN_GRAPH if core.config.rs else f"Service {resolved} does not exist")
         try:
             request_type, response_type = core.registry.service_parts(entry.type)
             request = core.registry.from_json(request_type, core.args_dict(request_type, args))

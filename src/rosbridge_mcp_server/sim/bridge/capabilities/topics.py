@@ -12,6 +12,7 @@ import time
 from typing import Any
 
 from rosbridge_mcp_server.sim.bridge.core import (
+    RS_NOT_IN_GRAPH,
     BridgeCore,
     Capability,
     FieldSpec,
@@ -170,6 +171,8 @@ class Topics(Capability):
             elif core.ros2 and "type" in msg:
                 # ROS 2 2.0.6/2.6.0/3.2.0/4.1.0+ register the topic from the publish's own type.
                 msg_type = core.resolve_type(msg["type"], "msg")
+            elif core.config.rs:
+                raise OpError(RS_NOT_IN_GRAPH)
             else:
                 raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
             self._register_publisher(
@@ -223,6 +226,8 @@ class Topics(Capability):
                 )
         elif (inferred := core.infer_type(msg["topic"])) is not None:
             msg_type = inferred
+        elif core.config.rs:
+            raise OpError(RS_NOT_IN_GRAPH)
         else:
             raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
         compression = msg.get("compression", "none")

@@ -1,0 +1,308 @@
+"""The console's map panel: the robot's pose from /tf and the latched map drawn with it, at a low rate.
+
+While a page is open, the panel listens to ``/tf`` and ``/tf_static`` (a frame tree of its own) and to the map
+topic (``nav_msgs/OccupancyGrid``, latched). Twice a second it looks up the base frame in ``map`` (the map's
+own frame), or in ``odom`` when there is no map frame, and pushes the pose when it moved; the map picture is
+drawn again (off the event loop, with ``robot/maps.py``'s renderer and the robot's arrow) only when the map or
+the pose changed, at most once a second. It only listens: nothing here publishes or calls anything.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import base64
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.robot.drawing import png_bytes
+from rosbridge_mcp_server.robot.frames import TF_TOPICS
+from rosbridge_mcp_server.robot.maps import Grid, MapError, Overlay, Pose2D, decode_grid, draw_map
+from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.names import absolute_name
+from rosbridge_mcp_server.robot.transforms import FrameTree, TransformError, frame_name
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.robot.graph import RosGraph
+
+__all__ = [
+    "DEFAULT_BASE_FRAME",
+    "DEFAULT_MAP_TOPIC",
+    "MAP_FPS",
+    "MAP_MAX_SIZE",
+    "POSE_HZ",
+    "MapImage",
+    "MapPanel",
+    "pose_of",
+]
+
+DEFAULT_MAP_TOPIC = "/map"
+DEFAULT_BASE_FRAME = "base_link"
+#: How often the pose is looked up (and pushed when it moved).
+POSE_HZ = 2.0
+#: The map picture's budget: at most this many pictures a second, at most this many pixels a side.
+MAP_FPS = 1.0
+MAP_MAX_SIZE = 420
+#: How soon a missing map topic, or a robot that was down, is looked for again (seconds).
+RETRY_EVERY = 2.0
+_GRID_TYPE = "nav_msgs/OccupancyGrid"
+
+
+@dataclass(frozen=True)
+class MapImage:
+    """The map picture, ready for the page."""
+
+    seq: int
+    topic: str
+    data: str  #: base64 PNG
+    width: int
+    height: int
+
+    def event(self) -> dict[str, Any]:
+        return {
+            "seq": self.seq,
+            "topic": self.topic,
+            "src": f"data:image/png;base64,{self.data}",
+            "width": self.width,
+            "height": self.height,
+        }
+
+
+class MapPanel:
+    """The pose and map of one robot for the console; ``changed`` is called when the panel's state changes,
+    ``pushed`` when a new pose or picture is ready."""
+
+    def __init__(
+        self,
+        client: RosbridgeClient,
+        graph: RosGraph,
+        changed: Callable[[], None],
+        pushed: Callable[[], None],
+    ) -> None:
+        self._client = client
+        self._graph = graph
+        self._changed = changed
+        self._pushed = pushed
+        self.topic = DEFAULT_MAP_TOPIC
+        self.base_frame = DEFAULT_BASE_FRAME
+        self.status = "off"
+        self.map_status = "off"
+        self.pose: dict[str, Any] | None = None
+        self.image: MapImage | None = None
+        self.poses = 0
+        self.images = 0
+        self._task: asyncio.Task[None] | None = None
+        self._tree = FrameTree()
+        self._grid: Grid | None = None
+        self._grid_seq = 0
+
+    # --- what the page reads -------------------------------------------------------------------------------
+
+    def state(self) -> dict[str, Any]:
+        """The panel's settings and what it is doing (the pose and the picture come as their own events)."""
+        return {
+            "topic": self.topic,
+            "base_frame": self.base_frame,
+            "status": self.status,
+            "map_status": self.map_status,
+        }
+
+    def pose_event(self) -> dict[str, Any] | None:
+        return self.pose
+
+    def image_event(self) -> dict[str, Any] | None:
+        return None if self.image is None else self.image.event()
+
+    # --- starting, stopping, choosing ----------------------------------------------------------------------
+
+    @property
+    def running(self) -> bool:
+        return self._task is not None
+
+    def start(self) -> None:
+        """Listen (a page is open); a no-op when already listening."""
+        if self._task is None:
+            self.status = self.map_status = "starting"
+            self._task = asyncio.create_task(self._run(), name="console map")
+            self._changed()
+
+    def stop(self) -> None:
+        """Stop listening (no page is open): every subscription of the panel ends."""
+        if self._task is not None:
+            self._task.cancel()
+            self._task = None
+        self.status = self.map_status = "off"
+        self._changed()
+
+    def choose(self, topic: str, base_frame: str) -> None:
+        """Show ``topic``'s map and ``base_frame``'s pose; a bad topic name raises :class:`RosbridgeError`."""
+        name = absolute_name(topic or DEFAULT_MAP_TOPIC, "topic")
+        base = frame_name(base_frame) or DEFAULT_BASE_FRAME
+        self.topic, self.base_frame = name, base
+        self.pose = None
+        self.image = None
+        self.poses += 1
+        self.images += 1
+        if self._task is not None:
+            self._task.cancel()
+            self._task = None
+            self.start()
+        self._changed()
+
+    # --- listening -----------------------------------------------------------------------------------------
+
+    async def _run(self) -> None:
+        self._tree = FrameTree()
+        self._grid = None
+        try:
+            async with asyncio.TaskGroup() as group:
+                group.create_task(self._transforms())
+                group.create_task(self._map())
+                group.create_task(self._poses())
+        finally:
+            if self._task is None:  # stopped, not restarted by choose(): let go of the map's cells
+                self._tree = FrameTree()
+                self._grid = None
+
+    async def _transforms(self) -> None:
+        while True:
+            try:
+                types = {topic: await self._graph.topic_type(topic) for topic in TF_TOPICS}
+                present = {topic: msg_type for topic, msg_type in types.items() if msg_type}
+                if present:
+                    async with asyncio.TaskGroup() as group:
+                        for topic, msg_type in present.items():
+                            group.create_task(self._transform_pump(topic, msg_type))
+                else:
+                    self._say(status="no pose: nothing publishes /tf or /tf_static")
+            except* RosbridgeError as group:
+                self._say(status=f"{group.exceptions[0]} (trying again)")
+            # Not a sync: how soon to look again after the robot or the topics were missing.
+            await asyncio.sleep(RETRY_EVERY)
+
+    async def _transform_pump(self, topic: str, msg_type: str) -> None:
+        async with self._client.subscribe(topic, msg_type, max_queue=100) as subscription:
+            while True:
+                message = await subscription.get()
+                self._tree.add_message(message, static=topic == "/tf_static", received=time.monotonic())
+
+    async def _map(self) -> None:
+        topic = self.topic
+        while True:
+            try:
+                msg_type = await self._graph.topic_type(topic)
+                if not msg_type:
+                    self._say(map_status=f"no map: {topic} is not in the robot's graph")
+                elif short_type_name(msg_type) != _GRID_TYPE:
+                    self._say(map_status=f"no map: {topic} carries {msg_type}, not a {_GRID_TYPE}")
+                else:
+                    await self._maps_of(topic, msg_type)
+            except RosbridgeError as exc:
+                self._say(map_status=f"{exc} (trying again)")
+            # Not a sync: how soon to look again after the topic or the robot was missing.
+            await asyncio.sleep(RETRY_EVERY)
+
+    async def _maps_of(self, topic: str, msg_type: str) -> None:
+        # A latched map arrives once; a SLAM map again every few seconds: keep only the newest.
+        async with self._client.subscribe(topic, msg_type, queue_length=1, max_queue=1) as subscription:
+            self._say(map_status=f"waiting for {topic}")
+            while True:
+                message = await subscription.get()
+                try:
+                    self._grid = await asyncio.to_thread(decode_grid, message)
+                except MapError as exc:
+                    self._say(map_status=f"cannot draw {topic}: {exc}")
+                    continue
+                del message
+                self._grid_seq += 1
+                grid = self._grid
+                self._say(map_status=f"{topic}: {grid.width}x{grid.height} cells of {grid.resolution:.3g} m")
+
+    async def _poses(self) -> None:
+        drawn: tuple[int, Any] | None = None
+        last_draw = -math.inf
+        while True:
+            found = self._look_up()
+            if isinstance(found, str):
+                if self.pose is not None or self.status != found:
+                    self.pose = None
+                    self.poses += 1
+                    self._say(status=found)
+                    self._pushed()
+            else:
+                frame, pose = found
+                shown = _pose_event(frame, self.base_frame, pose)
+                if shown != self.pose:
+                    self.pose = shown
+                    self.poses += 1
+                    self._say(status="live")
+                    self._pushed()
+            grid = self._grid
+            key = (self._grid_seq, self.pose)
+            if grid is not None and key != drawn and time.monotonic() - last_draw >= 1 / MAP_FPS:
+                robot = None
+                if not isinstance(found, str) and found[0] == (grid.frame_id or "map"):
+                    robot = found[1]
+                data, width, height = await asyncio.to_thread(_draw, grid, robot)
+                drawn, last_draw = key, time.monotonic()
+                self.images += 1
+                self.image = MapImage(self.images, self.topic, data, width, height)
+                self._pushed()
+            # The pose's rate: /tf may change 50 times a second, the page needs two.
+            await asyncio.sleep(1 / POSE_HZ)
+
+    def _look_up(self) -> tuple[str, Pose2D] | str:
+        grid_frame = self._grid.frame_id if self._grid is not None else ""
+        return pose_of(self._tree, self.base_frame, grid_frame or "map")
+
+    def _say(self, *, status: str | None = None, map_status: str | None = None) -> None:
+        before = (self.status, self.map_status)
+        if status is not None:
+            self.status = status
+        if map_status is not None:
+            self.map_status = map_status
+        if (self.status, self.map_status) != before:
+            self._changed()
+
+
+def pose_of(tree: FrameTree, base_frame: str, map_frame: str = "map") -> tuple[str, Pose2D] | str:
+    """``base_frame`` in ``map_frame``, else in ``odom`` (no map frame heard): (frame, pose), or why not."""
+    frames = [map_frame] if tree.knows(map_frame) else []
+    frames += [] if map_frame == "odom" else ["odom"]
+    problem = ""
+    for frame in frames:
+        try:
+            found = tree.lookup(frame, base_frame)
+        except TransformError as exc:
+            problem = str(exc)
+            continue
+        t = found.transform
+        x, y, z, w = t.rotation
+        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return frame, Pose2D(t.translation[0], t.translation[1], yaw)
+    if not tree.frames():
+        return "no pose yet: no transform heard on /tf or /tf_static"
+    return (
+        f"no pose: {problem}" if problem else f"no pose: neither {map_frame} nor odom has been heard on /tf"
+    )
+
+
+def _pose_event(frame: str, base: str, pose: Pose2D) -> dict[str, Any]:
+    # Rounded to what the page shows, so a robot standing still pushes nothing.
+    return {
+        "frame": frame,
+        "base_frame": base,
+        "x": round(pose.x, 2),
+        "y": round(pose.y, 2),
+        "yaw": round(math.degrees(pose.yaw), 1),
+    }
+
+
+def _draw(grid: Grid, robot: Pose2D | None) -> tuple[str, int, int]:
+    picture = draw_map(grid, max_size=MAP_MAX_SIZE, overlay=Overlay(robot=robot))
+    data = png_bytes(picture.image)
+    return base64.b64encode(data).decode("ascii"), picture.image.width, picture.image.height

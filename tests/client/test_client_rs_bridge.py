@@ -1,0 +1,57 @@
+"""The client against a bridge like rosbridge-server-rs 0.1.6 (the simulated robot's ``server="rs"``)."""
+
+from __future__ import annotations
+
+import logging
+
+import pytest
+from client_harness import MakeClient, MakeSim
+
+from rosbridge_mcp_server.errors import GoalTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.goals import ros2
+
+
+async def test_a_refused_subscribe_is_logged_with_the_bridges_words(
+    make_sim: MakeSim, make_client: MakeClient, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Its error status for a subscribe nobody waits on is a warning naming the reason, not lost."""
+    robot = await make_sim(dialect="ros2", server="rs")
+    client = await make_client(robot)
+    with caplog.at_level(logging.WARNING, logger="rosbridge_mcp_server.client"):
+        sub = client.subscribe("/no_such_topic")
+        await sub.open()
+        await client.call_service("/rosapi/get_time")  # a barrier: the refusal came before its answer
+        await sub.close()
+    refused = [r.getMessage() for r in caplog.records if "the bridge refused" in r.getMessage()]
+    assert refused
+    assert "type is required when interface is absent from ROS graph" in refused[0]
+
+
+async def test_a_missing_service_fails_with_a_sentence_naming_it(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """The bridge's "type is required ..." becomes: the service is not in the graph, check list_services."""
+    robot = await make_sim(dialect="ros2", server="rs")
+    client = await make_client(robot)
+    with pytest.raises(ServiceError) as caught:
+        await client.call_service("/no_such_service")
+    assert caught.value.not_in_graph
+    assert str(caught.value).startswith("Service /no_such_service is not in the ROS graph")
+    assert "list_services" in str(caught.value)
+
+
+async def test_a_goal_timing_out_is_cancelled_on_its_own_connection_without_a_warning(
+    make_sim: MakeSim, make_client: MakeClient, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The lane's cancel ends the goal CANCELED; the refusal of the main connection's copy is not logged."""
+    robot = await make_sim(dialect="ros2", server="rs", action_step=0.1)
+    client = await make_client(robot)
+    with caplog.at_level(logging.WARNING, logger="rosbridge_mcp_server"):
+        with pytest.raises(GoalTimeoutError) as caught:
+            await ros2.send_action_goal(
+                client, "/fibonacci", "example_interfaces/Fibonacci", {"order": 40}, timeout=0.5
+            )
+        await client.call_service("/rosapi/get_time")  # a barrier: the refusal came before its answer
+    assert caught.value.status == 5
+    ours = [r for r in caplog.records if not r.name.startswith("rosbridge_mcp_server.sim")]
+    assert not [r.getMessage() for r in ours if r.levelno >= logging.WARNING]
