@@ -67,6 +67,7 @@ from pathlib import Path
 from typing import IO, Any
 from urllib.parse import urlsplit
 
+import cbor2
 import httpx2
 import mcp_types
 import psutil
@@ -1763,15 +1764,24 @@ BIG_MAP_CELLS = 2000
 QUICK_MAP_CELLS = 300
 
 
-async def raw_whole_message(url: str, topic: str, msg_type: str) -> int:
+async def raw_whole_message(url: str, topic: str, msg_type: str, *, cbor: bool = False) -> int:
     """A fresh raw connection: subscribe → the first message, reassembled from its fragments and parsed →
-    unsubscribe. Returns the message's JSON size in characters."""
+    unsubscribe. Returns the message's JSON size in characters (with ``cbor``: its binary frame's bytes,
+    decoded by cbor2 with the typed arrays left as byte strings)."""
     async with connect(url, max_size=None, compression=None) as ws:
-        await ws.send(json.dumps({"op": "subscribe", "id": "raw:map", "topic": topic, "type": msg_type}))
+        subscribe = {"op": "subscribe", "id": "raw:map", "topic": topic, "type": msg_type}
+        await ws.send(json.dumps({**subscribe, "compression": "cbor"} if cbor else subscribe))
         parts: list[str] = []
         size = 0
         while True:
-            frame = json.loads(await ws.recv())
+            data = await ws.recv()
+            if isinstance(data, bytes):
+                frame = cbor2.loads(data)
+                if frame.get("op") == "publish" and frame.get("topic") == topic:
+                    size = len(data)
+                    break
+                continue
+            frame = json.loads(data)
             if frame.get("op") == "fragment":
                 if frame["num"] == 0:
                     parts = []
@@ -1815,14 +1825,16 @@ async def measure_view(ctx: Context) -> list[Row]:
         if not map_type:
             rows.append(Row("11a", "`view_map` /map", verdict="n/a (no /map)"))
         else:
-            samples: dict[str, list[float]] = {"raw": [], "tool": []}
-            json_chars = 0
+            samples: dict[str, list[float]] = {"raw": [], "tool": [], "cbor": []}
+            json_chars = cbor_bytes = 0
             for trial in range(trials + 1):
-                order = ["raw", "tool"] if trial % 2 == 0 else ["tool", "raw"]
+                order = ["raw", "cbor", "tool"] if trial % 2 == 0 else ["tool", "cbor", "raw"]
                 for name in order:
                     began = time.perf_counter()
                     if name == "raw":
                         json_chars = await raw_whole_message(url, "/map", map_type)
+                    elif name == "cbor":
+                        cbor_bytes = await raw_whole_message(url, "/map", map_type, cbor=True)
                     else:
                         result = await served.tool("view_map", {"timeout": 30})
                         sizes["view_map"] = image_bytes(result)
@@ -1836,6 +1848,15 @@ async def measure_view(ctx: Context) -> list[Row]:
                 1.5,
             )
             rows.append(row)
+            # view_map asks for CBOR (#19): the raw CBOR receipt is the floor it cannot beat.
+            rows.append(
+                timing_row(
+                    "11a",
+                    f"↳ reference: a raw CBOR receipt of the same /map ({mib(cbor_bytes)}, one binary frame)",
+                    Stats.of(samples["cbor"]),
+                    verdict="info",
+                )
+            )
     scan_type = ctx.bridge.topics.get("/scan")
     if scan_type is None:
         rows.append(Row("11b", "`view_scan` /scan", verdict="n/a (no /scan)"))

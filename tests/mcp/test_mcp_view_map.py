@@ -166,6 +166,18 @@ async def test_a_2000_cell_map_is_drawn_with_its_walls(make_sim: Any) -> None:
     assert colour_near(image, pixel_of(data, image, TURTLE_HOME, TURTLE_HOME), ROBOT_COLOUR, reach=0)
 
 
+async def test_a_large_map_through_cbor_draws_the_same_picture_as_through_json(make_sim: Any) -> None:
+    """A 1000x1000 map: view_map on a bridge that answers CBOR and on one that ignores it, pixel for pixel."""
+    answers = []
+    for cbor in (True, False):
+        robot = await make_sim(map_cells=1000, cbor=cbor)
+        async with open_session(robot.url) as session:
+            answers.append(await session.ok("view_map", {"timeout": 20}))
+    through_cbor, through_json = answers
+    assert through_cbor.structured_content == through_json.structured_content
+    assert picture_of(through_cbor).tobytes() == picture_of(through_json).tobytes()
+
+
 async def test_a_path_without_a_frame_is_drawn_in_the_maps(sim: SimulatedRobot) -> None:
     """A nav_msgs/Path whose header names no frame is taken to be in the map's frame."""
     path_type = "nav_msgs/msg/Path" if sim.dialect == "ros2" else "nav_msgs/Path"
@@ -195,3 +207,14 @@ async def test_a_silent_path_topic_is_a_note_and_the_map_still_comes(sim: Simula
     assert data is not None
     assert data["path_poses"] is None
     assert data["notes"] == ["path not drawn: nothing arrived on /test/silent_plan within 0.5 s."]
+
+
+async def test_a_map_too_large_for_one_cbor_frame_is_read_as_json_with_a_note(make_sim: Any) -> None:
+    """A bridge fragmenting above 100 kB drops the 250 kB CBOR frame: view_map waits once more, for JSON."""
+    robot = await make_sim(dialect="ros2", map_cells=500, max_message_size=100_000)
+    async with open_session(robot.url) as session:
+        result = await session.ok("view_map", {"timeout": 1})
+    data = result.structured_content
+    assert data is not None
+    assert data["cells"] == [500, 500]
+    assert any("did not arrive as CBOR within 1 s" in note for note in data["notes"])

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+from array import array
 
+import cbor2
 import pytest
 
 from rosbridge_mcp_server.errors import ProtocolError
@@ -210,3 +212,48 @@ def test_reassembled_garbage_is_a_notice() -> None:
     event = decoder.feed('{"op":"fragment","id":"g","data":"oops","num":1,"total":2}')
     assert isinstance(event, protocol.Notice)
     assert "not JSON" in event.text
+
+
+def test_a_binary_cbor_publish_is_routed_with_its_typed_arrays_as_arrays() -> None:
+    """A CBOR publish (int8 tag 72, float32 tag 85, uint16 tag 69) becomes a PublishEvent of arrays."""
+    msg = {
+        "data": cbor2.CBORTag(72, array("b", [-1, 0, 100]).tobytes()),
+        "ranges": cbor2.CBORTag(85, array("f", [0.5, 1.25]).tobytes()),
+        "ids": cbor2.CBORTag(69, array("H", [1, 65535]).tobytes()),
+        "raw": b"\x01\x02",
+        "nested": [{"values": cbor2.CBORTag(86, array("d", [1e-9]).tobytes())}],
+    }
+    event = protocol.InboundDecoder().feed(cbor2.dumps({"op": "publish", "topic": "/x", "msg": msg}))
+    assert isinstance(event, protocol.PublishEvent)
+    assert event.topic == "/x"
+    data = event.msg["data"]
+    assert isinstance(data, array)
+    assert (data.typecode, data.tolist()) == ("b", [-1, 0, 100])
+    assert event.msg["ranges"].tolist() == [0.5, 1.25]
+    assert event.msg["ids"].tolist() == [1, 65535]
+    assert event.msg["raw"] == b"\x01\x02"
+    assert event.msg["nested"][0]["values"].tolist() == [1e-9]
+
+
+@pytest.mark.parametrize(
+    ("item", "expected"),
+    [
+        (cbor2.CBORTag(99, b"\x00"), "unsupported CBOR tag 99"),
+        (cbor2.CBORTag(78, b"\x00\x00\x00"), "not whole items"),
+        ([1, 2], "not a CBOR map"),
+    ],
+)
+def test_binary_frames_that_are_not_a_usable_cbor_op_become_notices(item: object, expected: str) -> None:
+    """An unknown tag, a typed array cut short, or a CBOR array is reported, never raised."""
+    frame = (
+        {"op": "publish", "topic": "/x", "msg": {"data": item}} if isinstance(item, cbor2.CBORTag) else item
+    )
+    event = protocol.InboundDecoder().feed(cbor2.dumps(frame))
+    assert isinstance(event, protocol.Notice)
+    assert expected in event.text
+
+
+def test_subscribe_asks_for_cbor_only_when_told() -> None:
+    """compression="cbor" adds the key; without it the op stays as before."""
+    assert protocol.subscribe("/map", None, id="s", compression="cbor")["compression"] == "cbor"
+    assert "compression" not in protocol.subscribe("/map", None, id="s")

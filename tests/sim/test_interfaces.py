@@ -785,3 +785,19 @@ def test_default_returns_a_fresh_message_each_time(registry: InterfaceRegistry) 
     first = registry.default("sensor_msgs/JointState")
     first["name"].append("joint")
     assert registry.default("sensor_msgs/JointState")["name"] == []
+
+
+@pytest.mark.parametrize("dialect", ["ros1", "ros2"])
+def test_the_cbor_form_fails_on_fixed_size_arrays_as_rosbridges_converter_does(dialect: Any) -> None:
+    """Odometry's float64[36] covariance is not in cbor_conversion's tables: the message cannot be sent."""
+    registry = InterfaceRegistry(dialect)
+    json_form = registry.to_json("nav_msgs/Odometry", {})
+    with pytest.raises(ConversionError, match="covariance"):
+        registry.to_cbor("nav_msgs/Odometry", json_form)
+
+
+def test_rosbridge_server_rs_sends_fixed_size_arrays_as_cbor_lists() -> None:
+    """rs 0.1.6 (seen on /odom): the covariance is a plain list, the message is sent."""
+    registry = InterfaceRegistry("ros2")
+    form = registry.to_cbor("nav_msgs/Odometry", registry.to_json("nav_msgs/Odometry", {}), fixed_lists=True)
+    assert form["pose"]["covariance"] == [0.0] * 36

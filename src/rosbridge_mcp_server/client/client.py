@@ -9,7 +9,7 @@ import logging
 import ssl
 from collections.abc import Callable, Coroutine, Sequence
 from types import TracebackType
-from typing import Any, Final, Protocol, Self
+from typing import Any, Final, Literal, Protocol, Self
 
 from rosbridge_mcp_server.client.connection import Connection, open_connection
 from rosbridge_mcp_server.client.goal_lane import GoalLane, GoalLanes
@@ -460,10 +460,13 @@ class RosbridgeClient:
         queue_length: int = 0,
         max_queue: int = 1000,
         qos: dict[str, Any] | None = None,
+        compression: Literal["cbor"] | None = None,
     ) -> Subscription:
         """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``).
 
         ``qos`` is sent as the ROS 2 ``qos`` object (read by rosbridge 2.0.7 / 2.7.0 / 3.3.0 and later).
+        ``compression="cbor"`` asks for binary CBOR frames: numeric arrays then arrive as ``array.array``
+        and ``uint8[]`` as bytes (far faster for large maps); a bridge that ignores it sends JSON.
         """
         return self.topics.subscribe(
             topic,
@@ -472,6 +475,7 @@ class RosbridgeClient:
             queue_length=queue_length,
             max_queue=max_queue,
             qos=qos,
+            compression=compression,
         )
 
     async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import asyncio
 from collections import deque
 from types import TracebackType
-from typing import Any, Protocol, Self
+from typing import Any, Literal, Protocol, Self
 
 from rosbridge_mcp_server.errors import NotConnectedError, RequestTimeoutError
 
@@ -45,6 +45,7 @@ class Subscription:
         queue_length: int,
         max_queue: int,
         qos: dict[str, Any] | None = None,
+        compression: Literal["cbor"] | None = None,
     ) -> None:
         if max_queue < 1:
             raise ValueError("max_queue must be at least 1")
@@ -55,6 +56,8 @@ class Subscription:
         self.queue_length = int(queue_length)
         self.max_queue = max_queue
         self.qos = qos
+        #: ``"cbor"``: ask for binary CBOR frames (typed arrays arrive as ``array.array``); JSON otherwise.
+        self.compression = compression
         self.dropped = 0
         self.received = 0
         self.wire_type: str | None = None

@@ -11,7 +11,7 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 from rosbridge_mcp_server.client.session import Session, send_quietly
 from rosbridge_mcp_server.client.subscription import Subscription
@@ -136,6 +136,7 @@ class Topics:
         queue_length: int,
         max_queue: int,
         qos: dict[str, Any] | None = None,
+        compression: Literal["cbor"] | None = None,
     ) -> Subscription:
         """A new, not yet opened :class:`Subscription`."""
         return Subscription(
@@ -147,6 +148,7 @@ class Topics:
             queue_length=queue_length,
             max_queue=max_queue,
             qos=qos,
+            compression=compression,
         )
 
     async def open_subscription(self, sub: Subscription) -> None:
@@ -244,4 +246,5 @@ def _subscribe_op(sub: Subscription) -> dict[str, Any]:
         throttle_rate=sub.throttle_rate,
         queue_length=sub.queue_length,
         qos=sub.qos,
+        compression=sub.compression,
     )

@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from rosbridge_mcp_server.errors import RequestTimeoutError
 from rosbridge_mcp_server.robot.messages import TypeDef, short_type_name
@@ -58,16 +58,20 @@ async def listen(
     first_timeout: float,
     qos: dict[str, Any] | None = None,
     on_message: Callable[[int], Awaitable[None]] | None = None,
+    compression: Literal["cbor"] | None = None,
 ) -> Listening:
     """Up to ``count`` messages; with ``duration``, those that arrive within that many seconds.
 
     Waits at most ``first_timeout`` for the first message (a latched / transient-local topic answers at
-    once), and without ``duration`` as long for each next one.
+    once), and without ``duration`` as long for each next one. ``compression="cbor"``: numeric arrays
+    arrive as ``array.array`` and byte arrays as bytes (see ``wire/cbor.py``).
     """
     heard: list[Heard] = []
     start = time.monotonic()
     end = None if duration is None else start + duration
-    async with client.subscribe(topic, msg_type, max_queue=max(count, 1), qos=qos) as sub:
+    async with client.subscribe(
+        topic, msg_type, max_queue=max(count, 1), qos=qos, compression=compression
+    ) as sub:
         while len(heard) < count:
             # The first message, and each gap without a duration, may take up to first_timeout; with a
             # duration the listen ends at its end (once something came).

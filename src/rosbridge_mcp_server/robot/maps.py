@@ -121,7 +121,8 @@ class MapPicture:
 
 
 def decode_grid(message: Mapping[str, Any]) -> Grid:
-    """An ``OccupancyGrid`` message (``data`` ints from JSON, or bytes, or base64) as a :class:`Grid`."""
+    """An ``OccupancyGrid`` message (``data`` ints from JSON, an int8 ``array`` from CBOR, bytes, or base64)
+    as a :class:`Grid`."""
     info = message.get("info")
     if not isinstance(info, Mapping):
         raise MapError("The message has no 'info' (MapMetaData): is it a nav_msgs/OccupancyGrid?")
@@ -136,6 +137,9 @@ def decode_grid(message: Mapping[str, Any]) -> Grid:
         cells = base64.b64decode(data)
     elif isinstance(data, bytes | bytearray):
         cells = bytes(data)
+    elif isinstance(data, array) and data.itemsize == 1:
+        # A CBOR typed array (tag 72, int8): its bytes are the cells, no list of ints in between.
+        cells = data.tobytes()
     elif isinstance(data, list):
         try:
             cells = array("b", data).tobytes()

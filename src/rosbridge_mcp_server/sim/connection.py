@@ -19,9 +19,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import cbor2
 from websockets.asyncio.server import ServerConnection
 from websockets.exceptions import ConnectionClosed
 
+from rosbridge_mcp_server.sim.interfaces.base import ConversionError
 from rosbridge_mcp_server.sim.png import encode_png
 
 __all__ = [
@@ -69,8 +71,11 @@ class OutgoingMessage:
     type: str
     msg: dict[str, Any]
     to_json: Callable[[str, dict[str, Any]], dict[str, Any]]
+    #: The registry's ``to_cbor`` (JSON form → CBOR values), for subscriptions asking for ``cbor``.
+    to_cbor: Callable[[str, dict[str, Any]], dict[str, Any]] | None = None
     _json_form: dict[str, Any] | None = None
     _texts: dict[str, str] = field(default_factory=dict)
+    _cbor: dict[str, bytes] = field(default_factory=dict)
 
     def frame_text(self, echo_topic: str, *, png: bool = False, dumps: Dumps = dumps_standard) -> str:
         """The ``publish`` frame for a subscription to ``echo_topic`` as spelled (or its ``png`` op)."""
@@ -84,6 +89,19 @@ class OutgoingMessage:
                 text = dumps({"op": "png", "data": png_frame_data(text)})
             self._texts[key] = text
         return text
+
+    def frame_cbor(self, echo_topic: str) -> bytes:
+        """The ``publish`` op as one binary CBOR frame (rosbridge never fragments these);
+        :class:`ConversionError` when rosbridge's CBOR converter fails on the message."""
+        data = self._cbor.get(echo_topic)
+        if data is None:
+            if self.to_cbor is None:
+                raise ConversionError(f"no CBOR conversion for {self.type}")
+            if self._json_form is None:
+                self._json_form = self.to_json(self.type, self.msg)
+            values = self.to_cbor(self.type, self._json_form)
+            data = self._cbor[echo_topic] = cbor2.dumps({"op": "publish", "topic": echo_topic, "msg": values})
+        return data
 
 
 def png_frame_data(text: str) -> str:
@@ -129,14 +147,22 @@ class TopicSubscription:
 
     @property
     def png(self) -> bool:
-        """...and the strongest compression: ``png`` if any request asked for it (CBOR is not simulated)."""
-        return any(o.compression == "png" for o in self.by_id.values())
+        """...and the strongest compression: ``png`` if any request asked for it and none for CBOR."""
+        return not self.cbor and any(o.compression == "png" for o in self.by_id.values())
+
+    @property
+    def cbor(self) -> bool:
+        """``cbor`` beats ``png`` (rosbridge's ``update_params``; ``cbor-raw`` is not simulated: JSON)."""
+        options = self.by_id.values()
+        return any(o.compression == "cbor" for o in options) and all(
+            o.compression != "cbor-raw" for o in options
+        )
 
 
 @dataclass
 class _Queued:
     droppable: bool
-    frames: list[str]
+    frames: list[str] | list[bytes]
     size: int
 
 
@@ -185,10 +211,23 @@ class Connection:
         """Queue a reply frame (never dropped)."""
         self._enqueue(self.dumps(message), droppable=False, fragment_id=message.get("id", self.fragment_id))
 
-    def _enqueue(self, text: str, *, droppable: bool, fragment_id: Any) -> None:
+    def _enqueue(self, text: str | bytes, *, droppable: bool, fragment_id: Any) -> None:
         if self.closed:
             return
-        frames = self._fragments(text, fragment_id)
+        if isinstance(text, bytes):
+            # rosbridge cannot fragment a CBOR frame: above the connection's fragment size its send fails
+            # (``message.get("id")`` on bytes) and the message is lost (ROS 2: 10 MB by default).
+            size = self.fragment_size
+            if isinstance(size, int | float) and len(text) > size:
+                log.error(
+                    "client %d: send failed: a CBOR frame of %d bytes cannot be fragmented",
+                    self.id,
+                    len(text),
+                )
+                return
+            frames: list[str] | list[bytes] | None = [text]
+        else:
+            frames = self._fragments(text, fragment_id)
         if frames is None:
             return
         self.frames_queued += len(frames)
@@ -301,7 +340,9 @@ class Connection:
     def _send_publish(self, sub: TopicSubscription, message: OutgoingMessage, fragment_id: Any) -> None:
         sub.last_sent = time.monotonic()
         self._enqueue(
-            message.frame_text(sub.echo_topic, png=sub.png, dumps=self.dumps),
+            message.frame_cbor(sub.echo_topic)
+            if sub.cbor
+            else message.frame_text(sub.echo_topic, png=sub.png, dumps=self.dumps),
             droppable=True,
             fragment_id=fragment_id,
         )

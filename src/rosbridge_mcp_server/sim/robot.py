@@ -50,7 +50,9 @@ class SimulatedRobot:
     ``rosapi_latency`` (seconds, or several taken in turn) makes every rosapi call take that long, one call
     at a time, as a real rosapi serves them. ``node_services=False`` leaves out the parameter / type
     description (ROS 2) and logger (ROS 1) services every real node has. ``map_cells`` is the side of
-    ``/map`` in cells (the same room, finer; e.g. 2000 for benchmarks).
+    ``/map`` in cells (the same room, finer; e.g. 2000 for benchmarks). ``cbor=False`` is a bridge that
+    ignores ``compression: "cbor"`` and sends JSON (by default it answers with binary CBOR frames, as
+    rosbridge_suite 0.11.17 / 2.x do).
 
     ``world="nav2"`` runs a Nav2-scale mobile robot instead of the turtle (see :mod:`.nodes.nav2`);
     ``robots=N`` runs N of them under ``/robot1``, ``/robot2``, ...
@@ -84,6 +86,7 @@ class SimulatedRobot:
         ssl: _ssl.SSLContext | None = None,
         world: Literal["turtle", "nav2"] = "turtle",
         robots: int = 1,
+        cbor: bool = True,
     ) -> None:
         if dialect not in ("ros1", "ros2"):
             raise ValueError(f"dialect must be 'ros1' or 'ros2', not {dialect!r}")
@@ -120,6 +123,7 @@ class SimulatedRobot:
                 distro=distro or ("humble" if in_order else "jazzy"),
                 # rosbridge_suite 2.1.0's call_service knows no timeout field (it waits as long as it takes).
                 timeout_field=rosapi == "newest",
+                cbor=cbor,
                 server=server,
             )
         else:
@@ -129,6 +133,7 @@ class SimulatedRobot:
                 max_message_size=max_message_size,
                 default_service_timeout=0.0,
                 distro="noetic",
+                cbor=cbor,
             )
         self.dialect = dialect
         self.in_order = in_order

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal
 
 from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.listening import listen
@@ -41,10 +41,20 @@ async def typed_topic(
 
 
 async def first_message(
-    ctx: ToolContext, name: str, msg_type: str, timeout: float, what: str
+    ctx: ToolContext,
+    name: str,
+    msg_type: str,
+    timeout: float,
+    what: str,
+    *,
+    compression: Literal["cbor"] | None = None,
 ) -> dict[str, Any]:
-    """One message from the topic within ``timeout`` seconds, else a :class:`ToolFailure`."""
-    heard = await listen(ctx.client, name, msg_type, count=1, duration=None, first_timeout=timeout)
+    """One message from the topic within ``timeout`` seconds, else a :class:`ToolFailure`.
+
+    ``compression="cbor"`` for large messages: numeric arrays arrive as ``array.array``, not lists."""
+    heard = await listen(
+        ctx.client, name, msg_type, count=1, duration=None, first_timeout=timeout, compression=compression
+    )
     if not heard.messages:
         raise ToolFailure(
             f"No {what} arrived on {name} within {timeout:g} s. Is its publisher running? get_topic_info "

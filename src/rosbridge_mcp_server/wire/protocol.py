@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
 from rosbridge_mcp_server.errors import ProtocolError
+from rosbridge_mcp_server.wire.cbor import decode_cbor
 
 __all__ = [
     "BRIDGE_MAX_FRAME_BYTES",
@@ -130,12 +131,16 @@ def subscribe(
     throttle_rate: int = 0,
     queue_length: int = 0,
     qos: dict[str, Any] | None = None,
+    compression: Literal["cbor"] | None = None,
 ) -> dict[str, Any]:
     """``subscribe`` with its own id, so it can be removed without touching other listeners.
 
     ``throttle_rate`` and ``queue_length`` must be JSON integers: every server type-checks them and
     silently ignores a subscribe with ``100.0``. ``qos`` is ROS 2's QoS object (rosbridge 2.0.7 / 2.7.0 /
-    3.3.0 on); older servers and ROS 1 ignore the key.
+    3.3.0 on); older servers and ROS 1 ignore the key. ``compression="cbor"`` asks for binary CBOR
+    frames (ROS 1 0.11.17, ROS 2 2.1.0 and rosbridge-server-rs 0.1.6 send them; a server that ignores the
+    key sends JSON, which is decoded the same). rosbridge uses CBOR for every subscription of the
+    connection to that topic once one asks for it.
     """
     op: dict[str, Any] = {"op": "subscribe", "id": id, "topic": topic}
     if msg_type:
@@ -146,6 +151,8 @@ def subscribe(
         op["queue_length"] = int(queue_length)
     if qos:
         op["qos"] = qos
+    if compression:
+        op["compression"] = compression
     return op
 
 
@@ -415,11 +422,16 @@ class InboundDecoder:
     def feed(self, data: str | bytes) -> InboundEvent:
         """Decode one WebSocket frame."""
         if isinstance(data, bytes | bytearray | memoryview):
-            # Binary frames are CBOR/BSON answers to subscriptions asking for compression, which we
-            # never do; nothing to route.
-            return Notice(
-                "warning", f"binary frame of {len(data)} bytes ignored (we never ask for CBOR/BSON)"
-            )
+            # Binary frames are CBOR answers to subscriptions asking for it: the same ops as JSON.
+            try:
+                item = decode_cbor(data)
+            except ValueError as exc:
+                return Notice("warning", f"binary frame of {len(data)} bytes ignored ({_short(exc)})")
+            except RecursionError:
+                return Notice("warning", "binary frame nested too deep to decode ignored")
+            if not isinstance(item, dict):
+                return Notice("warning", f"binary frame of {len(data)} bytes that is not a CBOR map ignored")
+            return self.route(item)
         try:
             frame = _decoder.decode(data)
         except ValueError as exc:

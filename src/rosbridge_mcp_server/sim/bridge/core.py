@@ -12,6 +12,7 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable, Coroutine
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, Literal
 
 from rosbridge_mcp_server.sim.connection import Connection, OutgoingMessage
@@ -67,6 +68,8 @@ class BridgeConfig:
     distro: str
     #: Whether ``call_service`` reads a ``timeout`` field (ROS 2; rosbridge_suite 2.1.0 ignores it).
     timeout_field: bool = True
+    #: Whether ``compression: "cbor"`` is honoured; ``False`` is a bridge that ignores the key (JSON).
+    cbor: bool = True
     #: Which server this is: ``rosbridge_suite``, or ``rs`` for rosbridge-server-rs 0.1.6 (an error
     #: ``status`` for every failed op, goals cancelled only by the connection that started them, a cancelled
     #: goal's result with ``result: false``, "type is required when interface is absent from ROS graph").
@@ -125,6 +128,11 @@ class BridgeCore:
         self._tasks: set[asyncio.Task[Any]] = set()
         #: rospy's per-publisher header seq counters: (published by rosbridge?, topic) -> last seq.
         self._header_seq: dict[tuple[bool, str], int] = {}
+        #: The last latched message of each topic with its frames, serialised once for every late subscriber
+        #: (a 2000² map is ~1 s of JSON conversion per subscribe otherwise).
+        self._latched_out: dict[str, OutgoingMessage] = {}
+        #: rosbridge-server-rs sends fixed-size arrays as CBOR lists; rosbridge_suite fails on them.
+        self._to_cbor = partial(registry.to_cbor, fixed_lists=config.rs)
 
     # --- names and types ----------------------------------------------------------------------------------
 
@@ -197,9 +205,10 @@ class BridgeCore:
                 callback(msg, source)
             except Exception:
                 log.exception("subscriber of %s failed", topic)
+        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json, self._to_cbor)
         if topic in self.graph.latched:
             self.graph.latched[topic] = msg
-        outgoing = OutgoingMessage(topic, msg_type, msg, self.registry.to_json)
+            self._latched_out[topic] = outgoing
         for conn in list(self.connections.values()):
             if topic in conn.subscriptions:
                 try:
@@ -207,6 +216,18 @@ class BridgeCore:
                 except (ConversionError, InterfaceError) as exc:
                     log.error("cannot send %s on %s: %s", msg_type, topic, exc)
                     return
+
+    def latched_message(self, topic: str, msg_type: str) -> OutgoingMessage | None:
+        """The topic's latched message for a new subscriber (its frames made once), if it has one."""
+        latched = self.graph.latched.get(topic)
+        if latched is None:
+            return None
+        outgoing = self._latched_out.get(topic)
+        if outgoing is None or outgoing.msg is not latched or outgoing.type != msg_type:
+            outgoing = self._latched_out[topic] = OutgoingMessage(
+                topic, msg_type, latched, self.registry.to_json, self._to_cbor
+            )
+        return outgoing
 
     def publish_json(self, topic: str, msg_type: str, partial: dict[str, Any]) -> None:
         """Publish a world message given in JSON form (missing fields take defaults)."""

@@ -31,6 +31,7 @@ from .base import (
     no_field,
     split_seconds,
 )
+from .cbor_form import cbor_form
 from .definitions import COMMON, ROS1_ONLY, ROS2_ONLY, ROSAPI_2_1, to_ros1_text
 from .definitions_nav2 import NAV2
 from .ros1 import Ros1Conversion
@@ -308,6 +309,13 @@ class InterfaceRegistry:
         rosbridge passes through as numpy values (the JSON writer emits bare ``NaN``).
         """
         return self._out_msg(self._spec(msg_type), value)
+
+    def to_cbor(
+        self, msg_type: str, json_form: dict[str, Any], *, fixed_lists: bool = False
+    ) -> dict[str, Any]:
+        """The values rosbridge encodes as CBOR for a message in its JSON form (typed arrays, bytes);
+        ``fixed_lists`` as rosbridge-server-rs does (fixed-size arrays as lists, not a failure)."""
+        return cbor_form(self._spec(msg_type), json_form, fixed_lists=fixed_lists)
 
     def _out_msg(self, spec: MessageSpec, value: Any) -> JsonDict:
         if not isinstance(value, dict):

@@ -22,7 +22,6 @@ from rosbridge_mcp_server.sim.bridge.core import (
 )
 from rosbridge_mcp_server.sim.connection import (
     Connection,
-    OutgoingMessage,
     SubscriptionOptions,
     TopicSubscription,
 )
@@ -232,7 +231,9 @@ class Topics(Capability):
         else:
             raise OpError(f"Cannot infer topic type for topic {msg['topic']} as it is not yet advertised")
         compression = msg.get("compression", "none")
-        if compression in ("cbor", "cbor-raw"):
+        if compression == "cbor" and not core.config.cbor:
+            compression = "none"  # a bridge without CBOR that ignores the key
+        if compression == "cbor-raw":
             log.warning(
                 "client %d: compression %r is not simulated; sending JSON on %s", conn.id, compression, topic
             )
@@ -245,9 +246,12 @@ class Topics(Capability):
         sub.by_id[sid] = SubscriptionOptions(
             msg.get("throttle_rate", 0), msg.get("queue_length", 0), compression
         )
-        latched = core.graph.latched.get(topic)
+        latched = core.latched_message(topic, msg_type)
         if latched is not None:
-            conn.deliver(OutgoingMessage(topic, msg_type, latched, core.registry.to_json), core.fragment_id)
+            try:
+                conn.deliver(latched, core.fragment_id)
+            except ConversionError as exc:  # rosbridge's CBOR converter (fixed-size arrays): logged, not sent
+                log.error("cannot send %s on %s: %s", msg_type, topic, exc)
 
     def unsubscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
         check_fields(msg, [(True, "topic", (str,))])
