@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.console.mapview import MapPanel
+from rosbridge_mcp_server.console.mapview import MapPanel, Picture
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.acting import Act
 from rosbridge_mcp_server.robot.goals import running_goals
@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.activity import SessionActivity
 
-__all__ = ["AUDIT_KEPT", "CAMERA_FPS", "CAMERA_MAX_SIZE", "ConsoleHub", "Frame", "RobotView", "summary_text"]
+__all__ = ["AUDIT_KEPT", "CAMERA_FPS", "CAMERA_MAX_SIZE", "ConsoleHub", "RobotView", "summary_text"]
 
 _log = logging.getLogger("rosbridge_mcp_server.console")
 
@@ -63,27 +63,6 @@ class RobotView:
     audit: Audit
 
 
-@dataclass(frozen=True)
-class Frame:
-    """The camera's latest frame, ready for the page."""
-
-    seq: int
-    topic: str
-    mime: str
-    data: str  #: base64
-    width: int
-    height: int
-
-    def event(self) -> dict[str, Any]:
-        return {
-            "seq": self.seq,
-            "topic": self.topic,
-            "src": f"data:{self.mime};base64,{self.data}",
-            "width": self.width,
-            "height": self.height,
-        }
-
-
 class ConsoleHub:
     """The console's state and actions for ``robots`` (their audits merged) and the ``operator``.
 
@@ -103,7 +82,7 @@ class ConsoleHub:
         self._graph = RosGraph(self.robots[0].client)
         self.camera_topic: str | None = None
         self.camera_status = "off"
-        self.frame: Frame | None = None
+        self.frame: Picture | None = None
         self._frames = 0
         self._camera_task: asyncio.Task[None] | None = None
         self._pushes = 0
@@ -344,7 +323,7 @@ class ConsoleHub:
                 message = await subscription.get()
                 frame = await asyncio.to_thread(_encode, message, compressed)
                 self._frames += 1
-                self.frame = Frame(self._frames, topic, "image/jpeg", *frame)
+                self.frame = Picture(self._frames, topic, "image/jpeg", *frame)
                 self.camera_status = "live"
                 self.changed()
                 # The frame budget: the bridge throttles too, but a bridge that ignores it must not flood.

@@ -35,8 +35,8 @@ __all__ = [
     "MAP_FPS",
     "MAP_MAX_SIZE",
     "POSE_HZ",
-    "MapImage",
     "MapPanel",
+    "Picture",
     "pose_of",
 ]
 
@@ -53,12 +53,13 @@ _GRID_TYPE = "nav_msgs/OccupancyGrid"
 
 
 @dataclass(frozen=True)
-class MapImage:
-    """The map picture, ready for the page."""
+class Picture:
+    """A picture ready for the page: the map panel's drawing, or a camera frame (``console/hub.py``)."""
 
     seq: int
     topic: str
-    data: str  #: base64 PNG
+    mime: str
+    data: str  #: base64
     width: int
     height: int
 
@@ -66,7 +67,7 @@ class MapImage:
         return {
             "seq": self.seq,
             "topic": self.topic,
-            "src": f"data:image/png;base64,{self.data}",
+            "src": f"data:{self.mime};base64,{self.data}",
             "width": self.width,
             "height": self.height,
         }
@@ -92,7 +93,7 @@ class MapPanel:
         self.status = "off"
         self.map_status = "off"
         self.pose: dict[str, Any] | None = None
-        self.image: MapImage | None = None
+        self.image: Picture | None = None
         self.poses = 0
         self.images = 0
         self._task: asyncio.Task[None] | None = None
@@ -250,7 +251,7 @@ class MapPanel:
                 data, width, height = await asyncio.to_thread(_draw, grid, robot)
                 drawn, last_draw = key, time.monotonic()
                 self.images += 1
-                self.image = MapImage(self.images, self.topic, data, width, height)
+                self.image = Picture(self.images, self.topic, "image/png", data, width, height)
                 self._pushed()
             # The pose's rate: /tf may change 50 times a second, the page needs two.
             await asyncio.sleep(1 / POSE_HZ)
