@@ -40,7 +40,9 @@ async def test_a_hundred_concurrent_calls_on_humble_use_a_bounded_pool_of_lanes(
     sim_humble: SimulatedRobot, make_client: MakeClient
 ) -> None:
     """On an in-order bridge calls run on pooled lanes, never more than the cap at once."""
-    client = await make_client(sim_humble, lane_cap=4)
+    # A lane opens within the connect timeout; 100 calls at once on a loaded machine need more than the 2 s
+    # the test clients use by default.
+    client = await make_client(sim_humble, lane_cap=4, connect_timeout=10.0)
     results = await asyncio.gather(
         *(client.call_service("/add_two_ints", {"a": i, "b": 1}) for i in range(100))
     )
