@@ -1851,7 +1851,7 @@ async def measure_view(ctx: Context) -> list[Row]:
             # view_map asks for CBOR (#19): the raw CBOR receipt is the floor it cannot beat.
             rows.append(
                 timing_row(
-                    "11a",
+                    "11a·",
                     f"↳ reference: a raw CBOR receipt of the same /map ({mib(cbor_bytes)}, one binary frame)",
                     Stats.of(samples["cbor"]),
                     verdict="info",
