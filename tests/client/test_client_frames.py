@@ -97,7 +97,11 @@ async def stalled_bridge() -> AsyncIterator[str]:
     """A bridge that answers the version query and then never reads another frame."""
 
     async def handle(ws: ServerConnection) -> None:
-        request = json.loads(await ws.recv())
+        # Other ops may come first (the client's probes on connecting): answer the version query wherever.
+        while True:
+            request = json.loads(await ws.recv())
+            if request.get("service") == "/rosapi/get_ros_version":
+                break
         reply = {
             "op": "service_response",
             "id": request["id"],

@@ -267,6 +267,12 @@ class Connection:
             return await future
         finally:
             self.pending.pop(rid, None)
+            # A send that failed (or waited on flow control past the deadline, when the sweep has already
+            # failed the reply) raised its own error: the reply's future is not awaited by anyone now.
+            if not future.done():
+                future.cancel()
+            elif not future.cancelled():
+                future.exception()
 
     def expect(self, rid: str, what: str, timeout: float) -> asyncio.Future[dict[str, Any]]:
         """A future for the reply with id *rid* to something sent next (``forget(rid)`` when done).
