@@ -27,6 +27,7 @@ from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from rosbridge_mcp_server.client import Dialect, RosInfo
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.known_types import (
     PROBE_CONCURRENCY,
@@ -39,7 +40,6 @@ from rosbridge_mcp_server.robot.known_types import (
 )
 from rosbridge_mcp_server.robot.messages import TypeDef, typedefs_from_rosapi
 from rosbridge_mcp_server.robot.names import absolute, did_you_mean
-from rosbridge_mcp_server.wire.dialect import RosInfo, action_type_names, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -137,12 +137,16 @@ class RosGraph:
 
     async def ros_info(self) -> RosInfo:
         """The bridge's ROS version and distro (detected by the client once per connection)."""
-        info = await self._client.ros_info()
+        return (await self.dialect()).info
+
+    async def dialect(self) -> Dialect:
+        """How the bridge spells types and time fields (the client's, one per connection)."""
+        dialect = await self._client.dialect()
         # The client makes one RosInfo per connection, so a new object means a new connection.
-        if info is not self._cache_owner:
-            self._cache_owner = info
+        if dialect.info is not self._cache_owner:
+            self._cache_owner = dialect.info
             self._known = _ConnectionKnowledge()
-        return info
+        return dialect
 
     async def rosapi(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
         """Call ``/rosapi/<name>``; a missing rosapi is a :class:`ServiceError` saying how to start it."""
@@ -435,8 +439,8 @@ class RosGraph:
 
     async def message_typedefs(self, type_name: str) -> dict[str, TypeDef]:
         """A message type's definition and those of its nested types; :class:`UnknownTypeError` if none."""
-        info = await self.ros_info()
-        bridge_name = normalize_type(type_name, info.version, "msg")
+        dialect = await self.dialect()
+        info, bridge_name = dialect.info, dialect.message_type(type_name)
         await self._check_installed(type_name, bridge_name, info)
         typedefs = await self._details("message_details", bridge_name, required=True)
         if typedefs is None:
@@ -447,8 +451,7 @@ class RosGraph:
 
     async def service_request_typedefs(self, type_name: str) -> dict[str, TypeDef] | None:
         """The request definition of a service type, or ``None`` when rosapi cannot tell."""
-        info = await self.ros_info()
-        bridge_name = normalize_type(type_name, info.version, "srv")
+        bridge_name = (await self.dialect()).service_type(type_name)
         return await self._details("service_request_details", bridge_name) or None
 
     async def action_goal_typedefs(self, type_name: str) -> dict[str, TypeDef] | None:
@@ -458,7 +461,7 @@ class RosGraph:
         ``pkg/NameGoal`` (the goal message inside ``pkg/NameActionGoal``).
         """
         info = await self.ros_info()
-        names = action_type_names(type_name)
+        names = Dialect.action_names(type_name)
         if info.version == 1:
             return await self._details("message_details", f"{names.package}/{names.name}Goal") or None
         return await self._details("action_goal_details", names.ros2) or None

@@ -36,7 +36,6 @@ __all__ = [
     "normalize_type",
     "split_type",
     "to_ros1_time",
-    "to_ros2_time",
 ]
 
 Category = Literal["msg", "srv", "action"]
@@ -193,7 +192,6 @@ def action_type_names(type_name: str) -> ActionTypeNames:
 # --- time fields ------------------------------------------------------------------------------------
 
 _ROS2_TIME_KEYS: Final = frozenset({"sec", "nanosec"})
-_ROS1_TIME_KEYS: Final = frozenset({"secs", "nsecs"})
 
 
 def _convert_time(value: Any, from_keys: frozenset[str], mapping: dict[str, str]) -> Any:
@@ -214,11 +212,6 @@ def to_ros1_time(msg: Any) -> Any:
     given ``sec``/``nanosec``.
     """
     return _convert_time(msg, _ROS2_TIME_KEYS, {"sec": "secs", "nanosec": "nsecs"})
-
-
-def to_ros2_time(msg: Any) -> Any:
-    """A copy of *msg* with every ``{secs, nsecs}`` object spelled ``{sec, nanosec}``."""
-    return _convert_time(msg, _ROS1_TIME_KEYS, {"secs": "sec", "nsecs": "nanosec"})
 
 
 def adapt_message(msg: Any, version: int) -> Any:
