@@ -55,6 +55,16 @@ class Dialect:
         return rules.action_type_names(type_name).for_version(self.version)
 
     @staticmethod
+    def short_type(type_name: str) -> str:
+        """``pkg/msg/Type`` (and ``/srv/``, ``/action/``) → ``pkg/Type``, the form both dialects share."""
+        return rules.short_type(type_name)
+
+    @staticmethod
+    def same_type(a: str, b: str) -> bool:
+        """Whether two spellings name the same type (``pkg/msg/Type`` and ``pkg/Type`` do)."""
+        return rules.same_type(a, b)
+
+    @staticmethod
     def split_type(type_name: str) -> tuple[str, str | None, str]:
         """``(package, category or None, name)``; :class:`UnknownTypeError` for a name that is not a type."""
         return rules.split_type(type_name)

@@ -24,7 +24,7 @@ from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
-from rosbridge_mcp_server.robot.messages import require_fit, same_type, short_type_name
+from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
 from rosbridge_mcp_server.robot.velocity import clamp_text
@@ -204,7 +204,7 @@ async def _checked_message(
     typedefs = await ctx.graph.message_typedefs(message_type)
 
     graph_type = await ctx.graph.publishing_type(name)
-    if graph_type and not same_type(graph_type, bridge_type):
+    if graph_type and not dialect.same_type(graph_type, bridge_type):
         raise NotSentError(
             f"Topic {name} has type {graph_type}, not {bridge_type}; rosbridge would drop the message. "
             f"Publish a {graph_type} message, or choose another topic (list_topics shows each topic's type)."
@@ -390,10 +390,10 @@ async def call_service(
     given_type = dialect.service_type(service_type)
 
     graph_type = await ctx.graph.service_type(name, cached=True)
-    if graph_type and not same_type(graph_type, given_type):
+    if graph_type and not dialect.same_type(graph_type, given_type):
         # The cached type may be stale (the service was offered anew with another type): ask once more.
         graph_type = await ctx.graph.service_type(name)
-    if graph_type and not same_type(graph_type, given_type):
+    if graph_type and not dialect.same_type(graph_type, given_type):
         raise NotSentError(
             f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
             "and call again with that service_type."

@@ -21,7 +21,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
     UnknownTypeError,
 )
-from rosbridge_mcp_server.robot.messages import TypeDef, same_type, short_type_name
+from rosbridge_mcp_server.robot.messages import TypeDef, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
 
 if TYPE_CHECKING:
@@ -143,7 +143,7 @@ async def read_topic(
     graph_type = await graph.topic_type(name)
     if message_type:
         msg_type = dialect.message_type(message_type)
-        if graph_type and not same_type(graph_type, msg_type):
+        if graph_type and not dialect.same_type(graph_type, msg_type):
             raise NotSentError(
                 f"Topic {name} has type {graph_type}, not {msg_type}; rosbridge would not subscribe. Leave "
                 "message_type out to use the topic's own type."

@@ -34,6 +34,8 @@ __all__ = [
     "is_success_status",
     "is_terminal_status",
     "normalize_type",
+    "same_type",
+    "short_type",
     "split_type",
     "to_ros1_time",
 ]
@@ -127,6 +129,19 @@ def normalize_type(type_name: str, version: int, category: Category = "msg") -> 
     if version == 1:
         return f"{pkg}/{name}"
     return f"{pkg}/{given or category}/{name}"
+
+
+def short_type(name: str) -> str:
+    """``pkg/msg/Type`` (and ``/srv/``, ``/action/``) → ``pkg/Type``; other names unchanged."""
+    parts = name.strip().strip("/").split("/")
+    if len(parts) == 3 and parts[1] in ("msg", "srv", "action"):
+        return f"{parts[0]}/{parts[2]}"
+    return name.strip()
+
+
+def same_type(a: str, b: str) -> bool:
+    """Whether two spellings name the same type (``pkg/msg/Type`` and ``pkg/Type`` do)."""
+    return short_type(a) == short_type(b)
 
 
 @dataclass(frozen=True, slots=True)
