@@ -133,8 +133,7 @@ async def _describe_as(graph: RosGraph, type_name: str, kind: Kind, dialect: Dia
         return Description(kind, name, tuple(parts))
     names = dialect.action_names(type_name)
     if version == 1:
-        base = f"{names.package}/{names.name}"
-        sections = (("goal", f"{base}Goal"), ("result", f"{base}Result"), ("feedback", f"{base}Feedback"))
+        sections = tuple(zip(("goal", "result", "feedback"), names.ros1_parts, strict=True))
         found = [(title, await _part(graph, "message_details", msg, version)) for title, msg in sections]
         name = names.ros1.action
     else:

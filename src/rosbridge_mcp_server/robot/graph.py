@@ -463,7 +463,7 @@ class RosGraph:
         info = await self.ros_info()
         names = Dialect.action_names(type_name)
         if info.version == 1:
-            return await self._details("message_details", f"{names.package}/{names.name}Goal") or None
+            return await self._details("message_details", names.ros1_parts[0]) or None
         return await self._details("action_goal_details", names.ros2) or None
 
     async def _details(

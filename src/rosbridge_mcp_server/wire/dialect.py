@@ -176,6 +176,12 @@ class ActionTypeNames:
             action=base, goal=f"{base}Goal", feedback=f"{base}Feedback", result=f"{base}Result"
         )
 
+    @property
+    def ros1_parts(self) -> tuple[str, str, str]:
+        """The ROS 1 messages inside actionlib's family: ``pkg/NameGoal``, ``...Result``, ``...Feedback``."""
+        base = f"{self.package}/{self.name}"
+        return f"{base}Goal", f"{base}Result", f"{base}Feedback"
+
     def for_version(self, version: int) -> str:
         """The name the bridge of this ROS *version* knows the action by."""
         return self.ros2 if version == 2 else self.ros1.action
