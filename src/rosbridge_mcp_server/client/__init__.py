@@ -7,7 +7,8 @@ calls. By job: ``client.py`` (lifecycle, the connect loop, the current ``Session
 it, opened whole), ``detect.py`` (ROS version detection), ``dialect.py`` (the bridge's spelling of
 types and time fields, one ``Dialect`` per session), ``services.py``
 (service calls), ``topics.py`` and ``subscription.py`` (advertisements, subscriptions), ``lanes.py`` and
-``goal_lane.py`` (extra connections), ``connection.py`` (one WebSocket and its reader).
+``goal_lane.py`` (extra connections), ``connection.py`` (one WebSocket and its reader), ``frames.py``
+(what one frame may hold: size, text, nesting).
 """
 
 from __future__ import annotations
