@@ -38,7 +38,6 @@ __all__ = [
     "advertise",
     "call_service",
     "cancel_action_goal",
-    "decode_json",
     "encode",
     "publish",
     "send_action_goal",
@@ -69,13 +68,6 @@ def encode(op: dict[str, Any]) -> str:
     for a float field it rejects).
     """
     return _encoder.encode(op)
-
-
-def decode_json(text: str | bytes) -> Any:
-    """Parse JSON leniently (bare ``NaN``/``Infinity``/``-Infinity`` become floats)."""
-    if isinstance(text, bytes | bytearray):
-        text = text.decode("utf-8")
-    return _decoder.decode(text)
 
 
 # --- builders ---------------------------------------------------------------------------------------

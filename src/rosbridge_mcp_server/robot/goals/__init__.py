@@ -27,7 +27,6 @@ from rosbridge_mcp_server.robot.goals.record import (
 )
 from rosbridge_mcp_server.robot.goals.registry import GoalRegistry, goals_of
 from rosbridge_mcp_server.robot.names import absolute
-from rosbridge_mcp_server.wire.dialect import action_type_names
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -72,13 +71,13 @@ async def run_goal(
     connection drops: the goal keeps running on the robot, so it is cancelled as soon as a connection is back
     (``goal_cancel`` says whether that already happened).
     """
-    info = await client.ros_info()
+    dialect = await client.dialect()
     action = absolute(action)
     gid = goal_id if goal_id is not None else client.new_goal_id(action)
 
-    wire_type = action_type_names(action_type).for_version(info.version)
-    with goals_of(client).tracking(Goal(gid, action, wire_type, info.version)) as record:
-        if info.version == 1:
+    wire_type = dialect.action_type(action_type)
+    with goals_of(client).tracking(Goal(gid, action, wire_type, dialect.version)) as record:
+        if dialect.version == 1:
             return await ros1.run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
         try:
             return await ros2.run(client, record, goal, timeout=timeout, on_feedback=on_feedback)

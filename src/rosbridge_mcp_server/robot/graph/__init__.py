@@ -51,6 +51,7 @@ class RosGraph:
         definitions = TypeDefinitions(rosapi)
 
         self.ros_info = rosapi.ros_info
+        self.dialect = rosapi.dialect
         self.rosapi = rosapi.call
 
         self.topics = topics.topics

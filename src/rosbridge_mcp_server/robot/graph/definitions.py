@@ -11,11 +11,11 @@ from __future__ import annotations
 import logging
 from typing import Any
 
+from rosbridge_mcp_server.client import Dialect, RosInfo
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.graph.rosapi import ConnectionKnowledge, Rosapi, is_missing_service, strings
 from rosbridge_mcp_server.robot.known_types import ros1_load_failure
 from rosbridge_mcp_server.robot.messages import TypeDef, typedefs_from_rosapi
-from rosbridge_mcp_server.wire.dialect import RosInfo, action_type_names, normalize_type
 
 __all__ = ["TypeDefinitions"]
 
@@ -34,8 +34,8 @@ class TypeDefinitions:
 
     async def message_typedefs(self, type_name: str) -> dict[str, TypeDef]:
         """A message type's definition and those of its nested types; :class:`UnknownTypeError` if none."""
-        info = await self._rosapi.ros_info()
-        bridge_name = normalize_type(type_name, info.version, "msg")
+        dialect = await self._rosapi.dialect()
+        info, bridge_name = dialect.info, dialect.message_type(type_name)
         await self._check_installed(type_name, bridge_name, info)
         typedefs = await self._details("message_details", bridge_name, required=True)
         if typedefs is None:
@@ -46,8 +46,7 @@ class TypeDefinitions:
 
     async def service_request_typedefs(self, type_name: str) -> dict[str, TypeDef] | None:
         """The request definition of a service type, or ``None`` when rosapi cannot tell."""
-        info = await self._rosapi.ros_info()
-        bridge_name = normalize_type(type_name, info.version, "srv")
+        bridge_name = (await self._rosapi.dialect()).service_type(type_name)
         return await self._details("service_request_details", bridge_name) or None
 
     async def action_goal_typedefs(self, type_name: str) -> dict[str, TypeDef] | None:
@@ -57,9 +56,9 @@ class TypeDefinitions:
         ``pkg/NameGoal`` (the goal message inside ``pkg/NameActionGoal``).
         """
         info = await self._rosapi.ros_info()
-        names = action_type_names(type_name)
+        names = Dialect.action_names(type_name)
         if info.version == 1:
-            return await self._details("message_details", f"{names.package}/{names.name}Goal") or None
+            return await self._details("message_details", names.ros1_parts[0]) or None
         return await self._details("action_goal_details", names.ros2) or None
 
     async def _details(

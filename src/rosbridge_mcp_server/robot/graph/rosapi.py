@@ -13,9 +13,9 @@ from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from rosbridge_mcp_server.client import Dialect, RosInfo
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.messages import TypeDef
-from rosbridge_mcp_server.wire.dialect import RosInfo
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -74,12 +74,16 @@ class Rosapi:
 
     async def ros_info(self) -> RosInfo:
         """The bridge's ROS version and distro (detected by the client once per connection)."""
-        info = await self.client.ros_info()
+        return (await self.dialect()).info
+
+    async def dialect(self) -> Dialect:
+        """How the bridge spells types and time fields (the client's, one per connection)."""
+        dialect = await self.client.dialect()
         # The client makes one RosInfo per connection, so a new object means a new connection.
-        if info is not self._cache_owner:
-            self._cache_owner = info
+        if dialect.info is not self._cache_owner:
+            self._cache_owner = dialect.info
             self._known = ConnectionKnowledge()
-        return info
+        return dialect
 
     async def call(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
         """Call ``/rosapi/<name>``; a missing rosapi is a :class:`ServiceError` saying how to start it."""
