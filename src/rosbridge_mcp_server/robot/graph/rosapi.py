@@ -115,6 +115,16 @@ async def bounded_map(
             return await func(item)
 
     # A TaskGroup, not gather: when one look-up fails (the connection dropped) the others are cancelled.
-    async with asyncio.TaskGroup() as group:
-        tasks = [group.create_task(one(item)) for item in items]
+    # The caller gets that first failure itself (a NotConnectedError the tool answers), not an ExceptionGroup.
+    try:
+        async with asyncio.TaskGroup() as group:
+            tasks = [group.create_task(one(item)) for item in items]
+    except BaseExceptionGroup as failures:
+        raise _first_leaf(failures) from None
     return [task.result() for task in tasks]
+
+
+def _first_leaf(group: BaseExceptionGroup[BaseException]) -> BaseException:
+    """The first exception in *group* that is not itself a group."""
+    first = group.exceptions[0]
+    return _first_leaf(first) if isinstance(first, BaseExceptionGroup) else first
