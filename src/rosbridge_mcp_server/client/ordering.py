@@ -64,11 +64,14 @@ async def call_ordering(
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     failure: BaseException | None = None
-    async with asyncio.timeout_at(deadline):
-        async with connect(url, **options) as host_ws, connect(url, **options) as caller_ws:
-            host, caller = _Frames(host_ws), _Frames(caller_ws)
-            # Failures are caught inside, so both sockets close politely (an exception leaving `async with`
-            # closes them with 1011, which a bridge may log as an error of its own).
+    sockets: list[ClientConnection] = []
+    try:
+        async with asyncio.timeout_at(deadline):
+            sockets.append(await connect(url, **options))
+            sockets.append(await connect(url, **options))
+            host, caller = _Frames(sockets[0]), _Frames(sockets[1])
+            # Failures are caught inside, so both sockets close politely (a socket dropped without a close
+            # frame may be logged by the bridge as an error of its own).
             try:
                 await host.send({"op": "advertise_service", "service": name, "type": srv_type})
                 try:
@@ -78,6 +81,14 @@ async def call_ordering(
                     await _unadvertise(host, name)
             except (TimeoutError, LookupError, ValueError, WebSocketException) as exc:
                 failure = exc
+            await asyncio.gather(*(ws.close() for ws in sockets))
+    except BaseException:
+        # Cancelled (the client is closing) or past the deadline: the sockets go at once. A closing handshake
+        # waits for the bridge's close frame, which a bridge that stopped reading (or a socket whose unread
+        # frames paused reading) never delivers: close() would wait websockets' close_timeout, 10 s.
+        for ws in sockets:
+            ws.transport.abort()
+        raise
     if failure is not None:
         raise failure
     return queued
@@ -134,10 +145,14 @@ async def _unadvertise(host: _Frames, name: str) -> None:
     never gets an answer), and both drop the frames of a connection they have not handled yet when it
     closes: an ``unadvertise_service`` sent just before the close can be lost on a busy bridge (0.11.17's
     takes 1 s, so one is always busy there). A reply to a call sent after it on the same connection proves
-    it was handled.
+    it was handled. While the probe is being cancelled (the client is closing), nothing is awaited after the
+    send.
     """
     try:
         await host.send({"op": "unadvertise_service", "service": name})
+        task = asyncio.current_task()
+        if task is not None and task.cancelling():
+            return
         barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
         await host.send(barrier)
         async with asyncio.timeout(_UNADVERTISE_SECONDS):
