@@ -212,9 +212,10 @@ async def test_close_drops_a_call_ordering_probe_in_flight_at_once(
     url, probing = unread_probe_bridge
     client = await make_client(url)
     await asyncio.wait_for(probing.wait(), 5.0)
-    # close() waits for the client's background tasks, the probe included. 2 s is far below what the
-    # unanswered probe takes on its own (5 s) and what a closing handshake waits for its close frame (10 s).
-    await asyncio.wait_for(client.close(), 2.0)
+    # close() waits for the client's background tasks, the probe included (its unadvertise is confirmed for up
+    # to 1 s). 3 s is below what the unanswered probe takes on its own (5 s) and what a closing handshake
+    # waits for its close frame (10 s).
+    await asyncio.wait_for(client.close(), 3.0)
     assert client.closed
     assert client.session is None
 
