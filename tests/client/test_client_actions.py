@@ -106,51 +106,11 @@ async def test_a_goal_past_its_timeout_is_cancelled_and_reports_the_partial_resu
     await robot2.wait_for(lambda world: all(g.finished for g in world.goals.values()))
 
 
-async def test_cancelling_the_awaiting_task_cancels_the_goal_on_the_robot(
-    robot2: SimulatedRobot, make_client: MakeClient
-) -> None:
-    """If the caller is cancelled (the MCP request was cancelled), the goal is cancelled too."""
-    client = await make_client(robot2)
-    goal = asyncio.create_task(
-        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
-    )
-    await robot2.wait_for(running_goal_with_feedback)
-    goal.cancel()
-    with pytest.raises(asyncio.CancelledError):
-        await goal
-    await robot2.wait_for(lambda world: all(g.finished and g.cancel_requested for g in world.goals.values()))
-    assert goals.running_goals(client) == []
-
-
-async def test_a_goal_for_a_missing_action_server_raises_action_error(
-    sim_ros2: SimulatedRobot, make_client: MakeClient
-) -> None:
-    """The bridge's "No action server available" surfaces as ActionError."""
-    client = await make_client(sim_ros2)
-    with pytest.raises(ActionError, match="No action server available"):
-        await ros2.send_action_goal(client, "/no_such_action", ROS2_TYPE, {"order": 1}, timeout=5.0)
-
-
 async def test_a_rejected_goal_raises_action_error(sim_ros2: SimulatedRobot, make_client: MakeClient) -> None:
     """A goal the server rejects raises ActionError with the bridge's text."""
     client = await make_client(sim_ros2)
     with pytest.raises(ActionError, match="rejected"):
         await ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": -1}, timeout=5.0)
-
-
-async def test_a_drop_fails_a_running_goal_with_connection_lost(
-    sim_ros2: SimulatedRobot, make_client: MakeClient
-) -> None:
-    """When the bridge drops every connection, a goal waiting on its lane fails at once."""
-    client = await make_client(sim_ros2)
-    goal = asyncio.create_task(
-        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=20.0)
-    )
-    await sim_ros2.wait_for(running_goal_with_feedback)
-    await sim_ros2.drop_connections()
-    with pytest.raises(ConnectionLostError):
-        await asyncio.wait_for(goal, 5.0)
-    assert goals.running_goals(client) == []
 
 
 async def test_send_action_goal_refuses_ros1(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
@@ -271,16 +231,6 @@ async def test_cancel_goals_reports_an_unknown_goal_id(
     assert report.canceled_ours == []
 
 
-async def test_a_ros1_goal_without_an_action_server_fails_with_a_clear_error(
-    sim_ros1: SimulatedRobot, make_client: MakeClient
-) -> None:
-    """No status messages on <ns>/status within the wait means no action server there (the wait, rounded)."""
-    client = await make_client(sim_ros1)
-    expected = r"no action server at /nowhere: no status messages on /nowhere/status within 0\.3 s "
-    with pytest.raises(ActionError, match=expected):
-        await goals.run_goal(client, "/nowhere", ROS1_TYPE, {"order": 1}, timeout=0.3)
-
-
 async def test_a_rejected_ros1_goal_ends_rejected(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
     """A goal the actionlib server rejects ends with status "rejected" (5)."""
     client = await make_client(sim_ros1)
@@ -288,23 +238,6 @@ async def test_a_rejected_ros1_goal_ends_rejected(sim_ros1: SimulatedRobot, make
     assert outcome.status == "rejected"
     assert outcome.status_code == 5
     assert not outcome.succeeded
-
-
-async def test_cancelling_run_goal_cancels_the_ros1_goal(
-    sim_ros1: SimulatedRobot, make_client: MakeClient
-) -> None:
-    """Cancelling the task running a ROS 1 goal publishes a cancel for it before giving up."""
-    client = await make_client(sim_ros1)
-    run = asyncio.create_task(
-        goals.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=10.0)
-    )
-    await sim_ros1.wait_for(running_goal_with_feedback)
-    run.cancel()
-    with pytest.raises(asyncio.CancelledError):
-        await run
-    await sim_ros1.wait_for(lambda world: all(g.finished for g in world.goals.values()))
-    assert all(g.cancel_requested for g in sim_ros1.world.goals.values())
-    assert goals.running_goals(client) == []
 
 
 async def test_two_clients_never_mint_the_same_goal_id(
@@ -346,16 +279,60 @@ async def test_a_plain_function_can_take_feedback(sim_ros2: SimulatedRobot, make
     assert seen
 
 
-async def test_a_drop_fails_a_running_ros1_goal_with_connection_lost(
-    sim_ros1: SimulatedRobot, make_client: MakeClient
+async def test_cancelling_the_task_running_a_goal_cancels_the_goal_on_the_robot(
+    robot: SimulatedRobot, make_client: MakeClient
 ) -> None:
-    """A ROS 1 goal followed over topics fails with ConnectionLostError when the connection drops."""
-    client = await make_client(sim_ros1)
+    """If the caller is cancelled (the MCP request was cancelled), the goal is cancelled too (ROS 1: a cancel
+    is published for it) before the cancellation propagates."""
+    client = await make_client(robot)
     run = asyncio.create_task(
-        goals.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": LONG_ORDER}, timeout=20.0)
+        goals.run_goal(client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
     )
-    await sim_ros1.wait_for(running_goal_with_feedback)
-    await sim_ros1.drop_connections()
+    await robot.wait_for(running_goal_with_feedback)
+    run.cancel()
+    with pytest.raises(asyncio.CancelledError):
+        await run
+    await robot.wait_for(lambda world: all(g.finished and g.cancel_requested for g in world.goals.values()))
+    assert robot.world.goals
+    assert goals.running_goals(client) == []
+
+
+@pytest.mark.parametrize(
+    ("dialect", "timeout", "refusal"),
+    [
+        # rosbridge 2.x refuses the goal after about a second.
+        pytest.param("ros2", 5.0, "No action server available", id="ros2"),
+        # actionlib has no refusal: no status messages on <ns>/status within the wait (rounded) tells.
+        pytest.param(
+            "ros1",
+            0.3,
+            r"no action server at /nowhere: no status messages on /nowhere/status within 0\.3 s ",
+            id="ros1",
+        ),
+    ],
+)
+async def test_a_goal_for_a_missing_action_server_fails_with_action_error(
+    make_sim: MakeSim, make_client: MakeClient, dialect: str, timeout: float, refusal: str
+) -> None:
+    """A goal for an action nobody serves raises ActionError with the dialect's reason."""
+    robot = await make_sim(dialect=dialect)
+    client = await make_client(robot)
+    with pytest.raises(ActionError, match=refusal):
+        await goals.run_goal(client, "/nowhere", action_type_for(robot), {"order": 1}, timeout=timeout)
+    assert goals.running_goals(client) == []
+
+
+async def test_a_drop_fails_a_running_goal_with_connection_lost(
+    sim: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """When the bridge drops every connection, a goal (ROS 2: waiting on its lane, ROS 1: followed over
+    topics) fails at once with ConnectionLostError and leaves nothing behind."""
+    client = await make_client(sim)
+    run = asyncio.create_task(
+        goals.run_goal(client, "/fibonacci", action_type_for(sim), {"order": LONG_ORDER}, timeout=20.0)
+    )
+    await sim.wait_for(running_goal_with_feedback)
+    await sim.drop_connections()
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(run, 5.0)
     assert goals.running_goals(client) == []

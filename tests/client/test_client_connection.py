@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 import time
+from collections.abc import AsyncIterator
 from typing import Any
 
 import pytest
 from client_harness import MakeClient, MakeSim, unused_port
+from websockets.asyncio.server import ServerConnection, serve
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
@@ -172,6 +175,49 @@ async def test_close_releases_every_connection_to_the_bridge(sim_humble: Simulat
         await asyncio.gather(*(client.call_service("/add_two_ints", {"a": i, "b": 0}) for i in range(5)))
         assert sim_humble.connection_count >= 2
     await sim_humble.wait_for(lambda _world: sim_humble.connection_count == 0, 5.0)
+
+
+@pytest.fixture
+async def unread_probe_bridge() -> AsyncIterator[tuple[str, asyncio.Event]]:
+    """A bridge that answers its first connection's calls (a Jazzy without status replies: the client
+    measures call ordering) and never reads a frame on the others (the probe's two sockets); the event says
+    both are open."""
+    opened: list[ServerConnection] = []
+    probing = asyncio.Event()
+
+    async def handle(ws: ServerConnection) -> None:
+        opened.append(ws)
+        if len(opened) > 1:
+            if len(opened) == 3:
+                probing.set()
+            await ws.wait_closed()
+            return
+        async for raw in ws:
+            request: dict[str, Any] = json.loads(raw)
+            if request.get("op") == "call_service":
+                values = {"version": 2, "distro": "jazzy"}
+                reply = {"op": "service_response", "id": request["id"], "result": True, "values": values}
+                await ws.send(json.dumps(reply))
+
+    # max_queue=1: a socket whose frames go unread stops being read, so its closing handshake never completes.
+    async with serve(handle, "127.0.0.1", 0, compression=None, max_queue=1, close_timeout=0.2) as server:
+        port = server.sockets[0].getsockname()[1]
+        yield f"ws://127.0.0.1:{port}", probing
+
+
+async def test_close_drops_a_call_ordering_probe_in_flight_at_once(
+    unread_probe_bridge: tuple[str, asyncio.Event], make_client: MakeClient
+) -> None:
+    """close() cancels the connect-time ordering probe and drops its sockets without a closing handshake."""
+    url, probing = unread_probe_bridge
+    client = await make_client(url)
+    await asyncio.wait_for(probing.wait(), 5.0)
+    # close() waits for the client's background tasks, the probe included (its unadvertise is confirmed for up
+    # to 1 s). 3 s is below what the unanswered probe takes on its own (5 s) and what a closing handshake
+    # waits for its close frame (10 s).
+    await asyncio.wait_for(client.close(), 3.0)
+    assert client.closed
+    assert client.session is None
 
 
 async def _refusing_server(enough: int) -> tuple[asyncio.Server, int, asyncio.Event]:

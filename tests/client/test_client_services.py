@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+from typing import Any
 
 import pytest
 from client_harness import MakeClient, MakeSim
@@ -59,26 +60,50 @@ async def test_a_missing_service_fails_with_the_bridge_text(client: RosbridgeCli
     assert caught.value.service == "/no_such_service"
 
 
-async def test_a_slow_service_times_out_on_ros1_with_request_timeout_error(
-    sim_ros1: SimulatedRobot, make_client: MakeClient
+@pytest.mark.parametrize(
+    ("robot_options", "timeout", "error", "text"),
+    [
+        # ROS 1 has no service timeout field: our own deadline ends the call.
+        pytest.param(
+            {"dialect": "ros1"},
+            0.3,
+            RequestTimeoutError,
+            r"service /slow_service within 0\.3 s",
+            id="ros1",
+        ),
+        # On ROS 2 the call's timeout field makes the bridge answer "Timeout exceeded" before our deadline.
+        pytest.param(
+            {"dialect": "ros2", "slow_service_seconds": 3.0},
+            0.6,
+            ServiceError,
+            "Timeout exceeded while waiting for service response",
+            id="jazzy",
+        ),
+        pytest.param(
+            {"dialect": "ros2", "in_order": True, "slow_service_seconds": 3.0},
+            0.6,
+            ServiceError,
+            "Timeout exceeded while waiting for service response",
+            id="humble",
+        ),
+    ],
+)
+async def test_a_slow_service_past_its_timeout_fails_as_the_dialect_allows(
+    *,
+    make_sim: MakeSim,
+    make_client: MakeClient,
+    robot_options: dict[str, Any],
+    timeout: float,
+    error: type[Exception],
+    text: str,
 ) -> None:
-    """ROS 1 has no service timeout field: our own deadline ends the call with RequestTimeoutError."""
-    client = await make_client(sim_ros1)
-    with pytest.raises(RequestTimeoutError, match=r"service /slow_service within 0\.3 s"):
-        await client.call_service("/slow_service", timeout=0.3)
+    """A call past its timeout fails (ROS 2: with the bridge's own text) and leaves nothing pending."""
+    robot = await make_sim(**robot_options)
+    client = await make_client(robot)
+    with pytest.raises(error, match=text):
+        await client.call_service("/slow_service", timeout=timeout)
     assert client.session is not None
     assert client.session.connection.pending == {}
-
-
-@pytest.mark.parametrize("in_order", [False, True], ids=["jazzy", "humble"])
-async def test_ros2_calls_carry_a_timeout_so_the_bridge_gives_up_with_its_own_text(
-    make_sim: MakeSim, make_client: MakeClient, in_order: bool
-) -> None:
-    """On ROS 2 the call's timeout field makes the bridge answer "Timeout exceeded" before our deadline."""
-    robot = await make_sim(dialect="ros2", in_order=in_order, slow_service_seconds=3.0)
-    client = await make_client(robot)
-    with pytest.raises(ServiceError, match="Timeout exceeded while waiting for service response"):
-        await client.call_service("/slow_service", timeout=0.6)
 
 
 @pytest.mark.parametrize("in_order", [False, True], ids=["jazzy", "humble"])

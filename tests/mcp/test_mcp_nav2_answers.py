@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import asyncio
 import json
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator
 from typing import Any
 
 import pytest
+import pytest_asyncio
 from mcp_harness import Session, open_session, parameter_names, service_rows, text_of
 from websockets.asyncio.client import connect
 
@@ -17,24 +18,32 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.graph import is_hidden
 from rosbridge_mcp_server.tools.paging import TEXT_BUDGET
 
-MakeSim = Callable[..., Awaitable[SimulatedRobot]]
-
-ROBOTS = {
+ROBOTS: dict[str, dict[str, Any]] = {
     "ros2": {"dialect": "ros2", "world": "nav2"},
     "ros1": {"dialect": "ros1", "world": "nav2"},
     "ros2-fleet": {"dialect": "ros2", "world": "nav2", "robots": 3},
 }
 
 
-@pytest.fixture(params=list(ROBOTS))
-async def nav2(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
-    """A Nav2 robot: ROS 2, ROS 1, and a ROS 2 fleet of three."""
-    return await make_sim(**ROBOTS[request.param])
+#: Starting a Nav2 world and an MCP session on it (the server learns over a thousand service types) takes
+#: seconds: each of the three is started once per test worker for the module, on the module's event loop.
+pytestmark = pytest.mark.asyncio(loop_scope="module")
 
 
-@pytest.fixture
+@pytest_asyncio.fixture(scope="module", loop_scope="module", params=list(ROBOTS))
+async def nav2(request: pytest.FixtureRequest) -> AsyncIterator[SimulatedRobot]:
+    """A Nav2 robot shared by the module's tests: ROS 2, ROS 1, and a ROS 2 fleet of three."""
+    robot = SimulatedRobot(action_step=0.05, slow_service_seconds=1.0, **ROBOTS[request.param])
+    await robot.start()
+    try:
+        yield robot
+    finally:
+        await robot.stop()
+
+
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def session(nav2: SimulatedRobot) -> AsyncIterator[Session]:
-    """An MCP session on the Nav2 robot."""
+    """An MCP session on the Nav2 robot, shared by the module's tests (they only read, but for one goal)."""
     async with open_session(nav2.url) as opened:
         yield opened
 
@@ -190,6 +199,7 @@ async def test_publish_action_navigates_the_robot_in_either_dialect(
     assert (robot.x, robot.y) == (3.0, 4.0)
 
 
+@pytest.mark.asyncio(loop_scope="function")  # its robot and session are its own
 async def test_get_node_info_filters_and_keeps_a_large_node_within_the_budget(
     session_ros2: Session, sim_ros2: SimulatedRobot
 ) -> None:

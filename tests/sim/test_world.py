@@ -135,25 +135,41 @@ def test_png_encoder_round_trips_pixels_through_zlib() -> None:
     assert png.endswith(b"IEND\xaeB`\x82")
 
 
-async def test_ros2_rosapi_uses_full_type_names_and_hides_nothing_public(sim_ros2: SimulatedRobot) -> None:
-    """ROS 2 topics come with pkg/msg/Type names, including /rosout and /parameter_events."""
-    async with await RawClient.open(sim_ros2.url) as client:
+@pytest.mark.parametrize(
+    ("dialect", "expected_types"),
+    [
+        # ROS 2: pkg/msg/Type names, /rosout and /parameter_events listed too.
+        pytest.param(
+            "ros2",
+            {
+                "/turtle1/cmd_vel": "geometry_msgs/msg/Twist",
+                "/turtle1/pose": "turtlesim/msg/Pose",
+                "/rosout": "rcl_interfaces/msg/Log",
+                "/parameter_events": "rcl_interfaces/msg/ParameterEvent",
+            },
+            id="ros2",
+        ),
+        # ROS 1: pkg/Type names and the /fibonacci actionlib topics.
+        pytest.param(
+            "ros1",
+            {
+                "/turtle1/cmd_vel": "geometry_msgs/Twist",
+                "/fibonacci/goal": "actionlib_tutorials/FibonacciActionGoal",
+                "/fibonacci/status": "actionlib_msgs/GoalStatusArray",
+            },
+            id="ros1",
+        ),
+    ],
+)
+async def test_rosapi_topics_spell_types_as_the_dialect_does(
+    make_sim: MakeSim, dialect: str, expected_types: dict[str, str]
+) -> None:
+    """/rosapi/topics pairs each topic with its type in the dialect's spelling, hiding nothing public."""
+    robot = await make_sim(dialect=dialect)
+    async with await RawClient.open(robot.url) as client:
         topics = await client.values("/rosapi/topics")
     pairs = dict(zip(topics["topics"], topics["types"], strict=True))
-    assert pairs["/turtle1/cmd_vel"] == "geometry_msgs/msg/Twist"
-    assert pairs["/turtle1/pose"] == "turtlesim/msg/Pose"
-    assert pairs["/rosout"] == "rcl_interfaces/msg/Log"
-    assert "/parameter_events" in pairs
-
-
-async def test_ros1_rosapi_uses_short_type_names_and_lists_actionlib_topics(sim_ros1: SimulatedRobot) -> None:
-    """ROS 1 topics are pkg/Type and include the five /fibonacci actionlib topics."""
-    async with await RawClient.open(sim_ros1.url) as client:
-        topics = await client.values("/rosapi/topics")
-    pairs = dict(zip(topics["topics"], topics["types"], strict=True))
-    assert pairs["/turtle1/cmd_vel"] == "geometry_msgs/Twist"
-    assert pairs["/fibonacci/goal"] == "actionlib_tutorials/FibonacciActionGoal"
-    assert pairs["/fibonacci/status"] == "actionlib_msgs/GoalStatusArray"
+    assert {topic: pairs.get(topic) for topic in expected_types} == expected_types
 
 
 async def test_service_providers_matches_service_types_not_names(sim: SimulatedRobot) -> None:

@@ -34,6 +34,9 @@ PROBE_SERVICE_PREFIX: Final = "/rosbridge_mcp_check_"
 HOLD_SECONDS: Final = 1.0
 #: How long the probe waits for the bridge to confirm its service is gone.
 _UNADVERTISE_SECONDS: Final = 3.0
+#: The same wait while the probe is being cancelled (the client is closing): a bridge that answers at all
+#: answers within milliseconds, and close() must not wait long on one that does not.
+_CANCELLED_UNADVERTISE_SECONDS: Final = 1.0
 #: At most this many unawaited frames are kept per connection (the bridge may publish; ours are few).
 _KEPT_FRAMES: Final = 64
 #: How often the probe calls its service before giving up (the bridge may not reach it at once).
@@ -64,11 +67,14 @@ async def call_ordering(
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     failure: BaseException | None = None
-    async with asyncio.timeout_at(deadline):
-        async with connect(url, **options) as host_ws, connect(url, **options) as caller_ws:
-            host, caller = _Frames(host_ws), _Frames(caller_ws)
-            # Failures are caught inside, so both sockets close politely (an exception leaving `async with`
-            # closes them with 1011, which a bridge may log as an error of its own).
+    sockets: list[ClientConnection] = []
+    try:
+        async with asyncio.timeout_at(deadline):
+            sockets.append(await connect(url, **options))
+            sockets.append(await connect(url, **options))
+            host, caller = _Frames(sockets[0]), _Frames(sockets[1])
+            # Failures are caught inside, so both sockets close politely (a socket dropped without a close
+            # frame may be logged by the bridge as an error of its own).
             try:
                 await host.send({"op": "advertise_service", "service": name, "type": srv_type})
                 try:
@@ -78,6 +84,14 @@ async def call_ordering(
                     await _unadvertise(host, name)
             except (TimeoutError, LookupError, ValueError, WebSocketException) as exc:
                 failure = exc
+            await asyncio.gather(*(ws.close() for ws in sockets))
+    except BaseException:
+        # Cancelled (the client is closing) or past the deadline: the sockets go at once. A closing handshake
+        # waits for the bridge's close frame, which a bridge that stopped reading (or a socket whose unread
+        # frames paused reading) never delivers: close() would wait websockets' close_timeout, 10 s.
+        for ws in sockets:
+            ws.transport.abort()
+        raise
     if failure is not None:
         raise failure
     return queued
@@ -94,13 +108,17 @@ async def _measure(host: _Frames, caller: _Frames, name: str, hold: float) -> bo
             await caller.send({"op": "call_service", "id": rid, "service": service})
         hosted = asyncio.ensure_future(host.next(lambda f: f.get("op") == "call_service"))
         refused = asyncio.ensure_future(caller.next(_with_id(slow)))
-        done, _ = await asyncio.wait({hosted, refused}, return_when=asyncio.FIRST_COMPLETED)
-        # Cancelling recv() loses no frame (websockets keeps it for the next recv()).
-        for task in (hosted, refused):
-            if task not in done:
-                task.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
+        try:
+            done, _ = await asyncio.wait({hosted, refused}, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            # Cancelling recv() loses no frame (websockets keeps it for the next recv()). Also when the probe
+            # itself is cancelled: a reader left behind would make the unadvertise's wait fail at once (two
+            # recv() at a time), and the service would outlive the probe.
+            for task in (hosted, refused):
+                if not task.done():
+                    task.cancel()
+                    with contextlib.suppress(asyncio.CancelledError):
+                        await task
         if hosted in done:
             request = hosted.result()
             break
@@ -134,16 +152,19 @@ async def _unadvertise(host: _Frames, name: str) -> None:
     never gets an answer), and both drop the frames of a connection they have not handled yet when it
     closes: an ``unadvertise_service`` sent just before the close can be lost on a busy bridge (0.11.17's
     takes 1 s, so one is always busy there). A reply to a call sent after it on the same connection proves
-    it was handled.
+    it was handled. While the probe is being cancelled (the client is closing) that reply is awaited only
+    briefly: without it, a real Jazzy 2.1.0 kept the service of a probe cancelled mid-way.
     """
+    task = asyncio.current_task()
+    cancelled = task is not None and task.cancelling() > 0
     try:
         await host.send({"op": "unadvertise_service", "service": name})
         barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
         await host.send(barrier)
-        async with asyncio.timeout(_UNADVERTISE_SECONDS):
+        async with asyncio.timeout(_CANCELLED_UNADVERTISE_SECONDS if cancelled else _UNADVERTISE_SECONDS):
             await host.next(_with_id("unadvertised"))
-    except (TimeoutError, WebSocketException, OSError):
-        pass  # the probe's own outcome (or failure) is what matters
+    except (TimeoutError, ValueError, WebSocketException, OSError):
+        pass  # the probe's own outcome (or failure, or cancellation) is what matters
 
 
 class _Frames:
