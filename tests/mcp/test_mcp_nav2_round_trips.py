@@ -132,3 +132,35 @@ async def test_a_type_missing_from_the_kept_list_is_looked_up_again(make_sim: Ma
         text = await session.error("describe_type", {"type_name": "nav_msgs/msg/OccupancyGridd"})
     assert "OccupancyGridd" in text
     assert robot.world.service_calls["/rosapi/interfaces"] == before + 1
+
+
+async def test_get_node_info_on_rosbridge_server_rs_is_one_round_trip(make_sim: MakeSim) -> None:
+    """rosbridge-server-rs: node_details and topics side by side, no node list first."""
+    robot = await make_sim(dialect="ros2", world="nav2", server="rs")
+    async with open_session(robot.url) as opened:
+        await warmed_up(opened.ros)
+        await opened.ok("list_actions")
+        calls = await asked(robot, opened, "get_node_info", {"node": "/controller_server"})
+    assert calls == {"/rosapi/node_details": 1, "/rosapi/topics": 1}
+
+
+async def test_an_unknown_node_on_rosbridge_server_rs_is_worded_from_the_node_list(make_sim: MakeSim) -> None:
+    """rs never answers node_details for an unknown node: the node list, asked after its silence, words it."""
+    robot = await make_sim(dialect="ros2", world="nav2", server="rs")
+    async with open_session(robot.url) as opened:
+        text = await opened.error("get_node_info", {"node": "/controler_server"})
+    assert "Did you mean /controller_server?" in text
+    assert robot.world.service_calls.get("/rosapi/nodes") == 1
+
+
+async def test_an_in_order_rosbridge_suite_is_never_asked_details_of_an_unknown_node(
+    make_sim: MakeSim,
+) -> None:
+    """rosbridge_suite ROS 2 (2.1.0, in order): the node list comes first, node_details is not asked at all."""
+    robot = await make_sim(dialect="ros2", world="nav2", in_order=True, rosapi="2.1.0")
+    async with open_session(robot.url) as opened:
+        text = await opened.error("get_node_info", {"node": "/controler_server"})
+        assert "Did you mean /controller_server?" in text
+        assert "/rosapi/node_details" not in robot.world.service_calls
+        await opened.ok("get_node_info", {"node": "/controller_server"})
+    assert robot.world.service_calls["/rosapi/node_details"] == 1
