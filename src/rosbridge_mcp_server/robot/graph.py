@@ -125,6 +125,8 @@ class _ConnectionKnowledge:
     # Types the bridge named when refusing a probe call; only listed, never used to ask rosapi for details.
     listed_types: dict[str, str] = field(default_factory=dict)
     refuses_unknown_fields: bool | None = None
+    # The last listing whose services were all typed, with its names: the same names list the same entries.
+    listing: tuple[tuple[str, ...], list[ServiceEntry]] | None = None
 
 
 class RosGraph:
@@ -236,6 +238,7 @@ class RosGraph:
     def forget_service(self, service: str) -> None:
         """Drop the cached type of ``service`` (it went away, or was offered anew)."""
         self._known.service_types.pop(service, None)
+        self._known.listing = None
 
     async def _service_type_or_blank(self, service: str) -> str:
         try:
@@ -253,6 +256,8 @@ class RosGraph:
         """
         info = await self.ros_info()
         names = await self.service_names()
+        if (last := self._known.listing) is not None and last[0] == tuple(names):
+            return last[1]
         known, listed = self._known.service_types, self._known.listed_types
         for cache in (known, listed):
             for gone in cache.keys() - set(names):
@@ -263,9 +268,11 @@ class RosGraph:
             await _bounded_map(self._listed_type, missing, PROBE_CONCURRENCY)
         elif missing:
             await _bounded_map(self._service_type_or_blank, missing)
-        return [
+        entries = [
             ServiceEntry(name, fixed.get(name) or known.get(name) or listed.get(name, "")) for name in names
         ]
+        self._known.listing = (tuple(names), entries) if all(entry.type for entry in entries) else None
+        return entries
 
     async def learn_service_types(self, limit: int = 256) -> int:
         """Ask rosapi, one service at a time, for the types a first listing would look up; how many it learnt.
