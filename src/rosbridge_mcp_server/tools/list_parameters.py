@@ -83,7 +83,8 @@ async def run(
     """Ask the graph (ROS 1 parameter server, ROS 2 nodes) for the names."""
     name = absolute_name(node, "node") if node else None
     names = await list_parameters(ctx.graph, ctx.client, name)
-    selected = [full for full in names if matcher(filter)(full)] if filter else names
+    wanted = matcher(filter)
+    selected = [full for full in names if wanted(full)] if filter else names
     # ROS 2 names hold their node before the ":"; the rest is split by _split.
     rows = sorted(
         [
