@@ -186,3 +186,17 @@ async def test_a_later_listing_shows_a_service_offered_and_withdrawn_meanwhile(m
         await provider.send(json.dumps({"op": "call_service", "id": "gone", "service": "/rosapi/get_time"}))
         assert json.loads(await provider.recv())["id"] == "gone"
         assert service_rows((await opened.ok("list_services")).structured_content) == first
+
+
+async def test_get_node_info_learns_an_actions_type_once_for_its_hidden_services(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    """Without list_actions first: the second call asks no type of the node's hidden action services."""
+    await session.ok("get_node_info", {"node": "/controller_server"})
+    calls = await asked(nav2, session, "get_node_info", {"node": "/controller_server"})
+    assert "/rosapi/service_type" not in calls
+    info = (await session.ok("get_node_info", {"node": "/controller_server"})).structured_content
+    assert info is not None
+    typed = {row["name"]: row["type"] for row in info["services"]}
+    if nav2.dialect == "ros2":
+        assert typed["/follow_path/_action/send_goal"] == "nav2_msgs/action/FollowPath_SendGoal"

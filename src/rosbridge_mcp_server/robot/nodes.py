@@ -9,6 +9,7 @@ on that bridge a node is looked up in the list first, and on the others only to 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -118,6 +119,22 @@ async def _service_types(graph: RosGraph, services: list[str], version: int) -> 
     look-up failed."""
     fixed = infrastructure_types(services, version)
     gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE)
+    # An action's hidden services are typed from the action's type, which is learnt once per connection;
+    # rosapi's service_type does not know them (it answers "", which is never kept, so it was asked anew on
+    # every call).
+    untold = {
+        action
+        for service in services
+        if (action := _hidden_action(service)) and graph.known_action_type(action) is None
+    }
+
+    async def learn(action: str) -> None:
+        # On failure rosapi is asked about the service, as before.
+        async with gate:
+            with contextlib.suppress(ServiceError, RequestTimeoutError):
+                await graph.action_type(action)
+
+    await asyncio.gather(*(learn(action) for action in sorted(untold)))
 
     async def one(service: str) -> str:
         told = fixed.get(service) or _action_service_type(graph, service)
@@ -133,6 +150,12 @@ async def _service_types(graph: RosGraph, services: list[str], version: int) -> 
 
 
 _ACTION_SERVICES = {"send_goal": "_SendGoal", "get_result": "_GetResult"}
+
+
+def _hidden_action(service: str) -> str:
+    """The action whose ``send_goal`` or ``get_result`` service this is, or ``""``."""
+    action, marker, leaf = service.rpartition("/_action/")
+    return action if marker and leaf in _ACTION_SERVICES else ""
 
 
 def _action_service_type(graph: RosGraph, service: str) -> str:
