@@ -33,7 +33,8 @@ What is measured:
     scan (phase-locked to the 5 Hz laser), and the PNG sizes of their pictures and of a ``plot_topic`` chart.
 12. every graph tool on a simulated Nav2 robot (``--only nav2``; ~36 nodes, ~400 services, 1,000+
     parameters), the server alone (JSON-RPC lines), against the raw calls its answer needs, with the size of
-    each answer's text and structured content.
+    each answer's text and structured content; ``get_node_info`` also on the same world behaving like
+    rosbridge-server-rs (row 12k: one round trip, no node list first).
 
 The table goes to stdout (Markdown, so it can be pasted into docs/performance.md), progress to stderr.
 The exit status is 0 when every measurement ran, whatever the figures; 1 when something errored.
@@ -319,6 +320,7 @@ async def simulated_robot(
     camera_size: str = CAMERA_SIZE,
     map_cells: int | None = None,
     world: str = "turtle",
+    server: str = "rosbridge_suite",
 ) -> AsyncIterator[str]:
     """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL.
 
@@ -340,6 +342,7 @@ async def simulated_robot(
         *(["--map-cells", str(map_cells)] if map_cells else []),
         "--world",
         world,
+        *(["--server", server] if server != "rosbridge_suite" else []),
         "--log-level",
         "WARNING",
     ]
@@ -1049,6 +1052,13 @@ async def measure_nav2(ctx: Context) -> list[Row]:
         raw = raws[0]
         many = ManyCalls(raw)
         ours = await stack.enter_async_context(raw_pipe_client(our_server_command(url), ctx.errlog, {}))
+        # The same world on a bridge like rosbridge-server-rs: get_node_info needs no node list there.
+        rs_url = await stack.enter_async_context(simulated_robot(ctx.errlog, world="nav2", server="rs"))
+        rs_raws = [
+            RawBridge(await stack.enter_async_context(connect(rs_url, max_size=None, compression=None)))
+            for _ in range(2)
+        ]
+        ours_rs = await stack.enter_async_context(raw_pipe_client(our_server_command(rs_url), ctx.errlog, {}))
         services = (await raw.call("/rosapi/services"))["services"]
         parameter_nodes = [
             name.removesuffix("/list_parameters") for name in services if name.endswith("/list_parameters")
@@ -1060,6 +1070,10 @@ async def measure_nav2(ctx: Context) -> list[Row]:
             await asyncio.gather(
                 raws[1].call("/rosapi/node_details", {"node": NAV2_NODE}), raws[2].call("/rosapi/topics")
             )
+
+        async def node_info_rs_floor() -> None:
+            details = rs_raws[0].call("/rosapi/node_details", {"node": NAV2_NODE})
+            await asyncio.gather(details, rs_raws[1].call("/rosapi/topics"))
 
         async def topic_info_floor() -> None:
             await asyncio.gather(
@@ -1117,16 +1131,31 @@ async def measure_nav2(ctx: Context) -> list[Row]:
                 lambda: raw.call("/rosapi/message_details", {"type": "nav_msgs/msg/OccupancyGrid"}),
             ),
         ]
+        cases.append(
+            (
+                "12k",
+                "get_node_info",
+                {"node": NAV2_NODE},
+                "`node_details` and `topics` side by side, on a bridge like rosbridge-server-rs",
+                node_info_rs_floor,
+            )
+        )
+        servers = {"12k": ours_rs}
         subjects: list[Subject] = []
         sizes: dict[str, tuple[int, int]] = {}
         for item, tool, arguments, _, floor_call in cases:
-            answer = await ours.tool(tool, arguments)  # also learns the types, as a session's first call does
+            server = servers.get(item, ours)
+            # The first call also learns the types, as a session's first call does.
+            answer = await server.tool(tool, arguments)
             result = answer["result"]
             text = "".join(block.get("text", "") for block in result["content"])
             sizes[item] = (len(text), len(json.dumps(result.get("structuredContent"))))
             subjects.append(Subject(f"n_{item}_floor", floor_call, pause=TOOL_PAUSE))
             subjects.append(
-                Subject(f"n_{item}", lambda tool=tool, arguments=arguments: ours.tool(tool, arguments))
+                Subject(
+                    f"n_{item}",
+                    lambda tool=tool, arguments=arguments, server=server: server.tool(tool, arguments),
+                )
             )
         await interleave(subjects, Plan(**{**dataclasses.asdict(plan), "block": max(2, plan.block // 4)}))
     ctx.samples.update({subject.key: subject.samples for subject in subjects})

@@ -3,11 +3,13 @@ its answer needs (counted by the simulated robot), and checks that only word an 
 
 from __future__ import annotations
 
+import json
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
 import pytest
-from mcp_harness import Session, open_session, warmed_up
+import websockets
+from mcp_harness import Session, open_session, service_rows, warmed_up
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -132,3 +134,69 @@ async def test_a_type_missing_from_the_kept_list_is_looked_up_again(make_sim: Ma
         text = await session.error("describe_type", {"type_name": "nav_msgs/msg/OccupancyGridd"})
     assert "OccupancyGridd" in text
     assert robot.world.service_calls["/rosapi/interfaces"] == before + 1
+
+
+async def test_get_node_info_on_rosbridge_server_rs_is_one_round_trip(make_sim: MakeSim) -> None:
+    """rosbridge-server-rs: node_details and topics side by side, no node list first."""
+    robot = await make_sim(dialect="ros2", world="nav2", server="rs")
+    async with open_session(robot.url) as opened:
+        await warmed_up(opened.ros)
+        await opened.ok("list_actions")
+        calls = await asked(robot, opened, "get_node_info", {"node": "/controller_server"})
+    assert calls == {"/rosapi/node_details": 1, "/rosapi/topics": 1}
+
+
+async def test_an_unknown_node_on_rosbridge_server_rs_is_worded_from_the_node_list(make_sim: MakeSim) -> None:
+    """rs never answers node_details for an unknown node: the node list, asked after its silence, words it."""
+    robot = await make_sim(dialect="ros2", world="nav2", server="rs")
+    async with open_session(robot.url) as opened:
+        text = await opened.error("get_node_info", {"node": "/controler_server"})
+    assert "Did you mean /controller_server?" in text
+    assert robot.world.service_calls.get("/rosapi/nodes") == 1
+
+
+async def test_an_in_order_rosbridge_suite_is_never_asked_details_of_an_unknown_node(
+    make_sim: MakeSim,
+) -> None:
+    """rosbridge_suite ROS 2 (2.1.0, in order): the node list first; never node_details of an unknown node."""
+    robot = await make_sim(dialect="ros2", world="nav2", in_order=True, rosapi="2.1.0")
+    async with open_session(robot.url) as opened:
+        text = await opened.error("get_node_info", {"node": "/controler_server"})
+        assert "Did you mean /controller_server?" in text
+        assert "/rosapi/node_details" not in robot.world.service_calls
+        await opened.ok("get_node_info", {"node": "/controller_server"})
+    assert robot.world.service_calls["/rosapi/node_details"] == 1
+
+
+async def test_a_later_listing_shows_a_service_offered_and_withdrawn_meanwhile(make_sim: MakeSim) -> None:
+    """A listing reused while the services stay the same still follows the graph when they change."""
+    robot = await make_sim(dialect="ros2", world="nav2")
+    async with open_session(robot.url) as opened, websockets.connect(robot.url) as provider:
+        first = service_rows((await opened.ok("list_services")).structured_content)
+        assert first == service_rows((await opened.ok("list_services")).structured_content)
+        offer = {"op": "advertise_service", "service": "/dock_now", "type": "std_srvs/srv/Trigger"}
+        await provider.send(json.dumps(offer))
+        # No acknowledgement exists in rosbridge: a call on the same connection comes after the offer.
+        await provider.send(json.dumps({"op": "call_service", "id": "after", "service": "/rosapi/get_time"}))
+        assert json.loads(await provider.recv())["id"] == "after"
+        offered = service_rows((await opened.ok("list_services")).structured_content)
+        assert {"name": "/dock_now", "type": "std_srvs/srv/Trigger"} in offered
+        assert len(offered) == len(first) + 1
+        await provider.send(json.dumps({"op": "unadvertise_service", "service": "/dock_now"}))
+        await provider.send(json.dumps({"op": "call_service", "id": "gone", "service": "/rosapi/get_time"}))
+        assert json.loads(await provider.recv())["id"] == "gone"
+        assert service_rows((await opened.ok("list_services")).structured_content) == first
+
+
+async def test_get_node_info_learns_an_actions_type_once_for_its_hidden_services(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    """Without list_actions first: the second call asks no type of the node's hidden action services."""
+    await session.ok("get_node_info", {"node": "/controller_server"})
+    calls = await asked(nav2, session, "get_node_info", {"node": "/controller_server"})
+    assert "/rosapi/service_type" not in calls
+    info = (await session.ok("get_node_info", {"node": "/controller_server"})).structured_content
+    assert info is not None
+    typed = {row["name"]: row["type"] for row in info["services"]}
+    if nav2.dialect == "ros2":
+        assert typed["/follow_path/_action/send_goal"] == "nav2_msgs/action/FollowPath_SendGoal"

@@ -1,13 +1,15 @@
 """Nodes of the ROS graph and what each one publishes, subscribes and serves, with types.
 
-``/rosapi/nodes`` lists full node names on both lines. ``/rosapi/node_details`` answers an unknown node with
-empty lists on ROS 1, and not at all on ROS 2 (its handler fails), so on ROS 2 a node is looked up in the list
-first.
+``/rosapi/nodes`` lists full node names on both lines. ``/rosapi/node_details`` of an unknown node: ROS 1
+(0.11.17) answers empty lists; rosbridge-server-rs never answers (each call is a task of its own there, so
+the silence holds nothing up); rosbridge_suite's ROS 2 rosapi fails in its handler (2.1.0's rosapi dies), so
+on that bridge a node is looked up in the list first, and on the others only to word an unknown node's error.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -16,12 +18,16 @@ from rosbridge_mcp_server.robot.known_types import infrastructure_types
 from rosbridge_mcp_server.robot.names import did_you_mean
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.graph import RosGraph
+    from rosbridge_mcp_server.robot.graph import RosGraph, TopicEntry
 
-__all__ = ["NodeDetails", "UnknownNodeError", "node_details", "node_names"]
+__all__ = ["UNANSWERED_SECONDS", "NodeDetails", "UnknownNodeError", "node_details", "node_names"]
 
 # rosapi 0.11 answers one look-up at a time anyway; ROS 2 nodes offer ~7 services each.
 _LOOKUPS_AT_ONCE = 8
+#: rosbridge-server-rs answers node_details in milliseconds (3-15 ms on the lab), and never for an unknown
+#: node: after this long without an answer the node list is asked, so an unknown node is an error in well
+#: under a second, while a known node's details are still awaited.
+UNANSWERED_SECONDS = 0.5
 
 
 class UnknownNodeError(NotOnRobotError):
@@ -54,20 +60,25 @@ async def node_names(graph: RosGraph) -> list[str]:
 async def node_details(graph: RosGraph, node: str) -> NodeDetails:
     """What ``node`` publishes, subscribes and serves; :class:`UnknownNodeError` when it is not running.
 
-    ROS 1 answers an unknown node with empty lists, so the node list is asked only then, to word the error.
-    ROS 2's rosapi never answers for an unknown node (and an in-order bridge would wait on it), so there the
-    node list comes first.
+    One round trip on the happy path where the bridge's answer for an unknown node is harmless: ROS 1 answers
+    it with empty lists, rosbridge-server-rs with silence; the node list is asked only then, to word the
+    error. rosbridge_suite's ROS 2 rosapi must never be asked about an unknown node (it kills rosapi 2.1.0),
+    so there the node list comes first.
     """
     info = await graph.ros_info()
-    if info.version == 2:
+    listed_first = info.version == 2 and not info.status_replies
+    if listed_first:
         known = await node_names(graph)
         if node not in known:
             raise UnknownNodeError(node, known)
-    details, topics = await asyncio.gather(graph.rosapi("node_details", {"node": node}), graph.topics())
+        details, topics = await asyncio.gather(graph.rosapi("node_details", {"node": node}), graph.topics())
+    else:
+        details, topics = await _details_or_unknown(graph, node)
     publishes = sorted(_strings(details.get("publishing")))
     subscribes = sorted(_strings(details.get("subscribing")))
     served = sorted(set(_strings(details.get("services"))))
-    if info.version == 1 and not (publishes or subscribes or served):
+    if not listed_first and not (publishes or subscribes or served):
+        # ROS 1's answer for an unknown node (a running ROS 2 node always has /rosout at least).
         known = await node_names(graph)
         if node not in known:
             raise UnknownNodeError(node, known)
@@ -81,12 +92,49 @@ async def node_details(graph: RosGraph, node: str) -> NodeDetails:
     )
 
 
+async def _details_or_unknown(graph: RosGraph, node: str) -> tuple[dict[str, Any], list[TopicEntry]]:
+    """``node_details`` and the topics side by side; when the details have not come after
+    :data:`UNANSWERED_SECONDS` (rosbridge-server-rs says nothing for an unknown node), the node list decides
+    whether to wait on or to raise :class:`UnknownNodeError`."""
+    asking = asyncio.ensure_future(graph.rosapi("node_details", {"node": node}))
+    listing = asyncio.ensure_future(graph.topics())
+    try:
+        done, _ = await asyncio.wait({asking}, timeout=UNANSWERED_SECONDS)
+        if not done:
+            known = await node_names(graph)
+            if node not in known:
+                raise UnknownNodeError(node, known)
+        return await asking, await listing
+    finally:
+        for task in (asking, listing):
+            if not task.done():
+                task.cancel()
+        # Retrieve what a failed or abandoned task holds, so nothing is logged as never retrieved.
+        await asyncio.gather(asking, listing, return_exceptions=True)
+
+
 async def _service_types(graph: RosGraph, services: list[str], version: int) -> list[str]:
     """Each service's type: told by its name (the services every node offers, an action's hidden services
     whose action type this connection knows) or looked up side by side, a few at a time; ``""`` where the
     look-up failed."""
     fixed = infrastructure_types(services, version)
     gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE)
+    # An action's hidden services are typed from the action's type, which is learnt once per connection;
+    # rosapi's service_type does not know them (it answers "", which is never kept, so it was asked anew on
+    # every call).
+    untold = {
+        action
+        for service in services
+        if (action := _hidden_action(service)) and graph.known_action_type(action) is None
+    }
+
+    async def learn(action: str) -> None:
+        # On failure rosapi is asked about the service, as before.
+        async with gate:
+            with contextlib.suppress(ServiceError, RequestTimeoutError):
+                await graph.action_type(action)
+
+    await asyncio.gather(*(learn(action) for action in sorted(untold)))
 
     async def one(service: str) -> str:
         told = fixed.get(service) or _action_service_type(graph, service)
@@ -102,6 +150,12 @@ async def _service_types(graph: RosGraph, services: list[str], version: int) -> 
 
 
 _ACTION_SERVICES = {"send_goal": "_SendGoal", "get_result": "_GetResult"}
+
+
+def _hidden_action(service: str) -> str:
+    """The action whose ``send_goal`` or ``get_result`` service this is, or ``""``."""
+    action, marker, leaf = service.rpartition("/_action/")
+    return action if marker and leaf in _ACTION_SERVICES else ""
 
 
 def _action_service_type(graph: RosGraph, service: str) -> str:

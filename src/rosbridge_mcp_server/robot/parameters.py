@@ -42,7 +42,11 @@ __all__ = [
     "plan_set",
 ]
 
+#: Nodes asked for their parameter names at once: a few when each call needs a connection of its own (an
+#: in-order bridge: lanes), all of a Nav2-size graph when calls share the connection (each is then only a
+#: message on it, as the raw floor sends them).
 _LOOKUPS_AT_ONCE = 8
+_LOOKUPS_AT_ONCE_SHARED = 64
 
 
 class ParameterError(NotOnRobotError):
@@ -130,7 +134,9 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
     # Every node with parameters offers <node>/list_parameters: the service list names them all.
     suffix = "/list_parameters"
     offering = sorted(name[: -len(suffix)] for name in await graph.service_names() if name.endswith(suffix))
-    gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE)
+    session = client.session
+    shared = session is not None and not session.lanes_by_default
+    gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE_SHARED if shared else _LOOKUPS_AT_ONCE)
 
     async def one(name: str) -> list[str]:
         async with gate:

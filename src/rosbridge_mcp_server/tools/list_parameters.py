@@ -84,7 +84,15 @@ async def run(
     name = absolute_name(node, "node") if node else None
     names = await list_parameters(ctx.graph, ctx.client, name)
     wanted = matcher(filter)
-    rows = sorted(_split(full, name) for full in names if wanted(full))
+    selected = [full for full in names if wanted(full)] if filter else names
+    # ROS 2 names hold their node before the ":"; the rest is split by _split.
+    rows = sorted(
+        [
+            (owner, local) if sep else _split(full, name)
+            for full in selected
+            for owner, sep, local in (full.partition(":"),)
+        ]
+    )
     # Room for the node headings and the closing note.
     budget = TEXT_BUDGET - 800
     page = page_of(rows, offset=offset, limit=limit, line=lambda row: row[1] + ", ", budget=budget)

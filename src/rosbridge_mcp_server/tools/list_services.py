@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Annotated
 
 from pydantic import BaseModel, Field
 
+from rosbridge_mcp_server.robot.graph import ServiceEntry
 from rosbridge_mcp_server.robot.known_types import per_node_types, rosapi_types
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
 from rosbridge_mcp_server.tools.paging import (
@@ -84,31 +86,69 @@ async def run(
             text="The robot offers no services right now.",
             data=ServicesAnswer(count=0, offset=offset, more=0, services=[]),
         )
-    # Rows are (name, type) pairs until the page is known: a real graph has hundreds.
-    rows = [(service.name, service.type) for service in services]
+    total = len(services)
     if filter:
+        # Rows are (name, type) pairs until the page is known: a real graph has hundreds.
         wanted = matcher(filter)
-        matching = [row for row in rows if wanted(row[0]) or wanted(row[1])]
+        matching = [(s.name, s.type) for s in services if wanted(s.name) or wanted(s.type)]
         page = page_of(matching, offset=offset, limit=limit, line=_pair_line)
         head = f"{len(matching)} services:" if page.rows else f"No services on this page match {filter!r}."
         body = [head, *map(_pair_line, page.rows)]
         groups: list[ServiceGroup] = []
         count = len(matching)
+        shown = [ServiceRow.model_construct(name=name, type=kind) for name, kind in page.rows]
     else:
         version = (await ctx.graph.ros_info()).version
-        own, groups = _split(rows, version)
-        group_lines = [_group_line(group) for group in groups]
-        head = _head(len(rows), len(own))
+        grouping = _grouped(services, version)
+        groups = grouping.groups
         # What the head, the groups and the closing note take; the robot's own services get the rest.
-        budget = TEXT_BUDGET - FRAME_RESERVE - sum(len(line) + 1 for line in group_lines)
-        page = page_of(own, offset=offset, limit=limit, line=_pair_line, budget=max(budget, 1_000))
-        body = [head, *map(_pair_line, page.rows), *group_lines]
-        count = len(rows)
-    note = page_note(page, "services", filter, len(rows))
+        budget = TEXT_BUDGET - FRAME_RESERVE - sum(len(line) + 1 for line in grouping.group_lines)
+        page = page_of(grouping.own, offset=offset, limit=limit, line=_pair_line, budget=max(budget, 1_000))
+        body = [grouping.head, *map(_pair_line, page.rows), *grouping.group_lines]
+        count = total
+        shown = grouping.own_rows[offset : offset + len(page.rows)]
+    note = page_note(page, "services", filter, total)
     text = "\n".join([*body, note] if note else body)
-    shown = [ServiceRow.model_construct(name=name, type=kind) for name, kind in page.rows]
-    data = ServicesAnswer(count=count, offset=offset, more=page.more, services=shown, groups=groups)
+    # Built from our own rows and groups: nothing to validate.
+    data = ServicesAnswer.model_construct(
+        count=count, offset=offset, more=page.more, services=shown, groups=groups
+    )
     return ToolAnswer(text=text, data=data)
+
+
+@dataclass(frozen=True)
+class _Grouping:
+    """The unfiltered listing's parts: the robot's own rows (as pairs and as rows), the groups, their text
+    lines and the head."""
+
+    own: list[tuple[str, str]]
+    own_rows: list[ServiceRow]
+    groups: list[ServiceGroup]
+    group_lines: list[str]
+    head: str
+
+
+#: The last unfiltered listing's grouping, by the graph's listing it was made from: the graph hands out the
+#: same list while the services and their types stay the same, so grouping ~400 names is done once.
+_last_grouping: tuple[list[ServiceEntry], int, _Grouping] | None = None
+
+
+def _grouped(services: list[ServiceEntry], version: int) -> _Grouping:
+    """The grouping of the unfiltered listing of ``services``."""
+    global _last_grouping
+    last = _last_grouping
+    if last is not None and last[0] is services and last[1] == version:
+        return last[2]
+    own, groups = _split([(service.name, service.type) for service in services], version)
+    grouping = _Grouping(
+        own=own,
+        own_rows=[ServiceRow.model_construct(name=name, type=kind) for name, kind in own],
+        groups=groups,
+        group_lines=[_group_line(group) for group in groups],
+        head=_head(len(services), len(own)),
+    )
+    _last_grouping = (services, version, grouping)
+    return grouping
 
 
 def _split(rows: list[tuple[str, str]], version: int) -> tuple[list[tuple[str, str]], list[ServiceGroup]]:
@@ -129,15 +169,17 @@ def _split(rows: list[tuple[str, str]], version: int) -> tuple[list[tuple[str, s
     for node, leaves in offered.items():
         nodes_by_set.setdefault(tuple(leaves), []).append(node)
     groups = [
-        ServiceGroup(nodes=nodes, services=[ServiceRow(name=leaf, type=kind) for leaf, kind in leaves])
+        ServiceGroup.model_construct(
+            nodes=nodes, services=[ServiceRow.model_construct(name=leaf, type=kind) for leaf, kind in leaves]
+        )
         for leaves, nodes in nodes_by_set.items()
     ]
     if rosapi:
         groups.append(
-            ServiceGroup(
+            ServiceGroup.model_construct(
                 nodes=["/rosapi"],
                 services=[
-                    ServiceRow(name=name.rpartition("/")[2], type=kind)
+                    ServiceRow.model_construct(name=name.rpartition("/")[2], type=kind)
                     for name, kind in sorted(rosapi.items())
                 ],
             )

@@ -36,6 +36,9 @@ class Services:
     def __init__(self, rosapi: Rosapi) -> None:
         self._rosapi = rosapi
         self._client = rosapi.client
+        # The last listing whose services were all typed: (the connection's knowledge, its names, entries).
+        # The same names on the same connection list the same entries, so a call reuses it.
+        self._listing: tuple[ConnectionKnowledge, tuple[str, ...], list[ServiceEntry]] | None = None
 
     @property
     def _known(self) -> ConnectionKnowledge:
@@ -60,14 +63,17 @@ class Services:
         found = values.get("type")
         found = found if isinstance(found, str) else ""
         if found:
+            if self._known.service_types.get(service) != found:
+                self._listing = None
             self._known.service_types[service] = found
         else:
-            self._known.service_types.pop(service, None)
+            self.forget_service(service)
         return found
 
     def forget_service(self, service: str) -> None:
         """Drop the cached type of ``service`` (it went away, or was offered anew)."""
         self._known.service_types.pop(service, None)
+        self._listing = None
 
     async def _service_type_or_blank(self, service: str) -> str:
         try:
@@ -85,6 +91,9 @@ class Services:
         """
         info = await self._rosapi.ros_info()
         names = await self.service_names()
+        last = self._listing
+        if last is not None and last[0] is self._known and last[1] == tuple(names):
+            return list(last[2])
         known, listed = self._known.service_types, self._known.listed_types
         for cache in (known, listed):
             for gone in cache.keys() - set(names):
@@ -95,9 +104,12 @@ class Services:
             await bounded_map(self._listed_type, missing, PROBE_CONCURRENCY)
         elif missing:
             await bounded_map(self._service_type_or_blank, missing)
-        return [
+        entries = [
             ServiceEntry(name, fixed.get(name) or known.get(name) or listed.get(name, "")) for name in names
         ]
+        typed = all(entry.type for entry in entries)
+        self._listing = (self._known, tuple(names), entries) if typed else None
+        return list(entries)
 
     async def learn_service_types(self, limit: int = 256) -> int:
         """Ask rosapi, one service at a time, for the types a first listing would look up; how many it learnt.
