@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Final
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, RequestTimeoutError, RosbridgeError
 from rosbridge_mcp_server.robot.goals.actionlib import goal_id_of, publish_cancel
 from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
-from rosbridge_mcp_server.robot.goals.registry import GoalRegistry, goals_of
+from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
 from rosbridge_mcp_server.wire.dialect import action_type_names, is_terminal_status
 
 if TYPE_CHECKING:
@@ -28,7 +28,7 @@ RESULT_AFTER_STATUS_GRACE: Final = 1.0
 
 
 async def run(
-    client: RosbridgeClient,
+    registry: GoalRegistry,
     record: Goal,
     goal: dict[str, Any],
     *,
@@ -36,7 +36,7 @@ async def run(
     on_feedback: GoalFeedback | None,
 ) -> Goal:
     """Send *goal* on ``<ns>/goal``, follow it until it ends (at *timeout*: cancel it); returns *record*."""
-    registry = goals_of(client)
+    client = registry.client
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     ns = record.action
