@@ -86,7 +86,8 @@ async def run_goal(
 async def cancel_goals(
     goals: GoalRegistry, action: str, goal_id: str | None = None, *, by: CanceledBy = "cancel_action"
 ) -> CancelReport:
-    """Cancel one goal (by id) or every goal of *action* (ours and others'); *by* names who asked.
+    """Cancel one goal (by id) or every goal of *action* (ours: those *goals* tracks, and others'); *by*
+    names who asked.
 
     ROS 2: ``cancel_action_goal`` for our goals, on the main connection and on the goal's own lane (see
     :mod:`.ros2`). A goal of another client given by its goal UUID goes to the action's own
@@ -96,17 +97,17 @@ async def cancel_goals(
     service with a zero goal id and zero stamp. ROS 1: a ``actionlib_msgs/GoalID`` on ``<ns>/cancel`` (empty
     id and zero stamp cancels every goal).
     """
-    client, registry = goals.client, goals
+    client = goals.client
     info = await client.ros_info()
     ns = absolute(action)
-    ours = [g for g in registry.running(ns) if goal_id is None or g.goal_id == goal_id]
+    ours = [g for g in goals.running(ns) if goal_id is None or g.goal_id == goal_id]
     for entry in ours:
         entry.cancel_requested = True
         entry.cancel_source = by
     canceled_ours = [g.goal_id for g in ours]
     unknown = goal_id is not None and not ours
     if info.version == 1:
-        if not await ros1.send_cancel(client, registry, ns, goal_id or ""):
+        if not await ros1.send_cancel(client, goals, ns, goal_id or ""):
             raise NotConnectedError(client.url, f"could not publish on {ns}/cancel")
         return CancelReport(ns, 1, goal_id, canceled_ours, unknown)
     for entry in ours:
