@@ -178,3 +178,23 @@ async def test_a_negative_ros1_time_is_refused_and_a_negative_duration_is_sent(
     )
     await sim_ros1.world.wait_for(lambda w: len(w.published.get("/mcp_test/duration", ())) == 1)
     assert "/mcp_test/time" not in sim_ros1.world.published
+
+
+async def test_a_ros1_time_written_sec_nanosec_is_checked_and_arrives_as_secs_nsecs(
+    sim_ros1: SimulatedRobot, session_ros1: Session
+) -> None:
+    """The check reads the time as ROS 1 will (a negative sec is out of range); the client respells it."""
+    text = await session_ros1.error(
+        "publish_topic",
+        {"topic": "/mcp_test/time", "message_type": "std_msgs/Time", "message": {"data": {"sec": -1}}},
+    )
+    assert "data.secs: -1 is out of range for uint32 in time" in text
+    stamp = {"sec": 5, "nanosec": 6}
+    result = await session_ros1.ok(
+        "publish_topic",
+        {"topic": "/mcp_test/time", "message_type": "std_msgs/Time", "message": {"data": stamp}},
+    )
+    assert result.structured_content is not None
+    assert result.structured_content["message"] == {"data": stamp}, "the answer shows the message as given"
+    await sim_ros1.world.wait_for(lambda w: len(w.published.get("/mcp_test/time", ())) == 1)
+    assert sim_ros1.world.published["/mcp_test/time"][0].msg == {"data": {"secs": 5, "nsecs": 6}}

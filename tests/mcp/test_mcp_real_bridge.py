@@ -31,8 +31,8 @@ from mcp.types import CallToolResult
 from mcp_harness import Session, open_session, parameter_names, service_rows, text_of, unreadable_services
 
 from rosbridge_mcp_server.cli.check import run_check
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.config import Config
-from rosbridge_mcp_server.wire.dialect import action_type_names
 
 REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
 ACTION = os.environ.get("ROSBRIDGE_TEST_ACTION")
@@ -248,7 +248,7 @@ async def test_list_actions_types_the_test_action(real: Session) -> None:
     data = (await real.ok("list_actions")).structured_content
     assert data is not None
     row = next(row for row in data["actions"] if row["name"] == action)
-    expected = action_type_names(action_type).for_version(await _version(real))
+    expected = Dialect.action_names(action_type).for_version(await _version(real))
     assert row["type"] == expected
 
 
@@ -457,7 +457,7 @@ async def test_a_goal_another_client_started_is_cancelled_by_its_id_or_the_answe
         await watch.until(lambda latest: True)
         before = set(watch.latest)
         rid = f"mcp_test_foreign:{os.getpid()}:{id(other)}"
-        wire_type = action_type_names(action_type).ros2
+        wire_type = Dialect.action_names(action_type).ros2
         await other.send(
             json.dumps(
                 {

@@ -10,6 +10,7 @@ import pytest
 
 from rosbridge_mcp_server.errors import ProtocolError
 from rosbridge_mcp_server.wire import protocol
+from rosbridge_mcp_server.wire.fragments import FragmentAssembler
 
 
 def fragments(message: dict[str, object], size: int, fid: object) -> list[dict[str, object]]:
@@ -122,7 +123,7 @@ def test_fragment_buffer_restarts_when_part_zero_arrives_again() -> None:
     """Two messages sharing id "0": the second part 0 discards the first, unfinished message."""
     first = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 100}}, 40, "0")
     second = fragments({"op": "publish", "topic": "/b", "msg": {"d": "b" * 100}}, 40, "0")
-    assembler = protocol.FragmentAssembler()
+    assembler = FragmentAssembler()
     assert assembler.add(first[0]) is None
     results = [assembler.add(f) for f in second]
     assert json.loads(results[-1] or "")["topic"] == "/b"
@@ -132,7 +133,7 @@ def test_fragment_buffer_restarts_when_part_zero_arrives_again() -> None:
 def test_fragment_with_a_changed_total_is_dropped() -> None:
     """A part whose total differs from part 0's raises and drops the buffer."""
     parts = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 100}}, 40, "m")
-    assembler = protocol.FragmentAssembler()
+    assembler = FragmentAssembler()
     assembler.add(parts[0])
     bad = dict(parts[1], total=parts[1]["total"] + 1)  # type: ignore[operator]
     with pytest.raises(ProtocolError, match="changed total"):
@@ -143,7 +144,7 @@ def test_fragment_with_a_changed_total_is_dropped() -> None:
 def test_fragment_out_of_order_is_dropped() -> None:
     """A gap in the numbering drops the message rather than joining it wrongly."""
     parts = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 200}}, 40, "m")
-    assembler = protocol.FragmentAssembler()
+    assembler = FragmentAssembler()
     assembler.add(parts[0])
     with pytest.raises(ProtocolError, match="was due"):
         assembler.add(parts[2])
@@ -154,7 +155,7 @@ def test_fragment_without_part_zero_is_rejected() -> None:
     """A middle part with nothing buffered is reported, not kept."""
     parts = fragments({"op": "publish", "topic": "/a", "msg": {"d": "a" * 200}}, 40, "m")
     with pytest.raises(ProtocolError, match="without part 0"):
-        protocol.FragmentAssembler().add(parts[1])
+        FragmentAssembler().add(parts[1])
 
 
 @pytest.mark.parametrize(
@@ -170,12 +171,12 @@ def test_fragment_without_part_zero_is_rejected() -> None:
 def test_malformed_fragments_raise_protocol_errors(frame: dict[str, object]) -> None:
     """Fragments with missing or mistyped fields are rejected with a ProtocolError."""
     with pytest.raises(ProtocolError):
-        protocol.FragmentAssembler().add(frame)
+        FragmentAssembler().add(frame)
 
 
 def test_fragment_memory_is_bounded_by_dropping_the_oldest() -> None:
     """Beyond max_buffers partial messages, the oldest partial message is dropped."""
-    assembler = protocol.FragmentAssembler(max_buffers=3)
+    assembler = FragmentAssembler(max_buffers=3)
     for n in range(10):
         assembler.add({"op": "fragment", "id": f"m{n}", "data": "x", "num": 0, "total": 2})
     assert assembler.pending == 3
@@ -186,7 +187,7 @@ def test_fragment_memory_is_bounded_by_dropping_the_oldest() -> None:
 
 def test_a_fragmented_message_larger_than_the_character_bound_is_dropped() -> None:
     """One message bigger than max_chars is dropped with a ProtocolError."""
-    assembler = protocol.FragmentAssembler(max_chars=100)
+    assembler = FragmentAssembler(max_chars=100)
     assembler.add({"op": "fragment", "id": "big", "data": "x" * 60, "num": 0, "total": 3})
     with pytest.raises(ProtocolError, match="exceeds"):
         assembler.add({"op": "fragment", "id": "big", "data": "x" * 60, "num": 1, "total": 3})
@@ -196,7 +197,7 @@ def test_a_fragmented_message_larger_than_the_character_bound_is_dropped() -> No
 def test_stale_fragment_buffers_expire() -> None:
     """A partial message untouched for longer than the ttl is forgotten."""
     now = [100.0]
-    assembler = protocol.FragmentAssembler(ttl=5.0, clock=lambda: now[0])
+    assembler = FragmentAssembler(ttl=5.0, clock=lambda: now[0])
     assembler.add({"op": "fragment", "id": "old", "data": "x", "num": 0, "total": 2})
     now[0] += 6.0
     assembler.add({"op": "fragment", "id": "new", "data": "x", "num": 0, "total": 2})

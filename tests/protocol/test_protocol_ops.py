@@ -95,13 +95,16 @@ def test_goal_ids_differ_between_clients() -> None:
     assert all(a.token in gid for gid in ids_a)
 
 
-def test_decode_json_accepts_nan_and_infinity() -> None:
+def test_inbound_frames_accept_nan_and_infinity() -> None:
     """Bare NaN/Infinity tokens (ROS 2 fixed-size float arrays) parse instead of failing."""
-    value = protocol.decode_json('{"c": [NaN, Infinity, -Infinity, 1.5]}')
+    frame = '{"op": "publish", "topic": "/c", "msg": {"c": [NaN, Infinity, -Infinity, 1.5]}}'
+    event = protocol.InboundDecoder().feed(frame)
+    assert isinstance(event, protocol.PublishEvent)
+    value = event.msg
     assert math.isnan(value["c"][0])
     assert value["c"][1] == math.inf
     assert value["c"][2] == -math.inf
-    assert protocol.decode_json(b'{"a": 1}') == {"a": 1}
+    assert value["c"][3] == 1.5
 
 
 def test_encode_writes_non_finite_floats_as_bare_tokens() -> None:

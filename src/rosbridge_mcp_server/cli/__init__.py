@@ -1,8 +1,10 @@
-"""The command line: argument parsing, the subcommands (serve, ``check``) and their exit codes."""
+"""The command line: argument parsing (:mod:`.arguments`), the subcommands (serve, ``check``) and their exit
+codes (:mod:`.commands`), the ``check`` diagnostic (:mod:`.check`)."""
 
 from __future__ import annotations
 
-from rosbridge_mcp_server.cli.commands import PROG, configure_logging, run
+from rosbridge_mcp_server.cli.arguments import PROG
+from rosbridge_mcp_server.cli.commands import configure_logging, run
 
 __all__ = ["PROG", "configure_logging", "main", "run"]
 

@@ -18,7 +18,7 @@ from urllib.parse import urlsplit
 from websockets.exceptions import WebSocketException
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.client import Dialect, RosbridgeClient, RosInfo
 from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config, plain_text_warning
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
@@ -26,7 +26,6 @@ from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.messages import find_problems, typedefs_from_rosapi
 from rosbridge_mcp_server.robot.names import did_you_mean
 from rosbridge_mcp_server.safety.policy import Policy
-from rosbridge_mcp_server.wire.dialect import RosInfo, normalize_type
 
 __all__ = ["run_check", "unreachable_advice"]
 
@@ -99,7 +98,7 @@ def _features(info: RosInfo) -> list[tuple[str, str]]:
 
 async def _message_check(graph: RosGraph, info: RosInfo) -> tuple[str, str]:
     """Whether a valid geometry_msgs/Twist passes our check against this rosapi's TypeDefs."""
-    twist = normalize_type("geometry_msgs/Twist", info.version, "msg")
+    twist = Dialect.for_version(info.version).message_type("geometry_msgs/Twist")
     try:
         raw = await graph.rosapi("message_details", {"type": twist})
     except RosbridgeError as exc:

@@ -9,7 +9,6 @@ In ``serve`` mode stdout belongs to JSON-RPC: everything else goes to stderr thr
 
 from __future__ import annotations
 
-import argparse
 import asyncio
 import contextlib
 import logging
@@ -18,219 +17,24 @@ import signal
 import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from dataclasses import replace
-from typing import NoReturn, TextIO
+from typing import TextIO
 
-from rosbridge_mcp_server import __version__
+from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.config import LOG_LEVELS, Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
 from rosbridge_mcp_server.fleet_config import load_fleet
-from rosbridge_mcp_server.http_config import DEFAULT_BIND, HttpSettings, load_http_settings
+from rosbridge_mcp_server.http_config import HttpSettings, load_http_settings
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
 from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 
-PROG = "rosbridge-mcp-server"
 #: After SIGTERM or Ctrl-C: how long tool calls get to cancel their goals, and then the client to close.
 SIGNAL_GRACE = 1.0
 _log = logging.getLogger(__name__)
-
-
-class _UsageError(Exception):
-    """argparse found a bad command line."""
-
-
-class _Parser(argparse.ArgumentParser):
-    # argparse prints usage plus the message and exits; we want one line and our own exit code.
-    def error(self, message: str) -> NoReturn:
-        raise _UsageError(message)
-
-
-def _console_flags(parser: argparse.ArgumentParser) -> None:
-    console = parser.add_argument_group("operator console (docs/console.md)")
-    console.add_argument(
-        "--console",
-        metavar="[HOST:]PORT",
-        help="serve a web page for the person beside the robot (default host 127.0.0.1); its URL is "
-        "written on stderr (env ROSBRIDGE_MCP_CONSOLE)",
-    )
-    console.add_argument("--console-cert", help="TLS certificate for the console (PEM)")
-    console.add_argument("--console-key", help="the TLS certificate's key (PEM)")
-    console.add_argument(
-        "--console-insecure",
-        action="store_true",
-        help="allow plain HTTP on a non-loopback --console address (a trusted network only)",
-    )
-
-
-def _parser(command: str) -> _Parser:
-    if command == "check":
-        description = (
-            "Diagnose the connection to rosbridge: is it reachable, which ROS it runs, what rosbridge can "
-            "do, whether rosapi answers. Exit code 0 when healthy, 1 when not."
-        )
-    else:
-        description = (
-            "MCP server (stdio, or Streamable HTTP) that lets an AI assistant watch and drive a ROS robot "
-            "through rosbridge. Use `check` to diagnose the connection."
-        )
-    if command == "check":
-        parser = _Parser(prog=f"{PROG} check", description=description)
-    else:
-        parser = _Parser(
-            prog=PROG,
-            usage=f"{PROG} [serve] [options]\n       {PROG} check [options]",
-            description=description,
-            epilog=(
-                "commands: serve (the default) runs the MCP server; check diagnoses the connection to "
-                f"rosbridge with the same connection flags (`{PROG} check --help`)."
-            ),
-        )
-    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    connection = parser.add_argument_group("connection (flags win over the environment)")
-    connection.add_argument("--host", help="rosbridge host (env ROSBRIDGE_HOST, default localhost)")
-    connection.add_argument("--port", help="rosbridge port (env ROSBRIDGE_PORT, default 9090)")
-    connection.add_argument(
-        "--url", help="full ws:// or wss:// URL, path included; wins over host/port (env ROSBRIDGE_URL)"
-    )
-    connection.add_argument(
-        "--timeout", help="default request timeout in seconds (env ROSBRIDGE_TIMEOUT, default 10)"
-    )
-    security = parser.add_argument_group("connection security")
-    security.add_argument("--ca-file", help="CA certificate(s) to trust for wss:// (env ROSBRIDGE_CA_FILE)")
-    security.add_argument(
-        "--client-cert",
-        help="client certificate for wss:// (PEM, may hold the key) (env ROSBRIDGE_CLIENT_CERT)",
-    )
-    security.add_argument("--client-key", help="client certificate's key (env ROSBRIDGE_CLIENT_KEY)")
-    security.add_argument(
-        "--header",
-        action="append",
-        metavar="'NAME: VALUE'",
-        help=(
-            "extra HTTP header for the WebSocket handshake, repeatable, e.g. 'Authorization: Bearer …' "
-            "(env ROSBRIDGE_HEADERS, one per line; prefer the environment for secrets)"
-        ),
-    )
-    safety = parser.add_argument_group("safety")
-    safety.add_argument(
-        "--policy", help="safety policy TOML file (env ROSBRIDGE_MCP_POLICY); see docs/safety.md"
-    )
-    safety.add_argument(
-        "--read-only",
-        action="store_true",
-        help="only reading tools are listed or callable (env ROSBRIDGE_MCP_READ_ONLY=1)",
-    )
-    safety.add_argument(
-        "--audit-log",
-        help="append one JSON line per acting call to this file (env ROSBRIDGE_MCP_AUDIT_LOG)",
-    )
-    parser.add_argument(
-        "--tools",
-        help=(
-            "tools the host sees: all; original (the first eight, with stop_robot whenever a tool acts); "
-            "watch (reading topics, types, nodes, parameters, frames); view (pictures: map, scan, charts); "
-            "or a comma list of groups and tool names (env ROSBRIDGE_MCP_TOOLS, default all)"
-        ),
-    )
-    parser.add_argument(
-        "--log-level",
-        help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
-    )
-    if command == "serve":
-        _fleet_flags(parser)
-        _transport_flags(parser)
-        _console_flags(parser)
-    demo = parser.add_argument_group("demo")
-    demo.add_argument(
-        "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
-    )
-    demo.add_argument(
-        "--demo-dialect",
-        choices=("ros1", "ros2"),
-        default="ros2",
-        help="which rosbridge the simulated robot imitates (default ros2)",
-    )
-    demo.add_argument(
-        "--demo-world",
-        choices=("turtle", "nav2"),
-        default="turtle",
-        help="the simulated robot: turtle (default) or nav2 (a Nav2 mobile robot's graph, ~36 nodes)",
-    )
-    demo.add_argument(
-        "--demo-robots",
-        type=int,
-        default=1,
-        metavar="N",
-        help="with --demo-world nav2: N robots under /robot1 ... /robotN (default 1)",
-    )
-    return parser
-
-
-def _fleet_flags(parser: _Parser) -> None:
-    fleet = parser.add_argument_group("several robots (every tool then takes a robot argument)")
-    fleet.add_argument(
-        "--robot",
-        action="append",
-        metavar="NAME=URL",
-        help="a robot and its rosbridge URL, repeatable; the other flags apply to each",
-    )
-    fleet.add_argument(
-        "--robots",
-        metavar="FILE",
-        help="robots in TOML: [robots.NAME] with url and optional headers, ca_file, client_cert, client_key, "
-        "policy, read_only",
-    )
-
-
-def _transport_flags(parser: _Parser) -> None:
-    http = parser.add_argument_group("MCP transport (see docs/deployment.md)")
-    http.add_argument(
-        "--transport",
-        choices=("stdio", "http"),
-        help="stdio (default, started by the host) or http: Streamable HTTP (env ROSBRIDGE_MCP_TRANSPORT)",
-    )
-    http.add_argument(
-        "--bind",
-        metavar="HOST:PORT",
-        help=f"HTTP address, path /mcp (env ROSBRIDGE_MCP_BIND, default {DEFAULT_BIND})",
-    )
-    http.add_argument(
-        "--auth-tokens",
-        metavar="FILE",
-        help="bearer tokens, one 'name token' per line (env ROSBRIDGE_MCP_AUTH_TOKENS: the pairs themselves)",
-    )
-    http.add_argument(
-        "--allow-host",
-        action="append",
-        metavar="NAME[:PORT]",
-        help="another Host clients use (a DNS name, a proxy's), repeatable (env ROSBRIDGE_MCP_ALLOWED_HOSTS)",
-    )
-    http.add_argument(
-        "--allow-origin",
-        action="append",
-        metavar="URL",
-        help="another browser Origin to accept, repeatable (env ROSBRIDGE_MCP_ALLOWED_ORIGINS)",
-    )
-    http.add_argument("--tls-cert", metavar="FILE", help="serve HTTPS with this certificate (PEM)")
-    http.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
-    oauth = parser.add_argument_group("OAuth 2.1 resource server (JWT access tokens)")
-    oauth.add_argument("--oauth-issuer", metavar="URL", help="the authorization server (the tokens' iss)")
-    oauth.add_argument("--oauth-audience", metavar="AUD", help="the tokens' aud (default: --oauth-resource)")
-    oauth.add_argument(
-        "--oauth-jwks",
-        metavar="URL|FILE",
-        help="the issuer's signing keys (default ISSUER/.well-known/jwks.json)",
-    )
-    oauth.add_argument(
-        "--oauth-resource",
-        metavar="URL",
-        help="this server's public URL, e.g. https://robot.example.com/mcp (default: the bind address)",
-    )
-    oauth.add_argument("--oauth-scopes", metavar="A,B", help="scopes every token must carry")
 
 
 def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = None) -> int:
@@ -241,7 +45,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     if args and args[0] in ("serve", "check"):
         command = args.pop(0)
     try:
-        options = _parser(command).parse_args(args)
+        options = build_parser(command).parse_args(args)
         config = load_config(
             env,
             host=options.host,
@@ -294,7 +98,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
                 source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
             )
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
-    except (_UsageError, ConfigError) as exc:
+    except (UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
 

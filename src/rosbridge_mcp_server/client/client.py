@@ -12,6 +12,7 @@ from types import TracebackType
 from typing import Any, Final, Literal, Protocol, Self
 
 from rosbridge_mcp_server.client.connection import Connection, open_connection
+from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.client.goal_lane import GoalLane, GoalLanes
 from rosbridge_mcp_server.client.lanes import LanePool
 from rosbridge_mcp_server.client.ordering import call_ordering
@@ -313,6 +314,10 @@ class RosbridgeClient:
         """What the bridge is: ROS version and distro, detected once per connection."""
         return (await self._wait_session()).info
 
+    async def dialect(self) -> Dialect:
+        """How the bridge spells types and time fields (one :class:`Dialect` per connection)."""
+        return (await self._wait_session()).dialect
+
     # --- background helpers -------------------------------------------------------------------------
 
     def run_in_background(self, coro: Coroutine[Any, Any, Any], name: str) -> asyncio.Task[Any]:
@@ -390,7 +395,8 @@ class RosbridgeClient:
     ) -> Any:
         """Call a ROS service and return its response fields (``values``).
 
-        Runs on the shared connection, or on a lane of its own when the bridge may handle one
+        Time fields in *args* are respelled for ROS 1, which ignores ``sec``/``nanosec``. Runs on the shared
+        connection, or on a lane of its own when the bridge may handle one
         connection in order, when another call is in flight on a ROS 1 connection (see
         :attr:`RosInfo.one_call_per_connection`), or when *isolated* is true. Raises :class:`ServiceError`
         with the bridge's text, :class:`RequestTimeoutError`, :class:`ConnectionLostError`,
@@ -400,6 +406,7 @@ class RosbridgeClient:
         session = self._session
         if session is None or not session.is_open:
             session = await self._wait_session(asyncio.get_running_loop().time() + t)
+        args = session.dialect.outgoing(args)
         if isolated or (
             isolated is None
             and (session.lanes_by_default or (session.spread_calls and session.connection.pending))

@@ -11,16 +11,15 @@ from typing import Any, Final
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 
+from rosbridge_mcp_server.client.frames import frame_bytes
 from rosbridge_mcp_server.errors import (
     ConnectionLostError,
-    FrameTooLargeError,
     NotConnectedError,
-    NotSentError,
     RequestTimeoutError,
 )
 from rosbridge_mcp_server.wire import protocol
 
-__all__ = ["Connection", "GoalStream", "ReplyWaiter", "frame_bytes", "open_connection"]
+__all__ = ["Connection", "GoalStream", "ReplyWaiter", "open_connection"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
@@ -344,26 +343,6 @@ class Connection:
 def _consume(future: asyncio.Future[Any]) -> None:
     if not future.cancelled():
         future.exception()
-
-
-def frame_bytes(text: str, what: str) -> bytes:
-    """The UTF-8 bytes of a text frame, refused before anything is sent if the bridge could not take them.
-
-    Encoded here rather than inside websockets: there, text that is not valid Unicode (an unpaired UTF-16
-    surrogate, which JSON text can carry as ``\\ud800``) fails inside ``send()`` and websockets closes the
-    connection. A frame over :data:`~rosbridge_mcp_server.wire.protocol.BRIDGE_MAX_FRAME_BYTES` would make the
-    bridge drop the connection (:class:`FrameTooLargeError`).
-    """
-    try:
-        data = text.encode("utf-8")
-    except UnicodeEncodeError as exc:
-        raise NotSentError(
-            f"The {what} holds text that is not valid Unicode (an unpaired UTF-16 surrogate, "
-            f"\\u{ord(text[exc.start]):04x}), so nothing was sent. Send plain text."
-        ) from None
-    if len(data) > protocol.BRIDGE_MAX_FRAME_BYTES:
-        raise FrameTooLargeError(what, len(data), protocol.BRIDGE_MAX_FRAME_BYTES)
-    return data
 
 
 def _close_text(ws: ClientConnection) -> str:

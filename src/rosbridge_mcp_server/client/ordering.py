@@ -23,7 +23,7 @@ from typing import Any, Final
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import WebSocketException
 
-from rosbridge_mcp_server.wire.dialect import normalize_type
+from rosbridge_mcp_server.client.dialect import Dialect
 
 __all__ = ["PROBE_SERVICE_PREFIX", "call_ordering"]
 
@@ -55,7 +55,7 @@ async def call_ordering(
     ``std_srvs`` on the robot, a bridge that cannot host services, no rosapi).
     """
     name = f"{PROBE_SERVICE_PREFIX}{uuid.uuid4().hex[:8]}"
-    srv_type = normalize_type("std_srvs/Trigger", version, "srv")
+    srv_type = Dialect.for_version(version).service_type("std_srvs/Trigger")
     options: dict[str, Any] = {"compression": None, "proxy": None, "open_timeout": timeout}
     if ssl_context is not None:
         options["ssl"] = ssl_context

@@ -15,6 +15,7 @@ from typing import Any
 
 from rosbridge_mcp_server.client.connection import Connection
 from rosbridge_mcp_server.client.detect import detect
+from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
@@ -32,6 +33,7 @@ class Session:
     __slots__ = (
         "cancel_owner_only",
         "connection",
+        "dialect",
         "goals_block",
         "info",
         "lanes_by_default",
@@ -44,6 +46,8 @@ class Session:
     def __init__(self, connection: Connection, info: RosInfo, number: int) -> None:
         self.connection = connection
         self.info = info
+        #: How this bridge spells types and time fields (what ``robot/`` asks instead of the ROS version).
+        self.dialect = Dialect(info)
         #: 1 for the first connection of a client, 2 after the first reconnect, ...
         self.number = number
         # Derived once per connection, so the hot path does not recompute them.

@@ -17,7 +17,6 @@ from rosbridge_mcp_server.client.session import Session, send_quietly
 from rosbridge_mcp_server.client.subscription import Subscription
 from rosbridge_mcp_server.errors import NotSentError
 from rosbridge_mcp_server.wire import protocol
-from rosbridge_mcp_server.wire.dialect import adapt_message, normalize_type
 
 __all__ = ["Advert", "Topics"]
 
@@ -61,7 +60,7 @@ class Topics:
     ) -> None:
         """Advertise *topic* on *session* unless it already is, with this type and latching."""
         conn = session.connection
-        wire_type = normalize_type(msg_type, session.info.version, "msg")
+        wire_type = session.dialect.message_type(msg_type)
         advert = self.adverts.get(topic)
         if advert is not None and (advert.wire_type != wire_type or advert.latch != latch):
             conn.advertised.discard(topic)
@@ -96,20 +95,16 @@ class Topics:
         queue_size: int,
     ) -> None:
         """Publish one message on *session*, advertising first when needed."""
-        conn, info = session.connection, session.info
+        conn, dialect = session.connection, session.dialect
         advert = self.adverts.get(topic)
         if (
             advert is None
             or topic not in conn.advertised
             or advert.latch != latch
-            or (
-                advert.msg_type != msg_type
-                and advert.wire_type != normalize_type(msg_type, info.version, "msg")
-            )
+            or (advert.msg_type != msg_type and advert.wire_type != dialect.message_type(msg_type))
         ):
             await self.advertise(session, topic, msg_type, latch=latch, queue_size=queue_size)
-        payload = adapt_message(msg, info.version) if info.version == 1 else msg
-        await conn.send(protocol.publish(topic, payload, latch=latch))
+        await conn.send(protocol.publish(topic, dialect.outgoing(msg), latch=latch))
 
     async def unadvertise(self, topic: str) -> None:
         """Stop advertising *topic* (our advertisement only)."""
@@ -154,7 +149,7 @@ class Topics:
     async def open_subscription(self, sub: Subscription) -> None:
         """Send *sub*'s ``subscribe`` on the current session (waiting only for an attempt under way)."""
         session = await self._wait_for_session()
-        sub.wire_type = normalize_type(sub.msg_type, session.info.version, "msg") if sub.msg_type else None
+        sub.wire_type = session.dialect.message_type(sub.msg_type) if sub.msg_type else None
         self.subscriptions.setdefault(sub.topic, {})[sub.id] = sub
         try:
             await session.send(_subscribe_op(sub))
@@ -208,9 +203,9 @@ class Topics:
         Type names are spelled again for this session's bridge: the robot may have come back with another
         ROS version behind the same address.
         """
-        version = session.info.version
+        dialect = session.dialect
         for topic, advert in list(self.adverts.items()):
-            advert.wire_type = normalize_type(advert.msg_type, version, "msg")
+            advert.wire_type = dialect.message_type(advert.msg_type)
             try:
                 await session.send(
                     protocol.advertise(
@@ -229,7 +224,7 @@ class Topics:
             session.connection.advertised.add(topic)
         for subs in list(self.subscriptions.values()):
             for sub in list(subs.values()):
-                sub.wire_type = normalize_type(sub.msg_type, version, "msg") if sub.msg_type else None
+                sub.wire_type = dialect.message_type(sub.msg_type) if sub.msg_type else None
                 try:
                     await session.send(_subscribe_op(sub))
                 except NotSentError as exc:

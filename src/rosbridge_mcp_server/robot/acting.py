@@ -1,11 +1,13 @@
 """Checked sends: every act on the robot goes through here and through the safety seam (cancels: unguarded).
 
-Each function takes what a caller gave (names, types, a message), makes the name absolute, spells the type
-for the bridge, compares it with the graph, checks the message against the type's definitions (raising a
+Each function takes what a caller gave (names, types, a message), makes the name absolute, has the client's
+:class:`~rosbridge_mcp_server.client.Dialect` spell the type for the bridge, compares it with the graph,
+checks the message as the bridge will read it against the type's definitions (raising a
 :class:`~rosbridge_mcp_server.errors.NotSentError` that carries an example of the type), and only then asks
 the :class:`Guard` whether the act may happen: ``await guard.approve(act, ask_person)``. The guard may return
 a clamped copy of the act (what is then sent) or raise :class:`~rosbridge_mcp_server.errors.PolicyRefusal`;
-either way it is told the outcome (``guard.record``), once per act.
+either way it is told the outcome (``guard.record``), once per act. Messages stay as the caller wrote them
+(time fields in either spelling): the client respells them once, on the way out.
 
 Nothing here knows MCP: the server hands in ``ask_person`` (its elicitation) through the tool's context.
 """
@@ -18,14 +20,14 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
-from rosbridge_mcp_server.robot.messages import require_fit, same_type, short_type_name
+from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
 from rosbridge_mcp_server.robot.velocity import clamp_text
-from rosbridge_mcp_server.wire.dialect import action_type_names, adapt_message, normalize_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -197,29 +199,34 @@ async def publish_once(
 async def _checked_message(
     ctx: Acting, topic: str, message_type: str, message: dict[str, Any]
 ) -> tuple[str, str, dict[str, Any]]:
-    """The absolute topic, the type as the bridge spells it, and the message adapted and checked."""
+    """The absolute topic, the type as the bridge spells it, and the message, checked."""
     name = absolute_name(topic, "topic")
-    info = await ctx.graph.ros_info()
-    check_name_for_ros(name, "topic", info.version)
-    bridge_type = normalize_type(message_type, info.version, "msg")
+    dialect = await ctx.graph.dialect()
+    check_name_for_ros(name, "topic", dialect.version)
+    bridge_type = dialect.message_type(message_type)
     typedefs = await ctx.graph.message_typedefs(message_type)
 
     graph_type = await ctx.graph.publishing_type(name)
-    if graph_type and not same_type(graph_type, bridge_type):
+    if graph_type and not dialect.same_type(graph_type, bridge_type):
         raise NotSentError(
             f"Topic {name} has type {graph_type}, not {bridge_type}; rosbridge would drop the message. "
             f"Publish a {graph_type} message, or choose another topic (list_topics shows each topic's type)."
         )
-    body = adapt_message(message, info.version)
     require_fit(
-        body,
+        _as_read(dialect, message),
         typedefs,
         type_name=bridge_type,
-        ros_version=info.version,
+        ros_version=dialect.version,
         nothing_sent="Nothing was published",
         looks_like=f"A {bridge_type} message",
     )
-    return name, bridge_type, body
+    return name, bridge_type, message
+
+
+def _as_read(dialect: Dialect, message: dict[str, Any]) -> Any:
+    """*message* as the bridge will read it (ROS 1 time fields respelled), for checking only: the client
+    respells what it sends itself, so the message that goes on stays as the caller wrote it."""
+    return dialect.outgoing(message)
 
 
 #: Velocity commands: a stream of them ends with one all-zero message, so the robot stops.
@@ -381,28 +388,33 @@ async def call_service(
 ) -> ServiceReply:
     """Check the request when rosapi can describe the type, call the service, return its response."""
     name = absolute_name(service, "service")
-    info = await ctx.graph.ros_info()
-    check_name_for_ros(name, "service", info.version)
-    given_type = normalize_type(service_type, info.version, "srv")
+    dialect = await ctx.graph.dialect()
+    check_name_for_ros(name, "service", dialect.version)
+    given_type = dialect.service_type(service_type)
 
     graph_type = await ctx.graph.service_type(name, cached=True)
-    if graph_type and not same_type(graph_type, given_type):
+    if graph_type and not dialect.same_type(graph_type, given_type):
         # The cached type may be stale (the service was offered anew with another type): ask once more.
         graph_type = await ctx.graph.service_type(name)
-    if graph_type and not same_type(graph_type, given_type):
+    if graph_type and not dialect.same_type(graph_type, given_type):
         raise NotSentError(
             f"Service {name} has type {graph_type}, not {given_type}. Build the request for {graph_type} "
             "and call again with that service_type."
         )
     srv_type = graph_type or given_type
-    body = adapt_message(request, info.version)
     if graph_type:
         typedefs = await ctx.graph.service_request_typedefs(srv_type)
         if typedefs:
             fit = "The service was not called"
-            require_fit(body, typedefs, ros_version=info.version, nothing_sent=fit, looks_like="A request")
+            require_fit(
+                _as_read(dialect, request),
+                typedefs,
+                ros_version=dialect.version,
+                nothing_sent=fit,
+                looks_like="A request",
+            )
 
-    act = await _approved(ctx, Act(tool, "service", name, srv_type, body))
+    act = await _approved(ctx, Act(tool, "service", name, srv_type, request))
     try:
         response = await _carry_out(
             ctx, act, lambda: ctx.client.call_service(act.name, act.payload, timeout=timeout)
@@ -439,14 +451,18 @@ async def send_goal(
     can name the goal (to cancel it) while it runs.
     """
     name = absolute_name(action, "action")
-    info = await ctx.graph.ros_info()
-    check_name_for_ros(name, "action", info.version)
-    wire_type = action_type_names(action_type).for_version(info.version)
+    dialect = await ctx.graph.dialect()
+    check_name_for_ros(name, "action", dialect.version)
+    wire_type = dialect.action_type(action_type)
     await require_action_server(ctx.graph, name, action_type)
     typedefs = await ctx.graph.action_goal_typedefs(action_type)
     if typedefs:
         require_fit(
-            goal, typedefs, ros_version=info.version, nothing_sent="No goal was sent", looks_like="A goal"
+            _as_read(dialect, goal),
+            typedefs,
+            ros_version=dialect.version,
+            nothing_sent="No goal was sent",
+            looks_like="A goal",
         )
 
     act = await _approved(ctx, Act(tool, "action", name, wire_type, goal))
@@ -472,9 +488,7 @@ async def require_action_server(graph: RosGraph, name: str, action_type: str | N
     found = await graph.action_type(name)
     if found is None:
         return
-    expected = action_type_names(found)
-    given = action_type_names(action_type)
-    if (expected.package, expected.name) != (given.package, given.name):
+    if not Dialect.same_action(found, action_type):
         raise NotSentError(
             f"Action {name} has type {found}, not {action_type}. Send a goal of type {found} instead."
         )

@@ -17,9 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.type_outline import TypeOutline, clean_typedefs, outline_type
-from rosbridge_mcp_server.wire.dialect import action_type_names, normalize_type, split_type
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.graph import RosGraph
@@ -44,8 +44,9 @@ class Description:
 
 async def describe_type(graph: RosGraph, type_name: str) -> Description:
     """Look ``type_name`` up as the kind its name says, or (``pkg/T``) as a message, a service, an action."""
-    _, category, _ = split_type(type_name)
-    info = await graph.ros_info()
+    _, category, _ = Dialect.split_type(type_name)
+    dialect = await graph.dialect()
+    info = dialect.info
     kinds: tuple[Kind, ...]
     if category == "msg":
         kinds = ("message",)
@@ -61,7 +62,7 @@ async def describe_type(graph: RosGraph, type_name: str) -> Description:
     if info.version == 2:
         kinds = await _installed_kinds(graph, type_name, kinds)
     for kind in kinds:
-        found = await _describe_as(graph, type_name, kind, info.version)
+        found = await _describe_as(graph, type_name, kind, dialect)
         if found is not None:
             return found
     hint = (
@@ -84,7 +85,7 @@ async def _installed_kinds(graph: RosGraph, type_name: str, kinds: tuple[Kind, .
     it: ``service_request_details`` of a type rosapi cannot load gets no answer and ends the rosapi node on
     2.1.0. Such a rosapi has no action details either.
     """
-    package, _, name = split_type(type_name)
+    package, _, name = Dialect.split_type(type_name)
     installed = await graph.installed_interfaces()
     if installed is not None:
         folders: dict[Kind, str] = {"message": "msg", "service": "srv", "action": "action"}
@@ -116,23 +117,23 @@ async def _installed_kinds(graph: RosGraph, type_name: str, kinds: tuple[Kind, .
     return tuple(safe)
 
 
-async def _describe_as(graph: RosGraph, type_name: str, kind: Kind, version: int) -> Description | None:
+async def _describe_as(graph: RosGraph, type_name: str, kind: Kind, dialect: Dialect) -> Description | None:
+    version = dialect.version
     if kind == "message":
-        name = normalize_type(type_name, version, "msg")
+        name = dialect.message_type(type_name)
         part = await _part(graph, "message_details", name, version)
         return Description(kind, name, (("message", part),)) if part else None
     if kind == "service":
-        name = normalize_type(type_name, version, "srv")
+        name = dialect.service_type(type_name)
         request = await _part(graph, "service_request_details", name, version)
         if request is None:
             return None
         response = await _part(graph, "service_response_details", name, version)
         parts = [("request", request)] + ([("response", response)] if response else [])
         return Description(kind, name, tuple(parts))
-    names = action_type_names(type_name)
+    names = dialect.action_names(type_name)
     if version == 1:
-        base = f"{names.package}/{names.name}"
-        sections = (("goal", f"{base}Goal"), ("result", f"{base}Result"), ("feedback", f"{base}Feedback"))
+        sections = tuple(zip(("goal", "result", "feedback"), names.ros1_parts, strict=True))
         found = [(title, await _part(graph, "message_details", msg, version)) for title, msg in sections]
         name = names.ros1.action
     else:

@@ -2,7 +2,9 @@
 
 The subscription has its own rosbridge id, so closing it never removes another listener of the same topic
 (rosbridge keeps one ROS subscription per topic and connection while any id remains). It is closed in
-``finally``, also when the caller is cancelled.
+``finally``, also when the caller is cancelled. :func:`read_topic` is ``subscribe_topic``'s whole read: the
+topic's type checked against the graph, the fields against the type, the QoS as the bridge's dialect takes
+it, then the listen.
 """
 
 from __future__ import annotations
@@ -12,13 +14,29 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
-from rosbridge_mcp_server.errors import RequestTimeoutError
+from rosbridge_mcp_server.errors import (
+    NotOnRobotError,
+    NotSentError,
+    RequestTimeoutError,
+    ServiceError,
+    UnknownTypeError,
+)
 from rosbridge_mcp_server.robot.messages import TypeDef, short_type_name
+from rosbridge_mcp_server.robot.names import absolute_name
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.robot.graph import RosGraph
 
-__all__ = ["Heard", "Listening", "byte_array_paths", "listen", "unknown_field_path"]
+__all__ = [
+    "Heard",
+    "Listening",
+    "Readout",
+    "byte_array_paths",
+    "listen",
+    "read_topic",
+    "unknown_field_path",
+]
 
 _BYTE_TYPES = frozenset({"uint8", "char", "octet", "byte"})
 
@@ -88,6 +106,81 @@ async def listen(
             if on_message is not None:
                 await on_message(len(heard))
     return Listening(tuple(heard), first_timed_out=not heard, listened=time.monotonic() - start)
+
+
+@dataclass(frozen=True)
+class Readout:
+    """What :func:`read_topic` heard, with what the caller needs to shorten it."""
+
+    topic: str  #: absolute
+    message_type: str  #: the graph's type, or the one given (spelled for the bridge)
+    heard: Listening
+    byte_fields: list[str]  #: dotted paths of the type's byte arrays ([] when rosapi could not describe it)
+    qos_note: str | None  #: what the bridge makes of the QoS asked for, when some was
+
+
+async def read_topic(
+    graph: RosGraph,
+    client: RosbridgeClient,
+    topic: str,
+    message_type: str | None,
+    *,
+    count: int,
+    duration: float | None,
+    first_timeout: float,
+    fields: list[str] | None = None,
+    qos: dict[str, Any] | None = None,
+    on_message: Callable[[int], Awaitable[None]] | None = None,
+) -> Readout:
+    """Check the topic's type (the graph's, or *message_type* when it agrees) and *fields* against it, then
+    :func:`listen` with the QoS as this bridge takes it (*qos*: reliability, durability, depth).
+
+    Raises :class:`NotSentError` for a type that is not the topic's or a field path the type does not have,
+    :class:`NotOnRobotError` for a topic nothing publishes when no type was given.
+    """
+    name = absolute_name(topic, "topic")
+    dialect = await graph.dialect()
+    graph_type = await graph.topic_type(name)
+    if message_type:
+        msg_type = dialect.message_type(message_type)
+        if graph_type and not dialect.same_type(graph_type, msg_type):
+            raise NotSentError(
+                f"Topic {name} has type {graph_type}, not {msg_type}; rosbridge would not subscribe. Leave "
+                "message_type out to use the topic's own type."
+            )
+    elif graph_type:
+        msg_type = graph_type
+    else:
+        missing, _ = await graph.unknown_topic(name, " (nothing publishes it)")
+        raise NotOnRobotError(
+            f"{missing} Call list_topics to see the topics, or give message_type to wait for a publisher "
+            "that has not started yet."
+        )
+    typedefs = await _typedefs_or_none(graph, msg_type)
+    if fields and typedefs and (problem := unknown_field_path(msg_type, typedefs, fields)):
+        raise NotSentError(f"{problem} Nothing was subscribed; fix fields or leave them out.")
+    wire_qos, qos_note = dialect.subscription_qos(qos)
+    heard = await listen(
+        client,
+        name,
+        msg_type,
+        count=count,
+        duration=duration,
+        first_timeout=first_timeout,
+        qos=wire_qos,
+        on_message=on_message,
+    )
+    byte_fields = byte_array_paths(msg_type, typedefs) if typedefs else []
+    return Readout(name, msg_type, heard, byte_fields, qos_note)
+
+
+async def _typedefs_or_none(graph: RosGraph, msg_type: str) -> dict[str, TypeDef]:
+    try:
+        return await graph.message_typedefs(msg_type)
+    except (UnknownTypeError, ServiceError, RequestTimeoutError):
+        # Without a description the summary still spots byte arrays by their base64 look, and fields are
+        # checked against the first message instead.
+        return {}
 
 
 def byte_array_paths(type_name: str, typedefs: dict[str, TypeDef], *, depth: int = 6) -> list[str]:

@@ -30,6 +30,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.errors import InvalidMessageError, NotSentError
 
 __all__ = [
@@ -108,17 +109,10 @@ class TypeDef:
             yield name, base, length
 
 
-def short_type_name(name: str) -> str:
-    """``pkg/msg/Type`` (and ``/srv/``, ``/action/``) → ``pkg/Type``; other names unchanged."""
-    parts = name.strip().strip("/").split("/")
-    if len(parts) == 3 and parts[1] in ("msg", "srv", "action"):
-        return f"{parts[0]}/{parts[2]}"
-    return name.strip()
-
-
-def same_type(a: str, b: str) -> bool:
-    """Whether two spellings name the same type (``pkg/msg/Type`` and ``pkg/Type`` do)."""
-    return short_type_name(a) == short_type_name(b)
+#: ``pkg/msg/Type`` → ``pkg/Type`` (the key rosapi's TypeDefs use); the dialect's rule.
+short_type_name = Dialect.short_type
+#: Whether two spellings name the same type; the dialect's rule.
+same_type = Dialect.same_type
 
 
 def _split_array(raw: str) -> tuple[str, int | None]:

@@ -107,19 +107,18 @@ def scaled(type_name: str, message: dict[str, Any], linear: float, angular: floa
     return new_twist
 
 
-def zero_command(type_name: str, ros_version: int, now: float, frame_id: str = "") -> dict[str, Any]:
+def zero_command(type_name: str, now: float, frame_id: str = "") -> dict[str, Any]:
     """A complete "stand still" message of ``type_name``; a TwistStamped is stamped ``now`` (Unix seconds).
 
-    A zero stamp could look stale to a controller that drops old commands, so the stop carries the time.
+    A zero stamp could look stale to a controller that drops old commands, so the stop carries the time
+    (spelled ``sec``/``nanosec``: the client respells it for ROS 1).
     """
     zeros = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
     if not stamped(type_name):
         return zeros
     seconds = int(now)
     fraction = int((now - seconds) * 1e9)
-    stamp = (
-        {"sec": seconds, "nanosec": fraction} if ros_version == 2 else {"secs": seconds, "nsecs": fraction}
-    )
+    stamp = {"sec": seconds, "nanosec": fraction}
     return {"header": {"stamp": stamp, "frame_id": frame_id}, "twist": zeros}
 
 

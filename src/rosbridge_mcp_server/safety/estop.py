@@ -57,15 +57,16 @@ async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> Stop
     report.streams_stopped = [entry.topic for entry in ended]
     report.streams_still_running = [entry.topic for entry in running]
 
-    version: int | None = None
+    connected = False
     try:
-        version = (await client.ros_info()).version
+        await client.ros_info()
+        connected = True
     except RosbridgeError as exc:
         report.failures.append(f"not connected, so no zero command was sent: {exc}")
-    if version is not None:
+    if connected:
         now = time.time()
         for target in activity.velocity_topics:
-            message = zero_command(target.type, version, now, target.frame_id)
+            message = zero_command(target.type, now, target.frame_id)
             try:
                 await client.publish(target.topic, target.type, message)
             except RosbridgeError as exc:

@@ -6,8 +6,8 @@ published an empty message) and takes ``true`` for the number 1. Here, before th
 * a key the tool does not take is an error naming it (the input schemas say ``additionalProperties: false``);
 * a boolean given for a number is an error;
 * bounded work: a plain string argument (a name, an id) has at most :data:`MAX_TEXT_ARGUMENT` characters,
-  and a message, request or goal at most :data:`~rosbridge_mcp_server.tools.base.MAX_NESTING` levels and what
-  rosbridge takes in one frame (:func:`~rosbridge_mcp_server.tools.base.payload_problem`).
+  and a message, request or goal at most :data:`~rosbridge_mcp_server.client.frames.MAX_NESTING` levels
+  and what rosbridge takes in one frame (:func:`~rosbridge_mcp_server.client.frames.payload_problem`).
 
 Each refusal names the argument and the limit.
 """

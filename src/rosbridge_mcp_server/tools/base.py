@@ -9,17 +9,16 @@ function of the domain layer (``robot/``) and renders a :class:`ToolAnswer`.
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
+from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, nesting_text, payload_problem
 from rosbridge_mcp_server.robot.acting import AskPerson, Guard, nobody_to_ask
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
-from rosbridge_mcp_server.wire.protocol import BRIDGE_MAX_FRAME_BYTES
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -171,66 +170,10 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
             f"{example}."
         ) from None
     except RecursionError:
-        raise ToolFailure(f"The {what} {_nesting_text()}. Nothing was sent.") from None
+        raise ToolFailure(f"The {what} {nesting_text()}. Nothing was sent.") from None
     if not isinstance(parsed, dict):
         raise ToolFailure(f"The {what} must be a JSON object, e.g. {example}; got {compact_json(parsed)}.")
     problem = payload_problem(parsed)
     if problem is not None:
         raise ToolFailure(f"The {what} {problem}. Nothing was sent.")
     return parsed
-
-
-#: Deepest nesting of objects and arrays in a message, request or goal. ROS messages nest a handful of levels
-#: (a nav_msgs/Path: 6); the bound keeps checking and encoding one bounded, well inside the recursion limits
-#: of every JSON parser on the way.
-MAX_NESTING = 64
-#: The most text a message, request or goal may hold: what rosbridge accepts in one frame.
-MAX_PAYLOAD_CHARS = BRIDGE_MAX_FRAME_BYTES
-_SURROGATE = re.compile("[\ud800-\udfff]")
-
-
-def _nesting_text() -> str:
-    return f"nests deeper than {MAX_NESTING} levels, the limit (ROS messages nest a handful of levels)"
-
-
-def payload_problem(value: Any) -> str | None:
-    """What makes ``value`` (a message, request or goal) unfit to send, or ``None``; bounded work.
-
-    Too deep (:data:`MAX_NESTING`), too large for one rosbridge frame, or text that is not text (an unpaired
-    UTF-16 surrogate, which cannot be encoded as UTF-8). Stops at the first problem.
-    """
-    size = 0
-    stack: list[tuple[Any, int]] = [(value, 0)]
-    while stack:
-        item, depth = stack.pop()
-        if isinstance(item, dict | list):
-            if depth >= MAX_NESTING:
-                return _nesting_text()
-            size += 2
-            if isinstance(item, dict):
-                for key, inner in item.items():
-                    if isinstance(key, str):
-                        size += len(key) + 3
-                        if _SURROGATE.search(key):
-                            return _surrogate_text(key)
-                    stack.append((inner, depth + 1))
-            else:
-                stack.extend((inner, depth + 1) for inner in item)
-        elif isinstance(item, str):
-            size += len(item) + 3
-            if _SURROGATE.search(item):
-                return _surrogate_text(item)
-        else:
-            size += 8
-        if size > MAX_PAYLOAD_CHARS:
-            return (
-                f"is larger than {MAX_PAYLOAD_CHARS // (1024 * 1024)} MiB, the most rosbridge accepts in one "
-                "frame (a larger frame makes it drop the connection)"
-            )
-    return None
-
-
-def _surrogate_text(text: str) -> str:
-    found = _SURROGATE.search(text)
-    code = ord(found.group()) if found is not None else 0
-    return f"holds an unpaired UTF-16 surrogate (\\u{code:04x}), which is not text and cannot be sent"

@@ -6,9 +6,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
-from rosbridge_mcp_server.robot.listening import byte_array_paths, listen, unknown_field_path
-from rosbridge_mcp_server.robot.messages import TypeDef, same_type
+from rosbridge_mcp_server.robot.listening import read_topic
 from rosbridge_mcp_server.robot.summary import FieldPathError, select_fields, summarize
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
@@ -19,7 +17,6 @@ from rosbridge_mcp_server.tools.base import (
     absolute_name,
     compact_json,
 )
-from rosbridge_mcp_server.wire.dialect import normalize_type
 
 __all__ = ["MAX_COUNT", "MAX_DURATION", "SPEC", "SubscribeAnswer", "run"]
 
@@ -93,47 +90,27 @@ async def run(
         Field(description='ROS 2 QoS, e.g. {"durability": "transient_local"}'),
     ] = None,
 ) -> ToolAnswer:
-    """Subscribe, collect, unsubscribe; shorten each message."""
-    name = absolute_name(topic, "topic")
-    info = await ctx.graph.ros_info()
-    graph_type = await ctx.graph.topic_type(name)
-    if message_type:
-        wanted = normalize_type(message_type, info.version, "msg")
-        if graph_type and not same_type(graph_type, wanted):
-            raise ToolFailure(
-                f"Topic {name} has type {graph_type}, not {wanted}; rosbridge would not subscribe. Leave "
-                "message_type out to use the topic's own type."
-            )
-        msg_type = wanted
-    elif graph_type:
-        msg_type = graph_type
-    else:
-        missing, _ = await ctx.graph.unknown_topic(name, " (nothing publishes it)")
-        raise ToolFailure(
-            f"{missing} Call list_topics to see the topics, or give message_type to wait for a publisher "
-            "that has not started yet."
-        )
-    typedefs = await _typedefs(ctx, msg_type)
-    if fields and typedefs and (problem := unknown_field_path(msg_type, typedefs, fields)):
-        raise ToolFailure(f"{problem} Nothing was subscribed; fix fields or leave them out.")
-    wire_qos, qos_note = _qos(qos, info.version)
+    """Subscribe, collect, unsubscribe (robot/'s read_topic); shorten each message."""
     wanted_count = count if count is not None else (MAX_COUNT if duration is not None else 1)
 
     async def progress(done: int) -> None:
         if wanted_count > 1:
             await ctx.report_progress(done, wanted_count, f"{done} of {wanted_count} messages from {name}")
 
-    heard = await listen(
+    name = absolute_name(topic, "topic")
+    readout = await read_topic(
+        ctx.graph,
         ctx.client,
         name,
-        msg_type,
+        message_type,
         count=wanted_count,
         duration=duration,
         first_timeout=timeout,
-        qos=wire_qos,
+        fields=fields,
+        qos=qos.model_dump(exclude_none=True) if qos is not None else None,
         on_message=progress,
     )
-    byte_fields = byte_array_paths(msg_type, typedefs) if typedefs else []
+    heard = readout.heard
     received: list[ReceivedMessage] = []
     for item in heard.messages:
         body: dict[str, Any] = item.message
@@ -144,7 +121,7 @@ async def run(
                 raise ToolFailure(
                     f"{exc} Call subscribe_topic without fields to see the whole message."
                 ) from None
-        summary = summarize(body, byte_fields=byte_fields)
+        summary = summarize(body, byte_fields=readout.byte_fields)
         received.append(
             ReceivedMessage(
                 received=round(item.at, 3),
@@ -154,39 +131,14 @@ async def run(
         )
     rate = heard.rate_hz
     answer = SubscribeAnswer(
-        topic=name,
-        message_type=msg_type,
+        topic=readout.topic,
+        message_type=readout.message_type,
         messages=received,
         rate_hz=round(rate, 2) if rate is not None else None,
         timed_out=heard.first_timed_out,
-        qos_note=qos_note,
+        qos_note=readout.qos_note,
     )
     return ToolAnswer(text=_text(answer, timeout), data=answer)
-
-
-def _qos(qos: QosRequest | None, version: int) -> tuple[dict[str, Any] | None, str | None]:
-    if qos is None:
-        return None, None
-    wire = qos.model_dump(exclude_none=True)
-    if not wire:
-        return None, None
-    if version == 1:
-        return None, "QoS not applied: ROS 1 has no QoS (rosbridge 0.11 ignores it)."
-    if "depth" in wire:
-        wire["history"] = "keep_last"
-    return wire, (
-        "QoS sent; rosbridge applies it from 2.0.7 (Humble), 2.7.0 (Jazzy), 3.3.0 (Kilted) on, older bridges "
-        "ignore it, and only the first subscriber of a topic on the bridge sets it."
-    )
-
-
-async def _typedefs(ctx: ToolContext, msg_type: str) -> dict[str, TypeDef]:
-    try:
-        return await ctx.graph.message_typedefs(msg_type)
-    except (UnknownTypeError, ServiceError, RequestTimeoutError):
-        # Without a description the summary still spots byte arrays by their base64 look, and fields are
-        # checked against the first message instead.
-        return {}
 
 
 def _text(answer: SubscribeAnswer, timeout: float) -> str:

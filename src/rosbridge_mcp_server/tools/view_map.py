@@ -72,15 +72,17 @@ SPEC = ToolSpec(
 async def _map_message(
     ctx: ToolContext, name: str, msg_type: str, timeout: float, notes: list[str]
 ) -> dict[str, Any]:
-    """The grid as CBOR; on ROS 2, when none came, once more as JSON (a bounded second wait).
-
-    rosbridge_suite cannot fragment a CBOR frame, so on ROS 2 a map above the connection's fragment size
-    (10 MB by default, ~10 M cells) is never sent as CBOR; as JSON it arrives in fragments.
+    """The grid as CBOR when the bridge can send it so; when none came and the bridge drops large CBOR
+    frames (ROS 2: a map above the connection's fragment size, 10 MB by default, ~10 M cells), once more as
+    JSON, which arrives in fragments (a bounded second wait).
     """
+    dialect = await ctx.client.dialect()
+    # An OccupancyGrid has no fixed-size array.
+    compression = dialect.compression_for(fixed_size_arrays=False)
     try:
-        return await first_message(ctx, name, msg_type, timeout, "map", compression="cbor")
+        return await first_message(ctx, name, msg_type, timeout, "map", compression=compression)
     except ToolFailure:
-        if (await ctx.client.ros_info()).version != 2:
+        if compression is None or not dialect.drops_large_cbor:
             raise
     message = await first_message(ctx, name, msg_type, timeout, "map")
     notes.append(

@@ -34,9 +34,10 @@ __all__ = [
     "is_success_status",
     "is_terminal_status",
     "normalize_type",
+    "same_type",
+    "short_type",
     "split_type",
     "to_ros1_time",
-    "to_ros2_time",
 ]
 
 Category = Literal["msg", "srv", "action"]
@@ -130,6 +131,19 @@ def normalize_type(type_name: str, version: int, category: Category = "msg") -> 
     return f"{pkg}/{given or category}/{name}"
 
 
+def short_type(name: str) -> str:
+    """``pkg/msg/Type`` (and ``/srv/``, ``/action/``) → ``pkg/Type``; other names unchanged."""
+    parts = name.strip().strip("/").split("/")
+    if len(parts) == 3 and parts[1] in ("msg", "srv", "action"):
+        return f"{parts[0]}/{parts[2]}"
+    return name.strip()
+
+
+def same_type(a: str, b: str) -> bool:
+    """Whether two spellings name the same type (``pkg/msg/Type`` and ``pkg/Type`` do)."""
+    return short_type(a) == short_type(b)
+
+
 @dataclass(frozen=True, slots=True)
 class Ros1ActionTypes:
     """The actionlib message family of one ROS 1 action."""
@@ -162,6 +176,12 @@ class ActionTypeNames:
             action=base, goal=f"{base}Goal", feedback=f"{base}Feedback", result=f"{base}Result"
         )
 
+    @property
+    def ros1_parts(self) -> tuple[str, str, str]:
+        """The ROS 1 messages inside actionlib's family: ``pkg/NameGoal``, ``...Result``, ``...Feedback``."""
+        base = f"{self.package}/{self.name}"
+        return f"{base}Goal", f"{base}Result", f"{base}Feedback"
+
     def for_version(self, version: int) -> str:
         """The name the bridge of this ROS *version* knows the action by."""
         return self.ros2 if version == 2 else self.ros1.action
@@ -193,7 +213,6 @@ def action_type_names(type_name: str) -> ActionTypeNames:
 # --- time fields ------------------------------------------------------------------------------------
 
 _ROS2_TIME_KEYS: Final = frozenset({"sec", "nanosec"})
-_ROS1_TIME_KEYS: Final = frozenset({"secs", "nsecs"})
 
 
 def _convert_time(value: Any, from_keys: frozenset[str], mapping: dict[str, str]) -> Any:
@@ -214,11 +233,6 @@ def to_ros1_time(msg: Any) -> Any:
     given ``sec``/``nanosec``.
     """
     return _convert_time(msg, _ROS2_TIME_KEYS, {"sec": "secs", "nanosec": "nsecs"})
-
-
-def to_ros2_time(msg: Any) -> Any:
-    """A copy of *msg* with every ``{secs, nsecs}`` object spelled ``{sec, nanosec}``."""
-    return _convert_time(msg, _ROS1_TIME_KEYS, {"secs": "sec", "nsecs": "nanosec"})
 
 
 def adapt_message(msg: Any, version: int) -> Any:

@@ -27,7 +27,6 @@ from rosbridge_mcp_server.robot.goals.record import (
 )
 from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
 from rosbridge_mcp_server.robot.names import absolute
-from rosbridge_mcp_server.wire.dialect import action_type_names
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -67,13 +66,13 @@ async def run_goal(
     (``goal_cancel`` says whether that already happened).
     """
     client = goals.client
-    info = await client.ros_info()
+    dialect = await client.dialect()
     action = absolute(action)
     gid = goal_id if goal_id is not None else client.new_goal_id(action)
 
-    wire_type = action_type_names(action_type).for_version(info.version)
-    with goals.tracking(Goal(gid, action, wire_type, info.version)) as record:
-        if info.version == 1:
+    wire_type = dialect.action_type(action_type)
+    with goals.tracking(Goal(gid, action, wire_type, dialect.version)) as record:
+        if dialect.version == 1:
             return await ros1.run(goals, record, goal, timeout=timeout, on_feedback=on_feedback)
         try:
             return await ros2.run(goals, record, goal, timeout=timeout, on_feedback=on_feedback)

@@ -25,7 +25,7 @@ async def publish_cancel(
 
     With *session*, only on that session. Raises what ``publish`` raises when it cannot be sent.
     """
-    msg = {"stamp": {"secs": 0, "nsecs": 0}, "id": goal_id}
+    msg = {"stamp": {"sec": 0, "nanosec": 0}, "id": goal_id}
     await client.publish(f"{ns}/cancel", CANCEL_TYPE, msg, session=session)
 
 

@@ -8,7 +8,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
-from rosbridge_mcp_server.wire.dialect import goal_status_name, is_success_status
+from rosbridge_mcp_server.client import Dialect
 
 __all__ = [
     "CANCEL_GRACE_SECONDS",
@@ -75,8 +75,9 @@ class Goal:
         """Record how the goal ended (*confirmed*: the robot said so, not only our timeout); returns self."""
         self.finished = True
         self.status_code = code
-        self.succeeded = confirmed and is_success_status(code, self.dialect)
-        self.status = goal_status_name(code, self.dialect) if confirmed else UNCONFIRMED_STATUS
+        dialect = Dialect.for_version(self.dialect)
+        self.succeeded = confirmed and dialect.goal_succeeded(code)
+        self.status = dialect.goal_status(code) if confirmed else UNCONFIRMED_STATUS
         self.result = result if isinstance(result, dict) else None
         if not self.succeeded:
             if timed_out:

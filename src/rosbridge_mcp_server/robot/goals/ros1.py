@@ -7,11 +7,11 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING, Any, Final
 
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, RequestTimeoutError, RosbridgeError
 from rosbridge_mcp_server.robot.goals.actionlib import goal_id_of, publish_cancel
 from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
 from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
-from rosbridge_mcp_server.wire.dialect import action_type_names, is_terminal_status
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient, Subscription
@@ -25,6 +25,8 @@ logger = logging.getLogger("rosbridge_mcp_server.robot.goals")
 ACTIONLIB_SERVER_WAIT: Final = 3.0
 #: A ROS 1 goal whose status says it finished, but whose result never came, ends after this long.
 RESULT_AFTER_STATUS_GRACE: Final = 1.0
+#: actionlib's goal states (0..9).
+_ROS1: Final = Dialect.for_version(1)
 
 
 async def run(
@@ -40,7 +42,7 @@ async def run(
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     ns = record.action
-    types = action_type_names(record.action_type).ros1
+    types = Dialect.action_names(record.action_type).ros1
     gid = record.goal_id
     # Advertised before we wait for the server, so the bridge's publishers have time to connect to
     # the action server: a message published right after a ROS 1 advertise is often lost.
@@ -74,7 +76,7 @@ async def run(
             await client.publish(
                 f"{ns}/goal",
                 types.goal,
-                {"header": {}, "goal_id": {"stamp": {"secs": 0, "nsecs": 0}, "id": gid}, "goal": goal},
+                {"header": {}, "goal_id": {"stamp": {"sec": 0, "nanosec": 0}, "id": gid}, "goal": goal},
             )
             sent = True
             try:
@@ -159,7 +161,7 @@ async def follow(
             for status in msg.get("status_list") or []:
                 if goal_id_of(status) == gid and isinstance(status.get("status"), int):
                     seen.code = status["status"]
-                    if is_terminal_status(seen.code, 1) and seen.ended_at is None:
+                    if _ROS1.goal_ended(seen.code) and seen.ended_at is None:
                         seen.ended_at = loop.time()
 
 

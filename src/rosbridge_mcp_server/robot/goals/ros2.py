@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 from typing import TYPE_CHECKING, Any
 
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
@@ -21,7 +22,6 @@ from rosbridge_mcp_server.errors import (
 from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
 from rosbridge_mcp_server.robot.goals.registry import CANCEL_CONFIRM_SECONDS, GoalRegistry
 from rosbridge_mcp_server.wire import protocol
-from rosbridge_mcp_server.wire.dialect import action_type_names
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import GoalLane, RosbridgeClient
@@ -48,7 +48,7 @@ async def send_action_goal(
     If the awaiting task is cancelled, the goal is cancelled too before the task ends.
     """
     gid = goal_id if goal_id is not None else registry.client.new_goal_id(action)
-    with registry.tracking(Goal(gid, action, action_type_names(action_type).ros2, 2)) as record:
+    with registry.tracking(Goal(gid, action, Dialect.action_names(action_type).ros2, 2)) as record:
         return await run(registry, record, goal, timeout=timeout, on_feedback=on_feedback)
 
 
