@@ -273,8 +273,9 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
-#: Tool names by ``--tools`` group, in registration order. ``tools/__init__.py`` builds its module lists from
-#: these names (failing at import when one has no module), so the configuration needs none of the tools.
+#: The tool catalogue, the one list of the tools: their names by ``--tools`` group, in registration order.
+#: ``tools/__init__.py`` imports the module of each name (failing at import when one has none), so the
+#: configuration needs none of the tools.
 ORIGINAL_TOOL_NAMES = (
     "list_topics",
     "get_topic_info",

@@ -9,7 +9,7 @@ from typing import Any
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-__all__ = ["FAST_RECONNECT", "MakeClient", "MakeSim", "unused_port"]
+__all__ = ["FAST_RECONNECT", "MakeClient", "MakeSim", "busy_lanes", "idle_lanes", "unused_port"]
 
 MakeClient = Callable[..., Awaitable[RosbridgeClient]]
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
@@ -24,3 +24,13 @@ def unused_port() -> int:
         sock.bind(("127.0.0.1", 0))
         port: int = sock.getsockname()[1]
     return port
+
+
+def idle_lanes(client: RosbridgeClient) -> int:
+    """How many pooled lanes wait, open, for a next call."""
+    return len(client.lanes._idle)
+
+
+def busy_lanes(client: RosbridgeClient) -> int:
+    """How many pooled lanes carry a call now."""
+    return len(client.lanes._busy)

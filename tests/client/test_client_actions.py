@@ -11,7 +11,7 @@ from client_harness import MakeClient, MakeSim
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, GoalTimeoutError
 from rosbridge_mcp_server.robot import goals
-from rosbridge_mcp_server.robot.goals import ros2
+from rosbridge_mcp_server.robot.goals import GoalRegistry, ros2
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 ROS2_TYPE = "example_interfaces/action/Fibonacci"
@@ -56,13 +56,14 @@ async def test_send_action_goal_returns_the_result_and_streams_feedback(
 ) -> None:
     """A goal runs on its own lane, feedback reaches the callback, the result has status 4."""
     client = await make_client(robot2)
+    registry = GoalRegistry(client)
     feedback: list[dict[str, Any]] = []
 
     async def on_feedback(_goal: goals.Goal, values: dict[str, Any]) -> None:
         feedback.append(values)
 
     result = await ros2.send_action_goal(
-        client,
+        registry,
         "/fibonacci",
         "example_interfaces/Fibonacci",
         {"order": 5},
@@ -74,7 +75,7 @@ async def test_send_action_goal_returns_the_result_and_streams_feedback(
     assert result.result["sequence"] == [0, 1, 1, 2, 3, 5]
     assert feedback
     assert feedback[-1]["sequence"] == [0, 1, 1, 2, 3, 5]
-    assert goals.running_goals(client) == []
+    assert registry.running() == []
 
 
 async def test_a_running_goal_can_be_cancelled_from_the_main_connection(
@@ -82,11 +83,12 @@ async def test_a_running_goal_can_be_cancelled_from_the_main_connection(
 ) -> None:
     """cancel_action_goal reaches a goal running on its lane, even on an in-order (Humble) bridge."""
     client = await make_client(robot2)
+    registry = GoalRegistry(client)
     goal = asyncio.create_task(
-        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
+        ros2.send_action_goal(registry, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot2.wait_for(running_goal_with_feedback)
-    [handle] = goals.running_goals(client, "/fibonacci")
+    [handle] = registry.running("/fibonacci")
     await client.cancel_action_goal("/fibonacci", handle.goal_id)
     result = await asyncio.wait_for(goal, 5.0)
     assert result.status_code == 5
@@ -98,8 +100,9 @@ async def test_a_goal_past_its_timeout_is_cancelled_and_reports_the_partial_resu
 ) -> None:
     """At the deadline a cancel is sent; GoalTimeoutError carries the canceled status and result."""
     client = await make_client(robot2)
+    registry = GoalRegistry(client)
     with pytest.raises(GoalTimeoutError) as caught:
-        await ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=0.3)
+        await ros2.send_action_goal(registry, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=0.3)
     assert caught.value.status == 5
     assert isinstance(caught.value.result, dict)
     assert 2 <= len(caught.value.result["sequence"]) < LONG_ORDER + 1
@@ -109,15 +112,17 @@ async def test_a_goal_past_its_timeout_is_cancelled_and_reports_the_partial_resu
 async def test_a_rejected_goal_raises_action_error(sim_ros2: SimulatedRobot, make_client: MakeClient) -> None:
     """A goal the server rejects raises ActionError with the bridge's text."""
     client = await make_client(sim_ros2)
+    registry = GoalRegistry(client)
     with pytest.raises(ActionError, match="rejected"):
-        await ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": -1}, timeout=5.0)
+        await ros2.send_action_goal(registry, "/fibonacci", ROS2_TYPE, {"order": -1}, timeout=5.0)
 
 
 async def test_send_action_goal_refuses_ros1(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
     """ROS 1 has no action ops: send_action_goal says to use actionlib topics."""
     client = await make_client(sim_ros1)
+    registry = GoalRegistry(client)
     with pytest.raises(ActionError, match="actionlib"):
-        await ros2.send_action_goal(client, "/fibonacci", ROS1_TYPE, {"order": 3}, timeout=2.0)
+        await ros2.send_action_goal(registry, "/fibonacci", ROS1_TYPE, {"order": 3}, timeout=2.0)
 
 
 # --- goals.run_goal / cancel_goals (both dialects) ---------------------------------------------------
@@ -128,13 +133,14 @@ async def test_run_goal_succeeds_with_feedback_on_every_dialect(
 ) -> None:
     """run_goal returns a succeeded outcome with the result and the last feedback."""
     client = await make_client(robot)
+    registry = GoalRegistry(client)
     seen: list[int] = []
 
     async def on_feedback(goal: goals.Goal, values: dict[str, Any]) -> None:
         seen.append(goal.feedback_count)
 
     outcome = await goals.run_goal(
-        client, "/fibonacci", action_type_for(robot), {"order": 6}, timeout=5.0, on_feedback=on_feedback
+        registry, "/fibonacci", action_type_for(robot), {"order": 6}, timeout=5.0, on_feedback=on_feedback
     )
     assert outcome.succeeded
     assert outcome.status == "succeeded"
@@ -145,7 +151,7 @@ async def test_run_goal_succeeds_with_feedback_on_every_dialect(
     assert 1 <= len(outcome.last_feedback) <= 5
     assert outcome.canceled_by is None
     assert outcome.dialect == (2 if robot.dialect == "ros2" else 1)
-    assert goals.running_goals(client) == []
+    assert registry.running() == []
 
 
 @pytest.mark.parametrize(
@@ -163,7 +169,8 @@ async def test_run_goal_accepts_the_action_type_as_users_write_it(
     """pkg/Fibonacci, pkg/action/Fibonacci and pkg/FibonacciAction all work on both dialects."""
     robot = await make_sim(dialect=dialect)
     client = await make_client(robot)
-    outcome = await goals.run_goal(client, "fibonacci", written, {"order": 2}, timeout=5.0)
+    registry = GoalRegistry(client)
+    outcome = await goals.run_goal(registry, "fibonacci", written, {"order": 2}, timeout=5.0)
     assert outcome.succeeded
     assert outcome.action == "/fibonacci"
 
@@ -173,8 +180,9 @@ async def test_run_goal_past_its_timeout_cancels_and_says_so(
 ) -> None:
     """A goal past its timeout is cancelled; the outcome names the dialect's canceled status."""
     client = await make_client(robot)
+    registry = GoalRegistry(client)
     outcome = await goals.run_goal(
-        client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=0.3
+        registry, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=0.3
     )
     assert not outcome.succeeded
     assert outcome.canceled_by == "timeout"
@@ -188,12 +196,13 @@ async def test_cancel_goals_stops_a_goal_while_run_goal_is_waiting(
 ) -> None:
     """cancel_goals by our goal id works during run_goal, on Humble too; the outcome says who cancelled."""
     client = await make_client(robot)
+    registry = GoalRegistry(client)
     run = asyncio.create_task(
-        goals.run_goal(client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
+        goals.run_goal(registry, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot.wait_for(running_goal_with_feedback)
-    [running] = goals.running_goals(client, "/fibonacci")
-    report = await goals.cancel_goals(client, "/fibonacci", running.goal_id)
+    [running] = registry.running("/fibonacci")
+    report = await goals.cancel_goals(registry, "/fibonacci", running.goal_id)
     assert report.canceled_ours == [running.goal_id]
     assert not report.unknown_goal_id
     outcome = await asyncio.wait_for(run, 5.0)
@@ -206,12 +215,14 @@ async def test_cancel_goals_without_an_id_also_cancels_goals_of_other_clients(
 ) -> None:
     """Cancel-all reaches a goal another client started (ROS 2: hidden cancel_goal service)."""
     ours = await make_client(robot)
+    our_goals = GoalRegistry(ours)
     theirs = await make_client(robot)
+    their_goals = GoalRegistry(theirs)
     run = asyncio.create_task(
-        goals.run_goal(theirs, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
+        goals.run_goal(their_goals, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot.wait_for(running_goal_with_feedback)
-    report = await goals.cancel_goals(ours, "/fibonacci")
+    report = await goals.cancel_goals(our_goals, "/fibonacci")
     assert report.canceled_ours == []
     if robot.dialect == "ros2":
         assert report.goals_canceling is not None
@@ -226,7 +237,8 @@ async def test_cancel_goals_reports_an_unknown_goal_id(
 ) -> None:
     """A goal id that is not one of our running goals is reported as unknown."""
     client = await make_client(robot)
-    report = await goals.cancel_goals(client, "/fibonacci", "not-a-goal-of-ours")
+    registry = GoalRegistry(client)
+    report = await goals.cancel_goals(registry, "/fibonacci", "not-a-goal-of-ours")
     assert report.unknown_goal_id
     assert report.canceled_ours == []
 
@@ -234,7 +246,8 @@ async def test_cancel_goals_reports_an_unknown_goal_id(
 async def test_a_rejected_ros1_goal_ends_rejected(sim_ros1: SimulatedRobot, make_client: MakeClient) -> None:
     """A goal the actionlib server rejects ends with status "rejected" (5)."""
     client = await make_client(sim_ros1)
-    outcome = await goals.run_goal(client, "/fibonacci", ROS1_TYPE, {"order": -1}, timeout=5.0)
+    registry = GoalRegistry(client)
+    outcome = await goals.run_goal(registry, "/fibonacci", ROS1_TYPE, {"order": -1}, timeout=5.0)
     assert outcome.status == "rejected"
     assert outcome.status_code == 5
     assert not outcome.succeeded
@@ -254,8 +267,9 @@ async def test_every_goal_runs_on_a_connection_of_its_own_closed_afterwards(
 ) -> None:
     """While a goal runs the robot sees a second connection (its lane); it goes away with the goal."""
     client = await make_client(robot2)
+    registry = GoalRegistry(client)
     goal = asyncio.create_task(
-        ros2.send_action_goal(client, "/fibonacci", ROS2_TYPE, {"order": 8}, timeout=10.0)
+        ros2.send_action_goal(registry, "/fibonacci", ROS2_TYPE, {"order": 8}, timeout=10.0)
     )
     await robot2.wait_for(running_goal_with_feedback)
     assert robot2.connection_count == 2
@@ -266,9 +280,10 @@ async def test_every_goal_runs_on_a_connection_of_its_own_closed_afterwards(
 async def test_a_plain_function_can_take_feedback(sim_ros2: SimulatedRobot, make_client: MakeClient) -> None:
     """on_feedback may be a plain function as well as a coroutine function."""
     client = await make_client(sim_ros2)
+    registry = GoalRegistry(client)
     seen: list[dict[str, Any]] = []
     result = await ros2.send_action_goal(
-        client,
+        registry,
         "/fibonacci",
         ROS2_TYPE,
         {"order": 3},
@@ -285,8 +300,9 @@ async def test_cancelling_the_task_running_a_goal_cancels_the_goal_on_the_robot(
     """If the caller is cancelled (the MCP request was cancelled), the goal is cancelled too (ROS 1: a cancel
     is published for it) before the cancellation propagates."""
     client = await make_client(robot)
+    registry = GoalRegistry(client)
     run = asyncio.create_task(
-        goals.run_goal(client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
+        goals.run_goal(registry, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=10.0)
     )
     await robot.wait_for(running_goal_with_feedback)
     run.cancel()
@@ -294,7 +310,7 @@ async def test_cancelling_the_task_running_a_goal_cancels_the_goal_on_the_robot(
         await run
     await robot.wait_for(lambda world: all(g.finished and g.cancel_requested for g in world.goals.values()))
     assert robot.world.goals
-    assert goals.running_goals(client) == []
+    assert registry.running() == []
 
 
 @pytest.mark.parametrize(
@@ -317,9 +333,10 @@ async def test_a_goal_for_a_missing_action_server_fails_with_action_error(
     """A goal for an action nobody serves raises ActionError with the dialect's reason."""
     robot = await make_sim(dialect=dialect)
     client = await make_client(robot)
+    registry = GoalRegistry(client)
     with pytest.raises(ActionError, match=refusal):
-        await goals.run_goal(client, "/nowhere", action_type_for(robot), {"order": 1}, timeout=timeout)
-    assert goals.running_goals(client) == []
+        await goals.run_goal(registry, "/nowhere", action_type_for(robot), {"order": 1}, timeout=timeout)
+    assert registry.running() == []
 
 
 async def test_a_drop_fails_a_running_goal_with_connection_lost(
@@ -328,12 +345,13 @@ async def test_a_drop_fails_a_running_goal_with_connection_lost(
     """When the bridge drops every connection, a goal (ROS 2: waiting on its lane, ROS 1: followed over
     topics) fails at once with ConnectionLostError and leaves nothing behind."""
     client = await make_client(sim)
+    registry = GoalRegistry(client)
     run = asyncio.create_task(
-        goals.run_goal(client, "/fibonacci", action_type_for(sim), {"order": LONG_ORDER}, timeout=20.0)
+        goals.run_goal(registry, "/fibonacci", action_type_for(sim), {"order": LONG_ORDER}, timeout=20.0)
     )
     await sim.wait_for(running_goal_with_feedback)
     await sim.drop_connections()
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(run, 5.0)
-    assert goals.running_goals(client) == []
+    assert registry.running() == []
     assert client.topics.subscriptions == {}

@@ -10,7 +10,7 @@ from collections.abc import AsyncIterator
 from typing import Any
 
 import pytest
-from client_harness import MakeClient, MakeSim, unused_port
+from client_harness import MakeClient, MakeSim, busy_lanes, unused_port
 from websockets.asyncio.server import ServerConnection, serve
 
 from rosbridge_mcp_server.client import RosbridgeClient
@@ -151,7 +151,7 @@ async def test_a_drop_on_humble_fails_calls_waiting_on_lanes_too(
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(call, 5.0)
     await client.wait_connected(5.0)
-    assert client.lanes.busy_count == 0
+    assert busy_lanes(client) == 0
 
 
 async def test_close_is_idempotent_and_later_calls_raise_not_connected(

@@ -9,11 +9,10 @@ from collections.abc import Callable, Iterator
 import pytest
 from client_harness import MakeClient, MakeSim
 
-from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, GoalTimeoutError
 from rosbridge_mcp_server.robot import goals
+from rosbridge_mcp_server.robot.goals import GoalRegistry, ros2
 from rosbridge_mcp_server.robot.goals import registry as registry_module
-from rosbridge_mcp_server.robot.goals import ros2
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import PublishedMessage, World
 
@@ -102,12 +101,22 @@ def running_with_feedback(goal_id: str) -> Callable[[World], bool]:
     return check
 
 
-async def start_long_goal(client: RosbridgeClient, robot: SimulatedRobot) -> tuple[str, asyncio.Task[object]]:
+def cut_off_ids(registry: GoalRegistry) -> list[str]:
+    """The ids of the goals a drop cut off that *registry* still means to cancel, oldest first."""
+    return list(registry._cut_off)
+
+
+async def start_long_goal(registry: GoalRegistry, robot: SimulatedRobot) -> tuple[str, asyncio.Task[object]]:
     """A long /fibonacci goal through run_goal, once it runs on the robot: its id and its task."""
-    goal_id = client.new_goal_id("/fibonacci")
+    goal_id = registry.client.new_goal_id("/fibonacci")
     task: asyncio.Task[object] = asyncio.create_task(
         goals.run_goal(
-            client, "/fibonacci", action_type_for(robot), {"order": LONG_ORDER}, timeout=60.0, goal_id=goal_id
+            registry,
+            "/fibonacci",
+            action_type_for(robot),
+            {"order": LONG_ORDER},
+            timeout=60.0,
+            goal_id=goal_id,
         )
     )
     await robot.wait_for(running_with_feedback(goal_id), WAIT)
@@ -119,7 +128,8 @@ async def test_a_goal_running_at_a_drop_is_cancelled_on_the_robot_once_the_conne
 ) -> None:
     """The goal call fails at once saying a cancel will follow; after the reconnect the goal ends canceled."""
     client = await make_client(robot)
-    goal_id, task = await start_long_goal(client, robot)
+    registry = GoalRegistry(client)
+    goal_id, task = await start_long_goal(registry, robot)
     await robot.drop_connections()
     with pytest.raises(ConnectionLostError, match="will be sent as soon as the connection is back") as caught:
         await asyncio.wait_for(task, WAIT)
@@ -131,7 +141,7 @@ async def test_a_goal_running_at_a_drop_is_cancelled_on_the_robot_once_the_conne
     assert record.status == CANCELED[robot.dialect]
     assert len(record.sequence) < LONG_ORDER + 1
     await cancel_log.wait_for_goal(goal_id)
-    assert goals.goals_of(client).cut_off() == []
+    assert cut_off_ids(registry) == []
 
 
 async def test_a_ros1_cancel_after_a_reconnect_is_published_again_a_moment_later(
@@ -140,7 +150,8 @@ async def test_a_ros1_cancel_after_a_reconnect_is_published_again_a_moment_later
     """rospy often loses a message published right after its publisher is recreated: the cancel goes twice."""
     robot = await make_sim(dialect="ros1", action_step=SLOW_STEP)
     client = await make_client(robot)
-    goal_id, task = await start_long_goal(client, robot)
+    registry = GoalRegistry(client)
+    goal_id, task = await start_long_goal(registry, robot)
     await robot.drop_connections()
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(task, WAIT)
@@ -159,12 +170,13 @@ async def test_a_goal_that_finished_before_the_drop_is_not_cancelled(
 ) -> None:
     """Only the goal still running at the drop gets a cancel after the reconnect, not one that had ended."""
     client = await make_client(robot)
+    registry = GoalRegistry(client)
     done_id = client.new_goal_id("/fibonacci")
     outcome = await goals.run_goal(
-        client, "/fibonacci", action_type_for(robot), {"order": 2}, timeout=WAIT, goal_id=done_id
+        registry, "/fibonacci", action_type_for(robot), {"order": 2}, timeout=WAIT, goal_id=done_id
     )
     assert outcome.succeeded
-    running_id, task = await start_long_goal(client, robot)
+    running_id, task = await start_long_goal(registry, robot)
     await robot.drop_connections()
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(task, WAIT)
@@ -174,7 +186,7 @@ async def test_a_goal_that_finished_before_the_drop_is_not_cancelled(
     assert not robot.world.goals[done_id].cancel_requested
     cancels = [m.msg.get("id") for m in robot.world.published.get("/fibonacci/cancel", [])]
     assert done_id not in cancels
-    assert goals.goals_of(client).cut_off() == []
+    assert cut_off_ids(registry) == []
 
 
 async def test_a_restarted_robot_that_lost_the_goal_gets_a_harmless_cancel_and_a_log_line(
@@ -182,7 +194,8 @@ async def test_a_restarted_robot_that_lost_the_goal_gets_a_harmless_cancel_and_a
 ) -> None:
     """A robot restart loses its goals: the cancel after the reconnect raises nothing, it is only logged."""
     client = await make_client(robot)
-    goal_id, task = await start_long_goal(client, robot)
+    registry = GoalRegistry(client)
+    goal_id, task = await start_long_goal(registry, robot)
     await robot.stop()
     with pytest.raises(ConnectionLostError):
         await asyncio.wait_for(task, WAIT)
@@ -190,8 +203,8 @@ async def test_a_restarted_robot_that_lost_the_goal_gets_a_harmless_cancel_and_a
     await client.wait_connected(WAIT)
     await cancel_log.wait_for_goal(goal_id)
     assert cancel_log.errors == []
-    assert goals.goals_of(client).cut_off() == []
-    outcome = await goals.run_goal(client, "/fibonacci", action_type_for(robot), {"order": 1}, timeout=WAIT)
+    assert cut_off_ids(registry) == []
+    outcome = await goals.run_goal(registry, "/fibonacci", action_type_for(robot), {"order": 1}, timeout=WAIT)
     assert outcome.succeeded
 
 
@@ -201,13 +214,14 @@ async def test_a_goal_orphaned_too_long_ago_is_forgotten_without_a_cancel(
     """Past the age limit a surprise cancel would stop whatever the robot does now: it is logged, not sent."""
     monkeypatch.setattr(registry_module, "ORPHAN_MAX_AGE_SECONDS", 0.0)
     client = await make_client(sim_ros2)
+    registry = GoalRegistry(client)
     goal_id = client.new_goal_id("/fibonacci")
     await sim_ros2.stop()
-    goals.goals_of(client).remember_cut_off("/fibonacci", goal_id, 2)
+    registry.remember_cut_off("/fibonacci", goal_id, 2)
     await sim_ros2.start()
     await client.wait_connected(WAIT)
     await cancel_log.wait_for(f"Not cancelling goal {goal_id}")
-    assert goals.goals_of(client).cut_off() == []
+    assert cut_off_ids(registry) == []
     assert not any(goal_id in line for line in cancel_log.lines)
 
 
@@ -216,12 +230,13 @@ async def test_at_most_a_bounded_number_of_orphaned_goals_are_remembered(
 ) -> None:
     """Beyond the limit the oldest orphaned goal is forgotten, so an outage cannot grow memory."""
     client = await make_client(sim_ros2)
+    registry = GoalRegistry(client)
     await sim_ros2.stop()
     await client.wait_disconnected(WAIT)
     ids = [f"goal-{n}" for n in range(registry_module.ORPHAN_LIMIT + 1)]
     for goal_id in ids:
-        goals.goals_of(client).remember_cut_off("/fibonacci", goal_id, 2)
-    assert [orphan.goal_id for orphan in goals.goals_of(client).cut_off()] == ids[1:]
+        registry.remember_cut_off("/fibonacci", goal_id, 2)
+    assert cut_off_ids(registry) == ids[1:]
 
 
 @pytest.fixture(params=["jazzy", "humble"])
@@ -235,7 +250,8 @@ async def test_when_only_the_goals_lane_drops_the_cancel_goes_out_at_once_on_the
 ) -> None:
     """The main connection stays up: the goal is cancelled right away; the error says a cancel was sent."""
     client = await make_client(robot2)
-    goal_id, task = await start_long_goal(client, robot2)
+    registry = GoalRegistry(client)
+    goal_id, task = await start_long_goal(registry, robot2)
     main_id, lane_id = sorted(robot2.bridge.connections)
     await robot2.bridge.connections[lane_id].ws.close(1001, "only the lane drops")
     with pytest.raises(ConnectionLostError, match="a cancel for the goal was sent, so it stops") as caught:
@@ -243,7 +259,7 @@ async def test_when_only_the_goals_lane_drops_the_cancel_goes_out_at_once_on_the
     assert caught.value.goal_cancel == "sent"
     await robot2.wait_for(lambda world: world.goals[goal_id].finished, WAIT)
     assert robot2.world.goals[goal_id].status == CANCELED["ros2"]
-    assert goals.goals_of(client).cut_off() == []
+    assert cut_off_ids(registry) == []
     assert client.connections_made == 1
     assert main_id in robot2.bridge.connections
     assert cancel_log.lines == []
@@ -255,10 +271,11 @@ async def test_a_goal_timing_out_while_only_its_lane_is_up_is_remembered_only_on
     """With the main connection down the timeout's cancel goes on the lane, which Humble reads too late."""
     # A long backoff keeps the main connection down past the goal's deadline.
     client = await make_client(robot2, reconnect_min=60.0, reconnect_max=60.0)
+    registry = GoalRegistry(client)
     goal_id = client.new_goal_id("/fibonacci")
     task = asyncio.create_task(
         ros2.send_action_goal(
-            client, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=1.0, goal_id=goal_id
+            registry, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=1.0, goal_id=goal_id
         )
     )
     await robot2.wait_for(running_with_feedback(goal_id), WAIT)
@@ -269,8 +286,8 @@ async def test_a_goal_timing_out_while_only_its_lane_is_up_is_remembered_only_on
         await asyncio.wait_for(task, WAIT)
     if robot2.bridge.config.in_order:
         assert caught.value.status is None
-        assert [orphan.goal_id for orphan in goals.goals_of(client).cut_off()] == [goal_id]
+        assert cut_off_ids(registry) == [goal_id]
         assert not robot2.world.goals[goal_id].cancel_requested
     else:
         assert caught.value.status == CANCELED["ros2"]
-        assert goals.goals_of(client).cut_off() == []
+        assert cut_off_ids(registry) == []

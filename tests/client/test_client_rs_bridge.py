@@ -8,7 +8,7 @@ import pytest
 from client_harness import MakeClient, MakeSim
 
 from rosbridge_mcp_server.errors import GoalTimeoutError, ServiceError
-from rosbridge_mcp_server.robot.goals import ros2
+from rosbridge_mcp_server.robot.goals import GoalRegistry, ros2
 
 
 async def test_a_refused_subscribe_is_logged_with_the_bridges_words(
@@ -46,10 +46,11 @@ async def test_a_goal_timing_out_is_cancelled_on_its_own_connection_without_a_wa
     """The lane's cancel ends the goal CANCELED; the refusal of the main connection's copy is not logged."""
     robot = await make_sim(dialect="ros2", server="rs", action_step=0.1)
     client = await make_client(robot)
+    registry = GoalRegistry(client)
     with caplog.at_level(logging.WARNING, logger="rosbridge_mcp_server"):
         with pytest.raises(GoalTimeoutError) as caught:
             await ros2.send_action_goal(
-                client, "/fibonacci", "example_interfaces/Fibonacci", {"order": 40}, timeout=0.5
+                registry, "/fibonacci", "example_interfaces/Fibonacci", {"order": 40}, timeout=0.5
             )
         await client.call_service("/rosapi/get_time")  # a barrier: the refusal came before its answer
     assert caught.value.status == 5

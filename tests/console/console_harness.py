@@ -23,7 +23,9 @@ from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView
 from rosbridge_mcp_server.console.serve import RunningConsole, open_console
-from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard, SessionActivity
+from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard
 from rosbridge_mcp_server.server import build_server
 
 CONNECT_WAIT = 5.0
@@ -86,15 +88,14 @@ async def served_console(url: str, policy: Policy | None = None) -> AsyncIterato
     )
     operator = Operator()
     audit = Audit()
-    guard = PolicyGuard(config.policy, audit, operator)
-    activity = SessionActivity()
-    hub = ConsoleHub([RobotView("robot", ros, activity, audit)], operator)
+    robot = RobotSession(ros, PolicyGuard(config.policy, audit, operator))
+    hub = ConsoleHub([RobotView("robot", robot, audit)], operator)
     ready: asyncio.Future[Client] = asyncio.get_running_loop().create_future()
     stop = asyncio.Event()
 
     async def host() -> None:
         try:
-            server = build_server(ros, config, guard=guard, activity=activity, console_view=hub.snapshot)
+            server = build_server(robot, config, console_view=hub.snapshot)
             async with Client(server, mode="legacy") as mcp:
                 ready.set_result(mcp)
                 await stop.wait()
@@ -108,7 +109,7 @@ async def served_console(url: str, policy: Policy | None = None) -> AsyncIterato
         mcp = await ready
         await ros.wait_connected(CONNECT_WAIT)
         async with open_console(ConsoleSettings(port=0), hub) as running:
-            yield Console(running, mcp, operator, activity)
+            yield Console(running, mcp, operator, robot.activity)
     finally:
         stop.set()
         await hosting

@@ -12,9 +12,9 @@ from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.console import ConsoleHub, RobotView
-from rosbridge_mcp_server.robot.acting import Guard
-from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard, SessionActivity
-from rosbridge_mcp_server.server import build_fleet_server
+from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
+from rosbridge_mcp_server.server import Robot, build_fleet_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"
@@ -41,21 +41,20 @@ async def test_one_estop_stops_every_robot_and_latches_them_all(
     sims = {"jazzy": sim_ros2, "noetic": sim_ros1}
     base = Config()
     operator = Operator()
-    entries: list[tuple[str, RosbridgeClient, Config, Guard | None]] = []
+    entries: list[Robot] = []
     views = []
     for name, sim in sims.items():
         config = replace(base, url=sim.url)
         ros = RosbridgeClient(sim.url, request_timeout=5.0, reconnect_min=0.05, reconnect_max=0.2)
         audit = Audit(robot=name)
-        entries.append((name, ros, config, PolicyGuard(config.policy, audit, operator)))
-        views.append(RobotView(name, ros, SessionActivity(), audit))
+        robot = RobotSession(ros, PolicyGuard(config.policy, audit, operator))
+        entries.append(Robot(name, config, robot))
+        views.append(RobotView(name, robot, audit))
     hub = ConsoleHub(views, operator)
-    server = build_fleet_server(
-        entries, base, activities={view.name: view.activity for view in views}, console_view=hub.snapshot
-    )
+    server = build_fleet_server(entries, base, console_view=hub.snapshot)
     async with Client(server, mode="legacy") as client:
-        for _, ros, _, _ in entries:
-            await ros.wait_connected(5)
+        for entry in entries:
+            await entry.session.client.wait_connected(5)
         streaming = [
             asyncio.create_task(client.call_tool("publish_topic", stream(name, rate_hz=10, duration=30)))
             for name in sims
@@ -86,18 +85,17 @@ async def test_show_console_is_about_every_robot_and_needs_no_robot_argument(
     sims = {"jazzy": sim_ros2, "noetic": sim_ros1}
     base = Config()
     operator = Operator()
-    entries: list[tuple[str, RosbridgeClient, Config, Guard | None]] = []
+    entries: list[Robot] = []
     views = []
     for name, sim in sims.items():
         config = replace(base, url=sim.url)
         ros = RosbridgeClient(sim.url, request_timeout=5.0, reconnect_min=0.05, reconnect_max=0.2)
         audit = Audit(robot=name)
-        entries.append((name, ros, config, PolicyGuard(config.policy, audit, operator)))
-        views.append(RobotView(name, ros, SessionActivity(), audit))
+        robot = RobotSession(ros, PolicyGuard(config.policy, audit, operator))
+        entries.append(Robot(name, config, robot))
+        views.append(RobotView(name, robot, audit))
     hub = ConsoleHub(views, operator)
-    server = build_fleet_server(
-        entries, base, activities={view.name: view.activity for view in views}, console_view=hub.snapshot
-    )
+    server = build_fleet_server(entries, base, console_view=hub.snapshot)
     async with Client(server, mode="legacy") as client:
         shown = await client.call_tool("show_console", {})
         assert not shown.is_error, text_of(shown)

@@ -100,15 +100,22 @@ async def start_http(*flags: str, env: dict[str, str]) -> Served:
     )
     served = Served("http", flags, env, process=process)
     assert process.stderr is not None
-    async with asyncio.timeout(WAIT):
-        while True:
-            raw = await process.stderr.readline()
-            assert raw, f"the server exited: {''.join(served.stderr)}"
-            line = raw.decode(errors="replace")
-            served.stderr.append(line)
-            if "serving MCP on " in line:
-                served.url = line.split("serving MCP on ", 1)[1].split()[0]
-                break
+    try:
+        async with asyncio.timeout(WAIT):
+            while True:
+                raw = await process.stderr.readline()
+                assert raw, f"the server exited: {''.join(served.stderr)}"
+                line = raw.decode(errors="replace")
+                served.stderr.append(line)
+                if "serving MCP on " in line:
+                    served.url = line.split("serving MCP on ", 1)[1].split()[0]
+                    break
+    except BaseException:
+        # A server that did not come up in time must not outlive the test (it would keep its port and robot).
+        if process.returncode is None:
+            process.kill()
+        await process.wait()
+        raise
     served.drain = asyncio.get_running_loop().create_task(_drain(process, served.stderr))
     return served
 

@@ -19,8 +19,9 @@ from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
-from rosbridge_mcp_server.safety import Policy
+from rosbridge_mcp_server.safety import Policy, PolicyGuard
 from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -55,6 +56,11 @@ class Session:
         result = await self.call(name, arguments)
         assert result.is_error, text_of(result)
         return text_of(result)
+
+
+def guarded(client: RosbridgeClient, config: Config) -> RobotSession:
+    """A robot session for *client* under *config*'s policy, as ``serve`` builds one (audited on stderr)."""
+    return RobotSession(client, PolicyGuard(config.policy))
 
 
 def text_of(result: CallToolResult) -> str:
@@ -98,7 +104,8 @@ async def open_session(
 
     async def host() -> None:
         try:
-            server = build_server(ros, config, guard=guard)
+            robot = guarded(ros, config) if guard is None else RobotSession(ros, guard)
+            server = build_server(robot, config)
             async with Client(server, mode=mode, elicitation_callback=elicitation_callback) as mcp:
                 ready.set_result(Session(mcp, ros))
                 await stop.wait()

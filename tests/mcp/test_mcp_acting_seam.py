@@ -9,8 +9,11 @@ from mcp.client.context import ClientRequestContext
 from mcp.types import ElicitRequestParams, ElicitResult
 from mcp_harness import open_session, types_for
 
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Act, Answer, AskPerson
+from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.tools.base import ToolContext
 
@@ -161,9 +164,11 @@ async def test_without_elicitation_the_person_cannot_be_asked(sim_ros2: Simulate
     assert guard.answers == ["unsupported"]
 
 
-async def test_a_tool_context_allows_everything_and_asks_nobody_by_default() -> None:
-    """ToolContext's defaults are harmless: ALLOW_ALL approves unchanged, the person is never asked."""
-    ctx = ToolContext(client=None, config=None, graph=None)  # type: ignore[arg-type]
+async def test_a_tool_context_asks_nobody_by_default_and_allow_all_approves_unchanged() -> None:
+    """A tool context without the server's elicitation never asks the person; its robot's ALLOW_ALL guard
+    approves an act unchanged."""
+    robot = RobotSession(RosbridgeClient("ws://127.0.0.1:9"), ALLOW_ALL)
+    ctx = ToolContext(robot=robot, config=Config())
     act = Act("publish_topic", "topic", CMD_VEL, "geometry_msgs/msg/Twist", {})
     assert ctx.guard is ALLOW_ALL
     assert await ctx.guard.approve(act, ctx.ask_person) is act

@@ -12,8 +12,9 @@ from mcp_harness import text_of
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
-from rosbridge_mcp_server.safety import Policy, parse_policy
-from rosbridge_mcp_server.server import build_fleet_server, build_server
+from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.safety import Policy, PolicyGuard, parse_policy
+from rosbridge_mcp_server.server import Robot, build_fleet_server, build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 10.0
@@ -30,11 +31,12 @@ async def fleet_session(
     entries = []
     for name, robot in robots.items():
         config = replace(base, url=robot.url, policy=(policies or {}).get(name, Policy()))
-        entries.append((name, RosbridgeClient(robot.url, request_timeout=5.0), config, None))
+        ros = RosbridgeClient(robot.url, request_timeout=5.0)
+        entries.append(Robot(name, config, RobotSession(ros, PolicyGuard(config.policy))))
     server = build_fleet_server(entries, base)
     async with Client(server, mode="legacy") as client:
-        for _, ros, _, _ in entries:
-            await ros.wait_connected(WAIT)
+        for entry in entries:
+            await entry.session.client.wait_connected(WAIT)
         yield client
 
 
@@ -151,11 +153,15 @@ async def test_one_robot_lists_no_robot_argument_and_no_list_robots(
 ) -> None:
     """A server of one robot lists what a fleet lists minus the robot argument and list_robots."""
     base = replace(Config(), url=sim_ros2.url)
-    single = build_server(RosbridgeClient(sim_ros2.url), base)
+    single = build_server(RobotSession(RosbridgeClient(sim_ros2.url), PolicyGuard(base.policy)), base)
     two = build_fleet_server(
         [
-            ("a", RosbridgeClient(sim_ros2.url), base, None),
-            ("b", RosbridgeClient(sim_ros1.url), replace(base, url=sim_ros1.url), None),
+            Robot("a", base, RobotSession(RosbridgeClient(sim_ros2.url), PolicyGuard(base.policy))),
+            Robot(
+                "b",
+                replace(base, url=sim_ros1.url),
+                RobotSession(RosbridgeClient(sim_ros1.url), PolicyGuard(base.policy)),
+            ),
         ],
         base,
     )

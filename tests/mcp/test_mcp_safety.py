@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 from mcp.client.context import ClientRequestContext
 from mcp.types import ElicitRequestParams, ElicitResult
-from mcp_harness import open_session, text_of, types_for
+from mcp_harness import guarded, open_session, text_of, types_for
 
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
@@ -447,7 +447,9 @@ async def test_read_only_withholds_set_parameter_and_stop_robot_even_when_tools_
 ) -> None:
     """--tools watch (which holds set_parameter) under read-only lists neither it nor stop_robot."""
     config = load_config({"ROSBRIDGE_MCP_READ_ONLY": "1"}, url=sim_ros2.url, tools="watch")
-    async with Client(build_server(RosbridgeClient(sim_ros2.url), config), mode="legacy") as mcp:
+    async with Client(
+        build_server(guarded(RosbridgeClient(sim_ros2.url), config), config), mode="legacy"
+    ) as mcp:
         names = [tool.name for tool in (await mcp.list_tools()).tools]
         refused = await mcp.call_tool("set_parameter", {"name": "/turtlesim:background_r", "value": 1})
     assert "set_parameter" not in names

@@ -7,7 +7,7 @@ import socket
 from typing import Any
 
 import pytest
-from mcp_harness import open_session, text_of
+from mcp_harness import guarded, open_session, text_of
 
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
@@ -136,7 +136,7 @@ async def test_with_no_bridge_the_server_starts_lists_tools_and_tools_fail_namin
     url = _closed_port_url()
     config = Config(url=url)
     ros = RosbridgeClient(url, connect_timeout=2.0)
-    async with Client(build_server(ros, config), mode="legacy") as mcp:
+    async with Client(build_server(guarded(ros, config), config), mode="legacy") as mcp:
         assert mcp.instructions is not None
         assert "list_topics" in mcp.instructions
         assert len((await mcp.list_tools()).tools) == len(EXPECTED_PARAMETERS)
@@ -191,7 +191,7 @@ async def test_tools_original_lists_only_the_first_eight_within_budget() -> None
     sizes = {}
     for spec in ("original", "all"):
         config = load_config({}, url=url, tools=spec)
-        async with Client(build_server(RosbridgeClient(url), config), mode="legacy") as mcp:
+        async with Client(build_server(guarded(RosbridgeClient(url), config), config), mode="legacy") as mcp:
             tools = (await mcp.list_tools()).tools
         sizes[spec] = _listing_size(tools)
         expected = [*ORIGINAL, "stop_robot"] if spec == "original" else list(EXPECTED_PARAMETERS)
@@ -204,7 +204,7 @@ async def test_a_comma_list_of_groups_and_names_is_honoured_in_order() -> None:
     """ROSBRIDGE_MCP_TOOLS=get_image,original lists the original eight, then get_image (and the e-stop)."""
     url = _closed_port_url()
     config = load_config({"ROSBRIDGE_MCP_TOOLS": "get_image, original"}, url=url)
-    async with Client(build_server(RosbridgeClient(url), config), mode="legacy") as mcp:
+    async with Client(build_server(guarded(RosbridgeClient(url), config), config), mode="legacy") as mcp:
         names = [tool.name for tool in (await mcp.list_tools()).tools]
     assert names == [*ORIGINAL, "get_image", "stop_robot"]
 

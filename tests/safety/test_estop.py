@@ -10,7 +10,10 @@ import pytest
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import NotConnectedError
-from rosbridge_mcp_server.safety import SessionActivity, emergency_stop
+from rosbridge_mcp_server.robot.acting import ALLOW_ALL
+from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.safety import emergency_stop
 from rosbridge_mcp_server.safety.estop import STREAM_STOP_SECONDS
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -58,13 +61,15 @@ def is_zero(message: dict[str, Any]) -> bool:
 
 async def test_a_running_stream_ends_and_its_last_message_is_zero(sim: SimulatedRobot) -> None:
     """After the e-stop, the stream's task is done and the newest message on the topic stands still."""
-    activity = SessionActivity()
-    async with RosbridgeClient(sim.url) as client:
+    client = RosbridgeClient(sim.url)
+    robot = RobotSession(client, ALLOW_ALL)
+    activity = robot.activity
+    async with client:
         await client.wait_connected(WAIT)
         moving = {"linear": {"x": 0.8, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.4}}
         task = asyncio.create_task(stream(client, activity, CMD_VEL, twist_type(sim), moving))
         await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 3, WAIT)
-        report = await emergency_stop(client, activity)
+        report = await emergency_stop(robot)
         assert task.done()
         assert task.result() >= 3  # it ended by itself, on the request, not by a cancel
         # A barrier: a service reply on the same connection comes after every publish sent before it.
@@ -79,14 +84,16 @@ async def test_a_running_stream_ends_and_its_last_message_is_zero(sim: Simulated
 
 async def test_a_twist_stamped_stop_keeps_the_frame_and_carries_the_time(sim: SimulatedRobot) -> None:
     """A TwistStamped zero is stamped now (a zero stamp could be dropped as stale), in the last frame."""
-    activity = SessionActivity()
+    client = RosbridgeClient(sim.url)
+    robot = RobotSession(client, ALLOW_ALL)
+    activity = robot.activity
     type_name = twist_type(sim, stamped=True)
     message = {"header": {"frame_id": "base_link"}, "twist": {"linear": {"x": 0.5}}}
-    async with RosbridgeClient(sim.url) as client:
+    async with client:
         await client.wait_connected(WAIT)
         await client.publish("/base/cmd_vel", type_name, message)
         activity.published("/base/cmd_vel", type_name, message)
-        await emergency_stop(client, activity)
+        await emergency_stop(robot)
         await client.call_service("/rosapi/get_time", {})
     last = sim.world.published["/base/cmd_vel"][-1].msg
     assert is_zero(last)
@@ -100,7 +107,9 @@ async def test_a_stream_that_will_not_end_is_reported_and_the_zero_still_goes_ou
     sim_ros2: SimulatedRobot,
 ) -> None:
     """A stream deaf to cancellation cannot hold the stop hostage: it is named, and the zero goes out."""
-    activity = SessionActivity()
+    client = RosbridgeClient(sim_ros2.url)
+    robot = RobotSession(client, ALLOW_ALL)
+    activity = robot.activity
     release = asyncio.Event()
     running = asyncio.Event()
 
@@ -111,14 +120,14 @@ async def test_a_stream_that_will_not_end_is_reported_and_the_zero_still_goes_ou
                 with contextlib.suppress(asyncio.CancelledError):
                     await release.wait()
 
-    async with RosbridgeClient(sim_ros2.url) as client:
+    async with client:
         await client.wait_connected(WAIT)
         activity.published(CMD_VEL, "geometry_msgs/msg/Twist", {})
         task = asyncio.create_task(stubborn())
         await asyncio.wait_for(running.wait(), WAIT)
         loop = asyncio.get_running_loop()
         started = loop.time()
-        report = await emergency_stop(client, activity)
+        report = await emergency_stop(robot)
         assert loop.time() - started < STREAM_STOP_SECONDS + 1.0
         release.set()
         await task
@@ -136,7 +145,9 @@ async def test_only_velocity_commands_are_remembered_for_the_stop() -> None:
 
 async def test_a_stream_that_does_not_look_at_the_request_is_cancelled(sim_ros2: SimulatedRobot) -> None:
     """A loop sleeping with plain asyncio.sleep is cancelled halfway through the wait, and counts as ended."""
-    activity = SessionActivity()
+    client = RosbridgeClient(sim_ros2.url)
+    robot = RobotSession(client, ALLOW_ALL)
+    activity = robot.activity
     running = asyncio.Event()
 
     async def oblivious() -> None:
@@ -144,11 +155,11 @@ async def test_a_stream_that_does_not_look_at_the_request_is_cancelled(sim_ros2:
             running.set()
             await asyncio.Event().wait()
 
-    async with RosbridgeClient(sim_ros2.url) as client:
+    async with client:
         await client.wait_connected(WAIT)
         task = asyncio.create_task(oblivious())
         await asyncio.wait_for(running.wait(), WAIT)
-        report = await emergency_stop(client, activity)
+        report = await emergency_stop(robot)
     assert task.cancelled()
     assert report.streams_stopped == [CMD_VEL]
     assert report.streams_still_running == []
@@ -160,8 +171,10 @@ async def test_without_a_connection_the_stop_still_ends_the_streams_and_says_wha
 ) -> None:
     """The robot unreachable: streams end all the same, and the report says no zero could be sent."""
     sim: SimulatedRobot = await make_sim(dialect=dialect)
-    activity = SessionActivity()
-    async with RosbridgeClient(sim.url, reconnect_min=5.0) as client:
+    client = RosbridgeClient(sim.url, reconnect_min=5.0)
+    robot = RobotSession(client, ALLOW_ALL)
+    activity = robot.activity
+    async with client:
         await client.wait_connected(WAIT)
         activity.published(CMD_VEL, "geometry_msgs/msg/Twist", {})
         task = asyncio.create_task(
@@ -170,7 +183,7 @@ async def test_without_a_connection_the_stop_still_ends_the_streams_and_says_wha
         await sim.world.wait_for(lambda w: CMD_VEL in w.published, WAIT)
         await sim.stop()
         await client.wait_disconnected(WAIT)
-        report = await emergency_stop(client, activity)
+        report = await emergency_stop(robot)
         assert task.done()
     assert report.streams_stopped == [CMD_VEL]
     assert report.zeroed_topics == []

@@ -26,9 +26,9 @@ from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
 from rosbridge_mcp_server.fleet_config import load_fleet
 from rosbridge_mcp_server.http_config import HttpSettings, load_http_settings
-from rosbridge_mcp_server.robot.acting import Guard
-from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard, SessionActivity
-from rosbridge_mcp_server.server import build_fleet_server, serve_stdio
+from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
+from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 
@@ -257,7 +257,7 @@ async def serve(
     *console*, the operator console beside it (one person, one E-STOP for every robot)."""
     async with demo_robot(config) as effective:
         robots = list(fleet) or [("robot", effective)]
-        entries: list[tuple[str, RosbridgeClient, Config, Guard | None]] = []
+        entries: list[Robot] = []
         operator = Operator(present=console is not None)
         views: list[RobotView] = []
         for name, robot_config in robots:
@@ -275,19 +275,16 @@ async def serve(
                 headers=robot_config.headers,
             )
             audit = Audit(audit_file, robot=name if fleet else None)
-            guard = PolicyGuard(robot_config.policy, audit, operator)
-            entries.append((name, client, robot_config, guard))
-            views.append(RobotView(name, client, SessionActivity(), audit))
+            session = RobotSession(client, PolicyGuard(robot_config.policy, audit, operator))
+            entries.append(Robot(name, robot_config, session))
+            views.append(RobotView(name, session, audit))
         hub = ConsoleHub(views, operator) if console is not None else None
-        activities = {view.name: view.activity for view in views}
         console_view = hub.snapshot if hub is not None else None
         if http is not None and http.transport == "http":
             # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
             from rosbridge_mcp_server.server.http import auth_options, serve_http  # noqa: PLC0415
 
-            server = build_fleet_server(
-                entries, effective, activities=activities, console_view=console_view, **auth_options(http)
-            )
+            server = build_fleet_server(entries, effective, console_view=console_view, **auth_options(http))
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
             # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
             # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as
@@ -299,8 +296,8 @@ async def serve(
             finally:
                 signal.signal(signal.SIGTERM, previous)
             return
-        server = build_fleet_server(entries, effective, activities=activities, console_view=console_view)
-        _stop_on_signals([client for _, client, _, _ in entries])
+        server = build_fleet_server(entries, effective, console_view=console_view)
+        _stop_on_signals([robot.session.client for robot in entries])
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
             _log.warning(

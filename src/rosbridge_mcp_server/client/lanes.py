@@ -41,14 +41,6 @@ class LanePool:
         self.opened = 0
         self.closed = False
 
-    @property
-    def idle_count(self) -> int:
-        return len(self._idle)
-
-    @property
-    def busy_count(self) -> int:
-        return len(self._busy)
-
     async def acquire(self, deadline: float, what: str, total: float) -> Connection:
         """A lane for one call, waiting for a free one until *deadline* (loop time)."""
         loop = asyncio.get_running_loop()

@@ -24,8 +24,6 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.console.mapview import MapPanel, Picture
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.acting import Act
-from rosbridge_mcp_server.robot.goals import running_goals
-from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.images import ImageError, decode_compressed, decode_raw, encode_picture
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
@@ -33,7 +31,7 @@ from rosbridge_mcp_server.safety import Audit, AuditEntry, Operator, emergency_s
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.session import RobotSession
 
 __all__ = ["AUDIT_KEPT", "CAMERA_FPS", "CAMERA_MAX_SIZE", "ConsoleHub", "RobotView", "summary_text"]
 
@@ -55,11 +53,11 @@ _IMAGE_TYPES = ("sensor_msgs/Image", "sensor_msgs/CompressedImage")
 
 @dataclass
 class RobotView:
-    """One robot as the console sees it: its client, what this server set going on it, and its audit."""
+    """One robot as the console sees it: its session (client, graph, goals, what this server set going on it)
+    and its audit."""
 
     name: str
-    client: RosbridgeClient
-    activity: SessionActivity
+    session: RobotSession
     audit: Audit
 
 
@@ -79,7 +77,8 @@ class ConsoleHub:
         self._changed = asyncio.Event()
         self._closed = False
         self._live: Any = None
-        self._graph = RosGraph(self.robots[0].client)
+        first = self.robots[0].session
+        self._graph = first.graph
         self.camera_topic: str | None = None
         self.camera_status = "off"
         self.frame: Picture | None = None
@@ -87,7 +86,7 @@ class ConsoleHub:
         self._camera_task: asyncio.Task[None] | None = None
         self._pushes = 0
         self.viewers = 0
-        self.map = MapPanel(self.robots[0].client, self._graph, self.changed, self._pushed)
+        self.map = MapPanel(first.client, self._graph, self.changed, self._pushed)
         for robot in self.robots:
             robot.audit.listen(self._on_audit)
         operator.listen(self.changed)
@@ -198,20 +197,21 @@ class ConsoleHub:
         now = time.monotonic()
         robots = []
         for robot in self.robots:
-            session = robot.client.session
-            info = session.info if session is not None and robot.client.connected else None
+            client = robot.session.client
+            session = client.session
+            info = session.info if session is not None and client.connected else None
             ros = None
             if info is not None:
                 ros = f"ROS {info.version}" + (f" {info.distro}" if info.distro else "")
             robots.append(
                 {
                     "name": robot.name,
-                    "url": robot.client.url,
+                    "url": client.url,
                     "connected": info is not None,
                     "ros": ros,
                     "streams": [
                         {"topic": s.topic, "type": s.type, "stopping": s.stop_requested.is_set()}
-                        for s in robot.activity.streams
+                        for s in robot.session.activity.streams
                     ],
                     "goals": [
                         {
@@ -222,7 +222,7 @@ class ConsoleHub:
                             "last_feedback": _short(goal.last_feedback[-1]) if goal.last_feedback else None,
                             "cancel_requested": goal.cancel_requested,
                         }
-                        for goal in running_goals(robot.client)
+                        for goal in robot.session.goals.running()
                     ],
                 }
             )
@@ -244,7 +244,7 @@ class ConsoleHub:
         self.operator.latch("console")
         reports = []
         for robot in self.robots:
-            report = await emergency_stop(robot.client, robot.activity, by=ESTOP_BY)
+            report = await emergency_stop(robot.session, by=ESTOP_BY)
             for topic, type_name, message in report.zero_messages:
                 robot.audit.write(Act("console", "topic", topic, type_name, message), "e-stop")
             for action, goal_id in report.goals:
@@ -294,7 +294,7 @@ class ConsoleHub:
         self.changed()
 
     async def _camera(self, topic: str) -> None:
-        client = self.robots[0].client
+        client = self.robots[0].session.client
         while True:
             try:
                 await self._frames_of(client, topic)

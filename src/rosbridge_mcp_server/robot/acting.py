@@ -32,6 +32,7 @@ from rosbridge_mcp_server.robot.velocity import clamp_text
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.goals import GoalRegistry
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = [
@@ -122,7 +123,7 @@ class Timeouts(Protocol):
 
 
 class Acting(Protocol):
-    """What an act needs (a tool's ``ToolContext`` is one)."""
+    """What an act needs: a robot session's parts and the call's own (a tool's ``ToolContext`` is one)."""
 
     @property
     def client(self) -> RosbridgeClient: ...
@@ -136,6 +137,8 @@ class Acting(Protocol):
     def ask_person(self) -> AskPerson: ...
     @property
     def activity(self) -> SessionActivity: ...
+    @property
+    def goals(self) -> GoalRegistry: ...
 
 
 async def _approved(ctx: Acting, act: Act) -> Act:
@@ -467,7 +470,7 @@ async def send_goal(
         ctx,
         act,
         lambda: run_goal(
-            ctx.client, act.name, action_type, act.payload, timeout=timeout, on_feedback=on_feedback
+            ctx.goals, act.name, action_type, act.payload, timeout=timeout, on_feedback=on_feedback
         ),
     )
     return outcome
@@ -503,7 +506,7 @@ async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) ->
             f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} Call "
             "list_actions to see the actions."
         )
-    return await cancel_goals(ctx.client, name, goal_id)
+    return await cancel_goals(ctx.goals, name, goal_id)
 
 
 # --- parameters -------------------------------------------------------------------------------------------

@@ -47,10 +47,6 @@ class Stream:
     #: Who asked it to stop, for its answer ("stop_robot", or "E-STOP on the operator console").
     stopped_by: str = "stop_robot"
 
-    @property
-    def stopped_by_estop(self) -> bool:
-        return self.stop_requested.is_set()
-
     async def pause(self, seconds: float) -> bool:
         """Wait up to ``seconds``; ``True`` (at once) when stop_robot asked this stream to stop."""
         if self.stop_requested.is_set():

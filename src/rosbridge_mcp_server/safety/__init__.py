@@ -1,11 +1,11 @@
 """Safety for real robots: the policy, the guard that applies it to every acting call, the audit, the e-stop.
 
-Domain-level: nothing here knows MCP. The server gives each tool a guard (:class:`PolicyGuard`) and a way to
-ask the person; the acting layer calls the guard before anything is sent.
+Domain-level: nothing here knows MCP. Each robot's session holds its guard (:class:`PolicyGuard`), the server
+gives each tool call a way to ask the person, and the acting layer calls the guard before anything is sent.
+What this server set going on a robot (``robot/activity.py``) and its velocity rules (``robot/velocity.py``)
+are domain, imported from ``robot/``.
 """
 
-from rosbridge_mcp_server.robot.activity import SessionActivity, Stream, VelocityTopic
-from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure
 from rosbridge_mcp_server.safety.estop import StopReport, emergency_stop
 from rosbridge_mcp_server.safety.guard import (
     LATCH_RULE,
@@ -38,18 +38,12 @@ __all__ = [
     "PolicyError",
     "PolicyGuard",
     "PublishLimits",
-    "SessionActivity",
     "StopReport",
-    "Stream",
     "VelocityCaps",
-    "VelocityTopic",
     "calling_as",
-    "clamp_text",
     "current_caller",
     "emergency_stop",
-    "is_velocity_type",
     "load_policy",
-    "measure",
     "parse_policy",
     "question",
 ]

@@ -11,12 +11,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.goals import cancel_goals, running_goals
+from rosbridge_mcp_server.robot.goals import cancel_goals
 from rosbridge_mcp_server.robot.velocity import zero_command
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.session import RobotSession
 
 __all__ = ["STREAM_STOP_SECONDS", "StopReport", "emergency_stop"]
 
@@ -45,13 +44,13 @@ class StopReport:
         )
 
 
-async def emergency_stop(
-    client: RosbridgeClient, activity: SessionActivity, *, by: str = "stop_robot"
-) -> StopReport:
-    """End every stream, publish one zero command on every velocity topic used, cancel every running goal.
+async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> StopReport:
+    """On *robot*: end every stream, publish one zero command on every velocity topic used, cancel every
+    running goal.
 
     ``by`` (who stops: ``stop_robot``, or the operator's E-STOP) is what each ended stream's answer names.
     """
+    client, activity = robot.client, robot.activity
     report = StopReport()
     # Streams first: a stream still running after the zero message would set the robot moving again.
     ended, running = await activity.stop_streams(STREAM_STOP_SECONDS, by=by)
@@ -76,9 +75,9 @@ async def emergency_stop(
                 report.zeroed_topics.append(target.topic)
                 report.zero_messages.append((target.topic, target.type, message))
 
-    for goal in running_goals(client):
+    for goal in robot.goals.running():
         try:
-            await cancel_goals(client, goal.action, goal.goal_id, by="stop_robot")
+            await cancel_goals(robot.goals, goal.action, goal.goal_id, by="stop_robot")
         except RosbridgeError as exc:
             report.failures.append(f"cancelling goal {goal.goal_id} on {goal.action} failed: {exc}")
         else:

@@ -5,6 +5,7 @@ every call gets first (``checks``), several robots (``fleet``), the stdio and HT
 from __future__ import annotations
 
 from rosbridge_mcp_server.server.app import INSTRUCTIONS, SERVER_NAME, build_fleet_server, build_server
+from rosbridge_mcp_server.server.fleet import Robot
 from rosbridge_mcp_server.server.stdio import serve_stdio
 
-__all__ = ["INSTRUCTIONS", "SERVER_NAME", "build_fleet_server", "build_server", "serve_stdio"]
+__all__ = ["INSTRUCTIONS", "SERVER_NAME", "Robot", "build_fleet_server", "build_server", "serve_stdio"]

@@ -179,13 +179,10 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
                 _log.debug("could not send a progress notification", exc_info=True)
 
         ctx = ToolContext(
-            client=robot.client,
+            robot=robot.session,
             config=robot.config,
-            graph=robot.graph,
             report_progress=report_progress,
-            guard=robot.guard,
             ask_person=_asker(mcp_context),
-            activity=robot.activity,
         )
         try:
             answer = await run(ctx, **arguments)

@@ -9,17 +9,14 @@ from __future__ import annotations
 import contextlib
 import logging
 import typing
-from collections.abc import AsyncIterator, Callable, Mapping, Sequence
+from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
 from typing import Any, Literal
 
 from mcp.server.mcpserver import MCPServer
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.robot.acting import Act, Guard
-from rosbridge_mcp_server.robot.graph import RosGraph
-from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
-from rosbridge_mcp_server.safety import PolicyGuard, SessionActivity
+from rosbridge_mcp_server.robot.acting import Act
 from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
 from rosbridge_mcp_server.server.console_app import CONSOLE_APP_TOOL, console_app
@@ -28,8 +25,8 @@ from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
 from rosbridge_mcp_server.tools.arguments import argument_problem
 
 if typing.TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.session import RobotSession
 
 __all__ = ["INSTRUCTIONS", "SERVER_NAME", "build_fleet_server", "build_server"]
 
@@ -79,64 +76,37 @@ This server is read-only: it lists only tools that read the robot, and refuses a
 
 
 def build_server(
-    client: RosbridgeClient,
+    robot: RobotSession,
     config: Config,
     *,
-    guard: Guard | None = None,
-    activity: SessionActivity | None = None,
     console_view: Callable[[], dict[str, Any]] | None = None,
     **transport: Any,
 ) -> MCPServer[None]:
-    """An ``MCPServer`` with every tool, driving ``client`` (started and closed by the server's lifespan).
-
-    Every act on the robot is first approved by *guard* (default: a :class:`PolicyGuard` for
-    ``config.policy``, audited on stderr). A read-only policy lists only the reading tools. Every tool call
-    first goes through the checks of ``checks.py`` (the SDK's server middleware), on any transport.
-    *transport* goes to ``MCPServer`` as it is (``auth`` and ``token_verifier`` for HTTP). *activity* and
-    *console_view*: see :func:`build_fleet_server`.
-    """
-    return build_fleet_server(
-        [("robot", client, config, guard)],
-        config,
-        activities={"robot": activity} if activity is not None else None,
-        console_view=console_view,
-        **transport,
-    )
+    """An ``MCPServer`` with every tool, driving one robot (its client started and closed by the server's
+    lifespan); see :func:`build_fleet_server`."""
+    return build_fleet_server([Robot("robot", config, robot)], config, console_view=console_view, **transport)
 
 
 def build_fleet_server(
-    robots: Sequence[tuple[str, RosbridgeClient, Config, Guard | None]],
+    robots: Sequence[Robot],
     config: Config,
     *,
-    activities: Mapping[str, SessionActivity] | None = None,
     console_view: Callable[[], dict[str, Any]] | None = None,
     **transport: Any,
 ) -> MCPServer[None]:
-    """An ``MCPServer`` driving each ``(name, client, config, guard)`` robot; with one, :func:`build_server`.
+    """An ``MCPServer`` driving *robots* (each client started and closed by the server's lifespan).
 
-    *config* chooses the tools and, when read-only, withholds the acting ones; each robot's own config
-    holds its policy, which its guard (default: a :class:`PolicyGuard` for it) applies. With several robots
-    every tool takes a ``robot`` argument and ``list_robots`` is listed (``fleet.py``).
-
-    *activities* (by robot name; default a new one each) is what the tools record they set going: pass them
-    to share them with the operator console's E-STOP. With *console_view* (the console's snapshot) the server
-    also offers the console's read-only view as an MCP App: ``show_console`` and its ``ui://`` resource
-    (``server/console_app.py``).
+    Every act on a robot is first approved by its session's guard (the server as ``serve`` runs it: a
+    :class:`~rosbridge_mcp_server.safety.PolicyGuard` for the robot's policy, audited). *config* chooses the
+    tools and, when read-only, withholds the acting ones. Every tool call first goes through the checks of
+    ``checks.py`` (the SDK's server middleware), on any transport. With several robots every tool takes a
+    ``robot`` argument and ``list_robots`` is listed (``fleet.py``). The tools record what they set going in
+    each robot's session, which the operator console's E-STOP shares. With *console_view* (the console's
+    snapshot) the server also offers the console's read-only view as an MCP App: ``show_console`` and its
+    ``ui://`` resource (``server/console_app.py``). *transport* goes to ``MCPServer`` as it is (``auth`` and
+    ``token_verifier`` for HTTP).
     """
-    shared = activities or {}
-    fleet = Fleet(
-        [
-            Robot(
-                name=name,
-                client=client,
-                config=robot_config,
-                graph=RosGraph(client),
-                guard=guard if guard is not None else PolicyGuard(robot_config.policy),
-                activity=shared.get(name) or SessionActivity(),
-            )
-            for name, client, robot_config, guard in robots
-        ]
-    )
+    fleet = Fleet(robots)
     policy = config.policy
     chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
     if any(not m.SPEC.hints.read_only for m in chosen) and stop_robot not in chosen:
@@ -145,20 +115,21 @@ def build_fleet_server(
     modules = [m for m in chosen if m.SPEC.hints.read_only or not policy.read_only]
     if list_services in modules:
         for robot in fleet.robots:
-            robot.client.watch(ServiceTypeWarmUp(robot.client, robot.graph))
+            robot.session.learn_service_types()
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
         async with contextlib.AsyncExitStack() as started:
             for robot in fleet.robots:
-                await robot.client.start()
-                started.push_async_callback(robot.client.close)
+                client = robot.session.client
+                await client.start()
+                started.push_async_callback(client.close)
                 where = f"{robot.name} at " if fleet.several else ""
                 _log.info(
                     "rosbridge-mcp-server %s: connecting to %s%s in the background",
                     __version__,
                     where,
-                    robot.client.url,
+                    client.url,
                 )
             yield None
 
@@ -180,7 +151,7 @@ def build_fleet_server(
         if name not in withheld:
             return None
         for robot in fleet.robots:
-            robot.guard.record(
+            robot.session.guard.record(
                 Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only"
             )
         return (

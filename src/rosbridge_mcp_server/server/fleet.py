@@ -1,4 +1,5 @@
-"""The robots one server drives: each with its own client, graph, guard (policy) and session activity.
+"""The robots one server drives: each with its own configuration and robot session (client, graph, goals,
+activity, guard).
 
 With one robot nothing here shows: tools take no ``robot`` argument and ``tools/list`` is as before. With
 several, the server's checks (``checks.py``) take the ``robot`` argument off every call before the SDK sees it
@@ -20,14 +21,11 @@ from mcp.server.mcpserver.tools import Tool
 from mcp.types import CallToolResult, TextContent, ToolAnnotations
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.server.sdk import tool_from_handler
 
 if typing.TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
-    from rosbridge_mcp_server.robot.acting import Guard
-    from rosbridge_mcp_server.robot.graph import RosGraph
+    from rosbridge_mcp_server.robot.session import RobotSession
 
 __all__ = ["LIST_ROBOTS", "ROBOT_ARGUMENT", "STOP_ALL", "Fleet", "Robot", "list_robots_tool", "selected"]
 
@@ -40,14 +38,11 @@ STOP_ALL = "stop_robot"
 
 @dataclass(frozen=True)
 class Robot:
-    """One robot and everything a tool call on it needs."""
+    """One robot of the server: its name, its configuration (policy, timeouts) and its session."""
 
     name: str
-    client: RosbridgeClient
     config: Config
-    graph: RosGraph
-    guard: Guard
-    activity: SessionActivity
+    session: RobotSession
 
 
 _SELECTED: contextvars.ContextVar[tuple[Robot, ...] | None] = contextvars.ContextVar(
@@ -171,15 +166,16 @@ def list_robots_tool(fleet: Fleet) -> Tool:
 
 
 def _row(robot: Robot) -> RobotRow:
-    session = robot.client.session
+    client = robot.session.client
+    session = client.session
     ros = None
-    if robot.client.connected and session is not None:
+    if client.connected and session is not None:
         info = session.info
         ros = f"ROS {info.version}" + (f" {info.distro}" if info.distro else "")
     return RobotRow(
         name=robot.name,
-        url=_without_credentials(robot.client.url),
-        connected=robot.client.connected,
+        url=_without_credentials(client.url),
+        connected=client.connected,
         ros=ros,
         policy=_policy_line(robot.config),
     )

@@ -1,8 +1,8 @@
 """What every tool module shares: its spec, its answer, and the context it runs in.
 
-A tool module never imports ``mcp`` and never touches a socket: it gets a :class:`ToolContext` (the rosbridge
-client, the configuration, graph look-ups, the safety guard, a way to ask the person, a progress callback),
-parses its arguments, calls one function of the domain layer (``robot/``) and renders a :class:`ToolAnswer`.
+A tool module never imports ``mcp`` and never touches a socket: it gets a :class:`ToolContext` (the robot's
+session, the configuration, a way to ask the person, a progress callback), parses its arguments, calls one
+function of the domain layer (``robot/``) and renders a :class:`ToolAnswer`.
 ``server/adapter.py`` turns these into MCP tools.
 """
 
@@ -16,15 +16,17 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel
 
 from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, nesting_text, payload_problem
-from rosbridge_mcp_server.robot.acting import ALLOW_ALL, AskPerson, Guard, nobody_to_ask
-from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.robot.acting import AskPerson, Guard, nobody_to_ask
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.goals import GoalRegistry
     from rosbridge_mcp_server.robot.graph import RosGraph
+    from rosbridge_mcp_server.robot.session import RobotSession
 
 __all__ = [
     "ACTS_ON_ROBOT",
@@ -102,22 +104,41 @@ async def _no_progress(progress: float, total: float | None, message: str | None
     """Default reporter: the caller did not ask for progress."""
 
 
-@dataclass
+@dataclass(frozen=True)
 class ToolContext:
-    """What a tool may use: the client, the configuration, graph look-ups, the safety guard, a way to ask
-    the person at the MCP client (elicitation), and a progress callback.
+    """What one tool call may use: the robot's session (shared by every call on that robot), the robot's
+    configuration, and the call's own ways to ask the person at the MCP client (elicitation) and to report
+    progress.
 
-    It is the :class:`~rosbridge_mcp_server.robot.acting.Acting` every checked send in ``robot/`` takes.
+    It is the :class:`~rosbridge_mcp_server.robot.acting.Acting` every checked send in ``robot/`` takes: the
+    session's parts are read through it (``ctx.client``, ``ctx.graph``, ``ctx.guard``, ...).
     """
 
-    client: RosbridgeClient
+    robot: RobotSession
     config: Config
-    graph: RosGraph
     report_progress: ProgressReporter = field(default=_no_progress)
-    guard: Guard = field(default=ALLOW_ALL)
     ask_person: AskPerson = field(default=nobody_to_ask)
-    #: What this server session set going (velocity topics, streams), shared by every call: stop_robot's list.
-    activity: SessionActivity = field(default_factory=SessionActivity)
+
+    @property
+    def client(self) -> RosbridgeClient:
+        return self.robot.client
+
+    @property
+    def graph(self) -> RosGraph:
+        return self.robot.graph
+
+    @property
+    def guard(self) -> Guard:
+        return self.robot.guard
+
+    @property
+    def activity(self) -> SessionActivity:
+        """What this server set going on the robot (velocity topics, streams): stop_robot's list."""
+        return self.robot.activity
+
+    @property
+    def goals(self) -> GoalRegistry:
+        return self.robot.goals
 
 
 class ToolFailure(Exception):

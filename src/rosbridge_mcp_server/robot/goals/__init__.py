@@ -1,8 +1,8 @@
 """Action goals, one owner: running, observing and cancelling them on ROS 2 (action ops) and ROS 1.
 
 * :mod:`.record`: :class:`Goal`, the one record of a goal (running, then ended), and :class:`CancelReport`;
-* :mod:`.registry`: one :class:`GoalRegistry` per client: the goals running now, and the ledger of goals a
-  drop cut off, cancelled once as soon as the connection is back;
+* :mod:`.registry`: :class:`GoalRegistry`, one per robot session (``robot/session.py`` makes it): the goals
+  running now, and the ledger of goals a drop cut off, cancelled once as soon as the connection is back;
 * :mod:`.ros2` and :mod:`.ros1`: the two strategies; :mod:`.actionlib`: ROS 1's topics and cancel message.
 
 The client only provides what is connection-level: a goal's own lane and the cancel op.
@@ -25,7 +25,7 @@ from rosbridge_mcp_server.robot.goals.record import (
     Goal,
     GoalFeedback,
 )
-from rosbridge_mcp_server.robot.goals.registry import GoalRegistry, goals_of
+from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
 from rosbridge_mcp_server.robot.names import absolute
 
 if TYPE_CHECKING:
@@ -40,21 +40,14 @@ __all__ = [
     "GoalFeedback",
     "GoalRegistry",
     "cancel_goals",
-    "goals_of",
     "run_goal",
-    "running_goals",
 ]
 
 _ZERO_UUID: Final = [0] * 16
 
 
-def running_goals(client: RosbridgeClient, action: str | None = None) -> list[Goal]:
-    """Goals *client* has running now (all, or those of *action*)."""
-    return goals_of(client).running(action)
-
-
 async def run_goal(
-    client: RosbridgeClient,
+    goals: GoalRegistry,
     action: str,
     action_type: str,
     goal: dict[str, Any],
@@ -63,7 +56,8 @@ async def run_goal(
     on_feedback: GoalFeedback | None = None,
     goal_id: str | None = None,
 ) -> Goal:
-    """Send a goal and wait (up to *timeout* seconds) for it to end; returns the goal, ended.
+    """Send a goal through the client of *goals* and wait (up to *timeout* seconds) for it to end; returns
+    the goal, ended (*goals* tracks it while it runs).
 
     On timeout the goal is cancelled and it says ``canceled_by="timeout"``; if the task running this is
     cancelled, the goal is cancelled before the cancellation propagates. Raises :class:`ActionError` when the
@@ -71,16 +65,17 @@ async def run_goal(
     connection drops: the goal keeps running on the robot, so it is cancelled as soon as a connection is back
     (``goal_cancel`` says whether that already happened).
     """
+    client = goals.client
     dialect = await client.dialect()
     action = absolute(action)
     gid = goal_id if goal_id is not None else client.new_goal_id(action)
 
     wire_type = dialect.action_type(action_type)
-    with goals_of(client).tracking(Goal(gid, action, wire_type, dialect.version)) as record:
+    with goals.tracking(Goal(gid, action, wire_type, dialect.version)) as record:
         if dialect.version == 1:
-            return await ros1.run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
+            return await ros1.run(goals, record, goal, timeout=timeout, on_feedback=on_feedback)
         try:
-            return await ros2.run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
+            return await ros2.run(goals, record, goal, timeout=timeout, on_feedback=on_feedback)
         except GoalTimeoutError as exc:
             if exc.status is None:
                 return record.end(0, None, timed_out=True, confirmed=False)
@@ -88,9 +83,10 @@ async def run_goal(
 
 
 async def cancel_goals(
-    client: RosbridgeClient, action: str, goal_id: str | None = None, *, by: CanceledBy = "cancel_action"
+    goals: GoalRegistry, action: str, goal_id: str | None = None, *, by: CanceledBy = "cancel_action"
 ) -> CancelReport:
-    """Cancel one goal (by id) or every goal of *action* (ours and others'); *by* names who asked.
+    """Cancel one goal (by id) or every goal of *action* (ours: those *goals* tracks, and others'); *by*
+    names who asked.
 
     ROS 2: ``cancel_action_goal`` for our goals, on the main connection and on the goal's own lane (see
     :mod:`.ros2`). A goal of another client given by its goal UUID goes to the action's own
@@ -100,17 +96,17 @@ async def cancel_goals(
     service with a zero goal id and zero stamp. ROS 1: a ``actionlib_msgs/GoalID`` on ``<ns>/cancel`` (empty
     id and zero stamp cancels every goal).
     """
+    client = goals.client
     info = await client.ros_info()
     ns = absolute(action)
-    registry = goals_of(client)
-    ours = [g for g in registry.running(ns) if goal_id is None or g.goal_id == goal_id]
+    ours = [g for g in goals.running(ns) if goal_id is None or g.goal_id == goal_id]
     for entry in ours:
         entry.cancel_requested = True
         entry.cancel_source = by
     canceled_ours = [g.goal_id for g in ours]
     unknown = goal_id is not None and not ours
     if info.version == 1:
-        if not await ros1.send_cancel(client, registry, ns, goal_id or ""):
+        if not await ros1.send_cancel(client, goals, ns, goal_id or ""):
             raise NotConnectedError(client.url, f"could not publish on {ns}/cancel")
         return CancelReport(ns, 1, goal_id, canceled_ours, unknown)
     for entry in ours:

@@ -1,4 +1,4 @@
-"""One registry of goals per client: the goals running now, and the ledger of goals a drop cut off.
+"""One registry of goals per robot session: the goals running now, and the ledger of goals a drop cut off.
 
 A goal keeps running on the robot when our connection drops: ROS 2 goals outlive the WebSocket that sent them
 (the bridge's goal table is process-wide) and ROS 1 actionlib goals live in the action server. Nobody
@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import time
-import weakref
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, Final
 
@@ -29,7 +28,6 @@ __all__ = [
     "ORPHAN_MAX_AGE_SECONDS",
     "ROS1_CANCEL_REPEAT_SECONDS",
     "GoalRegistry",
-    "goals_of",
 ]
 
 logger = logging.getLogger("rosbridge_mcp_server.robot.goals")
@@ -58,21 +56,15 @@ class _CutOff:
 
 
 class GoalRegistry:
-    """The goals of one client: running ones, and those a drop cut off (to be cancelled once it is back)."""
+    """The goals sent through one client: running ones, and those a drop cut off (to be cancelled once it is
+    back). Made once per client, by its :class:`~rosbridge_mcp_server.robot.session.RobotSession`: it watches
+    the client's sessions, so a second registry on the same client would cancel the same goals again."""
 
     def __init__(self, client: RosbridgeClient) -> None:
-        # Weak: the client keeps its watchers, and the registry must not keep its client alive.
-        self._client_ref = weakref.ref(client)
+        self.client = client
         self._running: dict[str, Goal] = {}
         self._cut_off: dict[str, _CutOff] = {}
         client.watch(self)
-
-    @property
-    def _client(self) -> RosbridgeClient:
-        client = self._client_ref()
-        if client is None:
-            raise RuntimeError("the client of this goal registry is gone")
-        return client
 
     # --- running goals ----------------------------------------------------------------------------------
 
@@ -94,10 +86,6 @@ class GoalRegistry:
 
     # --- the ledger of goals cut off by a drop -----------------------------------------------------------
 
-    def cut_off(self) -> list[Goal]:
-        """Goals cut off by a drop, waiting for the connection to come back to be cancelled."""
-        return [entry.goal for entry in self._cut_off.values()]
-
     def ended(self, goal_id: str) -> None:
         """The bridge said goal *goal_id* ended: nothing is left to cancel when the connection is back."""
         self._cut_off.pop(goal_id, None)
@@ -111,7 +99,7 @@ class GoalRegistry:
         is, other than *stale*, a session known to be dying), then forgotten. At most :data:`ORPHAN_LIMIT`
         are kept; one older than :data:`ORPHAN_MAX_AGE_SECONDS` is never cancelled.
         """
-        if self._client.closed:
+        if self.client.closed:
             return
         self._cut_off.pop(goal_id, None)
         self._cut_off[goal_id] = _CutOff(Goal(goal_id, action, "", dialect), time.monotonic(), stale)
@@ -120,7 +108,7 @@ class GoalRegistry:
             "connection to %s is back",
             goal_id,
             action,
-            self._client.url,
+            self.client.url,
         )
         while len(self._cut_off) > ORPHAN_LIMIT:
             oldest = next(iter(self._cut_off.values())).goal
@@ -132,7 +120,7 @@ class GoalRegistry:
                 oldest.action,
             )
         # The reconnect may already have happened (its own sweep ran before this goal was remembered).
-        session = self._client.session
+        session = self.client.session
         if session is not None and session is not stale:
             self._sweep_in_background(session)
 
@@ -148,7 +136,7 @@ class GoalRegistry:
                 continue
             op = protocol.cancel_action_goal(goal.action, id=goal.goal_id)
             if session is not None and await session.try_send(op):
-                self._client.unhandled_acts = True  # the client waits for them before it closes
+                self.client.unhandled_acts = True  # the client waits for them before it closes
             # rosbridge-server-rs cancels only on the connection that started the goal.
             if goal.send_on_owner is not None:
                 await goal.send_on_owner(op)
@@ -161,7 +149,7 @@ class GoalRegistry:
         self._cut_off.clear()
 
     def _sweep_in_background(self, session: Session) -> None:
-        self._client.run_in_background(self._sweep(session), "cancel goals cut off by a drop")
+        self.client.run_in_background(self._sweep(session), "cancel goals cut off by a drop")
 
     async def _sweep(self, session: Session) -> None:
         """Cancel, once, every remembered goal *session* may reach; forget them once the bridge read it."""
@@ -191,7 +179,7 @@ class GoalRegistry:
                     goal.goal_id,
                     goal.action,
                     goal.dialect,
-                    self._client.url,
+                    self.client.url,
                     version,
                 )
                 continue
@@ -206,7 +194,7 @@ class GoalRegistry:
         if not sent:
             return
         # A cancel written into a socket the bridge is closing is lost: only a pong proves it was read.
-        if not await session.confirm(min(CANCEL_CONFIRM_SECONDS, self._client.request_timeout)):
+        if not await session.confirm(min(CANCEL_CONFIRM_SECONDS, self.client.request_timeout)):
             self._keep(sent, session)
             return
         for entry in sent:
@@ -221,8 +209,8 @@ class GoalRegistry:
         if ros1:
             # Until the disconnect (close() too) or the repeat time, whichever comes first.
             with contextlib.suppress(TimeoutError):
-                await self._client.wait_disconnected(ROS1_CANCEL_REPEAT_SECONDS)
-            if self._client.session is session:
+                await self.client.wait_disconnected(ROS1_CANCEL_REPEAT_SECONDS)
+            if self.client.session is session:
                 for goal in ros1:
                     with contextlib.suppress(Exception):
                         await self._send_cancel(session, goal)
@@ -236,16 +224,4 @@ class GoalRegistry:
         if goal.dialect == 2:
             await session.send(protocol.cancel_action_goal(goal.action, id=goal.goal_id))
         else:
-            await publish_cancel(self._client, goal.action, goal.goal_id, session=session)
-
-
-_registries: weakref.WeakKeyDictionary[RosbridgeClient, GoalRegistry] = weakref.WeakKeyDictionary()
-
-
-def goals_of(client: RosbridgeClient) -> GoalRegistry:
-    """The goal registry of *client* (made on first use)."""
-    registry = _registries.get(client)
-    if registry is None:
-        registry = GoalRegistry(client)
-        _registries[client] = registry
-    return registry
+            await publish_cancel(self.client, goal.action, goal.goal_id, session=session)

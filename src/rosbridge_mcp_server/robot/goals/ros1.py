@@ -11,7 +11,7 @@ from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, RequestTimeoutError, RosbridgeError
 from rosbridge_mcp_server.robot.goals.actionlib import goal_id_of, publish_cancel
 from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
-from rosbridge_mcp_server.robot.goals.registry import GoalRegistry, goals_of
+from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient, Subscription
@@ -30,7 +30,7 @@ _ROS1: Final = Dialect.for_version(1)
 
 
 async def run(
-    client: RosbridgeClient,
+    registry: GoalRegistry,
     record: Goal,
     goal: dict[str, Any],
     *,
@@ -38,7 +38,7 @@ async def run(
     on_feedback: GoalFeedback | None,
 ) -> Goal:
     """Send *goal* on ``<ns>/goal``, follow it until it ends (at *timeout*: cancel it); returns *record*."""
-    registry = goals_of(client)
+    client = registry.client
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     ns = record.action

@@ -20,7 +20,7 @@ from rosbridge_mcp_server.errors import (
     GoalTimeoutError,
 )
 from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
-from rosbridge_mcp_server.robot.goals.registry import CANCEL_CONFIRM_SECONDS, GoalRegistry, goals_of
+from rosbridge_mcp_server.robot.goals.registry import CANCEL_CONFIRM_SECONDS, GoalRegistry
 from rosbridge_mcp_server.wire import protocol
 
 if TYPE_CHECKING:
@@ -30,7 +30,7 @@ __all__ = ["cancel_on_both", "run", "send_action_goal"]
 
 
 async def send_action_goal(
-    client: RosbridgeClient,
+    registry: GoalRegistry,
     action: str,
     action_type: str,
     goal: dict[str, Any],
@@ -47,13 +47,13 @@ async def send_action_goal(
     running on the robot, so it is cancelled on the main connection, or as soon as a connection is back).
     If the awaiting task is cancelled, the goal is cancelled too before the task ends.
     """
-    gid = goal_id if goal_id is not None else client.new_goal_id(action)
-    with goals_of(client).tracking(Goal(gid, action, Dialect.action_names(action_type).ros2, 2)) as record:
-        return await run(client, record, goal, timeout=timeout, on_feedback=on_feedback)
+    gid = goal_id if goal_id is not None else registry.client.new_goal_id(action)
+    with registry.tracking(Goal(gid, action, Dialect.action_names(action_type).ros2, 2)) as record:
+        return await run(registry, record, goal, timeout=timeout, on_feedback=on_feedback)
 
 
 async def run(
-    client: RosbridgeClient,
+    registry: GoalRegistry,
     record: Goal,
     goal: dict[str, Any],
     *,
@@ -64,7 +64,7 @@ async def run(
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     action, gid, wire_type = record.action, record.goal_id, record.action_type
-    registry = goals_of(client)
+    client = registry.client
     session = client.require_session()
     if not session.info.has_action_ops:
         raise ActionError(action, "this bridge runs ROS 1, which has no action ops; use actionlib topics")

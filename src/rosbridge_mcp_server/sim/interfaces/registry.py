@@ -12,8 +12,8 @@ rclpy's value formatting in :mod:`.pyrepr`), and the outbound JSON form (here).
 
 from __future__ import annotations
 
+import functools
 import math
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -44,29 +44,23 @@ __all__ = ["ConversionError", "Dialect", "InterfaceError", "InterfaceRegistry", 
 # rospkg's ResourceNotFound lists the package path after the name; a stock Noetic install has one entry.
 _ROS1_PACKAGE_PATH = "/opt/ros/noetic/share"
 
-_tables: dict[tuple[str, str], ParsedTable] = {}
-_tables_lock = threading.Lock()
 
-
+@functools.cache
 def _table_for(dialect: Dialect, rosapi: str) -> ParsedTable:
-    # Parsed once per process: the specs are never mutated after linking, so robots share them.
-    with _tables_lock:
-        table = _tables.get((dialect, rosapi))
-        if table is None:
-            if dialect == "ros2":
-                texts = {**COMMON, **NAV2, **ROS2_ONLY}
-                if rosapi == "2.1.0":
-                    for key, text in ROSAPI_2_1.items():
-                        if text is None:
-                            texts.pop(key, None)
-                        else:
-                            texts[key] = text
-            else:
-                texts = {key: to_ros1_text(text) for key, text in {**COMMON, **NAV2}.items()}
-                texts.update(ROS1_ONLY)
-            table = parse_table(dialect, texts)
-            _tables[(dialect, rosapi)] = table
-        return table
+    # Parsed once per process: the specs are never mutated after linking, so robots share them. (Two threads
+    # missing at once may both parse; either table is right.)
+    if dialect == "ros2":
+        texts = {**COMMON, **NAV2, **ROS2_ONLY}
+        if rosapi == "2.1.0":
+            for key, text in ROSAPI_2_1.items():
+                if text is None:
+                    texts.pop(key, None)
+                else:
+                    texts[key] = text
+    else:
+        texts = {key: to_ros1_text(text) for key, text in {**COMMON, **NAV2}.items()}
+        texts.update(ROS1_ONLY)
+    return parse_table(dialect, texts)
 
 
 def _finite_or_none(value: float) -> float | None:

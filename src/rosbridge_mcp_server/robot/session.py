@@ -1,0 +1,55 @@
+"""One robot as this server drives it: the one owner of everything that lasts as long as the server does.
+
+A :class:`RobotSession` is made once per robot, beside its client, and lives across reconnects (unlike the
+client's :class:`~rosbridge_mcp_server.client.session.Session`, which is one connection). It holds:
+
+* ``client``: the rosbridge client (started and closed by whoever serves, not here);
+* ``graph``: what was learnt about the robot's graph (:class:`RosGraph`, per connection inside);
+* ``goals``: the goals sent through the client (:class:`GoalRegistry`: running ones, and those a drop cut
+  off, cancelled once the connection is back);
+* ``activity``: what this server set going (velocity topics, streams), which ``stop_robot`` and the operator
+  console's E-STOP stop;
+* ``guard``: the safety seam's guard every act asks first, and that records every outcome;
+* ``warm_up``: the background learning of service types after every (re)connect, when asked for
+  (:meth:`learn_service_types`; only a server that offers ``list_services`` needs it).
+
+The tools reach it through their context, ``safety.emergency_stop`` and the operator console through it:
+nothing of a robot session hangs off a module.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.robot.goals import GoalRegistry
+from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.robot.acting import Guard
+
+__all__ = ["RobotSession"]
+
+
+class RobotSession:
+    """The client, graph, goals, activity, guard and warm-up of one robot (see the module docstring)."""
+
+    def __init__(self, client: RosbridgeClient, guard: Guard) -> None:
+        self.client = client
+        self.guard = guard
+        self.graph = RosGraph(client)
+        self.goals = GoalRegistry(client)
+        self.activity = SessionActivity()
+        self.warm_up: ServiceTypeWarmUp | None = None
+
+    def learn_service_types(self) -> ServiceTypeWarmUp:
+        """Learn the service types in the background after every (re)connect, from now on (once)."""
+        if self.warm_up is None:
+            self.warm_up = ServiceTypeWarmUp(self.client, self.graph)
+            self.client.watch(self.warm_up)
+        return self.warm_up
+
+    def __repr__(self) -> str:
+        return f"RobotSession({self.client.url!r})"
