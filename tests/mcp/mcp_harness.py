@@ -18,7 +18,7 @@ from mcp.types import CallToolResult, TextContent
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
-from rosbridge_mcp_server.robot.acting import ALLOW_ALL, Guard
+from rosbridge_mcp_server.robot.seam import ALLOW_ALL, Guard
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import Policy, PolicyGuard

@@ -10,7 +10,12 @@ import pytest
 
 @pytest.mark.parametrize(
     "module",
-    ["rosbridge_mcp_server.robot.acting", "rosbridge_mcp_server.safety", "rosbridge_mcp_server.safety.guard"],
+    [
+        "rosbridge_mcp_server.robot.acting",
+        "rosbridge_mcp_server.robot.seam",
+        "rosbridge_mcp_server.safety",
+        "rosbridge_mcp_server.safety.guard",
+    ],
 )
 def test_the_module_imports_first_in_a_fresh_interpreter(module: str) -> None:
     """No import cycle bites whichever of them a program imports first."""

@@ -4,10 +4,9 @@ Each function takes what a caller gave (names, types, a message), makes the name
 :class:`~rosbridge_mcp_server.client.Dialect` spell the type for the bridge, compares it with the graph,
 checks the message as the bridge will read it against the type's definitions (raising a
 :class:`~rosbridge_mcp_server.errors.NotSentError` that carries an example of the type), and only then asks
-the :class:`Guard` whether the act may happen: ``await guard.approve(act, ask_person)``. The guard may return
-a clamped copy of the act (what is then sent) or raise :class:`~rosbridge_mcp_server.errors.PolicyRefusal`;
-either way it is told the outcome (``guard.record``), once per act. Messages stay as the caller wrote them
-(time fields in either spelling): the client respells them once, on the way out.
+the guard of :mod:`rosbridge_mcp_server.robot.seam` whether the act may happen (:func:`approved`), telling
+it the outcome once per act (:func:`carry_out`). Messages stay as the caller wrote them (time fields in
+either spelling): the client respells them once, on the way out.
 
 Nothing here knows MCP: the server hands in ``ask_person`` (its elicitation) through the tool's context.
 """
@@ -18,38 +17,29 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.client import Dialect
-from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import NotSentError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
+from rosbridge_mcp_server.robot.seam import Act, Acting, approved, carry_out
 from rosbridge_mcp_server.robot.velocity import clamp_text
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.robot.activity import SessionActivity
-    from rosbridge_mcp_server.robot.goals import GoalRegistry
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = [
-    "ALLOW_ALL",
     "PING_LIMIT",
     "VELOCITY_TYPES",
-    "Act",
-    "Acting",
-    "Answer",
-    "AskPerson",
-    "Guard",
     "Published",
     "ServiceReply",
     "StreamProgress",
     "Streamed",
     "call_service",
-    "nobody_to_ask",
     "publish_once",
     "publish_stream",
     "require_action_server",
@@ -62,102 +52,6 @@ _log = logging.getLogger(__name__)
 
 #: Longest wait for the bridge's pong before a publish (less when the configured request timeout is shorter).
 PING_LIMIT = 3.0
-
-
-@dataclass(frozen=True)
-class Act:
-    """One act on the robot, as it will be sent: checked, normalised, with an absolute name."""
-
-    tool: str  #: the tool that asks, e.g. "publish_topic"
-    kind: Literal["topic", "service", "action", "parameter"]
-    name: str  #: absolute ROS name (topic/service/action/parameter)
-    type: str  #: ROS type as sent to the bridge ("" when none, e.g. a parameter)
-    payload: Any  #: message / request / goal / value that will be sent
-    rate_hz: float | None = None  #: publish streams only
-    duration: float | None = None  #: publish streams only
-
-
-Answer = Literal["accept", "decline", "cancel", "unsupported"]
-#: Asks the person at the MCP client a yes/no question (the server's elicitation).
-AskPerson = Callable[[str], Awaitable[Answer]]
-
-
-class Guard(Protocol):
-    """The safety policy's side of the seam."""
-
-    async def approve(self, act: Act, ask: AskPerson) -> Act:
-        """The act to send (*act*, or a clamped copy); raises :class:`PolicyRefusal` to refuse it."""
-        ...
-
-    def record(self, act: Act, outcome: str) -> None:
-        """One audit line per acting call: ``sent``, ``refused: ...`` or ``failed: ...``."""
-        ...
-
-
-class _AllowAll:
-    """Approves every act unchanged and records nothing."""
-
-    async def approve(self, act: Act, ask: AskPerson) -> Act:
-        return act
-
-    def record(self, act: Act, outcome: str) -> None:
-        return None
-
-    def __repr__(self) -> str:
-        return "ALLOW_ALL"
-
-
-ALLOW_ALL: Guard = _AllowAll()
-
-
-async def nobody_to_ask(question: str) -> Answer:
-    """The default :data:`AskPerson`: nobody to ask (no MCP client, or one without elicitation)."""
-    return "unsupported"
-
-
-class Timeouts(Protocol):
-    """The one setting an act reads (the server's ``Config`` is one)."""
-
-    @property
-    def request_timeout(self) -> float: ...
-
-
-class Acting(Protocol):
-    """What an act needs: a robot session's parts and the call's own (a tool's ``ToolContext`` is one)."""
-
-    @property
-    def client(self) -> RosbridgeClient: ...
-    @property
-    def config(self) -> Timeouts: ...
-    @property
-    def graph(self) -> RosGraph: ...
-    @property
-    def guard(self) -> Guard: ...
-    @property
-    def ask_person(self) -> AskPerson: ...
-    @property
-    def activity(self) -> SessionActivity: ...
-    @property
-    def goals(self) -> GoalRegistry: ...
-
-
-async def _approved(ctx: Acting, act: Act) -> Act:
-    try:
-        return await ctx.guard.approve(act, ctx.ask_person)
-    except PolicyRefusal as exc:
-        ctx.guard.record(act, f"refused: {exc}")
-        raise
-
-
-async def _carry_out(ctx: Acting, act: Act, send: Callable[[], Awaitable[Any]]) -> Any:
-    """Run *send* for an approved *act* and tell the guard how it went."""
-    try:
-        result = await send()
-    except BaseException as exc:
-        ctx.guard.record(act, f"failed: {type(exc).__name__}: {exc}")
-        raise
-    ctx.guard.record(act, "sent")
-    return result
 
 
 # --- topics -----------------------------------------------------------------------------------------------
@@ -182,7 +76,7 @@ async def publish_once(
     Before the publish, a ping proves the bridge reads the connection now (see :func:`_bridge_is_reading`).
     """
     name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
-    act = await _approved(ctx, Act(tool, "topic", name, bridge_type, body))
+    act = await approved(ctx, Act(tool, "topic", name, bridge_type, body))
 
     async def send() -> None:
         await _bridge_is_reading(ctx)
@@ -191,7 +85,7 @@ async def publish_once(
         # stop_robot zeroes every velocity topic this session has driven.
         ctx.activity.published(act.name, act.type, act.payload)
 
-    await _carry_out(ctx, act, send)
+    await carry_out(ctx, act, send)
     adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
     return Published(act.name, act.type, act.payload, adjusted)
 
@@ -273,9 +167,7 @@ async def publish_stream(
     cancelled; cancellation stops it at once otherwise and is re-raised after that zero message.
     """
     name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
-    act = await _approved(
-        ctx, Act(tool, "topic", name, bridge_type, body, rate_hz=rate_hz, duration=duration)
-    )
+    act = await approved(ctx, Act(tool, "topic", name, bridge_type, body, rate_hz=rate_hz, duration=duration))
     rate = act.rate_hz or rate_hz
     length = act.duration if act.duration is not None else duration
     planned = max(1, round(length * rate))
@@ -414,9 +306,9 @@ async def call_service(
                 looks_like="A request",
             )
 
-    act = await _approved(ctx, Act(tool, "service", name, srv_type, request))
+    act = await approved(ctx, Act(tool, "service", name, srv_type, request))
     try:
-        response = await _carry_out(
+        response = await carry_out(
             ctx, act, lambda: ctx.client.call_service(act.name, act.payload, timeout=timeout)
         )
     except ServiceError as exc:
@@ -465,8 +357,8 @@ async def send_goal(
             looks_like="A goal",
         )
 
-    act = await _approved(ctx, Act(tool, "action", name, wire_type, goal))
-    outcome: Goal = await _carry_out(
+    act = await approved(ctx, Act(tool, "action", name, wire_type, goal))
+    outcome: Goal = await carry_out(
         ctx,
         act,
         lambda: run_goal(
@@ -515,8 +407,8 @@ async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) ->
 async def set_parameter(ctx: Acting, *, tool: str, name: str, value: Any) -> SetOutcome:
     """Check the parameter (name form, and on ROS 2 that its node has it), then set it and read it back."""
     planned = await plan_set(ctx.graph, ctx.client, name, value)
-    act = await _approved(ctx, Act(tool, "parameter", planned.name.full, "", planned.value))
-    outcome: SetOutcome = await _carry_out(
+    act = await approved(ctx, Act(tool, "parameter", planned.name.full, "", planned.value))
+    outcome: SetOutcome = await carry_out(
         ctx, act, lambda: apply_set(ctx.graph, ctx.client, planned, act.payload)
     )
     return outcome

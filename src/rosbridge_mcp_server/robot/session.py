@@ -28,7 +28,7 @@ from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.robot.acting import Guard
+    from rosbridge_mcp_server.robot.seam import Guard
 
 __all__ = ["RobotSession"]
 

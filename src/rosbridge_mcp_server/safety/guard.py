@@ -30,7 +30,7 @@ from rosbridge_mcp_server.safety.policy import Policy
 if TYPE_CHECKING:
     # Only for annotations: the acting layer imports this package's velocity rules, so a runtime import here
     # would be circular.
-    from rosbridge_mcp_server.robot.acting import Act, Answer, AskPerson
+    from rosbridge_mcp_server.robot.seam import Act, Answer, AskPerson
 
 __all__ = [
     "AUDIT_PAYLOAD_LIMIT",

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.acting import Act, Answer
+    from rosbridge_mcp_server.robot.seam import Act, Answer
 
 __all__ = ["Operator", "PendingConfirmation"]
 

@@ -46,7 +46,7 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.acting import Answer, AskPerson
+from rosbridge_mcp_server.robot.seam import Answer, AskPerson
 from rosbridge_mcp_server.server.checks import CheckedTool
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler

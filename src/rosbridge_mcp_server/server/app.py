@@ -16,7 +16,7 @@ from typing import Any, Literal
 from mcp.server.mcpserver import MCPServer
 
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.robot.acting import Act
+from rosbridge_mcp_server.robot.seam import Act
 from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
 from rosbridge_mcp_server.server.console_app import CONSOLE_APP_TOOL, console_app

@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel
 
 from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, nesting_text, payload_problem
-from rosbridge_mcp_server.robot.acting import AskPerson, Guard, nobody_to_ask
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
+from rosbridge_mcp_server.robot.seam import AskPerson, Guard, nobody_to_ask
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
