@@ -148,6 +148,22 @@ def test_goal_states_are_read_in_the_numbering_of_the_dialect(
     )
 
 
+@pytest.mark.parametrize(
+    ("stamp", "seconds"),
+    [
+        pytest.param({"sec": 12, "nanosec": 500_000_000}, 12.5, id="ros2"),
+        pytest.param({"secs": 12, "nsecs": 250_000_000}, 12.25, id="ros1"),
+        pytest.param({"sec": 3}, 3.0, id="seconds-only"),
+        pytest.param({"sec": 0, "nanosec": 0}, None, id="unset"),
+        pytest.param({"sec": "12"}, None, id="not-a-number"),
+        pytest.param(12.5, None, id="not-a-time"),
+    ],
+)
+def test_a_received_time_is_read_in_either_spelling(stamp: Any, seconds: float | None) -> None:
+    """Stamps the bridge sends read as seconds whichever line wrote them; an unset stamp is no time."""
+    assert Dialect.seconds(stamp) == seconds
+
+
 def test_only_the_client_and_the_wire_import_the_dialect_rules() -> None:
     """robot/, tools/, cli/ and the rest ask the client's Dialect; none imports wire.dialect."""
     package = Path(rosbridge_mcp_server.__file__).parent

@@ -90,6 +90,12 @@ class Dialect:
         """
         return rules.adapt_message(message, self.version)
 
+    @staticmethod
+    def seconds(stamp: Any) -> float | None:
+        """A received time or duration, in seconds, whichever spelling the bridge wrote it in; ``None`` when
+        *stamp* is not one or is zero."""
+        return rules.time_seconds(stamp)
+
     # --- goals --------------------------------------------------------------------------------------
 
     def goal_status(self, code: int) -> str:

@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotOnRobotError
 
 __all__ = ["FrameTree", "Lookup", "Transform", "TransformError", "frame_name"]
@@ -132,7 +133,7 @@ class FrameTree:
         # keeps the static one too.
         if existing is not None and existing.static and not static:
             return False
-        self._links[child] = _Link(parent, transform, static, received, _stamp(header.get("stamp")))
+        self._links[child] = _Link(parent, transform, static, received, Dialect.seconds(header.get("stamp")))
         return True
 
     def frames(self) -> list[str]:
@@ -227,18 +228,6 @@ def _transform(body: Mapping[str, Any]) -> Transform | None:
     if norm < 1e-9:
         return None
     return Transform(t, (q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm))
-
-
-def _stamp(value: Any) -> float | None:
-    if not isinstance(value, Mapping):
-        return None
-    # ROS 1 spells a time secs/nsecs, ROS 2 sec/nanosec.
-    seconds = value.get("sec", value.get("secs"))
-    nanos = value.get("nanosec", value.get("nsecs", 0))
-    if not isinstance(seconds, int | float) or not isinstance(nanos, int | float):
-        return None
-    stamp = float(seconds) + float(nanos) / 1e9
-    return stamp or None
 
 
 def _multiply(

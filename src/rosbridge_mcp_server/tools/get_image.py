@@ -7,6 +7,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.robot.images import (
     Encoded,
     ImageError,
@@ -133,21 +134,10 @@ def _answer(
         sent_height=encoded.height,
         format=fmt,
         frame_id=str(header.get("frame_id", "")),
-        stamp=_seconds(header.get("stamp")),
+        stamp=None if (at := Dialect.seconds(header.get("stamp"))) is None else round(at, 3),
         depth_range=[picture.depth.near, picture.depth.far] if picture.depth else None,
         depth_unit=picture.depth.unit if picture.depth else None,
     )
-
-
-def _seconds(stamp: Any) -> float | None:
-    if not isinstance(stamp, dict):
-        return None
-    sec = stamp.get("sec", stamp.get("secs"))
-    nanosec = stamp.get("nanosec", stamp.get("nsecs", 0))
-    if not isinstance(sec, int | float) or not isinstance(nanosec, int | float):
-        return None
-    value = float(sec) + float(nanosec) / 1e9
-    return round(value, 3) if value else None
 
 
 def _text(answer: ImageAnswer) -> str:

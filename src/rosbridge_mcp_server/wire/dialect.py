@@ -235,6 +235,18 @@ def to_ros1_time(msg: Any) -> Any:
     return _convert_time(msg, _ROS2_TIME_KEYS, {"sec": "secs", "nanosec": "nsecs"})
 
 
+def time_seconds(value: Any) -> float | None:
+    """A time or duration read in either spelling (ROS 1 ``secs``/``nsecs``, ROS 2 ``sec``/``nanosec``), in
+    seconds; ``None`` when *value* is not one, or is zero (an unset stamp)."""
+    if not isinstance(value, dict):
+        return None
+    seconds = value.get("sec", value.get("secs"))
+    nanos = value.get("nanosec", value.get("nsecs", 0))
+    if not isinstance(seconds, int | float) or not isinstance(nanos, int | float):
+        return None
+    return (float(seconds) + float(nanos) / 1e9) or None
+
+
 def adapt_message(msg: Any, version: int) -> Any:
     """*msg* with time fields spelled the way the bridge of this ROS *version* reads them.
 
