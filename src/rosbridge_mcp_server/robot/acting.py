@@ -23,18 +23,17 @@ from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotSentError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
-from rosbridge_mcp_server.robot.messages import require_fit, short_type_name
+from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
 from rosbridge_mcp_server.robot.seam import Act, Acting, approved, carry_out
-from rosbridge_mcp_server.robot.velocity import clamp_text
+from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, stamped
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = [
     "PING_LIMIT",
-    "VELOCITY_TYPES",
     "Published",
     "ServiceReply",
     "StreamProgress",
@@ -123,8 +122,6 @@ def _as_read(dialect: Dialect, message: dict[str, Any]) -> Any:
     return dialect.outgoing(message)
 
 
-#: Velocity commands: a stream of them ends with one all-zero message, so the robot stops.
-VELOCITY_TYPES = frozenset({"geometry_msgs/Twist", "geometry_msgs/TwistStamped"})
 #: Told of a stream's progress: (messages sent, messages planned).
 StreamProgress = Callable[[int, int], Awaitable[None]]
 
@@ -232,11 +229,12 @@ async def _publish_quietly(ctx: Acting, act: Act, message: dict[str, Any]) -> No
 
 
 def _zero_velocity(bridge_type: str, message: dict[str, Any]) -> dict[str, Any] | None:
-    short = short_type_name(bridge_type)
-    if short not in VELOCITY_TYPES:
+    """The all-zero command that ends a stream of velocity commands (a stream of them ends with one, so the
+    robot stops); ``None`` for other types."""
+    if not is_velocity_type(bridge_type):
         return None
     still = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
-    if short == "geometry_msgs/Twist":
+    if not stamped(bridge_type):
         return still
     header = message.get("header")
     frame = header.get("frame_id", "") if isinstance(header, dict) else ""

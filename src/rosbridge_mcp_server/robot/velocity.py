@@ -10,8 +10,11 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from rosbridge_mcp_server.client import Dialect
+
 __all__ = [
-    "TWIST_TYPES",
+    "TWIST",
+    "TWIST_STAMPED",
     "Velocity",
     "clamp_text",
     "is_velocity_type",
@@ -21,24 +24,19 @@ __all__ = [
     "zero_command",
 ]
 
-#: The velocity types in both spellings (ROS 2 ``pkg/msg/Name``, ROS 1 ``pkg/Name``).
-TWIST_TYPES = frozenset(
-    {
-        "geometry_msgs/msg/Twist",
-        "geometry_msgs/Twist",
-        "geometry_msgs/msg/TwistStamped",
-        "geometry_msgs/TwistStamped",
-    }
-)
+#: The velocity command types, named canonically (the dialect compares either line's spelling with them).
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 
 
 def is_velocity_type(type_name: str) -> bool:
     """Whether ``type_name`` is a Twist or TwistStamped, in either dialect's spelling."""
-    return type_name.strip().strip("/") in TWIST_TYPES
+    return Dialect.same_type(type_name, TWIST) or stamped(type_name)
 
 
 def stamped(type_name: str) -> bool:
-    return type_name.strip().endswith("TwistStamped")
+    """Whether ``type_name`` is a TwistStamped, in either dialect's spelling."""
+    return Dialect.same_type(type_name, TWIST_STAMPED)
 
 
 @dataclass(frozen=True)
