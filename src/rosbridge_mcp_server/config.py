@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Literal
 from urllib.parse import urlsplit
 
+from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES, select_tools
 from rosbridge_mcp_server.safety.policy import Policy, PolicyError, load_policy
 
 __all__ = [
@@ -271,71 +272,6 @@ def _is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
-
-
-#: The tool catalogue, the one list of the tools: their names by ``--tools`` group, in registration order.
-#: ``tools/__init__.py`` imports the module of each name (failing at import when one has none), so the
-#: configuration needs none of the tools.
-ORIGINAL_TOOL_NAMES = (
-    "list_topics",
-    "get_topic_info",
-    "publish_topic",
-    "list_services",
-    "publish_service",
-    "list_actions",
-    "publish_action",
-    "cancel_action",
-)
-WATCH_TOOL_NAMES = (
-    "subscribe_topic",
-    "get_image",
-    "describe_type",
-    "list_nodes",
-    "get_node_info",
-    "list_parameters",
-    "get_parameter",
-    "set_parameter",
-    "get_transform",
-)
-#: Pictures of the robot's world: its map, its scan, a topic over time.
-VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
-SAFETY_TOOL_NAMES = ("stop_robot",)
-ALL_TOOL_NAMES = ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + VIEW_TOOL_NAMES + SAFETY_TOOL_NAMES
-TOOL_GROUPS: dict[str, tuple[str, ...]] = {
-    "all": ALL_TOOL_NAMES,
-    "original": ORIGINAL_TOOL_NAMES,
-    "watch": WATCH_TOOL_NAMES,
-    "view": VIEW_TOOL_NAMES,
-    "safety": SAFETY_TOOL_NAMES,
-}
-
-
-def select_tools(spec: str) -> tuple[str, ...]:
-    """The tool names a ``--tools`` value stands for, in registration order.
-
-    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``)
-    and tool names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
-    """
-    chosen: set[str] = set()
-    unknown: list[str] = []
-    for raw in spec.split(","):
-        item = raw.strip()
-        if not item:
-            continue
-        if item in TOOL_GROUPS:
-            chosen.update(TOOL_GROUPS[item])
-        elif item in ALL_TOOL_NAMES:
-            chosen.add(item)
-        else:
-            unknown.append(item)
-    if unknown:
-        raise ValueError(
-            f"unknown tool or group {', '.join(repr(u) for u in unknown)}; use {', '.join(TOOL_GROUPS)} or "
-            f"tool names: {', '.join(ALL_TOOL_NAMES)}"
-        )
-    if not chosen:
-        raise ValueError(f"no tools chosen; use {', '.join(TOOL_GROUPS)} or tool names")
-    return tuple(name for name in ALL_TOOL_NAMES if name in chosen)
 
 
 def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:

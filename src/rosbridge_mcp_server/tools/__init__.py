@@ -11,7 +11,7 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-from rosbridge_mcp_server.config import ALL_TOOL_NAMES
+from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
 
 __all__ = ["TOOL_MODULES"]
 
@@ -25,5 +25,5 @@ def _modules(names: tuple[str, ...]) -> tuple[ModuleType, ...]:
     return modules
 
 
-#: Every tool module, in the catalogue's order (``config.ALL_TOOL_NAMES``).
+#: Every tool module, in the catalogue's order (``catalogue.ALL_TOOL_NAMES``).
 TOOL_MODULES: tuple[ModuleType, ...] = _modules(ALL_TOOL_NAMES)
