@@ -17,7 +17,12 @@ from pydantic import BaseModel, Field, ValidationError
 
 from mcp import Client
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
-from rosbridge_mcp_server.server.sdk import replace_output_schema, serve_streams, tool_from_handler
+from rosbridge_mcp_server.server.sdk import (
+    replace_output_schema,
+    serve_streams,
+    tool_from_handler,
+    tool_with_handler,
+)
 
 
 class _Doubled(BaseModel):
@@ -131,6 +136,34 @@ async def test_a_replaced_output_schema_is_the_one_clients_see() -> None:
     assert seen[0]["properties"] == {"value": {"title": "Value", "type": "integer"}}
     assert listed.output_schema is not None
     assert listed.output_schema["description"] == "replaced"
+
+
+async def test_a_tool_copied_with_another_handler_runs_that_handler_with_the_templates_schemas() -> None:
+    """Two servers from one template: each call reaches its own server's handler, validated by the template's
+    argument model, and both list the template's replaced output schema."""
+    template = _tool()
+    replace_output_schema(template, lambda derived: {**derived, "description": "shared"})
+    tripled: list[int] = []
+
+    async def _triple(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
+        tripled.append(arguments["number"])
+        value = arguments["number"] * 3
+        return CallToolResult(
+            content=[TextContent(type="text", text=str(value))], structured_content={"value": value}
+        )
+
+    doubling = MCPServer("seam", tools=[tool_with_handler(template, _double)])
+    tripling = MCPServer("seam", tools=[tool_with_handler(template, _triple)])
+    async with Client(doubling) as first, Client(tripling) as second:
+        doubled = await first.call_tool("double", {"number": 5})
+        thrice = await second.call_tool("double", {"number": "5"})
+        wrong = await second.call_tool("double", {"number": "many"})
+        [listed] = (await second.list_tools()).tools
+    assert (doubled.structured_content, thrice.structured_content) == ({"value": 10}, {"value": 15})
+    assert tripled == [5]  # converted by the template's argument model before the handler saw it
+    assert wrong.is_error
+    assert listed.output_schema is not None
+    assert listed.output_schema["description"] == "shared"
 
 
 async def test_serve_streams_serves_an_mcp_server_on_the_streams_it_is_given() -> None:

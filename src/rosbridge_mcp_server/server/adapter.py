@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import functools
 import hashlib
 import inspect
 import logging
@@ -49,7 +50,7 @@ from rosbridge_mcp_server.errors import (
 from rosbridge_mcp_server.robot.seam import Answer, AskPerson
 from rosbridge_mcp_server.server.checks import CheckedTool
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
-from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler
+from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler, tool_with_handler
 from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema
@@ -152,12 +153,7 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
     """
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
-
-    # The tool's parameters are run()'s, minus its ToolContext. Annotations are resolved here: the modules
-    # use postponed annotations.
-    hints = typing.get_type_hints(run, include_extras=True)
-    run_parameters = list(inspect.signature(run).parameters.values())[1:]
-    parameters = [p.replace(annotation=hints[p.name]) for p in run_parameters]
+    template, checked = _template(module)
 
     async def call_tool(
         mcp_context: Context[Any, Any], **arguments: Any
@@ -202,8 +198,31 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
             structured_content=answer.data.model_dump(mode="json"),
         )
 
+    tool = tool_with_handler(template, call_tool)
+    tool.parameters = fleet.schema_with_robot(checked.schema, spec.name)
+    return tool, checked
+
+
+@functools.cache
+def _template(module: ModuleType) -> tuple[Tool, CheckedTool]:
+    """*module*'s tool as every server lists it, with no handler yet, and its argument checks.
+
+    Made once per process: deriving a tool's schemas from its parameters builds pydantic models (~4 ms a
+    tool), and every server (one per MCP session over HTTP, one per test) lists the same tools.
+    """
+    spec: ToolSpec = module.SPEC
+    run: Callable[..., Awaitable[ToolAnswer]] = module.run
+    # The tool's parameters are run()'s, minus its ToolContext. Annotations are resolved here: the modules
+    # use postponed annotations.
+    hints = typing.get_type_hints(run, include_extras=True)
+    run_parameters = list(inspect.signature(run).parameters.values())[1:]
+    parameters = [p.replace(annotation=hints[p.name]) for p in run_parameters]
+
+    async def unbound(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
+        raise RuntimeError(f"{spec.name}: a tool template is never called")
+
     tool = tool_from_handler(
-        call_tool,
+        unbound,
         parameters,
         spec.output,
         name=spec.name,
@@ -213,7 +232,7 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
     )
     # What the argument checks hold every call to, said where clients read it.
     own = {**compact_input_schema(tool.parameters), "additionalProperties": False}
-    tool.parameters = fleet.schema_with_robot(own, spec.name)
+    tool.parameters = own
     replace_output_schema(tool, lambda schema: compact_output_schema(inline_refs(schema)))
     return tool, CheckedTool.of(spec.name, own, parameters)
 

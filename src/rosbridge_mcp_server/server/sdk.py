@@ -1,13 +1,15 @@
 """Every use of the MCP SDK beyond its documented API, each behind one named function.
 
 The SDK (``mcp`` 2.3) documents ``MCPServer(tools=..., middleware=...)``, the stdio and Streamable HTTP
-transports and the auth settings, which is what the rest of ``server/`` uses. Three things have no documented
+transports and the auth settings, which is what the rest of ``server/`` uses. Four things have no documented
 way; each function here says what it relies on, and ``tests/mcp/test_sdk_seam.py`` holds each to its effect,
 so an SDK upgrade that changes one fails there, by name, instead of somewhere in a tool call:
 
 * :func:`tool_from_handler`: a ``Tool`` for a handler that takes ``**arguments``, with the parameters we give
   it. The SDK reads a tool's parameters from ``inspect.signature`` of the function (which honours
   ``__signature__``, so we hand it one) and finds the ``Context`` parameter by its annotation.
+* :func:`tool_with_handler`: a copy of such a ``Tool`` calling another handler (``Tool.run`` calls
+  ``Tool.fn``), so the schemas and argument model, built once, serve every server.
 * :func:`replace_output_schema`: the output schema the SDK derived from the return annotation, replaced
   (``Tool.output_schema`` reads ``Tool.fn_metadata.output_schema``).
 * :func:`serve_streams`: ``MCPServer`` on streams we give it (the SDK's stdio transport's, with unreadable
@@ -26,7 +28,7 @@ from mcp.server.mcpserver.tools import Tool
 from mcp.types import CallToolResult, InputRequiredResult, ToolAnnotations
 from pydantic import BaseModel
 
-__all__ = ["replace_output_schema", "serve_streams", "tool_from_handler"]
+__all__ = ["replace_output_schema", "serve_streams", "tool_from_handler", "tool_with_handler"]
 
 
 def tool_from_handler(
@@ -64,6 +66,16 @@ def tool_from_handler(
         annotations=annotations,
         structured_output=True,
     )
+
+
+def tool_with_handler(template: Tool, handler: Callable[..., Awaitable[Any]]) -> Tool:
+    """A copy of *template* (from :func:`tool_from_handler`) that calls *handler* instead.
+
+    Relies on ``Tool.run`` calling ``self.fn`` with the arguments ``self.fn_metadata`` validated, so one
+    template's argument model and schemas serve every server's tool. The copy is shallow: the copy's
+    ``parameters`` may be replaced, never changed in place.
+    """
+    return template.model_copy(update={"fn": handler})
 
 
 def replace_output_schema(tool: Tool, schema: Callable[[dict[str, Any]], dict[str, Any]]) -> None:
