@@ -1033,6 +1033,10 @@ class ManyCalls:
                 pending.discard(reply["id"])
 
 
+#: A row of item 12: (item, tool, arguments, what its floor is, the floor's raw calls).
+_Nav2Case = tuple[str, str, dict[str, Any], str, Callable[[], Awaitable[object]]]
+
+
 async def measure_nav2(ctx: Context) -> list[Row]:
     """Item 10: every graph tool on a simulated Nav2 robot (its own process), called by JSON-RPC lines (the
     server alone), against the raw calls its answer needs, interleaved; with each answer's size.
@@ -1052,13 +1056,6 @@ async def measure_nav2(ctx: Context) -> list[Row]:
         raw = raws[0]
         many = ManyCalls(raw)
         ours = await stack.enter_async_context(raw_pipe_client(our_server_command(url), ctx.errlog, {}))
-        # The same world on a bridge like rosbridge-server-rs: get_node_info needs no node list there.
-        rs_url = await stack.enter_async_context(simulated_robot(ctx.errlog, world="nav2", server="rs"))
-        rs_raws = [
-            RawBridge(await stack.enter_async_context(connect(rs_url, max_size=None, compression=None)))
-            for _ in range(2)
-        ]
-        ours_rs = await stack.enter_async_context(raw_pipe_client(our_server_command(rs_url), ctx.errlog, {}))
         services = (await raw.call("/rosapi/services"))["services"]
         parameter_nodes = [
             name.removesuffix("/list_parameters") for name in services if name.endswith("/list_parameters")
@@ -1070,10 +1067,6 @@ async def measure_nav2(ctx: Context) -> list[Row]:
             await asyncio.gather(
                 raws[1].call("/rosapi/node_details", {"node": NAV2_NODE}), raws[2].call("/rosapi/topics")
             )
-
-        async def node_info_rs_floor() -> None:
-            details = rs_raws[0].call("/rosapi/node_details", {"node": NAV2_NODE})
-            await asyncio.gather(details, rs_raws[1].call("/rosapi/topics"))
 
         async def topic_info_floor() -> None:
             await asyncio.gather(
@@ -1089,7 +1082,7 @@ async def measure_nav2(ctx: Context) -> list[Row]:
                 [(f"{node}/list_parameters", {"prefixes": [], "depth": 0}) for node in parameter_nodes]
             )
 
-        cases: list[tuple[str, str, dict[str, Any], str, Callable[[], Awaitable[object]]]] = [
+        cases: list[_Nav2Case] = [
             ("12a", "list_topics", {}, "`topics`", lambda: raw.call("/rosapi/topics")),
             ("12b", "list_services", {}, "`services`", lambda: raw.call("/rosapi/services")),
             ("12c", "list_actions", {}, "`action_servers`", lambda: raw.call("/rosapi/action_servers")),
@@ -1131,33 +1124,35 @@ async def measure_nav2(ctx: Context) -> list[Row]:
                 lambda: raw.call("/rosapi/message_details", {"type": "nav_msgs/msg/OccupancyGrid"}),
             ),
         ]
-        cases.append(
-            (
-                "12k",
-                "get_node_info",
-                {"node": NAV2_NODE},
-                "`node_details` and `topics` side by side, on a bridge like rosbridge-server-rs",
-                node_info_rs_floor,
-            )
-        )
-        servers = {"12k": ours_rs}
-        subjects: list[Subject] = []
-        sizes: dict[str, tuple[int, int]] = {}
-        for item, tool, arguments, _, floor_call in cases:
-            server = servers.get(item, ours)
-            # The first call also learns the types, as a session's first call does.
-            answer = await server.tool(tool, arguments)
-            result = answer["result"]
-            text = "".join(block.get("text", "") for block in result["content"])
-            sizes[item] = (len(text), len(json.dumps(result.get("structuredContent"))))
-            subjects.append(Subject(f"n_{item}_floor", floor_call, pause=TOOL_PAUSE))
-            subjects.append(
-                Subject(
-                    f"n_{item}",
-                    lambda tool=tool, arguments=arguments, server=server: server.tool(tool, arguments),
-                )
-            )
+        subjects, sizes = await _nav2_subjects(cases, ours)
         await interleave(subjects, Plan(**{**dataclasses.asdict(plan), "block": max(2, plan.block // 4)}))
+    # The same world on a bridge like rosbridge-server-rs (get_node_info needs no node list there), measured
+    # after the first world has stopped: a second world's sensors running beside the rows above took CPU
+    # from them on 2 cores.
+    async with contextlib.AsyncExitStack() as stack:
+        rs_url = await stack.enter_async_context(simulated_robot(ctx.errlog, world="nav2", server="rs"))
+        rs_raws = [
+            RawBridge(await stack.enter_async_context(connect(rs_url, max_size=None, compression=None)))
+            for _ in range(2)
+        ]
+        ours_rs = await stack.enter_async_context(raw_pipe_client(our_server_command(rs_url), ctx.errlog, {}))
+
+        async def node_info_rs_floor() -> None:
+            details = rs_raws[0].call("/rosapi/node_details", {"node": NAV2_NODE})
+            await asyncio.gather(details, rs_raws[1].call("/rosapi/topics"))
+
+        rs_case: _Nav2Case = (
+            "12k",
+            "get_node_info",
+            {"node": NAV2_NODE},
+            "`node_details` and `topics` side by side, on a bridge like rosbridge-server-rs",
+            node_info_rs_floor,
+        )
+        rs_subjects, rs_sizes = await _nav2_subjects([rs_case], ours_rs)
+        await interleave(rs_subjects, Plan(**{**dataclasses.asdict(plan), "block": max(2, plan.block // 4)}))
+    cases.append(rs_case)
+    subjects += rs_subjects
+    sizes.update(rs_sizes)
     ctx.samples.update({subject.key: subject.samples for subject in subjects})
     by_key = {subject.key: subject.stats for subject in subjects}
     rows: list[Row] = []
@@ -1182,6 +1177,25 @@ async def measure_nav2(ctx: Context) -> list[Row]:
         )
         rows.append(row)
     return rows
+
+
+async def _nav2_subjects(
+    cases: list[_Nav2Case], server: Any
+) -> tuple[list[Subject], dict[str, tuple[int, int]]]:
+    """Each case's floor and tool call as interleaved subjects, and each answer's size (text, structured)."""
+    subjects: list[Subject] = []
+    sizes: dict[str, tuple[int, int]] = {}
+    for item, tool, arguments, _, floor_call in cases:
+        # The first call also learns the types, as a session's first call does.
+        answer = await server.tool(tool, arguments)
+        result = answer["result"]
+        text = "".join(block.get("text", "") for block in result["content"])
+        sizes[item] = (len(text), len(json.dumps(result.get("structuredContent"))))
+        subjects.append(Subject(f"n_{item}_floor", floor_call, pause=TOOL_PAUSE))
+        subjects.append(
+            Subject(f"n_{item}", lambda tool=tool, arguments=arguments: server.tool(tool, arguments))
+        )
+    return subjects, sizes
 
 
 async def look_up_types(bridge: RawBridge, queue: list[str]) -> None:
