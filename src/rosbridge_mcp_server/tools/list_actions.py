@@ -7,7 +7,15 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
-from rosbridge_mcp_server.tools.paging import FilterArg, OffsetArg, limit_arg, matcher, page_note, page_of
+from rosbridge_mcp_server.tools.paging import (
+    FilterArg,
+    OffsetArg,
+    limit_arg,
+    matcher,
+    page_note,
+    page_of,
+    typed_line,
+)
 
 __all__ = ["DEFAULT_LIMIT", "SPEC", "ActionRow", "ActionsAnswer", "run"]
 
@@ -45,7 +53,7 @@ SPEC = ToolSpec(
 
 
 def _line(row: ActionRow) -> str:
-    return f"{row.name} ({row.type or 'type unknown'})"
+    return typed_line(row.name, row.type)
 
 
 async def run(

@@ -27,6 +27,7 @@ __all__ = [
     "matcher",
     "page_note",
     "page_of",
+    "typed_line",
 ]
 
 #: The most characters a list tool's text holds (~2,000 tokens).
@@ -39,6 +40,11 @@ FilterArg = Annotated[
     Field(description="Glob or substring of names (or types), e.g. *costmap*"),
 ]
 OffsetArg = Annotated[int, Field(ge=0, description="Matches to skip, e.g. 100")]
+
+
+def typed_line(name: str, type_name: str | None) -> str:
+    """One listed name and its type, as every list tool writes it: ``/scan (sensor_msgs/msg/LaserScan)``."""
+    return f"{name} ({type_name or 'type unknown'})"
 
 
 def limit_arg(default: int) -> object:

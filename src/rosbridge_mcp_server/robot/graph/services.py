@@ -38,7 +38,7 @@ class Services:
         self._client = rosapi.client
         # The last listing whose services were all typed: (the connection's knowledge, its names, entries).
         # The same names on the same connection list the same entries, so a call reuses it.
-        self._listing: tuple[ConnectionKnowledge, tuple[str, ...], list[ServiceEntry]] | None = None
+        self._listing: tuple[ConnectionKnowledge, tuple[str, ...], tuple[ServiceEntry, ...]] | None = None
 
     @property
     def _known(self) -> ConnectionKnowledge:
@@ -82,7 +82,7 @@ class Services:
             _log.info("no type for service %s: %s", service, exc)
             return ""
 
-    async def services(self) -> list[ServiceEntry]:
+    async def services(self) -> tuple[ServiceEntry, ...]:
         """Every service with its type (``""`` where a look-up failed).
 
         A service's type cannot change while it exists, so each is looked up once per connection and kept
@@ -93,7 +93,7 @@ class Services:
         names = await self.service_names()
         last = self._listing
         if last is not None and last[0] is self._known and last[1] == tuple(names):
-            return list(last[2])
+            return last[2]
         known, listed = self._known.service_types, self._known.listed_types
         for cache in (known, listed):
             for gone in cache.keys() - set(names):
@@ -104,12 +104,12 @@ class Services:
             await bounded_map(self._listed_type, missing, PROBE_CONCURRENCY)
         elif missing:
             await bounded_map(self._service_type_or_blank, missing)
-        entries = [
+        entries = tuple(
             ServiceEntry(name, fixed.get(name) or known.get(name) or listed.get(name, "")) for name in names
-        ]
+        )
         typed = all(entry.type for entry in entries)
         self._listing = (self._known, tuple(names), entries) if typed else None
-        return list(entries)
+        return entries
 
     async def learn_service_types(self, limit: int = 256) -> int:
         """Ask rosapi, one service at a time, for the types a first listing would look up; how many it learnt.
