@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
+from types import MappingProxyType
 from typing import Final
 
 __all__ = [
@@ -120,22 +121,23 @@ def rosapi_types(names: Iterable[str], version: int) -> dict[str, str]:
     """The types of rosapi's own services among *names* (``/rosapi/topics`` and the like)."""
     rosapi = {**_ROSAPI_SERVICES, **(_ROSAPI_SERVICES_ROS2 if version == 2 else _ROSAPI_SERVICES_ROS1)}
     package = "rosapi_msgs/srv" if version == 2 else "rosapi"
-    leaves = _by_prefix(names).get("/rosapi", set())
+    leaves = _by_prefix(names).get("/rosapi", frozenset())
     return {f"/rosapi/{leaf}": f"{package}/{rosapi[leaf]}" for leaf in leaves if leaf in rosapi}
 
 
-def _by_prefix(names: Iterable[str]) -> dict[str, set[str]]:
+def _by_prefix(names: Iterable[str]) -> Mapping[str, frozenset[str]]:
     # A listing asks several of these helpers about the same few hundred names: split them once.
     return _split_by_prefix(tuple(names))
 
 
 @functools.lru_cache(maxsize=4)
-def _split_by_prefix(names: tuple[str, ...]) -> dict[str, set[str]]:
+def _split_by_prefix(names: tuple[str, ...]) -> Mapping[str, frozenset[str]]:
+    # Read-only: every caller with the same names gets this one answer.
     by_prefix: dict[str, set[str]] = {}
     for name in set(names):
         prefix, _, leaf = name.rpartition("/")
         by_prefix.setdefault(prefix, set()).add(leaf)
-    return by_prefix
+    return MappingProxyType({prefix: frozenset(leaves) for prefix, leaves in by_prefix.items()})
 
 
 #: A field name no ROS message has (ROS field names start with a letter): a request carrying it is refused.
