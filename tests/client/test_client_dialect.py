@@ -181,3 +181,22 @@ def test_only_the_client_and_the_wire_import_the_dialect_rules() -> None:
             if any(name == "rosbridge_mcp_server.wire.dialect" for name in names):
                 offenders.append(str(path.relative_to(package)))
     assert offenders == []
+
+
+def test_only_the_client_builds_ops_among_the_layers_above_the_wire() -> None:
+    """robot/, tools/, safety/ and the rest send through the client's methods; none imports wire/ (the
+    simulated robot, a bridge of its own, may)."""
+    package = Path(rosbridge_mcp_server.__file__).parent
+    offenders = []
+    for path in package.rglob("*.py"):
+        if path.relative_to(package).parts[0] in ("wire", "client", "sim"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = []
+            if isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module] + [f"{node.module}.{alias.name}" for alias in node.names]
+            elif isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            if any(name.startswith("rosbridge_mcp_server.wire") for name in names):
+                offenders.append(str(path.relative_to(package)))
+    assert offenders == []

@@ -519,7 +519,7 @@ class RosbridgeClient:
         a goal cancel it (``robot/goals`` also sends the cancel on the goal's own lane). No reply comes; the
         goal's result says what happened.
         """
-        await self.require_session().send(protocol.cancel_action_goal(action, id=goal_id))
+        await self.require_session().cancel_goal(action, goal_id)
         self.unhandled_acts = True
 
     async def cancel_action_goal_heard(self, action: str, goal_id: str, timeout: float) -> str | None:
@@ -534,7 +534,7 @@ class RosbridgeClient:
         conn = session.connection
         heard = conn.expect(goal_id, f"a refusal of the cancel of goal {goal_id}", timeout)
         try:
-            await session.send(protocol.cancel_action_goal(action, id=goal_id))
+            await session.cancel_goal(action, goal_id)
             self.unhandled_acts = True
             if not heard.done():
                 await session.handled(timeout)

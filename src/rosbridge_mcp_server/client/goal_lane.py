@@ -13,6 +13,7 @@ from typing import Any
 from rosbridge_mcp_server.client.connection import Connection, GoalStream
 from rosbridge_mcp_server.client.session import send_quietly
 from rosbridge_mcp_server.errors import NotConnectedError
+from rosbridge_mcp_server.wire import protocol
 
 __all__ = ["GoalLane", "GoalLanes"]
 
@@ -29,13 +30,15 @@ class GoalLane:
         self._on_close = on_close
         connection.pending[goal_id] = self._stream
 
-    async def send(self, op: dict[str, Any]) -> None:
-        """Send an op on the lane (the goal itself)."""
-        await self.connection.send(op)
+    async def send_goal(self, action: str, action_type: str, goal: dict[str, Any]) -> None:
+        """Send the goal itself (with feedback) on the lane, under the lane's goal id."""
+        await self.connection.send(
+            protocol.send_action_goal(action, action_type, goal, id=self.goal_id, feedback=True)
+        )
 
-    async def try_send(self, op: dict[str, Any]) -> bool:
-        """Send an op if the lane is open; False when it could not be sent."""
-        return await send_quietly(self.connection, op)
+    async def try_cancel(self, action: str) -> bool:
+        """Send the goal's cancel on the lane if it is open; False when it could not be sent."""
+        return await send_quietly(self.connection, protocol.cancel_action_goal(action, id=self.goal_id))
 
     async def next(self) -> tuple[str, dict[str, Any]]:
         """The next ``action_feedback`` or ``action_result`` frame, as ``(op, frame)``.

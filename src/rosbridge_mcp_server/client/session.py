@@ -77,6 +77,14 @@ class Session:
         """Send one op if the connection is open; False (and nothing raised) when it could not be sent."""
         return await send_quietly(self.connection, op)
 
+    async def cancel_goal(self, action: str, goal_id: str) -> None:
+        """Send the cancel of goal *goal_id* of *action*; :class:`NotConnectedError` once it is closed."""
+        await self.connection.send(protocol.cancel_action_goal(action, id=goal_id))
+
+    async def try_cancel_goal(self, action: str, goal_id: str) -> bool:
+        """Send the cancel of goal *goal_id* of *action* if the connection is open; False if it could not."""
+        return await send_quietly(self.connection, protocol.cancel_action_goal(action, id=goal_id))
+
     async def handled(self, timeout: float) -> bool:
         """Whether the bridge has handled (not only read) everything sent on this session so far.
 

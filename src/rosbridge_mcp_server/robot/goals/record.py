@@ -55,11 +55,9 @@ class Goal:
     succeeded: bool = False
     result: dict[str, Any] | None = None
     canceled_by: CanceledBy | None = None
-    #: Sends an op on the connection that started the goal (ROS 2: its own lane); rosbridge-server-rs lets
-    #: only that connection cancel it. False when it could not be sent.
-    send_on_owner: Callable[[dict[str, Any]], Awaitable[bool]] | None = field(
-        default=None, repr=False, compare=False
-    )
+    #: Sends the goal's cancel on the connection that started it (ROS 2: its own lane); rosbridge-server-rs
+    #: lets only that connection cancel it. False when it could not be sent.
+    cancel_on_owner: Callable[[], Awaitable[bool]] | None = field(default=None, repr=False, compare=False)
 
     async def take_feedback(self, values: Any, listener: GoalFeedback | None) -> None:
         """Count a feedback message (anything but an object counts as ``{}``), keep it, tell *listener*."""

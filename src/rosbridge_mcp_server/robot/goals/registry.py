@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING, Final
 from rosbridge_mcp_server.errors import ActionError
 from rosbridge_mcp_server.robot.goals.actionlib import publish_cancel
 from rosbridge_mcp_server.robot.goals.record import Goal
-from rosbridge_mcp_server.wire import protocol
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient, Session
@@ -134,12 +133,11 @@ class GoalRegistry:
         for goal in self.running():
             if goal.dialect != 2:
                 continue
-            op = protocol.cancel_action_goal(goal.action, id=goal.goal_id)
-            if session is not None and await session.try_send(op):
+            if session is not None and await session.try_cancel_goal(goal.action, goal.goal_id):
                 self.client.unhandled_acts = True  # the client waits for them before it closes
             # rosbridge-server-rs cancels only on the connection that started the goal.
-            if goal.send_on_owner is not None:
-                await goal.send_on_owner(op)
+            if goal.cancel_on_owner is not None:
+                await goal.cancel_on_owner()
         for entry in self._cut_off.values():
             logger.warning(
                 "The client is closing; goal %s on %s, left running by a drop, was not cancelled",
@@ -222,6 +220,6 @@ class GoalRegistry:
 
     async def _send_cancel(self, session: Session, goal: Goal) -> None:
         if goal.dialect == 2:
-            await session.send(protocol.cancel_action_goal(goal.action, id=goal.goal_id))
+            await session.cancel_goal(goal.action, goal.goal_id)
         else:
             await publish_cancel(self.client, goal.action, goal.goal_id, session=session)

@@ -11,6 +11,7 @@ silence; rosbridge-server-rs: with a ``status``) the other.
 from __future__ import annotations
 
 import asyncio
+import functools
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.client import Dialect
@@ -21,7 +22,6 @@ from rosbridge_mcp_server.errors import (
 )
 from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
 from rosbridge_mcp_server.robot.goals.registry import CANCEL_CONFIRM_SECONDS, GoalRegistry
-from rosbridge_mcp_server.wire import protocol
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import GoalLane, RosbridgeClient
@@ -77,8 +77,8 @@ async def run(
     finished = False
     try:
         lane = await client.open_goal_lane(gid, what, max(deadline - loop.time(), 0.05))
-        record.send_on_owner = lane.try_send
-        await lane.send(protocol.send_action_goal(action, wire_type, goal, id=gid, feedback=True))
+        record.cancel_on_owner = functools.partial(lane.try_cancel, action)
+        await lane.send_goal(action, wire_type, goal)
         sent = True
         try:
             async with asyncio.timeout_at(deadline):
@@ -141,17 +141,16 @@ async def cancel_on_both(client: RosbridgeClient, record: Goal) -> tuple[bool, b
     The main connection first: on an in-order bridge the goal's own lane is blocked by the goal. The lane's
     copy is for bridges that let only the starting connection cancel (rosbridge-server-rs).
     """
-    op = protocol.cancel_action_goal(record.action, id=record.goal_id)
     session = client.session
     if session is not None and session.info.status_replies:
         # Such a bridge refuses the main connection's copy with an error status: expected, so not logged.
         conn = session.connection
         conn.expect(record.goal_id, f"the refusal of goal {record.goal_id}'s cancel", _REFUSAL_SECONDS)
         asyncio.get_running_loop().call_later(_REFUSAL_SECONDS, conn.forget, record.goal_id)
-    on_main = session is not None and await session.try_send(op)
+    on_main = session is not None and await session.try_cancel_goal(record.action, record.goal_id)
     if on_main:
         client.unhandled_acts = True
-    on_lane = record.send_on_owner is not None and await record.send_on_owner(op)
+    on_lane = record.cancel_on_owner is not None and await record.cancel_on_owner()
     return on_main, on_lane
 
 
@@ -180,10 +179,9 @@ async def _cancel_after_drop(client: RosbridgeClient, registry: GoalRegistry, re
     Otherwise the goal is remembered and cancelled on the next connection.
     """
     session = client.session
-    op = protocol.cancel_action_goal(record.action, id=record.goal_id)
     if (
         session is not None
-        and await session.try_send(op)
+        and await session.try_cancel_goal(record.action, record.goal_id)
         and await session.confirm(min(CANCEL_CONFIRM_SECONDS, client.request_timeout))
     ):
         return True
