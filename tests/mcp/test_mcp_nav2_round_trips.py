@@ -12,6 +12,7 @@ import websockets
 from mcp_harness import Session, open_session, service_rows, warmed_up
 
 from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.sim.graph import ServiceEntry
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
@@ -200,3 +201,39 @@ async def test_get_node_info_learns_an_actions_type_once_for_its_hidden_services
     typed = {row["name"]: row["type"] for row in info["services"]}
     if nav2.dialect == "ros2":
         assert typed["/follow_path/_action/send_goal"] == "nav2_msgs/action/FollowPath_SendGoal"
+
+
+async def test_every_nodes_parameters_follow_the_service_list_from_one_listing_to_the_next(
+    make_sim: MakeSim,
+) -> None:
+    """A later listing asks the nodes the last one named while the service list is on its way; the new list
+    decides: a node that left is not in the answer, a node that came is asked and is."""
+
+    async def new_node_names(request: dict[str, Any]) -> dict[str, Any]:
+        return {"result": {"names": ["alpha", "beta"], "prefixes": []}}
+
+    robot = await make_sim(dialect="ros2", world="nav2")
+    async with open_session(robot.url) as session:
+        before = (await session.ok("list_parameters", {"filter": "/amcl:*"})).structured_content
+        assert before is not None
+        assert before["count"] > 0
+        robot.graph.remove_service("/amcl/list_parameters")
+        robot.graph.add_service(
+            ServiceEntry(
+                "/dock_camera/list_parameters",
+                "rcl_interfaces/srv/ListParameters",
+                "/dock_camera",
+                new_node_names,
+            )
+        )
+        calls = await asked(robot, session, "list_parameters", {"filter": "/amcl:*"})
+        after = (await session.ok("list_parameters", {"filter": "/amcl:*"})).structured_content
+        came = (await session.ok("list_parameters", {"filter": "/dock_camera:*"})).structured_content
+    assert after is not None
+    assert after["count"] == 0
+    assert came is not None
+    assert came["nodes"] == [{"node": "/dock_camera", "names": ["alpha", "beta"]}]
+    # One service list; every node the last listing named (/amcl too: its answer is not used) or the new one.
+    assert calls["/rosapi/services"] == 1
+    assert calls["/dock_camera/list_parameters"] == 1
+    assert calls["/controller_server/list_parameters"] == 1

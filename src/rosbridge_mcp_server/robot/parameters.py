@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -131,9 +132,25 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
             listed = values.get("names") if isinstance(values, dict) else None
             if isinstance(listed, list):
                 return sorted({n for n in listed if isinstance(n, str)})
-    # Every node with parameters offers <node>/list_parameters: the service list names them all.
-    suffix = "/list_parameters"
-    offering = sorted(name[: -len(suffix)] for name in await graph.service_names() if name.endswith(suffix))
+    return await _every_nodes_names(graph, client)
+
+
+_PARAMETER_SERVICE = "/list_parameters"
+
+
+def _offering(service_names: Iterable[str]) -> list[str]:
+    """The nodes that offer ``<node>/list_parameters`` (every ROS 2 node with parameters), sorted."""
+    cut = len(_PARAMETER_SERVICE)
+    return sorted(name[:-cut] for name in service_names if name.endswith(_PARAMETER_SERVICE))
+
+
+async def _every_nodes_names(graph: RosGraph, client: RosbridgeClient) -> list[str]:
+    """Every ROS 2 node's parameter names: the service list says which nodes to ask.
+
+    The nodes the last listing on this connection named are asked while the new listing is on its way (one
+    round trip instead of two while the graph stays the same); the new listing decides: a node it no longer
+    names is not waited for and its answer not used, a node new in it is asked then.
+    """
     session = client.session
     shared = session is not None and not session.lanes_by_default
     gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE_SHARED if shared else _LOOKUPS_AT_ONCE)
@@ -145,7 +162,17 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
             except (ServiceError, RequestTimeoutError):
                 return []  # a node that does not answer does not hide the others
 
-    per_node = await asyncio.gather(*(one(name) for name in offering))
+    seen = await graph.service_names_seen()
+    asked = {name: asyncio.ensure_future(one(name)) for name in _offering(seen or ())}
+    try:
+        offering = _offering(await graph.service_names())
+        for name in offering:
+            if name not in asked:
+                asked[name] = asyncio.ensure_future(one(name))
+        per_node = await asyncio.gather(*(asked[name] for name in offering))
+    finally:
+        for task in asked.values():
+            task.cancel()  # a node the new listing no longer names (or every one, when the listing failed)
     return sorted(name for names in per_node for name in names)
 
 

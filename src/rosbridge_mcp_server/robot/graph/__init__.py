@@ -62,6 +62,7 @@ class RosGraph:
         self.topic_details = topics.topic_details
 
         self.service_names = services.service_names
+        self.service_names_seen = services.service_names_seen
         self.service_type = services.service_type
         self.forget_service = services.forget_service
         self.services = services.services

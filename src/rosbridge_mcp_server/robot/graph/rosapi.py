@@ -57,6 +57,8 @@ class ConnectionKnowledge:
     # Types the bridge named when refusing a probe call; only listed, never used to ask rosapi for details.
     listed_types: dict[str, str] = field(default_factory=dict)
     refuses_unknown_fields: bool | None = None
+    # The names of the last service listing on this connection (None before the first one).
+    service_names: tuple[str, ...] | None = None
 
 
 class Rosapi:

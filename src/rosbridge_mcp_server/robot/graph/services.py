@@ -46,8 +46,19 @@ class Services:
 
     async def service_names(self) -> list[str]:
         """Every service name, sorted."""
+        await self._rosapi.ros_info()  # forgets what an earlier connection knew
         values = await self._rosapi.call("services")
-        return sorted(set(strings(values.get("services"))))
+        names = sorted(set(strings(values.get("services"))))
+        self._known.service_names = tuple(names)
+        return names
+
+    async def service_names_seen(self) -> tuple[str, ...] | None:
+        """The names of the last service listing on this connection, without asking (None before the first).
+
+        Only a guess at what the next listing will say, to start work that the listing then confirms.
+        """
+        await self._rosapi.ros_info()
+        return self._known.service_names
 
     async def service_type(self, service: str, *, cached: bool = False) -> str:
         """The type of ``service``, or ``""`` when rosapi does not know it.
