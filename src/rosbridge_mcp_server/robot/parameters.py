@@ -33,12 +33,13 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ParameterError",
+    "ParameterGroup",
     "ParameterName",
     "PlannedSet",
     "SetOutcome",
     "apply_set",
     "get_parameter",
-    "list_parameters",
+    "parameter_groups",
     "parse_name",
     "plan_set",
 ]
@@ -97,21 +98,21 @@ def parse_name(name: str, version: int) -> ParameterName:
     return ParameterName(f"{node}:{local}", node, local)
 
 
-async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | None) -> list[str]:
-    """Every parameter name (of ``node`` only, when given), sorted, in the dialect's form."""
+#: One node's parameter names, sorted and relative to it (ROS 2); on ROS 1 the node is ``""`` and the names
+#: are full (ROS 1 parameters belong to namespaces, not nodes).
+ParameterGroup = tuple[str, list[str]]
+
+
+async def parameter_groups(
+    graph: RosGraph, client: RosbridgeClient, node: str | None
+) -> list[ParameterGroup]:
+    """Every parameter name (of ``node`` only, when given), by node, nodes and names sorted.
+
+    ROS 2: ``[(node, names relative to it), ...]`` for the nodes that have any. ROS 1: ``[("", full names)]``.
+    """
     info = await graph.ros_info()
     if info.version == 1:
-        values = await graph.rosapi("get_param_names")
-        names = sorted({n for n in values.get("names") or () if isinstance(n, str)})
-        if node is None:
-            return names
-        prefix = node.rstrip("/") + "/"
-        found = [n for n in names if n.startswith(prefix)]
-        if not found:
-            # ROS 1 parameters belong to namespaces, not nodes: suggest the namespaces that have some.
-            spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
-            raise ParameterError(f"No parameters under {prefix}.{did_you_mean(node, spaces, cutoff=0.7)}")
-        return found
+        return [("", await _ros1_names(graph, node))]
     if node is not None:
         # Asked directly: the graph is consulted only to word a failure.
         try:
@@ -120,7 +121,7 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
             if not is_missing_service(exc):
                 raise
             raise ParameterError(_no_parameter_service(node, nodes=await node_names(graph))) from None
-        return sorted(f"{node}:{local}" for local in local_names)
+        return [(node, sorted(local_names))] if local_names else []
     if info.status_replies:
         # rosbridge-server-rs's built-in rosapi answers get_param_names safely (it kills rosapi 2.1.0, which
         # never answers with a status): one call instead of one per node.
@@ -131,8 +132,28 @@ async def list_parameters(graph: RosGraph, client: RosbridgeClient, node: str | 
         else:
             listed = values.get("names") if isinstance(values, dict) else None
             if isinstance(listed, list):
-                return sorted({n for n in listed if isinstance(n, str)})
+                by_node: dict[str, set[str]] = {}
+                for full in listed:
+                    if isinstance(full, str):
+                        owner, sep, local = full.partition(":")
+                        by_node.setdefault(owner if sep else "", set()).add(local if sep else full)
+                return [(owner, sorted(by_node[owner])) for owner in sorted(by_node)]
     return await _every_nodes_names(graph, client)
+
+
+async def _ros1_names(graph: RosGraph, node: str | None) -> list[str]:
+    """ROS 1: every parameter's full name (under ``node``'s namespace only, when given), sorted."""
+    values = await graph.rosapi("get_param_names")
+    names = sorted({n for n in values.get("names") or () if isinstance(n, str)})
+    if node is None:
+        return names
+    prefix = node.rstrip("/") + "/"
+    found = [n for n in names if n.startswith(prefix)]
+    if not found:
+        # ROS 1 parameters belong to namespaces, not nodes: suggest the namespaces that have some.
+        spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
+        raise ParameterError(f"No parameters under {prefix}.{did_you_mean(node, spaces, cutoff=0.7)}")
+    return found
 
 
 _PARAMETER_SERVICE = "/list_parameters"
@@ -144,12 +165,13 @@ def _offering(service_names: Iterable[str]) -> list[str]:
     return sorted(name[:-cut] for name in service_names if name.endswith(_PARAMETER_SERVICE))
 
 
-async def _every_nodes_names(graph: RosGraph, client: RosbridgeClient) -> list[str]:
+async def _every_nodes_names(graph: RosGraph, client: RosbridgeClient) -> list[ParameterGroup]:
     """Every ROS 2 node's parameter names: the service list says which nodes to ask.
 
     The nodes the last listing on this connection named are asked while the new listing is on its way (one
     round trip instead of two while the graph stays the same); the new listing decides: a node it no longer
-    names is not waited for and its answer not used, a node new in it is asked then.
+    names is not waited for and its answer not used, a node new in it is asked then. Each node's names are
+    sorted as they come, while the others are still on their way.
     """
     session = client.session
     shared = session is not None and not session.lanes_by_default
@@ -158,7 +180,7 @@ async def _every_nodes_names(graph: RosGraph, client: RosbridgeClient) -> list[s
     async def one(name: str) -> list[str]:
         async with gate:
             try:
-                return [f"{name}:{local}" for local in await _node_parameter_names(client, name)]
+                return sorted(await _node_parameter_names(client, name))
             except (ServiceError, RequestTimeoutError):
                 return []  # a node that does not answer does not hide the others
 
@@ -173,7 +195,7 @@ async def _every_nodes_names(graph: RosGraph, client: RosbridgeClient) -> list[s
     finally:
         for task in asked.values():
             task.cancel()  # a node the new listing no longer names (or every one, when the listing failed)
-    return sorted(name for names in per_node for name in names)
+    return [(name, names) for name, names in zip(offering, per_node, strict=True) if names]
 
 
 async def get_parameter(graph: RosGraph, client: RosbridgeClient, name: str) -> tuple[ParameterName, Any]:
@@ -290,7 +312,7 @@ async def _require_existing(
         values = await graph.rosapi("has_param", {"name": parsed.full})
         if values.get("exists") is True:
             return
-        names = await list_parameters(graph, client, None)
+        names = await _ros1_names(graph, None)
         raise ParameterError(
             f"Parameter {parsed.full} does not exist.{did_you_mean(parsed.full, names, cutoff=0.7)}"
         )
