@@ -139,12 +139,13 @@ async def run(
         lines = [f"No parameters{where}."]
     note = page_note(page, "parameters", filter, total)
     text = "\n".join([*lines, note] if note else lines)
-    data = ParametersAnswer(
+    # Built from our own rows: nothing to validate.
+    data = ParametersAnswer.model_construct(
         node=name,
         separator=":" if ros2 else "/",
         count=matched,
         offset=offset,
         more=page.more,
-        nodes=[NodeParameters(node=owner, names=names) for owner, names in shown],
+        nodes=[NodeParameters.model_construct(node=owner, names=names) for owner, names in shown],
     )
     return ToolAnswer(text=text, data=data)
