@@ -123,3 +123,24 @@ async def test_a_set_goes_through_the_safety_seam(sim_ros1: SimulatedRobot) -> N
         1,
     )
     assert (after.structured_content or {})["value"] == 69
+
+
+async def test_small_pages_walk_every_parameter_once_across_the_nodes(session: Session) -> None:
+    """Pages of 7, from offset 0 on, give the same names in the same order as the whole listing, each page
+    starting where the last ended (inside a node's names or at a new node) and saying how many are left."""
+    whole = (await session.ok("list_parameters", {"limit": 1000})).structured_content
+    assert whole is not None
+    everything = parameter_names(whole)
+    walked: list[str] = []
+    while True:
+        page = (await session.ok("list_parameters", {"limit": 7, "offset": len(walked)})).structured_content
+        assert page is not None
+        names = parameter_names(page)
+        assert page["count"] == len(everything)
+        assert page["more"] == len(everything) - len(walked) - len(names)
+        walked += names
+        if not page["more"]:
+            break
+        assert len(names) == 7
+    assert walked == everything
+    assert len(everything) > 14
