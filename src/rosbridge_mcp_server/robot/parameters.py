@@ -98,21 +98,20 @@ def parse_name(name: str, version: int) -> ParameterName:
     return ParameterName(f"{node}:{local}", node, local)
 
 
-#: One node's parameter names, sorted and relative to it (ROS 2); on ROS 1 the node is ``""`` and the names
-#: are full (ROS 1 parameters belong to namespaces, not nodes).
+#: One node's parameter names, sorted and relative to it. ROS 1 parameters belong to namespaces, not nodes:
+#: there the group is the first namespace (or the node asked for; ``""`` for the top level). The full name is
+#: the node, the dialect's separator (ROS 2 ``:``, ROS 1 ``/``) and the name.
 ParameterGroup = tuple[str, list[str]]
 
 
 async def parameter_groups(
     graph: RosGraph, client: RosbridgeClient, node: str | None
 ) -> list[ParameterGroup]:
-    """Every parameter name (of ``node`` only, when given), by node, nodes and names sorted.
-
-    ROS 2: ``[(node, names relative to it), ...]`` for the nodes that have any. ROS 1: ``[("", full names)]``.
-    """
+    """Every parameter name (of ``node`` only, when given), by node, nodes and names sorted: ``[(node, names
+    relative to it), ...]`` for the nodes that have any (:data:`ParameterGroup`)."""
     info = await graph.ros_info()
     if info.version == 1:
-        return [("", await _ros1_names(graph, node))]
+        return _by_namespace(await _ros1_names(graph, node), node)
     if node is not None:
         # Asked directly: the graph is consulted only to word a failure.
         try:
@@ -154,6 +153,22 @@ async def _ros1_names(graph: RosGraph, node: str | None) -> list[str]:
         spaces = sorted({"/".join(n.split("/")[:2]) for n in names if n.count("/") >= 2})
         raise ParameterError(f"No parameters under {prefix}.{did_you_mean(node, spaces, cutoff=0.7)}")
     return found
+
+
+def _by_namespace(names: list[str], node: str | None) -> list[ParameterGroup]:
+    """ROS 1's full names grouped under ``node`` or, without one, by their first namespace."""
+    grouped: dict[str, list[str]] = {}
+    for owner, local in sorted(_split_ros1(full, node) for full in names):
+        grouped.setdefault(owner, []).append(local)
+    return list(grouped.items())
+
+
+def _split_ros1(name: str, node: str | None) -> tuple[str, str]:
+    """(namespace, name relative to it) of a ROS 1 parameter's full name."""
+    if node is not None and name.startswith(node.rstrip("/") + "/"):
+        return node.rstrip("/"), name[len(node.rstrip("/")) + 1 :]
+    parts = name.split("/")
+    return ("/" + parts[1], "/".join(parts[2:])) if len(parts) > 2 else ("", name.lstrip("/"))
 
 
 _PARAMETER_SERVICE = "/list_parameters"

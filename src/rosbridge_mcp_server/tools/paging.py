@@ -27,6 +27,7 @@ __all__ = [
     "matcher",
     "page_note",
     "page_of",
+    "page_of_groups",
     "typed_line",
 ]
 
@@ -97,6 +98,46 @@ def page_of(
             break
         shown.append(row)
     return Page(shown, len(rows), offset)
+
+
+K = TypeVar("K")
+
+
+def page_of_groups(
+    groups: Sequence[tuple[K, Sequence[T]]],
+    *,
+    offset: int,
+    limit: int,
+    line: Callable[[T], str],
+    budget: int = TEXT_BUDGET - FRAME_RESERVE,
+) -> tuple[list[tuple[K, list[T]]], Page[T]]:
+    """:func:`page_of` over rows that come in groups (a node's parameter names), without flattening them all:
+    the groups on the page, each with its rows there, and the :class:`Page` of those rows."""
+    shown: list[tuple[K, list[T]]] = []
+    rows: list[T] = []
+    matched = used = 0
+    skip = offset
+    full = False
+    for key, items in groups:
+        matched += len(items)
+        if full:
+            continue
+        if skip >= len(items):
+            skip -= len(items)
+            continue
+        taken: list[T] = []
+        for row in items[skip : skip + limit - len(rows)]:
+            used += len(line(row)) + 1
+            if (rows or taken) and used > budget:
+                full = True
+                break
+            taken.append(row)
+        skip = 0
+        if taken:
+            shown.append((key, taken))
+            rows += taken
+        full = full or len(rows) >= limit
+    return shown, Page(rows, matched, offset)
 
 
 def page_note(page: Page[T], noun: str, filter_text: str | None, total: int) -> str:
