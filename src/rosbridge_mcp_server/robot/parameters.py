@@ -210,6 +210,8 @@ async def _every_nodes_names(graph: RosGraph, client: RosbridgeClient) -> list[P
     finally:
         for task in asked.values():
             task.cancel()  # a node the new listing no longer names (or every one, when the listing failed)
+        # Retrieve what an abandoned call ended with (a lost connection), so nothing is logged as unretrieved.
+        await asyncio.gather(*asked.values(), return_exceptions=True)
     return [(name, names) for name, names in zip(offering, per_node, strict=True) if names]
 
 
