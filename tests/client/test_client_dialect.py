@@ -164,13 +164,12 @@ def test_a_received_time_is_read_in_either_spelling(stamp: Any, seconds: float |
     assert Dialect.seconds(stamp) == seconds
 
 
-def test_only_the_client_and_the_wire_import_the_dialect_rules() -> None:
-    """robot/, tools/, cli/ and the rest ask the client's Dialect; none imports wire.dialect."""
+def _importers(module: str, allowed: tuple[str, ...]) -> list[str]:
+    """Our modules outside the *allowed* top-level packages that import *module* or anything under it."""
     package = Path(rosbridge_mcp_server.__file__).parent
     offenders = []
     for path in package.rglob("*.py"):
-        layer = path.relative_to(package).parts[0]
-        if layer in ("wire", "client"):
+        if path.relative_to(package).parts[0] in allowed:
             continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             names = []
@@ -178,25 +177,19 @@ def test_only_the_client_and_the_wire_import_the_dialect_rules() -> None:
                 names = [node.module] + [f"{node.module}.{alias.name}" for alias in node.names]
             elif isinstance(node, ast.Import):
                 names = [alias.name for alias in node.names]
-            if any(name == "rosbridge_mcp_server.wire.dialect" for name in names):
+            if any(name == module or name.startswith(module + ".") for name in names):
                 offenders.append(str(path.relative_to(package)))
+    return offenders
+
+
+def test_only_the_client_and_the_wire_import_the_dialect_rules() -> None:
+    """robot/, tools/, cli/ and the rest ask the client's Dialect; none imports wire.dialect."""
+    offenders = _importers("rosbridge_mcp_server.wire.dialect", ("wire", "client"))
     assert offenders == []
 
 
 def test_only_the_client_builds_ops_among_the_layers_above_the_wire() -> None:
     """robot/, tools/, safety/ and the rest send through the client's methods; none imports wire/ (the
     simulated robot, a bridge of its own, may)."""
-    package = Path(rosbridge_mcp_server.__file__).parent
-    offenders = []
-    for path in package.rglob("*.py"):
-        if path.relative_to(package).parts[0] in ("wire", "client", "sim"):
-            continue
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            names = []
-            if isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module] + [f"{node.module}.{alias.name}" for alias in node.names]
-            elif isinstance(node, ast.Import):
-                names = [alias.name for alias in node.names]
-            if any(name.startswith("rosbridge_mcp_server.wire") for name in names):
-                offenders.append(str(path.relative_to(package)))
+    offenders = _importers("rosbridge_mcp_server.wire", ("wire", "client", "sim"))
     assert offenders == []
