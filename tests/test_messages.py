@@ -68,10 +68,10 @@ MIXED = typedefs_from_rosapi(
 
 def test_a_fitting_message_passes_and_missing_fields_are_fine() -> None:
     """A partial Twist fits: rosbridge fills the rest with zeros."""
-    check_message(
-        {"linear": {"x": 0.5}, "angular": {"z": 0.3}}, "geometry_msgs/msg/Twist", TWIST, ros_version=2
-    )
-    check_message({}, "geometry_msgs/Twist", TWIST, ros_version=2)
+    partial = {"linear": {"x": 0.5}, "angular": {"z": 0.3}}
+    assert find_problems(partial, "geometry_msgs/msg/Twist", TWIST, ros_version=2) == []
+    assert find_problems({}, "geometry_msgs/Twist", TWIST, ros_version=2) == []
+    check_message(partial, "geometry_msgs/msg/Twist", TWIST, ros_version=2)
 
 
 def test_a_string_where_a_number_belongs_is_named_by_path() -> None:

@@ -29,6 +29,8 @@ async def test_the_example_is_accepted_by_publish_topic(session: Session, sim: S
     await session.ok(
         "publish_topic", {"topic": "/turtle1/cmd_vel", "message_type": twist, "message": example}
     )
+    await sim.world.wait_for(lambda w: bool(w.published.get("/turtle1/cmd_vel")))
+    assert sim.world.published["/turtle1/cmd_vel"][-1].msg == example
 
 
 async def test_a_service_type_shows_request_and_response(session: Session, sim: SimulatedRobot) -> None:

@@ -1,4 +1,4 @@
-"""The safety package and the acting layer import each other's parts; each must import first, on its own."""
+"""The safety seam, the acting layer and the safety package each import first, in a fresh interpreter."""
 
 from __future__ import annotations
 

@@ -18,7 +18,7 @@ from rosbridge_mcp_server.robot.velocity import is_velocity_type, stamped
 
 __all__ = ["SessionActivity", "Stream", "VelocityTopic"]
 
-_log = logging.getLogger("rosbridge_mcp_server.safety")
+_log = logging.getLogger(__name__)
 
 
 @dataclass

@@ -34,7 +34,8 @@ def console_app(view: Callable[[], dict[str, Any]]) -> Apps:
         title="Show the operator console",
         description=(
             "What the operator console shows: the robot's connection, the last acting calls, running "
-            "streams and goals, whether E-STOP is latched, confirmations waiting. Read-only; {}."
+            "streams and goals, whether E-STOP is latched, confirmations waiting. Read-only: it sends "
+            "nothing to the robot."
         ),
         annotations=ToolAnnotations(
             title="Show the operator console", read_only_hint=True, idempotent_hint=True, open_world_hint=True

@@ -78,16 +78,6 @@ def _error_reply(code: int, message: str, request_id: int | str | None) -> JSONR
     return JSONRPCError(jsonrpc="2.0", id=request_id, error=ErrorData(code=code, message=message))
 
 
-def _parsed_id(text: str) -> int | str | None:
-    try:
-        value = json.loads(text)
-    except (ValueError, RecursionError):
-        return None
-    if isinstance(value, dict):
-        return _valid_id(value.get("id"))
-    return None
-
-
 def _valid_id(value: object) -> int | str | None:
     if isinstance(value, str) or (isinstance(value, int) and not isinstance(value, bool)):
         return value

@@ -1,9 +1,9 @@
 """The MCP tools, one module each, named after its tool.
 
 Each module exposes ``SPEC`` (:class:`~rosbridge_mcp_server.tools.base.ToolSpec`) and
-``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. The catalogue (which tools there are, in what
-order, in which ``--tools`` group) is ``config.py``'s: :data:`TOOL_MODULES` is its names as modules, in that
-order, and ``server/app.py`` registers the ones the configuration chose.
+``async def run(ctx: ToolContext, <parameters>) -> ToolAnswer``. The catalogue (which tools there are, in
+what order, in which ``--tools`` group) is ``catalogue.py``'s: :data:`TOOL_MODULES` is its names as modules,
+in that order, and ``server/app.py`` registers the ones the configuration chose.
 """
 
 from __future__ import annotations
