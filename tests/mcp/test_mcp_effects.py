@@ -1,8 +1,8 @@
 """An effect is judged by what it does, under its canonical name, and only the console's person approves.
 
-Each test attacks as a user of an MCP client would (issue 25, findings 2, 3 and 8) and watches the robot from a
-raw rosbridge socket of its own: the goal topic, the action's status, the parameter's value read back from the
-robot, the turtle's pose.
+Each test attacks as a user of an MCP client would (issue 25, findings 2, 3 and 8) and watches the robot
+from a raw rosbridge socket of its own: the goal topic, the action's status, the parameter's value read back
+from the robot, the turtle's pose.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def policy(**sections: Any) -> Policy:
 
 
 class Person:
-    """The person at the MCP client (or the requester's own client): answers every question with ``action``."""
+    """The person at the MCP client (or the requester's own client): answers every question so."""
 
     def __init__(self, action: str = "accept") -> None:
         self.action = action
@@ -183,7 +183,7 @@ async def test_ros1_a_goal_published_on_the_goal_topic_meets_the_actions_deny(
 async def test_ros2_a_goal_sent_through_the_send_goal_service_meets_the_actions_deny(
     sim_ros2: SimulatedRobot,
 ) -> None:
-    """[actions] deny /fibonacci refuses publish_service /fibonacci/_action/send_goal; no goal status appears."""
+    """[actions] deny /fibonacci refuses publish_service /fibonacci/_action/send_goal; no goal appears."""
     sim = sim_ros2
     stream = io.StringIO()
     rules = policy(actions={"deny": ["/fibonacci"]})
