@@ -394,7 +394,7 @@ async def test_a_teleport_is_motion_the_person_confirms(sim: SimulatedRobot) -> 
     assert (stayed["x"], stayed["y"]) == (start["x"], start["y"]) != (1.0, 1.0)
     assert moved["x"] == 1.0
     assert len(person.questions) == 2
-    assert "motion of the robot by service /turtle1/teleport_absolute" in person.questions[0]
+    assert "motion of the robot through /turtle1/teleport_absolute" in person.questions[0]
 
 
 async def test_the_policy_names_more_motion_services_and_always_asks_for_every_service(
@@ -465,3 +465,29 @@ async def test_approvals_console_never_asks_the_requesters_client(sim: Simulated
     assert "--console" in text
     assert self_approving.questions == []
     assert len(sim.world.published["/turtle1/cmd_vel"]) == 1
+
+
+async def test_a_goal_pose_for_the_navigation_stack_is_motion_and_the_policy_names_more_topics(
+    sim: SimulatedRobot,
+) -> None:
+    """confirm = "motion" asks before a PoseStamped on /goal_pose (Nav2 drives there) and before a topic that
+    [topics] motion names; declined, neither reaches the robot; /chatter is asked about by no one."""
+    person = Person("decline")
+    pose_type = "geometry_msgs/msg/PoseStamped" if sim.dialect == "ros2" else "geometry_msgs/PoseStamped"
+    goal = {"topic": "/goal_pose", "message_type": pose_type, "message": {"pose": {"position": {"x": 2.0}}}}
+    rules = policy(confirm="motion", topics={"motion": ["/led/*"]})
+    led = {"topic": "/led/blink", "message_type": types_for(sim)["string"], "message": {"data": "on"}}
+    async with (
+        watching(sim) as watcher,
+        open_session(sim.url, guard=None, policy=rules, elicitation_callback=person) as session,
+    ):
+        await watcher.subscribe("/goal_pose", pose_type)
+        await watcher.subscribe("/led/blink", types_for(sim)["string"])
+        await watcher.subscribe("/chatter", types_for(sim)["string"])
+        texts = [await session.error("publish_topic", goal), await session.error("publish_topic", led)]
+        await barrier(session, watcher, sim)
+    assert all("The person declined" in text for text in texts)
+    assert len(person.questions) == 2
+    assert "motion of the robot through /goal_pose" in person.questions[0]
+    assert "/goal_pose" not in watcher.seen
+    assert "/led/blink" not in watcher.seen

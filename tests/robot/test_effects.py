@@ -24,8 +24,15 @@ from rosbridge_mcp_server.robot.names import parameter_name
         ),
         ("/fibonacci/cancel", "actionlib_msgs/GoalID", (Effect("action", "/fibonacci", "cancel"),)),
         ("/fibonacci/goal", "std_msgs/String", ()),
-        ("/goal_pose", "geometry_msgs/msg/PoseStamped", ()),
         ("/turtle1/cmd_vel", "geometry_msgs/Twist", ()),
+        ("/goal_pose", "geometry_msgs/msg/PoseStamped", (Effect("motion", "/goal_pose", "move"),)),
+        (
+            "/r1/move_base_simple/goal",
+            "geometry_msgs/PoseStamped",
+            (Effect("motion", "/r1/move_base_simple/goal", "move"),),
+        ),
+        ("/arm/command", "trajectory_msgs/msg/JointTrajectory", (Effect("motion", "/arm/command", "move"),)),
+        ("/my_goal_pose", "geometry_msgs/msg/PoseStamped", ()),
     ],
 )
 def test_an_actionlib_topic_is_a_goal_or_cancel_of_its_action(

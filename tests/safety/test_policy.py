@@ -162,13 +162,16 @@ def test_describe_lists_what_the_policy_restricts() -> None:
 def test_approvals_and_motion_services_are_read_and_described(tmp_path: Path) -> None:
     """approvals = "console" and [services] motion load, and check / the start-up log name them."""
     text = 'confirm = "motion"\napprovals = "console"\n[services]\nmotion = ["/arm/move_to"]\n'
+    text += '[topics]\nmotion = ["/arm/command"]\n'
     policy = load_policy(write(tmp_path, text))
     assert policy.approvals == "console"
     assert policy.motion_services == ("/arm/move_to",)
+    assert policy.motion_topics == ("/arm/command",)
     assert policy.services == NameRules()
     described = "\n".join(policy.describe())
     assert "approvals = console: only the person at the operator console confirms" in described
     assert "[services] motion: /arm/move_to" in described
+    assert "[topics] motion: /arm/command" in described
     assert load_policy(write(tmp_path, "")).approvals == "client"
 
 

@@ -13,6 +13,10 @@ ROS reaches the same effect several ways, and a rule written for one of them mus
   (``dynamic_reconfigure/Reconfigure``: ``/<node>/<name>`` for each value in the config), rosapi's
   ``set_param`` and ``delete_param`` (both lines). On ROS 1 a write to a name replaces everything under it
   (a parameter is also a namespace), so such a write is marked ``subtree``.
+* **Motion by topic**, besides velocity commands (which :mod:`~rosbridge_mcp_server.robot.velocity` knows
+  by type): joint trajectories, jogs and Ackermann drive commands by type (:data:`MOTION_TOPIC_TYPES`), and a
+  navigation goal published on ``/move_base_simple/goal`` (ROS 1 move_base) or ``/goal_pose`` (ROS 2 Nav2's
+  bt_navigator) (:data:`MOTION_GOAL_TOPICS`).
 * **Motion by service.** A service that moves the robot or a body of it: by type
   (:data:`MOTION_SERVICE_TYPES`: turtlesim's teleports, Gazebo's set-state services, MoveIt's
   ``ExecuteKnownTrajectory``) or, when the type is not known, by the name's last part
@@ -32,8 +36,10 @@ from rosbridge_mcp_server.errors import NotSentError
 from rosbridge_mcp_server.robot.names import parameter_name
 
 __all__ = [
+    "MOTION_GOAL_TOPICS",
     "MOTION_SERVICE_LEAVES",
     "MOTION_SERVICE_TYPES",
+    "MOTION_TOPIC_TYPES",
     "Effect",
     "parameter_write",
     "service_effects",
@@ -57,10 +63,23 @@ class Effect:
     def describe(self) -> str:
         """E.g. ``a goal of action /fibonacci`` or ``a set of parameter /turtlesim:background_r``."""
         if self.kind == "motion":
-            return f"motion of the robot by service {self.name}"
+            return f"motion of the robot through {self.name}"
         under = " and everything under it" if self.subtree else ""
         return f"a {self.what} of {self.kind} {self.name}{under}"
 
+
+#: Message types that command motion (velocity commands aside), in the short ``pkg/Type`` form.
+MOTION_TOPIC_TYPES = frozenset(
+    {
+        "trajectory_msgs/JointTrajectory",
+        "trajectory_msgs/MultiDOFJointTrajectory",
+        "control_msgs/JointJog",
+        "ackermann_msgs/AckermannDrive",
+        "ackermann_msgs/AckermannDriveStamped",
+    }
+)
+#: Topics a navigation stack takes a goal pose on (the robot then drives there).
+MOTION_GOAL_TOPICS = ("/move_base_simple/goal", "/goal_pose")
 
 #: Service types that move the robot (or a simulated body), in the short ``pkg/Type`` form both lines share.
 MOTION_SERVICE_TYPES = frozenset(
@@ -101,7 +120,8 @@ def topic_effects(topic: str, type_name: str) -> tuple[Effect, ...]:
     """What publishing a ``type_name`` message on (the absolute) ``topic`` does besides the publish.
 
     ROS 1 actionlib: ``<action>/goal`` with a ``…ActionGoal`` message is a goal of ``<action>``;
-    ``<action>/cancel`` with ``actionlib_msgs/GoalID`` a cancel of it.
+    ``<action>/cancel`` with ``actionlib_msgs/GoalID`` a cancel of it. A motion command other than a velocity
+    command (a joint trajectory, a goal pose for the navigation stack, also under a namespace) is motion.
     """
     parent, _, leaf = topic.rpartition("/")
     short = Dialect.short_type(type_name) if "/" in type_name else type_name
@@ -109,6 +129,8 @@ def topic_effects(topic: str, type_name: str) -> tuple[Effect, ...]:
         return (Effect("action", parent or "/", "goal"),)
     if leaf == "cancel" and short == "actionlib_msgs/GoalID":
         return (Effect("action", parent or "/", "cancel"),)
+    if short in MOTION_TOPIC_TYPES or topic in MOTION_GOAL_TOPICS or topic.endswith(MOTION_GOAL_TOPICS):
+        return (Effect("motion", topic, "move"),)
     return ()
 
 

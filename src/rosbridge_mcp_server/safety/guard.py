@@ -316,15 +316,16 @@ def moves(act: Act, policy: Policy) -> bool:
     """Whether ``act`` moves the robot, as ``confirm = "motion"`` judges it.
 
     A velocity command (Twist / TwistStamped on any topic), an action goal (``publish_action``, or a goal sent
-    through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a known motion service
-    (``robot/effects.py``: turtlesim's teleports, Gazebo's set-state services, ...) and a service the
-    policy's ``[services] motion`` names.
+    through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a known motion command
+    or service (``robot/effects.py``: joint trajectories, goal poses, turtlesim's teleports, Gazebo's
+    set-state services, ...) and a topic or service the policy's ``[topics]`` / ``[services] motion`` names.
     """
     if act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type)):
         return True
     if any(e.kind == "motion" or (e.kind == "action" and e.what == "goal") for e in act.effects):
         return True
-    return act.kind == "service" and any(fnmatchcase(act.name, p) for p in policy.motion_services)
+    listed = {"service": policy.motion_services, "topic": policy.motion_topics}.get(act.kind, ())
+    return any(fnmatchcase(act.name, pattern) for pattern in listed)
 
 
 def question(act: Act, clamp: str | None = None) -> str:

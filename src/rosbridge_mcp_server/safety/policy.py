@@ -11,8 +11,8 @@ robot uncapped). The file::
     [topics]                     # publishing; also [services], [actions], [parameters]
     allow = ["/turtle1/*"]       # absent = everything; shell-style globs, * crosses /
     deny = ["/rosout"]           # deny wins over allow
-    [services]
-    motion = ["/arm/move_to"]    # services that move the robot (confirm = "motion" asks), besides known ones
+    [services]                   # [topics] too
+    motion = ["/arm/move_to"]    # what moves the robot (confirm = "motion" asks), besides the known ones
     [velocity]                   # every geometry_msgs Twist / TwistStamped, on any topic
     max_linear = 0.5             # m/s, length of the linear vector
     max_angular = 1.0            # rad/s, length of the angular vector
@@ -137,6 +137,8 @@ class Policy:
     approvals: Approvals = "client"
     #: Services that move the robot, besides the known motion services (``[services] motion``).
     motion_services: tuple[str, ...] = ()
+    #: Topics whose messages move the robot, besides velocity commands and known ones (``[topics] motion``).
+    motion_topics: tuple[str, ...] = ()
     topics: NameRules = field(default_factory=NameRules)
     services: NameRules = field(default_factory=NameRules)
     actions: NameRules = field(default_factory=NameRules)
@@ -172,6 +174,8 @@ class Policy:
         lines.append(f"  confirm = {self.confirm}: {_CONFIRM_TEXT[self.confirm]}{asked}")
         if self.approvals == "console":
             lines.append("  approvals = console: only the person at the operator console confirms")
+        if self.motion_topics:
+            lines.append(f"  [topics] motion: {', '.join(self.motion_topics)} (besides the known ones)")
         if self.motion_services:
             lines.append(f"  [services] motion: {', '.join(self.motion_services)} (besides the known ones)")
         for section in ACT_KINDS:
@@ -211,7 +215,7 @@ _CONFIRM_TEXT: dict[Confirm, str] = {
 
 _TOP_KEYS = ("read_only", "confirm", "confirm_timeout", "approvals", *ACT_KINDS, "velocity", "publish")
 _RULE_KEYS = ("allow", "deny")
-_SERVICE_KEYS = ("allow", "deny", "motion")
+_MOTION_KEYS = ("allow", "deny", "motion")
 _VELOCITY_KEYS = ("max_linear", "max_angular", "mode")
 _PUBLISH_KEYS = ("max_rate_hz", "max_duration")
 
@@ -251,14 +255,18 @@ def parse_policy(data: Mapping[str, Any], *, where: str = "policy") -> Policy:
             f"{where}: approvals must be one of {', '.join(repr(a) for a in APPROVALS)}, not {approvals!r}"
         )
     rules = {section: _name_rules(data, section, where) for section in ACT_KINDS}
-    services = _table(data, "services", where, _SERVICE_KEYS)
-    motion = _globs(services, "motion", "services", where) if "motion" in services else ()
+    motion = {
+        section: _globs(table, "motion", section, where) if "motion" in table else ()
+        for section in ("topics", "services")
+        for table in (_table(data, section, where, _MOTION_KEYS),)
+    }
     return Policy(
         read_only=read_only,
         confirm=confirm_text,
         confirm_timeout=DEFAULT_CONFIRM_TIMEOUT if timeout is None else timeout,
         approvals=approvals,
-        motion_services=motion,
+        motion_services=motion["services"],
+        motion_topics=motion["topics"],
         topics=rules["topics"],
         services=rules["services"],
         actions=rules["actions"],
@@ -295,7 +303,7 @@ def _bool(data: Mapping[str, Any], key: str, where: str) -> bool:
 
 
 def _name_rules(data: Mapping[str, Any], section: str, where: str) -> NameRules:
-    table = _table(data, section, where, _SERVICE_KEYS if section == "services" else _RULE_KEYS)
+    table = _table(data, section, where, _MOTION_KEYS if section in ("topics", "services") else _RULE_KEYS)
     allow = _globs(table, "allow", section, where) if "allow" in table else None
     deny = _globs(table, "deny", section, where) if "deny" in table else ()
     return NameRules(allow=allow, deny=deny)
