@@ -2,9 +2,14 @@
 
 :class:`PolicyGuard` is what the acting layer calls before anything is sent. Order matters:
 
-1. ``read_only`` and the allow/deny globs: a name the policy forbids is refused without asking anyone;
+1. ``read_only`` and the allow/deny globs, for the act's carrier (the topic, the service) and for each of its
+   effects (the action a goal topic reaches, the parameters a ``set_parameters`` call writes: see
+   :mod:`rosbridge_mcp_server.robot.effects`), under canonical names: a name the policy forbids is refused
+   without asking anyone;
 2. stream limits and velocity caps: refused, or (``mode = "clamp"``) scaled down to the cap;
-3. confirmation, with the act as it will be sent (after clamping), so the person approves exactly that.
+3. confirmation, with the act as it will be sent (after clamping), so the person approves exactly that: asked
+   of the MCP client's person (the console's when the client cannot ask), or with ``approvals = "console"``
+   of the console's person only.
 
 A refusal raises :class:`~rosbridge_mcp_server.errors.PolicyRefusal` whose text names the rule. Every decision
 is one audit line (:class:`Audit`): on stderr, and as JSON in the audit file when one is configured.
