@@ -160,3 +160,26 @@ async def test_a_client_without_elicitation_cannot_confirm_so_nothing_moves(tmp_
         assert CMD_VEL not in robot.world.published
     assert refused["isError"] is True
     assert "cannot ask (it does not support elicitation)" in text(refused)
+
+
+async def test_approvals_console_never_asks_a_self_approving_client(tmp_path: Path) -> None:
+    """approvals = "console" over stdio: a client that would accept anything is never asked; without a console
+    the motion is refused saying so, nothing moves, and the start-up log warned of it."""
+    policy = tmp_path / "policy.toml"
+    policy.write_text('approvals = "console"\n' + POLICY, encoding="utf-8")
+    async with SimulatedRobot(port=0) as robot:
+        client = await start(
+            "--url",
+            robot.url,
+            "--policy",
+            str(policy),
+            answer={"action": "accept", "content": {"approve": True}},
+        )
+        await client.initialize(elicitation=True)
+        refused = await client.call("publish_topic", twist(0.1))
+        stderr = await client.finish()
+        assert CMD_VEL not in robot.world.published
+    assert client.questions == []
+    assert refused["isError"] is True
+    assert "approvals = 'console'" in text(refused)
+    assert "no console is served (--console)" in stderr

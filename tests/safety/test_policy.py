@@ -104,6 +104,9 @@ def test_a_policy_error_is_a_configuration_error(tmp_path: Path) -> None:
         ("confirm_timeout = 'long'", "confirm_timeout must be a number of seconds"),
         ("topics = 3", "topics must be a table"),
         ("read_only = tru", "not valid TOML"),
+        ("approvals = 'anyone'", "approvals must be one of 'client', 'console'"),
+        ("[services]\nmotion = '/arm/move'", r"\[services\] motion must be a list"),
+        ("[actions]\nmotion = ['/a']", r"unknown key \[actions\] 'motion'"),
     ],
 )
 def test_a_bad_value_is_an_error_saying_what_fits(tmp_path: Path, text: str, fragment: str) -> None:
@@ -154,3 +157,39 @@ def test_describe_lists_what_the_policy_restricts() -> None:
     assert "linear ≤ 0.5 m/s" in text
     assert "no restrictions" in Policy().describe()[0]
     assert "read_only" in "\n".join(Policy(read_only=True).describe())
+
+
+def test_approvals_and_motion_services_are_read_and_described(tmp_path: Path) -> None:
+    """approvals = "console" and [services] motion load, and check / the start-up log name them."""
+    text = 'confirm = "motion"\napprovals = "console"\n[services]\nmotion = ["/arm/move_to"]\n'
+    text += '[topics]\nmotion = ["/arm/command"]\n'
+    policy = load_policy(write(tmp_path, text))
+    assert policy.approvals == "console"
+    assert policy.motion_services == ("/arm/move_to",)
+    assert policy.motion_topics == ("/arm/command",)
+    assert policy.services == NameRules()
+    described = "\n".join(policy.describe())
+    assert "approvals = console: only the person at the operator console confirms" in described
+    assert "[services] motion: /arm/move_to" in described
+    assert "[topics] motion: /arm/command" in described
+    assert load_policy(write(tmp_path, "")).approvals == "client"
+
+
+@pytest.mark.parametrize(
+    ("name", "deny", "refused"),
+    [
+        ("/turtlesim", "/turtlesim/background_r", True),
+        ("/turtlesim", "/turtlesim/*", True),
+        ("/turtlesim", "/turtle*", True),
+        ("/turtlesim", "/turtlesim", True),
+        ("/turtlesim", "/turtlesimulator/x", False),
+        ("/turtlesim", "/camera/*", False),
+        ("/turtlesim/background_r", "/turtlesim/background_g", False),
+    ],
+)
+def test_a_subtree_write_is_refused_when_a_deny_may_match_under_it(
+    name: str, deny: str, refused: bool
+) -> None:
+    """A ROS 1 write replaces everything under its name, so a deny below it refuses it."""
+    rules = NameRules(deny=(deny,))
+    assert (rules.refusal(name, "parameters", subtree=True) is not None) is refused

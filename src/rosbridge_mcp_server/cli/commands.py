@@ -267,6 +267,13 @@ async def serve(
                 _log.warning("%s%s", where, warning)
             for line in robot_config.policy.describe():
                 _log.info("%ssafety %s", where, line.strip())
+            rules = robot_config.policy
+            if rules.approvals == "console" and rules.confirm != "never" and console is None:
+                _log.warning(
+                    "%sthe policy sends every confirmation to the operator console (approvals = console), "
+                    "but no console is served (--console): every act that needs a confirmation is refused",
+                    where,
+                )
             client = RosbridgeClient(
                 robot_config.url,
                 connect_timeout=robot_config.connect_timeout,

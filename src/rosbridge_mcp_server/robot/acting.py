@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotSentError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.effects import parameter_write, service_effects, topic_effects
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit
@@ -75,7 +76,18 @@ async def publish_once(
     Before the publish, a ping proves the bridge reads the connection now (see :func:`_bridge_is_reading`).
     """
     name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
-    act = await approved(ctx, Act(tool, "topic", name, bridge_type, body))
+    act = await approved(
+        ctx,
+        Act(
+            tool,
+            "topic",
+            name,
+            bridge_type,
+            body,
+            effects=topic_effects(name, bridge_type),
+            given=_given(topic, name),
+        ),
+    )
 
     async def send() -> None:
         await _bridge_is_reading(ctx)
@@ -114,6 +126,11 @@ async def _checked_message(
         looks_like=f"A {bridge_type} message",
     )
     return name, bridge_type, message
+
+
+def _given(written: str, canonical: str) -> str | None:
+    """The name as the caller wrote it, for the audit, when it is not the canonical one."""
+    return written if written != canonical else None
 
 
 def _as_read(dialect: Dialect, message: dict[str, Any]) -> Any:
@@ -164,7 +181,20 @@ async def publish_stream(
     cancelled; cancellation stops it at once otherwise and is re-raised after that zero message.
     """
     name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
-    act = await approved(ctx, Act(tool, "topic", name, bridge_type, body, rate_hz=rate_hz, duration=duration))
+    act = await approved(
+        ctx,
+        Act(
+            tool,
+            "topic",
+            name,
+            bridge_type,
+            body,
+            rate_hz=rate_hz,
+            duration=duration,
+            effects=topic_effects(name, bridge_type),
+            given=_given(topic, name),
+        ),
+    )
     rate = act.rate_hz or rate_hz
     length = act.duration if act.duration is not None else duration
     planned = max(1, round(length * rate))
@@ -304,7 +334,11 @@ async def call_service(
                 looks_like="A request",
             )
 
-    act = await approved(ctx, Act(tool, "service", name, srv_type, request))
+    # What the call does (an action's goal, parameter writes, motion) is judged too, not only its name.
+    effects = service_effects(name, srv_type, request, dialect.version)
+    act = await approved(
+        ctx, Act(tool, "service", name, srv_type, request, effects=effects, given=_given(service, name))
+    )
     try:
         response = await carry_out(
             ctx, act, lambda: ctx.client.call_service(act.name, act.payload, timeout=timeout)
@@ -355,7 +389,7 @@ async def send_goal(
             looks_like="A goal",
         )
 
-    act = await approved(ctx, Act(tool, "action", name, wire_type, goal))
+    act = await approved(ctx, Act(tool, "action", name, wire_type, goal, given=_given(action, name)))
     outcome: Goal = await carry_out(
         ctx,
         act,
@@ -405,7 +439,20 @@ async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) ->
 async def set_parameter(ctx: Acting, *, tool: str, name: str, value: Any) -> SetOutcome:
     """Check the parameter (name form, and on ROS 2 that its node has it), then set it and read it back."""
     planned = await plan_set(ctx.graph, ctx.client, name, value)
-    act = await approved(ctx, Act(tool, "parameter", planned.name.full, "", planned.value))
+    full = planned.name.full
+    dialect = await ctx.graph.dialect()
+    act = await approved(
+        ctx,
+        Act(
+            tool,
+            "parameter",
+            full,
+            "",
+            planned.value,
+            effects=(parameter_write(full, dialect.version),),
+            given=_given(name, full),
+        ),
+    )
     outcome: SetOutcome = await carry_out(
         ctx, act, lambda: apply_set(ctx.graph, ctx.client, planned, act.payload)
     )

@@ -7,7 +7,14 @@ import re
 
 from rosbridge_mcp_server.errors import NotSentError
 
-__all__ = ["MAX_NAME_CHARS", "absolute", "absolute_name", "check_name_for_ros", "did_you_mean"]
+__all__ = [
+    "MAX_NAME_CHARS",
+    "absolute",
+    "absolute_name",
+    "check_name_for_ros",
+    "did_you_mean",
+    "parameter_name",
+]
 
 #: A ROS 2 name has at most 247 characters (rmw's limit: 255 less room for a DDS prefix); ROS 1 names never
 #: come near it.
@@ -56,6 +63,42 @@ def absolute_name(name: str, what: str) -> str:
             "only the letters A-Z and a-z, digits, _ and / (e.g. /turtle1/cmd_vel)."
         )
     return text
+
+
+def parameter_name(name: str, ros_version: int) -> str:
+    """A parameter's canonical full name: the one the robot acts on, in the dialect's form.
+
+    ROS 1: a graph name, made absolute as :func:`absolute` does (``//turtlesim//background_r/`` is
+    ``/turtlesim/background_r``: the parameter server resolves it so). ROS 2: ``/node:name``, the node part
+    made absolute the same way (``/turtlesim/:background_r`` and ``turtlesim//:background_r`` are the
+    node ``/turtlesim``'s); the name within the node is kept as written (ROS 2 names hold dots and slashes,
+    and a node knows only the exact name it declared). :class:`NotSentError` for what cannot be one.
+    """
+    text = name.strip()
+    if not text or any(ch.isspace() for ch in text):
+        raise NotSentError(f"The parameter name {name!r} is empty or holds whitespace.")
+    if ros_version == 1:
+        if ":" in text:
+            raise NotSentError(
+                f"{text!r} is a ROS 2 style name; ROS 1 parameters are graph names like "
+                "/turtlesim/background_r."
+            )
+        if "~" in text:
+            raise NotSentError(
+                f"The parameter name {text!r} is a private name (~), which only means something inside a "
+                "node; give the full name, e.g. /turtlesim/background_r."
+            )
+        full = absolute(text)
+        if full == "/":
+            raise NotSentError(f"The parameter name {name!r} names the root; give a parameter's name.")
+        return full
+    node, sep, local = text.partition(":")
+    if not sep or not node.strip("/") or not local or ":" in local:
+        raise NotSentError(
+            f"{text!r} is not a ROS 2 parameter name: they look like /node:name, e.g. "
+            "/turtlesim:background_r (list_parameters shows them)."
+        )
+    return f"{absolute(node)}:{local}"
 
 
 def check_name_for_ros(name: str, what: str, ros_version: int) -> None:

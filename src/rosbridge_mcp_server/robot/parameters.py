@@ -22,9 +22,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import NotOnRobotError, NotSentError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.graph import is_missing_service
-from rosbridge_mcp_server.robot.names import did_you_mean
+from rosbridge_mcp_server.robot.names import did_you_mean, parameter_name
 from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_names
 
 if TYPE_CHECKING:
@@ -77,25 +77,17 @@ class SetOutcome:
 
 
 def parse_name(name: str, version: int) -> ParameterName:
-    """``/turtlesim:background_r`` (ROS 2) or ``/turtlesim/background_r`` (ROS 1), checked."""
-    text = name.strip()
-    if not text or any(ch.isspace() for ch in text):
-        raise ParameterError(f"The parameter name {name!r} is empty or holds whitespace.")
+    """``/turtlesim:background_r`` (ROS 2) or ``/turtlesim/background_r`` (ROS 1), checked and canonical
+    (:func:`~rosbridge_mcp_server.robot.names.parameter_name`: ``/turtlesim//:background_r`` is
+    ``/turtlesim:background_r``)."""
+    try:
+        full = parameter_name(name, version)
+    except NotSentError as exc:
+        raise ParameterError(str(exc)) from None
     if version == 1:
-        if ":" in text:
-            raise ParameterError(
-                f"{text!r} is a ROS 2 style name; ROS 1 parameters are graph names like "
-                "/turtlesim/background_r."
-            )
-        return ParameterName(text if text.startswith("/") else "/" + text)
-    node, sep, local = text.partition(":")
-    if not sep or not node.strip("/") or not local or ":" in local:
-        raise ParameterError(
-            f"{text!r} is not a ROS 2 parameter name: they look like /node:name, e.g. "
-            "/turtlesim:background_r (list_parameters shows them)."
-        )
-    node = node if node.startswith("/") else "/" + node
-    return ParameterName(f"{node}:{local}", node, local)
+        return ParameterName(full)
+    node, _, local = full.partition(":")
+    return ParameterName(full, node, local)
 
 
 #: One node's parameter names, sorted and relative to it. ROS 1 parameters belong to namespaces, not nodes:

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.effects import Effect
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -36,7 +37,14 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Act:
-    """One act on the robot, as it will be sent: checked, normalised, with an absolute name."""
+    """One act on the robot, as it will be sent: checked, normalised, with an absolute name.
+
+    ``kind`` and ``name`` are the carrier the tool names (the topic published on, the service called);
+    ``effects`` what the robot does besides (:mod:`rosbridge_mcp_server.robot.effects`: the goal a
+    ``…/goal`` topic starts, the parameters a ``set_parameters`` call writes, a teleport's motion), judged by
+    the guard as if the matching tool had been used. ``given`` is the name as the caller wrote it, when that
+    is not the canonical ``name``.
+    """
 
     tool: str  #: the tool that asks, e.g. "publish_topic"
     kind: Literal["topic", "service", "action", "parameter"]
@@ -45,6 +53,8 @@ class Act:
     payload: Any  #: message / request / goal / value that will be sent
     rate_hz: float | None = None  #: publish streams only
     duration: float | None = None  #: publish streams only
+    effects: tuple[Effect, ...] = ()
+    given: str | None = None
 
 
 Answer = Literal["accept", "decline", "cancel", "unsupported"]

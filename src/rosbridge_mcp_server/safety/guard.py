@@ -2,9 +2,14 @@
 
 :class:`PolicyGuard` is what the acting layer calls before anything is sent. Order matters:
 
-1. ``read_only`` and the allow/deny globs: a name the policy forbids is refused without asking anyone;
+1. ``read_only`` and the allow/deny globs, for the act's carrier (the topic, the service) and for each of its
+   effects (the action a goal topic reaches, the parameters a ``set_parameters`` call writes: see
+   :mod:`rosbridge_mcp_server.robot.effects`), under canonical names: a name the policy forbids is refused
+   without asking anyone;
 2. stream limits and velocity caps: refused, or (``mode = "clamp"``) scaled down to the cap;
-3. confirmation, with the act as it will be sent (after clamping), so the person approves exactly that.
+3. confirmation, with the act as it will be sent (after clamping), so the person approves exactly that: asked
+   of the MCP client's person (the console's when the client cannot ask), or with ``approvals = "console"``
+   of the console's person only.
 
 A refusal raises :class:`~rosbridge_mcp_server.errors.PolicyRefusal` whose text names the rule. Every decision
 is one audit line (:class:`Audit`): on stderr, and as JSON in the audit file when one is configured.
@@ -20,6 +25,7 @@ import datetime
 import json
 import logging
 from collections.abc import Callable, Iterator
+from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
@@ -41,6 +47,7 @@ __all__ = [
     "PolicyGuard",
     "calling_as",
     "current_caller",
+    "moves",
     "question",
 ]
 
@@ -105,15 +112,19 @@ class Audit:
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
         level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
         caller = current_caller()
+        written = f" (written {act.given!r})" if act.given is not None else ""
+        effects = f" [{'; '.join(e.describe() for e in act.effects)}]" if act.effects else ""
         _log.log(
             level,
-            "audit: %s%s %s %s %s%s: %s%s%s",
+            "audit: %s%s %s %s%s %s%s%s: %s%s%s",
             f"[{self.robot}] " if self.robot else "",
             act.tool,
             act.kind,
             act.name,
+            written,
             act.type or "-",
             stream,
+            effects,
             outcome,
             extra,
             f" [caller {caller}]" if caller else "",
@@ -132,6 +143,13 @@ class Audit:
             "rate_hz": act.rate_hz,
             "duration": act.duration,
         }
+        if act.given is not None:
+            entry["given"] = act.given
+        if act.effects:
+            entry["effects"] = [
+                {"kind": e.kind, "name": e.name, "what": e.what, **({"subtree": True} if e.subtree else {})}
+                for e in act.effects
+            ]
         if caller is not None:
             entry["caller"] = caller
         if self.robot is not None:
@@ -208,6 +226,16 @@ class PolicyGuard:
         refusal = rules.refusal(act.name, section)
         if refusal is not None:
             return refusal
+        for effect in act.effects:
+            # Judged as if the matching tool had been used: a goal sent through its topic or service meets
+            # [actions], a parameter set through a service meets [parameters]. A cancel only stops what the
+            # robot does (cancel_action asks no rule either); motion by service has no section of its own.
+            if effect.kind == "motion" or effect.what == "cancel":
+                continue
+            section, rules = policy.rules_for(effect.kind)
+            refusal = rules.refusal(effect.name, section, subtree=effect.subtree)
+            if refusal is not None:
+                return f"{refusal}: {act.tool} on {act.name} is {effect.describe()}"
         limits = policy.publish
         if act.rate_hz is not None:
             if limits.max_rate_hz is not None and act.rate_hz > limits.max_rate_hz:
@@ -257,13 +285,18 @@ class PolicyGuard:
         if confirm == "always":
             return True
         if confirm == "motion":
-            return act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type))
+            return moves(act, self.policy)
         return False
 
     async def _ask(self, act: Act, ask: AskPerson, clamp: str | None) -> Answer | str:
         text = question(act, clamp)
         try:
             async with asyncio.timeout(self.policy.confirm_timeout):
+                if self.policy.approvals == "console":
+                    # Only the person at the console: the MCP client's own answer could be the requester's.
+                    if self.operator is None or not self.operator.present:
+                        return "no console"
+                    return await self.operator.ask(text, act)
                 answer = await ask(text)
                 if answer == "unsupported" and self.operator is not None and self.operator.present:
                     # The MCP client cannot ask: the person at the console can, within the same timeout.
@@ -284,6 +317,22 @@ _LATCHED_TEXT = (
 )
 
 
+def moves(act: Act, policy: Policy) -> bool:
+    """Whether ``act`` moves the robot, as ``confirm = "motion"`` judges it.
+
+    A velocity command (Twist / TwistStamped on any topic), an action goal (``publish_action``, or a goal sent
+    through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a known motion command
+    or service (``robot/effects.py``: joint trajectories, goal poses, turtlesim's teleports, Gazebo's
+    set-state services, ...) and a topic or service the policy's ``[topics]`` / ``[services] motion`` names.
+    """
+    if act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type)):
+        return True
+    if any(e.kind == "motion" or (e.kind == "action" and e.what == "goal") for e in act.effects):
+        return True
+    listed = {"service": policy.motion_services, "topic": policy.motion_topics}.get(act.kind, ())
+    return any(fnmatchcase(act.name, pattern) for pattern in listed)
+
+
 def question(act: Act, clamp: str | None = None) -> str:
     """What the person is asked: exactly what would be sent, and by which tool."""
     payload_kind = _PAYLOADS.get(act.kind, "payload")
@@ -297,6 +346,8 @@ def question(act: Act, clamp: str | None = None) -> str:
     ]
     if act.type:
         lines.append(f"Type: {act.type}")
+    if act.effects:
+        lines.append(f"What it does: {'; '.join(e.describe() for e in act.effects)}.")
     lines.append(f"{payload_kind.capitalize()}: {body}")
     if act.rate_hz is not None:
         lasting = f" for {act.duration:g} s" if act.duration is not None else " until stopped"
@@ -318,6 +369,12 @@ def _answer_text(act: Act, answer: str, policy: Policy) -> str:
             f"The safety policy requires a person to confirm {what} (confirm = {policy.confirm!r}), but this "
             "MCP client cannot ask (it does not support elicitation); nothing was sent. Use an MCP client "
             "that supports elicitation, or ask the robot's operator to change the policy."
+        )
+    if answer == "no console":
+        return (
+            f"The safety policy requires the person at the operator console to confirm {what} (approvals = "
+            "'console'), but no operator console is served (start the server with --console); nothing was "
+            "sent. Tell the user."
         )
     if answer == "timeout":
         return (

@@ -7,9 +7,12 @@ robot uncapped). The file::
     read_only = false            # true: only reading tools are listed or callable
     confirm = "never"            # "never" | "motion" | "always": ask the person before acting
     confirm_timeout = 120        # seconds the person has to answer; no answer is a "no"
+    approvals = "client"         # or "console": only the operator console's person confirms
     [topics]                     # publishing; also [services], [actions], [parameters]
     allow = ["/turtle1/*"]       # absent = everything; shell-style globs, * crosses /
     deny = ["/rosout"]           # deny wins over allow
+    [services]                   # [topics] too
+    motion = ["/arm/move_to"]    # what moves the robot (confirm = "motion" asks), besides the known ones
     [velocity]                   # every geometry_msgs Twist / TwistStamped, on any topic
     max_linear = 0.5             # m/s, length of the linear vector
     max_angular = 1.0            # rad/s, length of the angular vector
@@ -32,6 +35,7 @@ from typing import Any, Literal
 
 __all__ = [
     "ACT_KINDS",
+    "APPROVALS",
     "CONFIRM_MODES",
     "DEFAULT_CONFIRM_TIMEOUT",
     "NameRules",
@@ -45,6 +49,10 @@ __all__ = [
 
 Confirm = Literal["never", "motion", "always"]
 CONFIRM_MODES: tuple[Confirm, ...] = ("never", "motion", "always")
+#: Who may answer a confirmation: the MCP client's person (elicitation; the console when the client cannot
+#: ask), or the operator console's person only (a token holder's own client cannot approve its own acts).
+Approvals = Literal["client", "console"]
+APPROVALS: tuple[Approvals, ...] = ("client", "console")
 VelocityMode = Literal["refuse", "clamp"]
 #: How long the person has to answer a confirmation. An answer much later would send a command the situation
 #: may no longer call for, so silence counts as a no.
@@ -67,13 +75,20 @@ class NameRules:
     allow: tuple[str, ...] | None = None
     deny: tuple[str, ...] = ()
 
-    def refusal(self, name: str, section: str) -> str | None:
-        """Why ``name`` is refused (the rule, in words), or ``None`` when it is allowed."""
+    def refusal(self, name: str, section: str, *, subtree: bool = False) -> str | None:
+        """Why ``name`` is refused (the rule, in words), or ``None`` when it is allowed.
+
+        With ``subtree`` (a ROS 1 parameter write, which replaces everything under the name) a deny glob
+        that may match a name under ``name`` refuses it too: ``deny = ["/turtlesim/background_r"]`` refuses
+        a write to ``/turtlesim``.
+        """
         for pattern in self.deny:
             # Case-sensitive like ROS names; fnmatch's * also crosses "/", as in rosbridge's own
             # topics_glob / services_glob.
             if fnmatchcase(name, pattern):
                 return f"[{section}] deny {pattern!r} matches {name}"
+            if subtree and _may_match_under(name, pattern):
+                return f"[{section}] deny {pattern!r} matches names under {name}, which a write replaces"
         if self.allow is not None and not any(fnmatchcase(name, pattern) for pattern in self.allow):
             listed = ", ".join(repr(p) for p in self.allow) or "nothing"
             return f"[{section}] allow lists only {listed}; {name} matches none of them"
@@ -82,6 +97,17 @@ class NameRules:
     @property
     def is_open(self) -> bool:
         return self.allow is None and not self.deny
+
+
+def _may_match_under(name: str, pattern: str) -> bool:
+    """Whether ``pattern`` may match some name below ``name`` (``name/...``); errs towards yes."""
+    below = name.rstrip("/") + "/"
+    cut = min((i for i, ch in enumerate(pattern) if ch in "*?["), default=len(pattern))
+    literal = pattern[:cut]
+    if cut == len(pattern):
+        return literal.startswith(below)
+    # A glob: its fixed start must agree with "name/" as far as both go (* crosses "/").
+    return literal.startswith(below) or below.startswith(literal)
 
 
 @dataclass(frozen=True)
@@ -108,6 +134,11 @@ class Policy:
     read_only: bool = False
     confirm: Confirm = "never"
     confirm_timeout: float = DEFAULT_CONFIRM_TIMEOUT
+    approvals: Approvals = "client"
+    #: Services that move the robot, besides the known motion services (``[services] motion``).
+    motion_services: tuple[str, ...] = ()
+    #: Topics whose messages move the robot, besides velocity commands and known ones (``[topics] motion``).
+    motion_topics: tuple[str, ...] = ()
     topics: NameRules = field(default_factory=NameRules)
     services: NameRules = field(default_factory=NameRules)
     actions: NameRules = field(default_factory=NameRules)
@@ -141,6 +172,12 @@ class Policy:
             return lines
         asked = f" (no answer within {self.confirm_timeout:g} s is a no)" if self.confirm != "never" else ""
         lines.append(f"  confirm = {self.confirm}: {_CONFIRM_TEXT[self.confirm]}{asked}")
+        if self.approvals == "console":
+            lines.append("  approvals = console: only the person at the operator console confirms")
+        if self.motion_topics:
+            lines.append(f"  [topics] motion: {', '.join(self.motion_topics)} (besides the known ones)")
+        if self.motion_services:
+            lines.append(f"  [services] motion: {', '.join(self.motion_services)} (besides the known ones)")
         for section in ACT_KINDS:
             rules: NameRules = getattr(self, section)
             if rules.is_open:
@@ -169,12 +206,16 @@ class Policy:
 
 _CONFIRM_TEXT: dict[Confirm, str] = {
     "never": "nobody is asked",
-    "motion": "the person confirms every velocity command and action goal",
-    "always": "the person confirms every acting call",
+    "motion": (
+        "the person confirms every velocity command, action goal (also one sent through its topic or "
+        "service) and service that moves the robot"
+    ),
+    "always": "the person confirms every acting call (topics, services, goals, parameters)",
 }
 
-_TOP_KEYS = ("read_only", "confirm", "confirm_timeout", *ACT_KINDS, "velocity", "publish")
+_TOP_KEYS = ("read_only", "confirm", "confirm_timeout", "approvals", *ACT_KINDS, "velocity", "publish")
 _RULE_KEYS = ("allow", "deny")
+_MOTION_KEYS = ("allow", "deny", "motion")
 _VELOCITY_KEYS = ("max_linear", "max_angular", "mode")
 _PUBLISH_KEYS = ("max_rate_hz", "max_duration")
 
@@ -208,11 +249,24 @@ def parse_policy(data: Mapping[str, Any], *, where: str = "policy") -> Policy:
     timeout = _positive(data, "confirm_timeout", "", where, "seconds")
     if timeout == 0:
         raise PolicyError(f"{where}: confirm_timeout must be more than 0 seconds")
+    approvals = data.get("approvals", "client")
+    if approvals not in APPROVALS:
+        raise PolicyError(
+            f"{where}: approvals must be one of {', '.join(repr(a) for a in APPROVALS)}, not {approvals!r}"
+        )
     rules = {section: _name_rules(data, section, where) for section in ACT_KINDS}
+    motion = {
+        section: _globs(table, "motion", section, where) if "motion" in table else ()
+        for section in ("topics", "services")
+        for table in (_table(data, section, where, _MOTION_KEYS),)
+    }
     return Policy(
         read_only=read_only,
         confirm=confirm_text,
         confirm_timeout=DEFAULT_CONFIRM_TIMEOUT if timeout is None else timeout,
+        approvals=approvals,
+        motion_services=motion["services"],
+        motion_topics=motion["topics"],
         topics=rules["topics"],
         services=rules["services"],
         actions=rules["actions"],
@@ -249,7 +303,7 @@ def _bool(data: Mapping[str, Any], key: str, where: str) -> bool:
 
 
 def _name_rules(data: Mapping[str, Any], section: str, where: str) -> NameRules:
-    table = _table(data, section, where, _RULE_KEYS)
+    table = _table(data, section, where, _MOTION_KEYS if section in ("topics", "services") else _RULE_KEYS)
     allow = _globs(table, "allow", section, where) if "allow" in table else None
     deny = _globs(table, "deny", section, where) if "deny" in table else ()
     return NameRules(allow=allow, deny=deny)

@@ -1,0 +1,210 @@
+"""What an act does on the robot, whichever tool carries it: an action goal, a parameter write, a motion.
+
+A tool names the carrier (a topic published on, a service called); the robot acts on what the carrier means.
+ROS reaches the same effect several ways, and a rule written for one of them must hold for all:
+
+* **Action goals and cancels.** ROS 1 actionlib takes goals on the ``<action>/goal`` topic (a ``…ActionGoal``
+  message) and cancels on ``<action>/cancel`` (``actionlib_msgs/GoalID``); ROS 2 takes them through the hidden
+  services ``<action>/_action/send_goal`` and ``…/cancel_goal`` (and hands results out through
+  ``…/get_result``). ``publish_topic`` and ``publish_service`` reach them as ``publish_action`` and
+  ``cancel_action`` do.
+* **Parameter writes.** A ROS 2 node's ``set_parameters`` / ``set_parameters_atomically`` services (one write
+  per parameter in the request), a ROS 1 node's dynamic_reconfigure ``set_parameters``
+  (``dynamic_reconfigure/Reconfigure``: ``/<node>/<name>`` for each value in the config), rosapi's
+  ``set_param`` and ``delete_param`` (both lines). On ROS 1 a write to a name replaces everything under it
+  (a parameter is also a namespace), so such a write is marked ``subtree``.
+* **Motion by topic**, besides velocity commands (which :mod:`~rosbridge_mcp_server.robot.velocity` knows
+  by type): joint trajectories, jogs and Ackermann drive commands by type (:data:`MOTION_TOPIC_TYPES`), and a
+  navigation goal published on ``/move_base_simple/goal`` (ROS 1 move_base) or ``/goal_pose`` (ROS 2 Nav2's
+  bt_navigator) (:data:`MOTION_GOAL_TOPICS`).
+* **Motion by service.** A service that moves the robot or a body of it: by type
+  (:data:`MOTION_SERVICE_TYPES`: turtlesim's teleports, Gazebo's set-state services, MoveIt's
+  ``ExecuteKnownTrajectory``) or, when the type is not known, by the name's last part
+  (:data:`MOTION_SERVICE_LEAVES`). A policy may name more (``[services] motion``).
+
+Every name here is canonical (:mod:`rosbridge_mcp_server.robot.names`): what the robot will act on, so that a
+rule written for ``/turtlesim:background_r`` holds for ``/turtlesim//:background_r`` too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from rosbridge_mcp_server.client import Dialect
+from rosbridge_mcp_server.errors import NotSentError
+from rosbridge_mcp_server.robot.names import parameter_name
+
+__all__ = [
+    "MOTION_GOAL_TOPICS",
+    "MOTION_SERVICE_LEAVES",
+    "MOTION_SERVICE_TYPES",
+    "MOTION_TOPIC_TYPES",
+    "Effect",
+    "parameter_write",
+    "service_effects",
+    "topic_effects",
+]
+
+EffectKind = Literal["action", "parameter", "motion"]
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One thing an act does on the robot besides what its carrier names."""
+
+    kind: EffectKind
+    name: str  #: canonical: the action, the parameter (ROS 2 ``/node:name``, ROS 1 ``/ns/name``), the service
+    #: "goal", "cancel" or "result" (an action); "set" or "delete" (a parameter); "move" (motion)
+    what: str
+    #: A ROS 1 parameter write: everything under ``name`` is replaced as well.
+    subtree: bool = False
+
+    def describe(self) -> str:
+        """E.g. ``a goal of action /fibonacci`` or ``a set of parameter /turtlesim:background_r``."""
+        if self.kind == "motion":
+            return f"motion of the robot through {self.name}"
+        under = " and everything under it" if self.subtree else ""
+        return f"a {self.what} of {self.kind} {self.name}{under}"
+
+
+#: Message types that command motion (velocity commands aside), in the short ``pkg/Type`` form.
+MOTION_TOPIC_TYPES = frozenset(
+    {
+        "trajectory_msgs/JointTrajectory",
+        "trajectory_msgs/MultiDOFJointTrajectory",
+        "control_msgs/JointJog",
+        "ackermann_msgs/AckermannDrive",
+        "ackermann_msgs/AckermannDriveStamped",
+    }
+)
+#: Topics a navigation stack takes a goal pose on (the robot then drives there).
+MOTION_GOAL_TOPICS = ("/move_base_simple/goal", "/goal_pose")
+
+#: Service types that move the robot (or a simulated body), in the short ``pkg/Type`` form both lines share.
+MOTION_SERVICE_TYPES = frozenset(
+    {
+        "turtlesim/TeleportAbsolute",
+        "turtlesim/TeleportRelative",
+        "gazebo_msgs/SetModelState",
+        "gazebo_msgs/SetEntityState",
+        "gazebo_msgs/SetLinkState",
+        "gazebo_msgs/SetModelConfiguration",
+        "gazebo_msgs/SetJointTrajectory",
+        "ros_gz_interfaces/SetEntityPose",
+        "moveit_msgs/ExecuteKnownTrajectory",
+    }
+)
+#: The last part of a motion service's usual name, for when its type is not known.
+MOTION_SERVICE_LEAVES = frozenset(
+    {
+        "teleport_absolute",
+        "teleport_relative",
+        "set_model_state",
+        "set_entity_state",
+        "set_link_state",
+        "set_model_configuration",
+        "set_entity_pose",
+        "execute_kinematic_path",
+    }
+)
+
+_ROS2_ACTION_SERVICES = {"send_goal": "goal", "cancel_goal": "cancel", "get_result": "result"}
+_ROSAPI_PARAMETER_TYPES = {"rosapi/SetParam": "set", "rosapi/DeleteParam": "delete"}
+_ROSAPI_PARAMETER_SERVICES = {"/rosapi/set_param": "set", "/rosapi/delete_param": "delete"}
+_ROS2_SET_PARAMETERS = ("set_parameters", "set_parameters_atomically")
+_RECONFIGURE_LISTS = ("bools", "ints", "strs", "doubles")
+
+
+def topic_effects(topic: str, type_name: str) -> tuple[Effect, ...]:
+    """What publishing a ``type_name`` message on (the absolute) ``topic`` does besides the publish.
+
+    ROS 1 actionlib: ``<action>/goal`` with a ``…ActionGoal`` message is a goal of ``<action>``;
+    ``<action>/cancel`` with ``actionlib_msgs/GoalID`` a cancel of it. A motion command other than a velocity
+    command (a joint trajectory, a goal pose for the navigation stack, also under a namespace) is motion.
+    """
+    parent, _, leaf = topic.rpartition("/")
+    short = Dialect.short_type(type_name) if "/" in type_name else type_name
+    if leaf == "goal" and short.endswith("ActionGoal"):
+        return (Effect("action", parent or "/", "goal"),)
+    if leaf == "cancel" and short == "actionlib_msgs/GoalID":
+        return (Effect("action", parent or "/", "cancel"),)
+    if short in MOTION_TOPIC_TYPES or topic in MOTION_GOAL_TOPICS or topic.endswith(MOTION_GOAL_TOPICS):
+        return (Effect("motion", topic, "move"),)
+    return ()
+
+
+def service_effects(service: str, type_name: str, request: Any, ros_version: int) -> tuple[Effect, ...]:
+    """What calling (the absolute) ``service`` of ``type_name`` with ``request`` does on the robot.
+
+    :class:`~rosbridge_mcp_server.errors.NotSentError` when a parameter service's request does not say
+    plainly which parameters it writes (the policy could not judge it).
+    """
+    short = Dialect.short_type(type_name) if "/" in type_name else type_name
+    parent, _, leaf = service.rpartition("/")
+    action_parent, _, hidden = parent.rpartition("/")
+    if hidden == "_action" and leaf in _ROS2_ACTION_SERVICES:
+        return (Effect("action", action_parent or "/", _ROS2_ACTION_SERVICES[leaf]),)
+    rosapi = _ROSAPI_PARAMETER_TYPES.get(short) or _ROSAPI_PARAMETER_SERVICES.get(service)
+    if rosapi is not None:
+        return (_rosapi_parameter(service, request, ros_version, rosapi),)
+    if leaf in _ROS2_SET_PARAMETERS and ros_version == 2:
+        return _ros2_set_parameters(service, parent, request)
+    if leaf == "set_parameters" and ros_version == 1:
+        return _reconfigure(service, parent, request)
+    if short in MOTION_SERVICE_TYPES or leaf in MOTION_SERVICE_LEAVES:
+        return (Effect("motion", service, "move"),)
+    return ()
+
+
+def _unreadable(service: str, what: str) -> NotSentError:
+    return NotSentError(
+        f"The request to {service} does not name plainly which parameters it {what}, so the safety policy "
+        "could not judge it; nothing was sent. Use set_parameter, or give each parameter's name as text."
+    )
+
+
+def _rosapi_parameter(service: str, request: Any, ros_version: int, what: str) -> Effect:
+    name = request.get("name") if isinstance(request, dict) else None
+    if not isinstance(name, str):
+        raise _unreadable(service, "writes")
+    canonical = parameter_name(name, ros_version)
+    return Effect("parameter", canonical, what, subtree=ros_version == 1)
+
+
+def _ros2_set_parameters(service: str, node: str, request: Any) -> tuple[Effect, ...]:
+    parameters = request.get("parameters") if isinstance(request, dict) else None
+    if not isinstance(parameters, list):
+        raise _unreadable(service, "sets")
+    effects = []
+    for parameter in parameters:
+        local = parameter.get("name") if isinstance(parameter, dict) else None
+        if not isinstance(local, str):
+            raise _unreadable(service, "sets")
+        effects.append(Effect("parameter", parameter_name(f"{node or '/'}:{local}", 2), "set"))
+    return tuple(effects)
+
+
+def _reconfigure(service: str, node: str, request: Any) -> tuple[Effect, ...]:
+    """dynamic_reconfigure (ROS 1): ``{"config": {"bools": [{"name", "value"}], "ints": ..., ...}}``."""
+    config = request.get("config") if isinstance(request, dict) else None
+    if config is None:
+        return ()
+    if not isinstance(config, dict):
+        raise _unreadable(service, "sets")
+    effects = []
+    for key in _RECONFIGURE_LISTS:
+        entries = config.get(key) or []
+        if not isinstance(entries, list):
+            raise _unreadable(service, "sets")
+        for entry in entries:
+            local = entry.get("name") if isinstance(entry, dict) else None
+            if not isinstance(local, str):
+                raise _unreadable(service, "sets")
+            effects.append(Effect("parameter", parameter_name(f"{node}/{local}", 1), "set", subtree=True))
+    return tuple(effects)
+
+
+def parameter_write(name: str, ros_version: int) -> Effect:
+    """The effect of ``set_parameter`` on the canonical ``name``: on ROS 1 it replaces everything under it."""
+    return Effect("parameter", name, "set", subtree=ros_version == 1)
