@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import re
+import socket
 import sys
 
 import pytest
@@ -71,3 +72,43 @@ async def test_the_server_writes_the_console_url_on_stderr_and_serves_the_page()
             stdout, _ = await process.communicate()
     assert stdout == b""
     assert process.returncode == 0
+
+
+def test_a_console_on_the_mcp_listeners_port_is_refused_before_anything_listens(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """`--transport http --console 8765`: the HTTP default port twice; one line naming both flags, exit 2."""
+    assert run(["--demo", "--transport", "http", "--console", "8765"], {}) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    assert "--console 127.0.0.1:8765 and the MCP HTTP listener (--bind 127.0.0.1:8765, the default)" in err
+    assert "--console 8770" in err
+    assert "#secret=" not in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        (
+            ["--transport", "http", "--console", "0", "--bind", "127.0.0.1:{port}"],
+            "the MCP HTTP listener (--bind)",
+        ),
+        (["--console", "{port}"], "the operator console (--console)"),
+    ],
+)
+def test_a_port_taken_by_another_program_names_the_listener_and_its_flag(
+    argv: list[str], named: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A port already in use: the listener that failed and the flag that moves it, exit 2, no console URL."""
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen(1)
+    port = taken.getsockname()[1]
+    try:
+        code = run(["--demo", *(arg.format(port=port) for arg in argv)], {})
+    finally:
+        taken.close()
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"{named} cannot listen on 127.0.0.1:{port}" in err
+    assert "#secret=" not in err

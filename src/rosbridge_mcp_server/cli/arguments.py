@@ -193,6 +193,12 @@ def _transport_flags(parser: _Parser) -> None:
     )
     http.add_argument("--tls-cert", metavar="FILE", help="serve HTTPS with this certificate (PEM)")
     http.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
+    http.add_argument(
+        "--behind-tls-proxy",
+        action="store_true",
+        help="a reverse proxy in front terminates TLS: allows plain HTTP on a non-loopback --bind "
+        "(env ROSBRIDGE_MCP_BEHIND_TLS_PROXY=1)",
+    )
     oauth = parser.add_argument_group("OAuth 2.1 resource server (JWT access tokens)")
     oauth.add_argument("--oauth-issuer", metavar="URL", help="the authorization server (the tokens' iss)")
     oauth.add_argument("--oauth-audience", metavar="AUD", help="the tokens' aud (default: --oauth-resource)")

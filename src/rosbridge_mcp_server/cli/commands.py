@@ -25,13 +25,15 @@ from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
 from rosbridge_mcp_server.fleet_config import load_fleet
-from rosbridge_mcp_server.http_config import HttpSettings, load_http_settings
+from rosbridge_mcp_server.http_config import HttpSettings, is_loopback, load_http_settings
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
 from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 
+#: The console's port in examples and advice: not the MCP HTTP listener's default (8765).
+CONSOLE_EXAMPLE_PORT = 8770
 #: After SIGTERM or Ctrl-C: how long tool calls get to cancel their goals, and then the client to close.
 SIGNAL_GRACE = 1.0
 _log = logging.getLogger(__name__)
@@ -81,6 +83,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
                 oauth_jwks=options.oauth_jwks,
                 oauth_resource=options.oauth_resource,
                 oauth_scopes=options.oauth_scopes,
+                behind_tls_proxy=options.behind_tls_proxy,
             )
             if command == "serve"
             else HttpSettings()
@@ -97,6 +100,8 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
                 insecure=options.console_insecure,
                 source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
             )
+        if console is not None:
+            same_port_check(console, http)
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -129,6 +134,24 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         if audit_file is not None:
             audit_file.close()
     return 0
+
+
+def same_port_check(console: ConsoleSettings, http: HttpSettings) -> None:
+    """:class:`ConfigError` when ``--console`` and the MCP HTTP listener's ``--bind`` name one port."""
+    if http.transport != "http" or console.port == 0 or console.port != http.port:
+        return
+    wildcard = ("0.0.0.0", "::", "")
+    if (
+        console.host == http.host
+        or console.host in wildcard
+        or http.host in wildcard
+        or (console.loopback and is_loopback(http.host))
+    ):
+        raise ConfigError(
+            f"--console {console.host}:{console.port} and the MCP HTTP listener (--bind {http.host}:{http.port}"
+            f"{', the default' if http.port == 8765 else ''}) name the same port; give the console another, "
+            f"e.g. --console {CONSOLE_EXAMPLE_PORT} (or --console 0 for any free port)"
+        )
 
 
 def open_audit_log(path: str | None) -> TextIO | None:
@@ -282,8 +305,10 @@ async def serve(
         console_view = hub.snapshot if hub is not None else None
         if http is not None and http.transport == "http":
             # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
-            from rosbridge_mcp_server.server.http import auth_options, serve_http  # noqa: PLC0415
+            from rosbridge_mcp_server.server.http import auth_options, listen_http, serve_http  # noqa: PLC0415
 
+            # The MCP listener first: when its port is taken, it is named and nothing else has started.
+            sock = listen_http(http)
             server = build_fleet_server(entries, effective, console_view=console_view, **auth_options(http))
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
             # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
@@ -292,9 +317,10 @@ async def serve(
             previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
             try:
                 async with _console(console, hub):
-                    await serve_http(server, http)
+                    await serve_http(server, http, sock=sock)
             finally:
                 signal.signal(signal.SIGTERM, previous)
+                sock.close()
             return
         server = build_fleet_server(entries, effective, console_view=console_view)
         _stop_on_signals([robot.session.client for robot in entries])
@@ -325,7 +351,9 @@ async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> 
         running = await opened.__aenter__()
     except OSError as exc:
         raise ConfigError(
-            f"--console: cannot listen on {settings.host}:{settings.port}: {exc.strerror or exc}"
+            f"the operator console (--console) cannot listen on {settings.host}:{settings.port}: "
+            f"{exc.strerror or exc}; give it another port, e.g. --console {CONSOLE_EXAMPLE_PORT}, or "
+            "--console 0 for any free one"
         ) from None
     # The URL alone on its line, to copy; it carries the session secret, so it is not a log line either.
     sys.stderr.write(f"{running.url}\n")
