@@ -41,7 +41,7 @@ def test_binding_beyond_loopback_needs_tls_or_a_stated_tls_proxy(tmp_path: Path)
     """Tokens in clear on a network are refused; the server's own TLS or --behind-tls-proxy lets it listen."""
     env = {"ROSBRIDGE_MCP_AUTH_TOKENS": f"ops {TOKEN}"}
     for bind in ("0.0.0.0:8765", "[::]:8765", "192.168.1.5:8765"):
-        with pytest.raises(ConfigError, match="in plain HTTP.*--tls-cert.*--behind-tls-proxy"):
+        with pytest.raises(ConfigError, match=r"in plain HTTP.*--tls-cert.*--behind-tls-proxy"):
             load_http_settings(env, transport="http", bind=bind)
     with pytest.raises(ConfigError, match="in plain HTTP"):
         load_http_settings({}, transport="http", bind="0.0.0.0:8765", oauth_issuer="https://a.example")
@@ -54,7 +54,7 @@ def test_binding_beyond_loopback_needs_tls_or_a_stated_tls_proxy(tmp_path: Path)
         {**env, "ROSBRIDGE_MCP_BEHIND_TLS_PROXY": "1"}, transport="http", bind="0.0.0.0:1"
     )
     assert proxied.behind_tls_proxy
-    with pytest.raises(ConfigError, match="ROSBRIDGE_MCP_BEHIND_TLS_PROXY.*not a yes or no"):
+    with pytest.raises(ConfigError, match=r"ROSBRIDGE_MCP_BEHIND_TLS_PROXY.*not a yes or no"):
         load_http_settings(
             {**env, "ROSBRIDGE_MCP_BEHIND_TLS_PROXY": "maybe"}, transport="http", bind="0.0.0.0:1"
         )

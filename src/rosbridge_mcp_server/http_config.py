@@ -12,7 +12,7 @@ Read once by the CLI, like :mod:`~rosbridge_mcp_server.config` (flags win over t
   ``ROSBRIDGE_MCP_ALLOWED_ORIGINS`` (comma lists): the DNS-rebinding protection's extra names (a reverse
   proxy's, the robot's DNS name);
 * ``--tls-cert FILE`` / ``--tls-key FILE`` / ``ROSBRIDGE_MCP_TLS_CERT``, ``ROSBRIDGE_MCP_TLS_KEY``;
-* ``--behind-tls-proxy`` / ``ROSBRIDGE_MCP_BEHIND_TLS_PROXY=1``: a statement that a proxy in front terminates TLS.
+* ``--behind-tls-proxy`` / ``ROSBRIDGE_MCP_BEHIND_TLS_PROXY=1``: a proxy in front terminates TLS.
 
 The server refuses to listen beyond loopback without authentication, and without TLS (its own, or a proxy's
 that ``--behind-tls-proxy`` states): bearer tokens must not cross a network in clear. Either is a
@@ -183,8 +183,8 @@ def load_http_settings(
         )
     if not cert and not proxied and not is_loopback(host):
         raise ConfigError(
-            f"refusing to listen on {host}:{port} in plain HTTP: the bearer tokens would cross the network in "
-            "clear text. Give --tls-cert FILE and --tls-key FILE (HTTPS), or --behind-tls-proxy when a "
+            f"refusing to listen on {host}:{port} in plain HTTP: the bearer tokens would cross the network "
+            "in clear text. Give --tls-cert FILE and --tls-key FILE (HTTPS), or --behind-tls-proxy when a "
             "reverse proxy in front terminates TLS, or bind to 127.0.0.1 (docs/deployment.md)"
         )
     return settings

@@ -148,8 +148,9 @@ def same_port_check(console: ConsoleSettings, http: HttpSettings) -> None:
         or (console.loopback and is_loopback(http.host))
     ):
         raise ConfigError(
-            f"--console {console.host}:{console.port} and the MCP HTTP listener (--bind {http.host}:{http.port}"
-            f"{', the default' if http.port == 8765 else ''}) name the same port; give the console another, "
+            f"--console {console.host}:{console.port} and the MCP HTTP listener "
+            f"(--bind {http.host}:{http.port}{', the default' if http.port == 8765 else ''}) "
+            "name the same port; give the console another, "
             f"e.g. --console {CONSOLE_EXAMPLE_PORT} (or --console 0 for any free port)"
         )
 
