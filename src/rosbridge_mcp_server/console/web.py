@@ -5,7 +5,7 @@ Routes (everything under ``/api`` needs the session secret in the ``X-Console-Se
 * ``GET /`` (and its script and style): the page; it holds no robot data, only code;
 * ``GET /api/events``: server-sent events, ``state`` (the hub's snapshot), ``frame`` (the camera), ``pose``
   and ``map`` (the map panel's pose and picture);
-* ``GET /api/image-topics``: the image topics, for the camera picker;
+* ``GET /api/image-topics``: the image topics, for the camera picker, and the default (the colour camera);
 * ``POST /api/confirmations/{id}/approve`` and ``.../deny``, ``POST /api/estop``, ``POST /api/release``,
   ``POST /api/camera`` (``{"topic": "/camera/image_raw"}``, ``""`` for none), ``POST /api/map``
   (``{"topic": "/map", "base_frame": "base_link"}``).
@@ -88,7 +88,7 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
             topics = await hub.image_topics()
         except RosbridgeError as exc:
             return _json({"error": str(exc)}, 503)
-        return _json({"topics": topics})
+        return _json({"topics": topics, "default": await hub.default_camera(topics)})
 
     async def approve(request: Request) -> Response:
         return _answered(hub, request.path_params["id"], approve=True)
