@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import asyncio
+import os
 import re
 import socket
+import stat
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -112,3 +115,75 @@ def test_a_port_taken_by_another_program_names_the_listener_and_its_flag(
     assert code == 2, err
     assert f"{named} cannot listen on 127.0.0.1:{port}" in err
     assert "#secret=" not in err
+
+
+async def test_the_console_url_is_kept_in_a_file_only_the_user_can_read(tmp_path: Path) -> None:
+    """Besides stderr, console-<pid>.url (0600, in a 0700 directory); `console-url` prints it while the server
+    runs, and the file is gone once it stops."""
+    runtime = tmp_path / "runtime"
+    env = {**os.environ, "ROSBRIDGE_MCP_RUNTIME_DIR": str(runtime)}
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        "-m",
+        "rosbridge_mcp_server",
+        "--demo",
+        "--console",
+        "0",
+        env=env,
+        stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    assert process.stderr is not None
+    assert process.stdin is not None
+    try:
+        url = told = ""
+        async with asyncio.timeout(WAIT):
+            while not told:
+                line = (await process.stderr.readline()).decode()
+                assert line, "the server ended before writing the console's URL"
+                if "#secret=" in line:
+                    url = line.strip()
+                elif line.startswith("operator console:"):
+                    told = line
+        kept = runtime / f"console-{process.pid}.url"
+        assert str(kept) in told
+        assert "console-url" in told
+        assert kept.read_text() == url + "\n"
+        assert stat.S_IMODE(kept.stat().st_mode) == 0o600
+        assert stat.S_IMODE(runtime.stat().st_mode) == 0o700
+        printed = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-m",
+            "rosbridge_mcp_server",
+            "console-url",
+            env=env,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+        )
+        out, _ = await asyncio.wait_for(printed.communicate(), WAIT)
+        assert printed.returncode == 0
+        assert out.decode().strip() == url
+    finally:
+        process.stdin.close()
+        async with asyncio.timeout(WAIT):
+            await process.communicate()
+    assert process.returncode == 0
+    assert not kept.exists()
+
+
+def test_console_url_without_a_console_says_where_it_looked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No console running (a stopped server's file is left behind): exit 1, the directory named, the old
+    file removed."""
+    runtime = tmp_path / "runtime"
+    runtime.mkdir(mode=0o700)
+    dead = runtime / "console-999999999.url"
+    dead.write_text("http://127.0.0.1:1/#secret=old\n")
+    assert run(["console-url"], {"ROSBRIDGE_MCP_RUNTIME_DIR": str(runtime)}) == 1
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert str(runtime) in captured.err
+    assert "--console" in captured.err
+    assert not dead.exists()

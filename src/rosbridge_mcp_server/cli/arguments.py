@@ -43,6 +43,13 @@ def _console_flags(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser(command: str) -> _Parser:
+    if command == "console-url":
+        return _Parser(
+            prog=f"{PROG} console-url",
+            description="Print the URL (with its one-time secret) of each operator console this user runs "
+            "now (started with --console). Exit code 0 when one runs, 1 when none does. Set "
+            "ROSBRIDGE_MCP_RUNTIME_DIR if the server was started with it.",
+        )
     if command == "check":
         description = (
             "Diagnose the connection to rosbridge: is it reachable, which ROS it runs, what rosbridge can "
@@ -58,11 +65,12 @@ def build_parser(command: str) -> _Parser:
     else:
         parser = _Parser(
             prog=PROG,
-            usage=f"{PROG} [serve] [options]\n       {PROG} check [options]",
+            usage=f"{PROG} [serve] [options]\n       {PROG} check [options]\n       {PROG} console-url",
             description=description,
             epilog=(
                 "commands: serve (the default) runs the MCP server; check diagnoses the connection to "
-                f"rosbridge with the same connection flags (`{PROG} check --help`)."
+                f"rosbridge with the same flags (`{PROG} check --help`); console-url prints the URL of the "
+                "operator console running now."
             ),
         )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")

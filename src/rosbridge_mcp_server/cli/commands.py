@@ -17,6 +17,7 @@ import signal
 import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from dataclasses import replace
+from pathlib import Path
 from typing import TextIO
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
@@ -24,6 +25,7 @@ from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
+from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls, runtime_dir
 from rosbridge_mcp_server.fleet_config import load_fleet
 from rosbridge_mcp_server.http_config import HttpSettings, is_loopback, load_http_settings
 from rosbridge_mcp_server.robot.session import RobotSession
@@ -44,8 +46,10 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     args = list(sys.argv[1:] if argv is None else argv)
     env = os.environ if environ is None else environ
     command = "serve"
-    if args and args[0] in ("serve", "check"):
+    if args and args[0] in ("serve", "check", "console-url"):
         command = args.pop(0)
+    if command == "console-url":
+        return console_url(args, env)
     try:
         options = build_parser(command).parse_args(args)
         config = load_config(
@@ -117,7 +121,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout))
-        asyncio.run(serve(config, audit_file, http, fleet, console))
+        asyncio.run(serve(config, audit_file, http, fleet, console, console_dir=runtime_dir(env)))
     except ConfigError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
@@ -133,6 +137,28 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     finally:
         if audit_file is not None:
             audit_file.close()
+    return 0
+
+
+def console_url(args: Sequence[str], env: Mapping[str, str]) -> int:
+    """``console-url``: print the URL of each operator console this user runs now (0), or say there is none
+    (1). The URL carries the console's secret: it is for the person, not for a model's context."""
+    try:
+        build_parser("console-url").parse_args(list(args))
+    except UsageError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    directory = runtime_dir(env)
+    found = list(console_urls(directory))
+    for pid, url in found:
+        print(f"{url}  (process {pid})" if len(found) > 1 else url)
+    if not found:
+        print(
+            f"{PROG}: no operator console is running for this user (looked in {directory}); start the server "
+            "with --console PORT",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 
@@ -275,10 +301,13 @@ async def serve(
     http: HttpSettings | None = None,
     fleet: Sequence[tuple[str, Config]] = (),
     console: ConsoleSettings | None = None,
+    *,
+    console_dir: Path | None = None,
 ) -> None:
     """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
     Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names). With
-    *console*, the operator console beside it (one person, one E-STOP for every robot)."""
+    *console*, the operator console beside it (one person, one E-STOP for every robot); its URL is also
+    written to a file in *console_dir* (this user's alone) while it runs."""
     async with demo_robot(config) as effective:
         robots = list(fleet) or [("robot", effective)]
         entries: list[Robot] = []
@@ -317,7 +346,7 @@ async def serve(
             # on stdio (Ctrl-C still ends in KeyboardInterrupt, exit 130).
             previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
             try:
-                async with _console(console, hub):
+                async with _console(console, hub, console_dir):
                     await serve_http(server, http, sock=sock)
             finally:
                 signal.signal(signal.SIGTERM, previous)
@@ -334,13 +363,16 @@ async def serve(
                 PROG,
                 " --demo" if config.demo else "",
             )
-        async with _console(console, hub):
+        async with _console(console, hub, console_dir):
             await serve_stdio(server)
 
 
 @contextlib.asynccontextmanager
-async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> AsyncIterator[None]:
-    """The operator console beside the MCP server, when asked for; its one-time URL goes to stderr."""
+async def _console(
+    settings: ConsoleSettings | None, hub: ConsoleHub | None, directory: Path | None = None
+) -> AsyncIterator[None]:
+    """The operator console beside the MCP server, when asked for; its one-time URL goes to stderr and, with
+    *directory*, to a file there that only this user can read (``console-url`` prints it)."""
     if settings is None or hub is None:
         yield
         return
@@ -358,9 +390,20 @@ async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> 
         ) from None
     # The URL alone on its line, to copy; it carries the session secret, so it is not a log line either.
     sys.stderr.write(f"{running.url}\n")
-    sys.stderr.write("operator console: open the URL above in a browser beside the robot\n")
+    address = ConsoleAddressFile(directory) if directory is not None else None
+    where = ""
+    if address is not None:
+        try:
+            address.write(running.url)
+            where = f" (also in {address.path}, which `{PROG} console-url` prints)"
+        except OSError as exc:
+            address = None
+            _log.warning("the console's URL is on stderr only: cannot write it to %s: %s", directory, exc)
+    sys.stderr.write(f"operator console: open the URL above in a browser beside the robot{where}\n")
     sys.stderr.flush()
     try:
         yield
     finally:
+        if address is not None:
+            address.remove()
         await opened.__aexit__(None, None, None)
