@@ -260,8 +260,8 @@ def draw_map(
     image = Image.new("RGB", (out_w + MARGIN_LEFT, out_h + MARGIN_BOTTOM), (255, 255, 255))
     # The overlay is drawn on the map's own picture, so what falls outside it (a scan's far hits around the
     # robot) is cut at the plot's edge instead of covering the axes' labels.
-    plot = coloured.convert("RGB")
-    over = ImageDraw.Draw(plot)
+    drawn = coloured.convert("RGB")
+    over = ImageDraw.Draw(drawn)
 
     def pixel(x: float, y: float) -> tuple[float, float]:
         col, row = grid.to_cell(x, y)
@@ -280,7 +280,7 @@ def draw_map(
     if overlay.robot is not None:
         robot = overlay.robot
         draw_robot(over, pixel(robot.x, robot.y), robot.yaw - grid.origin.yaw, 0.25 * pixels_per_metre)
-    image.paste(plot, (MARGIN_LEFT, 0))
+    image.paste(drawn, (MARGIN_LEFT, 0))
     draw = ImageDraw.Draw(image)
     _draw_axes(draw, grid, cells=(col0, col1, row0, row1), out_w=out_w, out_h=out_h)
     # Below the axis labels, outside the map: a box in a corner would hide that corner of the map.
