@@ -25,7 +25,8 @@ WAIT = 30.0
         (["--console", "abc"], {}, "--console must be a port number"),
         ([], {"ROSBRIDGE_MCP_CONSOLE": "10.1.2.3:80"}, "ROSBRIDGE_MCP_CONSOLE: 10.1.2.3 is not a loopback"),
         (["--console-insecure"], {}, "need --console"),
-        (["check", "--console", "8765"], {}, "unrecognized arguments: --console"),
+        (["check", "--console", "10.1.2.3:8770"], {}, "10.1.2.3 is not a loopback address"),
+        (["check", "--transport", "http", "--console", "8765"], {}, "name the same port"),
     ],
 )
 def test_a_bad_console_option_exits_2_with_one_line(

@@ -53,7 +53,8 @@ def build_parser(command: str) -> _Parser:
     if command == "check":
         description = (
             "Diagnose the connection to rosbridge: is it reachable, which ROS it runs, what rosbridge can "
-            "do, whether rosapi answers. Exit code 0 when healthy, 1 when not."
+            "do, whether rosapi answers; every robot of --robot / --robots. It takes the server's flags "
+            "(the transport and console ones are only checked). Exit code 0 when healthy, 1 when not."
         )
     else:
         description = (
@@ -124,10 +125,11 @@ def build_parser(command: str) -> _Parser:
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
-    if command == "serve":
-        _fleet_flags(parser)
-        _transport_flags(parser)
-        _console_flags(parser)
+    # `check` takes every flag the server takes, so a server's command line can be checked as it is: it
+    # checks each robot of a fleet, and refuses a transport or console setting the server would refuse.
+    _fleet_flags(parser)
+    _transport_flags(parser)
+    _console_flags(parser)
     demo = parser.add_argument_group("demo")
     demo.add_argument(
         "--demo", action="store_true", help="start the built-in simulated robot and connect to it"

@@ -72,38 +72,30 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             headers=options.header,
             tools=options.tools,
         )
-        http = (
-            load_http_settings(
-                env,
-                transport=options.transport,
-                bind=options.bind,
-                auth_tokens=options.auth_tokens,
-                allow_hosts=options.allow_host,
-                allow_origins=options.allow_origin,
-                tls_cert=options.tls_cert,
-                tls_key=options.tls_key,
-                oauth_issuer=options.oauth_issuer,
-                oauth_audience=options.oauth_audience,
-                oauth_jwks=options.oauth_jwks,
-                oauth_resource=options.oauth_resource,
-                oauth_scopes=options.oauth_scopes,
-                behind_tls_proxy=options.behind_tls_proxy,
-            )
-            if command == "serve"
-            else HttpSettings()
+        http = load_http_settings(
+            env,
+            transport=options.transport,
+            bind=options.bind,
+            auth_tokens=options.auth_tokens,
+            allow_hosts=options.allow_host,
+            allow_origins=options.allow_origin,
+            tls_cert=options.tls_cert,
+            tls_key=options.tls_key,
+            oauth_issuer=options.oauth_issuer,
+            oauth_audience=options.oauth_audience,
+            oauth_jwks=options.oauth_jwks,
+            oauth_resource=options.oauth_resource,
+            oauth_scopes=options.oauth_scopes,
+            behind_tls_proxy=options.behind_tls_proxy,
         )
-        fleet = (
-            load_fleet(config, robots=options.robot, robots_file=options.robots) if command == "serve" else ()
+        fleet = load_fleet(config, robots=options.robot, robots_file=options.robots)
+        console = console_settings(
+            options.console if options.console is not None else env.get("ROSBRIDGE_MCP_CONSOLE") or None,
+            cert=options.console_cert,
+            key=options.console_key,
+            insecure=options.console_insecure,
+            source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
         )
-        console = None
-        if command == "serve":
-            console = console_settings(
-                options.console if options.console is not None else env.get("ROSBRIDGE_MCP_CONSOLE") or None,
-                cert=options.console_cert,
-                key=options.console_key,
-                insecure=options.console_insecure,
-                source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
-            )
         if console is not None:
             same_port_check(console, http)
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
@@ -120,7 +112,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     )
     try:
         if command == "check":
-            return asyncio.run(check(config, sys.stdout))
+            return asyncio.run(check(config, sys.stdout, fleet))
         asyncio.run(serve(config, audit_file, http, fleet, console, console_dir=runtime_dir(env)))
     except ConfigError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -289,8 +281,19 @@ async def demo_robot(config: Config) -> AsyncIterator[Config]:
         yield replace(config, url=robot.url)
 
 
-async def check(config: Config, out: TextIO) -> int:
-    """The ``check`` command: diagnose the bridge (or the demo robot); 0 when healthy, 1 when not."""
+async def check(config: Config, out: TextIO, fleet: Sequence[tuple[str, Config]] = ()) -> int:
+    """The ``check`` command: diagnose the bridge (or the demo robot), or each robot of a *fleet* in turn;
+    0 when every one is healthy, 1 when not."""
+    if fleet:
+        worst = 0
+        for number, (name, robot_config) in enumerate(fleet):
+            if number:
+                out.write("\n")
+            out.write(f"== robot {name} ({robot_config.url}) ==\n")
+            worst = max(worst, await run_check(robot_config, out))
+        unhealthy = "" if worst == 0 else " (at least one is not healthy: see above)"
+        out.write(f"\nchecked {len(fleet)} robots{unhealthy}\n")
+        return worst
     async with demo_robot(config) as effective:
         return await run_check(effective, out)
 
