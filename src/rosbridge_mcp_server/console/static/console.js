@@ -3,6 +3,14 @@
 "use strict";
 
 const SECRET_HEADER = "X-Console-Secret";
+const TOKEN_HEADER = "X-Confirmation-Token";
+// A link from the MCP client (URL-mode elicitation) names one confirmation and carries its own token: it can
+// answer that confirmation and nothing else. Read before the fragment leaves the address bar.
+const link = (() => {
+  const match = location.hash.match(/confirm=(c\d+)&token=([A-Za-z0-9_-]+)/);
+  return match ? { id: match[1], token: match[2] } : null;
+})();
+if (link && !location.hash.includes("secret=")) history.replaceState(null, "", location.pathname);
 const secret = (() => {
   const match = location.hash.match(/secret=([A-Za-z0-9_-]+)/);
   if (match) {
@@ -288,6 +296,37 @@ async function loadImageTopics() {
   } catch (error) { /* the picker stays empty; typing a topic still works */ }
 }
 
+async function showLink() {
+  $("link-section").hidden = false;
+  const headers = { [TOKEN_HEADER]: link.token };
+  const say = (text) => { $("link-status").textContent = text; };
+  try {
+    const response = await fetch(`/api/confirmations/${link.id}`, { headers });
+    const answer = await response.json().catch(() => ({}));
+    if (!response.ok) {
+      $("link-buttons").hidden = true;
+      say(answer.error || `HTTP ${response.status}`);
+      return;
+    }
+    $("link-question").textContent = answer.question;
+  } catch (error) {
+    say(`The console server did not answer: ${error}`);
+    return;
+  }
+  const decide = async (verdict) => {
+    const response = await fetch(`/api/confirmations/${link.id}/${verdict}`, {
+      method: "POST",
+      headers: { ...headers, "Content-Type": "application/json" },
+      body: "{}",
+    });
+    const answer = await response.json().catch(() => ({}));
+    $("link-buttons").hidden = true;
+    say(response.ok ? `${answer.answer === "approved" ? "Approved" : "Denied"}. You can close this tab.` : answer.error || `HTTP ${response.status}`);
+  };
+  $("link-approve").addEventListener("click", () => decide("approve"));
+  $("link-deny").addEventListener("click", () => decide("deny"));
+}
+
 $("estop").addEventListener("click", () => post("/api/estop"));
 $("release").addEventListener("click", () => post("/api/release"));
 $("camera-form").addEventListener("submit", (event) => {
@@ -299,6 +338,13 @@ $("map-form").addEventListener("submit", (event) => {
   post("/api/map", { topic: $("map-topic").value.trim(), base_frame: $("map-base").value.trim() });
 });
 $("camera-off").addEventListener("click", () => post("/api/camera", { topic: "" }));
-if (!secret) problem("Open the console with the URL the server printed on stderr (it carries the session secret).");
-listen();
-loadImageTopics();
+if (link) showLink();
+if (!secret && link) {
+  // A tab opened by a link answers its one confirmation; the whole console needs the secret.
+  $("main").hidden = true;
+  $("link").textContent = "one confirmation";
+} else {
+  if (!secret) problem("Open the console with the URL the server printed on stderr (`rosbridge-mcp-server console-url` prints it too): it carries the session secret.");
+  listen();
+  loadImageTopics();
+}
