@@ -82,7 +82,7 @@ def draw_chart(series: Sequence[Series], duration: float, width: int, height: in
     draw.text((_LEFT + plot_w, height - 4), "time (s)", fill=TEXT_COLOUR, font=small, anchor="rd")
     if len(units) == 1 and units[0]:
         draw.text((4, 2), units[0], fill=TEXT_COLOUR, font=small)
-    _legend(draw, series, set(units))
+    _legend(image, draw, series, set(units), plot_w=plot_w, bottom=height - _BOTTOM)
     return image
 
 
@@ -234,16 +234,34 @@ def _runs(
     return runs
 
 
-def _legend(draw: ImageDraw.ImageDraw, series: Sequence[Series], units: set[str]) -> None:
+def _legend(
+    image: Image.Image,
+    draw: ImageDraw.ImageDraw,
+    series: Sequence[Series],
+    units: set[str],
+    *,
+    plot_w: int,
+    bottom: int,
+) -> None:
+    """The legend in the plot's corner where it hides the fewest drawn points."""
     small = font(11)
     show_units = len(units) > 1
     names = [s.label + (f" ({s.unit})" if show_units and s.unit else "") for s in series]
     widths = [draw.textbbox((0, 0), n, font=small)[2] for n in names]
-    box_w = max(widths, default=0) + 34
-    x0, y0 = _LEFT + 8, _TOP + 6
-    draw.rectangle(
-        (x0, y0, x0 + box_w, y0 + 16 * len(names) + 6), fill=(255, 255, 255), outline=(180, 180, 180)
-    )
+    box_w = math.ceil(max(widths, default=0)) + 34
+    box_h = 16 * len(names) + 6
+    left, right = _LEFT + 8, max(_LEFT + 8, _LEFT + plot_w - 8 - box_w)
+    top, low = _TOP + 6, max(_TOP + 6, bottom - 6 - box_h)
+    corners = [(left, top), (right, top), (left, low), (right, low)]
+    colours = set(SERIES_COLOURS)
+
+    def hidden(corner: tuple[int, int]) -> int:
+        x, y = corner
+        found = image.crop((x, y, x + box_w, y + box_h)).getcolors(maxcolors=box_w * box_h) or []
+        return sum(count for count, colour in found if colour in colours)
+
+    x0, y0 = min(corners, key=hidden)
+    draw.rectangle((x0, y0, x0 + box_w, y0 + box_h), fill=(255, 255, 255), outline=(180, 180, 180))
     for index, name in enumerate(names):
         colour = SERIES_COLOURS[index % len(SERIES_COLOURS)]
         y = y0 + 11 + 16 * index
