@@ -188,6 +188,7 @@ class ConsoleHub:
                     "type": pending.act.type,
                     "question": pending.question,
                     "asked_at": pending.asked_at,
+                    "by_link": pending.by_link,
                 }
                 for pending in self.operator.pending
             ],

@@ -73,6 +73,7 @@ function renderPending(pending) {
     const item = el("li");
     item.dataset.id = entry.id;
     item.append(el("strong", `${entry.tool} → ${entry.name}`));
+    if (entry.by_link) item.append(" ", el("small", "(your assistant's app also sent you a link to it)"));
     item.append(el("div", entry.question, "question"));
     const approve = el("button", "Approve", "approve");
     approve.type = "button";
