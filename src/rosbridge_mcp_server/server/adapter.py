@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import contextlib
 import functools
 import hashlib
 import inspect
@@ -375,6 +376,12 @@ class _Asker:
         message = f"Approve or deny this on the robot's operator console:\n{question}"
         try:
             result = await self._context.elicit_url(message, url, elicitation_id)
+        except asyncio.CancelledError:
+            # Answered on the console (or the call ended) while the client still shows the link: tell it the
+            # out-of-band part is over, so it can close its prompt.
+            with contextlib.suppress(Exception):
+                await self._context.session.send_elicit_complete(elicitation_id)
+            raise
         except Exception:
             _log.info("sending the person to the console failed", exc_info=True)
             return "unsupported"
