@@ -1,10 +1,11 @@
 """Take docs/images/console.png: the operator console on the simulated robot, in headless Chromium.
 
-    uv run python scripts/console_screenshot.py [--out docs/images/console.png]
+    uv run python scripts/console_screenshot.py [--out docs/images/console.png] [--lost lost.png]
 
 Needs Debian's Chromium (/usr/bin/chromium, or CHROMIUM=...). The scene: confirm = "motion", a chatter
 message sent, a velocity command approved, a Fibonacci goal running, another command waiting for Approve,
-the camera on, the pose and the map.
+the camera on (the page's default camera), the pose and the map. ``--lost FILE``: then the robot's bridge
+stops, and a second picture shows the page marking the last pose, map and frame stale.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ async def approve_next(console: Console) -> None:
     operator.answer(operator.pending[-1].id, approve=True)
 
 
-async def main(out: Path) -> None:
+async def main(out: Path, lost: Path | None = None) -> None:
     policy = parse_policy(
         {
             "confirm": "motion",
@@ -96,7 +97,7 @@ async def main(out: Path) -> None:
             page = await browser.new_page(viewport={"width": 1100, "height": 860})
             await page.goto(console.url)
             await expect(page.locator("#link")).to_have_text("live", timeout=10_000)
-            await page.locator("#camera-topic").fill("/camera/image_raw")
+            await expect(page.locator("#camera-topic")).not_to_have_value("", timeout=10_000)
             await page.get_by_role("button", name="Show").click()
             await page.wait_for_function("() => document.getElementById('camera').naturalWidth > 0")
             await page.wait_for_function("() => document.getElementById('map').naturalWidth > 0")
@@ -104,6 +105,12 @@ async def main(out: Path) -> None:
             await expect(page.locator("#pending li")).to_have_count(1, timeout=10_000)
             await expect(page.locator("#running li")).to_have_count(1, timeout=10_000)
             png = await page.screenshot(full_page=True)
+            if lost is not None:
+                await robot.stop()
+                await expect(page.locator("#map-stale")).to_be_visible(timeout=10_000)
+                await expect(page.locator("#camera-stale")).to_be_visible(timeout=10_000)
+                await page.screenshot(path=str(lost), full_page=True)
+                print(f"{lost}: the robot lost")
             await browser.close()
         picture = Image.open(io.BytesIO(png)).convert("RGB").quantize(colors=128)
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -117,4 +124,6 @@ async def main(out: Path) -> None:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("docs/images/console.png"))
-    asyncio.run(main(parser.parse_args().out))
+    parser.add_argument("--lost", type=Path, help="also a picture of the page after the robot is lost")
+    arguments = parser.parse_args()
+    asyncio.run(main(arguments.out, arguments.lost))

@@ -9,7 +9,7 @@ suite stays fast; pass other values to ``make_sim`` when a test needs them.
 from __future__ import annotations
 
 import os
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import Any
 
 import pytest
@@ -69,3 +69,16 @@ async def sim_humble(make_sim: MakeSim) -> SimulatedRobot:
 async def sim(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
     """A started simulated robot of each dialect (the test runs once per dialect)."""
     return await make_sim(dialect=request.param)
+
+
+@pytest.fixture(autouse=True)
+def _console_address_in_a_test_directory(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """A server started by a test (in this process or a child) keeps its console's URL file in a directory
+    of the test run, not in the user's runtime directory."""
+    previous = os.environ.get("ROSBRIDGE_MCP_RUNTIME_DIR")
+    os.environ["ROSBRIDGE_MCP_RUNTIME_DIR"] = str(tmp_path_factory.getbasetemp() / "runtime")
+    yield
+    if previous is None:
+        os.environ.pop("ROSBRIDGE_MCP_RUNTIME_DIR", None)
+    else:
+        os.environ["ROSBRIDGE_MCP_RUNTIME_DIR"] = previous

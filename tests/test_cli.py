@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import asyncio
 import io
 import logging
 import socket
 import subprocess
 import sys
 from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -258,3 +261,58 @@ async def test_check_warns_about_policy_names_the_robot_does_not_have() -> None:
     assert "[warn] policy [actions] allow '/navigate_to_pose' matches no action on this robot" in text
     assert "see the warn lines about the policy" in text
     assert "[warn]" not in fine.getvalue()
+
+
+async def test_check_takes_the_fleet_flags_and_checks_every_robot(
+    make_sim: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`check --robot a=... --robot b=...`: a section per robot, exit 0 when both are healthy, 1 when one is
+    down (the healthy one still reported)."""
+    first, second = await make_sim(dialect="ros2"), await make_sim(dialect="ros1")
+    argv = ["check", "--robot", f"base={first.url}", "--robot", f"arm={second.url}", "--timeout", "5"]
+    assert await asyncio.to_thread(run, argv, {}) == 0
+    out = capsys.readouterr().out
+    assert f"== robot base ({first.url}) ==" in out
+    assert f"== robot arm ({second.url}) ==" in out
+    assert out.count("Healthy") == 2
+    assert "checked 2 robots\n" in out
+
+    await second.stop()
+    assert await asyncio.to_thread(run, argv, {}) == 1
+    out = capsys.readouterr().out
+    base, arm = out.split("== robot arm", 1)
+    assert "Healthy" in base
+    assert "Nothing listens on" in arm
+    assert "at least one is not healthy" in arm
+
+
+def test_check_takes_a_robots_file_and_the_servers_other_flags(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A server's whole command line, transport and console flags included, is a valid `check` command line;
+    a fleet file's robots are each checked (here none answers: exit 1, both named)."""
+    ports = []
+    for _ in range(2):
+        with socket.socket() as probe:
+            probe.bind(("127.0.0.1", 0))
+            ports.append(probe.getsockname()[1])
+    fleet = tmp_path / "fleet.toml"
+    fleet.write_text(
+        f'[robots.base]\nurl = "ws://127.0.0.1:{ports[0]}"\n[robots.arm]\nurl = "ws://127.0.0.1:{ports[1]}"\n'
+    )
+    argv = ["check", "--robots", str(fleet), "--transport", "http", "--bind", "127.0.0.1:8765"]
+    argv += ["--console", "8770", "--timeout", "2"]
+    assert run(argv, {}) == 1
+    out = capsys.readouterr().out
+    assert "== robot base" in out
+    assert "== robot arm" in out
+
+
+def test_demo_with_robots_says_how_to_try_a_fleet_on_simulated_robots(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """--demo with --robot: exit 2, and the line says how to run a fleet of simulated robots instead."""
+    assert run(["check", "--demo", "--robot", "a=ws://127.0.0.1:9091"], {}) == 2
+    err = capsys.readouterr().err
+    assert "rosbridge-sim-robot --port 9091" in err
+    assert "--demo-robots 2" in err

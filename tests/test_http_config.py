@@ -32,9 +32,36 @@ def test_binding_beyond_loopback_needs_authentication() -> None:
         with pytest.raises(ConfigError, match="refusing to listen"):
             load_http_settings({}, transport="http", bind=bind)
     env = {"ROSBRIDGE_MCP_AUTH_TOKENS": f"ops {TOKEN}"}
-    settings = load_http_settings(env, transport="http", bind="192.168.1.5:8765")
+    settings = load_http_settings(env, transport="http", bind="192.168.1.5:8765", behind_tls_proxy=True)
     assert settings.tokens == (("ops", TOKEN),)
     assert "192.168.1.5:8765" in settings.allowed_hosts
+
+
+def test_binding_beyond_loopback_needs_tls_or_a_stated_tls_proxy(tmp_path: Path) -> None:
+    """Tokens in clear on a network are refused; the server's own TLS or --behind-tls-proxy lets it listen."""
+    env = {"ROSBRIDGE_MCP_AUTH_TOKENS": f"ops {TOKEN}"}
+    for bind in ("0.0.0.0:8765", "[::]:8765", "192.168.1.5:8765"):
+        with pytest.raises(ConfigError, match=r"in plain HTTP.*--tls-cert.*--behind-tls-proxy"):
+            load_http_settings(env, transport="http", bind=bind)
+    with pytest.raises(ConfigError, match="in plain HTTP"):
+        load_http_settings({}, transport="http", bind="0.0.0.0:8765", oauth_issuer="https://a.example")
+    cert, key = tmp_path / "cert.pem", tmp_path / "key.pem"
+    cert.write_text("not read here")
+    key.write_text("not read here")
+    tls = load_http_settings(env, transport="http", bind="0.0.0.0:8765", tls_cert=str(cert), tls_key=str(key))
+    assert tls.scheme == "https"
+    proxied = load_http_settings(
+        {**env, "ROSBRIDGE_MCP_BEHIND_TLS_PROXY": "1"}, transport="http", bind="0.0.0.0:1"
+    )
+    assert proxied.behind_tls_proxy
+    with pytest.raises(ConfigError, match=r"ROSBRIDGE_MCP_BEHIND_TLS_PROXY.*not a yes or no"):
+        load_http_settings(
+            {**env, "ROSBRIDGE_MCP_BEHIND_TLS_PROXY": "maybe"}, transport="http", bind="0.0.0.0:1"
+        )
+    with pytest.raises(ConfigError, match="--behind-tls-proxy needs --transport http"):
+        load_http_settings({}, behind_tls_proxy=True)
+    # Loopback stays plain HTTP without a word: the tokens never leave the machine.
+    assert load_http_settings(env, transport="http", bind="127.0.0.1:8765").scheme == "http"
 
 
 def test_a_token_file_has_one_name_and_token_per_line(tmp_path: Path) -> None:
@@ -85,7 +112,9 @@ def test_oauth_needs_an_issuer_url_and_not_tokens_too() -> None:
         load_http_settings(
             {"ROSBRIDGE_MCP_AUTH_TOKENS": f"a {TOKEN}"}, transport="http", oauth_issuer="https://a.example"
         )
-    settings = load_http_settings({}, transport="http", bind="0.0.0.0:8765", oauth_issuer="https://a.example")
+    settings = load_http_settings(
+        {}, transport="http", bind="0.0.0.0:8765", oauth_issuer="https://a.example", behind_tls_proxy=True
+    )
     assert settings.oauth is not None
     assert settings.oauth.jwks == "https://a.example/.well-known/jwks.json"
     assert settings.oauth.audience == settings.oauth.resource == "http://0.0.0.0:8765/mcp"

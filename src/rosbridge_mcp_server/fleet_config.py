@@ -54,7 +54,13 @@ def load_fleet(
             raise ConfigError(f"--robot: the robot {name!r} is named twice")
         fleet[name] = replace(base, url=parse_url(url.strip(), source=f"--robot {name}"))
     if base.demo and fleet:
-        raise ConfigError("--demo runs one simulated robot; it cannot be combined with --robot / --robots")
+        raise ConfigError(
+            "--demo runs one simulated robot; it cannot be combined with --robot / --robots. To try a fleet "
+            "on simulated robots, start two (`rosbridge-sim-robot --port 9091` and "
+            "`rosbridge-sim-robot --port 9092`) and give --robot a=ws://127.0.0.1:9091 "
+            "--robot b=ws://127.0.0.1:9092; or --demo "
+            "--demo-world nav2 --demo-robots 2 for two namespaced robots on one bridge"
+        )
     return tuple(fleet.items())
 
 

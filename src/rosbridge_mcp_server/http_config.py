@@ -11,9 +11,12 @@ Read once by the CLI, like :mod:`~rosbridge_mcp_server.config` (flags win over t
 * ``--allow-host NAME[:PORT]`` / ``--allow-origin URL`` (repeatable) / ``ROSBRIDGE_MCP_ALLOWED_HOSTS``,
   ``ROSBRIDGE_MCP_ALLOWED_ORIGINS`` (comma lists): the DNS-rebinding protection's extra names (a reverse
   proxy's, the robot's DNS name);
-* ``--tls-cert FILE`` / ``--tls-key FILE`` / ``ROSBRIDGE_MCP_TLS_CERT``, ``ROSBRIDGE_MCP_TLS_KEY``.
+* ``--tls-cert FILE`` / ``--tls-key FILE`` / ``ROSBRIDGE_MCP_TLS_CERT``, ``ROSBRIDGE_MCP_TLS_KEY``;
+* ``--behind-tls-proxy`` / ``ROSBRIDGE_MCP_BEHIND_TLS_PROXY=1``: a proxy in front terminates TLS.
 
-The server refuses to listen beyond loopback without authentication: that is a :class:`ConfigError` (exit 2).
+The server refuses to listen beyond loopback without authentication, and without TLS (its own, or a proxy's
+that ``--behind-tls-proxy`` states): bearer tokens must not cross a network in clear. Either is a
+:class:`ConfigError` (exit 2).
 Tokens are secrets: they are kept as given only to compare with, and never shown (``repr`` hides them).
 """
 
@@ -80,6 +83,8 @@ class HttpSettings:
     allowed_origins: tuple[str, ...] = ()
     tls_cert: str | None = None
     tls_key: str | None = None
+    #: The person said a proxy in front terminates TLS (the server itself then speaks plain HTTP).
+    behind_tls_proxy: bool = False
 
     @property
     def authenticated(self) -> bool:
@@ -112,6 +117,7 @@ def load_http_settings(
     oauth_jwks: str | None = None,
     oauth_resource: str | None = None,
     oauth_scopes: str | None = None,
+    behind_tls_proxy: bool = False,
 ) -> HttpSettings:
     """:class:`HttpSettings` from flags (``None``: not given) and the environment, or :class:`ConfigError`."""
     chosen = (transport or environ.get("ROSBRIDGE_MCP_TRANSPORT", "").strip() or "stdio").lower()
@@ -126,6 +132,7 @@ def load_http_settings(
                 ("--auth-tokens", auth_tokens),
                 ("--tls-cert", tls_cert),
                 ("--oauth-issuer", oauth_issuer),
+                ("--behind-tls-proxy", behind_tls_proxy),
             )
             if value
         ]
@@ -153,6 +160,7 @@ def load_http_settings(
     )
     if oauth is not None and tokens:
         raise ConfigError("give either --auth-tokens or --oauth-issuer, not both")
+    proxied = behind_tls_proxy or _flag(environ, "ROSBRIDGE_MCP_BEHIND_TLS_PROXY")
     hosts = _list(allow_hosts, environ, "ROSBRIDGE_MCP_ALLOWED_HOSTS")
     origins = _list(allow_origins, environ, "ROSBRIDGE_MCP_ALLOWED_ORIGINS")
     settings = HttpSettings(
@@ -165,6 +173,7 @@ def load_http_settings(
         allowed_origins=allowed_origins(host, port, hosts, origins),
         tls_cert=cert,
         tls_key=key,
+        behind_tls_proxy=proxied,
     )
     if not settings.authenticated and not is_loopback(host):
         raise ConfigError(
@@ -172,7 +181,22 @@ def load_http_settings(
             "the robot. Give --auth-tokens FILE (or ROSBRIDGE_MCP_AUTH_TOKENS) or --oauth-issuer URL, or "
             "bind to 127.0.0.1"
         )
+    if not cert and not proxied and not is_loopback(host):
+        raise ConfigError(
+            f"refusing to listen on {host}:{port} in plain HTTP: the bearer tokens would cross the network "
+            "in clear text. Give --tls-cert FILE and --tls-key FILE (HTTPS), or --behind-tls-proxy when a "
+            "reverse proxy in front terminates TLS, or bind to 127.0.0.1 (docs/deployment.md)"
+        )
     return settings
+
+
+def _flag(environ: Mapping[str, str], name: str) -> bool:
+    value = environ.get(name, "").strip().lower()
+    if value in ("", "0", "false", "no", "off"):
+        return False
+    if value in ("1", "true", "yes", "on"):
+        return True
+    raise ConfigError(f"{name}: {value!r} is not a yes or no (1, true, yes, on / 0, false, no, off)")
 
 
 def _pick(

@@ -80,8 +80,11 @@ class Console:
 
 
 @asynccontextmanager
-async def served_console(url: str, policy: Policy | None = None) -> AsyncIterator[Console]:
-    """The server as ``serve --console`` wires it (one operator, audit, guard and activity), on port 0."""
+async def served_console(
+    url: str, policy: Policy | None = None, elicitation_callback: Any = None
+) -> AsyncIterator[Console]:
+    """The server as ``serve --console`` wires it (one operator, audit, guard and activity), on port 0; the
+    MCP client answers elicitations with ``elicitation_callback`` when given (else it cannot ask)."""
     config = Config(url=url, request_timeout=5.0, connect_timeout=2.0, policy=policy or Policy())
     ros = RosbridgeClient(
         url, connect_timeout=2.0, request_timeout=5.0, reconnect_min=0.05, reconnect_max=0.2
@@ -96,7 +99,7 @@ async def served_console(url: str, policy: Policy | None = None) -> AsyncIterato
     async def host() -> None:
         try:
             server = build_server(robot, config, console_view=hub.snapshot)
-            async with Client(server, mode="legacy") as mcp:
+            async with Client(server, mode="legacy", elicitation_callback=elicitation_callback) as mcp:
                 ready.set_result(mcp)
                 await stop.wait()
         except BaseException as exc:

@@ -7,6 +7,7 @@ calls tools on the same server; what reached the robot is read on the simulated 
 from __future__ import annotations
 
 import asyncio
+import re
 from typing import Any
 
 import pytest
@@ -125,6 +126,11 @@ async def test_estop_stops_a_running_stream_and_refuses_acting_calls_until_relea
 
         await page.get_by_role("button", name="Release").click()
         await expect(page.locator("#latched")).to_be_hidden(timeout=WAIT_MS)
+        # Release is good news: not in the red of refusals and of the e-stop.
+        released = page.locator("#audit li").first.locator(".outcome")
+        await expect(released).to_have_text("e-stop released", timeout=WAIT_MS)
+        colour = await released.evaluate("node => getComputedStyle(node).color")
+        assert colour == "rgb(45, 122, 45)", colour
         allowed = await console.call("publish_topic", twist_call(0.2))
         assert not allowed.is_error, text_of(allowed)
         await sim_ros2.wait_for(lambda world: moving(sim_ros2)[-1] == 0.2, timeout=5)
@@ -165,3 +171,54 @@ async def test_the_page_without_the_secret_shows_nothing_and_can_change_nothing(
             await expect(page.locator("#audit li")).to_have_count(0)
         finally:
             await browser.close()
+
+
+async def test_the_colour_camera_is_the_default_and_the_map_keeps_its_aspect(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """The picker offers the colour camera (not the depth image that sorts first), and a map shrunk to a
+    narrow column keeps its width-to-height ratio (round obstacles stay round)."""
+    async with served_console(sim_ros2.url) as console, browser_page(console) as page:
+        await page.set_viewport_size({"width": 420, "height": 900})
+        await expect(page.locator("#camera-topic")).to_have_value("/camera/image_raw", timeout=WAIT_MS)
+        picture = page.locator("#map")
+        await expect(picture).to_be_visible(timeout=WAIT_MS)
+        shown = await picture.evaluate(
+            "img => [img.clientWidth, img.clientHeight, img.naturalWidth, img.naturalHeight]"
+        )
+        width, height, natural_width, natural_height = shown
+        assert width < natural_width, f"the map was not shrunk: {shown}"
+        assert width / height == pytest.approx(natural_width / natural_height, rel=0.01), shown
+        # The pose wraps between its parts only: every number with its unit stays on one line.
+        await expect(page.locator("#pose span").first).to_be_visible(timeout=WAIT_MS)
+        for part in await page.locator("#pose span").all():
+            assert await part.evaluate("node => getComputedStyle(node).whiteSpace") == "nowrap"
+
+
+async def test_a_lost_robot_marks_the_last_pose_map_and_frame_stale(sim_ros2: SimulatedRobot) -> None:
+    """The robot's bridge stops: the last map, frame and pose stay, each marked "stale since HH:MM:SS", the
+    robot is "not connected since", and the model's long error text is shown nowhere (not twice)."""
+    sim = sim_ros2
+    async with served_console(sim.url) as console, browser_page(console) as page:
+        await page.get_by_role("button", name="Show").click()
+        await expect(page.locator("#camera")).to_be_visible(timeout=WAIT_MS)
+        await expect(page.locator("#map")).to_be_visible(timeout=WAIT_MS)
+        await expect(page.locator("#pose")).to_contain_text("yaw", timeout=WAIT_MS)
+        await expect(page.locator("#map-stale")).to_be_hidden()
+
+        await sim.stop()
+        await expect(page.locator("#robots")).to_contain_text("not connected since", timeout=WAIT_MS)
+        for mark in ("#map-stale", "#camera-stale"):
+            await expect(page.locator(mark)).to_be_visible(timeout=WAIT_MS)
+            await expect(page.locator(mark)).to_contain_text(re.compile(r"stale since \d\d:\d\d:\d\d"))
+        # The last pictures stay under the mark; the pose keeps its numbers, marked too.
+        await expect(page.locator("#map")).to_be_visible()
+        await expect(page.locator("#camera")).to_be_visible()
+        await expect(page.locator("#pose")).to_contain_text("stale since")
+        await expect(page.locator("#map-status")).to_be_hidden()
+        body = await page.locator("body").inner_text()
+        assert "Not connected to rosbridge" not in body, body
+
+        await sim.start()
+        await expect(page.locator("#map-stale")).to_be_hidden(timeout=WAIT_MS)
+        await expect(page.locator("#pose")).not_to_contain_text("stale", timeout=WAIT_MS)

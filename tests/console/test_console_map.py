@@ -145,3 +145,20 @@ def test_the_pose_is_in_map_when_there_is_one_else_in_odom() -> None:
     frame, pose = found
     assert (frame, round(pose.x, 6), round(pose.y, 6)) == ("map", 11, 2)
     assert "'nowhere' has not been seen" in str(pose_of(tree, "nowhere"))
+
+
+def test_the_default_camera_is_the_colour_one() -> None:
+    """Depth, infrared and compressed copies come after the colour image; a colour-named topic comes first."""
+    from rosbridge_mcp_server.console.hub import default_camera
+
+    simulated = ["/camera/depth/image_raw", "/camera/image_raw", "/camera/image_raw/compressed"]
+    assert default_camera(simulated) == "/camera/image_raw"
+    realsense = [
+        "/camera/aligned_depth_to_color/image_raw",
+        "/camera/color/image_raw",
+        "/camera/color/image_raw/compressed",
+        "/camera/infra1/image_rect_raw",
+    ]
+    assert default_camera(realsense) == "/camera/color/image_raw"
+    assert default_camera(["/camera/depth/image_raw"]) == "/camera/depth/image_raw"
+    assert default_camera([]) is None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import ssl
 import sys
 from pathlib import Path
@@ -119,6 +120,44 @@ async def test_listening_beyond_loopback_without_authentication_exits_2(bind: st
     assert "refusing to listen" in lines[0]
     assert "without authentication" in lines[0]
     assert "--auth-tokens" in lines[0]
+
+
+@pytest.mark.parametrize("bind", ["0.0.0.0:0", "[::]:0"])
+async def test_tokens_in_plain_http_beyond_loopback_exit_2_unless_a_tls_proxy_is_stated(bind: str) -> None:
+    """Tokens but no TLS on a non-loopback address: one line naming --tls-cert and --behind-tls-proxy, exit
+    2, nothing listens; with --behind-tls-proxy the same command serves."""
+    env = {**os.environ, "ROSBRIDGE_MCP_AUTH_TOKENS": f"ops {TOKEN}"}
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        "-m",
+        "rosbridge_mcp_server",
+        "--transport",
+        "http",
+        "--bind",
+        bind,
+        env=env,
+        stdin=asyncio.subprocess.DEVNULL,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    stdout, stderr = await asyncio.wait_for(process.communicate(), WAIT)
+    assert process.returncode == 2
+    assert stdout == b""
+    lines = stderr.decode().strip().splitlines()
+    assert len(lines) == 1, lines
+    assert "refusing to listen" in lines[0]
+    assert "in plain HTTP" in lines[0]
+    assert "--tls-cert" in lines[0]
+    assert "--behind-tls-proxy" in lines[0]
+
+
+async def test_a_stated_tls_proxy_lets_the_server_listen_beyond_loopback(sim_ros2: SimulatedRobot) -> None:
+    """--behind-tls-proxy on 0.0.0.0 with tokens: the server listens and answers an authenticated client."""
+    # The later --bind wins over start_http's 127.0.0.1:0.
+    async with serving("http", "--url", sim_ros2.url, "--bind", "0.0.0.0:0", "--behind-tls-proxy") as served:
+        assert served.url.startswith("http://0.0.0.0:")
+        response = await _post(served.url.replace("0.0.0.0", "127.0.0.1"), INITIALIZE, **_headers(TOKEN))
+    assert response.status_code == 200
 
 
 async def test_a_thousand_bad_tokens_send_nothing_and_no_token_is_logged(

@@ -70,10 +70,10 @@ def test_the_chart_draws_each_series_in_its_colour_at_its_value() -> None:
     low = Series("/a", "v", "m/s", [0.5 * i for i in range(11)], [0.0] * 11)
     high = Series("/b", "v", "m/s", [0.5 * i for i in range(11)], [1.0] * 11)
     image = draw_chart([low, high], 5.0, 800, 400)
-    column = 600
-    rows = {y: image.getpixel((column, y)) for y in range(image.height)}
-    low_rows = [y for y, c in rows.items() if c == SERIES_COLOURS[0]]
-    high_rows = [y for y, c in rows.items() if c == SERIES_COLOURS[1]]
+    # Across a few columns: the second series is dashed.
+    rows = {(x, y): image.getpixel((x, y)) for x in range(580, 620) for y in range(image.height)}
+    low_rows = [y for (x, y), c in rows.items() if c == SERIES_COLOURS[0] and x > 560]
+    high_rows = [y for (x, y), c in rows.items() if c == SERIES_COLOURS[1]]
     assert low_rows
     assert high_rows
     assert max(high_rows) < min(low_rows)
@@ -86,3 +86,33 @@ def test_a_long_series_is_drawn_through_each_columns_min_and_max() -> None:
     image = draw_chart([line], 60.0, 800, 400)
     coloured = [y for y in range(image.height) for x in (400,) if image.getpixel((x, y)) == SERIES_COLOURS[0]]
     assert max(coloured) - min(coloured) > 250
+
+
+def test_coinciding_series_both_show() -> None:
+    """Two series with the same values: the second is dashed, so the first shows through its gaps."""
+    times = [0.1 * i for i in range(51)]
+    first = Series("/cmd_vel", "linear.x", "m/s", times, [0.5] * 51)
+    second = Series("/odom", "twist.twist.linear.x", "m/s", times, [0.5] * 51)
+    image = draw_chart([first, second], 5.0, 800, 400)
+    seen = {image.getpixel((x, y)) for x in range(200, 600) for y in range(image.height)}
+    assert SERIES_COLOURS[0] in seen
+    assert SERIES_COLOURS[1] in seen
+
+
+def test_each_unit_has_its_own_panel_and_scale() -> None:
+    """m/s and rad/s: two panels, one above the other, each spanning its own range and named by its unit."""
+    times = [0.1 * i for i in range(51)]
+    speed = Series("/cmd_vel", "linear.x", "m/s", times, [0.2] * 51)
+    turn = Series("/cmd_vel", "angular.z", "rad/s", times, [3.0 + 0.01 * i for i in range(51)])
+    image = draw_chart([speed, turn], 5.0, 800, 400)
+    rows_of = {
+        colour: [y for x in range(300, 500) for y in range(image.height) if image.getpixel((x, y)) == colour]
+        for colour in SERIES_COLOURS[:2]
+    }
+    speed_rows, turn_rows = rows_of[SERIES_COLOURS[0]], rows_of[SERIES_COLOURS[1]]
+    assert speed_rows
+    assert turn_rows
+    # The rad/s series is in the lower panel, although its values are larger.
+    assert max(speed_rows) < min(turn_rows)
+    # Its own scale: 0.5 rad/s of rise spans a good part of its panel, not a sliver of a shared axis.
+    assert max(turn_rows) - min(turn_rows) > 40

@@ -187,3 +187,56 @@ def test_a_rotated_grid_places_points_in_its_own_axes() -> None:
     scale = picture.pixels_per_metre
     at = (round(MARGIN_LEFT + 3.5 * scale), round(picture.image.height - MARGIN_BOTTOM - 2.5 * scale))
     assert colour_near(picture.image, at, ROBOT_COLOUR, reach=0)
+
+
+def test_overlays_outside_a_window_are_cut_at_the_plots_edge() -> None:
+    """Scan hits and a path beyond the window (around_robot) draw nothing over the axes and their labels."""
+    far = [(x * 0.1, y * 0.1) for x in range(-10, 90) for y in (-19, 35)]  # beyond the window on both sides
+    overlay = Overlay(robot=Pose2D(3.0, 0.0, 0.0), path=[(-1.0, -2.0), (9.0, 4.0)], hits=far)
+    picture = draw_map(
+        decode_grid(grid_message(100, 60, room())),
+        max_size=300,
+        overlay=overlay,
+        window=(2.0, -1.0, 4.0, 1.0),
+    )
+    image = picture.image
+    plot_bottom = image.height - MARGIN_BOTTOM
+    margins = [
+        (x, y) for x in range(image.width) for y in range(image.height) if x < MARGIN_LEFT or y >= plot_bottom
+    ]
+    drawn = {image.getpixel(xy) for xy in margins}
+    assert OBSTACLE_COLOUR not in drawn
+    assert PATH_COLOUR not in drawn
+    assert ROBOT_COLOUR not in drawn
+    # Inside the plot they are still drawn.
+    assert colour_near(image, pixel_of(picture, 3.0, 0.0), ROBOT_COLOUR, reach=0)
+
+
+def test_the_scale_bar_sits_below_the_map_and_hides_no_corner_of_it() -> None:
+    """The map's lower-left corner keeps its cells' colours; the bar is drawn in the bottom margin."""
+    picture = draw_map(decode_grid(grid_message(100, 60, room())), max_size=400, overlay=Overlay())
+    image = picture.image
+    plot_bottom = image.height - MARGIN_BOTTOM
+    # Just inside the one-cell wall, the free cells of the corner are white (no box, no bar).
+    corner = [
+        image.getpixel((x, y))
+        for x in range(MARGIN_LEFT + 6, MARGIN_LEFT + 60)
+        for y in range(plot_bottom - 40, plot_bottom - 6)
+    ]
+    assert set(corner) == {(254, 254, 254)}
+    bar_rows = [
+        y for y in range(plot_bottom, image.height) if image.getpixel((MARGIN_LEFT + 20, y)) == (20, 20, 20)
+    ]
+    assert bar_rows, "the scale bar is not in the bottom margin"
+
+
+def test_the_robot_arrow_is_large_enough_to_see() -> None:
+    """On a 420-pixel map of a small room, the arrow spans at least a twentieth of the picture."""
+    picture = draw_map(
+        decode_grid(grid_message(100, 60, room())), max_size=420, overlay=Overlay(robot=Pose2D(3.0, 0.0, 0.0))
+    )
+    image = picture.image
+    blue = [
+        x for x in range(image.width) for y in range(image.height) if image.getpixel((x, y)) == ROBOT_COLOUR
+    ]
+    assert max(blue) - min(blue) >= max(image.size) / 20

@@ -43,10 +43,18 @@ def _console_flags(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser(command: str) -> _Parser:
+    if command == "console-url":
+        return _Parser(
+            prog=f"{PROG} console-url",
+            description="Print the URL (with its one-time secret) of each operator console this user runs "
+            "now (started with --console). Exit code 0 when one runs, 1 when none does. Set "
+            "ROSBRIDGE_MCP_RUNTIME_DIR if the server was started with it.",
+        )
     if command == "check":
         description = (
             "Diagnose the connection to rosbridge: is it reachable, which ROS it runs, what rosbridge can "
-            "do, whether rosapi answers. Exit code 0 when healthy, 1 when not."
+            "do, whether rosapi answers; every robot of --robot / --robots. It takes the server's flags "
+            "(the transport and console ones are only checked). Exit code 0 when healthy, 1 when not."
         )
     else:
         description = (
@@ -58,11 +66,12 @@ def build_parser(command: str) -> _Parser:
     else:
         parser = _Parser(
             prog=PROG,
-            usage=f"{PROG} [serve] [options]\n       {PROG} check [options]",
+            usage=f"{PROG} [serve] [options]\n       {PROG} check [options]\n       {PROG} console-url",
             description=description,
             epilog=(
                 "commands: serve (the default) runs the MCP server; check diagnoses the connection to "
-                f"rosbridge with the same connection flags (`{PROG} check --help`)."
+                f"rosbridge with the same flags (`{PROG} check --help`); console-url prints the URL of the "
+                "operator console running now."
             ),
         )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
@@ -116,10 +125,11 @@ def build_parser(command: str) -> _Parser:
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
-    if command == "serve":
-        _fleet_flags(parser)
-        _transport_flags(parser)
-        _console_flags(parser)
+    # `check` takes every flag the server takes, so a server's command line can be checked as it is: it
+    # checks each robot of a fleet, and refuses a transport or console setting the server would refuse.
+    _fleet_flags(parser)
+    _transport_flags(parser)
+    _console_flags(parser)
     demo = parser.add_argument_group("demo")
     demo.add_argument(
         "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
@@ -193,6 +203,12 @@ def _transport_flags(parser: _Parser) -> None:
     )
     http.add_argument("--tls-cert", metavar="FILE", help="serve HTTPS with this certificate (PEM)")
     http.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
+    http.add_argument(
+        "--behind-tls-proxy",
+        action="store_true",
+        help="a reverse proxy in front terminates TLS: allows plain HTTP on a non-loopback --bind "
+        "(env ROSBRIDGE_MCP_BEHIND_TLS_PROXY=1)",
+    )
     oauth = parser.add_argument_group("OAuth 2.1 resource server (JWT access tokens)")
     oauth.add_argument("--oauth-issuer", metavar="URL", help="the authorization server (the tokens' iss)")
     oauth.add_argument("--oauth-audience", metavar="AUD", help="the tokens' aud (default: --oauth-resource)")

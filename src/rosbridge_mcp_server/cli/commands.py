@@ -17,6 +17,7 @@ import signal
 import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from dataclasses import replace
+from pathlib import Path
 from typing import TextIO
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
@@ -24,14 +25,17 @@ from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
+from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls, runtime_dir
 from rosbridge_mcp_server.fleet_config import load_fleet
-from rosbridge_mcp_server.http_config import HttpSettings, load_http_settings
+from rosbridge_mcp_server.http_config import HttpSettings, is_loopback, load_http_settings
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
 from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 
+#: The console's port in examples and advice: not the MCP HTTP listener's default (8765).
+CONSOLE_EXAMPLE_PORT = 8770
 #: After SIGTERM or Ctrl-C: how long tool calls get to cancel their goals, and then the client to close.
 SIGNAL_GRACE = 1.0
 _log = logging.getLogger(__name__)
@@ -42,8 +46,10 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     args = list(sys.argv[1:] if argv is None else argv)
     env = os.environ if environ is None else environ
     command = "serve"
-    if args and args[0] in ("serve", "check"):
+    if args and args[0] in ("serve", "check", "console-url"):
         command = args.pop(0)
+    if command == "console-url":
+        return console_url(args, env)
     try:
         options = build_parser(command).parse_args(args)
         config = load_config(
@@ -66,37 +72,32 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             headers=options.header,
             tools=options.tools,
         )
-        http = (
-            load_http_settings(
-                env,
-                transport=options.transport,
-                bind=options.bind,
-                auth_tokens=options.auth_tokens,
-                allow_hosts=options.allow_host,
-                allow_origins=options.allow_origin,
-                tls_cert=options.tls_cert,
-                tls_key=options.tls_key,
-                oauth_issuer=options.oauth_issuer,
-                oauth_audience=options.oauth_audience,
-                oauth_jwks=options.oauth_jwks,
-                oauth_resource=options.oauth_resource,
-                oauth_scopes=options.oauth_scopes,
-            )
-            if command == "serve"
-            else HttpSettings()
+        http = load_http_settings(
+            env,
+            transport=options.transport,
+            bind=options.bind,
+            auth_tokens=options.auth_tokens,
+            allow_hosts=options.allow_host,
+            allow_origins=options.allow_origin,
+            tls_cert=options.tls_cert,
+            tls_key=options.tls_key,
+            oauth_issuer=options.oauth_issuer,
+            oauth_audience=options.oauth_audience,
+            oauth_jwks=options.oauth_jwks,
+            oauth_resource=options.oauth_resource,
+            oauth_scopes=options.oauth_scopes,
+            behind_tls_proxy=options.behind_tls_proxy,
         )
-        fleet = (
-            load_fleet(config, robots=options.robot, robots_file=options.robots) if command == "serve" else ()
+        fleet = load_fleet(config, robots=options.robot, robots_file=options.robots)
+        console = console_settings(
+            options.console if options.console is not None else env.get("ROSBRIDGE_MCP_CONSOLE") or None,
+            cert=options.console_cert,
+            key=options.console_key,
+            insecure=options.console_insecure,
+            source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
         )
-        console = None
-        if command == "serve":
-            console = console_settings(
-                options.console if options.console is not None else env.get("ROSBRIDGE_MCP_CONSOLE") or None,
-                cert=options.console_cert,
-                key=options.console_key,
-                insecure=options.console_insecure,
-                source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
-            )
+        if console is not None:
+            same_port_check(console, http)
         audit_file = open_audit_log(config.audit_log) if command == "serve" else None
     except (UsageError, ConfigError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -111,8 +112,8 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     )
     try:
         if command == "check":
-            return asyncio.run(check(config, sys.stdout))
-        asyncio.run(serve(config, audit_file, http, fleet, console))
+            return asyncio.run(check(config, sys.stdout, fleet))
+        asyncio.run(serve(config, audit_file, http, fleet, console, console_dir=runtime_dir(env)))
     except ConfigError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
@@ -129,6 +130,47 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         if audit_file is not None:
             audit_file.close()
     return 0
+
+
+def console_url(args: Sequence[str], env: Mapping[str, str]) -> int:
+    """``console-url``: print the URL of each operator console this user runs now (0), or say there is none
+    (1). The URL carries the console's secret: it is for the person, not for a model's context."""
+    try:
+        build_parser("console-url").parse_args(list(args))
+    except UsageError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    directory = runtime_dir(env)
+    found = list(console_urls(directory))
+    for pid, url in found:
+        print(f"{url}  (process {pid})" if len(found) > 1 else url)
+    if not found:
+        print(
+            f"{PROG}: no operator console is running for this user (looked in {directory}); start the server "
+            "with --console PORT",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def same_port_check(console: ConsoleSettings, http: HttpSettings) -> None:
+    """:class:`ConfigError` when ``--console`` and the MCP HTTP listener's ``--bind`` name one port."""
+    if http.transport != "http" or console.port == 0 or console.port != http.port:
+        return
+    wildcard = ("0.0.0.0", "::", "")
+    if (
+        console.host == http.host
+        or console.host in wildcard
+        or http.host in wildcard
+        or (console.loopback and is_loopback(http.host))
+    ):
+        raise ConfigError(
+            f"--console {console.host}:{console.port} and the MCP HTTP listener "
+            f"(--bind {http.host}:{http.port}{', the default' if http.port == 8765 else ''}) "
+            "name the same port; give the console another, "
+            f"e.g. --console {CONSOLE_EXAMPLE_PORT} (or --console 0 for any free port)"
+        )
 
 
 def open_audit_log(path: str | None) -> TextIO | None:
@@ -239,8 +281,19 @@ async def demo_robot(config: Config) -> AsyncIterator[Config]:
         yield replace(config, url=robot.url)
 
 
-async def check(config: Config, out: TextIO) -> int:
-    """The ``check`` command: diagnose the bridge (or the demo robot); 0 when healthy, 1 when not."""
+async def check(config: Config, out: TextIO, fleet: Sequence[tuple[str, Config]] = ()) -> int:
+    """The ``check`` command: diagnose the bridge (or the demo robot), or each robot of a *fleet* in turn;
+    0 when every one is healthy, 1 when not."""
+    if fleet:
+        worst = 0
+        for number, (name, robot_config) in enumerate(fleet):
+            if number:
+                out.write("\n")
+            out.write(f"== robot {name} ({robot_config.url}) ==\n")
+            worst = max(worst, await run_check(robot_config, out))
+        unhealthy = "" if worst == 0 else " (at least one is not healthy: see above)"
+        out.write(f"\nchecked {len(fleet)} robots{unhealthy}\n")
+        return worst
     async with demo_robot(config) as effective:
         return await run_check(effective, out)
 
@@ -251,10 +304,13 @@ async def serve(
     http: HttpSettings | None = None,
     fleet: Sequence[tuple[str, Config]] = (),
     console: ConsoleSettings | None = None,
+    *,
+    console_dir: Path | None = None,
 ) -> None:
     """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
     Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names). With
-    *console*, the operator console beside it (one person, one E-STOP for every robot)."""
+    *console*, the operator console beside it (one person, one E-STOP for every robot); its URL is also
+    written to a file in *console_dir* (this user's alone) while it runs."""
     async with demo_robot(config) as effective:
         robots = list(fleet) or [("robot", effective)]
         entries: list[Robot] = []
@@ -289,8 +345,10 @@ async def serve(
         console_view = hub.snapshot if hub is not None else None
         if http is not None and http.transport == "http":
             # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
-            from rosbridge_mcp_server.server.http import auth_options, serve_http  # noqa: PLC0415
+            from rosbridge_mcp_server.server.http import auth_options, listen_http, serve_http  # noqa: PLC0415
 
+            # The MCP listener first: when its port is taken, it is named and nothing else has started.
+            sock = listen_http(http)
             server = build_fleet_server(entries, effective, console_view=console_view, **auth_options(http))
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
             # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
@@ -298,10 +356,11 @@ async def serve(
             # on stdio (Ctrl-C still ends in KeyboardInterrupt, exit 130).
             previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
             try:
-                async with _console(console, hub):
-                    await serve_http(server, http)
+                async with _console(console, hub, console_dir):
+                    await serve_http(server, http, sock=sock)
             finally:
                 signal.signal(signal.SIGTERM, previous)
+                sock.close()
             return
         server = build_fleet_server(entries, effective, console_view=console_view)
         _stop_on_signals([robot.session.client for robot in entries])
@@ -314,13 +373,16 @@ async def serve(
                 PROG,
                 " --demo" if config.demo else "",
             )
-        async with _console(console, hub):
+        async with _console(console, hub, console_dir):
             await serve_stdio(server)
 
 
 @contextlib.asynccontextmanager
-async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> AsyncIterator[None]:
-    """The operator console beside the MCP server, when asked for; its one-time URL goes to stderr."""
+async def _console(
+    settings: ConsoleSettings | None, hub: ConsoleHub | None, directory: Path | None = None
+) -> AsyncIterator[None]:
+    """The operator console beside the MCP server, when asked for; its one-time URL goes to stderr and, with
+    *directory*, to a file there that only this user can read (``console-url`` prints it)."""
     if settings is None or hub is None:
         yield
         return
@@ -332,13 +394,26 @@ async def _console(settings: ConsoleSettings | None, hub: ConsoleHub | None) -> 
         running = await opened.__aenter__()
     except OSError as exc:
         raise ConfigError(
-            f"--console: cannot listen on {settings.host}:{settings.port}: {exc.strerror or exc}"
+            f"the operator console (--console) cannot listen on {settings.host}:{settings.port}: "
+            f"{exc.strerror or exc}; give it another port, e.g. --console {CONSOLE_EXAMPLE_PORT}, or "
+            "--console 0 for any free one"
         ) from None
     # The URL alone on its line, to copy; it carries the session secret, so it is not a log line either.
     sys.stderr.write(f"{running.url}\n")
-    sys.stderr.write("operator console: open the URL above in a browser beside the robot\n")
+    address = ConsoleAddressFile(directory) if directory is not None else None
+    where = ""
+    if address is not None:
+        try:
+            address.write(running.url)
+            where = f" (also in {address.path}, which `{PROG} console-url` prints)"
+        except OSError as exc:
+            address = None
+            _log.warning("the console's URL is on stderr only: cannot write it to %s: %s", directory, exc)
+    sys.stderr.write(f"operator console: open the URL above in a browser beside the robot{where}\n")
     sys.stderr.flush()
     try:
         yield
     finally:
+        if address is not None:
+            address.remove()
         await opened.__aexit__(None, None, None)

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.console.mapview import MapPanel, Picture
+from rosbridge_mcp_server.console.mapview import MapPanel, Picture, trying_again
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.images import ImageError, decode_compressed, decode_raw, encode_picture
 from rosbridge_mcp_server.robot.messages import short_type_name
@@ -33,7 +33,15 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.session import RobotSession
 
-__all__ = ["AUDIT_KEPT", "CAMERA_FPS", "CAMERA_MAX_SIZE", "ConsoleHub", "RobotView", "summary_text"]
+__all__ = [
+    "AUDIT_KEPT",
+    "CAMERA_FPS",
+    "CAMERA_MAX_SIZE",
+    "ConsoleHub",
+    "RobotView",
+    "default_camera",
+    "summary_text",
+]
 
 _log = logging.getLogger("rosbridge_mcp_server.console")
 
@@ -87,6 +95,8 @@ class ConsoleHub:
         self._pushes = 0
         self.viewers = 0
         self.map = MapPanel(first.client, self._graph, self.changed, self._pushed)
+        #: Since when (local wall-clock time, HH:MM:SS) each robot has not been connected.
+        self._down_since: dict[str, str] = {}
         for robot in self.robots:
             robot.audit.listen(self._on_audit)
         operator.listen(self.changed)
@@ -178,12 +188,15 @@ class ConsoleHub:
                     "type": pending.act.type,
                     "question": pending.question,
                     "asked_at": pending.asked_at,
+                    "by_link": pending.by_link,
                 }
                 for pending in self.operator.pending
             ],
             "audit": list(reversed(self._entries)),
             "camera": {"topic": self.camera_topic, "status": self.camera_status},
             "map": self.map.state(),
+            # The camera and the map panel show the first robot: while it is down, their pictures are old.
+            "stale_since": self._down_since.get(self.robots[0].name),
         }
 
     def frame_event(self) -> dict[str, Any] | None:
@@ -203,11 +216,15 @@ class ConsoleHub:
             ros = None
             if info is not None:
                 ros = f"ROS {info.version}" + (f" {info.distro}" if info.distro else "")
+                self._down_since.pop(robot.name, None)
+            else:
+                self._down_since.setdefault(robot.name, time.strftime("%H:%M:%S"))
             robots.append(
                 {
                     "name": robot.name,
                     "url": client.url,
                     "connected": info is not None,
+                    "down_since": self._down_since.get(robot.name),
                     "ros": ros,
                     "streams": [
                         {"topic": s.topic, "type": s.type, "stopping": s.stop_requested.is_set()}
@@ -278,6 +295,10 @@ class ConsoleHub:
         topics = await self._graph.topics()
         return sorted(t.name for t in topics if short_type_name(t.type) in _IMAGE_TYPES)
 
+    async def default_camera(self, topics: Sequence[str] | None = None) -> str | None:
+        """The camera a person most likely wants first: see :func:`default_camera`."""
+        return default_camera(await self.image_topics() if topics is None else topics)
+
     def show_camera(self, topic: str | None) -> None:
         """Show ``topic`` (``None``: no camera); a bad name is refused with :class:`RosbridgeError`."""
         name = absolute_name(topic, "topic") if topic else None
@@ -299,7 +320,7 @@ class ConsoleHub:
             try:
                 await self._frames_of(client, topic)
             except RosbridgeError as exc:
-                self._camera_said(f"{exc} (trying again)")
+                self._camera_said(trying_again(exc))
             except ImageError as exc:
                 self._camera_said(f"cannot show this frame: {exc}")
             # Not a sync: how soon to try again after the robot or the topic failed.
@@ -332,6 +353,24 @@ class ConsoleHub:
     def _camera_said(self, status: str) -> None:
         self.camera_status = status
         self.changed()
+
+
+#: Words in a topic name that mean a picture for machines, not people (depth, infrared, disparity, masks).
+_NOT_FOR_PEOPLE = ("depth", "disparity", "/ir/", "infra", "mask", "confidence", "points", "segment")
+
+
+def default_camera(topics: Sequence[str]) -> str | None:
+    """The colour camera when there is one: a name without depth/infrared/..., preferring ``color``/``rgb``,
+    then the raw image over its compressed copy, then the shortest name; ``None`` when there is no topic."""
+
+    def rank(name: str) -> tuple[int, int, int, int, str]:
+        lower = name.lower()
+        machine = any(word in lower for word in _NOT_FOR_PEOPLE)
+        colour = "color" in lower or "colour" in lower or "rgb" in lower
+        compressed = lower.endswith(("/compressed", "/compresseddepth", "/theora"))
+        return (machine, not colour, compressed, len(name), name)
+
+    return min(topics, key=rank, default=None)
 
 
 def _encode(message: dict[str, Any], compressed: bool) -> tuple[str, int, int]:

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.drawing import png_bytes
 from rosbridge_mcp_server.robot.frames import TF_TOPICS
 from rosbridge_mcp_server.robot.maps import Grid, MapError, Overlay, Pose2D, decode_grid, draw_map
@@ -38,6 +38,7 @@ __all__ = [
     "MapPanel",
     "Picture",
     "pose_of",
+    "trying_again",
 ]
 
 DEFAULT_MAP_TOPIC = "/map"
@@ -181,7 +182,7 @@ class MapPanel:
                 else:
                     self._say(status="no pose: nothing publishes /tf or /tf_static")
             except* RosbridgeError as group:
-                self._say(status=f"{group.exceptions[0]} (trying again)")
+                self._say(status=trying_again(group.exceptions[0]))
             # Not a sync: how soon to look again after the robot or the topics were missing.
             await asyncio.sleep(RETRY_EVERY)
 
@@ -203,7 +204,7 @@ class MapPanel:
                 else:
                     await self._maps_of(topic, msg_type)
             except RosbridgeError as exc:
-                self._say(map_status=f"{exc} (trying again)")
+                self._say(map_status=trying_again(exc))
             # Not a sync: how soon to look again after the topic or the robot was missing.
             await asyncio.sleep(RETRY_EVERY)
 
@@ -268,6 +269,15 @@ class MapPanel:
             self.map_status = map_status
         if (self.status, self.map_status) != before:
             self._changed()
+
+
+def trying_again(exc: BaseException) -> str:
+    """What the page says while a listener waits to try again after ``exc``."""
+    # A lost robot is said once, shortly (the page marks the last pose and picture stale); the long text
+    # written for the model would stand twice in the panel, under the pose and under the map.
+    if isinstance(exc, NotConnectedError):
+        return "the robot is not connected (trying again)"
+    return f"{exc} (trying again)"
 
 
 def pose_of(tree: FrameTree, base_frame: str, map_frame: str = "map") -> tuple[str, Pose2D] | str:

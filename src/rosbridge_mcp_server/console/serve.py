@@ -74,9 +74,12 @@ async def open_console(settings: ConsoleSettings, hub: ConsoleHub) -> AsyncItera
     serving = asyncio.create_task(server.serve(sockets=[sock]), name="console")
     looking = asyncio.create_task(hub.look(), name="console look")
     running = RunningConsole(hub, f"{settings.scheme}://{shown_host}:{port}/", secret)
+    # Confirmations by link (URL-mode elicitation) send the person here.
+    hub.operator.link_base = running.base_url
     try:
         yield running
     finally:
+        hub.operator.link_base = None
         hub.close()
         server.should_exit = True
         looking.cancel()

@@ -5,7 +5,8 @@ Routes (everything under ``/api`` needs the session secret in the ``X-Console-Se
 * ``GET /`` (and its script and style): the page; it holds no robot data, only code;
 * ``GET /api/events``: server-sent events, ``state`` (the hub's snapshot), ``frame`` (the camera), ``pose``
   and ``map`` (the map panel's pose and picture);
-* ``GET /api/image-topics``: the image topics, for the camera picker;
+* ``GET /api/image-topics``: the image topics, for the camera picker, and the default (the colour camera);
+* ``GET /api/confirmations/{id}``: one waiting confirmation (for a page opened by a link);
 * ``POST /api/confirmations/{id}/approve`` and ``.../deny``, ``POST /api/estop``, ``POST /api/release``,
   ``POST /api/camera`` (``{"topic": "/camera/image_raw"}``, ``""`` for none), ``POST /api/map``
   (``{"topic": "/map", "base_frame": "base_link"}``).
@@ -14,6 +15,10 @@ There is no route that publishes, calls or sends anything of its own: the consol
 and releases, and nothing else. A header (not a cookie) carries the secret, so another page in the same
 browser cannot make a request that counts, and a request whose ``Host`` is not the console's own address is
 refused (a DNS-rebinding page would otherwise reach a loopback console).
+
+A confirmation sent to the person by link (URL-mode elicitation) carries a token of its own in the URL's
+fragment; the page sends it in ``X-Confirmation-Token``, which reads, approves or denies that one
+confirmation while it waits, and nothing else (no event stream, no E-STOP, no other confirmation).
 """
 
 from __future__ import annotations
@@ -33,11 +38,12 @@ from rosbridge_mcp_server.console.hub import ConsoleHub
 from rosbridge_mcp_server.console.pages import static_text
 from rosbridge_mcp_server.errors import RosbridgeError
 
-__all__ = ["SECRET_HEADER", "console_app"]
+__all__ = ["SECRET_HEADER", "TOKEN_HEADER", "console_app"]
 
 _log = logging.getLogger("rosbridge_mcp_server.console")
 
 SECRET_HEADER = "X-Console-Secret"
+TOKEN_HEADER = "X-Confirmation-Token"
 #: A comment line on an idle event stream, so proxies and the browser keep it open.
 KEEP_ALIVE_SECONDS = 15.0
 _SECURITY_HEADERS = {
@@ -69,6 +75,43 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
 
         return check
 
+    def secret_or_token(handler: Handler) -> Handler:
+        # The session secret, or the token of the one confirmation the path names (a link's).
+        async def check(request: Request) -> Response:
+            token = request.headers.get(TOKEN_HEADER)
+            if token is None or request.headers.get(SECRET_HEADER) is not None:
+                return await guarded(handler)(request)
+            refusal = _refusal(request, secret, allowed_hosts, need_secret=False)
+            if refusal is not None:
+                return refusal
+            if hub.operator.by_token(request.path_params["id"], token) is None:
+                _log.warning(
+                    "console: refused %s %s with a wrong or spent token", request.method, request.url.path
+                )
+                return _json(
+                    {"error": "this link's confirmation is no longer waiting, or the link is wrong"}, 403
+                )
+            return await handler(request)
+
+        return check
+
+    async def confirmation(request: Request) -> Response:
+        pending = next((p for p in hub.operator.pending if p.id == request.path_params["id"]), None)
+        if pending is None:
+            return _json({"error": "this confirmation is no longer waiting"}, 404)
+        act = pending.act
+        return _json(
+            {
+                "id": pending.id,
+                "tool": act.tool,
+                "kind": act.kind,
+                "name": act.name,
+                "type": act.type,
+                "question": pending.question,
+                "asked_at": pending.asked_at,
+            }
+        )
+
     async def page(request: Request) -> Response:
         refusal = _refusal(request, secret, allowed_hosts, need_secret=False)
         if refusal is not None:
@@ -88,7 +131,7 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
             topics = await hub.image_topics()
         except RosbridgeError as exc:
             return _json({"error": str(exc)}, 503)
-        return _json({"topics": topics})
+        return _json({"topics": topics, "default": await hub.default_camera(topics)})
 
     async def approve(request: Request) -> Response:
         return _answered(hub, request.path_params["id"], approve=True)
@@ -140,8 +183,9 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
     routes += [
         Route("/api/events", guarded(events), methods=["GET"]),
         Route("/api/image-topics", guarded(image_topics), methods=["GET"]),
-        Route("/api/confirmations/{id}/approve", guarded(approve), methods=["POST"]),
-        Route("/api/confirmations/{id}/deny", guarded(deny), methods=["POST"]),
+        Route("/api/confirmations/{id}", secret_or_token(confirmation), methods=["GET"]),
+        Route("/api/confirmations/{id}/approve", secret_or_token(approve), methods=["POST"]),
+        Route("/api/confirmations/{id}/deny", secret_or_token(deny), methods=["POST"]),
         Route("/api/estop", guarded(estop), methods=["POST"]),
         Route("/api/release", guarded(release), methods=["POST"]),
         Route("/api/camera", guarded(camera), methods=["POST"]),

@@ -96,14 +96,23 @@ def label(value: float, unit: str = "") -> str:
     return f"{text} {unit}" if unit else text
 
 
-def draw_scale_bar(draw: ImageDraw.ImageDraw, pixels_per_metre: float, corner: tuple[int, int]) -> float:
+def draw_scale_bar(
+    draw: ImageDraw.ImageDraw, pixels_per_metre: float, corner: tuple[int, int], *, boxed: bool = True
+) -> float:
     """A labelled bar of a round length (about a fifth of the picture) with its left end at ``corner``
-    (bottom-left of the bar); returns the length in metres."""
+    (bottom-left of the bar); returns the length in metres. ``boxed``: on a white box with the label above
+    (over a picture); else the label right of the bar (in a margin, where nothing is hidden)."""
     width = draw.im.size[0]
     metres = round_down(width * 0.25 / pixels_per_metre)
     length = max(1, round(metres * pixels_per_metre))
     x, y = corner
     text = label(metres, "m")
+    if not boxed:
+        draw.line((x, y, x + length, y), fill=TEXT_COLOUR, width=3)
+        draw.line((x, y - 5, x, y), fill=TEXT_COLOUR, width=1)
+        draw.line((x + length, y - 5, x + length, y), fill=TEXT_COLOUR, width=1)
+        draw.text((x + length + 6, y), text, fill=TEXT_COLOUR, font=font(), anchor="lm")
+        return metres
     box = draw.textbbox((0, 0), text, font=font())
     pad = 4
     draw.rectangle(
@@ -120,8 +129,9 @@ def draw_scale_bar(draw: ImageDraw.ImageDraw, pixels_per_metre: float, corner: t
 
 def draw_robot(draw: ImageDraw.ImageDraw, centre: tuple[float, float], heading: float, radius: float) -> None:
     """The robot as a filled arrow pointing along ``heading`` (radians, counter-clockwise from the picture's
-    +x axis, which points right), ``radius`` pixels from centre to tip, with a white rim."""
-    radius = max(radius, 12.0)
+    +x axis, which points right), ``radius`` pixels from centre to tip, with a white rim; never smaller than
+    a twentieth of the picture's long side (16 px at least), so it is seen at a glance."""
+    radius = max(radius, 16.0, max(draw.im.size) / 20)
     cx, cy = centre
 
     def at(angle: float, r: float) -> tuple[float, float]:

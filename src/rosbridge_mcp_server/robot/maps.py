@@ -50,7 +50,7 @@ OCCUPIED_FROM = 65
 #: Pixels left of and below the map for the axes' labels: map point (x, y) is drawn at
 #: (MARGIN_LEFT + (x - x_min) · px/m, map height in pixels - (y - y_min) · px/m) for an unrotated grid.
 MARGIN_LEFT = 44
-MARGIN_BOTTOM = 20
+MARGIN_BOTTOM = 38
 
 
 class MapError(ValueError):
@@ -254,28 +254,33 @@ def draw_map(
     coloured = Image.frombuffer("P", ranked.size, ranked.tobytes(), "raw", "P", 0, 1)
     coloured.putpalette(_PALETTE)
     image = Image.new("RGB", (out_w + MARGIN_LEFT, out_h + MARGIN_BOTTOM), (255, 255, 255))
-    image.paste(coloured.convert("RGB"), (MARGIN_LEFT, 0))
-    draw = ImageDraw.Draw(image)
+    # The overlay is drawn on the map's own picture, so what falls outside it (a scan's far hits around the
+    # robot) is cut at the plot's edge instead of covering the axes' labels.
+    drawn = coloured.convert("RGB")
+    over = ImageDraw.Draw(drawn)
 
     def pixel(x: float, y: float) -> tuple[float, float]:
         col, row = grid.to_cell(x, y)
-        return (MARGIN_LEFT + (col - col0) * scale, out_h - (row - row0) * scale)
+        return ((col - col0) * scale, out_h - (row - row0) * scale)
 
     pixels_per_metre = scale / grid.resolution
-    _draw_axes(draw, grid, cells=(col0, col1, row0, row1), out_w=out_w, out_h=out_h)
     if overlay.path:
         points = [pixel(x, y) for x, y in overlay.path]
         if len(points) > 1:
-            draw.line(points, fill=PATH_COLOUR, width=3, joint="curve")
+            over.line(points, fill=PATH_COLOUR, width=3, joint="curve")
         end = points[-1]
-        draw.ellipse((end[0] - 4, end[1] - 4, end[0] + 4, end[1] + 4), fill=PATH_COLOUR)
+        over.ellipse((end[0] - 4, end[1] - 4, end[0] + 4, end[1] + 4), fill=PATH_COLOUR)
     for x, y in overlay.hits:
         px, py = pixel(x, y)
-        draw.rectangle((px - 1, py - 1, px + 1, py + 1), fill=OBSTACLE_COLOUR)
+        over.rectangle((px - 1, py - 1, px + 1, py + 1), fill=OBSTACLE_COLOUR)
     if overlay.robot is not None:
         robot = overlay.robot
-        draw_robot(draw, pixel(robot.x, robot.y), robot.yaw - grid.origin.yaw, 0.25 * pixels_per_metre)
-    bar = draw_scale_bar(draw, pixels_per_metre, (MARGIN_LEFT + 10, out_h - 10))
+        draw_robot(over, pixel(robot.x, robot.y), robot.yaw - grid.origin.yaw, 0.25 * pixels_per_metre)
+    image.paste(drawn, (MARGIN_LEFT, 0))
+    draw = ImageDraw.Draw(image)
+    _draw_axes(draw, grid, cells=(col0, col1, row0, row1), out_w=out_w, out_h=out_h)
+    # Below the axis labels, outside the map: a box in a corner would hide that corner of the map.
+    bar = draw_scale_bar(draw, pixels_per_metre, (MARGIN_LEFT, out_h + MARGIN_BOTTOM - 6), boxed=False)
     x_min, y_min = grid.to_map(col0, row0)
     x_max, y_max = grid.to_map(col1, row1)
     return MapPicture(image, found, (x_min, y_min, x_max, y_max), pixels_per_metre, bar)

@@ -28,6 +28,7 @@ __all__ = [
     "Answer",
     "AskPerson",
     "Guard",
+    "SendToLink",
     "Timeouts",
     "approved",
     "carry_out",
@@ -60,6 +61,9 @@ class Act:
 Answer = Literal["accept", "decline", "cancel", "unsupported"]
 #: Asks the person at the MCP client a yes/no question (the server's elicitation).
 AskPerson = Callable[[str], Awaitable[Answer]]
+#: Sends the person at the MCP client to a URL (``question``, ``url``, an id for the request): their answer
+#: is given there; "accept" only means they went. An :data:`AskPerson` may carry one as ``by_link``.
+SendToLink = Callable[[str, str, str], Awaitable[Answer]]
 
 
 class Guard(Protocol):

@@ -297,6 +297,13 @@ class PolicyGuard:
                     if self.operator is None or not self.operator.present:
                         return "no console"
                     return await self.operator.ask(text, act)
+                # An AskPerson whose client can open a URL carries a SendToLink as ``by_link`` (seam.py).
+                link = getattr(ask, "by_link", None)
+                operator = self.operator
+                if link is not None and operator is not None and operator.present and operator.link_base:
+                    # The client can open a URL: it sends the person to this call's approval on the console,
+                    # where the camera and the map are (the console's secret never goes to the client).
+                    return await operator.ask(text, act, by_link=link)
                 answer = await ask(text)
                 if answer == "unsupported" and self.operator is not None and self.operator.present:
                     # The MCP client cannot ask: the person at the console can, within the same timeout.

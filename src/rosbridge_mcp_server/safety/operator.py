@@ -4,20 +4,30 @@
 shows the robot to a person (the operator console): the guard asks it when the MCP client cannot ask, and
 refuses every acting call while its e-stop is latched. It knows no web page; the console reads its state and
 calls :meth:`Operator.answer`, :meth:`Operator.latch` and :meth:`Operator.release`.
+
+**Confirmations by link.** While the console is served it sets :attr:`Operator.link_base` (its address).
+When the MCP client can open a URL for the person (URL-mode elicitation), the guard asks through
+:meth:`Operator.ask` with that client's ``by_link``: the client is sent the console's address with this one
+confirmation's id and a token of its own in the fragment (``#confirm=c3&token=...``), never the console's
+session secret. The token answers this confirmation only, and only while it waits: it is what a form
+elicitation would let the client do (answer this one question), and nothing more.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import hmac
 import itertools
 import logging
+import secrets
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.seam import Act, Answer
+    from rosbridge_mcp_server.robot.seam import Act, Answer, SendToLink
 
 __all__ = ["Operator", "PendingConfirmation"]
 
@@ -33,6 +43,10 @@ class PendingConfirmation:
     act: Act
     asked_at: float = field(default_factory=time.time)
     answer: asyncio.Future[Answer] = field(default_factory=lambda: asyncio.get_running_loop().create_future())
+    #: Lets a link (URL-mode elicitation) answer this confirmation, and nothing else.
+    token: str = field(default_factory=lambda: secrets.token_urlsafe(24), repr=False)
+    #: Whether the person was sent here by a link from the MCP client.
+    by_link: bool = False
 
 
 class Operator:
@@ -48,23 +62,47 @@ class Operator:
         self._ids = itertools.count(1)
         self._latched_by: str | None = None
         self._listeners: list[Callable[[], None]] = []
+        #: The console's address (``http(s)://HOST:PORT/``) while it is served: links to confirmations.
+        self.link_base: str | None = None
 
     # --- what the guard asks -------------------------------------------------------------------------------
 
-    async def ask(self, question: str, act: Act) -> Answer:
-        """Wait for the person's answer to ``question`` (the caller bounds the wait; no answer is a no)."""
+    async def ask(self, question: str, act: Act, by_link: SendToLink | None = None) -> Answer:
+        """Wait for the person's answer to ``question`` (the caller bounds the wait; no answer is a no).
+
+        With ``by_link`` (the MCP client can open a URL) and the console served, the client is also sent to
+        this confirmation on the console; declining to go there is a no, going there waits for the answer.
+        """
         if not self.present:
             return "unsupported"
         if self._latched_by is not None:
             return "decline"
         pending = PendingConfirmation(f"c{next(self._ids)}", question, act)
+        link = self.link_base
+        pending.by_link = by_link is not None and link is not None
         self._pending[pending.id] = pending
         self._changed()
+        sending: asyncio.Future[Answer] | None = None
+        if by_link is not None and link is not None:
+            url = f"{link}#confirm={pending.id}&token={pending.token}"
+            sending = asyncio.ensure_future(by_link(question, url, pending.id))
+            sending.add_done_callback(lambda done: _link_answered(pending, done))
         try:
             return await pending.answer
         finally:
+            if sending is not None and not sending.done():
+                sending.cancel()
+                with contextlib.suppress(asyncio.CancelledError, Exception):
+                    await sending
             self._pending.pop(pending.id, None)
             self._changed()
+
+    def by_token(self, pending_id: str, token: str) -> PendingConfirmation | None:
+        """The confirmation waiting under ``pending_id`` when ``token`` is its own, else ``None``."""
+        pending = self._pending.get(pending_id)
+        if pending is None or not hmac.compare_digest(pending.token.encode(), token.encode()):
+            return None
+        return pending
 
     @property
     def latched(self) -> str | None:
@@ -116,3 +154,16 @@ class Operator:
                 callback()
             except Exception:
                 _log.exception("an operator listener failed")
+
+
+def _link_answered(pending: PendingConfirmation, sending: asyncio.Future[Answer]) -> None:
+    """The client's answer to the link: a no ends the confirmation; going there (or a client that could not
+    show it) leaves it waiting for the console."""
+    if sending.cancelled() or pending.answer.done():
+        return
+    if sending.exception() is not None:
+        _log.info("sending the person to the console failed: %s", sending.exception())
+        return
+    answer = sending.result()
+    if answer in ("decline", "cancel"):
+        pending.answer.set_result(answer)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import contextlib
 import functools
 import hashlib
 import inspect
@@ -47,7 +48,7 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.seam import Answer, AskPerson
+from rosbridge_mcp_server.robot.seam import Answer, AskPerson, SendToLink
 from rosbridge_mcp_server.server.checks import CheckedTool
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
 from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler, tool_with_handler
@@ -322,16 +323,32 @@ class _AskInNextRound(BaseException):
         self.question = question
 
 
-def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
+class _Asker:
     """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot).
 
     Handshake sessions (up to 2025-11-25) get an ``elicitation/create`` request in the middle of the call.
     In 2026-07-28 sessions the call ends with an ``InputRequiredResult`` holding the question; the client asks
     the person and calls again, the tool runs again up to the same question, and the answer is found by a key
     made from the question's text, so a "yes" only ever approves exactly what it was shown.
+
+    ``by_link`` is set when the client can open a URL for the person (URL-mode elicitation, handshake
+    sessions): the guard then sends the person to this call's approval on the operator console, when one runs.
     """
 
-    async def ask(question: str) -> Answer:
+    def __init__(self, mcp_context: Context[Any, Any]) -> None:
+        self._context = mcp_context
+        capabilities = mcp_context.client_capabilities
+        version = mcp_context.protocol_version
+        can_link = (
+            capabilities is not None
+            and capabilities.elicitation is not None
+            and capabilities.elicitation.url is not None
+            and (version is None or version < _INPUT_ROUNDS_FROM)
+        )
+        self.by_link: SendToLink | None = self._send_to_link if can_link else None
+
+    async def __call__(self, question: str) -> Answer:
+        mcp_context = self._context
         capabilities = mcp_context.client_capabilities
         if capabilities is None or capabilities.elicitation is None:
             return "unsupported"
@@ -344,6 +361,8 @@ def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
             if response.action != "accept":
                 return response.action
             return "accept" if (response.content or {}).get("approve") is True else "decline"
+        if capabilities.elicitation.form is None and capabilities.elicitation.url is not None:
+            return "unsupported"  # a URL-only client answers by link, or not at all
         try:
             result = await mcp_context.elicit(question, schema=_Confirmation)
         except Exception:
@@ -353,7 +372,24 @@ def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
             return "accept" if result.data.approve else "decline"
         return result.action
 
-    return ask
+    async def _send_to_link(self, question: str, url: str, elicitation_id: str) -> Answer:
+        message = f"Approve or deny this on the robot's operator console:\n{question}"
+        try:
+            result = await self._context.elicit_url(message, url, elicitation_id)
+        except asyncio.CancelledError:
+            # Answered on the console (or the call ended) while the client still shows the link: tell it the
+            # out-of-band part is over, so it can close its prompt.
+            with contextlib.suppress(Exception):
+                await self._context.session.send_elicit_complete(elicitation_id)
+            raise
+        except Exception:
+            _log.info("sending the person to the console failed", exc_info=True)
+            return "unsupported"
+        return result.action
+
+
+def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
+    return _Asker(mcp_context)
 
 
 def _question_round(asking: _AskInNextRound) -> InputRequiredResult:

@@ -31,9 +31,10 @@ from mcp.server.auth.settings import AuthSettings
 from mcp.server.mcpserver import MCPServer
 from mcp.server.transport_security import TransportSecuritySettings
 
+from rosbridge_mcp_server.config import ConfigError
 from rosbridge_mcp_server.http_config import MCP_PATH, HttpSettings, OAuthSettings
 
-__all__ = ["JwtVerifier", "StaticTokens", "auth_options", "serve_http"]
+__all__ = ["JwtVerifier", "StaticTokens", "auth_options", "listen_http", "serve_http"]
 
 _log = logging.getLogger(__name__)
 
@@ -178,12 +179,7 @@ async def serve_http(
     )
     http = uvicorn.Server(config)
     if sock is None:
-        # Bound before serving, so the line below can name the port (--bind HOST:0 picks a free one) and a
-        # client that read it finds the port open: connections wait in the backlog until uvicorn accepts.
-        sock = config.bind_socket()
-        # uvicorn's bind_socket only binds; listen now, so that a connection made before uvicorn serves
-        # waits instead of being refused.
-        sock.listen(config.backlog)
+        sock = listen_http(settings)
     auth = "bearer tokens" if settings.tokens else "OAuth JWTs" if settings.oauth else "no authentication"
     _log.info("serving MCP on %s (%s)", _sock_url(sock, settings), auth)
     started = time.monotonic()
@@ -197,6 +193,29 @@ async def serve_http(
         await serving
         raise
     _log.info("HTTP server stopped after %.0f s", time.monotonic() - started)
+
+
+def listen_http(settings: HttpSettings, backlog: int = 2048) -> socket.socket:
+    """The MCP HTTP listener's socket, bound and listening; :class:`ConfigError` naming ``--bind`` when not.
+
+    Bound before serving, so the log can name the port (``--bind HOST:0`` picks a free one) and a client that
+    read it finds the port open: connections wait in the backlog until uvicorn accepts. (uvicorn's own
+    ``bind_socket`` would log the bare error and exit the process, without saying which listener failed.)
+    """
+    family = socket.AF_INET6 if ":" in settings.host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((settings.host, settings.port))
+        sock.listen(backlog)
+    except OSError as exc:
+        sock.close()
+        raise ConfigError(
+            f"the MCP HTTP listener (--bind) cannot listen on {settings.host}:{settings.port}: "
+            f"{exc.strerror or exc}; give it another address with --bind HOST:PORT (port 0: any free port)"
+        ) from None
+    sock.setblocking(False)
+    return sock
 
 
 def _sock_url(sock: socket.socket, settings: HttpSettings) -> str:

@@ -3,6 +3,14 @@
 "use strict";
 
 const SECRET_HEADER = "X-Console-Secret";
+const TOKEN_HEADER = "X-Confirmation-Token";
+// A link from the MCP client (URL-mode elicitation) names one confirmation and carries its own token: it can
+// answer that confirmation and nothing else. Read before the fragment leaves the address bar.
+const link = (() => {
+  const match = location.hash.match(/confirm=(c\d+)&token=([A-Za-z0-9_-]+)/);
+  return match ? { id: match[1], token: match[2] } : null;
+})();
+if (link && !location.hash.includes("secret=")) history.replaceState(null, "", location.pathname);
 const secret = (() => {
   const match = location.hash.match(/secret=([A-Za-z0-9_-]+)/);
   if (match) {
@@ -49,7 +57,8 @@ function renderRobots(robots) {
     const item = el("li");
     item.dataset.robot = robot.name;
     item.append(el("strong", robot.name), " ");
-    item.append(el("span", robot.connected ? "connected" : "not connected", robot.connected ? "ok" : "bad"));
+    const down = robot.down_since ? `not connected since ${robot.down_since}` : "not connected";
+    item.append(el("span", robot.connected ? "connected" : down, robot.connected ? "ok" : "bad"));
     if (robot.ros) item.append(" · ", el("span", robot.ros, "ros"));
     item.append(el("div", robot.url, "mono"));
     list.append(item);
@@ -64,6 +73,7 @@ function renderPending(pending) {
     const item = el("li");
     item.dataset.id = entry.id;
     item.append(el("strong", `${entry.tool} → ${entry.name}`));
+    if (entry.by_link) item.append(" ", el("small", "(your assistant's app also sent you a link to it)"));
     item.append(el("div", entry.question, "question"));
     const approve = el("button", "Approve", "approve");
     approve.type = "button";
@@ -109,7 +119,9 @@ function renderAudit(entries) {
   for (const entry of entries) {
     const item = el("li");
     const outcome = String(entry.outcome || "");
-    item.append(el("span", outcome, `outcome ${outcome.split(/[: ]/)[0]}`), " ");
+    // "e-stop released" is good news: not in the red of refusals and of the e-stop itself.
+    const kind = outcome.startsWith("e-stop released") ? "released" : outcome.split(/[: ]/)[0];
+    item.append(el("span", outcome, `outcome ${kind}`), " ");
     item.append(el("span", (entry.time || "").slice(11, 23), "mono"), " ");
     if (entry.robot) item.append(el("span", `[${entry.robot}] `));
     item.append(el("strong", entry.tool), " ", el("span", entry.name || "", "mono"), " ");
@@ -132,9 +144,28 @@ function renderState(state) {
   $("release").hidden = !latched;
   document.body.classList.toggle("is-latched", latched);
   const camera = state.camera;
+  $("camera-status").dataset.topic = camera.topic || "";
   $("camera-status").textContent = camera.topic ? `${camera.topic}: ${camera.status}` : "off";
   if (!camera.topic) $("camera").hidden = true;
   renderMapState(state.map);
+  renderStale(state.stale_since);
+}
+
+// While the robot is not connected, the last pose, map and frame stay, marked stale over the picture.
+let staleSince = null;
+function renderStale(since) {
+  staleSince = since || null;
+  const text = staleSince ? `stale since ${staleSince}` : "";
+  for (const name of ["camera", "map"]) {
+    $(`${name}-stale`).textContent = text;
+    $(`${name}-stale`).hidden = !staleSince || $(name).hidden;
+    $(`${name}-picture`).classList.toggle("is-stale", Boolean(staleSince));
+  }
+  $("pose").classList.toggle("is-stale", Boolean(staleSince));
+  $("map-status").hidden = Boolean(staleSince);
+  const cameraTopic = $("camera-status").dataset.topic;
+  if (staleSince && cameraTopic) $("camera-status").textContent = `${cameraTopic}: stale, the last frame`;
+  showPose();
 }
 
 function renderMapState(panel) {
@@ -146,23 +177,41 @@ function renderMapState(panel) {
     base.value = panel.base_frame;
   }
   $("map-status").textContent = panel.map_status;
-  const pose = $("pose");
-  pose.dataset.status = panel.status;
-  if (panel.status !== "live") pose.textContent = panel.status;
+  $("pose").dataset.status = panel.status;
+  showPose();
 }
 
+let lastPose = null;
 function renderPose({ pose }) {
   const shown = $("pose");
+  lastPose = pose;
   if (!pose) {
     delete shown.dataset.x;
-    shown.textContent = shown.dataset.status || "no pose yet";
-    return;
+  } else {
+    shown.dataset.x = pose.x;
+    shown.dataset.y = pose.y;
+    shown.dataset.yaw = pose.yaw;
+    shown.dataset.frame = pose.frame;
   }
-  shown.dataset.x = pose.x;
-  shown.dataset.y = pose.y;
-  shown.dataset.yaw = pose.yaw;
-  shown.dataset.frame = pose.frame;
-  shown.textContent = `${pose.base_frame} in ${pose.frame}: x ${pose.x.toFixed(2)} m, y ${pose.y.toFixed(2)} m, yaw ${pose.yaw.toFixed(1)}°`;
+  showPose();
+}
+
+// The pose line: the last pose (marked stale while the robot is away), else why there is none.
+function showPose() {
+  const shown = $("pose");
+  const status = shown.dataset.status || "";
+  if (lastPose && (status === "live" || staleSince)) {
+    const parts = [
+      `${lastPose.base_frame} in ${lastPose.frame}:`,
+      `x ${lastPose.x.toFixed(2)} m,`,
+      `y ${lastPose.y.toFixed(2)} m,`,
+      `yaw ${lastPose.yaw.toFixed(1)}°`,
+    ];
+    if (staleSince) parts.push(`(stale since ${staleSince})`);
+    shown.replaceChildren(...parts.flatMap((part, index) => (index ? [" ", el("span", part)] : [el("span", part)])));
+  } else {
+    shown.textContent = staleSince ? `stale since ${staleSince}: ${status || "no pose yet"}` : status || "no pose yet";
+  }
 }
 
 function renderMap({ image }) {
@@ -177,6 +226,7 @@ function renderMap({ image }) {
   shown.width = image.width;
   shown.height = image.height;
   shown.hidden = false;
+  renderStale(staleSince);
 }
 
 function renderFrame(frame) {
@@ -187,6 +237,7 @@ function renderFrame(frame) {
   image.width = frame.width;
   image.height = frame.height;
   image.hidden = false;
+  renderStale(staleSince);
 }
 
 // Server-sent events read through fetch, so the secret travels in a header (EventSource cannot send one).
@@ -238,10 +289,43 @@ async function loadImageTopics() {
   try {
     const response = await fetch("/api/image-topics", { headers: { [SECRET_HEADER]: secret } });
     if (!response.ok) return;
-    const { topics } = await response.json();
+    const answer = await response.json();
+    const topics = answer.topics;
     $("camera-topics").replaceChildren(...topics.map((topic) => { const o = el("option"); o.value = topic; return o; }));
-    if (!$("camera-topic").value && topics.length) $("camera-topic").value = topics[0];
+    // The server's pick: the colour camera when there is one (not a depth or infrared image).
+    if (!$("camera-topic").value && topics.length) $("camera-topic").value = answer.default || topics[0];
   } catch (error) { /* the picker stays empty; typing a topic still works */ }
+}
+
+async function showLink() {
+  $("link-section").hidden = false;
+  const headers = { [TOKEN_HEADER]: link.token };
+  const say = (text) => { $("link-status").textContent = text; };
+  try {
+    const response = await fetch(`/api/confirmations/${link.id}`, { headers });
+    const answer = await response.json().catch(() => ({}));
+    if (!response.ok) {
+      $("link-buttons").hidden = true;
+      say(answer.error || `HTTP ${response.status}`);
+      return;
+    }
+    $("link-question").textContent = answer.question;
+  } catch (error) {
+    say(`The console server did not answer: ${error}`);
+    return;
+  }
+  const decide = async (verdict) => {
+    const response = await fetch(`/api/confirmations/${link.id}/${verdict}`, {
+      method: "POST",
+      headers: { ...headers, "Content-Type": "application/json" },
+      body: "{}",
+    });
+    const answer = await response.json().catch(() => ({}));
+    $("link-buttons").hidden = true;
+    say(response.ok ? `${answer.answer === "approved" ? "Approved" : "Denied"}. You can close this tab.` : answer.error || `HTTP ${response.status}`);
+  };
+  $("link-approve").addEventListener("click", () => decide("approve"));
+  $("link-deny").addEventListener("click", () => decide("deny"));
 }
 
 $("estop").addEventListener("click", () => post("/api/estop"));
@@ -255,6 +339,13 @@ $("map-form").addEventListener("submit", (event) => {
   post("/api/map", { topic: $("map-topic").value.trim(), base_frame: $("map-base").value.trim() });
 });
 $("camera-off").addEventListener("click", () => post("/api/camera", { topic: "" }));
-if (!secret) problem("Open the console with the URL the server printed on stderr (it carries the session secret).");
-listen();
-loadImageTopics();
+if (link) showLink();
+if (!secret && link) {
+  // A tab opened by a link answers its one confirmation; the whole console needs the secret.
+  $("main").hidden = true;
+  $("link").textContent = "one confirmation";
+} else {
+  if (!secret) problem("Open the console with the URL the server printed on stderr (`rosbridge-mcp-server console-url` prints it too): it carries the session secret.");
+  listen();
+  loadImageTopics();
+}

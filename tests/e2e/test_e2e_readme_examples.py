@@ -1,0 +1,131 @@
+"""Every example of the README's tools table (English and Japanese), run on ``--demo`` as a reader would.
+
+The table is read from README.md and README_ja.md: each `{...}` in a row's examples is one call of that row's
+tool; a fragment such as `"rate_hz": 10, "duration": 3` ("add ... to keep it moving") is added to the example
+before it. The calls go to the real command, ``python -m rosbridge_mcp_server --demo --console 0``, over stdio
+with the SDK's client. A goal id written as a placeholder (``"…"``) is filled with the id of a goal started
+first. ``list_robots`` is listed only with several robots, so its examples run on a two-robot server over the
+same simulated robot.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from mcp.client.stdio import StdioServerParameters
+from mcp.types import CallToolResult, TextContent
+
+from mcp import Client
+from rosbridge_mcp_server.sim import SimulatedRobot
+
+ROOT = Path(__file__).resolve().parents[2]
+WAIT = 60.0
+PLACEHOLDER = "…"
+#: Tools that are listed only when the server drives several robots.
+FLEET_ONLY = {"list_robots"}
+
+
+def tools_table(readme: Path) -> dict[str, list[dict[str, Any]]]:
+    """The tools table's examples: tool name → the argument objects its row shows."""
+    examples: dict[str, list[dict[str, Any]]] = {}
+    for line in readme.read_text(encoding="utf-8").splitlines():
+        row = re.match(r"^\| `([a-z_]+)` \|(.*)\|(.*)\|\s*$", line)
+        if row is None:
+            continue
+        name, _, shown = row.groups()
+        calls: list[dict[str, Any]] = []
+        for fragment in re.findall(r"`([^`]+)`", shown):
+            if fragment.startswith("{"):
+                calls.append(json.loads(fragment))
+            elif ":" in fragment and calls:
+                calls[-1] = {**calls[-1], **json.loads("{" + fragment + "}")}
+        examples[name] = calls
+    return examples
+
+
+def text_of(result: CallToolResult) -> str:
+    return "\n".join(block.text for block in result.content if isinstance(block, TextContent))
+
+
+def _env() -> dict[str, str]:
+    return {
+        k: v for k, v in os.environ.items() if not k.startswith("ROSBRIDGE_") or k.endswith("RUNTIME_DIR")
+    }
+
+
+async def run_examples(
+    flags: list[str], examples: dict[str, list[dict[str, Any]]]
+) -> tuple[list[str], set[str]]:
+    """Call every example on the server the flags start; returns what failed (one line each) and the tools
+    the server listed."""
+    failures: list[str] = []
+    parameters = StdioServerParameters(
+        command=sys.executable, args=["-m", "rosbridge_mcp_server", *flags], env=_env()
+    )
+    async with Client(parameters, mode="legacy") as mcp:
+        listed = {tool.name for tool in (await mcp.list_tools()).tools}
+        for name, calls in examples.items():
+            if name not in listed:
+                failures.append(f"{name}: not listed by the server")
+                continue
+            for example in calls:
+                arguments = example
+                if PLACEHOLDER in json.dumps(example, ensure_ascii=False):
+                    arguments = await _filled(mcp, example)
+                result = await asyncio.wait_for(mcp.call_tool(name, arguments), WAIT)
+                if result.is_error:
+                    failures.append(f"{name} {json.dumps(arguments)}: {text_of(result)[:300]}")
+    return failures, listed
+
+
+async def _filled(mcp: Client, arguments: dict[str, Any]) -> dict[str, Any]:
+    """A placeholder goal id replaced by the id of a goal of the example's action that is running now (read
+    from the goal's first feedback, which publish_action reports as progress)."""
+    goal_id: asyncio.Future[str] = asyncio.get_running_loop().create_future()
+
+    async def on_progress(progress: float, total: float | None, message: str | None) -> None:
+        found = re.match(r"goal (\S+) feedback", message or "")
+        if found and not goal_id.done():
+            goal_id.set_result(found.group(1))
+
+    goal = {"order": 40}
+    started = asyncio.create_task(
+        mcp.call_tool(
+            "publish_action",
+            {
+                "action_name": arguments["action_name"],
+                "action_type": "example_interfaces/action/Fibonacci",
+                "goal": goal,
+                "timeout": 30,
+            },
+            progress_callback=on_progress,
+        )
+    )
+    running = await asyncio.wait_for(goal_id, WAIT)
+    # The goal ends by the example's cancel; its own call's answer is not what this test looks at.
+    started.add_done_callback(lambda task: task.cancelled() or task.exception())
+    return {key: (running if value == PLACEHOLDER else value) for key, value in arguments.items()}
+
+
+@pytest.mark.parametrize("readme", ["README.md", "README_ja.md"])
+async def test_every_tools_table_example_runs_on_the_demo_robot(
+    readme: str, sim_ros2: SimulatedRobot
+) -> None:
+    """Each example of the table is a call that succeeds on `--demo`; every tool the server lists is in it."""
+    examples = tools_table(ROOT / readme)
+    assert len(examples) >= 21, sorted(examples)
+    single = {name: calls for name, calls in examples.items() if name not in FLEET_ONLY}
+    fleet = {name: calls for name, calls in examples.items() if name in FLEET_ONLY}
+    assert all(single.values()), [name for name, calls in single.items() if not calls]
+    failures, listed = await run_examples(["--demo", "--console", "0"], single)
+    robots = ["--robot", f"a={sim_ros2.url}", "--robot", f"b={sim_ros2.url}"]
+    fleet_failures, fleet_listed = await run_examples(robots, fleet)
+    assert failures + fleet_failures == [], "\n".join(failures + fleet_failures)
+    assert (listed | fleet_listed) - set(examples) == set(), f"tools missing from {readme}'s table"
