@@ -143,3 +143,31 @@ async def test_declining_the_link_is_a_no(sim_ros2: SimulatedRobot, action: str)
         assert result.is_error
         assert console.operator.pending == []
     assert moving(sim_ros2) == []
+
+
+async def test_with_approvals_by_the_console_a_link_is_never_sent_to_the_requesters_client(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """approvals = "console": a client that can open links gets none (its token would let the requester
+    approve itself); the call waits for the console's person, and only their Approve lets it through."""
+    links: list[str] = []
+
+    async def open_link(context: Any, params: Any) -> ElicitResult:
+        links.append(getattr(params, "url", repr(params)))
+        return ElicitResult(action="accept")
+
+    policy = parse_policy({**POLICY, "approvals": "console"})
+    async with served_console(sim_ros2.url, policy, open_link) as console:
+        waiting = asyncio.Event()
+        console.operator.listen(lambda: waiting.set() if console.operator.pending else None)
+        call = asyncio.create_task(console.call("publish_topic", CALL))
+        await asyncio.wait_for(waiting.wait(), 10)
+        (pending,) = console.operator.pending
+        assert not pending.by_link
+        assert links == []
+        assert moving(sim_ros2) == []
+        assert console.operator.answer(pending.id, approve=True)
+        result = await asyncio.wait_for(call, 30)
+        assert not result.is_error, text_of(result)
+        await sim_ros2.wait_for(lambda world: moving(sim_ros2) == [0.4], timeout=5)
+        assert links == []
