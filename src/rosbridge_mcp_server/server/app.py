@@ -116,6 +116,9 @@ def build_fleet_server(
     if list_services in modules:
         for robot in fleet.robots:
             robot.session.learn_service_types()
+    if read_logs in modules or diagnose in modules:
+        for robot in fleet.robots:
+            robot.session.keep_logs()
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
