@@ -266,17 +266,15 @@ async def diagnose(
             if topic in topics:
                 listen[topic] = (topics[topic], True)
 
-    async def details() -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
-        wanted = [t for t in topics if t.rsplit("/", 1)[-1] == "cmd_vel" and _short(topics[t]) in _TWISTS]
-        wanted += [t for t in streams if t not in wanted]
-        if "graph" not in areas and "streams" not in areas:
-            return {}
+    async def details(wanted: list[str]) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
         found = await asyncio.gather(*(graph.topic_details(t) for t in wanted), return_exceptions=True)
         out = {}
         for topic, got in zip(wanted, found, strict=True):
             if not isinstance(got, BaseException):
                 out[topic] = (got.publishers, got.subscribers)
         return out
+
+    drives = [t for t in topics if t.rsplit("/", 1)[-1] == "cmd_vel" and _short(topics[t]) in _TWISTS]
 
     async def lifecycle() -> dict[str, str] | None:
         if "lifecycle" not in areas or not ros2:
@@ -301,7 +299,14 @@ async def diagnose(
         states = await asyncio.gather(*(state(s) for s in getters))
         return {s.removesuffix("/get_state"): st for s, st in zip(getters, states, strict=True)}
 
-    heard, pubsub, states = await asyncio.gather(_listen(client, listen, window), details(), lifecycle())
+    # Who publishes and reads a stream is asked only of the silent ones, after the look (a healthy robot's
+    # look costs no more rosapi calls than the cmd_vel topics'; ROS 1 would open a lane for each).
+    heard, pubsub, states = await asyncio.gather(
+        _listen(client, listen, window), details(drives if "graph" in areas else []), lifecycle()
+    )
+    silent = [t for t in streams if t in heard and not heard[t].times]
+    if silent and ("graph" in areas or "streams" in areas):
+        pubsub = {**pubsub, **await details(silent)}
 
     if "graph" in areas:
         findings += _graph(
@@ -624,21 +629,9 @@ def _tf(
                 )
             )
     base = next((f for f in ("base_footprint", "base_link") if f in frames), None)
-    chain: list[str] = [f for f in ("map", "odom") if f in frames]
-    if "map" not in frames and any(
-        t.rsplit("/", 1)[-1] == "map" and _short(ty) == "OccupancyGrid" for t, ty in topics.items()
-    ):
-        target = "odom" if "odom" in frames else base or "the robot"
-        out.append(
-            Finding(
-                "problem",
-                "tf",
-                f"map -> {target}",
-                f"No map frame in tf although the robot has a map: nothing publishes map → {target} in "
-                f"{window:g} s (is localization, e.g. amcl, running?).",
-                f'get_transform {{"target_frame": "map", "source_frame": "{target}", "timeout": 5}}',
-            )
-        )
+    has_map = any(t.rsplit("/", 1)[-1] == "map" and _short(ty) == "OccupancyGrid" for t, ty in topics.items())
+    has_odometry = any(_short(ty) == "Odometry" for ty in topics.values())
+    chain = [f for f, expected in (("map", has_map), ("odom", has_odometry)) if f in frames or expected]
     if base is None and "odom" in frames:
         out.append(
             Finding(
@@ -654,19 +647,29 @@ def _tf(
     for upper, lower in itertools.pairwise(chain):
         if upper in _ancestors(lower, edges):
             continue
-        stale = any(f.subject == f"{upper} -> {lower}" for f in out)
-        if stale:
-            continue
-        parent = edges[lower].parent if lower in edges else None
-        root = _ancestors(lower, edges)[-1]
+        if any(f.subject == f"{upper} -> {lower}" for f in out):
+            continue  # already said: stale
+        if upper not in frames:
+            who = (
+                "is localization, e.g. amcl, running?"
+                if upper == "map"
+                else "is odometry, e.g. the EKF or the base driver, running?"
+            )
+            summary = f"No {upper} frame in tf: nothing published {upper} → {lower} in {window:g} s ({who})."
+        else:
+            parent = edges[lower].parent if lower in edges else None
+            root = _ancestors(lower, edges)[-1]
+            summary = (
+                f"No transform path {upper} → {lower} in {window:g} s: {lower} "
+                + (f"hangs under {parent} (tree root {root})" if parent else "has no parent")
+                + f", cut off from {upper}. Whatever publishes {upper} → {lower} stopped."
+            )
         out.append(
             Finding(
                 "problem",
                 "tf",
                 f"{upper} -> {lower}",
-                f"No transform path {upper} → {lower} in {window:g} s: {lower} "
-                + (f"hangs under {parent} (tree root {root})" if parent else "has no parent")
-                + f", apart from {upper}. Whatever publishes {upper} → {lower} stopped.",
+                summary,
                 f'get_transform {{"target_frame": "{upper}", "source_frame": "{lower}", "timeout": 5}}',
             )
         )
@@ -704,3 +707,7 @@ def _logs(keeper: LogKeeper, checked: dict[str, str]) -> list[Finding]:
         f"{errors} errors, {warnings} warnings since {since} ({len(keeper.ring)} lines kept{more})"
     )
     return out
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}{'' if count == 1 else 's'}"

@@ -21,7 +21,7 @@ from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
 from rosbridge_mcp_server.server.console_app import CONSOLE_APP_TOOL, console_app
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, Fleet, Robot, list_robots_tool
-from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
+from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
 from rosbridge_mcp_server.tools.arguments import argument_problem
 
 if typing.TYPE_CHECKING:
