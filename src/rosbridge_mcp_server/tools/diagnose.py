@@ -3,6 +3,8 @@ call to make next), and what each area checked."""
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
@@ -12,6 +14,9 @@ from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext
 from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
 
 __all__ = ["SPEC", "DiagnoseAnswer", "run"]
+
+#: How long a call made just after connecting waits for the log subscription being opened.
+READY_WAIT = 1.0
 
 
 class FindingModel(BaseModel):
@@ -64,6 +69,10 @@ async def run(
 ) -> ToolAnswer:
     """Look at the robot once."""
     keeper = ctx.robot.keep_logs()
+    if not keeper.ready.is_set():
+        # Just connected: the log subscription is being opened in the background.
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(keeper.ready.wait(), READY_WAIT)
     try:
         found = await diagnose(ctx.client, ctx.graph, keeper, focus=focus)
     except UnknownFocusError as exc:

@@ -173,15 +173,8 @@ class Health:
         while True:
             await asyncio.sleep(1.0)
             tick += 1
-            if (
-                "node-gone" in self.faults
-                and not self.gone
-                and time.monotonic() - started >= self.node_gone_after
-            ):
-                for robot in self.robots:
-                    self._leave(robot, GONE_NODE)
-                self.gone = True
-                self.kit.world.notify()
+            if "node-gone" in self.faults and time.monotonic() - started >= self.node_gone_after:
+                self.take_out()
             if "log-errors" in self.faults:
                 for robot in self.robots:
                     self.log(
@@ -192,6 +185,15 @@ class Health:
                         self.log(
                             robot, "bt_navigator", "warn", "Goal failed: FollowPath aborted (error code 105)"
                         )
+
+    def take_out(self) -> None:
+        """``node-gone`` now: /amcl of every robot leaves the graph (once)."""
+        if self.gone:
+            return
+        for robot in self.robots:
+            self._leave(robot, GONE_NODE)
+        self.gone = True
+        self.kit.world.notify()
 
     def _leave(self, robot: Nav2Robot, name: str) -> None:
         """*name* of *robot* leaves the graph: its publishers, subscribers, services and parameters go."""
