@@ -49,11 +49,10 @@ class DiagnoseAnswer(BaseModel):
 
 SPEC = ToolSpec(
     name="diagnose",
-    title="What is wrong with the robot",
+    title="Diagnose the robot",
     description=(
-        "One look at diagnostics, logs, sensor/odom/tf rates, the tf tree, lifecycle states and the graph: a "
-        "count, then each problem with the call to make next. Read-only, ~1.5 s. Example: "
-        '{"focus": "navigation"}'
+        "What is wrong: diagnostics, logs, stream rates, tf, lifecycle and graph in one look; a count, then "
+        'each problem and the call to make next. Read-only, ~1.5 s. Example: {"focus": "navigation"}'
     ),
     hints=READS_ROBOT,
     output=DiagnoseAnswer,

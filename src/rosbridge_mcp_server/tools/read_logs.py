@@ -38,20 +38,17 @@ class LogsAnswer(BaseModel):
     since: str | None = Field(description="When the log was first read (local time)")
     lines: int = Field(description="Matching lines")
     count: int = Field(description="Matching groups")
-    offset: int
     more: int = Field(description="Groups after this page")
     groups: list[LogGroup]
-    kept: int = Field(description="Lines in the ring")
     dropped: int = Field(description="Lines the ring's bounds let go")
 
 
 SPEC = ToolSpec(
     name="read_logs",
-    title="Read the robot's log",
+    title="Robot log",
     description=(
-        f"The robot's /rosout log since this server connected (last {RING_LINES:,} lines, "
-        f"{RING_SECONDS / 60:.0f} min), repeats folded. Read-only. Example: "
-        '{"level": "warn", "node": "*controller*", "text": "progress", "since": 60}'
+        f"The robot's /rosout since this server connected ({RING_LINES:,} lines, {RING_SECONDS / 60:.0f} "
+        'min), repeats folded. Read-only. Example: {"node": "*controller*", "text": "progress", "since": 60}'
     ),
     hints=READS_ROBOT,
     output=LogsAnswer,
@@ -63,10 +60,10 @@ async def run(
     *,
     level: Annotated[
         Literal["debug", "info", "warn", "error", "fatal"],
-        Field(description="Lowest level shown, e.g. info"),
+        Field(description="Lowest level, e.g. info"),
     ] = "warn",
     node: Annotated[str | None, Field(description="Node name or glob, e.g. *costmap*")] = None,
-    text: Annotated[str | None, Field(description="Text the line contains, any case")] = None,
+    text: Annotated[str | None, Field(description="Text in the line, e.g. progress")] = None,
     since: Annotated[
         float | None, Field(gt=0, le=86_400, description="Only the last N seconds, e.g. 60")
     ] = None,
@@ -87,9 +84,7 @@ async def run(
     if keeper.absent:
         return ToolAnswer(
             text="This robot has no /rosout topic, so there is no log to read (diagnose checks the rest).",
-            data=LogsAnswer(
-                source=None, since=None, lines=0, count=0, offset=0, more=0, groups=[], kept=0, dropped=0
-            ),
+            data=LogsAnswer(source=None, since=None, lines=0, count=0, more=0, groups=[], dropped=0),
         )
     now = time.time()
     ring = keeper.ring
@@ -122,10 +117,8 @@ async def run(
         since=since_text,
         lines=len(lines),
         count=len(folds),
-        offset=offset,
         more=page.more,
         groups=[_group(f, now) for f in page.rows],
-        kept=len(ring),
         dropped=ring.dropped,
     )
     return ToolAnswer(text=text_out, data=data)
