@@ -57,8 +57,10 @@ class LogKeeper:
         self.source: str | None = None
         #: True when the robot's graph has no log topic (checked again on every reconnect).
         self.absent = False
-        #: Set once the keeper knows: subscribed, or the robot has no log topic.
+        #: Set once the keeper knows: subscribed, or the robot has no log topic (or the subscribe failed).
         self.ready = asyncio.Event()
+        #: Set once the first look at the graph (topics, nodes) has ended, however it ended.
+        self.looked = asyncio.Event()
         #: The node names at connect, then at diagnose's last look.
         self.nodes_seen: set[str] | None = None
         self.nodes_seen_at: float | None = None
@@ -91,8 +93,10 @@ class LogKeeper:
             topics = {entry.name: entry.type for entry in await self._graph.topics()}
         except RosbridgeError as exc:
             _log.debug("could not list the topics to find the log on connection %d: %s", session.number, exc)
+            self.looked.set()
             return
         await self._look(session)
+        self.looked.set()
         source = "/rosout"
         if session.dialect.version == 1 and topics.get("/rosout_agg"):
             source = "/rosout_agg"
@@ -124,6 +128,7 @@ class LogKeeper:
             await sub.open()
         except RosbridgeError as exc:
             _log.debug("could not subscribe to %s: %s", topic, exc)
+            self.ready.set()
             return
         self._subs[topic] = sub
         if handle == self._log_line:
