@@ -6,12 +6,14 @@ topic, frame or node; focus narrows; an unknown focus names the choices; a robot
 from __future__ import annotations
 
 import asyncio
+import json
 import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from typing import Any
 
 import pytest
+import websockets
 from mcp_harness import Session, open_session, text_of
 
 from rosbridge_mcp_server.client import RosbridgeClient
@@ -226,3 +228,39 @@ async def test_diagnose_answers_within_a_second_and_a_half_of_its_window() -> No
     # The figure that counts is the benchmark's p50 (scripts/bench.py); here only a bound that catches a
     # serial look (one window per topic would take ten seconds).
     assert took < 5.0, took
+
+
+async def test_a_frame_with_two_parents_and_a_stale_transform_are_named() -> None:
+    """Another client publishes on /tf a second parent for base_footprint and a transform stamped 5 s ago."""
+    async with broken("ros2", ()) as (_robot, session), websockets.connect(_robot.url) as other:
+        await other.send(json.dumps({"op": "advertise", "topic": "/tf", "type": "tf2_msgs/msg/TFMessage"}))
+
+        def transform(parent: str, child: str, age: float) -> dict[str, Any]:
+            now = time.time() - age
+            stamp = {"sec": int(now), "nanosec": int((now % 1) * 1e9)}
+            return {
+                "header": {"stamp": stamp, "frame_id": parent},
+                "child_frame_id": child,
+                "transform": {"translation": {"x": 1.0}, "rotation": {"w": 1.0}},
+            }
+
+        async def publish() -> None:
+            while True:
+                msg = {
+                    "transforms": [transform("map", "base_footprint", 0.0), transform("odom", "dock", 5.0)]
+                }
+                await other.send(json.dumps({"op": "publish", "topic": "/tf", "msg": msg}))
+                await asyncio.sleep(0.05)
+
+        publishing = asyncio.create_task(publish())
+        try:
+            result = await session.ok("diagnose", {"focus": "tf"})
+        finally:
+            publishing.cancel()
+    data = result.structured_content
+    assert data is not None
+    subjects = {f["subject"]: f["summary"] for f in data["findings"]}
+    assert "base_footprint" in subjects
+    assert "2 parents (map, odom)" in subjects["base_footprint"]
+    assert "odom -> dock" in subjects
+    assert "stale" in subjects["odom -> dock"]

@@ -69,6 +69,7 @@ FOCUSES: Final[dict[str, tuple[tuple[str, ...], frozenset[str] | None]]] = {
 #: At most this many key topics are measured (the most important kinds first).
 MAX_STREAMS: Final = 16
 MAX_LOG_FINDINGS: Final = 5
+MAX_STATUS_FINDINGS: Final = 20
 
 _KINDS: Final = {
     "LaserScan": "scan",
@@ -446,9 +447,8 @@ def _lifecycle(states: Mapping[str, str], checked: dict[str, str]) -> list[Findi
 def _diagnostics(board: StatusBoard, checked: dict[str, str]) -> list[Finding]:
     out = []
     statuses = board.statuses()
-    for status in statuses:
-        if status.level == 0:
-            continue
+    not_ok = [s for s in statuses if s.level != 0]
+    for status in not_ok[:MAX_STATUS_FINDINGS]:
         severity: Literal["problem", "warning"] = "problem" if status.level == 2 else "warning"
         hardware = f" ({status.hardware_id})" if status.hardware_id else ""
         values = ", ".join(f"{k}: {v}" for k, v in status.values[:3])
@@ -472,8 +472,11 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str]) -> list[Finding]:
             )
         )
     if statuses:
-        ok = sum(1 for s in statuses if s.level == 0)
-        checked["diagnostics"] = f"{len(statuses)} statuses, {ok} OK"
+        ok = len(statuses) - len(not_ok)
+        more = len(not_ok) - MAX_STATUS_FINDINGS
+        checked["diagnostics"] = f"{len(statuses)} statuses, {ok} OK" + (
+            f" ({more} more not OK: subscribe_topic /diagnostics)" if more > 0 else ""
+        )
     else:
         checked["diagnostics"] = "no status has arrived yet"
     return out
