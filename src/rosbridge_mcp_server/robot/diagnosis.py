@@ -427,12 +427,17 @@ def _lifecycle(states: Mapping[str, str], checked: dict[str, str]) -> list[Findi
     for node, state in sorted(states.items()):
         if state == "active":
             continue
+        summary = (
+            f"Lifecycle node {node} did not answer get_state: {state.removeprefix('no answer (')[:-1]}"
+            if state.startswith("no answer (")
+            else f"Lifecycle node {node} is {state}, not active: it does none of its work."
+        )
         out.append(
             Finding(
                 "problem",
                 "lifecycle",
                 node,
-                f"Lifecycle node {node} is {state}, not active: it does none of its work.",
+                summary,
                 f'activate it: publish_service {{"service": "{node}/change_state", "request": '
                 '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes); get_node_info',
                 nodes=(node,),
