@@ -43,7 +43,9 @@ Work like this:
 1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
 names and types; get_topic_info shows who publishes and subscribes a topic; describe_type shows a type's \
 fields with an example. To see the robot's state: subscribe_topic reads messages, get_image shows a camera, \
-get_transform says where a frame is (e.g. base_link in odom).
+get_transform says where a frame is (e.g. base_link in odom). When something seems wrong (the robot does \
+not move, a sensor is quiet, a node died), diagnose looks at everything at once; read_logs shows the robot's \
+log since this server connected.
 2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
 zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
 3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; \
