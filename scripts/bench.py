@@ -31,6 +31,9 @@ What is measured:
 11. the picture tools (``--only view``): ``view_map`` on a 2000×2000 ``/map`` against a raw socket's receipt
     of the same message (subscribe → every fragment → parsed → unsubscribe), ``view_scan`` against a raw first
     scan (phase-locked to the 5 Hz laser), and the PNG sizes of their pictures and of a ``plot_topic`` chart.
+13. ``diagnose`` (``--only diagnose``) on the simulated Nav2 world, healthy and with two faults, through the
+    console script (p50 against its 1.5 s target); and the log ring under 10,000 ``/rosout`` lines a second
+    for 10 s from a simulated robot in this process: lines received, kept, dropped, and the RSS along the way.
 12. every graph tool on a simulated Nav2 robot (``--only nav2``; ~36 nodes, ~400 services, 1,000+
     parameters), the server alone (JSON-RPC lines), against the raw calls its answer needs, with the size of
     each answer's text and structured content; ``get_node_info`` also on the same world behaving like
@@ -321,6 +324,7 @@ async def simulated_robot(
     map_cells: int | None = None,
     world: str = "turtle",
     server: str = "rosbridge_suite",
+    faults: str = "",
 ) -> AsyncIterator[str]:
     """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL.
 
@@ -343,6 +347,7 @@ async def simulated_robot(
         "--world",
         world,
         *(["--server", server] if server != "rosbridge_suite" else []),
+        *(["--fault", faults] if faults else []),
         "--log-level",
         "WARNING",
     ]
@@ -2125,6 +2130,105 @@ class Context:
     startup_rss: dict[str, Stats] = dataclasses.field(default_factory=dict)
 
 
+DIAGNOSE_TARGET = 1.5
+LOG_FLOOD_RATE = 10_000
+LOG_FLOOD_SECONDS = 10
+
+
+async def measure_diagnose(ctx: Context) -> list[Row]:
+    """Item 13: ``diagnose`` on the simulated Nav2 world (healthy, then scan-stopped + log-errors), its p50
+    against 1.5 s; the log ring under a flood of /rosout lines."""
+    rows: list[Row] = []
+    full = ctx.plan.name == "full"
+    calls = 10 if full else 2
+    cases = (("13a", ""), ("13b", "scan-stopped,log-errors")) if full else (("13a", ""),)
+    for item, faults in cases:
+        async with contextlib.AsyncExitStack() as stack:
+            url = await stack.enter_async_context(simulated_robot(ctx.errlog, world="nav2", faults=faults))
+            ours = await stack.enter_async_context(raw_pipe_client(our_server_command(url), ctx.errlog, {}))
+            answer = await ours.tool("diagnose", {})  # the first look also waits for the connection
+            samples = []
+            for _ in range(calls):
+                began = time.perf_counter()
+                answer = await ours.tool("diagnose", {})
+                samples.append(time.perf_counter() - began)
+            text = answer["result"]["content"][0]["text"]
+            stats = Stats.of(samples)
+            what = "healthy" if not faults else f"--fault {faults}"
+            row = timing_row(
+                item,
+                f"`diagnose` on the Nav2 world, {what}: {text.splitlines()[0]}",
+                stats,
+                target=f"p50 ≤ {DIAGNOSE_TARGET:g} s",
+            )
+            row.verdict = verdict(stats.median <= DIAGNOSE_TARGET)
+            row.figures.update(first_line=text.splitlines()[0], text_chars=len(text))
+            rows.append(row)
+    rows.append(await _log_flood_row(ctx))
+    return rows
+
+
+async def _log_flood_row(ctx: Context) -> Row:
+    """10,000 /rosout lines a second for 10 s (quick: 1 s) from a simulated robot in this process into a
+    session's log keeper over a real socket: every line received, the ring holding exactly the newest it
+    keeps, and the process's RSS sampled every half second."""
+    from rosbridge_mcp_server.robot.logs import RING_LINES  # noqa: PLC0415
+    from rosbridge_mcp_server.robot.seam import ALLOW_ALL  # noqa: PLC0415
+    from rosbridge_mcp_server.robot.session import RobotSession  # noqa: PLC0415
+    from rosbridge_mcp_server.sim import SimulatedRobot  # noqa: PLC0415
+
+    seconds = LOG_FLOOD_SECONDS if ctx.plan.name == "full" else 1
+    process = psutil.Process()
+    rss: list[float] = []
+
+    async def sample() -> None:
+        while True:
+            rss.append(process.memory_info().rss)
+            await asyncio.sleep(0.5)
+
+    async with SimulatedRobot(world="nav2") as robot, RosbridgeClient(robot.url) as client:
+        keeper = RobotSession(client, ALLOW_ALL).keep_logs()
+        await client.wait_connected(10)
+        await asyncio.wait_for(keeper.ready.wait(), 10)
+        nav2, health = robot.nav2.robots[0], robot.nav2.health
+        before = keeper.ring.received
+        sampler = asyncio.create_task(sample())
+        began = time.monotonic()
+        sent = 0
+        per_tick = LOG_FLOOD_RATE // 100
+        for tick in range(seconds * 100):
+            await asyncio.sleep(max(0.0, began + tick / 100 - time.monotonic()))
+            for _ in range(per_tick):
+                sent += 1
+                health.log(nav2, "flood", "warn", f"line {sent}")
+        sent_in = time.monotonic() - began
+        deadline = time.monotonic() + 120
+        # The ring has no event to wait on (it is fed by the keeper's reader); a bounded poll reads it.
+        while keeper.ring.received - before < sent and time.monotonic() < deadline:  # noqa: ASYNC110
+            await asyncio.sleep(0.05)
+        received_in = time.monotonic() - began
+        sampler.cancel()
+        kept = keeper.ring.lines()
+        newest = [f"line {i}" for i in range(max(1, sent - RING_LINES + 1), sent + 1)]
+        exact = [line.text for line in kept if line.node == "/flood"] == newest
+        received = keeper.ring.received - before
+    settled = rss[len(rss) // 4 :] or rss
+    growth = (max(settled) - min(settled)) / MIB
+    row = Row(
+        "13c",
+        f"log ring: {LOG_FLOOD_RATE:,} /rosout lines/s for {seconds} s ({sent:,} sent in {sent_in:.1f} s, "
+        f"received by {received_in:.1f} s)",
+        n=sent,
+        median=f"{received:,} received",
+        p90=f"{len(kept):,} kept",
+        versus=f"RSS {min(rss) / MIB:.0f}-{max(rss) / MIB:.0f} MiB, {growth:+.1f} MiB after the ring filled",
+        target="nothing lost; the newest 5,000 kept in order; RSS flat (≤ 8 MiB)",
+    )
+    row.verdict = verdict(received == sent and exact and growth <= 8)
+    row.figures.update(sent=sent, received=received, kept=len(kept), exact=exact, rss_growth_mib=growth)
+    return row
+
+
 Item = Callable[[Context], Awaitable[list[Row]]]
 #: name for --only, item numbers, title, the measuring function, its deadline in seconds.
 ITEMS: list[tuple[str, str, str, Item, float]] = [
@@ -2138,6 +2242,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("http", "10", "Streamable HTTP", measure_http, 240.0),
     ("view", "11", "picture tools", measure_view, 240.0),
     ("nav2", "12", "graph tools on a Nav2 robot", measure_nav2, 300.0),
+    ("diagnose", "13", "diagnose and the log ring", measure_diagnose, 300.0),
 ]
 
 

@@ -38,6 +38,8 @@ TARGET_ROWS = (
     "9f",
     "11a",
     "11b",
+    "13a",
+    "13c",
 )
 
 
@@ -50,14 +52,14 @@ def quick_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[subprocess.Comp
         cwd=REPO,
         capture_output=True,
         text=True,
-        timeout=110,
+        timeout=230,
         check=False,
     )
     figures = json.loads(report.read_text()) if report.exists() else {}
     return finished, figures
 
 
-@pytest.mark.timeout(120)
+@pytest.mark.timeout(240)
 def test_quick_benchmark_exits_zero_and_prints_the_table(
     quick_run: tuple[subprocess.CompletedProcess[str], dict],
 ) -> None:
@@ -69,7 +71,7 @@ def test_quick_benchmark_exits_zero_and_prints_the_table(
     assert "**error**" not in finished.stdout
 
 
-@pytest.mark.timeout(120)
+@pytest.mark.timeout(240)
 def test_quick_benchmark_reports_every_targeted_item(
     quick_run: tuple[subprocess.CompletedProcess[str], dict],
 ) -> None:
@@ -85,7 +87,7 @@ def test_quick_benchmark_reports_every_targeted_item(
         assert rows[item]["verdict"] in expected, rows[item]
 
 
-@pytest.mark.timeout(120)
+@pytest.mark.timeout(240)
 def test_quick_benchmark_json_holds_the_floor_samples_and_machine(
     quick_run: tuple[subprocess.CompletedProcess[str], dict],
 ) -> None:

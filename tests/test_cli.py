@@ -56,6 +56,25 @@ def _free_port() -> int:
         (["--demo-dialect", "ros3"], {}, "invalid choice: 'ros3'"),
         (["--demo-world", "mars"], {}, "invalid choice: 'mars'"),
         (["--demo-robots", "2"], {}, "--demo-robots must be 1-100 and more than 1 needs --demo-world nav2"),
+        (["--demo", "--demo-fault", "scan-stopped"], {}, "--demo-fault needs --demo-world nav2"),
+        (
+            ["--demo", "--demo-world", "nav2", "--demo-fault", "wheels-off"],
+            {},
+            "--demo-fault: unknown fault wheels-off; the faults are scan-stopped, tf-stale",
+        ),
+        (
+            [
+                "--demo",
+                "--demo-world",
+                "nav2",
+                "--demo-dialect",
+                "ros1",
+                "--demo-fault",
+                "controller-inactive",
+            ],
+            {},
+            "--demo-fault: controller-inactive needs ROS 2",
+        ),
         (["check", "--port", "abc"], {}, "--port must be a port number"),
     ],
 )

@@ -37,6 +37,8 @@ const EXAMPLES = {
   get_parameter: { name: "/turtlesim:background_r" },
   set_parameter: { name: "/turtlesim:background_r", value: 100 },
   get_transform: { target_frame: "odom", source_frame: "base_link" },
+  read_logs: { level: "info" },
+  diagnose: { focus: "tf" },
   view_map: { path_topic: "/plan", scan_topic: "/scan", max_size: 200 },
   view_scan: { max_size: 200 },
   plot_topic: { series: ["/turtle1/pose x theta"], duration: 1 },

@@ -38,6 +38,8 @@ WATCH_TOOL_NAMES = (
     "get_parameter",
     "set_parameter",
     "get_transform",
+    "read_logs",
+    "diagnose",
 )
 #: Pictures of the robot's world: its map, its scan, a topic over time.
 VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")

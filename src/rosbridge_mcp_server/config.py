@@ -84,6 +84,8 @@ class Config:
     #: The demo robot's world: the turtle (default) or a Nav2-scale mobile robot, ``demo_robots`` of them.
     demo_world: DemoWorld = "turtle"
     demo_robots: int = 1
+    #: Faults the demo's Nav2 robot is broken with (``--demo-fault``), checked by the simulated robot.
+    demo_faults: tuple[str, ...] = ()
     policy: Policy = field(default_factory=Policy)
     audit_log: str | None = None
     ca_file: str | None = None
@@ -128,6 +130,7 @@ def load_config(
     demo_dialect: str = "ros2",
     demo_world: str = "turtle",
     demo_robots: int = 1,
+    demo_faults: str | None = None,
     policy: str | None = None,
     read_only: bool = False,
     audit_log: str | None = None,
@@ -160,6 +163,9 @@ def load_config(
         raise ConfigError(
             f"--demo-robots must be 1-100 and more than 1 needs --demo-world nav2, not {demo_robots}"
         )
+    faults = tuple(f.strip() for f in (demo_faults or "").split(",") if f.strip())
+    if faults and demo_world != "nav2":
+        raise ConfigError("--demo-fault needs --demo-world nav2")
     tools_text = tools if tools is not None else environ.get("ROSBRIDGE_MCP_TOOLS", "").strip() or None
     tools_source = "--tools" if tools is not None else "ROSBRIDGE_MCP_TOOLS"
     chosen = _parse_tools(tools_text, source=tools_source) if tools_text is not None else None
@@ -171,6 +177,7 @@ def load_config(
         demo_dialect="ros1" if demo_dialect == "ros1" else "ros2",
         demo_world="nav2" if demo_world == "nav2" else "turtle",
         demo_robots=demo_robots,
+        demo_faults=faults,
         policy=_load_policy(environ, policy, read_only),
         audit_log=_path(environ, audit_log, "--audit-log", "ROSBRIDGE_MCP_AUDIT_LOG"),
         ca_file=_path(environ, ca_file, "--ca-file", "ROSBRIDGE_CA_FILE"),

@@ -18,6 +18,7 @@ from mcp.types import CallToolResult, TextContent
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 from rosbridge_mcp_server.robot.seam import ALLOW_ALL, Guard
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
@@ -132,10 +133,14 @@ WARM_UP_WAIT = 60.0
 
 
 async def warmed_up(ros: RosbridgeClient) -> None:
-    """Wait until the server has learnt the service types after connecting (tests then count only theirs)."""
+    """Wait until the server has learnt the service types and had its first look at the graph after connecting
+    (tests then count only theirs)."""
     for watcher in ros.watchers:
         if isinstance(watcher, ServiceTypeWarmUp):
             await asyncio.wait_for(watcher.done.wait(), WARM_UP_WAIT)
+        if isinstance(watcher, LogKeeper):
+            # Its first look at the graph (a topic and a node listing) is behind it too.
+            await asyncio.wait_for(watcher.looked.wait(), WARM_UP_WAIT)
     session = ros.session
     if session is not None:
         # Whether calls hold each other up is measured in the background (tests then count only theirs).

@@ -77,6 +77,9 @@ async def test_command_serves_the_robot_and_stops_cleanly_on_a_signal(
         ["--dialect", "ros1", "--server", "rs"],
         ["--server", "rs", "--in-order"],
         ["--server", "rust"],
+        ["--fault", "scan-stopped"],
+        ["--world", "nav2", "--fault", "wheels-off"],
+        ["--world", "nav2", "--dialect", "ros1", "--fault", "controller-inactive"],
     ],
 )
 async def test_a_bad_flag_is_one_line_on_stderr_and_exit_code_2(args: list[str]) -> None:

@@ -153,6 +153,13 @@ def build_parser(command: str) -> _Parser:
         metavar="N",
         help="with --demo-world nav2: N robots under /robot1 ... /robotN (default 1)",
     )
+    demo.add_argument(
+        "--demo-fault",
+        default=None,
+        metavar="NAME[,NAME...]",
+        help="with --demo-world nav2: break the robot on purpose (scan-stopped, tf-stale, driver-error, "
+        "controller-inactive, log-errors, node-gone)",
+    )
     return parser
 
 

@@ -63,6 +63,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             demo_dialect=options.demo_dialect,
             demo_world=options.demo_world,
             demo_robots=options.demo_robots,
+            demo_faults=options.demo_fault,
             policy=options.policy,
             read_only=options.read_only,
             audit_log=options.audit_log,
@@ -72,6 +73,8 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             headers=options.header,
             tools=options.tools,
         )
+        if config.demo_faults:
+            _check_demo_faults(config)
         http = load_http_settings(
             env,
             transport=options.transport,
@@ -256,6 +259,16 @@ async def _exit_after_cleanup(clients: Sequence[RosbridgeClient], exit_code: int
     os._exit(exit_code)
 
 
+def _check_demo_faults(config: Config) -> None:
+    """``--demo-fault`` names the simulated robot knows, on a dialect that has them (a ConfigError if not)."""
+    from rosbridge_mcp_server.sim.nodes.nav2.health import check_faults  # noqa: PLC0415
+
+    try:
+        check_faults(config.demo_faults, ros2=config.demo_dialect == "ros2")
+    except ValueError as exc:
+        raise ConfigError(f"--demo-fault: {exc}") from None
+
+
 @contextlib.asynccontextmanager
 async def demo_robot(config: Config) -> AsyncIterator[Config]:
     """With ``--demo``: a simulated robot on a free local port, and ``config`` pointed at it."""
@@ -270,7 +283,11 @@ async def demo_robot(config: Config) -> AsyncIterator[Config]:
     if config.log_level != "DEBUG":
         logging.getLogger("rosbridge_mcp_server.sim").setLevel(logging.CRITICAL)
     async with SimulatedRobot(
-        dialect=config.demo_dialect, port=0, world=config.demo_world, robots=config.demo_robots
+        dialect=config.demo_dialect,
+        port=0,
+        world=config.demo_world,
+        robots=config.demo_robots,
+        faults=config.demo_faults,
     ) as robot:
         _log.info(
             "demo mode: simulated ROS %s %s robot at %s",

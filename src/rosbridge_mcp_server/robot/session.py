@@ -11,7 +11,9 @@ client's :class:`~rosbridge_mcp_server.client.session.Session`, which is one con
   console's E-STOP stop;
 * ``guard``: the safety seam's guard every act asks first, and that records every outcome;
 * ``warm_up``: the background learning of service types after every (re)connect, when asked for
-  (:meth:`learn_service_types`; only a server that offers ``list_services`` needs it).
+  (:meth:`learn_service_types`; only a server that offers ``list_services`` needs it);
+* ``logs``: the robot's log since the server connected, and the graph as first seen, when asked for
+  (:meth:`keep_logs`; only a server that offers ``read_logs`` or ``diagnose`` needs it).
 
 The tools reach it through their context, ``safety.emergency_stop`` and the operator console through it:
 nothing of a robot session hangs off a module.
@@ -24,6 +26,7 @@ from typing import TYPE_CHECKING
 from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.robot.goals import GoalRegistry
 from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 
 if TYPE_CHECKING:
@@ -43,6 +46,7 @@ class RobotSession:
         self.goals = GoalRegistry(client)
         self.activity = SessionActivity()
         self.warm_up: ServiceTypeWarmUp | None = None
+        self.logs: LogKeeper | None = None
 
     def learn_service_types(self) -> ServiceTypeWarmUp:
         """Learn the service types in the background after every (re)connect, from now on (once)."""
@@ -50,6 +54,16 @@ class RobotSession:
             self.warm_up = ServiceTypeWarmUp(self.client, self.graph)
             self.client.watch(self.warm_up)
         return self.warm_up
+
+    def keep_logs(self) -> LogKeeper:
+        """Keep the robot's log (and the graph as first seen) from every (re)connect on, in the background
+        (once; call it before the client starts to miss nothing of the first connection)."""
+        if self.logs is None:
+            self.logs = LogKeeper(self.client, self.graph)
+            self.client.watch(self.logs)
+            if self.client.session is not None:
+                self.logs.session_started(self.client.session)
+        return self.logs
 
     def __repr__(self) -> str:
         return f"RobotSession({self.client.url!r})"

@@ -21,7 +21,7 @@ from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
 from rosbridge_mcp_server.server.console_app import CONSOLE_APP_TOOL, console_app
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, Fleet, Robot, list_robots_tool
-from rosbridge_mcp_server.tools import TOOL_MODULES, list_services, stop_robot
+from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
 from rosbridge_mcp_server.tools.arguments import argument_problem
 
 if typing.TYPE_CHECKING:
@@ -43,7 +43,9 @@ Work like this:
 1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
 names and types; get_topic_info shows who publishes and subscribes a topic; describe_type shows a type's \
 fields with an example. To see the robot's state: subscribe_topic reads messages, get_image shows a camera, \
-get_transform says where a frame is (e.g. base_link in odom).
+get_transform says where a frame is (e.g. base_link in odom). When something seems wrong (the robot does \
+not move, a sensor is quiet, a node died), diagnose looks at everything at once; read_logs shows the robot's \
+log since this server connected.
 2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
 zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
 3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; \
@@ -116,6 +118,9 @@ def build_fleet_server(
     if list_services in modules:
         for robot in fleet.robots:
             robot.session.learn_service_types()
+    if read_logs in modules or diagnose in modules:
+        for robot in fleet.robots:
+            robot.session.keep_logs()
 
     @asynccontextmanager
     async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:

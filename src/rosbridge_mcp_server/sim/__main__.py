@@ -9,6 +9,7 @@ import signal
 import sys
 from typing import NoReturn
 
+from rosbridge_mcp_server.sim.nodes.nav2.health import FAULTS, check_faults
 from rosbridge_mcp_server.sim.robot import ROS2_DISTROS, WORLDS, SimulatedRobot
 
 __all__ = ["build_parser", "main", "run"]
@@ -94,6 +95,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="nav2 only: N robots on one graph, under /robot1 ... /robotN (default 1, no namespace)",
     )
     parser.add_argument(
+        "--fault",
+        default="",
+        metavar="NAME[,NAME...]",
+        help=f"nav2 only: break the robot on purpose ({', '.join(FAULTS)})",
+    )
+    parser.add_argument(
         "--in-order",
         action="store_true",
         help="ros2 only: Humble's and 2.1.0's defaults, each connection's operations strictly in order",
@@ -175,6 +182,13 @@ def run(argv: list[str] | None = None) -> int:
         parser.error("--server rs runs calls side by side with its newer rosapi: no --in-order, no --rosapi")
     if args.robots > 1 and args.world != "nav2":
         parser.error("--robots needs --world nav2")
+    faults = tuple(f for f in args.fault.split(",") if f.strip())
+    if faults and args.world != "nav2":
+        parser.error("--fault needs --world nav2")
+    try:
+        faults = check_faults(faults, ros2=args.dialect == "ros2")
+    except ValueError as exc:
+        parser.error(f"--fault: {exc}")
     try:
         width_text, height_text = args.camera_size.lower().split("x")
         width, height = int(width_text), int(height_text)
@@ -205,6 +219,7 @@ def run(argv: list[str] | None = None) -> int:
         map_cells=args.map_cells,
         world=args.world,
         robots=args.robots,
+        faults=faults,
     )
     try:
         asyncio.run(_serve(robot))

@@ -55,7 +55,9 @@ class SimulatedRobot:
     rosbridge_suite 0.11.17 / 2.x do).
 
     ``world="nav2"`` runs a Nav2-scale mobile robot instead of the turtle (see :mod:`.nodes.nav2`);
-    ``robots=N`` runs N of them under ``/robot1``, ``/robot2``, ...
+    ``robots=N`` runs N of them under ``/robot1``, ``/robot2``, ... ``faults`` (Nav2 only) breaks it on
+    purpose: ``scan-stopped``, ``tf-stale``, ``driver-error``, ``controller-inactive`` (ROS 2),
+    ``log-errors``, ``node-gone`` (see :mod:`.nodes.nav2.health`).
 
     ``server="rs"`` behaves like
     rosbridge-server-rs 0.1.6 (ROS 2): an error ``status`` answers every failed op, only the connection that
@@ -87,6 +89,7 @@ class SimulatedRobot:
         world: Literal["turtle", "nav2"] = "turtle",
         robots: int = 1,
         cbor: bool = True,
+        faults: Sequence[str] = (),
     ) -> None:
         if dialect not in ("ros1", "ros2"):
             raise ValueError(f"dialect must be 'ros1' or 'ros2', not {dialect!r}")
@@ -159,6 +162,7 @@ class SimulatedRobot:
             world=world,
             robots=robots,
             bridge_parameters=server != "rs",
+            faults=tuple(faults),
         )
         self._nodes.build()
         self.world_name = world

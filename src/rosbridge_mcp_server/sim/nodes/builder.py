@@ -65,6 +65,7 @@ class WorldNodes:
         world: str = "turtle",
         robots: int = 1,
         bridge_parameters: bool = True,
+        faults: tuple[str, ...] = (),
     ) -> None:
         self.bridge = bridge
         self.kit = NodeKit(bridge)
@@ -93,8 +94,14 @@ class WorldNodes:
         self.nav2: Nav2World | None = None
         if world == "nav2":
             self.nav2 = Nav2World(
-                self.kit, robots=robots, action_step=action_step, type_descriptions=self.type_descriptions
+                self.kit,
+                robots=robots,
+                action_step=action_step,
+                type_descriptions=self.type_descriptions,
+                faults=faults,
             )
+        elif faults:
+            raise ValueError("faults need world='nav2'")
         elif world != "turtle" or robots != 1:
             raise ValueError(f"world must be 'turtle' or 'nav2' (robots only with nav2), not {world!r}")
 

@@ -120,15 +120,18 @@ class Motion:
                 ns = robot.namespace
                 ox, oy = robot.x - TURTLE_HOME, robot.y - TURTLE_HOME
                 if kit.wants(f"{ns}/tf"):
-                    kit.publish(
-                        f"{ns}/tf",
-                        {
-                            "transforms": [
-                                self._transform(("map", "odom"), (TURTLE_HOME, TURTLE_HOME, 0.0), 0.0),
-                                self._transform(("odom", "base_footprint"), (ox, oy, 0.0), robot.yaw),
-                            ]
-                        },
-                    )
+                    transforms = [
+                        self._transform(("map", "odom"), (TURTLE_HOME, TURTLE_HOME, 0.0), 0.0),
+                        self._transform(("odom", "base_footprint"), (ox, oy, 0.0), robot.yaw),
+                    ]
+                    # A fault (health.py) may silence one of them.
+                    transforms = [
+                        t
+                        for t in transforms
+                        if f"{t['header']['frame_id']}->{t['child_frame_id']}" not in robot.quiet
+                    ]
+                    if transforms:
+                        kit.publish(f"{ns}/tf", {"transforms": transforms})
                 if kit.wants(f"{ns}/odom"):
                     kit.publish(
                         f"{ns}/odom",
@@ -148,7 +151,7 @@ class Motion:
             await asyncio.sleep(SCAN_PERIOD)
             for robot in self.robots:
                 ns = robot.namespace
-                if kit.wants(f"{ns}/scan"):
+                if kit.wants(f"{ns}/scan") and "scan" not in robot.quiet:
                     kit.publish(f"{ns}/scan", self.scan_message(robot))
                     kit.world.scans += 1
                     kit.world.notify()

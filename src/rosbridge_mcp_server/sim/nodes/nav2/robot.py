@@ -27,6 +27,8 @@ class Nav2Robot:
     commands: int = 0
     #: Lifecycle state id of each lifecycle node (by name relative to the namespace).
     states: dict[str, int] = field(default_factory=dict)
+    #: What a fault silenced (``health.py``): a topic (``"scan"``), a transform (``"odom->base_footprint"``).
+    quiet: set[str] = field(default_factory=set)
 
     def step(self, dt: float) -> None:
         if time.monotonic() - self.command_time > 0.5:

@@ -8,7 +8,7 @@ import contextlib
 import functools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
 from rosbridge_mcp_server.sim.actions import ActionServer, GoalHandle
@@ -16,6 +16,7 @@ from rosbridge_mcp_server.sim.actions.ros2 import FeedbackFn
 from rosbridge_mcp_server.sim.graph import ServiceEntry
 from rosbridge_mcp_server.sim.nodes.kit import NodeKit
 from rosbridge_mcp_server.sim.nodes.nav2.actionlib import ActionlibServer
+from rosbridge_mcp_server.sim.nodes.nav2.health import Health
 from rosbridge_mcp_server.sim.nodes.nav2.layout import (
     CONTROLLERS,
     LIFECYCLE_NODES,
@@ -111,6 +112,7 @@ class Nav2World:
         action_step: float = 0.2,
         type_descriptions: bool = True,
         surroundings: Surroundings | None = None,
+        faults: Sequence[str] = (),
     ) -> None:
         if robots < 1:
             raise ValueError("robots must be >= 1")
@@ -122,6 +124,8 @@ class Nav2World:
         self.robots = [Nav2Robot(ns) for ns in namespaces]
         self.motion = Motion(kit, self.robots, surroundings or TurtleRoom())
         self.lifecycles = Lifecycles(kit)
+        #: /diagnostics, /rosout, the drivers' topics and the faults set on purpose (health.py).
+        self.health = Health(kit, self.robots, faults)
         self.actions: list[Nav2ActionServer] = []
         #: Every node of the world (absolute names), for the plumbing every node gets.
         self.node_names: list[str] = []
@@ -151,6 +155,7 @@ class Nav2World:
         """Register every robot's nodes, topics, services, actions and parameters."""
         for robot in self.robots:
             self._build_robot(robot)
+        self.health.build()
         self.kit.loops.append(self.motion.motion_loop)
         self.kit.loops.append(self.motion.sensor_loop)
 

@@ -1,0 +1,135 @@
+"""``diagnose``: what is wrong with the robot, in one call: a count, the findings worst first (each with the
+call to make next), and what each area checked."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from typing import Annotated, Any
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.robot.diagnosis import FOCUSES, Diagnosis, Finding, UnknownFocusError, diagnose
+from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
+
+__all__ = ["SPEC", "DiagnoseAnswer", "run"]
+
+#: How long a call made just after connecting waits for the log subscription being opened.
+READY_WAIT = 1.0
+
+
+class FindingModel(BaseModel):
+    """One thing wrong."""
+
+    severity: str = Field(description="problem or warning")
+    area: str = Field(description="graph, lifecycle, diagnostics, streams, tf or logs")
+    subject: str = Field(description="The topic, frame pair, node or status it is about")
+    summary: str
+    next: str = Field(description="What to call next")
+    nodes: list[str]
+    details: dict[str, Any]
+
+
+class DiagnoseAnswer(BaseModel):
+    """The findings, worst first, and what was checked."""
+
+    problems: int
+    warnings: int
+    focus: str | None
+    findings: list[FindingModel]
+    checked: dict[str, str] = Field(description="What each area looked at")
+    unavailable: dict[str, str] = Field(description="Areas the robot does not have, and why")
+    streams: dict[str, float | None] = Field(
+        description="Hz of each key stream in the window (null: <2 messages)"
+    )
+    frames: list[str] = Field(description="tf frames seen")
+    seconds: float = Field(description="How long the look took")
+
+
+SPEC = ToolSpec(
+    name="diagnose",
+    title="Diagnose the robot",
+    description=(
+        "What is wrong: diagnostics, logs, stream rates, tf, lifecycle and graph in one look; a count, then "
+        'each problem and the call to make next. Read-only, ~1.5 s. Example: {"focus": "navigation"}'
+    ),
+    hints=READS_ROBOT,
+    output=DiagnoseAnswer,
+)
+
+
+async def run(
+    ctx: ToolContext,
+    focus: Annotated[
+        str | None,
+        Field(description=f"{', '.join(list(FOCUSES)[:3])}, another area, or a node name, e.g. /amcl"),
+    ] = None,
+) -> ToolAnswer:
+    """Look at the robot once."""
+    keeper = ctx.robot.keep_logs()
+    if not keeper.ready.is_set():
+        # Just connected: the log subscription is being opened in the background.
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(keeper.ready.wait(), READY_WAIT)
+    try:
+        found = await diagnose(ctx.client, ctx.graph, keeper, focus=focus)
+    except UnknownFocusError as exc:
+        raise ToolFailure(f"Unknown {exc}") from None
+    data = DiagnoseAnswer(
+        problems=found.problems,
+        warnings=found.warnings,
+        focus=focus,
+        findings=[_model(f) for f in found.findings],
+        checked=found.checked,
+        unavailable=found.unavailable,
+        streams={t: None if r is None else round(r, 2) for t, r in found.streams.items()},
+        frames=found.frames,
+        seconds=round(found.seconds, 2),
+    )
+    return ToolAnswer(text=_text(found, focus), data=data)
+
+
+def _model(finding: Finding) -> FindingModel:
+    return FindingModel(
+        severity=finding.severity,
+        area=finding.area,
+        subject=finding.subject,
+        summary=finding.summary,
+        next=finding.next,
+        nodes=list(finding.nodes),
+        details=finding.details,
+    )
+
+
+def _count(found: Diagnosis) -> str:
+    if not found.findings:
+        return "No problem found"
+    parts = []
+    if found.problems:
+        parts.append(f"{found.problems} problem{'s' if found.problems != 1 else ''}")
+    if found.warnings:
+        parts.append(f"{found.warnings} warning{'s' if found.warnings != 1 else ''}")
+    return ", ".join(parts)
+
+
+def _text(found: Diagnosis, focus: str | None) -> str:
+    head = _count(found) + (f" (focus: {focus})" if focus else "") + (":" if found.findings else ".")
+    lines = [head]
+    budget = TEXT_BUDGET - FRAME_RESERVE
+    used = len(head)
+    shown = 0
+    for finding in found.findings:
+        row = f"{finding.severity.upper()} [{finding.area}] {finding.summary}\n  → {finding.next}"
+        if shown and used + len(row) + 1 > budget - 600:
+            break
+        lines.append(row)
+        used += len(row) + 1
+        shown += 1
+    if shown < len(found.findings):
+        lines.append(f"{len(found.findings) - shown} more findings in the structured content.")
+    checked = "; ".join(f"{area}: {what}" for area, what in found.checked.items())
+    lines.append(f"Checked in {found.seconds:.1f} s — {checked}.")
+    if found.unavailable:
+        lines.append("Not checked: " + "; ".join(f"{a}: {why}" for a, why in found.unavailable.items()) + ".")
+    return "\n".join(lines)
