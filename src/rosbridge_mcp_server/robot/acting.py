@@ -238,7 +238,7 @@ async def publish_stream(
         planned,
         sent,
         cancelled,
-        zero,
+        zero if sent > 0 else None,  # sent only after a message that moved
         stopped,
         adjusted,
         stopped_by,

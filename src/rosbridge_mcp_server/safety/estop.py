@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.goals import cancel_goals
+from rosbridge_mcp_server.robot.goals import CanceledBy, cancel_goals
 from rosbridge_mcp_server.robot.velocity import zero_command
 
 if TYPE_CHECKING:
@@ -84,9 +84,10 @@ async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> Stop
                 report.zeroed_topics.append(target.topic)
                 report.zero_messages.append((target.topic, target.type, message))
 
+    source: CanceledBy = "stop_robot" if by == "stop_robot" else "estop"
     for goal in robot.goals.running():
         try:
-            await cancel_goals(robot.goals, goal.action, goal.goal_id, by="stop_robot")
+            await cancel_goals(robot.goals, goal.action, goal.goal_id, by=source)
         except RosbridgeError as exc:
             report.failures.append(f"cancelling goal {goal.goal_id} on {goal.action} failed: {exc}")
         else:

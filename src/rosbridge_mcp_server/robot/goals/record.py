@@ -22,7 +22,7 @@ __all__ = [
     "require_sendable",
 ]
 
-CanceledBy = Literal["timeout", "request_cancelled", "cancel_action", "stop_robot"]
+CanceledBy = Literal["timeout", "request_cancelled", "cancel_action", "stop_robot", "estop"]
 #: ``Goal.status`` of a goal that timed out and whose end the server never confirmed after the cancel.
 UNCONFIRMED_STATUS: Final = "timed out"
 #: After a timeout's cancel, how long we wait for the goal's final result.
@@ -120,9 +120,10 @@ def require_sendable(
     if before_send is not None:
         before_send()
     if record.cancel_requested:
+        who = "E-STOP on the operator console" if record.cancel_source == "estop" else record.cancel_source
         raise NotSentError(
-            f"Goal {record.goal_id} on {record.action} was cancelled by {record.cancel_source} before it was "
-            "sent, so no goal was sent."
+            f"Goal {record.goal_id} on {record.action} was cancelled by {who} before it was sent, so no goal "
+            "was sent."
         )
     if remaining <= 0:
         raise NotSentError(
