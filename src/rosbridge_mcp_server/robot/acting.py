@@ -150,6 +150,9 @@ class Streamed:
     adjusted: str | None = None
     #: Who stopped it early, when ``stopped``.
     stopped_by: str = "stop_robot"
+    #: Ended before ``planned``: the topic's rate cap, shared with every other sender on it, left no slot
+    #: within the stream's duration.
+    rate_limited: bool = False
 
 
 async def publish_stream(
@@ -185,6 +188,7 @@ async def publish_stream(
     loop = asyncio.get_running_loop()
     stopped = False
     stopped_by = "stop_robot"
+    rate_limited = False
     try:
         # Registered before anything of it is sent (the ping included), so that stop_robot and the E-STOP
         # see it and end it: pause() returns early when asked.
@@ -193,13 +197,14 @@ async def publish_stream(
                 await ctx.client.advertise(act.name, act.type)
             start = loop.time()
             # A slot (the topic's rate, shared with every other sender) later than this ends the stream.
-            latest = start + length
+            latest = start + length + 1 / rate
             for index in range(planned):
                 if await running.pause(start + index / rate - loop.time()):
                     stopped, stopped_by = True, running.stopped_by
                     break
                 try:
                     if not await ctx.gate.pace(ticket, act, latest=latest):
+                        rate_limited = True
                         break
                 except PolicyRefusal:
                     if sent == 0:
@@ -242,6 +247,7 @@ async def publish_stream(
         stopped,
         adjusted,
         stopped_by,
+        rate_limited,
     )
 
 

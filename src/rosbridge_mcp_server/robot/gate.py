@@ -94,23 +94,25 @@ class SendGate:
     # --- rate ------------------------------------------------------------------------------------------
 
     async def pace(self, ticket: Ticket, act: Act, *, latest: float | None = None) -> bool:
-        """Wait for *act*'s next send slot on its topic, then :meth:`check`; ``False`` when the slot would
-        come after the loop time *latest* (nothing reserved, nothing waited).
+        """Wait until *act*'s topic may take another message, then :meth:`check`; ``False`` (nothing waited)
+        when that would be after the loop time *latest*.
 
-        Slots on a topic are at least the guard's ``send_interval`` apart, whoever asks: in any window of
-        T seconds at most ``1 + T / interval`` messages go out on one topic. A stop during the wait ends it
-        at once (with the refusal).
+        The time of each yes is kept, and the next message on the topic waits until the guard's
+        ``send_interval`` after it, whoever sends it: the caller writes its frame right after the yes, with
+        nothing awaited between, so in any window of T seconds at most ``1 + T / interval`` messages leave
+        for one topic. A stop during the wait ends it at once (with the refusal).
         """
         interval = self._guard.send_interval(act)
         if interval > 0:
             loop = asyncio.get_running_loop()
-            now = loop.time()
-            slot = max(now, self._next_slot.get(act.name, now))
-            if latest is not None and slot > latest:
-                return False
-            self._next_slot[act.name] = slot + interval
-            if slot > now:
-                await self._wait_unless_stopped(slot - now)
+            while (due := self._next_slot.get(act.name, 0.0)) > loop.time():
+                if latest is not None and due > latest:
+                    return False
+                self.check(ticket, act)
+                await self._wait_unless_stopped(due - loop.time())
+            self.check(ticket, act)
+            self._next_slot[act.name] = loop.time() + interval
+            return True
         self.check(ticket, act)
         return True
 
