@@ -137,8 +137,8 @@ async def _stream(
         )
     elif streamed.rate_limited:
         text = (
-            f"Published {streamed.sent} of {streamed.planned} {streamed.type} messages on {streamed.topic} in "
-            f"{streamed.duration:g} s: {compact_json(streamed.message)}. The safety policy's [publish] "
+            f"Published {streamed.sent} of {streamed.planned} {streamed.type} messages on {streamed.topic} "
+            f"in {streamed.duration:g} s: {compact_json(streamed.message)}. The safety policy's [publish] "
             "max_rate_hz bounds every stream and publish of this server on the topic together, and other "
             "senders used the rest"
         )
