@@ -1,6 +1,7 @@
 """The console's web side: a static page, one event stream, and the four things a person may do.
 
-Routes (everything under ``/api`` needs the session secret in the ``X-Console-Secret`` header):
+Routes (everything under ``/api`` needs the session secret in the ``X-Console-Secret`` header, but E-STOP,
+which any page of the console's own origin may press):
 
 * ``GET /`` (and its script and style): the page; it holds no robot data, only code;
 * ``GET /api/events``: server-sent events, ``state`` (the hub's snapshot), ``frame`` (the camera), ``pose``
@@ -14,6 +15,12 @@ There is no route that publishes, calls or sends anything of its own: the consol
 and releases, and nothing else. A header (not a cookie) carries the secret, so another page in the same
 browser cannot make a request that counts, and a request whose ``Host`` is not the console's own address is
 refused (a DNS-rebinding page would otherwise reach a loopback console).
+
+A stop never fails silently: a tab of the console opened without the secret (a bookmark, a second tab) still
+shows a red E-STOP, so ``POST /api/estop`` is also taken without the secret when the browser says the request
+comes from a page of the console's own origin (its ``Origin`` header is the console's own address). A page of
+another site cannot send that header, and stopping only takes motion away; Release, Approve and everything
+that reads the robot still need the secret.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ import json
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
+from urllib.parse import urlsplit
 
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -62,9 +70,16 @@ Handler = Callable[[Request], Awaitable[Response]]
 def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starlette:
     """The console as an ASGI app, for ``hub``, guarded by ``secret``; ``allowed_hosts`` are Host values."""
 
-    def guarded(handler: Handler) -> Handler:
+    def guarded(handler: Handler, *, own_origin_may: bool = False) -> Handler:
         async def check(request: Request) -> Response:
             refusal = _refusal(request, secret, allowed_hosts, need_secret=True)
+            if refusal is not None and own_origin_may and _from_own_origin(request, allowed_hosts):
+                _log.warning(
+                    "console: %s %s without the session secret, from a page of the console's own origin",
+                    request.method,
+                    request.url.path,
+                )
+                refusal = None
             return refusal if refusal is not None else await handler(request)
 
         return check
@@ -142,7 +157,7 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
         Route("/api/image-topics", guarded(image_topics), methods=["GET"]),
         Route("/api/confirmations/{id}/approve", guarded(approve), methods=["POST"]),
         Route("/api/confirmations/{id}/deny", guarded(deny), methods=["POST"]),
-        Route("/api/estop", guarded(estop), methods=["POST"]),
+        Route("/api/estop", guarded(estop, own_origin_may=True), methods=["POST"]),
         Route("/api/release", guarded(release), methods=["POST"]),
         Route("/api/camera", guarded(camera), methods=["POST"]),
         Route("/api/map", guarded(map_panel), methods=["POST"]),
@@ -161,6 +176,15 @@ def _refusal(request: Request, secret: str, allowed_hosts: set[str], *, need_sec
         _log.warning("console: refused %s %s without the session secret", request.method, request.url.path)
         return _json({"error": f"this request needs the console's session secret in {SECRET_HEADER}"}, 403)
     return None
+
+
+def _from_own_origin(request: Request, allowed_hosts: set[str]) -> bool:
+    """Whether the browser says the request comes from a page of the console's own origin.
+
+    Browsers send ``Origin`` with every POST and a page cannot set it; ``Host`` was already checked.
+    """
+    origin = urlsplit(request.headers.get("origin", ""))
+    return origin.scheme in ("http", "https") and origin.netloc.lower() in allowed_hosts
 
 
 def _answered(hub: ConsoleHub, pending_id: str, *, approve: bool) -> Response:
