@@ -293,6 +293,8 @@ class RaceResult:
     commands_after: int  #: motion commands the robot received after E-STOP answered
     watcher_commands_after: int  #: the same, as the raw socket saw them (after the marker)
     goal_progress_after: int  #: goal feedback steps, and goals accepted, after E-STOP answered
+    commands_before: int  #: motion commands of this race the robot received before E-STOP answered
+    goal_ran_before: bool  #: the race's goal had reached the robot before E-STOP answered
     stream_text: str
     goal_text: str
     stream_error: bool
@@ -305,6 +307,8 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
     types = types_of(race.sim)
     world = race.sim.world
     race.allowed.clear()
+    goals_before = set(world.goals)
+    started = time.monotonic()
     stream_call = asyncio.create_task(
         race.mcp.call_tool(
             "publish_topic",
@@ -352,6 +356,9 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
     commands_after = sum(
         1 for m in world.published.get(CMD_VEL, ()) if m.received_at > answered and moving(m.msg)
     )
+    commands_before = sum(
+        1 for m in world.published.get(CMD_VEL, ()) if started < m.received_at <= answered and moving(m.msg)
+    )
     progress_after = 0
     for gid, record in world.goals.items():
         if gid not in progress_then:
@@ -365,6 +372,8 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
         commands_after=commands_after,
         watcher_commands_after=race.watcher.moving_after(marker),
         goal_progress_after=progress_after,
+        commands_before=commands_before,
+        goal_ran_before=bool(set(progress_then) - goals_before),
         stream_text=text_of(stream_result),
         goal_text=text_of(goal_result) if goal_result is not None else "",
         stream_error=stream_result.is_error,

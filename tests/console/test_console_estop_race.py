@@ -39,32 +39,37 @@ async def test_a_stream_and_a_goal_approved_at_the_press_send_nothing_after_esto
     assert result.goal_error, result.goal_text
 
 
-@pytest.mark.parametrize("press_after", [0.35, 0.6])
 async def test_a_goal_running_when_estop_is_pressed_makes_no_progress_after_it_answers(
-    sim: SimulatedRobot, press_after: float
+    sim: SimulatedRobot,
 ) -> None:
     """Pressed while the stream drives and the goal runs (150 ms link): both end before E-STOP answers."""
     async with race_console(sim, LINK) as race:
-        result = await run_race(race, press_after=press_after)
+        result = await run_race(race, press_after=1.2)
     nothing_after(result)
     assert result.estop["streams_stopped"] == [CMD_VEL], result
+    # Pressed that late, the race is against a stream that drives and a goal the robot already took.
+    assert result.commands_before > 0, result
+    assert result.goal_ran_before, result
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("delay", "races"), [(0.0, 100), (LINK, 20)], ids=["loopback", "150ms-link"])
 async def test_estop_race_stress(sim: SimulatedRobot, delay: float, races: int) -> None:
     """100 races on loopback and 20 on a 150 ms link per dialect, E-STOP pressed at moments spread over the
-    calls' first 0.5 s: not one command and not one goal step after E-STOP answers."""
+    calls' first 1.1 s: not one command and not one goal step after E-STOP answers."""
     results = []
     async with race_console(sim, delay) as race:
         for index in range(races):
-            results.append(await run_race(race, press_after=(index % 10) * 0.05))
+            results.append(await run_race(race, press_after=(index % 10) * 0.12))
     commands = sum(r.commands_after for r in results)
     watched = sum(r.watcher_commands_after for r in results)
     progress = sum(r.goal_progress_after for r in results)
     named = sum(1 for r in results if r.estop["streams_stopped"])
-    print(  # shown with -s: the figures for the report
+    drove = sum(1 for r in results if r.commands_before)
+    goals = sum(1 for r in results if r.goal_ran_before)
+    print(  # shown with -rP: the figures for the report
         f"{sim.dialect} link {delay:g} s: {races} races, {commands} commands and {progress} goal steps after "
-        f"E-STOP answered ({watched} seen on the raw socket); E-STOP named the stream in {named}"
+        f"E-STOP answered ({watched} seen on the raw socket); E-STOP named the stream in {named}; the stream "
+        f"had driven before the answer in {drove}, the goal had reached the robot in {goals}"
     )
     assert (commands, watched, progress) == (0, 0, 0)
