@@ -40,7 +40,7 @@ from rosbridge_mcp_server.console.web import SECRET_HEADER
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, AuditEntry, Operator, Policy, PolicyGuard
 from rosbridge_mcp_server.server import build_server
-from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.sim import World
 
 CMD_VEL = "/turtle1/cmd_vel"
 MARKER = "/estop_race_marker"
@@ -48,17 +48,22 @@ FIB = "/fibonacci"
 WAIT = 15.0
 
 
-def types_of(sim: SimulatedRobot) -> dict[str, str]:
-    if sim.dialect == "ros2":
+def types_of(dialect: str) -> dict[str, str]:
+    if dialect == "ros2":
         return {
             "twist": "geometry_msgs/msg/Twist",
             "string": "std_msgs/msg/String",
             "fibonacci": "example_interfaces/action/Fibonacci",
+            # rosbridge 2.x lets a client subscribe to an action's hidden feedback topic.
+            "feedback_topic": f"{FIB}/_action/feedback",
+            "feedback": "example_interfaces/action/Fibonacci_FeedbackMessage",
         }
     return {
         "twist": "geometry_msgs/Twist",
         "string": "std_msgs/String",
         "fibonacci": "actionlib_tutorials/FibonacciAction",
+        "feedback_topic": f"{FIB}/feedback",
+        "feedback": "actionlib_tutorials/FibonacciActionFeedback",
     }
 
 
@@ -158,15 +163,23 @@ class Watcher:
                 self.changed.clear()
                 await self.changed.wait()
 
+    def after(self, marker: str) -> list[tuple[str, dict[str, Any]]]:
+        index = next(i for i, (t, m) in enumerate(self.frames) if t == MARKER and m.get("data") == marker)
+        return self.frames[index + 1 :]
+
     def moving_after(self, marker: str) -> int:
         """Commands asking for motion that the watcher saw after *marker*."""
-        index = next(i for i, (t, m) in enumerate(self.frames) if t == MARKER and m.get("data") == marker)
-        return sum(1 for t, m in self.frames[index + 1 :] if t == CMD_VEL and moving(m))
+        return sum(1 for t, m in self.after(marker) if t == CMD_VEL and moving(m))
+
+    def feedback_after(self, marker: str) -> int:
+        """Goal feedback messages (any goal's) that the watcher saw after *marker*."""
+        return sum(1 for t, _ in self.after(marker) if t not in (CMD_VEL, MARKER))
 
 
 @dataclass
 class RaceConsole:
-    sim: SimulatedRobot
+    dialect: str
+    world: World | None  #: the simulated robot's own record; None on a real bridge
     mcp: Client
     running: RunningConsole
     operator: Operator
@@ -174,6 +187,7 @@ class RaceConsole:
     watcher: Watcher
     marker_socket: Any
     allowed: asyncio.Event
+    observe: float
     marks: int = 0
 
     async def post(self, path: str) -> tuple[int, Any]:
@@ -208,14 +222,24 @@ class RaceConsole:
 
 @asynccontextmanager
 async def race_console(
-    sim: SimulatedRobot, delay: float, policy: Policy | None = None
+    robot_url: str,
+    dialect: str,
+    delay: float,
+    *,
+    world: World | None = None,
+    observe: float = 0.3,
+    policy: Policy | None = None,
 ) -> AsyncIterator[RaceConsole]:
-    """The server, its console and an MCP session, with the rosbridge link delayed *delay* s each way."""
-    types = types_of(sim)
+    """The server, its console and an MCP session, with the rosbridge link delayed *delay* s each way.
+
+    *world* is the simulated robot's (None on a real bridge: only the raw socket watches then); *observe* is
+    how long each race watches for what must not come after E-STOP answered.
+    """
+    types = types_of(dialect)
     async with contextlib.AsyncExitStack() as stack:
-        url = sim.url
+        url = robot_url
         if delay > 0:
-            url = (await stack.enter_async_context(DelayingProxy(sim.url, delay))).url
+            url = (await stack.enter_async_context(DelayingProxy(robot_url, delay))).url
         config = Config(url=url, request_timeout=10.0, connect_timeout=5.0, policy=policy or Policy())
         ros = RosbridgeClient(
             url, connect_timeout=5.0, request_timeout=10.0, reconnect_min=0.05, reconnect_max=0.2
@@ -236,8 +260,10 @@ async def race_console(
 
         audit.listen(on_audit)
         watcher = Watcher()
-        raw = await stack.enter_async_context(websockets.connect(sim.url))
-        for topic, type_name in ((CMD_VEL, types["twist"]), (MARKER, types["string"])):
+        raw = await stack.enter_async_context(websockets.connect(robot_url))
+        watched = [(CMD_VEL, types["twist"]), (MARKER, types["string"])]
+        watched.append((types["feedback_topic"], types["feedback"]))
+        for topic, type_name in watched:
             await raw.send(json.dumps({"op": "subscribe", "topic": topic, "type": type_name}))
 
         async def watch() -> None:
@@ -249,7 +275,7 @@ async def race_console(
 
         watching = asyncio.create_task(watch())
         stack.callback(watching.cancel)
-        marker_socket = await stack.enter_async_context(websockets.connect(sim.url))
+        marker_socket = await stack.enter_async_context(websockets.connect(robot_url))
         await marker_socket.send(json.dumps({"op": "advertise", "topic": MARKER, "type": types["string"]}))
 
         ready: asyncio.Future[Client] = asyncio.get_running_loop().create_future()
@@ -271,7 +297,9 @@ async def race_console(
             mcp = await ready
             await ros.wait_connected(WAIT)
             async with open_console(ConsoleSettings(port=0), hub) as running:
-                race = RaceConsole(sim, mcp, running, operator, robot, watcher, marker_socket, allowed)
+                race = RaceConsole(
+                    dialect, world, mcp, running, operator, robot, watcher, marker_socket, allowed, observe
+                )
                 # The subscriptions are live once a first marker comes back.
                 async with asyncio.timeout(WAIT):
                     while True:
@@ -293,6 +321,7 @@ class RaceResult:
     commands_after: int  #: motion commands the robot received after E-STOP answered
     watcher_commands_after: int  #: the same, as the raw socket saw them (after the marker)
     goal_progress_after: int  #: goal feedback steps, and goals accepted, after E-STOP answered
+    watcher_feedback_after: int  #: goal feedback the raw socket saw after the marker
     commands_before: int  #: motion commands of this race the robot received before E-STOP answered
     goal_ran_before: bool  #: the race's goal had reached the robot before E-STOP answered
     stream_text: str
@@ -304,10 +333,10 @@ class RaceResult:
 async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = True) -> RaceResult:
     """Start a 10 Hz velocity stream (and a goal), press E-STOP *press_after* s after the console first shows
     one of them allowed, then measure; the latch is released at the end."""
-    types = types_of(race.sim)
-    world = race.sim.world
+    types = types_of(race.dialect)
+    world = race.world
     race.allowed.clear()
-    goals_before = set(world.goals)
+    goals_before = set(world.goals) if world is not None else set()
     started = time.monotonic()
     stream_call = asyncio.create_task(
         race.mcp.call_tool(
@@ -344,23 +373,21 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
     status, answer = await race.post("/api/estop")
     answered = time.monotonic()
     assert status == 200, answer
-    progress_then = {gid: record.feedback_count for gid, record in world.goals.items()}
+    goals_then = world.goals if world is not None else {}
+    progress_then = {gid: record.feedback_count for gid, record in goals_then.items()}
     marker = await race.mark()
     async with asyncio.timeout(WAIT):
         stream_result = await stream_call
         goal_result = await goal_call if goal_call is not None else None
-    # An observation window for what must NOT happen: a goal steps every 50 ms and the stream is 10 Hz, so
-    # anything still running would show here.
-    await asyncio.sleep(0.3)
+    # An observation window for what must NOT happen: a simulated goal steps every 50 ms (a real one each
+    # second: give *observe* to suit) and the stream is 10 Hz, so anything still running would show here.
+    await asyncio.sleep(race.observe)
     await race.mark()
-    commands_after = sum(
-        1 for m in world.published.get(CMD_VEL, ()) if m.received_at > answered and moving(m.msg)
-    )
-    commands_before = sum(
-        1 for m in world.published.get(CMD_VEL, ()) if started < m.received_at <= answered and moving(m.msg)
-    )
+    published = world.published.get(CMD_VEL, ()) if world is not None else ()
+    commands_after = sum(1 for m in published if m.received_at > answered and moving(m.msg))
+    commands_before = sum(1 for m in published if started < m.received_at <= answered and moving(m.msg))
     progress_after = 0
-    for gid, record in world.goals.items():
+    for gid, record in goals_then.items():
         if gid not in progress_then:
             progress_after += 1 + record.feedback_count  # a goal the robot took after E-STOP answered
         else:
@@ -372,6 +399,7 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
         commands_after=commands_after,
         watcher_commands_after=race.watcher.moving_after(marker),
         goal_progress_after=progress_after,
+        watcher_feedback_after=race.watcher.feedback_after(marker),
         commands_before=commands_before,
         goal_ran_before=bool(set(progress_then) - goals_before),
         stream_text=text_of(stream_result),

@@ -21,6 +21,7 @@ def nothing_after(result: RaceResult) -> None:
     assert result.commands_after == 0, result
     assert result.watcher_commands_after == 0, result
     assert result.goal_progress_after == 0, result
+    assert result.watcher_feedback_after == 0, result
 
 
 @pytest.mark.parametrize("delay", [0.0, LINK], ids=["loopback", "150ms-link"])
@@ -29,7 +30,7 @@ async def test_a_stream_and_a_goal_approved_at_the_press_send_nothing_after_esto
 ) -> None:
     """Pressed the moment the console shows the call allowed: no command, no goal step after the answer; the
     E-STOP answer names the stream it stopped, and each call says E-STOP stopped it."""
-    async with race_console(sim, delay) as race:
+    async with race_console(sim.url, sim.dialect, delay, world=sim.world) as race:
         result = await run_race(race)
     nothing_after(result)
     # The stream was registered before anything of it was sent, so E-STOP saw and named it.
@@ -43,7 +44,7 @@ async def test_a_goal_running_when_estop_is_pressed_makes_no_progress_after_it_a
     sim: SimulatedRobot,
 ) -> None:
     """Pressed while the stream drives and the goal runs (150 ms link): both end before E-STOP answers."""
-    async with race_console(sim, LINK) as race:
+    async with race_console(sim.url, sim.dialect, LINK, world=sim.world) as race:
         result = await run_race(race, press_after=1.2)
     nothing_after(result)
     assert result.estop["streams_stopped"] == [CMD_VEL], result
@@ -58,7 +59,7 @@ async def test_estop_race_stress(sim: SimulatedRobot, delay: float, races: int) 
     """100 races on loopback and 20 on a 150 ms link per dialect, E-STOP pressed at moments spread over the
     calls' first 1.1 s: not one command and not one goal step after E-STOP answers."""
     results = []
-    async with race_console(sim, delay) as race:
+    async with race_console(sim.url, sim.dialect, delay, world=sim.world) as race:
         for index in range(races):
             results.append(await run_race(race, press_after=(index % 10) * 0.12))
     commands = sum(r.commands_after for r in results)
