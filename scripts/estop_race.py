@@ -5,13 +5,14 @@
     uv run python scripts/estop_race.py --url ws://127.0.0.1:9090 --dialect ros1 --races 10 --observe 1.5
 
 Each race is what ``tests/console/test_console_estop_race.py`` runs (the harness is shared): through the
-served console and an MCP session, a 10 Hz ``publish_topic`` stream on /turtle1/cmd_vel and a /fibonacci goal
-start; E-STOP is pressed over HTTP at moments spread over their first 1.1 s after the console shows one of
-them allowed; then a raw rosbridge socket on the robot (no proxy) counts the motion commands and the goal
+served console and an MCP session, a 10 Hz ``publish_topic`` stream on /turtle1/cmd_vel and a /fibonacci
+goal start; E-STOP is pressed over HTTP at moments spread over their first 1.1 s after the console shows one
+of them allowed; then a raw rosbridge socket on the robot (no proxy) counts the motion commands and the goal
 feedback that came after E-STOP answered (after a marker published once the answer came), and on the
-simulated robot the robot's own record counts them too. ``--delay`` puts a proxy that holds every frame that long each way
-between the server and the bridge. A real robot's turtle is driven at 1 m/s for up to ~1 s per race: use it
-on a lab, not a robot in a room. Figures go to stdout; the exit status is 1 when anything came after E-STOP.
+simulated robot the robot's own record counts them too. ``--delay`` puts a proxy that holds every frame that
+long each way between the server and the bridge. A real robot's turtle is driven at 1 m/s for up to ~1 s per
+race: use it on a lab, not a robot in a room. Figures go to stdout; the exit status is 1 when anything came
+after E-STOP.
 """
 
 from __future__ import annotations
