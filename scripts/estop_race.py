@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import collections
 import logging
 import sys
 from pathlib import Path
@@ -52,6 +53,8 @@ async def races(args: argparse.Namespace) -> list[RaceResult]:
                     f"goals {result.estop['goals_cancelled']}",
                     file=sys.stderr,
                 )
+            seen = collections.Counter(topic for topic, _ in race.watcher.frames)
+            print(f"all the raw socket saw, by topic: {dict(seen)}", file=sys.stderr)
     finally:
         if sim is not None:
             await sim.stop()
