@@ -252,10 +252,7 @@ async def race_console(
 
         def on_audit(entry: AuditEntry) -> None:
             # What the console shows: the moment a call is allowed, the person presses E-STOP.
-            if entry["outcome"] in ("allowed", "confirmed") and entry["tool"] in (
-                "publish_topic",
-                "publish_action",
-            ):
+            if entry["outcome"] in ("allowed", "confirmed") and entry["tool"] != "console":
                 allowed.set()
 
         audit.listen(on_audit)
