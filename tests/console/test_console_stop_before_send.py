@@ -53,3 +53,30 @@ async def test_a_goal_approved_before_stop_robot_is_never_sent(sim: SimulatedRob
     assert "stop_robot" in text_of(result), text_of(result)
     assert "before it was sent" in text_of(result), text_of(result)
     assert set(sim.world.goals) == goals_before
+
+
+async def test_a_goal_whose_cancel_came_first_is_never_sent(sim_ros1: SimulatedRobot) -> None:
+    """cancel_action in the gap before the goal's first frame: the goal never reaches the robot, and its call
+    says cancel_action cancelled it before it was sent.
+
+    ROS 1 only: there the gap is long enough to land in every time (the goal waits for the action server's
+    first status, published at 5 Hz); a ROS 2 goal's gap (its lane opening) is about as long as
+    cancel_action's own look-up of the action, so which comes first varies.
+    """
+    sim = sim_ros1
+    types = types_of(sim.dialect)
+    async with race_console(sim.url, sim.dialect, LINK, world=sim.world) as race:
+        goals_before = set(sim.world.goals)
+        race.allowed.clear()
+        call = {"action_name": FIB, "action_type": types["fibonacci"], "goal": {"order": 5}, "timeout": 10}
+        sending = asyncio.create_task(race.mcp.call_tool("publish_action", call))
+        async with asyncio.timeout(10):
+            await race.allowed.wait()
+        cancelled = await race.mcp.call_tool("cancel_action", {"action_name": FIB})
+        assert not cancelled.is_error, text_of(cancelled)
+        result = await asyncio.wait_for(sending, 15)
+        await asyncio.sleep(2 * LINK)  # a goal sent late would be accepted within a round trip
+        await race.mark()
+    assert result.is_error, text_of(result)
+    assert "cancelled by cancel_action before it was sent" in text_of(result), text_of(result)
+    assert set(sim.world.goals) == goals_before
