@@ -67,11 +67,6 @@ class SendGate:
         """Who asked for the latest stop ("stop_robot", or the console's E-STOP)."""
         return self._stopped_by
 
-    @property
-    def stops(self) -> int:
-        """How many stops this robot has had (for tests and the console)."""
-        return self._stops
-
     def refusal(self, ticket: Ticket) -> str | None:
         """Why *ticket*'s act may not be sent now, or ``None``."""
         held = self._guard.held()
