@@ -152,23 +152,45 @@ async def test_the_camera_frame_appears(sim_ros2: SimulatedRobot) -> None:
         assert source.startswith("data:image/jpeg;base64,")
 
 
-async def test_the_page_without_the_secret_shows_nothing_and_can_change_nothing(
-    sim_ros2: SimulatedRobot,
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_the_page_without_the_secret_says_so_and_its_estop_stops_the_robot(
+    make_sim: Any, dialect: str
 ) -> None:
-    """Opened without the URL's secret, the page says how to open it, and its E-STOP changes nothing."""
+    """Opened without the URL's secret (a bookmark, a second tab), the page says it can only stop, shows no
+    robot data, Approve or Release; its E-STOP ends a 10 Hz stream and says what it stopped."""
     from console_harness import CHROMIUM_ARGS
     from playwright.async_api import async_playwright
 
-    async with served_console(sim_ros2.url) as console, async_playwright() as playwright:
+    sim = await make_sim(dialect=dialect)
+    twist = TWIST if dialect == "ros2" else "geometry_msgs/Twist"
+    call = {"topic": CMD_VEL, "message_type": twist, "message": {"linear": {"x": 0.5}}}
+    async with served_console(sim.url) as console, async_playwright() as playwright:
         browser = await playwright.chromium.launch(executable_path=need_chromium(), args=CHROMIUM_ARGS)
         try:
             page = await browser.new_page()
             await page.goto(console.running.base_url)
-            await expect(page.locator("#problem")).to_contain_text("session secret", timeout=WAIT_MS)
+            await expect(page.locator("#no-secret")).to_be_visible(timeout=WAIT_MS)
+            await expect(page.locator("#no-secret")).to_contain_text("E-STOP works")
+            await expect(page.locator("#audit-section")).to_be_hidden()
+            await expect(page.locator("#pending-section")).to_be_hidden()
+            await expect(page.get_by_role("button", name="Release")).to_be_hidden()
+            streaming = asyncio.create_task(
+                console.call("publish_topic", {**call, "rate_hz": 10, "duration": 30})
+            )
+            await sim.world.wait_for(lambda world: len(world.published.get(CMD_VEL, [])) >= 3, timeout=10)
             await page.get_by_role("button", name="E-STOP").click()
-            await expect(page.locator("#problem")).to_contain_text("session secret", timeout=WAIT_MS)
-            assert console.operator.latched is None
-            await expect(page.locator("#audit li")).to_have_count(0)
+            result = await asyncio.wait_for(streaming, 10)
+            assert text_of(result).startswith("E-STOP on the operator console ended the stream"), text_of(
+                result
+            )
+            shown = page.locator("#stopped")
+            await expect(shown).to_contain_text("E-STOP latched", timeout=WAIT_MS)
+            await expect(shown).to_contain_text(f"ended streams on {CMD_VEL}")
+            assert console.operator.latched == "console"
+            await expect(page.get_by_role("button", name="Release")).to_be_hidden()
+            refused = await console.call("publish_topic", call)
+            assert refused.is_error
+            assert "E-STOP" in text_of(refused)
         finally:
             await browser.close()
 
@@ -222,3 +244,13 @@ async def test_a_lost_robot_marks_the_last_pose_map_and_frame_stale(sim_ros2: Si
         await sim.start()
         await expect(page.locator("#map-stale")).to_be_hidden(timeout=WAIT_MS)
         await expect(page.locator("#pose")).not_to_contain_text("stale", timeout=WAIT_MS)
+
+
+async def test_a_failed_estop_says_so_on_the_page(sim_ros2: SimulatedRobot) -> None:
+    """When the console cannot be reached, the press says E-STOP FAILED rather than nothing."""
+    async with served_console(sim_ros2.url) as console, browser_page(console) as page:
+        # The console's own server goes away under the open page (as when the MCP server was stopped).
+        await page.route("**/api/estop", lambda route: route.abort())
+        await page.get_by_role("button", name="E-STOP").click()
+        await expect(page.locator("#stopped")).to_contain_text("E-STOP FAILED", timeout=WAIT_MS)
+        assert console.operator.latched is None

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
@@ -118,7 +119,16 @@ async def first_pending(console: Console) -> str:
     return console.operator.pending[0].id
 
 
-@pytest.mark.parametrize("headers", [{}, {SECRET_HEADER: "guess"}, {"Cookie": "secret=anything"}])
+@pytest.mark.parametrize(
+    "headers",
+    [
+        {},
+        {SECRET_HEADER: "guess"},
+        {"Cookie": "secret=anything"},
+        {"Origin": "http://evil.example"},
+        {"Origin": "null"},
+    ],
+)
 async def test_a_request_without_the_secret_changes_nothing(
     sim_ros2: SimulatedRobot, headers: dict[str, str]
 ) -> None:
@@ -140,6 +150,52 @@ async def test_a_request_without_the_secret_changes_nothing(
         denied = await web.post(f"/api/confirmations/{pending_id}/deny", headers=secret(console))
         assert denied.status_code == 200
         assert (await calling).is_error
+    assert CMD_VEL not in sim_ros2.world.published
+
+
+def own_origin(console: Console) -> dict[str, str]:
+    """What a browser sends with a POST from a page of the console's own origin (a tab without the secret)."""
+    return {"Origin": console.running.base_url.rstrip("/")}
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_estop_from_a_page_of_the_consoles_own_origin_stops_without_the_secret(
+    make_sim: Any, dialect: str
+) -> None:
+    """A tab opened without the secret still has a working E-STOP: it ends a 10 Hz stream, latches, and
+    answers with what it stopped; on the robot no command arrives after that answer."""
+    sim = await make_sim(dialect=dialect)
+    twist = "geometry_msgs/msg/Twist" if dialect == "ros2" else "geometry_msgs/Twist"
+    call = {**TWIST_CALL, "message_type": twist, "rate_hz": 10, "duration": 30}
+    async with served_console(sim.url) as console, http(console) as web:
+        streaming = asyncio.create_task(console.call("publish_topic", call))
+        await sim.world.wait_for(lambda world: len(world.published.get(CMD_VEL, ())) >= 2, 10)
+        answer = await web.post("/api/estop", headers=own_origin(console))
+        answered = time.monotonic()
+        assert answer.status_code == 200, answer.text
+        assert answer.json()["robots"][0]["streams_stopped"] == [CMD_VEL]
+        assert console.operator.latched == "console"
+        result = await asyncio.wait_for(streaming, 10)
+        assert text_of(result).startswith("E-STOP on the operator console ended the stream"), text_of(result)
+    late = [m for m in sim.world.published[CMD_VEL] if m.received_at > answered and m.msg["linear"]["x"]]
+    assert late == []
+
+
+async def test_a_page_of_the_consoles_own_origin_cannot_release_or_approve_without_the_secret(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """Only stopping is open to such a tab: Release, Approve, the event stream need the secret still."""
+    policy = parse_policy({"confirm": "motion", "confirm_timeout": 30})
+    async with served_console(sim_ros2.url, policy) as console, http(console) as web:
+        calling = asyncio.create_task(console.call("publish_topic", TWIST_CALL))
+        pending_id = await first_pending(console)
+        approve = await web.post(f"/api/confirmations/{pending_id}/approve", headers=own_origin(console))
+        assert approve.status_code == 403
+        assert (await web.get("/api/events", headers=own_origin(console))).status_code == 403
+        assert (await web.post("/api/estop", headers=own_origin(console))).status_code == 200
+        assert (await calling).is_error
+        assert (await web.post("/api/release", headers=own_origin(console))).status_code == 403
+        assert console.operator.latched == "console"
     assert CMD_VEL not in sim_ros2.world.published
 
 

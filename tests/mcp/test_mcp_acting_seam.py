@@ -47,6 +47,12 @@ class RecordingGuard:
     def record(self, act: Act, outcome: str) -> None:
         self.records.append((act, outcome))
 
+    def held(self) -> str | None:
+        return None
+
+    def send_interval(self, act: Act) -> float:
+        return 0.0
+
 
 async def test_a_refused_publish_is_an_error_naming_the_rule_and_nothing_is_sent(sim: SimulatedRobot) -> None:
     """The refusal's text reaches the model, the guard records it, and the robot gets no message."""

@@ -107,6 +107,12 @@ class RefusingGuard:
     def record(self, act: Act, outcome: str) -> None:
         return None
 
+    def held(self) -> str | None:
+        return None
+
+    def send_interval(self, act: Act) -> float:
+        return 0.0
+
 
 async def test_a_set_goes_through_the_safety_seam(sim_ros1: SimulatedRobot) -> None:
     """The guard sees a parameter act with the value; its refusal is the answer and nothing is set."""

@@ -123,6 +123,12 @@ class ClampingGuard:
     def record(self, act: Act, outcome: str) -> None:
         self.records.append(outcome)
 
+    def held(self) -> str | None:
+        return None
+
+    def send_interval(self, act: Act) -> float:
+        return 0.0
+
 
 async def test_the_stream_is_approved_once_and_the_guard_may_shorten_it(sim: SimulatedRobot) -> None:
     """The guard sees one act with the rate and duration asked for; its shorter duration is what runs."""

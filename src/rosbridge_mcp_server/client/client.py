@@ -392,6 +392,7 @@ class RosbridgeClient:
         *,
         timeout: float | None = None,
         isolated: bool | None = None,
+        check: Callable[[], None] | None = None,
     ) -> Any:
         """Call a ROS service and return its response fields (``values``).
 
@@ -400,7 +401,8 @@ class RosbridgeClient:
         connection in order, when another call is in flight on a ROS 1 connection (see
         :attr:`RosInfo.one_call_per_connection`), or when *isolated* is true. Raises :class:`ServiceError`
         with the bridge's text, :class:`RequestTimeoutError`, :class:`ConnectionLostError`,
-        :class:`NotConnectedError`.
+        :class:`NotConnectedError`. *check* (the send gate) is called right before the call's frame is
+        written, after a lane is opened for it; what it raises ends the call unsent.
         """
         t = self.request_timeout if timeout is None else timeout
         session = self._session
@@ -412,8 +414,16 @@ class RosbridgeClient:
             and (session.lanes_by_default or (session.spread_calls and session.connection.pending))
         ):
             return await call_on_lane(
-                self._lanes, self._ids, service, args, t, send_timeout=session.send_service_timeout
+                self._lanes,
+                self._ids,
+                service,
+                args,
+                t,
+                send_timeout=session.send_service_timeout,
+                check=check,
             )
+        if check is not None:
+            check()
         return await call_on(
             session.connection,
             self._ids,
@@ -500,6 +510,12 @@ class RosbridgeClient:
         """
         session = self.require_session()
         return await session.connection.ping(self.request_timeout if timeout is None else timeout)
+
+    async def handled(self, timeout: float) -> bool:
+        """Whether the bridge has handled everything sent so far on the main connection (one call's round
+        trip, within *timeout*); ``False`` when there is no connection or no answer in time."""
+        session = self.session
+        return session is not None and await session.handled(timeout)
 
     # --- action goals: ids, lanes and the cancel op (what a goal means is robot/goals' job) ---------
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Callable
 from typing import Any
 
 from rosbridge_mcp_server.client.connection import Connection
@@ -43,15 +44,27 @@ async def call_on(
 
 
 async def call_on_lane(
-    lanes: LanePool, ids: protocol.IdMinter, service: str, args: Args, timeout: float, *, send_timeout: bool
+    lanes: LanePool,
+    ids: protocol.IdMinter,
+    service: str,
+    args: Args,
+    timeout: float,
+    *,
+    send_timeout: bool,
+    check: Callable[[], None] | None = None,
 ) -> Any:
-    """Call *service* on a lane of its own (a bridge that handles one connection in order, or on request)."""
+    """Call *service* on a lane of its own (a bridge that handles one connection in order, or on request);
+    *check* is called once the lane is there, right before the call is written."""
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     what = f"service {service}"
     lane = await lanes.acquire(deadline, what, timeout)
     reusable = False
     try:
+        if check is not None:
+            reusable = True  # nothing was sent on it
+            check()
+            reusable = False
         remaining = max(deadline - loop.time(), 0.001)
         try:
             values = await call_on(

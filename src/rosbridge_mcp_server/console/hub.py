@@ -259,6 +259,9 @@ class ConsoleHub:
     async def estop(self) -> list[dict[str, Any]]:
         """E-STOP: latch first (nothing new is approved), then stop_robot on every robot; audited."""
         self.operator.latch("console")
+        # Before anything awaits: every robot's calls that began before the press send nothing more.
+        for robot in self.robots:
+            robot.session.gate.stop(ESTOP_BY)
         reports = []
         for robot in self.robots:
             report = await emergency_stop(robot.session, by=ESTOP_BY)

@@ -1,6 +1,7 @@
 """The console's web side: a static page, one event stream, and the four things a person may do.
 
-Routes (everything under ``/api`` needs the session secret in the ``X-Console-Secret`` header):
+Routes (everything under ``/api`` needs the session secret in the ``X-Console-Secret`` header, but E-STOP,
+which any page of the console's own origin may press):
 
 * ``GET /`` (and its script and style): the page; it holds no robot data, only code;
 * ``GET /api/events``: server-sent events, ``state`` (the hub's snapshot), ``frame`` (the camera), ``pose``
@@ -19,6 +20,12 @@ refused (a DNS-rebinding page would otherwise reach a loopback console).
 A confirmation sent to the person by link (URL-mode elicitation) carries a token of its own in the URL's
 fragment; the page sends it in ``X-Confirmation-Token``, which reads, approves or denies that one
 confirmation while it waits, and nothing else (no event stream, no E-STOP, no other confirmation).
+
+A stop never fails silently: a tab of the console opened without the secret (a bookmark, a second tab) still
+shows a red E-STOP, so ``POST /api/estop`` is also taken without the secret when the browser says the request
+comes from a page of the console's own origin (its ``Origin`` header is the console's own address). A page of
+another site cannot send that header, and stopping only takes motion away; Release, Approve and everything
+that reads the robot still need the secret.
 """
 
 from __future__ import annotations
@@ -28,6 +35,7 @@ import json
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
+from urllib.parse import urlsplit
 
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -68,9 +76,16 @@ Handler = Callable[[Request], Awaitable[Response]]
 def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starlette:
     """The console as an ASGI app, for ``hub``, guarded by ``secret``; ``allowed_hosts`` are Host values."""
 
-    def guarded(handler: Handler) -> Handler:
+    def guarded(handler: Handler, *, own_origin_may: bool = False) -> Handler:
         async def check(request: Request) -> Response:
             refusal = _refusal(request, secret, allowed_hosts, need_secret=True)
+            if refusal is not None and own_origin_may and _from_own_origin(request, allowed_hosts):
+                _log.warning(
+                    "console: %s %s without the session secret, from a page of the console's own origin",
+                    request.method,
+                    request.url.path,
+                )
+                refusal = None
             return refusal if refusal is not None else await handler(request)
 
         return check
@@ -186,7 +201,7 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
         Route("/api/confirmations/{id}", secret_or_token(confirmation), methods=["GET"]),
         Route("/api/confirmations/{id}/approve", secret_or_token(approve), methods=["POST"]),
         Route("/api/confirmations/{id}/deny", secret_or_token(deny), methods=["POST"]),
-        Route("/api/estop", guarded(estop), methods=["POST"]),
+        Route("/api/estop", guarded(estop, own_origin_may=True), methods=["POST"]),
         Route("/api/release", guarded(release), methods=["POST"]),
         Route("/api/camera", guarded(camera), methods=["POST"]),
         Route("/api/map", guarded(map_panel), methods=["POST"]),
@@ -205,6 +220,15 @@ def _refusal(request: Request, secret: str, allowed_hosts: set[str], *, need_sec
         _log.warning("console: refused %s %s without the session secret", request.method, request.url.path)
         return _json({"error": f"this request needs the console's session secret in {SECRET_HEADER}"}, 403)
     return None
+
+
+def _from_own_origin(request: Request, allowed_hosts: set[str]) -> bool:
+    """Whether the browser says the request comes from a page of the console's own origin.
+
+    Browsers send ``Origin`` with every POST and a page cannot set it; ``Host`` was already checked.
+    """
+    origin = urlsplit(request.headers.get("origin", ""))
+    return origin.scheme in ("http", "https") and origin.netloc.lower() in allowed_hosts
 
 
 def _answered(hub: ConsoleHub, pending_id: str, *, approve: bool) -> Response:

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.client import Dialect
-from rosbridge_mcp_server.errors import NotSentError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.effects import parameter_write, service_effects, topic_effects
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
@@ -73,8 +73,11 @@ async def publish_once(
 ) -> Published:
     """Check *message* against *message_type* and the topic's type in the graph, then publish it once.
 
-    Before the publish, a ping proves the bridge reads the connection now (see :func:`_bridge_is_reading`).
+    Before the publish, a ping proves the bridge reads the connection now (see :func:`_bridge_is_reading`);
+    then the send gate (``robot/gate.py``) says whether it may go now: no stop since the call began, no
+    latched E-STOP, and a free slot within the topic's rate.
     """
+    ticket = ctx.gate.ticket()  # a stop from now on voids this call
     name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
     act = await approved(
         ctx,
@@ -91,6 +94,9 @@ async def publish_once(
 
     async def send() -> None:
         await _bridge_is_reading(ctx)
+        # Advertised first, so that nothing but the message itself is sent after the gate said yes.
+        await ctx.client.advertise(act.name, act.type)
+        await ctx.gate.pace(ticket, act)
         await ctx.client.publish(act.name, act.type, act.payload)
         ctx.graph.remember_publishing(act.name, act.type)
         # stop_robot zeroes every velocity topic this session has driven.
@@ -161,6 +167,9 @@ class Streamed:
     adjusted: str | None = None
     #: Who stopped it early, when ``stopped``.
     stopped_by: str = "stop_robot"
+    #: Ended before ``planned``: the topic's rate cap, shared with every other sender on it, left no slot
+    #: within the stream's duration.
+    rate_limited: bool = False
 
 
 async def publish_stream(
@@ -176,10 +185,14 @@ async def publish_stream(
 ) -> Streamed:
     """Publish *message* at *rate_hz* for *duration* seconds, on an absolute schedule (no drift).
 
-    The stream is approved once, at the start, with its rate and duration (the guard may clamp both). A
-    velocity stream (``Twist``, ``TwistStamped``) always ends with one all-zero message, also when it is
-    cancelled; cancellation stops it at once otherwise and is re-raised after that zero message.
+    The stream is approved once, at the start, with its rate and duration (the guard may clamp both); each
+    message then passes the send gate (``robot/gate.py``): a stop or a latched E-STOP ends the stream (its
+    first message refused: :class:`PolicyRefusal`), and the topic's rate cap may hold a message back (a slot
+    after the stream's planned end ends it early). A velocity stream (``Twist``, ``TwistStamped``) always
+    ends with one all-zero message, also when it is cancelled; cancellation stops it at once otherwise and is
+    re-raised after that zero message.
     """
+    ticket = ctx.gate.ticket()  # a stop from now on voids this stream
     name, bridge_type, body = await _checked_message(ctx, topic, message_type, message)
     act = await approved(
         ctx,
@@ -205,14 +218,28 @@ async def publish_stream(
     loop = asyncio.get_running_loop()
     stopped = False
     stopped_by = "stop_robot"
+    rate_limited = False
     try:
-        await _bridge_is_reading(ctx)
-        start = loop.time()
-        # Registered while it runs, so that stop_robot can end it (pause() returns early when asked).
+        # Registered before anything of it is sent (the ping included), so that stop_robot and the E-STOP
+        # see it and end it: pause() returns early when asked.
         with ctx.activity.stream(act.name, act.type) as running:
+            if not await running.unless_stopped(_bridge_is_reading(ctx)):
+                await ctx.client.advertise(act.name, act.type)
+            start = loop.time()
+            # A slot (the topic's rate, shared with every other sender) later than this ends the stream.
+            latest = start + length + 1 / rate
             for index in range(planned):
                 if await running.pause(start + index / rate - loop.time()):
                     stopped, stopped_by = True, running.stopped_by
+                    break
+                try:
+                    if not await ctx.gate.pace(ticket, act, latest=latest):
+                        rate_limited = True
+                        break
+                except PolicyRefusal:
+                    if sent == 0:
+                        raise
+                    stopped, stopped_by = True, ctx.gate.stopped_by
                     break
                 await ctx.client.publish(act.name, act.type, act.payload)
                 if sent == 0:
@@ -224,6 +251,8 @@ async def publish_stream(
     except asyncio.CancelledError:
         cancelled = True
         raise
+    except PolicyRefusal:
+        raise  # the gate refused its first message and audited it: nothing of the stream was sent
     except BaseException as exc:
         ctx.guard.record(act, f"failed after {sent} of {planned}: {type(exc).__name__}: {exc}")
         raise
@@ -244,10 +273,11 @@ async def publish_stream(
         planned,
         sent,
         cancelled,
-        zero,
+        zero if sent > 0 else None,  # sent only after a message that moved
         stopped,
         adjusted,
         stopped_by,
+        rate_limited,
     )
 
 
@@ -306,7 +336,10 @@ class ServiceReply:
 async def call_service(
     ctx: Acting, *, tool: str, service: str, service_type: str, request: dict[str, Any], timeout: float
 ) -> ServiceReply:
-    """Check the request when rosapi can describe the type, call the service, return its response."""
+    """Check the request when rosapi can describe the type, call the service, return its response.
+
+    The send gate is asked right before the call's frame is written (after a lane is opened for it)."""
+    ticket = ctx.gate.ticket()  # a stop from now on voids this call
     name = absolute_name(service, "service")
     dialect = await ctx.graph.dialect()
     check_name_for_ros(name, "service", dialect.version)
@@ -341,7 +374,11 @@ async def call_service(
     )
     try:
         response = await carry_out(
-            ctx, act, lambda: ctx.client.call_service(act.name, act.payload, timeout=timeout)
+            ctx,
+            act,
+            lambda: ctx.client.call_service(
+                act.name, act.payload, timeout=timeout, check=lambda: ctx.gate.check(ticket, act)
+            ),
         )
     except ServiceError as exc:
         # rosapi does not list hidden services (ROS 2 `_action/...`), so an unlisted name is still tried;
@@ -372,8 +409,11 @@ async def send_goal(
     """Check the goal against the action server's type, run it until it ends, and return how it ended.
 
     *on_feedback* gets the running goal (``goal_id``, ``feedback_count``) and each feedback, so that a caller
-    can name the goal (to cancel it) while it runs.
+    can name the goal (to cancel it) while it runs. The goal is tracked (seen by stop_robot and the E-STOP)
+    from before anything of it is sent; right before the goal itself is sent, the send gate is asked, and a
+    goal whose cancel or timeout came first is not sent at all.
     """
+    ticket = ctx.gate.ticket()  # a stop from now on voids this goal
     name = absolute_name(action, "action")
     dialect = await ctx.graph.dialect()
     check_name_for_ros(name, "action", dialect.version)
@@ -394,7 +434,13 @@ async def send_goal(
         ctx,
         act,
         lambda: run_goal(
-            ctx.goals, act.name, action_type, act.payload, timeout=timeout, on_feedback=on_feedback
+            ctx.goals,
+            act.name,
+            action_type,
+            act.payload,
+            timeout=timeout,
+            on_feedback=on_feedback,
+            before_send=lambda: ctx.gate.check(ticket, act),
         ),
     )
     return outcome
@@ -438,6 +484,7 @@ async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) ->
 
 async def set_parameter(ctx: Acting, *, tool: str, name: str, value: Any) -> SetOutcome:
     """Check the parameter (name form, and on ROS 2 that its node has it), then set it and read it back."""
+    ticket = ctx.gate.ticket()  # a stop from now on voids this call
     planned = await plan_set(ctx.graph, ctx.client, name, value)
     full = planned.name.full
     dialect = await ctx.graph.dialect()
@@ -454,6 +501,10 @@ async def set_parameter(ctx: Acting, *, tool: str, name: str, value: Any) -> Set
         ),
     )
     outcome: SetOutcome = await carry_out(
-        ctx, act, lambda: apply_set(ctx.graph, ctx.client, planned, act.payload)
+        ctx,
+        act,
+        lambda: apply_set(
+            ctx.graph, ctx.client, planned, act.payload, before_write=lambda: ctx.gate.check(ticket, act)
+        ),
     )
     return outcome

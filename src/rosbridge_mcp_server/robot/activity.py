@@ -10,7 +10,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from collections.abc import Iterator
+from collections.abc import Awaitable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,6 +46,28 @@ class Stream:
     ended: asyncio.Event = field(default_factory=asyncio.Event)
     #: Who asked it to stop, for its answer ("stop_robot", or "E-STOP on the operator console").
     stopped_by: str = "stop_robot"
+
+    async def unless_stopped(self, step: Awaitable[Any]) -> bool:
+        """Run *step* unless stop_robot asks this stream to stop first (then *step* is cancelled); ``True``
+        when it was asked."""
+        if self.stop_requested.is_set():
+            if asyncio.iscoroutine(step):
+                step.close()
+            return True
+        work = asyncio.ensure_future(step)
+        asked = asyncio.ensure_future(self.stop_requested.wait())
+        try:
+            await asyncio.wait({work, asked}, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            asked.cancel()
+            if not work.done():
+                work.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await work
+        if work.cancelled():
+            return True
+        work.result()  # what the step raised, if anything
+        return False
 
     async def pause(self, seconds: float) -> bool:
         """Wait up to ``seconds``; ``True`` (at once) when stop_robot asked this stream to stop."""

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import json
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -257,16 +257,28 @@ async def plan_set(graph: RosGraph, client: RosbridgeClient, name: str, value: A
     return PlannedSet(parsed, before, _like(before, value))
 
 
-async def apply_set(graph: RosGraph, client: RosbridgeClient, planned: PlannedSet, value: Any) -> SetOutcome:
-    """Send the set, then read the value back; ``applied`` says whether the robot took it."""
+async def apply_set(
+    graph: RosGraph,
+    client: RosbridgeClient,
+    planned: PlannedSet,
+    value: Any,
+    *,
+    before_write: Callable[[], None] | None = None,
+) -> SetOutcome:
+    """Send the set, then read the value back; ``applied`` says whether the robot took it.
+
+    *before_write* (the send gate) is called right before the write; what it raises ends it unsent.
+    """
     info = await graph.ros_info()
     parsed = planned.name
     if info.version == 1:
+        if before_write is not None:
+            before_write()
         values = await graph.rosapi("set_param", {"name": parsed.full, "value": json.dumps(value)})
         given = values.get("reason")
         reason = given if isinstance(given, str) else ""
     else:
-        reason = await _ros2_set(client, parsed, value, planned.before)
+        reason = await _ros2_set(client, parsed, value, planned.before, before_write)
         if reason and planned.before is not None:
             reason += f" ({parsed.full} holds {_kind_of(planned.before)}; send one of those)"
     after = await _read(graph, client, parsed, info.version)
@@ -432,12 +444,18 @@ def _to_parameter_value(value: Any, before: Any) -> dict[str, Any]:
     return {"type": kind, _VALUE_FIELDS[kind]: value}
 
 
-async def _ros2_set(client: RosbridgeClient, parsed: ParameterName, value: Any, before: Any) -> str:
+async def _ros2_set(
+    client: RosbridgeClient,
+    parsed: ParameterName,
+    value: Any,
+    before: Any,
+    before_write: Callable[[], None] | None = None,
+) -> str:
     """Set through the node's ``set_parameters``; the node's reason when it refused, "" when it took it."""
     assert parsed.node is not None
     parameter = {"name": parsed.local, "value": _to_parameter_value(value, before)}
     reply = await client.call_service(
-        f"{parsed.node.rstrip('/')}/set_parameters", {"parameters": [parameter]}
+        f"{parsed.node.rstrip('/')}/set_parameters", {"parameters": [parameter]}, check=before_write
     )
     results = reply.get("results") if isinstance(reply, dict) else None
     first = results[0] if isinstance(results, list) and results else None

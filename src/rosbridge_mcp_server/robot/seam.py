@@ -3,7 +3,9 @@
 ``robot/acting.py`` builds an :class:`Act` for every checked send and asks the :class:`Guard` before anything
 is sent: ``await guard.approve(act, ask_person)``. The guard may return a clamped copy of the act (what is
 then sent) or raise :class:`~rosbridge_mcp_server.errors.PolicyRefusal`; either way it is told the outcome
-(``guard.record``), once per act. ``safety/`` implements the guard; nothing here knows a policy or MCP.
+(``guard.record``), once per act. Then every frame of it passes the robot's send gate
+(:mod:`rosbridge_mcp_server.robot.gate`), which asks :meth:`Guard.held` again at that moment. ``safety/``
+implements the guard; nothing here knows a policy or MCP.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from rosbridge_mcp_server.robot.effects import Effect
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.gate import SendGate
     from rosbridge_mcp_server.robot.goals import GoalRegistry
     from rosbridge_mcp_server.robot.graph import RosGraph
 
@@ -77,6 +80,17 @@ class Guard(Protocol):
         """One audit line per acting call: ``sent``, ``refused: ...`` or ``failed: ...``."""
         ...
 
+    def held(self) -> str | None:
+        """Why nothing may be sent right now (the operator's latched E-STOP), or ``None``.
+
+        Asked by the send gate (:mod:`rosbridge_mcp_server.robot.gate`) at every send, after approval too.
+        """
+        ...
+
+    def send_interval(self, act: Act) -> float:
+        """The shortest time (s) between two messages on *act*'s topic to the robot; 0 for no bound."""
+        ...
+
 
 class _AllowAll:
     """Approves every act unchanged and records nothing."""
@@ -86,6 +100,12 @@ class _AllowAll:
 
     def record(self, act: Act, outcome: str) -> None:
         return None
+
+    def held(self) -> str | None:
+        return None
+
+    def send_interval(self, act: Act) -> float:
+        return 0.0
 
     def __repr__(self) -> str:
         return "ALLOW_ALL"
@@ -123,6 +143,8 @@ class Acting(Protocol):
     def activity(self) -> SessionActivity: ...
     @property
     def goals(self) -> GoalRegistry: ...
+    @property
+    def gate(self) -> SendGate: ...
 
 
 async def approved(ctx: Acting, act: Act) -> Act:
@@ -138,6 +160,8 @@ async def carry_out(ctx: Acting, act: Act, send: Callable[[], Awaitable[Any]]) -
     """Run *send* for an approved *act* and tell the guard how it went."""
     try:
         result = await send()
+    except PolicyRefusal:
+        raise  # the send gate refused it at the moment of sending, and audited that
     except BaseException as exc:
         ctx.guard.record(act, f"failed: {type(exc).__name__}: {exc}")
         raise

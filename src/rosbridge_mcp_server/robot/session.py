@@ -10,6 +10,8 @@ client's :class:`~rosbridge_mcp_server.client.session.Session`, which is one con
 * ``activity``: what this server set going (velocity topics, streams), which ``stop_robot`` and the operator
   console's E-STOP stop;
 * ``guard``: the safety seam's guard every act asks first, and that records every outcome;
+* ``gate``: the send gate every frame of an act passes at the moment it is sent (the latch, stops since the
+  call began, the per-topic rate; see :mod:`~rosbridge_mcp_server.robot.gate`);
 * ``warm_up``: the background learning of service types after every (re)connect, when asked for
   (:meth:`learn_service_types`; only a server that offers ``list_services`` needs it);
 * ``logs``: the robot's log since the server connected, and the graph as first seen, when asked for
@@ -24,6 +26,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.robot.gate import SendGate
 from rosbridge_mcp_server.robot.goals import GoalRegistry
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.log_keeper import LogKeeper
@@ -45,6 +48,7 @@ class RobotSession:
         self.graph = RosGraph(client)
         self.goals = GoalRegistry(client)
         self.activity = SessionActivity()
+        self.gate = SendGate(guard)
         self.warm_up: ServiceTypeWarmUp | None = None
         self.logs: LogKeeper | None = None
 

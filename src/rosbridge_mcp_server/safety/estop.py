@@ -11,16 +11,18 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.goals import cancel_goals
+from rosbridge_mcp_server.robot.goals import CanceledBy, cancel_goals
 from rosbridge_mcp_server.robot.velocity import zero_command
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.session import RobotSession
 
-__all__ = ["STREAM_STOP_SECONDS", "StopReport", "emergency_stop"]
+__all__ = ["HANDLED_SECONDS", "STREAM_STOP_SECONDS", "StopReport", "emergency_stop"]
 
 #: How long the streams get to end after their cancel before the zero messages go out anyway.
 STREAM_STOP_SECONDS = 0.5
+#: How long the stop waits for the bridge to show it handled everything sent before (one call's round trip).
+HANDLED_SECONDS = 2.0
 
 
 @dataclass
@@ -49,8 +51,15 @@ async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> Stop
     running goal.
 
     ``by`` (who stops: ``stop_robot``, or the operator's E-STOP) is what each ended stream's answer names.
+
+    First, before anything awaits, the robot's send gate voids every call that began before this stop:
+    whatever was approved (or being approved) then sends nothing more, whether or not it is registered yet.
+    Last, one call on the main connection proves the bridge has handled everything sent before it (the
+    streams' last messages, the zero commands, the cancels): what the robot gets after this returns is
+    nothing of what ran before it.
     """
     client, activity = robot.client, robot.activity
+    robot.gate.stop(by)
     report = StopReport()
     # Streams first: a stream still running after the zero message would set the robot moving again.
     ended, running = await activity.stop_streams(STREAM_STOP_SECONDS, by=by)
@@ -75,12 +84,18 @@ async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> Stop
                 report.zeroed_topics.append(target.topic)
                 report.zero_messages.append((target.topic, target.type, message))
 
+    source: CanceledBy = "stop_robot" if by == "stop_robot" else "estop"
     for goal in robot.goals.running():
         try:
-            await cancel_goals(robot.goals, goal.action, goal.goal_id, by="stop_robot")
+            await cancel_goals(robot.goals, goal.action, goal.goal_id, by=source)
         except RosbridgeError as exc:
             report.failures.append(f"cancelling goal {goal.goal_id} on {goal.action} failed: {exc}")
         else:
             report.goals_cancelled.append(goal.goal_id)
             report.goals.append((goal.action, goal.goal_id))
+    if connected and not await client.handled(HANDLED_SECONDS):
+        report.failures.append(
+            f"the bridge did not confirm within {HANDLED_SECONDS:g} s that it handled what was sent before "
+            "the stop; check the robot"
+        )
     return report

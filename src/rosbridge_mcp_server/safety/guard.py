@@ -214,6 +214,20 @@ class PolicyGuard:
         if outcome != "sent" and not outcome.startswith("refused"):
             self.audit.write(act, outcome)
 
+    def held(self) -> str | None:
+        """The refusal of every send while the operator's E-STOP is latched (asked at each send), or None."""
+        if self.operator is not None and self.operator.latched:
+            return _LATCHED_TEXT
+        return None
+
+    def send_interval(self, act: Act) -> float:
+        """``1 / [publish] max_rate_hz`` for a message on a topic: the send gate keeps the messages on one
+        topic (every stream and single publish together) at least this far apart; 0 without a cap."""
+        rate = self.policy.publish.max_rate_hz
+        if act.kind != "topic" or rate is None or rate <= 0:
+            return 0.0
+        return 1.0 / rate
+
     def _refuse(self, act: Act, rule: str, text: str) -> NoReturn:
         self.audit.write(act, "refused", rule)
         raise PolicyRefusal(text)

@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.config import Config
     from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.gate import SendGate
     from rosbridge_mcp_server.robot.goals import GoalRegistry
     from rosbridge_mcp_server.robot.graph import RosGraph
     from rosbridge_mcp_server.robot.session import RobotSession
@@ -139,6 +140,11 @@ class ToolContext:
     @property
     def goals(self) -> GoalRegistry:
         return self.robot.goals
+
+    @property
+    def gate(self) -> SendGate:
+        """The send gate every frame of an act passes as it is sent (``robot/gate.py``)."""
+        return self.robot.gate
 
 
 class ToolFailure(Exception):

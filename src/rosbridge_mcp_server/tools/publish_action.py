@@ -27,6 +27,7 @@ _CANCELLED_BY = {
     "request_cancelled": "it was cancelled because the tool call was cancelled",
     "cancel_action": "it was cancelled by cancel_action",
     "stop_robot": "it was cancelled by stop_robot",
+    "estop": "it was cancelled by E-STOP on the operator console",
 }
 
 
@@ -48,7 +49,7 @@ class GoalAnswer(BaseModel):
     feedback_count: int = Field(description="How many feedback messages arrived")
     last_feedback: list[dict[str, Any]] = Field(description="The last few feedback messages, oldest first")
     canceled_by: str | None = Field(
-        description='"timeout", "request_cancelled", "cancel_action", "stop_robot" or null'
+        description='"timeout", "request_cancelled", "cancel_action", "stop_robot", "estop" or null'
     )
 
 

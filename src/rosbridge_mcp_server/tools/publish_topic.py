@@ -135,6 +135,13 @@ async def _stream(
             f"{streamed.stopped_by} ended the stream on {streamed.topic} after {streamed.sent} of "
             f"{streamed.planned} {streamed.type} messages ({compact_json(streamed.message)})"
         )
+    elif streamed.rate_limited:
+        text = (
+            f"Published {streamed.sent} of {streamed.planned} {streamed.type} messages on {streamed.topic} "
+            f"in {streamed.duration:g} s: {compact_json(streamed.message)}. The safety policy's [publish] "
+            "max_rate_hz bounds every stream and publish of this server on the topic together, and other "
+            "senders used the rest"
+        )
     if streamed.zero is not None:
         text += "; then one all-zero message to stop"
     if streamed.adjusted:

@@ -141,6 +141,7 @@ function renderState(state) {
   renderAudit(state.audit);
   const latched = state.estop.latched;
   $("latched").hidden = !latched;
+  if (!latched) $("stopped").hidden = true;
   $("release").hidden = !latched;
   document.body.classList.toggle("is-latched", latched);
   const camera = state.camera;
@@ -328,7 +329,48 @@ async function showLink() {
   $("link-deny").addEventListener("click", () => decide("deny"));
 }
 
-$("estop").addEventListener("click", () => post("/api/estop"));
+
+// E-STOP answers with what it stopped; that (or its failure) stays on the page until the next press, so a
+// press is never silent. It works without the secret too, from any tab of the console's own origin.
+async function estop() {
+  const shown = $("stopped");
+  shown.classList.remove("failed");
+  shown.textContent = "E-STOP: stopping…";
+  shown.hidden = false;
+  let answer = {};
+  let failure = "";
+  try {
+    const response = await fetch("/api/estop", {
+      method: "POST",
+      headers: { [SECRET_HEADER]: secret, "Content-Type": "application/json" },
+      body: "{}",
+    });
+    answer = await response.json().catch(() => ({}));
+    if (!response.ok) failure = answer.error || `HTTP ${response.status}`;
+  } catch (error) {
+    failure = `the console server did not answer (${error})`;
+  }
+  const time = new Date().toLocaleTimeString();
+  shown.hidden = false;
+  if (failure) {
+    shown.classList.add("failed");
+    shown.textContent = `E-STOP FAILED at ${time}: ${failure}. Stop the robot another way.`;
+    return;
+  }
+  const parts = [];
+  for (const robot of answer.robots || []) {
+    const did = [];
+    if (robot.streams_stopped.length) did.push(`ended streams on ${robot.streams_stopped.join(", ")}`);
+    if (robot.zeroed_topics.length) did.push(`zero sent on ${robot.zeroed_topics.join(", ")}`);
+    if (robot.goals_cancelled.length) did.push(`cancelled goals ${robot.goals_cancelled.join(", ")}`);
+    if (robot.failures.length) did.push(`FAILED: ${robot.failures.join("; ")}`);
+    parts.push(`${robot.robot}: ${did.length ? did.join("; ") : "nothing was running"}`);
+  }
+  shown.classList.toggle("failed", (answer.robots || []).some((robot) => robot.failures.length));
+  shown.textContent = `E-STOP latched at ${time}. ${parts.join(". ")}.`;
+}
+
+$("estop").addEventListener("click", estop);
 $("release").addEventListener("click", () => post("/api/release"));
 $("camera-form").addEventListener("submit", (event) => {
   event.preventDefault();
@@ -344,8 +386,14 @@ if (!secret && link) {
   // A tab opened by a link answers its one confirmation; the whole console needs the secret.
   $("main").hidden = true;
   $("link").textContent = "one confirmation";
-} else {
-  if (!secret) problem("Open the console with the URL the server printed on stderr (`rosbridge-mcp-server console-url` prints it too): it carries the session secret.");
+} else if (secret) {
   listen();
   loadImageTopics();
+} else {
+  // Nothing but E-STOP can work here: say so instead of showing a console that looks live.
+  $("no-secret").hidden = false;
+  $("link").textContent = "no secret: E-STOP only";
+  for (const id of ["robots-section", "pending-section", "running-section", "camera-section", "map-section", "audit-section"]) {
+    $(id).hidden = true;
+  }
 }

@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 import binascii
 import contextlib
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Final
 
 from rosbridge_mcp_server.errors import GoalTimeoutError, NotConnectedError, ServiceError
@@ -55,6 +56,7 @@ async def run_goal(
     timeout: float,
     on_feedback: GoalFeedback | None = None,
     goal_id: str | None = None,
+    before_send: Callable[[], None] | None = None,
 ) -> Goal:
     """Send a goal through the client of *goals* and wait (up to *timeout* seconds) for it to end; returns
     the goal, ended (*goals* tracks it while it runs).
@@ -64,6 +66,10 @@ async def run_goal(
     goal cannot be sent (no action server, refused by the bridge), and :class:`ConnectionLostError` when the
     connection drops: the goal keeps running on the robot, so it is cancelled as soon as a connection is back
     (``goal_cancel`` says whether that already happened).
+
+    The goal is tracked before anything of it is sent. Right before the goal itself goes out,
+    *before_send* (the send gate) is called, and a goal whose cancel or timeout came first is not sent:
+    :class:`NotSentError` says which (see :func:`~.record.require_sendable`).
     """
     client = goals.client
     dialect = await client.dialect()
@@ -73,9 +79,13 @@ async def run_goal(
     wire_type = dialect.action_type(action_type)
     with goals.tracking(Goal(gid, action, wire_type, dialect.version)) as record:
         if dialect.version == 1:
-            return await ros1.run(goals, record, goal, timeout=timeout, on_feedback=on_feedback)
+            return await ros1.run(
+                goals, record, goal, timeout=timeout, on_feedback=on_feedback, before_send=before_send
+            )
         try:
-            return await ros2.run(goals, record, goal, timeout=timeout, on_feedback=on_feedback)
+            return await ros2.run(
+                goals, record, goal, timeout=timeout, on_feedback=on_feedback, before_send=before_send
+            )
         except GoalTimeoutError as exc:
             if exc.status is None:
                 return record.end(0, None, timed_out=True, confirmed=False)

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
 from rosbridge_mcp_server.client import Dialect
+from rosbridge_mcp_server.errors import NotSentError
 
 __all__ = [
     "CANCEL_GRACE_SECONDS",
@@ -18,9 +19,10 @@ __all__ = [
     "CanceledBy",
     "Goal",
     "GoalFeedback",
+    "require_sendable",
 ]
 
-CanceledBy = Literal["timeout", "request_cancelled", "cancel_action", "stop_robot"]
+CanceledBy = Literal["timeout", "request_cancelled", "cancel_action", "stop_robot", "estop"]
 #: ``Goal.status`` of a goal that timed out and whose end the server never confirmed after the cancel.
 UNCONFIRMED_STATUS: Final = "timed out"
 #: After a timeout's cancel, how long we wait for the goal's final result.
@@ -106,3 +108,26 @@ class CancelReport:
 
 #: Told of each feedback message of a goal, after the goal counted it (``goal.feedback_count`` is its number).
 GoalFeedback = Callable[[Goal, dict[str, Any]], Awaitable[None] | None]
+
+
+def require_sendable(
+    record: Goal, remaining: float, timeout: float, before_send: Callable[[], None] | None
+) -> None:
+    """Right before *record*'s goal is sent: the send gate (*before_send*) first, then raise
+    :class:`NotSentError` if its cancel (cancel_action, stop_robot) came first or its timeout already ran out
+    (*remaining* seconds left of *timeout*). A goal refused here was never sent, so nothing needs cancelling.
+    """
+    if before_send is not None:
+        before_send()
+    if record.cancel_requested:
+        who = "E-STOP on the operator console" if record.cancel_source == "estop" else record.cancel_source
+        raise NotSentError(
+            f"Goal {record.goal_id} on {record.action} was cancelled by {who} before it was sent, so no goal "
+            "was sent."
+        )
+    if remaining <= 0:
+        raise NotSentError(
+            f"The timeout of {timeout:g} s for the goal on {record.action} ran out before the goal could be "
+            "sent (waiting for the action server), so no goal was sent. Check that the action server runs, "
+            "then try again with a longer timeout."
+        )

@@ -5,12 +5,18 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Final
 
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import ActionError, ConnectionLostError, RequestTimeoutError, RosbridgeError
 from rosbridge_mcp_server.robot.goals.actionlib import goal_id_of, publish_cancel
-from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
+from rosbridge_mcp_server.robot.goals.record import (
+    CANCEL_GRACE_SECONDS,
+    Goal,
+    GoalFeedback,
+    require_sendable,
+)
 from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
 
 if TYPE_CHECKING:
@@ -36,8 +42,11 @@ async def run(
     *,
     timeout: float,
     on_feedback: GoalFeedback | None,
+    before_send: Callable[[], None] | None = None,
 ) -> Goal:
-    """Send *goal* on ``<ns>/goal``, follow it until it ends (at *timeout*: cancel it); returns *record*."""
+    """Send *goal* on ``<ns>/goal``, follow it until it ends (at *timeout*: cancel it); returns *record*.
+
+    Right before the goal is published, :func:`require_sendable` (with *before_send*) may refuse it."""
     client = registry.client
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
@@ -73,6 +82,7 @@ async def run(
         queue.put_nowait(("status", first_status))
         seen = Progress()
         try:
+            require_sendable(record, deadline - loop.time(), timeout, before_send)
             await client.publish(
                 f"{ns}/goal",
                 types.goal,

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import functools
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.client import Dialect
@@ -20,7 +21,12 @@ from rosbridge_mcp_server.errors import (
     ConnectionLostError,
     GoalTimeoutError,
 )
-from rosbridge_mcp_server.robot.goals.record import CANCEL_GRACE_SECONDS, Goal, GoalFeedback
+from rosbridge_mcp_server.robot.goals.record import (
+    CANCEL_GRACE_SECONDS,
+    Goal,
+    GoalFeedback,
+    require_sendable,
+)
 from rosbridge_mcp_server.robot.goals.registry import CANCEL_CONFIRM_SECONDS, GoalRegistry
 
 if TYPE_CHECKING:
@@ -59,8 +65,10 @@ async def run(
     *,
     timeout: float,
     on_feedback: GoalFeedback | None,
+    before_send: Callable[[], None] | None = None,
 ) -> Goal:
-    """Run *record* (a goal the registry tracks); see :func:`send_action_goal`."""
+    """Run *record* (a goal the registry tracks); see :func:`send_action_goal`. Right before the goal is sent
+    on its lane, :func:`require_sendable` (with *before_send*) may refuse it."""
     loop = asyncio.get_running_loop()
     deadline = loop.time() + timeout
     action, gid, wire_type = record.action, record.goal_id, record.action_type
@@ -78,6 +86,7 @@ async def run(
     try:
         lane = await client.open_goal_lane(gid, what, max(deadline - loop.time(), 0.05))
         record.cancel_on_owner = functools.partial(lane.try_cancel, action)
+        require_sendable(record, deadline - loop.time(), timeout, before_send)
         await lane.send_goal(action, wire_type, goal)
         sent = True
         try:
