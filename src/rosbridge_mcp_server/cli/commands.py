@@ -65,6 +65,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             client_key=options.client_key,
             headers=options.header,
             tools=options.tools,
+            record_dir=options.record_dir,
         )
         http = (
             load_http_settings(

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.robot.goals import GoalRegistry
 from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.robot.recording import RunningRecordings
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 
 if TYPE_CHECKING:
@@ -42,6 +43,8 @@ class RobotSession:
         self.graph = RosGraph(client)
         self.goals = GoalRegistry(client)
         self.activity = SessionActivity()
+        #: The recordings ``record`` is making on this robot now (a later ``record`` call can stop them).
+        self.recordings = RunningRecordings()
         self.warm_up: ServiceTypeWarmUp | None = None
 
     def learn_service_types(self) -> ServiceTypeWarmUp:
