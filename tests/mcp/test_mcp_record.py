@@ -91,3 +91,21 @@ async def test_a_recording_opens_with_independent_readers_and_decodes(
     text = text_of(result)
     assert "t1.mcap" in text and "ended because its time was up" in text
     assert session.progress
+
+
+async def test_the_simulator_plays_a_recording_back_to_subscribe_topic(
+    session_dir: tuple[Session, Path], sim: SimulatedRobot
+) -> None:
+    """Recorded on one robot, played by another of the same dialect: subscribe_topic sees the recorded poses."""
+    session, directory = session_dir
+    sim.world.turtle.x = 7.25  # a pose the player's robot would never have of its own
+    await session.ok("record", {"topics": ["/turtle1/pose", "/scan"], "duration": 1.5, "name": "play"})
+    async with SimulatedRobot(dialect=sim.dialect, play=str(directory / "play.mcap")) as player:
+        assert player.player is not None
+        assert set(player.player.channels) == {"/turtle1/pose", "/scan"}
+        async with open_session(player.url) as replay:
+            result = await replay.ok("subscribe_topic", {"topic": "/turtle1/pose", "count": 3})
+            messages = result.structured_content["messages"]
+            assert [m["message"]["x"] for m in messages] == pytest.approx([7.25] * 3, abs=1e-3)
+            scan = await replay.ok("subscribe_topic", {"topic": "/scan", "count": 1})
+            assert len(scan.structured_content["messages"][0]["message"]["ranges"]) >= 1
