@@ -109,3 +109,114 @@ async def test_the_simulator_plays_a_recording_back_to_subscribe_topic(
             assert [m["message"]["x"] for m in messages] == pytest.approx([7.25] * 3, abs=1e-3)
             scan = await replay.ok("subscribe_topic", {"topic": "/scan", "count": 1})
             assert len(scan.structured_content["messages"][0]["message"]["ranges"]) >= 1
+
+
+async def test_counts_match_what_a_raw_socket_saw(session_dir: tuple[Session, Path], sim: SimulatedRobot) -> None:
+    """A raw socket publishes 60 numbered messages while record runs; another raw socket and the recording
+    both hold all 60, in order."""
+    session, directory = session_dir
+    msg_type = "std_msgs/msg/String" if sim.dialect == "ros2" else "std_msgs/String"
+    async with websockets.connect(sim.url) as publisher, websockets.connect(sim.url) as watcher:
+        await publisher.send(json.dumps({"op": "advertise", "topic": "/numbered", "type": msg_type}))
+        await watcher.send(json.dumps({"op": "subscribe", "topic": "/numbered", "type": msg_type}))
+        async with asyncio.timeout(5):
+            while not sim.bridge.has_subscribers("/numbered") or "/numbered" not in sim.graph.topic_types:
+                await asyncio.sleep(0.01)
+        recording = asyncio.create_task(
+            session.ok("record", {"topics": ["/numb*"], "duration": 4, "name": "numbered"})
+        )
+        async with asyncio.timeout(5):  # wait until record's own subscription is in place
+            while sum(1 for c in sim.bridge.connections.values() if "/numbered" in c.subscriptions) < 2:
+                await asyncio.sleep(0.01)
+        for index in range(60):
+            await publisher.send(json.dumps({"op": "publish", "topic": "/numbered", "msg": {"data": f"n{index}"}}))
+            await asyncio.sleep(0.005)
+        seen = []
+        async with asyncio.timeout(5):
+            while len(seen) < 60:
+                frame = json.loads(await watcher.recv())
+                if frame.get("op") == "publish":
+                    seen.append(frame["msg"]["data"])
+        result = await recording
+    assert seen == [f"n{i}" for i in range(60)]
+    counts, last, _ = _read_independently(directory / "numbered.mcap")
+    assert counts == {"/numbered": 60}
+    assert last["/numbered"].data == "n59"
+    assert result.structured_content["topics"][0]["lost"] == 0
+
+
+async def test_read_recording_answers_each_mode_within_the_budget(
+    session_dir: tuple[Session, Path], sim: SimulatedRobot
+) -> None:
+    session, directory = session_dir
+    await session.ok("record", {"topics": ["/turtle1/pose", "/odom", "/map", "/scan"], "duration": 2, "name": "r"})
+    listing = await session.ok("read_recording", {})
+    assert "r.mcap" in text_of(listing)
+    summary = await session.ok("read_recording", {"file": "r.mcap"})
+    topics = {t["topic"]: t for t in summary.structured_content["details"]["topics"]}
+    assert topics["/turtle1/pose"]["messages"] >= 20 and topics["/map"]["messages"] == 1
+    assert summary.structured_content["details"]["indexed"] is True
+    stats = await session.ok(
+        "read_recording", {"file": "r.mcap", "mode": "stats", "fields": ["/turtle1/pose x y"], "buckets": 4}
+    )
+    series = stats.structured_content["details"]["series"]
+    assert series[0]["min"] == pytest.approx(5.544, abs=0.01) and len(series[0]["windows"]) >= 3
+    around = await session.ok("read_recording", {"file": "r.mcap", "mode": "messages", "at": 1.0, "window": 0.2})
+    assert around.structured_content["details"]["total"] >= 5
+    plot = await session.ok("read_recording", {"file": "r.mcap", "mode": "plot", "fields": ["/odom pose.pose.position.x"]})
+    assert any(block.type == "image" for block in plot.content)
+    drawn = await session.ok("read_recording", {"file": "r.mcap", "mode": "map", "path_topic": "/odom"})
+    assert any(block.type == "image" for block in drawn.content)
+    for result in (listing, summary, stats, around, plot, drawn):
+        assert len(text_of(result)) <= 8000
+    wrong = await session.error("read_recording", {"file": "r.mcap", "mode": "stats", "fields": ["/odom nope"]})
+    assert "nope" in wrong
+
+
+async def test_bad_input_is_refused_with_the_reason(session_dir: tuple[Session, Path], tmp_path: Path) -> None:
+    session, directory = session_dir
+    text = await session.error("record", {"topics": ["/nothing/*"], "duration": 1})
+    assert "matches no topic" in text and "/turtle1/pose" in text
+    assert not directory.exists() or not list(directory.glob("*.mcap"))
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "notes.mcap").write_text("hello, not a recording")
+    text = await session.error("read_recording", {"file": "notes.mcap"})
+    assert "not an MCAP recording" in text
+    (tmp_path / "secret.mcap").write_bytes(b"\x89MCAP0\r\n")
+    for outside in ("../secret.mcap", str(tmp_path / "secret.mcap")):
+        text = await session.error("read_recording", {"file": outside})
+        assert "outside the recording directory" in text
+    (directory / "link.mcap").symlink_to(tmp_path / "secret.mcap")
+    text = await session.error("read_recording", {"file": "link.mcap"})
+    assert "outside the recording directory" in text
+    text = await session.error("record", {"topics": ["/chatter"], "duration": 1, "name": "../escape"})
+    assert "bare file name" in text
+    assert not (tmp_path / "escape.mcap").exists()
+
+
+async def test_the_size_cap_ends_the_recording_with_a_readable_file(session_dir: tuple[Session, Path]) -> None:
+    session, directory = session_dir
+    result = await session.ok(
+        "record", {"topics": ["/camera/image_raw"], "duration": 30, "max_megabytes": 0.5, "name": "capped"}
+    )
+    data = result.structured_content
+    assert data["ended"] == "size" and data["seconds"] < 20
+    assert "size cap" in text_of(result)
+    counts, _, _ = _read_independently(directory / "capped.mcap")
+    assert counts["/camera/image_raw"] == data["topics"][0]["messages"] >= 1
+    assert (directory / "capped.mcap").stat().st_size <= 0.5e6
+
+
+async def test_stop_ends_a_running_recording(session_dir: tuple[Session, Path]) -> None:
+    session, directory = session_dir
+    recording = asyncio.create_task(session.ok("record", {"topics": ["/chatter"], "duration": 60, "name": "long"}))
+    async with asyncio.timeout(10):
+        while True:
+            answer = await session.ok("record", {"stop": True})
+            if answer.structured_content["stopped"]:
+                break
+            await asyncio.sleep(0.05)
+    result = await asyncio.wait_for(recording, 10)
+    assert result.structured_content["ended"] == "stopped"
+    counts, _, _ = _read_independently(directory / "long.mcap")
+    assert counts.get("/chatter", 0) == result.structured_content["topics"][0]["messages"]

@@ -250,7 +250,7 @@ def decoded_messages(
         reader = make_reader(handle, decoder_factories=factories)
         decoders: dict[int, Any] = {}
         for schema, channel, message in reader.iter_messages(
-            topics=list(topics) if topics else None, start_time=start_ns, end_time=end_ns
+            topics=list(topics) if topics else None, starting_at=start_ns, ending_before=end_ns
         ):
             decoder = decoders.get(channel.id)
             if decoder is None:
