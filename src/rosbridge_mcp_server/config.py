@@ -92,7 +92,7 @@ class Config:
     headers: tuple[tuple[str, str], ...] = field(default=(), repr=False)
     #: Names of the tools a host sees; ``None`` is every tool.
     tools: tuple[str, ...] | None = None
-    #: Where ``record`` writes and ``read_recording`` reads (``--record-dir``); ``None``: the user data directory.
+    #: Where ``record`` writes and ``read_recording`` reads (``--record-dir``); ``None``: the default.
     record_dir: str | None = None
 
     def ssl_context(self) -> ssl.SSLContext | None:

@@ -89,10 +89,10 @@ class Player:
         self.passes = 0
         self.done = asyncio.Event()
 
-    # --- building ---------------------------------------------------------------------------------------------
+    # --- building -----------------------------------------------------------------------------------------
 
     def build(self) -> None:
-        """Read the file's channels and register the player's topics; :class:`PlayError` when it cannot play."""
+        """Read the file's channels and register the player's topics; :class:`PlayError` if it cannot play."""
         try:
             with self.path.open("rb") as handle:
                 if handle.read(len(_MAGIC)) != _MAGIC:
@@ -108,9 +108,11 @@ class Player:
                 continue
             existing = self.kit.graph.topic_types.get(topic)
             if existing is not None and existing != msg_type:
-                log.warning("not played: %s is %s in the world, %s in the recording", topic, existing, msg_type)
+                log.warning(
+                    "not played: %s is %s in the world, %s in the recording", topic, existing, msg_type
+                )
                 continue
-            # A world node publishing the topic stops (its kit no longer knows the topic): the recording has it.
+            # A world node publishing the topic stops (its kit forgets the topic): the recording has it.
             self.kit.types.pop(topic, None)
             for node in self.kit.graph.publishers_of(topic):
                 self.kit.graph.remove_publisher(node, topic)
@@ -122,14 +124,16 @@ class Player:
         if not self.channels:
             raise PlayError(f"{self.path} has no topic this simulator can play (types unknown to it)")
         log.info(
-            "playing %s: %s", self.path.name, ", ".join(f"{c.topic} ({c.messages})" for c in self.channels.values())
+            "playing %s: %s",
+            self.path.name,
+            ", ".join(f"{c.topic} ({c.messages})" for c in self.channels.values()),
         )
         self.kit.loops.append(self._play)
 
     def _channels(self) -> tuple[dict[str, int], dict[str, str]]:
         """Messages and schema name per topic: from the summary section, or by reading the file through."""
-        from mcap.exceptions import McapError
-        from mcap.reader import make_reader
+        from mcap.exceptions import McapError  # noqa: PLC0415
+        from mcap.reader import make_reader  # noqa: PLC0415
 
         counts: dict[str, int] = {}
         types: dict[str, str] = {}
@@ -153,12 +157,12 @@ class Player:
                 raise PlayError(f"{self.path} cannot be read as MCAP: {exc}") from None
         return counts, types
 
-    # --- playing ----------------------------------------------------------------------------------------------
+    # --- playing ------------------------------------------------------------------------------------------
 
     async def _play(self) -> None:
-        from mcap.reader import make_reader
-        from mcap_ros1.decoder import DecoderFactory as Ros1Factory
-        from mcap_ros2.decoder import DecoderFactory as Ros2Factory
+        from mcap.reader import make_reader  # noqa: PLC0415
+        from mcap_ros1.decoder import DecoderFactory as Ros1Factory  # noqa: PLC0415
+        from mcap_ros2.decoder import DecoderFactory as Ros2Factory  # noqa: PLC0415
 
         factories = [Ros2Factory(), Ros1Factory()]
         while True:
@@ -167,7 +171,9 @@ class Player:
             start = time.monotonic()
             decoders: dict[int, Any] = {}
             with self.path.open("rb") as handle:
-                for schema, channel, message in make_reader(handle, decoder_factories=factories).iter_messages():
+                for schema, channel, message in make_reader(
+                    handle, decoder_factories=factories
+                ).iter_messages():
                     entry = self.channels.get(channel.topic)
                     if entry is None:
                         continue
@@ -181,8 +187,11 @@ class Player:
                     if decoder is None:
                         decoder = decoders[channel.id] = self._decoder(factories, schema, channel)
                     bridge = self.kit.bridge
-                    if not bridge.has_subscribers(channel.topic) and channel.topic not in self.kit.graph.latched:
-                        continue  # nobody listens: nothing goes out (as a real publisher's message reaches no one)
+                    if (
+                        not bridge.has_subscribers(channel.topic)
+                        and channel.topic not in self.kit.graph.latched
+                    ):
+                        continue  # nobody listens: nothing goes out, as a real publisher's reaches no one
                     try:
                         msg = _plain(decoder(message.data), self.kit.ros2)
                         bridge.publish_json(channel.topic, entry.type, msg)

@@ -4,6 +4,7 @@ statistics over time, the messages around a moment, a chart of fields, or the ma
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import math
 import time
@@ -41,7 +42,11 @@ __all__ = ["SPEC", "ReadRecordingAnswer", "run"]
 BUDGET = 8000
 MAX_SERIES = 8
 MAX_MESSAGES = 50
-_EXAMPLE = '["/odom twist.twist.linear.x"]'
+PICTURE_SIZE = 800
+#: stats: the recording's time span in this many windows.
+BUCKETS = 10
+_EXAMPLE = '["/odom pose.pose.position.x"]'
+_FIELDS = '["/turtle1/pose x y"]'
 
 Mode = Literal["summary", "stats", "messages", "plot", "map"]
 
@@ -58,10 +63,8 @@ SPEC = ToolSpec(
     name="read_recording",
     title="Read a recording",
     description=(
-        "Without file: list the MCAP recordings in the recording directory. With file: mode summary (topics, "
-        "types, counts, rates, time span, gaps), stats (fields over time in windows), messages (around a "
-        "moment), plot (a chart of fields), map (the map with the path driven). Read-only. Example: "
-        f'{{"file": "drive-test.mcap", "mode": "stats", "fields": {_EXAMPLE}}}'
+        "No file: list them. Modes: summary (counts, rates, gaps), stats (fields), "
+        'messages (around at), plot, map with path. Example: {"file": "run1.mcap"}'
     ),
     hints=READS_ROBOT,
     output=ReadRecordingAnswer,
@@ -71,29 +74,17 @@ SPEC = ToolSpec(
 async def run(
     ctx: ToolContext,
     *,
-    file: Annotated[
-        str | None, Field(description='A recording in the directory, e.g. "drive-test.mcap"')
-    ] = None,
-    mode: Annotated[Mode, Field(description="summary, stats, messages, plot or map")] = "summary",
+    file: Annotated[str | None, Field(description='e.g. "run1.mcap"')] = None,
+    mode: Annotated[Mode, Field(description='e.g. "stats"')] = "summary",
     fields: Annotated[
         list[str] | None,
-        Field(max_length=MAX_SERIES, description=f'stats/plot: "TOPIC FIELD [FIELD...]", e.g. {_EXAMPLE}'),
+        Field(max_length=MAX_SERIES, description=f"e.g. {_FIELDS}"),
     ] = None,
-    at: Annotated[
-        float | None, Field(ge=0, description="messages: seconds from the start, e.g. 12.5")
-    ] = None,
-    window: Annotated[
-        float, Field(gt=0, le=3600, description="messages: seconds either side, e.g. 0.5")
-    ] = 0.5,
+    at: Annotated[float | None, Field(ge=0, description="s, e.g. 12.5")] = None,
+    window: Annotated[float, Field(gt=0, le=3600, description="e.g. 0.5")] = 0.5,
     topics: Annotated[
-        list[str] | None, Field(max_length=50, description='messages: only these topics, e.g. ["/odom"]')
+        list[str] | None, Field(max_length=50, description='map: map, path; e.g. ["/map", "/odom"]')
     ] = None,
-    buckets: Annotated[int, Field(ge=1, le=60, description="stats: time windows, e.g. 10")] = 10,
-    map_topic: Annotated[str, Field(description='map: the OccupancyGrid topic, e.g. "/map"')] = "/map",
-    path_topic: Annotated[
-        str, Field(description='map: an Odometry or pose topic for the path driven, e.g. "/odom"')
-    ] = "/odom",
-    max_size: Annotated[int, Field(ge=200, le=2048, description="plot/map: pixels, e.g. 800")] = 800,
 ) -> ToolAnswer:
     directory = record_dir(ctx)
     if file is None:
@@ -114,31 +105,32 @@ async def run(
         if mode == "messages":
             return await asyncio.to_thread(_messages, file, summary, at, window, topics)
         if mode == "map":
-            return await asyncio.to_thread(_map, file, summary, map_topic, path_topic, max_size)
+            map_topic, path_topic = (
+                [*(topics or []), "/map", "/odom"] if not topics or len(topics) >= 2 else [topics[0], "/odom"]
+            )[:2]
+            return await asyncio.to_thread(_map, file, summary, map_topic, path_topic, PICTURE_SIZE)
         wanted = _wanted(fields, summary)
         if mode == "stats":
-            return await asyncio.to_thread(_stats, file, summary, wanted, buckets)
-        return await asyncio.to_thread(_plot, file, summary, wanted, max_size)
+            return await asyncio.to_thread(_stats, file, summary, wanted, BUCKETS)
+        return await asyncio.to_thread(_plot, file, summary, wanted, PICTURE_SIZE)
     except NotARecording as exc:
         raise ToolFailure(str(exc)) from None
     except FieldError as exc:
         raise ToolFailure(f"{exc} Fix the field and call again.") from None
 
 
-# --- listing ----------------------------------------------------------------------------------------------------
+# --- listing ------------------------------------------------------------------------------------------------
 
 
 def _listing(directory: Path) -> ToolAnswer:
     entries = list_recordings(directory)
-    rows = []
+    rows: list[dict[str, Any]] = []
+    lines = [f"{len(entries)} recording(s) in {str(directory)!r}" + (":" if entries else ".")]
     for entry in entries[:200]:
         when = time.strftime("%Y-%m-%d %H:%M", time.localtime(entry.modified))
-        kind = "" if entry.is_mcap else " (not MCAP)"
         rows.append({"file": entry.name, "bytes": entry.size, "modified": when, "mcap": entry.is_mcap})
-    lines = [f"{len(entries)} recording(s) in {str(directory)!r}" + (":" if entries else ".")]
-    for row in rows:
         lines.append(
-            f"- {row['file']}: {row['bytes'] / 1e6:.1f} MB, {row['modified']}{'' if row['mcap'] else ' (not MCAP)'}"
+            f"- {entry.name}: {entry.size / 1e6:.1f} MB, {when}" + ("" if entry.is_mcap else " (not MCAP)")
         )
     if not entries:
         lines.append('record {"topics": [...], "duration": 10} makes one; MCAP files put there are read too.')
@@ -148,7 +140,7 @@ def _listing(directory: Path) -> ToolAnswer:
     )
 
 
-# --- summary ----------------------------------------------------------------------------------------------------
+# --- summary ------------------------------------------------------------------------------------------------
 
 
 def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
@@ -159,7 +151,8 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
     )
     how = "from its summary and index" if summary.indexed else "read through (it has no summary section)"
     lines = [
-        f"{file}: {summary.size / 1e6:.1f} MB, {summary.messages} messages on {len(summary.topics)} topics over "
+        f"{file}: {summary.size / 1e6:.1f} MB, {summary.messages} messages on {len(summary.topics)} topics "
+        "over "
         f"{summary.seconds:.1f} s from {start} (profile {summary.profile or '-'}; {how})."
     ]
     topics = []
@@ -198,7 +191,7 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
     return ToolAnswer(text=text, data=ReadRecordingAnswer(file=file, mode="summary", details=details))
 
 
-# --- fields -----------------------------------------------------------------------------------------------------
+# --- fields -------------------------------------------------------------------------------------------------
 
 
 def _wanted(fields: list[str] | None, summary: RecordingSummary) -> dict[str, list[str]]:
@@ -262,7 +255,8 @@ def _stats(file: str, summary: RecordingSummary, wanted: dict[str, list[str]], b
                 )
         for w in windows:
             lines.append(
-                f"  {w['from']:g}-{w['to']:g} s: n {w['n']} min {w['min']:g} max {w['max']:g} mean {w['mean']:g}"
+                f"  {w['from']:g}-{w['to']:g} s: n {w['n']} min {w['min']:g} max {w['max']:g} "
+                f"mean {w['mean']:g}"
             )
         details.append(
             {
@@ -293,7 +287,8 @@ def _plot(file: str, summary: RecordingSummary, wanted: dict[str, list[str]], wi
             rows.append(f"{line.label}: no numeric samples")
         else:
             rows.append(
-                f"{line.label}: min {found.min:.6g} max {found.max:.6g} mean {found.mean:.6g}, {found.count} samples"
+                f"{line.label}: min {found.min:.6g} max {found.max:.6g} mean {found.mean:.6g}, "
+                f"{found.count} samples"
             )
     text = f"{file}, {summary.seconds:.1f} s: " + "; ".join(rows) + "."
     details = {"series": [{"series": line.label, "samples": len(line.values)} for line in lines_found]}
@@ -304,7 +299,7 @@ def _plot(file: str, summary: RecordingSummary, wanted: dict[str, list[str]], wi
     )
 
 
-# --- messages ---------------------------------------------------------------------------------------------------
+# --- messages -----------------------------------------------------------------------------------------------
 
 
 def _messages(
@@ -354,7 +349,7 @@ def _messages(
     )
 
 
-# --- map --------------------------------------------------------------------------------------------------------
+# --- map ----------------------------------------------------------------------------------------------------
 
 
 def _pose_of(message: dict[str, Any]) -> Pose2D | None:
@@ -410,11 +405,12 @@ def _map(file: str, summary: RecordingSummary, map_topic: str, path_topic: str, 
         notes.append(f"{path_topic} is not in the recording: no path drawn.")
     elif path_frame and grid.frame_id and path_frame != grid.frame_id:
         notes.append(
-            f"The path is in {path_frame!r} and the map in {grid.frame_id!r}; it is drawn as if they coincided."
+            f"The path is in {path_frame!r} and the map in {grid.frame_id!r}; drawn as if they coincided."
         )
-    travelled = sum(math.dist(a, b) for a, b in zip(path, path[1:], strict=False))
+    travelled = sum(math.dist(a, b) for a, b in itertools.pairwise(path))
     text = (
-        f"{file}: {map_topic} ({grid.width}x{grid.height} cells of {grid.resolution:g} m) with {len(points)} poses "
+        f"{file}: {map_topic} ({grid.width}x{grid.height} cells of {grid.resolution:g} m) with "
+        f"{len(points)} poses "
         f"of {path_topic} ({travelled:.2f} m driven)"
         + (f", last at ({points[-1].x:.2f}, {points[-1].y:.2f})" if points else "")
         + "."

@@ -1,11 +1,12 @@
-"""``record``: topics written to an MCAP file in the recording directory, for some seconds or until stopped."""
+"""``record``: topics written to an MCAP file in the recording directory, for some seconds or until
+stopped."""
 
 from __future__ import annotations
 
 import os
 import shutil
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
@@ -33,44 +34,25 @@ _ENDINGS = {
 }
 
 
-class GapFigures(BaseModel):
-    at: float
-    seconds: float
-
-
-class TopicFigures(BaseModel):
-    """One topic's part of the recording."""
-
-    topic: str
-    type: str
-    messages: int
-    rate_hz: float | None
-    lost: int
-    gaps: list[GapFigures]
-    problem: str | None = None
-
-
 class RecordAnswer(BaseModel):
     """The file written, and what it holds."""
 
     file: str
-    path: str
     bytes: int
     seconds: float
     ended: str
-    topics: list[TopicFigures]
+    #: Per topic: topic, type, messages, rate_hz, lost, gaps [{at, seconds}], problem.
+    topics: list[dict[str, Any]]
     skipped: list[str]
     stopped: list[str] = []
 
 
 SPEC = ToolSpec(
     name="record",
-    title="Record topics to an MCAP file",
+    title="Record topics",
     description=(
-        "Record topics (names or globs) for some seconds into an MCAP file that ros2 bag, rosbag tools and "
-        "Foxglove open; read it back with read_recording. Ends at duration, a size cap, or stop=true from "
-        'another call. Writes a file on the server\'s host, sends nothing to the robot. Example: {"topics": '
-        '["/odom", "/scan", "/tf*"], "duration": 30, "name": "drive-test"}'
+        "Record topics to an MCAP file on the server's host until duration, size cap or stop=true. Example: "
+        '{"topics": ["/odom", "/tf*"], "duration": 30}'
     ),
     hints=ToolHints(read_only=False, destructive=False, idempotent=False),
     output=RecordAnswer,
@@ -88,19 +70,15 @@ async def run(
     *,
     topics: Annotated[
         list[str] | None,
-        Field(max_length=MAX_TOPICS, description='Topic names or globs, e.g. ["/odom", "/scan", "/tf*"]'),
+        Field(max_length=MAX_TOPICS, description='e.g. ["/odom", "/tf*"]'),
     ] = None,
     duration: Annotated[float, Field(gt=0, le=MAX_SECONDS, description="Seconds, e.g. 30")] = 10.0,
-    max_megabytes: Annotated[
-        float, Field(gt=0, le=100_000, description="Size cap of the file in MB, e.g. 500")
-    ] = DEFAULT_MEGABYTES,
+    max_megabytes: Annotated[float, Field(gt=0, le=100_000, description="MB, e.g. 500")] = DEFAULT_MEGABYTES,
     name: Annotated[
         str | None,
-        Field(description='File name in the recording directory, e.g. "drive-test"; default: the time'),
+        Field(description='File name, e.g. "run1"'),
     ] = None,
-    stop: Annotated[
-        bool, Field(description="true: end the recordings running now (or the one named) and return")
-    ] = False,
+    stop: Annotated[bool, Field(description="e.g. true")] = False,
 ) -> ToolAnswer:
     """Choose the topics, make the file, record, and say what was written."""
     if stop:
@@ -110,9 +88,7 @@ async def run(
             if stopped
             else "No recording is running" + (f" named {name!r}." if name else ".")
         )
-        answer = RecordAnswer(
-            file="", path="", bytes=0, seconds=0, ended="", topics=[], skipped=[], stopped=stopped
-        )
+        answer = RecordAnswer(file="", bytes=0, seconds=0, ended="", topics=[], skipped=[], stopped=stopped)
         return ToolAnswer(text=text, data=answer)
     limits = ctx.config.policy.recording
     if not limits.enabled:
@@ -178,15 +154,15 @@ async def run(
 
 def _answer(result: RecordingResult, directory: Path) -> RecordAnswer:
     topics = [
-        TopicFigures(
-            topic=t.topic,
-            type=t.type,
-            messages=t.timing.count,
-            rate_hz=t.timing.rate_hz,
-            lost=t.lost,
-            gaps=[GapFigures(at=g.at, seconds=g.seconds) for g in t.timing.gaps],
-            problem=t.problem,
-        )
+        {
+            "topic": t.topic,
+            "type": t.type,
+            "messages": t.timing.count,
+            "rate_hz": t.timing.rate_hz,
+            "lost": t.lost,
+            "gaps": [{"at": g.at, "seconds": g.seconds} for g in t.timing.gaps],
+            "problem": t.problem,
+        }
         for t in result.topics
     ]
     try:
@@ -195,7 +171,6 @@ def _answer(result: RecordingResult, directory: Path) -> RecordAnswer:
         relative = result.path.name
     return RecordAnswer(
         file=relative,
-        path=str(result.path),
         bytes=result.size,
         seconds=result.seconds,
         ended=result.ended,
@@ -206,21 +181,26 @@ def _answer(result: RecordingResult, directory: Path) -> RecordAnswer:
 
 def _text(answer: RecordAnswer, result: RecordingResult) -> str:
     why = _ENDINGS.get(answer.ended, answer.ended)
-    total = sum(t.messages for t in answer.topics)
+    total = sum(t["messages"] for t in answer.topics)
     lines = [
         f"Recorded {answer.file} ({answer.bytes / 1e6:.1f} MB, {answer.seconds:g} s, {total} messages) in "
-        f"{str(Path(answer.path).parent)!r}; it ended because {why}."
+        f"{str(result.path.parent)!r}; it ended because {why}."
     ]
     if result.finish_error:
         lines.append(
-            f"The file could not be finished ({result.finish_error}): its messages are readable, its index is not."
+            f"The file could not be finished ({result.finish_error}): its messages are readable, "
+            "its index not."
         )
     for t in answer.topics[:40]:
-        rate = f", {t.rate_hz:g} Hz" if t.rate_hz is not None else ""
-        lost = f", {t.lost} LOST" if t.lost else ""
-        gaps = "; gaps " + ", ".join(f"{g.seconds:g} s at {g.at:g} s" for g in t.gaps) if t.gaps else ""
-        problem = f"; {t.problem}" if t.problem else ""
-        lines.append(f"- {t.topic} ({t.type}): {t.messages} messages{rate}{lost}{gaps}{problem}")
+        rate = f", {t['rate_hz']:g} Hz" if t["rate_hz"] is not None else ""
+        lost = f", {t['lost']} LOST" if t["lost"] else ""
+        gaps = (
+            "; gaps " + ", ".join(f"{g['seconds']:g} s at {g['at']:g} s" for g in t["gaps"])
+            if t["gaps"]
+            else ""
+        )
+        problem = f"; {t['problem']}" if t["problem"] else ""
+        lines.append(f"- {t['topic']} ({t['type']}): {t['messages']} messages{rate}{lost}{gaps}{problem}")
     if len(answer.topics) > 40:
         lines.append(f"... and {len(answer.topics) - 40} more topics (read_recording lists every one).")
     if answer.skipped:

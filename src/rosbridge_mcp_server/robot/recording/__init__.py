@@ -3,7 +3,8 @@
 ``encoding.py`` (schemas and CDR / ROS 1 bytes from rosapi's TypeDefs), ``writing.py`` (the MCAP file on a
 writer thread, its caps), ``recorder.py`` (choosing topics, subscribing, recording), ``reading.py`` (summary
 from the index, decoded messages, fields over time), ``files.py`` (the recording directory and the paths held
-inside it), ``timing.py`` (rates and gaps). The ``mcap`` packages are imported only when a recording is made or
+inside it), ``timing.py`` (rates and gaps). The ``mcap`` packages are imported only when a recording is
+made or
 read.
 """
 
@@ -35,7 +36,7 @@ class RunningRecordings:
         """Stop the recording named ``name`` (every one when ``None``); the names stopped."""
         stopped = []
         for key, event in self._running.items():
-            if name is None or key == name or key == f"{name}.mcap":
+            if name is None or key in (name, f"{name}.mcap"):
                 event.set()
                 stopped.append(key)
         return stopped

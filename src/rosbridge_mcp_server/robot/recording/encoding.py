@@ -1,7 +1,8 @@
 """Messages as ``ros2 bag`` and ``rosbag`` write them: the schema text and the serialised bytes.
 
 rosapi's TypeDefs of a type (``/rosapi/message_details``) give everything both need. The schema is the
-concatenated ``.msg`` text MCAP's ``ros2msg`` and ``ros1msg`` encodings carry (the type's own fields, then each
+concatenated ``.msg`` text MCAP's ``ros2msg`` and ``ros1msg`` encodings carry (the type's own fields, then
+each
 nested type after a line of 80 ``=`` and ``MSG: pkg/Type``); the bytes are CDR (little-endian XCDR1, as rmw
 writes it, for ROS 2) or ROS 1's serialisation, encoded from the JSON message rosbridge sent.
 

@@ -3,7 +3,8 @@ a moment.
 
 The summary comes from the file's summary section (schemas, channels, statistics, chunk indexes) and its
 message indexes (each chunk's log times per channel, read without decompressing a chunk), so a 1 GB recording
-is summarised by reading a few kilobytes. A file without a summary section (a recorder that was killed) is read
+is summarised by reading a few kilobytes. A file without a summary section (a recorder that was killed) is
+read
 through once. Messages are decoded by their schemas: ``ros2msg``/``cdr`` with ``mcap-ros2-support``,
 ``ros1msg``/``ros1`` with ``mcap-ros1-support``, ``json`` as JSON; whatever the file, whoever wrote it.
 """
@@ -88,8 +89,8 @@ def _check_magic(handle: IO[bytes], path: Path) -> None:
 
 def summarize_recording(path: Path) -> RecordingSummary:
     """The summary of the MCAP file at ``path``; :class:`NotARecording` with the reason when it is not one."""
-    from mcap.exceptions import McapError
-    from mcap.reader import SeekingReader
+    from mcap.exceptions import McapError  # noqa: PLC0415
+    from mcap.reader import SeekingReader  # noqa: PLC0415
 
     size = path.stat().st_size
     with path.open("rb") as handle:
@@ -158,8 +159,8 @@ def _index_times(handle: IO[bytes], chunk: Any, times: dict[int, list[int]]) -> 
 
 def _scan(path: Path, size: int, header: Any, damaged: str) -> RecordingSummary:
     """A file without a usable summary section, read through (messages up to where it breaks off)."""
-    from mcap.exceptions import McapError
-    from mcap.reader import NonSeekingReader
+    from mcap.exceptions import McapError  # noqa: PLC0415
+    from mcap.reader import NonSeekingReader  # noqa: PLC0415
 
     times: dict[str, list[int]] = {}
     types: dict[str, tuple[str, str]] = {}
@@ -198,13 +199,13 @@ def _scan(path: Path, size: int, header: Any, damaged: str) -> RecordingSummary:
 def _decoder_factories() -> list[Any]:
     factories: list[Any] = []
     try:
-        from mcap_ros2.decoder import DecoderFactory as Ros2Factory
+        from mcap_ros2.decoder import DecoderFactory as Ros2Factory  # noqa: PLC0415
 
         factories.append(Ros2Factory())
     except ImportError:  # pragma: no cover - a dependency
         pass
     try:
-        from mcap_ros1.decoder import DecoderFactory as Ros1Factory
+        from mcap_ros1.decoder import DecoderFactory as Ros1Factory  # noqa: PLC0415
 
         factories.append(Ros1Factory())
     except ImportError:  # pragma: no cover - a dependency
@@ -241,7 +242,7 @@ def decoded_messages(
 ) -> Iterator[tuple[str, int, Any]]:
     """(topic, log time in ns, message as plain data) in log-time order; undecodable messages are skipped
     with a ``ValueError`` naming the encoding when no message could be decoded."""
-    from mcap.reader import make_reader
+    from mcap.reader import make_reader  # noqa: PLC0415
 
     factories = _decoder_factories()
     with path.open("rb") as handle:
@@ -261,7 +262,7 @@ def decoded_messages(
 
 def _decoder_for(factories: list[Any], schema: Any, channel: Any) -> Any:
     if channel.message_encoding == "json":
-        return lambda data: json.loads(data)
+        return json.loads
     for factory in factories:
         decoder = factory.decoder_for(channel.message_encoding, schema)
         if decoder is not None:

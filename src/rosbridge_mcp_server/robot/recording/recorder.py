@@ -3,14 +3,14 @@ up, a cap is reached, or the recording is stopped.
 
 Every topic has its own subscription (its own rosbridge id, closed in ``finally``) and its own pump task,
 which stamps each message with its receive time (the MCAP ``log_time``, as ``ros2 bag record`` does) and hands
-it to the writer thread (:mod:`.writing`). The subscription's local queue is large; messages the pumps could not
+it to the writer thread (:mod:`.writing`). The subscription's local queue is large; messages the pumps could
+not
 keep up with (dropped from the queue) and those the writer refused are counted and reported as lost.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import time
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass
@@ -132,7 +132,7 @@ async def record_topics(
         ros_version=version,
         max_bytes=max_bytes,
         free_bytes=free_bytes,
-        on_stop=lambda: loop.call_soon_threadsafe(stopped.set),
+        on_stop=lambda: _call_soon(loop, stopped.set),
         compression=compression,
     )
     lost = dict.fromkeys(codecs, 0)
@@ -209,7 +209,16 @@ async def record_topics(
         )
         for topic in codecs
     )
-    size = 0
-    with contextlib.suppress(OSError):
-        size = path.stat().st_size
+    size = _size(path)
     return RecordingResult(path, size, round(seconds, 2), ended, recorded, tuple(skipped), finish_error)
+
+
+def _size(path: Path) -> int:
+    try:
+        return path.stat().st_size
+    except OSError:
+        return 0
+
+
+def _call_soon(loop: asyncio.AbstractEventLoop, callback: Callable[[], object]) -> None:
+    loop.call_soon_threadsafe(callback)

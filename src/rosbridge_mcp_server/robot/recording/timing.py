@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -46,7 +47,7 @@ def timing_of(times_ns: Sequence[int], start_ns: int) -> TopicTiming:
     rate = (count - 1) / span if count > 1 and span > 0 else None
     gaps: list[Gap] = []
     if count > 2:
-        intervals = [(b - a) / 1e9 for a, b in zip(ordered, ordered[1:], strict=False)]
+        intervals = [(b - a) / 1e9 for a, b in itertools.pairwise(ordered)]
         typical = statistics.median(intervals)
         limit = max(MIN_GAP, GAP_PERIODS * typical)
         found = [

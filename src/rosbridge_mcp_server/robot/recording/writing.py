@@ -8,6 +8,7 @@ size cap is reached, the disk is nearly full (checked every half second: recordi
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import queue
@@ -62,7 +63,7 @@ class McapFileWriter:
         on_stop: Callable[[], None] | None = None,
         compression: str = "zstd",
     ) -> None:
-        from mcap.writer import CompressionType, Writer  # lazy: only recording needs mcap
+        from mcap.writer import CompressionType, Writer  # lazy: only recording needs mcap  # noqa: PLC0415
 
         self._file = os.fdopen(fd, "wb")
         kind = CompressionType.ZSTD if compression == "zstd" else CompressionType.NONE
@@ -100,19 +101,18 @@ class McapFileWriter:
         return True
 
     def close(self) -> str | None:
-        """Write what is left, the summary and the index; blocking (call it in a thread). Returns an error text
-        when the file could not be finished."""
+        """Write what is left, the summary and the index; blocking (call it in a thread). Returns an error
+        text
+                when the file could not be finished."""
         self._queue.put(None)
         self._thread.join()
         try:
-            self._writer.finish()
+            self._writer.finish()  # type: ignore[no-untyped-call]
             self._file.close()
         except OSError as exc:
             _log.warning("recording could not be finished: %s", exc)
-            try:
+            with contextlib.suppress(OSError):
                 self._file.close()
-            except OSError:
-                pass
             return exc.strerror or str(exc)
         return None
 
