@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import asyncio
 import json
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +20,7 @@ from mcap.reader import make_reader
 from mcp_harness import Session, open_session, text_of
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+from rosbridge_mcp_server.safety.policy import parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 
@@ -248,3 +251,51 @@ async def test_stop_ends_a_running_recording(session_dir: tuple[Session, Path]) 
     assert result.structured_content["ended"] == "stopped"
     counts, _, _ = _read_independently(directory / "long.mcap")
     assert counts.get("/chatter", 0) == result.structured_content["topics"][0]["messages"]
+
+
+async def test_the_policy_can_forbid_or_cap_recording(sim_ros2: SimulatedRobot, tmp_path: Path) -> None:
+    directory = tmp_path / "rec"
+    forbid = parse_policy({"recording": {"enabled": False}})
+    async with open_session(sim_ros2.url, policy=forbid, record_dir=str(directory)) as session:
+        text = await session.error("record", {"topics": ["/chatter"], "duration": 1})
+        assert "forbids recording" in text
+    assert not directory.exists()
+    capped = parse_policy({"recording": {"max_seconds": 2, "max_megabytes": 0.3}})
+    async with open_session(sim_ros2.url, policy=capped, record_dir=str(directory)) as session:
+        text = await session.error("record", {"topics": ["/chatter"], "duration": 5})
+        assert "cap of 2 s" in text
+        result = await session.ok(
+            "record", {"topics": ["/camera/image_raw"], "duration": 2, "max_megabytes": 50}
+        )
+        assert result.structured_content["ended"] == "size"
+        assert result.structured_content["bytes"] <= 0.3e6
+
+
+async def test_a_ros2_recording_plays_on_a_ros1_robot(session_ros2: Session, tmp_path: Path) -> None:
+    """The ros2msg schemas name types the ROS 1 simulator has too: the ROS 1 robot plays them."""
+    async with open_session(session_ros2.ros.url, record_dir=str(tmp_path)) as session:
+        await session.ok("record", {"topics": ["/turtle1/pose", "/chatter"], "duration": 1.5, "name": "x"})
+    async with SimulatedRobot(dialect="ros1", play=str(tmp_path / "x.mcap"), play_loop=True) as player:
+        assert player.player is not None
+        assert set(player.player.channels) == {"/turtle1/pose", "/chatter"}
+        async with open_session(player.url) as replay:
+            result = await replay.ok("subscribe_topic", {"topic": "/chatter", "count": 2})
+            texts = [m["message"]["data"] for m in result.structured_content["messages"]]
+            assert all(t.startswith("Hello World: ") for t in texts)
+            info = await replay.ok("get_topic_info", {"topic": "/chatter"})
+            assert "/player" in text_of(info)
+
+
+def test_the_command_refuses_a_file_it_cannot_play(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.mcap"
+    bad.write_text("not mcap")
+    done = subprocess.run(
+        [sys.executable, "-m", "rosbridge_mcp_server.sim", "--port", "0", "--play", str(bad)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert "not an MCAP file" in done.stderr
+    assert done.stdout == ""

@@ -167,7 +167,9 @@ def _scan(path: Path, size: int, header: Any, damaged: str) -> RecordingSummary:
     read = 0
     with path.open("rb") as handle:
         try:
-            for schema, channel, message in NonSeekingReader(handle, validate_crcs=False).iter_messages():
+            for schema, channel, message in NonSeekingReader(handle, validate_crcs=False).iter_messages(
+                log_time_order=False
+            ):
                 times.setdefault(channel.topic, []).append(message.log_time)
                 types.setdefault(channel.topic, (schema.name if schema else "", channel.message_encoding))
                 read += len(message.data)
