@@ -32,7 +32,7 @@ async def _robot(url: str) -> tuple[RosbridgeClient, RobotSession]:
 async def test_a_nearly_full_disk_ends_the_recording_with_a_readable_file(
     sim: SimulatedRobot, tmp_path: Path
 ) -> None:
-    """The disk's free space falls under the reserve after a few messages: recording stops, the file is finished
+    """The free space falls under the reserve after a few messages: recording stops, the file is finished
     (summary and index written) and holds what was written."""
     client, robot = await _robot(sim.url)
     try:
