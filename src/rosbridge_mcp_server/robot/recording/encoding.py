@@ -15,6 +15,8 @@ from __future__ import annotations
 import base64
 import math
 import struct
+import sys
+from array import array
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -139,6 +141,11 @@ class MessageCodec:
             sections.append(body if index == 0 else f"{_SEPARATOR}\nMSG: {type_name}\n{body}")
         return "\n".join(sections) + "\n"
 
+    @property
+    def fixed_size_arrays(self) -> bool:
+        """Whether the type (or one inside it) has a fixed-size array (rosbridge cannot send it as CBOR)."""
+        return any(item.length > 0 for fields in self._fields.values() for item in fields)
+
     # --- the bytes ------------------------------------------------------------------------------------------
 
     def encode(self, message: Mapping[str, Any]) -> bytes:
@@ -222,7 +229,21 @@ class MessageCodec:
                 out += struct.pack("<I", len(data))
             out += data
             return
-        values = list(value) if isinstance(value, list | tuple) or hasattr(value, "tolist") else []
+        if (
+            isinstance(value, array)
+            and item.length == 0
+            and value.itemsize == size
+            and _SAME_KIND.get(fmt) == (value.typecode)
+        ):
+            # A CBOR typed array of the field's own type: its bytes are the wire bytes (little-endian).
+            if cdr:
+                _align(out, 4)
+            out += struct.pack("<I", len(value))
+            if cdr and len(value):
+                _align(out, size)
+            out += value.tobytes() if not _BIG_ENDIAN else _swapped(value)
+            return
+        values = list(value) if isinstance(value, list | tuple | array) else []
         if item.length > 0:
             values = (values + [0] * item.length)[: item.length]
         else:
@@ -232,6 +253,28 @@ class MessageCodec:
         if cdr and values:
             _align(out, size)
         out += struct.pack(f"<{len(values)}{fmt}", *(_number(v, fmt) for v in values))
+
+
+_BIG_ENDIAN = sys.byteorder == "big"
+#: struct format → the array typecode of the same kind and size (CBOR typed arrays arrive as these).
+_SAME_KIND = {
+    "b": "b",
+    "B": "B",
+    "h": "h",
+    "H": "H",
+    "i": "i",
+    "I": "I",
+    "q": "q",
+    "Q": "Q",
+    "f": "f",
+    "d": "d",
+}
+
+
+def _swapped(value: array[Any]) -> bytes:
+    copy = array(value.typecode, value)
+    copy.byteswap()
+    return copy.tobytes()
 
 
 def _spelled(item: _Field) -> str:

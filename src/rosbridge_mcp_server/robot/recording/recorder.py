@@ -18,6 +18,7 @@ from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import (
     ConnectionLostError,
     RequestTimeoutError,
@@ -140,7 +141,12 @@ async def record_topics(
     end = start + duration
 
     async def pump(topic: str) -> None:
-        async with client.subscribe(topic, types[topic], max_queue=SUBSCRIPTION_QUEUE) as sub:
+        # CBOR where rosbridge can send it: byte arrays come as bytes, numbers as typed arrays, NaN and ±inf
+        # as themselves (JSON sends both as null); a type with a fixed-size array comes as JSON.
+        compression = Dialect.compression_for(fixed_size_arrays=codecs[topic].fixed_size_arrays)
+        async with client.subscribe(
+            topic, types[topic], max_queue=SUBSCRIPTION_QUEUE, compression=compression
+        ) as sub:
             try:
                 while not stopped.is_set():
                     left = end - time.monotonic()
