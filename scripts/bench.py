@@ -2011,7 +2011,9 @@ def _load_message(topic: str, index: int) -> dict[str, Any]:
     return {}
 
 
-async def _publish_load(ws: ClientConnection, seconds: float, published: dict[str, int]) -> None:
+async def _publish_load(
+    ws: ClientConnection, seconds: float, published: dict[str, int], first: int = 0
+) -> None:
     """On a raw socket that advertised the load's topics: publish each at its rate for ``seconds``."""
     width, height = 640, 480
     frame = bytes((i * 7) % 251 for i in range(width * height * 3))
@@ -2026,7 +2028,7 @@ async def _publish_load(ws: ClientConnection, seconds: float, published: dict[st
                 if topic.endswith("image_raw"):
                     msg: dict[str, Any] = {
                         "header": {
-                            "stamp": {"sec": int(time.time()), "nanosec": index},
+                            "stamp": {"sec": int(time.time()), "nanosec": first + index},
                             "frame_id": "camera",
                         },
                         "height": height,
@@ -2036,7 +2038,7 @@ async def _publish_load(ws: ClientConnection, seconds: float, published: dict[st
                         "data": image_data,
                     }
                 else:
-                    msg = _load_message(topic, index)
+                    msg = _load_message(topic, first + index)
                 await ws.send(json.dumps({"op": "publish", "topic": topic, "msg": msg}))
                 published[topic] += 1
                 await asyncio.sleep(max(0.0, start + (index + 1) / rate - loop.time()))
@@ -2044,8 +2046,15 @@ async def _publish_load(ws: ClientConnection, seconds: float, published: dict[st
         await asyncio.gather(*(one(topic, rate) for topic, _, rate in RECORDED_LOAD))
 
 
-async def _count_load(url: str, counts: dict[str, int], stop: asyncio.Event) -> None:
-    """A raw socket subscribed to the load's topics: what the simulated robot sent a subscriber."""
+def _index_of(message: dict[str, Any]) -> int:
+    """The publisher's counter a load message carries (its header stamp's nanoseconds)."""
+    header = message.get("header") or (message.get("transforms") or [{}])[0].get("header") or {}
+    stamp = header.get("stamp") or {}
+    return int(stamp.get("nanosec", stamp.get("nsecs", -1)))
+
+
+async def _count_load(url: str, counts: dict[str, set[int]], stop: asyncio.Event) -> None:
+    """A raw socket subscribed to the load's topics: which messages the simulated robot sent a subscriber."""
     async with connect(url, max_size=None, compression=None) as ws:
         for topic, msg_type, _ in RECORDED_LOAD:
             await ws.send(json.dumps({"op": "subscribe", "topic": topic, "type": msg_type}))
@@ -2056,9 +2065,10 @@ async def _count_load(url: str, counts: dict[str, int], stop: asyncio.Event) -> 
                 continue
             except ConnectionClosed:
                 return
-            topic = json.loads(frame).get("topic")
+            received = json.loads(frame)
+            topic = received.get("topic")
             if topic in counts:
-                counts[topic] += 1
+                counts[topic].add(_index_of(received.get("msg") or {}))
 
 
 async def ctx_graph_has(served: Served, topic: str) -> None:
@@ -2091,13 +2101,26 @@ async def measure_recording(ctx: Context) -> list[Row]:
                 began = time.perf_counter()
                 await served.tool("list_topics", {})
                 idle.append(time.perf_counter() - began)
-            counted = dict.fromkeys(published, 0)
+            counted: dict[str, set[int]] = {topic: set() for topic in published}
             stop = asyncio.Event()
             counter = asyncio.create_task(_count_load(url, counted, stop))
+            # The same load with nobody recording: what list_topics costs when the bridge is this busy.
+            loaded: list[float] = []
+            warm = asyncio.create_task(
+                _publish_load(publisher, min(seconds, 10.0), dict.fromkeys(published, 0), first=500_000_000)
+            )
+            while not warm.done():
+                began = time.perf_counter()
+                await served.tool("list_topics", {})
+                loaded.append(time.perf_counter() - began)
+                await asyncio.sleep(0.25)
+            await warm
+            for seen in counted.values():
+                seen.clear()
             recording = asyncio.create_task(
                 served.tool("record", {"topics": ["/bench/*"], "duration": seconds + 6, "name": "load"})
             )
-            await asyncio.sleep(3.0)  # record's subscriptions and the counter's are in place
+            await asyncio.sleep(3.0)  # record's subscriptions are in place (counted from its first message)
             load = asyncio.create_task(_publish_load(publisher, seconds, published))
             busy: list[float] = []
             while not load.done():
@@ -2110,19 +2133,34 @@ async def measure_recording(ctx: Context) -> list[Row]:
             stop.set()
             await counter
             data = result.structured_content or {}
-            recorded = {t["topic"]: t["messages"] for t in data.get("topics", [])}
-            lost = {t: counted[t] - recorded.get(t, 0) for t in counted}
-            sent = sum(counted.values())
+            recorded = await asyncio.to_thread(_recorded_indices, Path(folder) / "load.mcap")
+            # What the raw subscriber got while the recording was running (between the recording's first and
+            # last message of the topic) and the recording lacks.
+            lost: dict[str, int] = {}
+            for topic, seen in counted.items():
+                mine = recorded.get(topic, set())
+                low, high = (min(mine), max(mine)) if mine else (0, -1)
+                lost[topic] = len({i for i in seen if low <= i <= high} - mine)
+            sent = 0
+            for topic, seen in counted.items():
+                mine = recorded.get(topic, set())
+                sent += len({i for i in seen if mine and min(mine) <= i <= max(mine)})
             rows.append(
                 Row(
                     "13a",
                     f"`record` {seconds:g} s of scan 10 Hz, odom 50 Hz, tf 50 Hz, 640×480 camera 30 Hz: "
-                    "messages "
-                    f"lost vs a raw subscriber ({sent} sent, {data.get('bytes', 0) / 1e6:.0f} MB file)",
+                    f"messages lost vs a raw subscriber ({sent} sent while recording, "
+                    f"{data.get('bytes', 0) / 1e6:.1f} MB file)",
                     median=str(sum(lost.values())),
                     target="0",
                     verdict=verdict(sum(lost.values()) == 0 and sent > 0),
-                    figures={"published": published, "counted": counted, "recorded": recorded},
+                    figures={
+                        "published": published,
+                        "counted": {t: len(v) for t, v in counted.items()},
+                        "recorded": {t: len(v) for t, v in recorded.items()},
+                        "lost": lost,
+                        "lost_in_the_server": {t["topic"]: t["lost"] for t in data.get("topics", [])},
+                    },
                 )
             )
             during, before = Stats.of(busy), Stats.of(idle)
@@ -2137,6 +2175,16 @@ async def measure_recording(ctx: Context) -> list[Row]:
             )
             row.figures.update(idle_median_s=before.median, ratio=factor)
             rows.append(row)
+            busy_only = Stats.of(loaded)
+            rows.append(
+                timing_row(
+                    "13b·",
+                    "↳ reference: `list_topics` under the same load with nobody recording",
+                    busy_only,
+                    versus=f"recording: {during.median / busy_only.median:.2f}× this",
+                    verdict="info",
+                )
+            )
         # A large recording: summary from the index (the file is not read through).
         size = 1024**3 if ctx.plan.name == "full" else 64 * 1024**2
         if shutil.disk_usage(folder).free < size * 2:
@@ -2162,6 +2210,15 @@ async def measure_recording(ctx: Context) -> list[Row]:
             )
         )
     return rows
+
+
+def _recorded_indices(path: Path) -> dict[str, set[int]]:
+    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415
+
+    found: dict[str, set[int]] = {}
+    for topic, _, message in decoded_messages(path):
+        found.setdefault(topic, set()).add(_index_of(message))
+    return found
 
 
 def _write_large_recording(path: Path, size: int) -> None:
