@@ -116,6 +116,7 @@ def build_parser(command: str) -> _Parser:
         help=(
             "tools the host sees: all; original (the first eight, with stop_robot whenever a tool acts); "
             "watch (reading topics, types, nodes, parameters, frames); view (pictures: map, scan, charts); "
+            "record (record, read_recording); "
             "or a comma list of groups and tool names (env ROSBRIDGE_MCP_TOOLS, default all)"
         ),
     )
