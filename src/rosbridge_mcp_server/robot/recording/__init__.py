@@ -3,9 +3,8 @@
 ``encoding.py`` (schemas and CDR / ROS 1 bytes from rosapi's TypeDefs), ``writing.py`` (the MCAP file on a
 writer thread, its caps), ``recorder.py`` (choosing topics, subscribing, recording), ``reading.py`` (summary
 from the index, decoded messages, fields over time), ``files.py`` (the recording directory and the paths held
-inside it), ``timing.py`` (rates and gaps). The ``mcap`` packages are imported only when a recording is
-made or
-read.
+inside it), ``timing.py`` (rates and gaps). The ``mcap`` packages are imported only when a recording
+is made or read.
 """
 
 from __future__ import annotations

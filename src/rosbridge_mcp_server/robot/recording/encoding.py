@@ -2,9 +2,9 @@
 
 rosapi's TypeDefs of a type (``/rosapi/message_details``) give everything both need. The schema is the
 concatenated ``.msg`` text MCAP's ``ros2msg`` and ``ros1msg`` encodings carry (the type's own fields, then
-each
-nested type after a line of 80 ``=`` and ``MSG: pkg/Type``); the bytes are CDR (little-endian XCDR1, as rmw
-writes it, for ROS 2) or ROS 1's serialisation, encoded from the JSON message rosbridge sent.
+each nested type after a line of 80 ``=`` and ``MSG: pkg/Type``); the bytes are CDR (little-endian XCDR1, as
+rmw writes it, for ROS 2) or ROS 1's serialisation, encoded from the message rosbridge sent: JSON, or CBOR
+(typed arrays written as they came, byte arrays as bytes).
 
 What JSON loses, the recording cannot bring back: rosbridge sends NaN and ±inf as ``null`` (recorded as NaN)
 and ``uint8[]`` as base64 text (decoded back to its bytes). Pure: no I/O.

@@ -3,9 +3,8 @@
 A name given by a model is a path relative to the directory (``run1.mcap``, ``today/run1.mcap``) or an
 absolute path that lands inside it. Whatever it is, the path is resolved with every symlink followed and must
 still be inside the directory's own resolved path: ``../x``, ``/etc/passwd`` and a symlink pointing out are
-all
-refused. A new recording is created with ``O_EXCL | O_NOFOLLOW``: it never overwrites a file and never writes
-through a symlink planted in the directory.
+all refused. A new recording is created with ``O_EXCL | O_NOFOLLOW``: it never overwrites a file and never
+writes through a symlink planted in the directory.
 """
 
 from __future__ import annotations

@@ -1,11 +1,10 @@
-"""What a recording holds, read with the ``mcap`` package: its summary, a field over time, the messages around
-a moment.
+"""What a recording holds, read with the ``mcap`` package: its summary, a field over time, the messages
+around a moment.
 
 The summary comes from the file's summary section (schemas, channels, statistics, chunk indexes) and its
 message indexes (each chunk's log times per channel, read without decompressing a chunk), so a 1 GB recording
 is summarised by reading a few kilobytes. A file without a summary section (a recorder that was killed) is
-read
-through once. Messages are decoded by their schemas: ``ros2msg``/``cdr`` with ``mcap-ros2-support``,
+read through once. Messages are decoded by their schemas: ``ros2msg``/``cdr`` with ``mcap-ros2-support``,
 ``ros1msg``/``ros1`` with ``mcap-ros1-support``, ``json`` as JSON; whatever the file, whoever wrote it.
 """
 

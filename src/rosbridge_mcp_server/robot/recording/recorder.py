@@ -4,13 +4,13 @@ up, a cap is reached, or the recording is stopped.
 Every topic has its own subscription (its own rosbridge id, closed in ``finally``) and its own pump task,
 which stamps each message with its receive time (the MCAP ``log_time``, as ``ros2 bag record`` does) and hands
 it to the writer thread (:mod:`.writing`). The subscription's local queue is large; messages the pumps could
-not
-keep up with (dropped from the queue) and those the writer refused are counted and reported as lost.
+not keep up with (dropped from the queue) and those the writer refused are counted and reported as lost.
 """
 
 from __future__ import annotations
 
 import asyncio
+import os
 import time
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass
@@ -114,17 +114,21 @@ async def record_topics(
 
     ``on_progress(seconds, messages, bytes)`` is called about once a second.
     """
-    version = (await graph.dialect()).info.version
     codecs: dict[str, MessageCodec] = {}
     types: dict[str, str] = {}
     skipped: list[str] = []
-    for topic, msg_type in topics:
-        try:
-            typedefs = await graph.message_typedefs(msg_type)
-            codecs[topic] = message_codec(msg_type, typedefs, version)
-            types[topic] = msg_type
-        except (EncodingError, UnknownTypeError, RosbridgeError) as exc:
-            skipped.append(f"{topic} ({msg_type}): {exc}")
+    try:
+        version = (await graph.dialect()).info.version
+        for topic, msg_type in topics:
+            try:
+                typedefs = await graph.message_typedefs(msg_type)
+                codecs[topic] = message_codec(msg_type, typedefs, version)
+                types[topic] = msg_type
+            except (EncodingError, UnknownTypeError, RosbridgeError) as exc:
+                skipped.append(f"{topic} ({msg_type}): {exc}")
+    except BaseException:
+        os.close(fd)  # the writer never took the file over
+        raise
     stopped = stop or asyncio.Event()
     loop = asyncio.get_running_loop()
     writer = McapFileWriter(

@@ -101,9 +101,9 @@ class McapFileWriter:
         return True
 
     def close(self) -> str | None:
-        """Write what is left, the summary and the index; blocking (call it in a thread). Returns an error
-        text
-                when the file could not be finished."""
+        """Write what is left, the summary and the index; blocking (call it in a thread).
+
+        Returns an error text when the file could not be finished."""
         self._queue.put(None)
         self._thread.join()
         try:
@@ -162,6 +162,9 @@ class McapFileWriter:
                 )
             except OSError as exc:
                 self._stop(f"error: {exc.strerror or exc}")
+                continue
+            except Exception as exc:  # the mcap writer refused: stop, the file is still finished
+                self._stop(f"error: {exc}")
                 continue
             self.state.bytes_in += len(data)
             self.state.written[topic] += 1
