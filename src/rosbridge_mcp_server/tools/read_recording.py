@@ -165,7 +165,8 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
             if timing.gaps
             else ""
         )
-        lines.append(f"- {t.topic} ({t.type}, {t.encoding}): {timing.count} messages{rate}{span}{gaps}")
+        count = f"{timing.count} message" + ("" if timing.count == 1 else "s")
+        lines.append(f"- {t.topic} ({t.type}, {t.encoding}): {count}{rate}{span}{gaps}")
         topics.append(
             {
                 "topic": t.topic,

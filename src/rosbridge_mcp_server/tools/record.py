@@ -200,7 +200,8 @@ def _text(answer: RecordAnswer, result: RecordingResult) -> str:
             else ""
         )
         problem = f"; {t['problem']}" if t["problem"] else ""
-        lines.append(f"- {t['topic']} ({t['type']}): {t['messages']} messages{rate}{lost}{gaps}{problem}")
+        count = f"{t['messages']} message" + ("" if t["messages"] == 1 else "s")
+        lines.append(f"- {t['topic']} ({t['type']}): {count}{rate}{lost}{gaps}{problem}")
     if len(answer.topics) > 40:
         lines.append(f"... and {len(answer.topics) - 40} more topics (read_recording lists every one).")
     if answer.skipped:
