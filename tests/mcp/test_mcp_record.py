@@ -299,3 +299,17 @@ def test_the_command_refuses_a_file_it_cannot_play(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert "not an MCAP file" in done.stderr
     assert done.stdout == ""
+
+
+async def test_read_only_withholds_record_but_not_read_recording(
+    sim_ros2: SimulatedRobot, tmp_path: Path
+) -> None:
+    """record writes files on the server's host: a read-only server neither lists nor runs it."""
+    policy = parse_policy({"read_only": True})
+    async with open_session(sim_ros2.url, policy=policy, guard=None, record_dir=str(tmp_path)) as session:
+        names = {tool.name for tool in (await session.mcp.list_tools()).tools}
+        assert "read_recording" in names
+        assert "record" not in names
+        await session.error("record", {"topics": ["/chatter"], "duration": 1})
+        await session.ok("read_recording", {})
+    assert not await asyncio.to_thread(lambda: list(tmp_path.glob("*.mcap")))
