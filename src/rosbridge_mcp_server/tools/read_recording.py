@@ -16,7 +16,12 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.robot.charts import draw_chart, stats
 from rosbridge_mcp_server.robot.drawing import png_bytes
 from rosbridge_mcp_server.robot.maps import MapError, Overlay, Pose2D, decode_grid, draw_map, yaw_of
-from rosbridge_mcp_server.robot.recording.files import PathRefused, list_recordings, resolve_recording
+from rosbridge_mcp_server.robot.recording.files import (
+    PathRefused,
+    list_recordings,
+    recording_directory,
+    resolve_recording,
+)
 from rosbridge_mcp_server.robot.recording.reading import (
     NotARecording,
     RecordingSummary,
@@ -34,7 +39,6 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.record import record_dir
 
 __all__ = ["SPEC", "ReadRecordingAnswer", "run"]
 
@@ -86,7 +90,7 @@ async def run(
         list[str] | None, Field(max_length=50, description='map: map, path; e.g. ["/map", "/odom"]')
     ] = None,
 ) -> ToolAnswer:
-    directory = record_dir(ctx)
+    directory = recording_directory(ctx.config.record_dir)
     if file is None:
         return await asyncio.to_thread(_listing, directory)
     try:

@@ -10,7 +10,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording, default_record_dir
+from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording, recording_directory
 from rosbridge_mcp_server.robot.recording.recorder import (
     NoTopicMatched,
     RecordingResult,
@@ -19,7 +19,7 @@ from rosbridge_mcp_server.robot.recording.recorder import (
 )
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 
-__all__ = ["SPEC", "RecordAnswer", "record_dir", "run"]
+__all__ = ["SPEC", "RecordAnswer", "run"]
 
 #: Longest recording without a policy cap, and the size cap when none is given.
 MAX_SECONDS = 3600.0
@@ -57,12 +57,6 @@ SPEC = ToolSpec(
     hints=ToolHints(read_only=False, destructive=False, idempotent=False),
     output=RecordAnswer,
 )
-
-
-def record_dir(ctx: ToolContext) -> Path:
-    """The recording directory of this robot's configuration."""
-    configured = ctx.config.record_dir
-    return Path(configured).expanduser() if configured else default_record_dir()
 
 
 async def run(
@@ -110,7 +104,7 @@ async def run(
         chosen = await choose_topics(ctx.graph, topics)
     except NoTopicMatched as exc:
         raise ToolFailure(f"{exc} Nothing was recorded.") from None
-    directory = record_dir(ctx)
+    directory = recording_directory(ctx.config.record_dir)
     try:
         path, fd = create_recording(directory, name)
     except PathRefused as exc:

@@ -22,6 +22,7 @@ __all__ = [
     "create_recording",
     "default_record_dir",
     "list_recordings",
+    "recording_directory",
     "resolve_recording",
 ]
 
@@ -39,6 +40,11 @@ def default_record_dir() -> Path:
     base = os.environ.get("XDG_DATA_HOME", "").strip()
     root = Path(base) if base and Path(base).is_absolute() else Path.home() / ".local" / "share"
     return root / "rosbridge-mcp-server" / "recordings"
+
+
+def recording_directory(configured: str | None) -> Path:
+    """The recording directory: ``--record-dir`` (``~`` expanded), else :func:`default_record_dir`."""
+    return Path(configured).expanduser() if configured else default_record_dir()
 
 
 def _inside(directory: Path, given: str) -> Path:
