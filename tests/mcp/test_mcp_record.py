@@ -313,3 +313,28 @@ async def test_read_only_withholds_record_but_not_read_recording(
         await session.error("record", {"topics": ["/chatter"], "duration": 1})
         await session.ok("read_recording", {})
     assert not await asyncio.to_thread(lambda: list(tmp_path.glob("*.mcap")))
+
+
+async def test_a_bridge_outage_shows_as_a_gap_and_the_recording_goes_on(
+    session_dir: tuple[Session, Path], sim: SimulatedRobot
+) -> None:
+    """The bridge stops for about a second mid-recording: the subscription comes back after the reconnect, and
+    the answer names the pause."""
+    session, _ = session_dir
+    recording = asyncio.create_task(
+        session.ok("record", {"topics": ["/turtle1/pose"], "duration": 5, "name": "gap"})
+    )
+    await sim.wait_for(lambda world: world.turtle is not None, timeout=5)
+    async with asyncio.timeout(10):  # record's subscription is in place
+        while not sim.bridge.has_subscribers("/turtle1/pose"):  # noqa: ASYNC110
+            await asyncio.sleep(0.01)
+    await asyncio.sleep(1.0)  # some messages before the outage
+    await sim.stop()
+    await asyncio.sleep(1.0)  # the outage itself: nothing can arrive
+    await sim.start()
+    result = await asyncio.wait_for(recording, 20)
+    topic = result.structured_content["topics"][0]
+    assert topic["gaps"], text_of(result)
+    assert topic["gaps"][0]["seconds"] >= 0.9
+    assert topic["messages"] > 25  # before and after the outage
+    assert "gaps" in text_of(result)
