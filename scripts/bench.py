@@ -31,13 +31,16 @@ What is measured:
 11. the picture tools (``--only view``): ``view_map`` on a 2000×2000 ``/map`` against a raw socket's receipt
     of the same message (subscribe → every fragment → parsed → unsubscribe), ``view_scan`` against a raw first
     scan (phase-locked to the 5 Hz laser), and the PNG sizes of their pictures and of a ``plot_topic`` chart.
-13. ``diagnose`` (``--only diagnose``) on the simulated Nav2 world, healthy and with two faults, through the
-    console script (p50 against its 1.5 s target); and the log ring under 10,000 ``/rosout`` lines a second
-    for 10 s from a simulated robot in this process: lines received, kept, dropped, and the RSS along the way.
 12. every graph tool on a simulated Nav2 robot (``--only nav2``; ~36 nodes, ~400 services, 1,000+
     parameters), the server alone (JSON-RPC lines), against the raw calls its answer needs, with the size of
     each answer's text and structured content; ``get_node_info`` also on the same world behaving like
     rosbridge-server-rs (row 12k: one round trip, no node list first).
+13. ``diagnose`` (``--only diagnose``) on the simulated Nav2 world, healthy and with two faults, through the
+    console script (p50 against its 1.5 s target); and the log ring under 10,000 ``/rosout`` lines a second
+    for 10 s from a simulated robot in this process: lines received, kept, dropped, and the RSS along the way.
+14. recording (``--only recording``): ``record`` of a Nav2-like load (scan, odom, tf, a 640×480 camera)
+    against what a raw subscriber received, ``list_topics`` while it records against idle, and the summary
+    time of a large recording (from the MCAP index).
 
 The table goes to stdout (Markdown, so it can be pasted into docs/performance.md), progress to stderr.
 The exit status is 0 when every measurement ran, whatever the figures; 1 when something errored.
@@ -80,6 +83,7 @@ from mcp.client.session import ClientSession
 from mcp.client.stdio import StdioServerParameters, stdio_client
 from mcp.client.streamable_http import streamable_http_client
 from websockets.asyncio.client import ClientConnection, connect
+from websockets.exceptions import ConnectionClosed
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
@@ -1974,6 +1978,285 @@ async def measure_view(ctx: Context) -> list[Row]:
     return rows
 
 
+# --------------------------------------------------------------------------------- item 14: recording
+
+#: What item 14 records, as a Nav2 robot publishes it: topic, type, rate (Hz).
+RECORDED_LOAD = (
+    ("/bench/scan", "sensor_msgs/msg/LaserScan", 10.0),
+    ("/bench/odom", "nav_msgs/msg/Odometry", 50.0),
+    ("/bench/tf", "tf2_msgs/msg/TFMessage", 50.0),
+    ("/bench/camera/image_raw", "sensor_msgs/msg/Image", 30.0),
+)
+
+
+def _load_message(topic: str, index: int) -> dict[str, Any]:
+    stamp = {"sec": int(time.time()), "nanosec": index}
+    header = {"stamp": stamp, "frame_id": "base_link"}
+    if topic.endswith("scan"):
+        return {
+            "header": header,
+            "angle_min": -3.14,
+            "angle_increment": 0.0175,
+            "range_max": 12.0,
+            "ranges": [1.0 + (i % 50) / 10 for i in range(360)],
+        }
+    if topic.endswith("odom"):
+        return {
+            "header": header,
+            "child_frame_id": "base_link",
+            "pose": {"pose": {"position": {"x": index / 100.0}}},
+        }
+    if topic.endswith("tf"):
+        return {
+            "transforms": [
+                {
+                    "header": header,
+                    "child_frame_id": "base_link",
+                    "transform": {"translation": {"x": index / 100.0}, "rotation": {"w": 1.0}},
+                }
+            ]
+        }
+    return {}
+
+
+async def _publish_load(
+    ws: ClientConnection, seconds: float, published: dict[str, int], first: int = 0
+) -> None:
+    """On a raw socket that advertised the load's topics: publish each at its rate for ``seconds``."""
+    width, height = 640, 480
+    frame = bytes((i * 7) % 251 for i in range(width * height * 3))
+    image_data = base64.b64encode(frame).decode()
+    if True:
+
+        async def one(topic: str, rate: float) -> None:
+            loop = asyncio.get_running_loop()
+            start = loop.time()
+            count = int(seconds * rate)
+            for index in range(count):
+                if topic.endswith("image_raw"):
+                    msg: dict[str, Any] = {
+                        "header": {
+                            "stamp": {"sec": int(time.time()), "nanosec": first + index},
+                            "frame_id": "camera",
+                        },
+                        "height": height,
+                        "width": width,
+                        "encoding": "rgb8",
+                        "step": width * 3,
+                        "data": image_data,
+                    }
+                else:
+                    msg = _load_message(topic, first + index)
+                await ws.send(json.dumps({"op": "publish", "topic": topic, "msg": msg}))
+                published[topic] += 1
+                await asyncio.sleep(max(0.0, start + (index + 1) / rate - loop.time()))
+
+        await asyncio.gather(*(one(topic, rate) for topic, _, rate in RECORDED_LOAD))
+
+
+def _index_of(message: dict[str, Any]) -> int:
+    """The publisher's counter a load message carries (its header stamp's nanoseconds)."""
+    header = message.get("header") or (message.get("transforms") or [{}])[0].get("header") or {}
+    stamp = header.get("stamp") or {}
+    return int(stamp.get("nanosec", stamp.get("nsecs", -1)))
+
+
+async def _count_load(url: str, counts: dict[str, set[int]], stop: asyncio.Event) -> None:
+    """A raw socket subscribed to the load's topics: which messages the simulated robot sent a subscriber."""
+    async with connect(url, max_size=None, compression=None) as ws:
+        for topic, msg_type, _ in RECORDED_LOAD:
+            await ws.send(json.dumps({"op": "subscribe", "topic": topic, "type": msg_type}))
+        while not stop.is_set():
+            try:
+                frame = await asyncio.wait_for(ws.recv(), 0.5)
+            except TimeoutError:
+                continue
+            except ConnectionClosed:
+                return
+            received = json.loads(frame)
+            topic = received.get("topic")
+            if topic in counts:
+                counts[topic].add(_index_of(received.get("msg") or {}))
+
+
+async def ctx_graph_has(served: Served, topic: str) -> None:
+    """Wait (at most 10 s) until list_topics shows ``topic``."""
+    async with asyncio.timeout(10):
+        # The graph has no event to wait on: it is asked again until it shows the topic, within the timeout.
+        while topic not in str((await served.tool("list_topics", {})).content):  # noqa: ASYNC110
+            await asyncio.sleep(0.05)
+
+
+async def measure_recording(ctx: Context) -> list[Row]:
+    """Item 14: record a Nav2-like load (scan 10 Hz, odom 50 Hz, tf 50 Hz, a 640×480 camera at 30 Hz) and
+    count what was lost against a raw subscriber; list_topics while recording; a large recording's summary."""
+    seconds = 60.0 if ctx.plan.name == "full" else 1.0
+    rows: list[Row] = []
+    with tempfile.TemporaryDirectory(prefix="bench-rec-") as folder:
+        async with contextlib.AsyncExitStack() as stack:
+            url = await stack.enter_async_context(simulated_robot(ctx.errlog))
+            served = await stack.enter_async_context(
+                serve_mcp([*our_server_command(url), "--record-dir", folder], ctx.errlog)
+            )
+            # Advertised first, so record finds the topics in the graph.
+            publisher = await stack.enter_async_context(connect(url, max_size=None, compression=None))
+            for topic, msg_type, _ in RECORDED_LOAD:
+                await publisher.send(json.dumps({"op": "advertise", "topic": topic, "type": msg_type}))
+            await ctx_graph_has(served, RECORDED_LOAD[-1][0])
+            published = dict.fromkeys((t for t, _, _ in RECORDED_LOAD), 0)
+            idle: list[float] = []
+            for _ in range(20):
+                began = time.perf_counter()
+                await served.tool("list_topics", {})
+                idle.append(time.perf_counter() - began)
+            counted: dict[str, set[int]] = {topic: set() for topic in published}
+            stop = asyncio.Event()
+            counter = asyncio.create_task(_count_load(url, counted, stop))
+            # The same load with nobody recording: what list_topics costs when the bridge is this busy.
+            loaded: list[float] = []
+            warm = asyncio.create_task(
+                _publish_load(publisher, min(seconds, 10.0), dict.fromkeys(published, 0), first=500_000_000)
+            )
+            while not warm.done():
+                began = time.perf_counter()
+                await served.tool("list_topics", {})
+                loaded.append(time.perf_counter() - began)
+                await asyncio.sleep(0.25)
+            await warm
+            for seen in counted.values():
+                seen.clear()
+            recording = asyncio.create_task(
+                served.tool(
+                    "record",
+                    {
+                        "topics": ["/bench/*"],
+                        "duration": seconds + (6 if ctx.plan.name == "full" else 3),
+                        "name": "load",
+                    },
+                )
+            )
+            # record's subscriptions are in place (what it got is counted from its first message on)
+            await asyncio.sleep(3.0 if ctx.plan.name == "full" else 1.5)
+            load = asyncio.create_task(_publish_load(publisher, seconds, published))
+            busy: list[float] = []
+            while not load.done():
+                began = time.perf_counter()
+                await served.tool("list_topics", {})
+                busy.append(time.perf_counter() - began)
+                await asyncio.sleep(0.25)
+            await load
+            result = await recording
+            stop.set()
+            await counter
+            data = result.structured_content or {}
+            recorded = await asyncio.to_thread(_recorded_indices, Path(folder) / "load.mcap")
+            # What the raw subscriber got while the recording was running (between the recording's first and
+            # last message of the topic) and the recording lacks.
+            lost: dict[str, int] = {}
+            for topic, seen in counted.items():
+                mine = recorded.get(topic, set())
+                low, high = (min(mine), max(mine)) if mine else (0, -1)
+                lost[topic] = len({i for i in seen if low <= i <= high} - mine)
+            sent = 0
+            for topic, seen in counted.items():
+                mine = recorded.get(topic, set())
+                sent += len({i for i in seen if mine and min(mine) <= i <= max(mine)})
+            rows.append(
+                Row(
+                    "14a",
+                    f"`record` {seconds:g} s of scan 10 Hz, odom 50 Hz, tf 50 Hz, 640×480 camera 30 Hz: "
+                    f"messages lost vs a raw subscriber ({sent} sent while recording, "
+                    f"{data.get('bytes', 0) / 1e6:.1f} MB file)",
+                    median=str(sum(lost.values())),
+                    target="0",
+                    verdict=verdict(sum(lost.values()) == 0 and sent > 0),
+                    figures={
+                        "published": published,
+                        "counted": {t: len(v) for t, v in counted.items()},
+                        "recorded": {t: len(v) for t, v in recorded.items()},
+                        "lost": lost,
+                        "lost_in_the_server": {t["topic"]: t["lost"] for t in data.get("topics", [])},
+                    },
+                )
+            )
+            during, before = Stats.of(busy), Stats.of(idle)
+            factor = during.median / before.median
+            row = timing_row(
+                "14b",
+                "`list_topics` while `record` runs (14a's load) vs idle, same server",
+                during,
+                versus=f"{factor:.2f}× idle ({ms(before.median)})",
+                target="≤ 2× idle",
+                verdict=verdict(factor <= 2.0),
+            )
+            row.figures.update(idle_median_s=before.median, ratio=factor)
+            rows.append(row)
+            busy_only = Stats.of(loaded)
+            rows.append(
+                timing_row(
+                    "14b·",
+                    "↳ reference: `list_topics` under the same load with nobody recording",
+                    busy_only,
+                    versus=f"recording: {during.median / busy_only.median:.2f}× this",
+                    verdict="info",
+                )
+            )
+        # A large recording: summary from the index (the file is not read through).
+        size = 1024**3 if ctx.plan.name == "full" else 16 * 1024**2
+        if shutil.disk_usage(folder).free < size * 2:
+            rows.append(Row("14c", "`read_recording` summary of a large recording", verdict="n/a (disk)"))
+            return rows
+        path = Path(folder) / "large.mcap"
+        await asyncio.to_thread(_write_large_recording, path, size)
+        from rosbridge_mcp_server.robot.recording.reading import summarize_recording  # noqa: PLC0415
+
+        times = []
+        for _ in range(5):
+            began = time.perf_counter()
+            summary = await asyncio.to_thread(summarize_recording, path)
+            times.append(time.perf_counter() - began)
+        rows.append(
+            timing_row(
+                "14c",
+                f"summary of a {mib(path.stat().st_size)} recording ({summary.messages} messages) "
+                "from its index",
+                Stats.of(times),
+                target="< 1 s",
+                verdict=verdict(Stats.of(times).median < 1.0),
+            )
+        )
+    return rows
+
+
+def _recorded_indices(path: Path) -> dict[str, set[int]]:
+    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415
+
+    found: dict[str, set[int]] = {}
+    for topic, _, message in decoded_messages(path):
+        found.setdefault(topic, set()).add(_index_of(message))
+    return found
+
+
+def _write_large_recording(path: Path, size: int) -> None:
+    """An uncompressed MCAP of 640×480 frames at 30 Hz until ``size`` bytes (as a camera recording is)."""
+    from mcap.writer import CompressionType, Writer  # noqa: PLC0415
+
+    frame = os.urandom(640 * 480 * 3)
+    with path.open("wb") as handle:
+        writer = Writer(handle, chunk_size=4 * 1024**2, compression=CompressionType.NONE)
+        writer.start(profile="ros2", library="bench")
+        schema = writer.register_schema("sensor_msgs/msg/Image", "ros2msg", b"uint8[] data\n")
+        channel = writer.register_channel("/camera/image_raw", "cdr", schema)
+        start = time.time_ns()
+        written = index = 0
+        while written < size:
+            data = b"\x00\x01\x00\x00" + len(frame).to_bytes(4, "little") + frame
+            writer.add_message(channel, log_time=start + index * 33_333_333, data=data, publish_time=start)
+            written += len(data)
+            index += 1
+        writer.finish()
+
+
 # --------------------------------------------------------------------------------- items 6-7: startup, memory
 
 
@@ -2243,6 +2526,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("view", "11", "picture tools", measure_view, 240.0),
     ("nav2", "12", "graph tools on a Nav2 robot", measure_nav2, 300.0),
     ("diagnose", "13", "diagnose and the log ring", measure_diagnose, 300.0),
+    ("recording", "14", "recording", measure_recording, 300.0),
 ]
 
 

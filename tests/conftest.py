@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -72,13 +73,18 @@ async def sim(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRob
 
 
 @pytest.fixture(autouse=True)
-def _console_address_in_a_test_directory(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
-    """A server started by a test (in this process or a child) keeps its console's URL file in a directory
-    of the test run, not in the user's runtime directory."""
-    previous = os.environ.get("ROSBRIDGE_MCP_RUNTIME_DIR")
-    os.environ["ROSBRIDGE_MCP_RUNTIME_DIR"] = str(tmp_path_factory.getbasetemp() / "runtime")
+def _server_files_in_a_test_directory(tmp_path: Path) -> Iterator[None]:
+    """A server started by a test (in this process or a child) keeps its console's URL file and its
+    recordings in directories of that test, not in the user's runtime and data directories."""
+    chosen = {
+        "ROSBRIDGE_MCP_RUNTIME_DIR": tmp_path / "runtime",
+        "ROSBRIDGE_MCP_RECORD_DIR": tmp_path / "recordings",
+    }
+    previous = {name: os.environ.get(name) for name in chosen}
+    os.environ.update({name: str(path) for name, path in chosen.items()})
     yield
-    if previous is None:
-        os.environ.pop("ROSBRIDGE_MCP_RUNTIME_DIR", None)
-    else:
-        os.environ["ROSBRIDGE_MCP_RUNTIME_DIR"] = previous
+    for name, value in previous.items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = value

@@ -10,6 +10,7 @@ from __future__ import annotations
 __all__ = [
     "ALL_TOOL_NAMES",
     "ORIGINAL_TOOL_NAMES",
+    "RECORD_TOOL_NAMES",
     "SAFETY_TOOL_NAMES",
     "TOOL_GROUPS",
     "VIEW_TOOL_NAMES",
@@ -44,13 +45,18 @@ WATCH_TOOL_NAMES = (
 #: Pictures of the robot's world: its map, its scan, a topic over time.
 VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
 SAFETY_TOOL_NAMES = ("stop_robot",)
-ALL_TOOL_NAMES = ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + VIEW_TOOL_NAMES + SAFETY_TOOL_NAMES
+#: Recordings: MCAP files written from topics, and read back.
+RECORD_TOOL_NAMES = ("record", "read_recording")
+ALL_TOOL_NAMES = (
+    ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + VIEW_TOOL_NAMES + SAFETY_TOOL_NAMES + RECORD_TOOL_NAMES
+)
 TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "all": ALL_TOOL_NAMES,
     "original": ORIGINAL_TOOL_NAMES,
     "watch": WATCH_TOOL_NAMES,
     "view": VIEW_TOOL_NAMES,
     "safety": SAFETY_TOOL_NAMES,
+    "record": RECORD_TOOL_NAMES,
 }
 
 

@@ -94,6 +94,8 @@ class Config:
     headers: tuple[tuple[str, str], ...] = field(default=(), repr=False)
     #: Names of the tools a host sees; ``None`` is every tool.
     tools: tuple[str, ...] | None = None
+    #: Where ``record`` writes and ``read_recording`` reads (``--record-dir``); ``None``: the default.
+    record_dir: str | None = None
 
     def ssl_context(self) -> ssl.SSLContext | None:
         """The TLS context for wss:// with a private CA or a client certificate; ``None`` for the default.
@@ -139,6 +141,7 @@ def load_config(
     client_key: str | None = None,
     headers: Sequence[str] | None = None,
     tools: str | None = None,
+    record_dir: str | None = None,
 ) -> Config:
     """Build a :class:`Config` from command-line values (``None`` = not given) and the environment.
 
@@ -185,6 +188,7 @@ def load_config(
         client_key=_path(environ, client_key, "--client-key", "ROSBRIDGE_CLIENT_KEY"),
         headers=_headers(environ, headers),
         tools=chosen,
+        record_dir=_path(environ, record_dir, "--record-dir", "ROSBRIDGE_MCP_RECORD_DIR"),
     )
     _check_tls(config)
     return config

@@ -56,7 +56,9 @@ def text_of(result: CallToolResult) -> str:
 
 def _env() -> dict[str, str]:
     return {
-        k: v for k, v in os.environ.items() if not k.startswith("ROSBRIDGE_") or k.endswith("RUNTIME_DIR")
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith("ROSBRIDGE_") or k in ("ROSBRIDGE_MCP_RUNTIME_DIR", "ROSBRIDGE_MCP_RECORD_DIR")
     }
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import AsyncIterator
+from pathlib import Path
 
 import pytest
 from mcp_harness import Session, open_session
@@ -29,3 +30,11 @@ async def session_ros1(sim_ros1: SimulatedRobot) -> AsyncIterator[Session]:
     """A session on the ROS 1 (Noetic-like) robot."""
     async with open_session(sim_ros1.url) as opened:
         yield opened
+
+
+@pytest.fixture
+async def session_dir(sim: SimulatedRobot, tmp_path: Path) -> AsyncIterator[tuple[Session, Path]]:
+    """A session on each dialect's robot whose recording directory is a fresh temporary folder."""
+    directory = tmp_path / "recordings"
+    async with open_session(sim.url, record_dir=str(directory)) as opened:
+        yield opened, directory

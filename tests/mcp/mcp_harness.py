@@ -80,18 +80,24 @@ async def open_session(
     elicitation_callback: Any = None,
     policy: Policy | None = None,
     tools: tuple[str, ...] | None = None,
+    record_dir: str | None = None,
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
 
     ``mode="auto"`` speaks the 2026-07-28 protocol instead (in-process: direct dispatch, no JSON-RPC framing).
     With ``policy`` the server runs under that safety policy (``guard=None``: the server's own PolicyGuard);
-    ``tools`` picks the tools as ``--tools`` does.
+    ``tools`` picks the tools as ``--tools`` does; ``record_dir`` is ``--record-dir``.
 
     The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
     pytest-asyncio sets a fixture up and tears it down in different tasks.
     """
     config = Config(
-        url=url, request_timeout=request_timeout, connect_timeout=2.0, policy=policy or Policy(), tools=tools
+        url=url,
+        request_timeout=request_timeout,
+        connect_timeout=2.0,
+        policy=policy or Policy(),
+        tools=tools,
+        record_dir=record_dir,
     )
     ros = RosbridgeClient(
         url,

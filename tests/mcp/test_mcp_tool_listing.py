@@ -38,6 +38,8 @@ EXPECTED_PARAMETERS = {
     "view_scan": ["topic", "radius", "clearance", "max_size", "timeout"],
     "plot_topic": ["series", "duration", "max_size"],
     "stop_robot": [],
+    "record": ["topics", "duration", "max_megabytes", "name", "stop"],
+    "read_recording": ["file", "mode", "fields", "at", "window", "topics"],
 }
 READ_ONLY = {
     "list_topics",
@@ -57,6 +59,7 @@ READ_ONLY = {
     "view_map",
     "view_scan",
     "plot_topic",
+    "read_recording",
 }
 #: Acting tools that leave the robot as they found it when called twice with the same arguments.
 IDEMPOTENT_ACTS = {"set_parameter"}
@@ -99,6 +102,13 @@ async def test_every_tool_is_listed_with_annotations_and_described_parameters() 
                 None,
                 False,
                 True,
+            )
+        elif tool.name == "record":
+            # It writes a file on the server's host, never destroys one, and sends nothing to the robot.
+            assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (
+                None,
+                False,
+                None,
             )
         elif tool.name in READ_ONLY:
             assert (hints.read_only_hint, hints.destructive_hint, hints.idempotent_hint) == (True, None, None)

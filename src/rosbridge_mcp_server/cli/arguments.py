@@ -114,10 +114,18 @@ def build_parser(command: str) -> _Parser:
         help="append one JSON line per acting call to this file (env ROSBRIDGE_MCP_AUDIT_LOG)",
     )
     parser.add_argument(
+        "--record-dir",
+        help=(
+            "where record writes MCAP files and read_recording reads them (env ROSBRIDGE_MCP_RECORD_DIR, "
+            "default ~/.local/share/rosbridge-mcp-server/recordings)"
+        ),
+    )
+    parser.add_argument(
         "--tools",
         help=(
             "tools the host sees: all; original (the first eight, with stop_robot whenever a tool acts); "
             "watch (reading topics, types, nodes, parameters, frames); view (pictures: map, scan, charts); "
+            "record (record, read_recording); "
             "or a comma list of groups and tool names (env ROSBRIDGE_MCP_TOOLS, default all)"
         ),
     )

@@ -72,6 +72,7 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             client_key=options.client_key,
             headers=options.header,
             tools=options.tools,
+            record_dir=options.record_dir,
         )
         if config.demo_faults:
             _check_demo_faults(config)

@@ -30,6 +30,7 @@ from rosbridge_mcp_server.robot.gate import SendGate
 from rosbridge_mcp_server.robot.goals import GoalRegistry
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.log_keeper import LogKeeper
+from rosbridge_mcp_server.robot.recording import RunningRecordings
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 
 if TYPE_CHECKING:
@@ -49,6 +50,8 @@ class RobotSession:
         self.goals = GoalRegistry(client)
         self.activity = SessionActivity()
         self.gate = SendGate(guard)
+        #: The recordings ``record`` is making on this robot now (a later ``record`` call can stop them).
+        self.recordings = RunningRecordings()
         self.warm_up: ServiceTypeWarmUp | None = None
         self.logs: LogKeeper | None = None
 

@@ -20,6 +20,10 @@ robot uncapped). The file::
     [publish]                    # publish_topic rate streams
     max_rate_hz = 20
     max_duration = 30            # seconds
+    [recording]                  # record: MCAP files in the recording directory
+    enabled = true               # false: record refuses
+    max_seconds = 600            # longest recording
+    max_megabytes = 2000         # largest file
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ __all__ = [
     "Policy",
     "PolicyError",
     "PublishLimits",
+    "RecordingLimits",
     "VelocityCaps",
     "load_policy",
     "parse_policy",
@@ -128,6 +133,15 @@ class PublishLimits:
 
 
 @dataclass(frozen=True)
+class RecordingLimits:
+    """What ``record`` may do: whether it may record at all, and how long and how large at most."""
+
+    enabled: bool = True
+    max_seconds: float | None = None
+    max_megabytes: float | None = None
+
+
+@dataclass(frozen=True)
 class Policy:
     """The policy in force. ``Policy()`` allows everything and asks no one."""
 
@@ -145,6 +159,7 @@ class Policy:
     parameters: NameRules = field(default_factory=NameRules)
     velocity: VelocityCaps = field(default_factory=VelocityCaps)
     publish: PublishLimits = field(default_factory=PublishLimits)
+    recording: RecordingLimits = field(default_factory=RecordingLimits)
     source: str | None = None
 
     def rules_for(self, kind: str) -> tuple[str, NameRules]:
@@ -201,6 +216,17 @@ class Policy:
             if limits.max_duration is not None:
                 parts.append(f"duration ≤ {limits.max_duration:g} s")
             lines.append(f"  [publish] streams: {', '.join(parts)}")
+        rec = self.recording
+        if rec != RecordingLimits():
+            if not rec.enabled:
+                lines.append("  [recording] record refuses")
+            else:
+                parts = []
+                if rec.max_seconds is not None:
+                    parts.append(f"≤ {rec.max_seconds:g} s")
+                if rec.max_megabytes is not None:
+                    parts.append(f"≤ {rec.max_megabytes:g} MB")
+                lines.append(f"  [recording] {', '.join(parts)}")
         return lines
 
 
@@ -213,11 +239,21 @@ _CONFIRM_TEXT: dict[Confirm, str] = {
     "always": "the person confirms every acting call (topics, services, goals, parameters)",
 }
 
-_TOP_KEYS = ("read_only", "confirm", "confirm_timeout", "approvals", *ACT_KINDS, "velocity", "publish")
+_TOP_KEYS = (
+    "read_only",
+    "confirm",
+    "confirm_timeout",
+    "approvals",
+    *ACT_KINDS,
+    "velocity",
+    "publish",
+    "recording",
+)
 _RULE_KEYS = ("allow", "deny")
 _MOTION_KEYS = ("allow", "deny", "motion")
 _VELOCITY_KEYS = ("max_linear", "max_angular", "mode")
 _PUBLISH_KEYS = ("max_rate_hz", "max_duration")
+_RECORDING_KEYS = ("enabled", "max_seconds", "max_megabytes")
 
 
 def load_policy(path: str | Path, *, source: str = "--policy") -> Policy:
@@ -273,6 +309,7 @@ def parse_policy(data: Mapping[str, Any], *, where: str = "policy") -> Policy:
         parameters=rules["parameters"],
         velocity=_velocity(data, where),
         publish=_publish(data, where),
+        recording=_recording(data, where),
         source=where,
     )
 
@@ -347,4 +384,16 @@ def _publish(data: Mapping[str, Any], where: str) -> PublishLimits:
         raise PolicyError(f"{where}: [publish] max_rate_hz must be more than 0 (use [topics] deny to forbid)")
     return PublishLimits(
         max_rate_hz=rate, max_duration=_positive(table, "max_duration", "publish", where, "seconds")
+    )
+
+
+def _recording(data: Mapping[str, Any], where: str) -> RecordingLimits:
+    table = _table(data, "recording", where, _RECORDING_KEYS)
+    enabled = table.get("enabled", True)
+    if not isinstance(enabled, bool):
+        raise PolicyError(f"{where}: [recording] enabled must be true or false, not {enabled!r}")
+    return RecordingLimits(
+        enabled=enabled,
+        max_seconds=_positive(table, "max_seconds", "recording", where, "seconds"),
+        max_megabytes=_positive(table, "max_megabytes", "recording", where, "megabytes"),
     )

@@ -10,6 +10,7 @@ import sys
 from typing import NoReturn
 
 from rosbridge_mcp_server.sim.nodes.nav2.health import FAULTS, check_faults
+from rosbridge_mcp_server.sim.player import PlayError
 from rosbridge_mcp_server.sim.robot import ROS2_DISTROS, WORLDS, SimulatedRobot
 
 __all__ = ["build_parser", "main", "run"]
@@ -134,6 +135,8 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="leave out every node's parameter / type description (ros2) or logger (ros1) services",
     )
+    parser.add_argument("--play", metavar="FILE.mcap", help="play an MCAP recording's topics in real time")
+    parser.add_argument("--loop", action="store_true", help="with --play: play the recording over and over")
     parser.add_argument("--fast-topic", action="store_true", help="publish /fast_counter at 1 kHz")
     parser.add_argument(
         "--action-step", type=_positive_float, default=0.2, help="seconds per /fibonacci step (default 0.2)"
@@ -196,12 +199,28 @@ def run(argv: list[str] | None = None) -> int:
             raise ValueError
     except ValueError:
         parser.error(f"--camera-size must look like 160x120, not {args.camera_size!r}")
+    if args.loop and args.play is None:
+        parser.error("--loop needs --play FILE.mcap")
     if args.map_cells < 8:
         parser.error(f"--map-cells must be at least 8, not {args.map_cells}")
     logging.basicConfig(
         level=args.log_level, stream=sys.stderr, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
-    robot = SimulatedRobot(
+    try:
+        robot = _robot(args, width, height, faults)
+    except PlayError as exc:
+        print(f"{PROG}: --play: {exc}", file=sys.stderr)
+        return 2
+    try:
+        asyncio.run(_serve(robot))
+    except OSError as exc:
+        print(f"{PROG}: cannot serve on {args.host}:{args.port}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _robot(args: argparse.Namespace, width: int, height: int, faults: tuple[str, ...]) -> SimulatedRobot:
+    return SimulatedRobot(
         dialect=args.dialect,
         in_order=args.in_order,
         distro=args.distro,
@@ -220,13 +239,9 @@ def run(argv: list[str] | None = None) -> int:
         world=args.world,
         robots=args.robots,
         faults=faults,
+        play=args.play,
+        play_loop=args.loop,
     )
-    try:
-        asyncio.run(_serve(robot))
-    except OSError as exc:
-        print(f"{PROG}: cannot serve on {args.host}:{args.port}: {exc.strerror or exc}", file=sys.stderr)
-        return 1
-    return 0
 
 
 def main() -> None:

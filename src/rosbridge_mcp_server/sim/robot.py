@@ -18,6 +18,7 @@ from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
 from rosbridge_mcp_server.sim.nodes import CameraSettings, WorldNodes
 from rosbridge_mcp_server.sim.nodes.nav2 import Nav2World
 from rosbridge_mcp_server.sim.nodes.room import ROOM_MAP_CELLS
+from rosbridge_mcp_server.sim.player import Player
 from rosbridge_mcp_server.sim.rosapi import ROSAPI_RELEASES, Rosapi, RosapiOptions
 from rosbridge_mcp_server.sim.world import World
 
@@ -53,6 +54,8 @@ class SimulatedRobot:
     ``/map`` in cells (the same room, finer; e.g. 2000 for benchmarks). ``cbor=False`` is a bridge that
     ignores ``compression: "cbor"`` and sends JSON (by default it answers with binary CBOR frames, as
     rosbridge_suite 0.11.17 / 2.x do).
+
+    ``play`` plays an MCAP recording (``sim/player.py``), once or with ``play_loop`` over and over.
 
     ``world="nav2"`` runs a Nav2-scale mobile robot instead of the turtle (see :mod:`.nodes.nav2`);
     ``robots=N`` runs N of them under ``/robot1``, ``/robot2``, ... ``faults`` (Nav2 only) breaks it on
@@ -90,6 +93,8 @@ class SimulatedRobot:
         robots: int = 1,
         cbor: bool = True,
         faults: Sequence[str] = (),
+        play: str | None = None,
+        play_loop: bool = False,
     ) -> None:
         if dialect not in ("ros1", "ros2"):
             raise ValueError(f"dialect must be 'ros1' or 'ros2', not {dialect!r}")
@@ -165,6 +170,11 @@ class SimulatedRobot:
             faults=tuple(faults),
         )
         self._nodes.build()
+        #: The recording played (``play``: an MCAP file; ``play_loop``: over and over), else ``None``.
+        self.player: Player | None = None
+        if play is not None:
+            self.player = Player(self._nodes.kit, play, loop=play_loop)
+            self.player.build()
         self.world_name = world
         self._server: Server | None = None
 

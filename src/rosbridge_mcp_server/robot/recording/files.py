@@ -1,0 +1,135 @@
+"""Where recordings live: the recording directory, and every path held inside it.
+
+A name given by a model is a path relative to the directory (``run1.mcap``, ``today/run1.mcap``) or an
+absolute path that lands inside it. Whatever it is, the path is resolved with every symlink followed and must
+still be inside the directory's own resolved path: ``../x``, ``/etc/passwd`` and a symlink pointing out are
+all refused. A new recording is created with ``O_EXCL | O_NOFOLLOW``: it never overwrites a file and never
+writes through a symlink planted in the directory.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = [
+    "MCAP_MAGIC",
+    "PathRefused",
+    "RecordingEntry",
+    "create_recording",
+    "default_record_dir",
+    "list_recordings",
+    "recording_directory",
+    "resolve_recording",
+]
+
+#: The first 8 bytes of every MCAP file.
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
+
+
+class PathRefused(ValueError):
+    """A path outside the recording directory, or a name that cannot be a recording; ``str()`` says why."""
+
+
+def default_record_dir() -> Path:
+    """``$XDG_DATA_HOME/rosbridge-mcp-server/recordings`` (``~/.local/share/...`` when unset)."""
+    base = os.environ.get("XDG_DATA_HOME", "").strip()
+    root = Path(base) if base and Path(base).is_absolute() else Path.home() / ".local" / "share"
+    return root / "rosbridge-mcp-server" / "recordings"
+
+
+def recording_directory(configured: str | None) -> Path:
+    """The recording directory: ``--record-dir`` (``~`` expanded), else :func:`default_record_dir`."""
+    return Path(configured).expanduser() if configured else default_record_dir()
+
+
+def _inside(directory: Path, given: str) -> Path:
+    if "\x00" in given:
+        raise PathRefused("a file name cannot contain a NUL character")
+    root = directory.resolve()
+    candidate = Path(given)
+    target = (candidate if candidate.is_absolute() else root / candidate).resolve()
+    if target != root and root not in target.parents:
+        raise PathRefused(
+            f"{given!r} is outside the recording directory {str(root)!r}; name a file inside it "
+            "(read_recording without a file lists them)."
+        )
+    return target
+
+
+def resolve_recording(directory: Path, given: str) -> Path:
+    """An existing file inside ``directory``; :class:`PathRefused` otherwise."""
+    target = _inside(directory, given.strip())
+    if not target.is_file():
+        raise PathRefused(
+            f"There is no recording {given!r} in {str(directory.resolve())!r}; read_recording without a file "
+            "lists them."
+        )
+    return target
+
+
+def create_recording(directory: Path, name: str | None) -> tuple[Path, int]:
+    """A new, empty ``.mcap`` file inside ``directory`` (made if missing) and its open descriptor.
+
+    ``name`` is a bare file name (letters, digits, ``._-``); ``None`` names it after the time.
+    """
+    directory.mkdir(parents=True, exist_ok=True)
+    if name is None:
+        name = time.strftime("rec-%Y%m%d-%H%M%S", time.localtime())
+    name = name.strip()
+    if name.endswith(".mcap"):
+        name = name[:-5]
+    if not _NAME.match(name):
+        raise PathRefused(
+            f"Recording name {name!r} must be a bare file name of letters, digits, '.', '_' and '-' (at most "
+            '100), e.g. "drive-test"; the file goes in the recording directory.'
+        )
+    target = _inside(directory, f"{name}.mcap")
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(target, flags, 0o644)
+    except FileExistsError:
+        raise PathRefused(
+            f"A recording named {target.name!r} already exists; choose another name (recordings are never "
+            "overwritten)."
+        ) from None
+    return target, fd
+
+
+@dataclass(frozen=True)
+class RecordingEntry:
+    """One file in the recording directory."""
+
+    name: str
+    size: int
+    modified: float
+    is_mcap: bool
+
+
+def list_recordings(directory: Path, limit: int = 1000) -> list[RecordingEntry]:
+    """The ``.mcap`` files in ``directory`` and one level of folders, newest first."""
+    root = directory.resolve()
+    if not root.is_dir():
+        return []
+    found: list[RecordingEntry] = []
+    for path in [*root.glob("*.mcap"), *root.glob("*/*.mcap")]:
+        try:
+            resolved = path.resolve()
+            if root not in resolved.parents or not resolved.is_file():
+                continue
+            stat = resolved.stat()
+            with resolved.open("rb") as handle:
+                magic = handle.read(len(MCAP_MAGIC))
+        except OSError:
+            continue
+        found.append(
+            RecordingEntry(str(path.relative_to(root)), stat.st_size, stat.st_mtime, magic == MCAP_MAGIC)
+        )
+        if len(found) >= limit:
+            break
+    found.sort(key=lambda entry: entry.modified, reverse=True)
+    return found

@@ -1,0 +1,214 @@
+"""The simulated robot plays a recording (``rosbridge-sim-robot --play FILE.mcap [--loop]``).
+
+Every channel of the MCAP file whose schema the simulator's interface registry knows becomes a topic published
+by the player's node (``/rosbag2_player`` on ROS 2, ``/player`` on ROS 1, as ``ros2 bag play`` and ``rosbag
+play`` name theirs), with its recorded type, spelled for the dialect: a ``ros2msg`` recording plays on a ROS 1
+robot too when the types exist in both. Messages go out in real time, spaced as their log times were; a topic
+a world node publishes too is taken over by the recording. A topic with a single message (a map,
+``/tf_static``) is latched. Decoding uses the ``mcap`` support packages (``ros2msg``/``cdr``,
+``ros1msg``/``ros1``, ``json``), imported only when a recording is played.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import base64
+import json
+import logging
+import time
+from array import array
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rosbridge_mcp_server.sim.interfaces import InterfaceError
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.sim.nodes.kit import NodeKit
+
+__all__ = ["PlayError", "Player"]
+
+log = logging.getLogger("rosbridge_mcp_server.sim")
+
+_MAGIC = b"\x89MCAP0\r\n"
+
+
+class PlayError(ValueError):
+    """The file cannot be played; ``str()`` says why."""
+
+
+@dataclass
+class _Channel:
+    topic: str
+    type: str
+    messages: int
+
+
+def _plain(value: Any, ros2: bool) -> Any:
+    """A decoded message as JSON-like data, byte arrays as base64 and times in the dialect's spelling."""
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    if isinstance(value, bytes | bytearray | memoryview):
+        return base64.b64encode(bytes(value)).decode()
+    if isinstance(value, list | tuple):
+        return [_plain(item, ros2) for item in value]
+    if isinstance(value, array):
+        return value.tolist()
+    if isinstance(value, dict):
+        return {k: _plain(v, ros2) for k, v in value.items()}
+    slots = getattr(type(value), "__slots__", None)
+    if slots is None:
+        return value.tolist() if hasattr(value, "tolist") else str(value)
+    names = [slots] if isinstance(slots, str) else [n for n in slots if not n.startswith("_")]
+    out = {name: _plain(getattr(value, name, None), ros2) for name in names}
+    keys = set(out)
+    if keys in ({"sec", "nanosec"}, {"secs", "nsecs"}):
+        sec = out.get("sec", out.get("secs"))
+        nsec = out.get("nanosec", out.get("nsecs"))
+        return {"sec": sec, "nanosec": nsec} if ros2 else {"secs": sec, "nsecs": nsec}
+    return out
+
+
+def _spelled(schema_name: str, ros2: bool) -> str:
+    pkg, _, rest = schema_name.partition("/")
+    name = rest.split("/")[-1]
+    return f"{pkg}/msg/{name}" if ros2 else f"{pkg}/{name}"
+
+
+class Player:
+    """Plays one MCAP file on the world's bridge."""
+
+    def __init__(self, kit: NodeKit, path: str | Path, *, loop: bool = False) -> None:
+        self.kit = kit
+        self.path = Path(path)
+        self.loop = loop
+        self.node = "/rosbag2_player" if kit.ros2 else "/player"
+        self.channels: dict[str, _Channel] = {}
+        #: Messages published so far, per topic (what a subscriber can count against).
+        self.published: dict[str, int] = {}
+        self.passes = 0
+        self.done = asyncio.Event()
+
+    # --- building -----------------------------------------------------------------------------------------
+
+    def build(self) -> None:
+        """Read the file's channels and register the player's topics; :class:`PlayError` if it cannot play."""
+        try:
+            with self.path.open("rb") as handle:
+                if handle.read(len(_MAGIC)) != _MAGIC:
+                    raise PlayError(f"{self.path} is not an MCAP file")
+        except OSError as exc:
+            raise PlayError(f"cannot read {self.path}: {exc.strerror or exc}") from None
+        counts, types = self._channels()
+        for topic, schema_name in types.items():
+            try:
+                msg_type = self.kit.bridge.registry.resolve(_spelled(schema_name, self.kit.ros2), "msg")
+            except InterfaceError as exc:
+                log.warning("not played: %s (%s): %s", topic, schema_name, exc)
+                continue
+            existing = self.kit.graph.topic_types.get(topic)
+            if existing is not None and existing != msg_type:
+                log.warning(
+                    "not played: %s is %s in the world, %s in the recording", topic, existing, msg_type
+                )
+                continue
+            # A world node publishing the topic stops (its kit forgets the topic): the recording has it.
+            self.kit.types.pop(topic, None)
+            for node in self.kit.graph.publishers_of(topic):
+                self.kit.graph.remove_publisher(node, topic)
+            self.kit.graph.add_publisher(self.node, topic, msg_type)
+            if counts[topic] == 1:
+                self.kit.graph.latched.setdefault(topic, None)
+            self.channels[topic] = _Channel(topic, msg_type, counts[topic])
+            self.published[topic] = 0
+        if not self.channels:
+            raise PlayError(f"{self.path} has no topic this simulator can play (types unknown to it)")
+        log.info(
+            "playing %s: %s",
+            self.path.name,
+            ", ".join(f"{c.topic} ({c.messages})" for c in self.channels.values()),
+        )
+        self.kit.loops.append(self._play)
+
+    def _channels(self) -> tuple[dict[str, int], dict[str, str]]:
+        """Messages and schema name per topic: from the summary section, or by reading the file through."""
+        from mcap.exceptions import McapError  # noqa: PLC0415
+        from mcap.reader import make_reader  # noqa: PLC0415
+
+        counts: dict[str, int] = {}
+        types: dict[str, str] = {}
+        try:
+            with self.path.open("rb") as handle:
+                reader = make_reader(handle)
+                summary = reader.get_summary()
+                if summary is not None and summary.statistics is not None:
+                    for cid, channel in summary.channels.items():
+                        schema = summary.schemas.get(channel.schema_id)
+                        counts[channel.topic] = summary.statistics.channel_message_counts.get(cid, 0)
+                        if schema is not None:
+                            types[channel.topic] = schema.name
+                    return counts, types
+                for schema, channel, _ in reader.iter_messages():
+                    counts[channel.topic] = counts.get(channel.topic, 0) + 1
+                    if schema is not None:
+                        types.setdefault(channel.topic, schema.name)
+        except (McapError, ValueError, EOFError) as exc:
+            if not counts:
+                raise PlayError(f"{self.path} cannot be read as MCAP: {exc}") from None
+        return counts, types
+
+    # --- playing ------------------------------------------------------------------------------------------
+
+    async def _play(self) -> None:
+        from mcap.reader import make_reader  # noqa: PLC0415
+        from mcap_ros1.decoder import DecoderFactory as Ros1Factory  # noqa: PLC0415
+        from mcap_ros2.decoder import DecoderFactory as Ros2Factory  # noqa: PLC0415
+
+        factories = [Ros2Factory(), Ros1Factory()]
+        while True:
+            self.passes += 1
+            first: int | None = None
+            start = time.monotonic()
+            decoders: dict[int, Any] = {}
+            with self.path.open("rb") as handle:
+                for schema, channel, message in make_reader(
+                    handle, decoder_factories=factories
+                ).iter_messages():
+                    entry = self.channels.get(channel.topic)
+                    if entry is None:
+                        continue
+                    if first is None:
+                        first = message.log_time
+                    due = start + (message.log_time - first) / 1e9
+                    wait = due - time.monotonic()
+                    if wait > 0:
+                        await asyncio.sleep(wait)
+                    decoder = decoders.get(channel.id)
+                    if decoder is None:
+                        decoder = decoders[channel.id] = self._decoder(factories, schema, channel)
+                    bridge = self.kit.bridge
+                    if (
+                        not bridge.has_subscribers(channel.topic)
+                        and channel.topic not in self.kit.graph.latched
+                    ):
+                        continue  # nobody listens: nothing goes out, as a real publisher's reaches no one
+                    try:
+                        msg = _plain(decoder(message.data), self.kit.ros2)
+                        bridge.publish_json(channel.topic, entry.type, msg)
+                    except Exception as exc:  # one bad message costs one log line
+                        log.error("playing %s: %s", channel.topic, exc)
+                        continue
+                    self.published[channel.topic] += 1
+            if not self.loop:
+                self.done.set()
+                return
+
+    @staticmethod
+    def _decoder(factories: list[Any], schema: Any, channel: Any) -> Any:
+        if channel.message_encoding == "json":
+            return json.loads
+        for factory in factories:
+            decoder = factory.decoder_for(channel.message_encoding, schema)
+            if decoder is not None:
+                return decoder
+        raise PlayError(f"{channel.topic}: cannot decode {channel.message_encoding}")
