@@ -200,7 +200,7 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
         )
 
     tool = tool_with_handler(template, call_tool)
-    tool.parameters = fleet.schema_with_robot(checked.schema, spec.name)
+    tool.parameters = fleet.schema_with_robot(checked.schema, spec.name, acting=not spec.hints.read_only)
     return tool, checked
 
 

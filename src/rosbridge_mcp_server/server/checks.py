@@ -11,7 +11,9 @@ the SDK validates the parameters, so stdio and HTTP share each check here:
   (validated against our own model of the parameters, the same annotations the SDK's model is built from);
 * the caller the transport authenticated (a token's name, a JWT's subject) is named for the audit;
 * with several robots, the ``robot`` argument is taken off the call and chooses the robot it runs on
-  (``fleet.py``); a missing or unknown one is refused with the robots' names.
+  (``fleet.py``); a missing or unknown one is refused with the robots' names;
+* a call on the robots it runs on may be refused whatever its arguments (an acting tool on a read-only robot
+  of a fleet), by the server's ``robot_check``.
 
 A refusal is the ``isError`` result the tool itself would give; nothing reaches the tool.
 """
@@ -42,6 +44,8 @@ ArgumentErrorText = Callable[[str, ValidationError, dict[str, Any]], str]
 ArgumentCheck = Callable[[str, dict[str, Any], dict[str, Any]], str | None]
 #: Answers a call of a tool the server does not list: (name, arguments) -> a refusal, or None.
 UnlistedAnswer = Callable[[str, dict[str, Any]], str | None]
+#: Refuses a listed tool on the robots chosen for it ((), one robot): (name, robots, arguments) -> a refusal.
+RobotCheck = Callable[[str, "tuple[Robot, ...]", dict[str, Any]], str | None]
 
 
 @dataclass(frozen=True)
@@ -82,7 +86,9 @@ class ToolCallChecks:
         unlisted: UnlistedAnswer | None = None,
         fleet: Fleet | None = None,
         fleet_wide: Iterable[str] = (),
+        robot_check: RobotCheck | None = None,
     ) -> None:
+        self._robot_check = robot_check
         self._fleet = fleet
         # Tools about every robot at once (list_robots, show_console): no ``robot`` argument is taken off.
         self._fleet_wide = {LIST_ROBOTS, *fleet_wide}
@@ -109,6 +115,11 @@ class ToolCallChecks:
             if refusal is not None:
                 return refusal_result(refusal)
             ctx = replace(ctx, params={**ctx.params, "arguments": arguments})
+        if self._robot_check is not None and choosing:
+            with calling_as(caller()):
+                refusal = self._robot_check(name, robots, arguments)
+            if refusal is not None:
+                return refusal_result(refusal)
         refusal = self.refusal(name, arguments)
         if refusal is not None:
             return refusal_result(refusal)

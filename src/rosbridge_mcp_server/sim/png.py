@@ -1,5 +1,5 @@
 """A minimal PNG encoder (8-bit RGB, no filtering) for the simulated camera's compressed topic, and the
-decompression bomb the tests and the benchmark publish at the server: a small file declaring a huge picture."""
+decompression bomb the tests and the benchmark publish at the server: a small file, a huge picture."""
 
 from __future__ import annotations
 
