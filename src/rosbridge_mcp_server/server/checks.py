@@ -8,7 +8,8 @@ the SDK validates the parameters, so stdio and HTTP share each check here:
 * the arguments as the client sent them go through ``tools/arguments.py`` (unknown keys, booleans for numbers,
   sizes) before the SDK's lenient conversion would drop or convert them;
 * arguments that do not fit the tool's parameters are one sentence naming each, instead of pydantic's dump
-  (validated against our own model of the parameters, the same annotations the SDK's model is built from);
+  (validated against our own model of the parameters, the same annotations the SDK's model is built from,
+  after the SDK's own reading of JSON inside strings, so that ``"request": "null"`` is named too);
 * the caller the transport authenticated (a token's name, a JWT's subject) is named for the audit;
 * with several robots, the ``robot`` argument is taken off the call and chooses the robot it runs on
   (``fleet.py``); a missing or unknown one is refused with the robots' names;
@@ -55,9 +56,17 @@ class CheckedTool:
     name: str
     schema: dict[str, Any]
     arguments: type[BaseModel]
+    #: What the SDK does to the arguments before it validates them (``sdk.argument_pre_parse``).
+    pre_parse: Callable[[dict[str, Any]], dict[str, Any]] | None = None
 
     @classmethod
-    def of(cls, name: str, schema: dict[str, Any], parameters: list[inspect.Parameter]) -> CheckedTool:
+    def of(
+        cls,
+        name: str,
+        schema: dict[str, Any],
+        parameters: list[inspect.Parameter],
+        pre_parse: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
+    ) -> CheckedTool:
         """The tool named *name* whose parameters (annotations resolved) are *parameters*."""
         fields: dict[str, Any] = {
             p.name: (p.annotation, ... if p.default is inspect.Parameter.empty else p.default)
@@ -66,7 +75,7 @@ class CheckedTool:
         model = create_model(
             f"{name}_arguments", __config__=ConfigDict(arbitrary_types_allowed=True), **fields
         )
-        return cls(name, schema, model)
+        return cls(name, schema, model, pre_parse)
 
 
 def refusal_result(text: str) -> CallToolResult:
@@ -137,11 +146,23 @@ class ToolCallChecks:
         problem = self._argument_check(name, arguments, tool.schema)
         if problem is not None:
             return problem
+        # What the SDK validates: strings holding JSON objects, lists, null or booleans read as JSON.
+        validated = tool.pre_parse(arguments) if tool.pre_parse is not None else arguments
         try:
-            tool.arguments.model_validate(arguments)
+            tool.arguments.model_validate(validated)
         except ValidationError as exc:
-            return self._argument_error(name, exc, tool.schema)
+            text = self._argument_error(name, exc, tool.schema)
+            wrong = {str(error["loc"][0]) for error in exc.errors() if error["loc"]}
+            read = [key for key in arguments if key in wrong and validated[key] is not arguments[key]]
+            for key in read:
+                text += f" {key} was given as the text {_short(arguments[key])}, which is read as JSON."
+            return text
         return None
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def caller() -> str | None:
