@@ -355,6 +355,28 @@ async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_
     assert code == 0, stderr.decode()
 
 
+async def test_arguments_that_are_no_object_are_a_tool_error_naming_it() -> None:
+    """tools/call with arguments a list, a string or a number (the SDK's client cannot send them, a client
+    written by hand can): a tool error saying they must be an object, with the tool's parameters."""
+    server = await _start("--demo")
+    try:
+        await _initialized(server)
+        answers = [
+            await server.request("tools/call", {"name": "publish_service", "arguments": arguments})
+            for arguments in ([1, 2], "/add_two_ints", 5)
+        ]
+    finally:
+        _rest, stderr, code = await _finish(server)
+    texts = [answer["result"]["content"][0]["text"] for answer in answers]
+    assert all(answer["result"]["isError"] is True for answer in answers)
+    for text, kind in zip(texts, ("a list", "a string", "a number"), strict=True):
+        assert text.startswith(
+            f"Invalid arguments for publish_service: the arguments must be a JSON object of named arguments, "
+            f"not {kind}; nothing was sent. It takes: service, service_type"
+        )
+    assert code == 0, stderr.decode()
+
+
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the peak RSS from Linux's /proc")
 async def test_a_line_over_64_mib_is_refused_unread_and_memory_stays_bounded() -> None:
     """A 150 MiB line (a call with its id last): -32600 naming the limit under its id, the server's peak RSS

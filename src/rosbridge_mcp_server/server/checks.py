@@ -33,6 +33,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError, create_model
 
 from rosbridge_mcp_server.safety import calling_as
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT, selecting
+from rosbridge_mcp_server.tools.arguments import parameter_listing
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.server.fleet import Fleet, Robot
@@ -113,6 +114,14 @@ class ToolCallChecks:
         arguments = ctx.params.get("arguments")
         if arguments is None:
             arguments = {}
+        if isinstance(name, str) and name in self._tools and not isinstance(arguments, dict):
+            # A tool we list, called with arguments that are no object: a tool's error naming it, as for any
+            # wrong argument, rather than the SDK's bare "Invalid request parameters".
+            takes = parameter_listing(self._tools[name].schema)
+            return refusal_result(
+                f"Invalid arguments for {name}: the arguments must be a JSON object of named arguments, not "
+                f"{_kind(arguments)}; nothing was sent. It takes: {takes}."
+            )
         if not isinstance(name, str) or not isinstance(arguments, dict):
             # Malformed params: the SDK's own validation answers them.
             return await call_next(ctx)
@@ -158,6 +167,19 @@ class ToolCallChecks:
                 text += f" {key} was given as the text {_short(arguments[key])}, which is read as JSON."
             return text
         return None
+
+
+def _kind(value: Any) -> str:
+    """What a JSON value is, in words: "a list", "a string", ..."""
+    if isinstance(value, bool):
+        return "true or false"
+    if isinstance(value, int | float):
+        return "a number"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, str):
+        return "a string"
+    return f"a {type(value).__name__}"
 
 
 def _short(value: Any) -> str:
