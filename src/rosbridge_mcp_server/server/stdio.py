@@ -48,6 +48,7 @@ MAX_LINE_BYTES = 64 * 1024 * 1024
 #: The key of the small object that stands in for an over-long line on its way through the SDK's transport.
 _TOO_LONG = "rosbridge_mcp_line_too_long"
 _TAIL_BYTES = 1000
+_CHUNK_BYTES = 1024 * 1024
 
 
 async def serve_stdio(server: MCPServer[Any]) -> None:
@@ -105,22 +106,38 @@ class _BoundedLines:
         return line
 
     def _read_line(self) -> str | None:
-        raw = self._binary.readline(MAX_LINE_BYTES + 1)
-        if not raw:
-            return None
-        if len(raw) <= MAX_LINE_BYTES or raw.endswith(b"\n"):
-            return raw.decode("utf-8", errors="replace")
-        head, tail, size = raw[:_SCAN_CHARS], raw[-_TAIL_BYTES:], len(raw)
-        del raw
+        # Read in chunks into one growing buffer: a line is held once (readline with a limit of 64 MiB would
+        # hold its pieces and their join, twice the limit), and an over-long one is dropped at the limit.
+        line = bytearray()
         while True:
-            chunk = self._binary.readline(1024 * 1024)
+            chunk = self._binary.readline(_CHUNK_BYTES)
             if not chunk:
                 break
-            size += len(chunk)
-            tail = (tail + chunk)[-_TAIL_BYTES:]
+            line += chunk
             if chunk.endswith(b"\n"):
                 break
-        text = (head + tail.rstrip(b"\r\n")).decode("utf-8", errors="replace")
+            if len(line) > MAX_LINE_BYTES:
+                return self._skipped(line)
+        if not line:
+            return None
+        if len(line) - line.endswith(b"\n") > MAX_LINE_BYTES:
+            return self._skipped(line)
+        return line.decode("utf-8", errors="replace")
+
+    def _skipped(self, start: bytearray) -> str:
+        """The rest of an over-long line read and dropped; what stands in for it (its size and id)."""
+        head, tail, read = bytes(start[:_SCAN_CHARS]), bytes(start[-_TAIL_BYTES:]), len(start)
+        start.clear()
+        while not tail.endswith(b"\n"):
+            chunk = self._binary.readline(_CHUNK_BYTES)
+            if not chunk:
+                break
+            read += len(chunk)
+            tail = (tail + chunk)[-_TAIL_BYTES:]
+        size = read - tail.endswith(b"\n")
+        # The tail may overlap the head (a line just over a small limit): keep each byte once.
+        overlap = max(0, len(head) - (read - len(tail)))
+        text = (head + tail[overlap:].rstrip(b"\r\n")).decode("utf-8", errors="replace")
         return json.dumps({"jsonrpc": "2.0", "id": _recover_id(text), _TOO_LONG: size})
 
 
@@ -145,11 +162,16 @@ def reply_for_unreadable(exc: Exception) -> JSONRPCError | None:
     if too_long is not None:
         return _error_reply(
             INVALID_REQUEST,
-            f"Invalid request: the line is {too_long:,} bytes, longer than the {MAX_LINE_BYTES // 2**20} MiB "
-            "this server reads; it was skipped unread",
+            f"Invalid request: the line is {too_long:,} bytes, longer than the {_limit()} this server reads; "
+            "it was skipped unread",
             request_id,
         )
     return _not_json_rpc(request_id)
+
+
+def _limit() -> str:
+    mib, rest = divmod(MAX_LINE_BYTES, 2**20)
+    return f"{mib} MiB" if mib and not rest else f"{MAX_LINE_BYTES:,} bytes"
 
 
 def _parse_error(pydantic_message: str, request_id: int | str | None) -> JSONRPCError:
