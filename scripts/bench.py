@@ -18,7 +18,9 @@ What is measured:
    script, next to the same SDK's cost for a tool that does nothing (``scripts/bench/bare_server.py``),
    and, for comparison, all three again on the MCP SDK's own stdio transport instead of ours;
 4. 100 tool calls at once in one session against a 50 ms service, against 100 in a row;
-5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image;
+5. 1 000 messages of the 1 kHz topic: how many were lost; a camera frame as an MCP image; a PNG
+   decompression bomb (13000² at 16 bits in ~330 kB) refused by ``get_image``, with the server's peak RSS
+   growth while it is;
 6. spawn → ``initialize`` → ``tools/list``, against a bare ``MCPServer`` started the same way;
 7. RSS after startup and its growth over 10 000 tool calls, against the same bare server;
 8. the graph tools against the raw rosapi round trips each needs (``--only graph``; meant for real bridges).
@@ -87,6 +89,7 @@ from websockets.exceptions import ConnectionClosed
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
+from rosbridge_mcp_server.sim.png import png_bomb
 
 __all__ = ["main"]
 
@@ -1542,6 +1545,7 @@ async def measure_throughput(ctx: Context) -> list[Row]:
             ),
         ]
     rows.append(await measure_camera_image(ctx))
+    rows.append(await measure_png_bomb(ctx))
     return rows
 
 
@@ -1578,6 +1582,62 @@ async def measure_camera_image(ctx: Context) -> Row:
     await ctx.client.unadvertise(topic)
     stats = Stats.of(samples)
     return timing_row("5b", what, stats, target="≤ 100 ms", verdict=verdict(stats.median <= 0.1))
+
+
+async def measure_png_bomb(ctx: Context) -> Row:
+    """``get_image`` on a latched CompressedImage PNG declaring 13000 × 13000 × 16 bit (~330 kB): refused from
+    its header, and the server's peak RSS (Linux ``VmHWM``, reset first) grows by at most 50 MiB.
+
+    Before the decode budget one such call raised the server's peak from 531 MiB to 2,497 MiB.
+    """
+    what = "`get_image` on a 13000² 16-bit PNG bomb (~330 kB): refused, server's peak RSS growth"
+    target = "refused, ≤ 50 MiB"
+    if "get_image" not in ctx.ours.tools:
+        return Row("5c", what, target=target, verdict="n/a (no get_image tool)")
+    if not _peak_resettable(ctx.ours.process):
+        return Row("5c", what, target=target, verdict="n/a (needs Linux /proc/PID/clear_refs)")
+    topic = "/bench/png_bomb"
+    bomb = {"format": "png", "data": base64.b64encode(png_bomb()).decode()}
+    await ctx.client.publish(topic, "sensor_msgs/msg/CompressedImage", bomb, latch=True)
+    arguments = {"topic": topic, "timeout": 10}
+    # A first call learns the topic's type and warms the subscription path; the measured one follows.
+    await ctx.ours.session.call_tool("get_image", arguments)
+    before = ctx.ours.rss()
+    _peak_reset(ctx.ours.process)
+    began = time.perf_counter()
+    result = await ctx.ours.session.call_tool("get_image", arguments)
+    elapsed = time.perf_counter() - began
+    growth = max(0, _peak_rss(ctx.ours.process) - before)
+    await ctx.client.unadvertise(topic)
+    text = " ".join(getattr(block, "text", "") for block in result.content)
+    refused = bool(result.is_error) and "13000x13000" in text and "budget" in text
+    return Row(
+        "5c",
+        what,
+        n=1,
+        median=mib(growth),
+        versus=f"{'refused' if refused else 'NOT refused'} in {ms(elapsed)}",
+        target=target,
+        verdict=verdict(refused and growth <= 50 * MIB),
+        figures={"refused": refused, "peak_rss_growth_bytes": growth, "elapsed_s": elapsed},
+    )
+
+
+def _peak_resettable(process: psutil.Process) -> bool:
+    return Path(f"/proc/{process.pid}/clear_refs").exists() and Path(f"/proc/{process.pid}/status").exists()
+
+
+def _peak_reset(process: psutil.Process) -> None:
+    """Reset the process's peak RSS to its current RSS (Linux ≥ 4.0: ``5`` into ``clear_refs``)."""
+    Path(f"/proc/{process.pid}/clear_refs").write_text("5")
+
+
+def _peak_rss(process: psutil.Process) -> int:
+    """The process's peak RSS since the last reset (``VmHWM``), in bytes."""
+    for line in Path(f"/proc/{process.pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) * 1024
+    raise RuntimeError("no VmHWM in /proc/PID/status")
 
 
 # ---------------------------------------------------------------------------------- item 9: watch tools

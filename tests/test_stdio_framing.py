@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import io
+
+import pytest
 from mcp.types import JSONRPCError, jsonrpc_message_adapter
 
+from rosbridge_mcp_server.server import stdio
 from rosbridge_mcp_server.server.stdio import reply_for_unreadable
 
 
@@ -73,3 +77,26 @@ def test_the_sdk_transports_failures_are_answered_with_the_id_they_carry() -> No
     assert (parse.id, parse.error.code) == (3, -32700)
     assert (invalid.id, invalid.error.code) == ("q", -32600)
     assert (array.id, array.error.code) == (None, -32600)
+
+
+async def test_lines_up_to_the_limit_pass_and_a_longer_one_is_answered_naming_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With the limit at 40 bytes: a 40-byte line passes whole; a longer one (its id last, read after the
+    limit) stands in as -32600 naming its size under its id; the next line is read as it was sent."""
+    monkeypatch.setattr(stdio, "MAX_LINE_BYTES", 40)
+    monkeypatch.setattr(stdio, "_CHUNK_BYTES", 16)
+    exact = b'{"jsonrpc": "2.0", "method": "x", "a":1}'
+    over = b'{"jsonrpc": "2.0", "method": "tools/list", "params": {"x": "' + b"y" * 100 + b'"}, "id": 9}'
+    after = b'{"jsonrpc":"2.0","id":10,"method":"p"}'
+    assert len(exact) == 40
+    lines = stdio._BoundedLines(io.BytesIO(exact + b"\n" + over + b"\n" + after + b"\n"))
+    read = [line async for line in lines]
+    assert read[0] == exact.decode() + "\n"
+    assert read[2] == after.decode() + "\n"
+    reply = _reply(read[1])
+    assert (reply.id, reply.error.code) == (9, -32600)
+    assert reply.error.message == (
+        f"Invalid request: the line is {len(over):,} bytes, longer than the 40 bytes this server reads; it "
+        "was skipped unread"
+    )

@@ -318,7 +318,7 @@ async def test_a_running_goal_is_cancelled_when_the_server_is_stopped(
 
 
 async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_on() -> None:
-    """Garbage, 300 deep, not JSON-RPC, bad UTF-8, a 65 MiB call: each gets an error, with its id if shown."""
+    """Garbage, 300 deep, not JSON-RPC, bad UTF-8, a 65 MiB line: each gets an error, with its id if shown."""
     server = await _start("--demo")
     deep = "[" * 300 + "]" * 300
     try:
@@ -347,11 +347,68 @@ async def test_every_unreadable_line_gets_a_json_rpc_error_and_the_session_goes_
         ("forty-two", -32600),
         (None, -32600),
         (None, -32700),
-        (43, -32602),  # read whole by the SDK's transport: a call without a tool name
+        (43, -32600),  # over 64 MiB: skipped unread
     ]
     assert "nests deeper" in answers[1]["error"]["message"]
+    assert "longer than the 64 MiB this server reads" in answers[5]["error"]["message"]
     assert topics["result"]["isError"] is False
     assert code == 0, stderr.decode()
+
+
+async def test_arguments_that_are_no_object_are_a_tool_error_naming_it() -> None:
+    """tools/call with arguments a list, a string or a number (the SDK's client cannot send them, a client
+    written by hand can): a tool error saying they must be an object, with the tool's parameters."""
+    server = await _start("--demo")
+    try:
+        await _initialized(server)
+        answers = [
+            await server.request("tools/call", {"name": "publish_service", "arguments": arguments})
+            for arguments in ([1, 2], "/add_two_ints", 5)
+        ]
+    finally:
+        _rest, stderr, code = await _finish(server)
+    texts = [answer["result"]["content"][0]["text"] for answer in answers]
+    assert all(answer["result"]["isError"] is True for answer in answers)
+    for text, kind in zip(texts, ("a list", "a string", "a number"), strict=True):
+        assert text.startswith(
+            f"Invalid arguments for publish_service: the arguments must be a JSON object of named arguments, "
+            f"not {kind}; nothing was sent. It takes: service, service_type"
+        )
+    assert code == 0, stderr.decode()
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the peak RSS from Linux's /proc")
+async def test_a_line_over_64_mib_is_refused_unread_and_memory_stays_bounded() -> None:
+    """A 150 MiB line (a call with its id last): -32600 naming the limit under its id; the server's peak RSS
+    grows by about the 64 MiB limit, not by the line (it is never held whole); the session goes on."""
+    server = await _start("--demo")
+    try:
+        await _initialized(server)
+        before = _peak_rss(server.process.pid)
+        assert server.process.stdin is not None
+        server.process.stdin.write(b'{"jsonrpc": "2.0", "method": "tools/list", "params": {"x": "')
+        for _ in range(150):
+            server.process.stdin.write(b"y" * 2**20)
+            await server.process.stdin.drain()
+        server.process.stdin.write(b'"}, "id": 77}\n')
+        answer = await server.read_message()
+        growth = _peak_rss(server.process.pid) - before
+        topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
+    finally:
+        _rest, stderr, code = await _finish(server)
+    assert (answer["id"], answer["error"]["code"]) == (77, -32600)
+    assert "the line is 157,286," in answer["error"]["message"]
+    assert growth < 96 * 2**20, f"peak RSS grew by {growth / 2**20:.0f} MiB"
+    assert topics["result"]["isError"] is False
+    assert code == 0, stderr.decode()
+
+
+def _peak_rss(pid: int) -> int:
+    """The process's peak RSS (VmHWM), bytes."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) * 1024
+    raise AssertionError("no VmHWM")
 
 
 async def test_unreadable_lines_read_from_a_file_are_answered_too(tmp_path: Path) -> None:

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import pytest
-from mcp_harness import Session, types_for
+from mcp_harness import Session, text_of, types_for
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -157,3 +158,52 @@ async def test_a_lone_surrogate_in_json_text_is_refused(session: Session, sim: S
     )
     assert "unpaired UTF-16 surrogate (\\ud800)" in text
     await _still_works(session)
+
+
+async def test_two_wrong_arguments_one_of_them_json_text_are_both_named(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """``"request": "null"`` (JSON text the SDK reads as null) and a bad timeout: our sentence naming both,
+    not the SDK's "2 validation errors"; nothing is called."""
+    text = await session.error(
+        "publish_service",
+        {
+            "service": "/add_two_ints",
+            "service_type": types_for(sim)["add_two_ints"],
+            "request": "null",
+            "timeout": -1,
+        },
+    )
+    assert text.startswith(
+        "Invalid arguments for publish_service: request: expected a JSON object or a string"
+    )
+    assert "timeout: input should be greater than 0 (got -1)" in text
+    assert "request was given as the text 'null', which is read as JSON." in text
+    assert "validation error" not in text
+    assert "/add_two_ints" not in sim.world.service_calls
+    await _still_works(session)
+
+
+@pytest.mark.parametrize("text", ["null", "true", "[1, 2]", "{}"])
+async def test_json_text_for_any_parameter_that_is_not_text_is_worded(
+    session_ros2: Session, text: str
+) -> None:
+    """For every tool, every parameter that is not plain text given JSON text: each error is our sentence
+    (or the tool's own), never the SDK's raw validation error."""
+    listed = await session_ros2.mcp.list_tools()
+    tried = 0
+    for tool in listed.tools:
+        properties: dict[str, Any] = tool.input_schema.get("properties", {})
+        required = tool.input_schema.get("required", [])
+        for key, prop in properties.items():
+            if prop.get("type") == "string" and "enum" not in prop:
+                continue
+            arguments = {name: "/chatter" for name in required if name != key} | {key: text}
+            result = await session_ros2.call(tool.name, arguments)
+            tried += 1
+            if result.is_error:
+                said = text_of(result)
+                assert "validation error" not in said, f"{tool.name}.{key}: {said[:200]}"
+                assert "Error executing tool" not in said, f"{tool.name}.{key}: {said[:200]}"
+    assert tried > 20
+    await _still_works(session_ros2)

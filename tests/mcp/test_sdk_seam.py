@@ -18,6 +18,7 @@ from pydantic import BaseModel, Field, ValidationError
 from mcp import Client
 from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
 from rosbridge_mcp_server.server.sdk import (
+    argument_pre_parse,
     replace_output_schema,
     serve_streams,
     tool_from_handler,
@@ -197,3 +198,24 @@ async def test_the_checks_answer_unlisted_tools_they_know_and_leave_others_to_th
     assert ours.content[0].text == "withheld, arguments ['a']"  # type: ignore[union-attr]
     assert theirs.is_error
     assert "Unknown tool: other" in theirs.content[0].text  # type: ignore[union-attr]
+
+
+async def test_the_sdk_reads_json_text_as_the_pre_parse_says_and_the_checks_name_it() -> None:
+    """The SDK's pre-parse turns "null" for an int into None (and leaves "7" alone); the checks validate
+    that, so the call gets our sentence (naming the text) instead of the SDK's own validation error."""
+    pre_parse = argument_pre_parse(_tool())
+    assert pre_parse({"number": "null"}) == {"number": None}
+    assert pre_parse({"number": "7"}) == {"number": "7"}
+    tool = _tool()
+    checks = ToolCallChecks(
+        [CheckedTool.of("double", tool.parameters, PARAMETERS, argument_pre_parse(tool))],
+        argument_check=lambda tool, arguments, schema: None,
+        argument_error=_reword,
+    )
+    async with Client(MCPServer("seam", tools=[tool], middleware=[checks])) as client:
+        result = await client.call_tool("double", {"number": "null"})
+    assert result.is_error
+    assert isinstance(result.content[0], TextContent)
+    assert result.content[0].text == (
+        "double wants number (1 wrong) number was given as the text 'null', which is read as JSON."
+    )

@@ -4,7 +4,12 @@ rosbridge sends the pixel bytes (``uint8[] data``) as one base64 string in JSON 
 bridges; both are accepted). A raw image carries ``width``, ``height``, ``encoding``, ``is_bigendian`` and
 ``step`` (bytes per row, which may include padding). Depth images (``16UC1`` in millimetres, ``32FC1`` in
 metres) are normalised to grey over the range of valid (non-zero, finite) pixels, nearer is darker, and the
-range is reported. Pure: no I/O.
+range is reported.
+
+Before anything is decoded, the size the message declares (a raw image's width × height, a compressed
+image's PNG or JPEG header) is held to the decode budget of ``budget.py``: a frame that would take more memory
+than that is refused, naming its size, and never decoded. Only JPEG and PNG are opened (what
+``image_transport`` sends); Pillow's other formats are more surface than a camera needs. Pure: no I/O.
 """
 
 from __future__ import annotations
@@ -14,12 +19,15 @@ import base64
 import binascii
 import io
 import math
+import struct
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
 from PIL import Image, UnidentifiedImageError
+
+from rosbridge_mcp_server.robot.budget import budget_problem
 
 __all__ = [
     "ENCODINGS",
@@ -52,6 +60,19 @@ _DEPTH = frozenset({"16UC1", "32FC1"})
 #: Every raw encoding we turn into a picture.
 ENCODINGS: tuple[str, ...] = (*_COLOUR, "mono16", "16UC1", "32FC1")
 _JPEG_QUALITY = 85
+#: Bytes a raw encoding's decode holds per pixel at once: Pillow keeps colour in 4 bytes a pixel; mono16 is
+#: read 16-bit, widened to 32 and cut to 8; a depth image is also a list of its valid values (a Python number
+#: each) to find its range.
+_RAW_COST: dict[str, int] = {"mono16": 11, "16UC1": 51, "32FC1": 49} | {
+    encoding: 1 if mode == "L" else 4 for encoding, (mode, _, _) in _COLOUR.items()
+}
+#: The same for a compressed frame: an 8-bit grey or palette picture 1 byte a pixel, colour 4, a 16-bit grey
+#: (depth) PNG read as depth like 16UC1.
+_GREY, _COLOUR_COST, _DEPTH_COST = 1, 4, 55
+#: The compressed formats opened, as Pillow names them.
+_COMPRESSED_FORMATS = ("PNG", "JPEG")
+#: Pillow's own limit on the pixels of one picture (``Image.MAX_IMAGE_PIXELS``), when it has been unset.
+_PILLOW_PIXELS = 89_478_485
 
 
 class ImageError(ValueError):
@@ -103,6 +124,8 @@ def decode_raw(msg: Mapping[str, Any]) -> Picture:
     height = _dimension(msg, "height")
     if width == 0 or height == 0:
         raise ImageError(f"The image is empty ({width}x{height}).")
+    if encoding in _RAW_COST:
+        _within_budget(f"{width}x{height} pixels of {encoding}", width * height * _RAW_COST[encoding])
     big_endian = bool(msg.get("is_bigendian", 0))
     data = message_bytes(msg.get("data"))
     if encoding in _COLOUR:
@@ -137,13 +160,35 @@ def decode_compressed(msg: Mapping[str, Any]) -> Picture:
     png_start = data.find(b"\x89PNG")
     if "compresseddepth" in fmt.lower() and png_start > 0:
         data = data[png_start:]
+    header = _declared(data)
+    if header is None:
+        raise ImageError(
+            f"The compressed image (format {fmt or 'not given'!r}) could not be decoded: its bytes are not a "
+            "picture this server decodes (JPEG or PNG)."
+        )
+    width, height, kind, cost = header
+    declared = f"{width}x{height} pixels ({kind})"
+    _within_budget(declared, width * height * cost, what="The compressed image")
+    # Pillow warns above this many pixels (and refuses above twice as many); a server must do neither.
+    most = Image.MAX_IMAGE_PIXELS or _PILLOW_PIXELS
+    if width * height > most:
+        raise ImageError(
+            f"The compressed image declares {declared}: more than the {most:,} pixels "
+            "Pillow decodes safely, so it was not decoded. A real camera sends far less; check what "
+            "publishes it."
+        )
     try:
-        image = Image.open(io.BytesIO(data))
+        image = Image.open(io.BytesIO(data), formats=_COMPRESSED_FORMATS)
+        if image.size != (width, height):
+            raise ImageError(
+                f"The compressed image's header says {width}x{height} but Pillow reads {image.width}x"
+                f"{image.height}; it was not decoded."
+            )
         image.load()
     except UnidentifiedImageError:
         raise ImageError(
             f"The compressed image (format {fmt or 'not given'!r}) could not be decoded: its bytes are not a "
-            "picture Pillow knows (JPEG, PNG, …)."
+            "picture this server decodes (JPEG or PNG)."
         ) from None
     except OSError as exc:
         raise ImageError(
@@ -182,6 +227,57 @@ def encode_picture(picture: Picture, max_size: int, fmt: ImageFormat) -> Encoded
     else:
         image.save(out, "PNG", compress_level=1)
     return Encoded(out.getvalue(), image.width, image.height)
+
+
+def _within_budget(declared: str, needed: int, *, what: str = "The image") -> None:
+    problem = budget_problem(what, declared, needed)
+    if problem is not None:
+        raise ImageError(problem)
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: PNG colour types: (what it is, decode cost per pixel at 8 bits).
+_PNG_COLOUR_TYPES = {
+    0: ("grey", _GREY),
+    2: ("RGB", _COLOUR_COST),
+    3: ("palette", _GREY),
+    4: ("grey+alpha", _COLOUR_COST),
+}
+#: JPEG start-of-frame markers (SOF0-SOF15 but DHT, JPG and DAC), which carry the frame's size.
+_JPEG_FRAMES = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}
+
+
+def _declared(data: bytes) -> tuple[int, int, str, int] | None:
+    """What a PNG's or JPEG's header declares: width, height, what its pixels are, decode bytes per pixel;
+    ``None`` when the bytes are neither (or the header is cut short). Read before Pillow sees the bytes."""
+    if data.startswith(_PNG_SIGNATURE) and data[12:16] == b"IHDR" and len(data) >= 26:
+        width, height, bits, colour = struct.unpack(">IIBB", data[16:26])
+        kind, cost = _PNG_COLOUR_TYPES.get(colour, ("RGBA", _COLOUR_COST))
+        if colour == 0 and bits == 16:
+            return width, height, "16-bit grey PNG", _DEPTH_COST
+        return width, height, f"{bits}-bit {kind} PNG", cost
+    if not data.startswith(b"\xff\xd8"):
+        return None
+    at = 2
+    while at + 4 <= len(data):
+        if data[at] != 0xFF:
+            return None
+        marker = data[at + 1]
+        if marker == 0xFF:  # fill byte
+            at += 1
+            continue
+        if marker == 0x01 or 0xD0 <= marker <= 0xD9:  # markers without a length
+            at += 2
+            continue
+        (length,) = struct.unpack(">H", data[at + 2 : at + 4])
+        if marker in _JPEG_FRAMES:
+            if at + 10 > len(data):
+                return None
+            height, width, components = struct.unpack(">HHB", data[at + 5 : at + 10])
+            kind = "grey JPEG" if components == 1 else f"{components}-channel JPEG"
+            return width, height, kind, _GREY if components == 1 else _COLOUR_COST
+        at += 2 + length
+    return None
 
 
 def _dimension(msg: Mapping[str, Any], name: str) -> int:

@@ -6,6 +6,9 @@ from the moment they arrive (a 4,000² map is 16 MB, never a list of Python obje
 decoder made); when a large map is shrunk, a pixel over any occupied cell stays occupied, so one-cell walls
 survive.
 
+A map whose declared width × height would take more than the decode budget (``budget.py``; the cells and the
+few copies drawing makes, :data:`_CELL_COST` bytes a cell) is refused before its data is touched.
+
 Pure: no I/O. Coordinates are metres in the map's frame; the grid may be rotated in it (``info.origin``).
 """
 
@@ -20,6 +23,7 @@ from typing import Any
 
 from PIL import Image, ImageChops, ImageDraw
 
+from rosbridge_mcp_server.robot.budget import budget_problem
 from rosbridge_mcp_server.robot.drawing import (
     OBSTACLE_COLOUR,
     PATH_COLOUR,
@@ -51,6 +55,9 @@ OCCUPIED_FROM = 65
 #: (MARGIN_LEFT + (x - x_min) · px/m, map height in pixels - (y - y_min) · px/m) for an unrotated grid.
 MARGIN_LEFT = 44
 MARGIN_BOTTOM = 38
+#: Bytes per cell while a map is decoded and drawn: the cells, the cropped and ranked copies, the walls kept
+#: when shrinking (two more), all one byte a cell.
+_CELL_COST = 5
 
 
 class MapError(ValueError):
@@ -132,6 +139,9 @@ def decode_grid(message: Mapping[str, Any]) -> Grid:
         raise MapError(f"The map's size is {width!r} x {height!r} cells; both must be positive.")
     if not isinstance(resolution, int | float) or not resolution > 0 or not math.isfinite(resolution):
         raise MapError(f"The map's resolution is {resolution!r}; it must be positive metres per cell.")
+    problem = budget_problem("The map", f"{width}x{height} cells", width * height * _CELL_COST)
+    if problem is not None:
+        raise MapError(problem)
     data = message.get("data")
     if isinstance(data, str):
         cells = base64.b64decode(data)

@@ -7,6 +7,10 @@ unknown. rosbridge's JSON sends both as ``null``, which cannot tell them apart: 
 "nothing within range" (lasers report that far more often than an error) and counted, so the text can say so.
 A point cloud counts its finite points with x, y (and z when given) as FLOAT32/FLOAT64.
 
+What a message declares is held to the decode budget (``budget.py``) before anything is decoded: a scan's
+beams (each a bearing and a range, and a point for a hit, as Python objects: :data:`_BEAM_COST` bytes), a
+cloud's width × height × point_step bytes.
+
 The top view puts the sensor in the middle, forward up and left to the left, as a driver sees it. Pure: no
 I/O.
 """
@@ -22,6 +26,7 @@ from typing import Any
 
 from PIL import Image, ImageDraw
 
+from rosbridge_mcp_server.robot.budget import budget_problem
 from rosbridge_mcp_server.robot.drawing import (
     OBSTACLE_COLOUR,
     ROBOT_COLOUR,
@@ -47,6 +52,8 @@ __all__ = [
 #: Radius of the robot's footprint drawn around the sensor, metres.
 FOOTPRINT_RADIUS = 0.2
 _MAX_CLOUD_POINTS = 200_000
+#: Bytes a laser beam takes decoded: (bearing, range) and (x, y) tuples of floats, and their list slots.
+_BEAM_COST = 240
 
 
 class ScanError(ValueError):
@@ -100,6 +107,7 @@ def decode_scan(message: Mapping[str, Any]) -> ScanPoints:
         raise ScanError(
             f"The scan's angle_min ({first!r}) and angle_increment ({increment!r}) must be numbers."
         )
+    _within_budget("The scan", f"{len(ranges):,} beams", len(ranges) * _BEAM_COST)
     angle_min, step = _float(first), _float(increment)
     low, high = message.get("range_min"), message.get("range_max")
     range_min = _float(low) if _finite(low) else 0.0
@@ -159,6 +167,7 @@ def decode_cloud(message: Mapping[str, Any]) -> ScanPoints:
             f"The cloud has no FLOAT32/FLOAT64 x and y fields (its fields: {', '.join(names) or 'none'})."
         )
     data = message.get("data")
+    _within_budget("The cloud", *_cloud_size(message, data))
     raw = (
         base64.b64decode(data)
         if isinstance(data, str)
@@ -185,6 +194,27 @@ def decode_cloud(message: Mapping[str, Any]) -> ScanPoints:
         if math.isfinite(x) and math.isfinite(y):
             points.append((x, y))
     return ScanPoints(frame_id=_frame(message), points=points, range_max=None, beams=[], field_of_view=None)
+
+
+def _cloud_size(message: Mapping[str, Any], data: object) -> tuple[str, int]:
+    """What a cloud declares (width × height points of point_step bytes), or its data's length when that
+    says more: its bytes, decoded, plus the points kept."""
+    sizes = [_count(message.get(key)) for key in ("width", "height", "point_step")]
+    declared = sizes[0] * sizes[1] * sizes[2]
+    held = len(data) * 3 // 4 if isinstance(data, str) else len(data) if isinstance(data, bytes | list) else 0
+    needed = max(declared, held) + _MAX_CLOUD_POINTS * _BEAM_COST // 2
+    text = f"{sizes[0]}x{sizes[1]} points of {sizes[2]} bytes" if declared >= held else f"{held:,} bytes"
+    return text, needed
+
+
+def _count(value: object) -> int:
+    return value if isinstance(value, int) and not isinstance(value, bool) and value > 0 else 0
+
+
+def _within_budget(what: str, declared: str, needed: int) -> None:
+    problem = budget_problem(what, declared, needed)
+    if problem is not None:
+        raise ScanError(problem)
 
 
 def _finite(value: object) -> bool:

@@ -51,7 +51,12 @@ from rosbridge_mcp_server.errors import (
 from rosbridge_mcp_server.robot.seam import Answer, AskPerson, SendToLink
 from rosbridge_mcp_server.server.checks import CheckedTool
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
-from rosbridge_mcp_server.server.sdk import replace_output_schema, tool_from_handler, tool_with_handler
+from rosbridge_mcp_server.server.sdk import (
+    argument_pre_parse,
+    replace_output_schema,
+    tool_from_handler,
+    tool_with_handler,
+)
 from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema
@@ -200,7 +205,7 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
         )
 
     tool = tool_with_handler(template, call_tool)
-    tool.parameters = fleet.schema_with_robot(checked.schema, spec.name)
+    tool.parameters = fleet.schema_with_robot(checked.schema, spec.name, acting=not spec.hints.read_only)
     return tool, checked
 
 
@@ -235,7 +240,7 @@ def _template(module: ModuleType) -> tuple[Tool, CheckedTool]:
     own = {**compact_input_schema(tool.parameters), "additionalProperties": False}
     tool.parameters = own
     replace_output_schema(tool, lambda schema: compact_output_schema(inline_refs(schema)))
-    return tool, CheckedTool.of(spec.name, own, parameters)
+    return tool, CheckedTool.of(spec.name, own, parameters, argument_pre_parse(tool))
 
 
 def _merged(names: list[str], answers: list[CallToolResult | InputRequiredResult]) -> CallToolResult:

@@ -76,6 +76,11 @@ _READ_ONLY_NOTE = """
 This server is read-only: it lists only tools that read the robot, and refuses any other.\
 """
 
+_READ_ONLY_ROBOTS_NOTE = """
+
+Read-only robots ({names}): only reading tools and stop_robot work on them; any other is refused.\
+"""
+
 
 def build_server(
     robot: RobotSession,
@@ -110,11 +115,13 @@ def build_fleet_server(
     """
     fleet = Fleet(robots)
     policy = config.policy
+    # Read-only when the server is, or when every robot is (a fleet file may make each read-only).
+    read_only = policy.read_only or not fleet.acting_names
     chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
     if any(not m.SPEC.hints.read_only for m in chosen) and stop_robot not in chosen:
         # Whoever can set the robot going can stop it, whatever --tools picked.
         chosen.append(stop_robot)
-    modules = [m for m in chosen if m.SPEC.hints.read_only or not policy.read_only]
+    modules = [m for m in chosen if m.SPEC.hints.read_only or not read_only]
     if list_services in modules:
         for robot in fleet.robots:
             robot.session.learn_service_types()
@@ -164,6 +171,23 @@ def build_fleet_server(
             "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
         )
 
+    # Acting tools, which a read-only robot of a fleet refuses; stopping is allowed everywhere.
+    acting = {m.SPEC.name for m in modules if not m.SPEC.hints.read_only} - {stop_robot.SPEC.name}
+
+    def robot_check(name: str, chosen: tuple[Robot, ...], arguments: dict[str, Any]) -> str | None:
+        """An acting tool on a read-only robot of the fleet: refused, and audited on that robot."""
+        if name not in acting:
+            return None
+        targets = chosen or fleet.robots[:1]
+        refusal = fleet.read_only_refusal(name, targets)
+        if refusal is not None:
+            for robot in targets:
+                if robot.config.policy.read_only:
+                    robot.session.guard.record(
+                        Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only"
+                    )
+        return refusal
+
     checks = ToolCallChecks(
         checked,
         argument_check=argument_problem,
@@ -171,14 +195,17 @@ def build_fleet_server(
         unlisted=unlisted,
         fleet=fleet,
         fleet_wide=(CONSOLE_APP_TOOL,),
+        robot_check=robot_check,
     )
+    some_read_only = fleet.read_only_names if not read_only else []
     return MCPServer(
         name=SERVER_NAME,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
         instructions=INSTRUCTIONS
         + (_FLEET_NOTE if fleet.several else "")
-        + (_READ_ONLY_NOTE if policy.read_only else ""),
+        + (_READ_ONLY_NOTE if read_only else "")
+        + (_READ_ONLY_ROBOTS_NOTE.format(names=", ".join(some_read_only)) if some_read_only else ""),
         version=__version__,
         tools=tools,
         extensions=[console_app(console_view)] if console_view is not None else None,

@@ -8,10 +8,13 @@ the SDK validates the parameters, so stdio and HTTP share each check here:
 * the arguments as the client sent them go through ``tools/arguments.py`` (unknown keys, booleans for numbers,
   sizes) before the SDK's lenient conversion would drop or convert them;
 * arguments that do not fit the tool's parameters are one sentence naming each, instead of pydantic's dump
-  (validated against our own model of the parameters, the same annotations the SDK's model is built from);
+  (validated against our own model of the parameters, the same annotations the SDK's model is built from,
+  after the SDK's own reading of JSON inside strings, so that ``"request": "null"`` is named too);
 * the caller the transport authenticated (a token's name, a JWT's subject) is named for the audit;
 * with several robots, the ``robot`` argument is taken off the call and chooses the robot it runs on
-  (``fleet.py``); a missing or unknown one is refused with the robots' names.
+  (``fleet.py``); a missing or unknown one is refused with the robots' names;
+* a call on the robots it runs on may be refused whatever its arguments (an acting tool on a read-only robot
+  of a fleet), by the server's ``robot_check``.
 
 A refusal is the ``isError`` result the tool itself would give; nothing reaches the tool.
 """
@@ -30,6 +33,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError, create_model
 
 from rosbridge_mcp_server.safety import calling_as
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT, selecting
+from rosbridge_mcp_server.tools.arguments import parameter_listing
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.server.fleet import Fleet, Robot
@@ -42,6 +46,8 @@ ArgumentErrorText = Callable[[str, ValidationError, dict[str, Any]], str]
 ArgumentCheck = Callable[[str, dict[str, Any], dict[str, Any]], str | None]
 #: Answers a call of a tool the server does not list: (name, arguments) -> a refusal, or None.
 UnlistedAnswer = Callable[[str, dict[str, Any]], str | None]
+#: Refuses a listed tool on the robots chosen for it ((), one robot): (name, robots, arguments) -> a refusal.
+RobotCheck = Callable[[str, "tuple[Robot, ...]", dict[str, Any]], str | None]
 
 
 @dataclass(frozen=True)
@@ -51,9 +57,17 @@ class CheckedTool:
     name: str
     schema: dict[str, Any]
     arguments: type[BaseModel]
+    #: What the SDK does to the arguments before it validates them (``sdk.argument_pre_parse``).
+    pre_parse: Callable[[dict[str, Any]], dict[str, Any]] | None = None
 
     @classmethod
-    def of(cls, name: str, schema: dict[str, Any], parameters: list[inspect.Parameter]) -> CheckedTool:
+    def of(
+        cls,
+        name: str,
+        schema: dict[str, Any],
+        parameters: list[inspect.Parameter],
+        pre_parse: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
+    ) -> CheckedTool:
         """The tool named *name* whose parameters (annotations resolved) are *parameters*."""
         fields: dict[str, Any] = {
             p.name: (p.annotation, ... if p.default is inspect.Parameter.empty else p.default)
@@ -62,7 +76,7 @@ class CheckedTool:
         model = create_model(
             f"{name}_arguments", __config__=ConfigDict(arbitrary_types_allowed=True), **fields
         )
-        return cls(name, schema, model)
+        return cls(name, schema, model, pre_parse)
 
 
 def refusal_result(text: str) -> CallToolResult:
@@ -82,7 +96,9 @@ class ToolCallChecks:
         unlisted: UnlistedAnswer | None = None,
         fleet: Fleet | None = None,
         fleet_wide: Iterable[str] = (),
+        robot_check: RobotCheck | None = None,
     ) -> None:
+        self._robot_check = robot_check
         self._fleet = fleet
         # Tools about every robot at once (list_robots, show_console): no ``robot`` argument is taken off.
         self._fleet_wide = {LIST_ROBOTS, *fleet_wide}
@@ -98,6 +114,14 @@ class ToolCallChecks:
         arguments = ctx.params.get("arguments")
         if arguments is None:
             arguments = {}
+        if isinstance(name, str) and name in self._tools and not isinstance(arguments, dict):
+            # A tool we list, called with arguments that are no object: a tool's error naming it, as for any
+            # wrong argument, rather than the SDK's bare "Invalid request parameters".
+            takes = parameter_listing(self._tools[name].schema)
+            return refusal_result(
+                f"Invalid arguments for {name}: the arguments must be a JSON object of named arguments, not "
+                f"{_kind(arguments)}; nothing was sent. It takes: {takes}."
+            )
         if not isinstance(name, str) or not isinstance(arguments, dict):
             # Malformed params: the SDK's own validation answers them.
             return await call_next(ctx)
@@ -109,6 +133,11 @@ class ToolCallChecks:
             if refusal is not None:
                 return refusal_result(refusal)
             ctx = replace(ctx, params={**ctx.params, "arguments": arguments})
+        if self._robot_check is not None and choosing:
+            with calling_as(caller()):
+                refusal = self._robot_check(name, robots, arguments)
+            if refusal is not None:
+                return refusal_result(refusal)
         refusal = self.refusal(name, arguments)
         if refusal is not None:
             return refusal_result(refusal)
@@ -126,11 +155,36 @@ class ToolCallChecks:
         problem = self._argument_check(name, arguments, tool.schema)
         if problem is not None:
             return problem
+        # What the SDK validates: strings holding JSON objects, lists, null or booleans read as JSON.
+        validated = tool.pre_parse(arguments) if tool.pre_parse is not None else arguments
         try:
-            tool.arguments.model_validate(arguments)
+            tool.arguments.model_validate(validated)
         except ValidationError as exc:
-            return self._argument_error(name, exc, tool.schema)
+            text = self._argument_error(name, exc, tool.schema)
+            wrong = {str(error["loc"][0]) for error in exc.errors() if error["loc"]}
+            read = [key for key in arguments if key in wrong and validated[key] is not arguments[key]]
+            for key in read:
+                text += f" {key} was given as the text {_short(arguments[key])}, which is read as JSON."
+            return text
         return None
+
+
+def _kind(value: Any) -> str:
+    """What a JSON value is, in words: "a list", "a string", ..."""
+    if isinstance(value, bool):
+        return "true or false"
+    if isinstance(value, int | float):
+        return "a number"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, str):
+        return "a string"
+    return f"a {type(value).__name__}"
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def caller() -> str | None:

@@ -5,6 +5,11 @@ With one robot nothing here shows: tools take no ``robot`` argument and ``tools/
 several, the server's checks (``checks.py``) take the ``robot`` argument off every call before the SDK sees it
 (:meth:`Fleet.choose`) and the call runs on that robot (:func:`selected`, a context variable the tool adapter
 reads); ``stop_robot`` without one stops every robot. ``list_robots`` says what each robot is.
+
+A robot whose policy is read-only (``read_only = true`` in the fleet file, or the whole server read-only) is
+read-only in a fleet too: an acting tool's ``robot`` property offers only the robots that may act, and a call
+naming a read-only robot is refused by the checks (:meth:`Fleet.read_only_refusal`) before the tool runs, so
+nothing reaches its bridge (which may be another robot's too). ``stop_robot`` stays allowed on every robot.
 """
 
 from __future__ import annotations
@@ -67,6 +72,33 @@ class Fleet:
     def names(self) -> list[str]:
         return [robot.name for robot in self.robots]
 
+    @property
+    def read_only_names(self) -> list[str]:
+        """The robots whose policy is read-only."""
+        return [robot.name for robot in self.robots if robot.config.policy.read_only]
+
+    @property
+    def acting_names(self) -> list[str]:
+        """The robots an acting tool may act on."""
+        return [robot.name for robot in self.robots if not robot.config.policy.read_only]
+
+    def read_only_refusal(self, tool: str, robots: Sequence[Robot]) -> str | None:
+        """The sentence refusing acting *tool* on *robots* when one of them is read-only, or ``None``."""
+        read_only = [robot.name for robot in robots if robot.config.policy.read_only]
+        if not read_only:
+            return None
+        others = self.acting_names
+        can = (
+            f" It can act on {', '.join(others)}."
+            if others
+            else " No robot of this server may be acted on; only reading tools work."
+        )
+        return (
+            f"{tool} is not available on {', '.join(read_only)}: that robot is read-only (read_only = true "
+            f"in its policy or the fleet file), so nothing was sent.{can} Reading tools work on every robot, "
+            "and stop_robot too."
+        )
+
     def choose(self, tool: str, name: object) -> tuple[tuple[Robot, ...], str | None]:
         """The robots a call of *tool* with ``robot=name`` runs on, or a refusal naming the robots."""
         if name is None:
@@ -84,16 +116,20 @@ class Fleet:
             )
         return (self._by_name[name],), None
 
-    def schema_with_robot(self, schema: dict[str, Any], tool: str) -> dict[str, Any]:
-        """*schema* with the ``robot`` property (required, except for stop_robot) when there are several."""
+    def schema_with_robot(self, schema: dict[str, Any], tool: str, *, acting: bool = False) -> dict[str, Any]:
+        """*schema* with the ``robot`` property (required, except for stop_robot) when there are several; an
+        *acting* tool's offers only the robots that are not read-only."""
         if not self.several:
             return schema
-        description = "Which robot: " + ", ".join(self.names)
+        names = self.acting_names if acting and tool != STOP_ALL else self.names
+        description = "Which robot: " + ", ".join(names)
         if tool == STOP_ALL:
             description += " (omit to stop every robot)"
+        elif names != self.names:
+            description += f" ({', '.join(self.read_only_names)}: read-only)"
         properties = {
             **schema.get("properties", {}),
-            ROBOT_ARGUMENT: {"type": "string", "enum": self.names, "description": description},
+            ROBOT_ARGUMENT: {"type": "string", "enum": names, "description": description},
         }
         required = list(schema.get("required", []))
         if tool != STOP_ALL:

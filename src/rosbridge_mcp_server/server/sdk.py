@@ -1,7 +1,7 @@
 """Every use of the MCP SDK beyond its documented API, each behind one named function.
 
 The SDK (``mcp`` 2.3) documents ``MCPServer(tools=..., middleware=...)``, the stdio and Streamable HTTP
-transports and the auth settings, which is what the rest of ``server/`` uses. Four things have no documented
+transports and the auth settings, which is what the rest of ``server/`` uses. Five things have no documented
 way; each function here says what it relies on, and ``tests/mcp/test_sdk_seam.py`` holds each to its effect,
 so an SDK upgrade that changes one fails there, by name, instead of somewhere in a tool call:
 
@@ -12,6 +12,10 @@ so an SDK upgrade that changes one fails there, by name, instead of somewhere in
   ``Tool.fn``), so the schemas and argument model, built once, serve every server.
 * :func:`replace_output_schema`: the output schema the SDK derived from the return annotation, replaced
   (``Tool.output_schema`` reads ``Tool.fn_metadata.output_schema``).
+* :func:`argument_pre_parse`: the SDK's own reading of a tool's arguments before it validates them: a string
+  given for a parameter that is not a plain ``str`` is parsed as JSON when it holds an object, a list,
+  ``null`` or a boolean (``FuncMetadata.pre_parse_json``), so ``"request": "null"`` reaches validation as
+  ``None``. The server's checks validate what the SDK will, so that such a call gets our sentence too.
 * :func:`serve_streams`: ``MCPServer`` on streams we give it (the SDK's stdio transport's, with unreadable
   lines answered). ``MCPServer.run_stdio_async`` opens the transport itself; what it runs is its low-level
   server's ``run`` with the streams.
@@ -28,7 +32,13 @@ from mcp.server.mcpserver.tools import Tool
 from mcp.types import CallToolResult, InputRequiredResult, ToolAnnotations
 from pydantic import BaseModel
 
-__all__ = ["replace_output_schema", "serve_streams", "tool_from_handler", "tool_with_handler"]
+__all__ = [
+    "argument_pre_parse",
+    "replace_output_schema",
+    "serve_streams",
+    "tool_from_handler",
+    "tool_with_handler",
+]
 
 
 def tool_from_handler(
@@ -87,6 +97,13 @@ def replace_output_schema(tool: Tool, schema: Callable[[dict[str, Any]], dict[st
     derived = tool.fn_metadata.output_schema
     if derived is not None:
         tool.fn_metadata.output_schema = schema(derived)
+
+
+def argument_pre_parse(tool: Tool) -> Callable[[dict[str, Any]], dict[str, Any]]:
+    """The SDK's reading of *tool*'s arguments before validation (``Tool.fn_metadata.pre_parse_json``): the
+    arguments as the SDK will validate them, a new dict (the one given is left alone)."""
+    pre_parse: Callable[[dict[str, Any]], dict[str, Any]] = tool.fn_metadata.pre_parse_json
+    return pre_parse
 
 
 async def serve_streams(server: MCPServer[Any], read_stream: Any, write_stream: Any) -> None:

@@ -5,14 +5,24 @@ deeper than its parser allows, not JSON-RPC) on as an exception, which the SDK o
 client would wait forever. Here each gets the JSON-RPC error reply (-32700 / -32600) under the request's id
 when the text shows it, so every line gets an answer. The transport also keeps stray output off the wire
 (fd 1 points at stderr and fd 0 at the null device while serving).
+
+Lines are bounded: the transport reads a line whole, so a client could make the server hold any amount of
+memory with one line. We give it stdin's lines ourselves (:class:`_BoundedLines`, from a private copy of fd 0,
+fd 0 itself pointed at the null device as the SDK does): a line longer than :data:`MAX_LINE_BYTES` is read to
+its end without being kept (its first 64 KiB and last 1,000 bytes are kept to find its id) and answered
+``-32600`` naming the limit.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
+import os
 import re
-from typing import TYPE_CHECKING, Any, cast
+import sys
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any, BinaryIO, cast
 
 import anyio
 from mcp.server.stdio import stdio_server
@@ -25,7 +35,7 @@ from rosbridge_mcp_server.server.sdk import serve_streams
 if TYPE_CHECKING:
     from mcp.server.mcpserver import MCPServer
 
-__all__ = ["reply_for_unreadable", "serve_stdio"]
+__all__ = ["MAX_LINE_BYTES", "reply_for_unreadable", "serve_stdio"]
 
 _log = logging.getLogger(__name__)
 
@@ -33,12 +43,102 @@ _ID_VALUE = re.compile(r'\s*("(?:[^"\\]|\\.)*"|-?\d+)\s*[,}]')
 #: How much of an unreadable line is scanned for its id from the start (clients write "id" early).
 _SCAN_CHARS = 64 * 1024
 _TRAILING_ID = re.compile(r'[,{]\s*"id"\s*:\s*("(?:[^"\\]|\\.)*"|-?\d+)\s*}\s*$')
+#: The longest line read from stdin, in bytes (without its newline); a longer one is answered -32600.
+MAX_LINE_BYTES = 64 * 1024 * 1024
+#: The key of the small object that stands in for an over-long line on its way through the SDK's transport.
+_TOO_LONG = "rosbridge_mcp_line_too_long"
+_TAIL_BYTES = 1000
+_CHUNK_BYTES = 1024 * 1024
 
 
 async def serve_stdio(server: MCPServer[Any]) -> None:
     """Serve ``server`` on this process's stdin/stdout until stdin closes."""
-    async with stdio_server() as (read_stream, write_stream):
-        await serve_streams(server, _Answering(read_stream, write_stream), write_stream)
+    with _stdin_lines() as lines:
+        # The SDK's transport only iterates over its stdin (``async for line in stdin``).
+        stdin = cast("anyio.AsyncFile[str] | None", lines)
+        async with stdio_server(stdin=stdin) as (read_stream, write_stream):
+            await serve_streams(server, _Answering(read_stream, write_stream), write_stream)
+
+
+@contextlib.contextmanager
+def _stdin_lines() -> Iterator[_BoundedLines | None]:
+    """stdin's lines, bounded, from a private copy of fd 0 while fd 0 points at the null device (so a child
+    process or stray read gets end of file, as with the SDK's own transport); ``None`` (the SDK reads stdin
+    itself) when stdin is not fd 0."""
+    try:
+        backed = sys.stdin is not None and sys.stdin.buffer.fileno() == 0
+    except (AttributeError, OSError, ValueError):
+        backed = False
+    if not backed or sys.platform == "win32":
+        yield None
+        return
+    import fcntl  # noqa: PLC0415 - POSIX only
+
+    # Above the standard descriptors, as the SDK's transport does, and closed in child processes.
+    private = fcntl.fcntl(0, fcntl.F_DUPFD_CLOEXEC, 3)
+    null = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(null, 0)
+    os.close(null)
+    binary = os.fdopen(private, "rb")
+    try:
+        yield _BoundedLines(binary)
+    finally:
+        with contextlib.suppress(OSError):
+            os.dup2(private, 0)
+        binary.close()
+
+
+class _BoundedLines:
+    """The lines of *binary* as text (bad UTF-8 replaced, as the SDK's transport does), none longer than
+    :data:`MAX_LINE_BYTES`: an over-long line is read to its end without being kept, and handed on as a small
+    JSON object that is no JSON-RPC message, which :func:`reply_for_unreadable` answers."""
+
+    def __init__(self, binary: BinaryIO) -> None:
+        self._binary = binary
+
+    def __aiter__(self) -> _BoundedLines:
+        return self
+
+    async def __anext__(self) -> str:
+        line = await anyio.to_thread.run_sync(self._read_line)
+        if line is None:
+            raise StopAsyncIteration
+        return line
+
+    def _read_line(self) -> str | None:
+        # Read in chunks into one growing buffer: a line is held once (readline with a limit of 64 MiB would
+        # hold its pieces and their join, twice the limit), and an over-long one is dropped at the limit.
+        line = bytearray()
+        while True:
+            chunk = self._binary.readline(_CHUNK_BYTES)
+            if not chunk:
+                break
+            line += chunk
+            if chunk.endswith(b"\n"):
+                break
+            if len(line) > MAX_LINE_BYTES:
+                return self._skipped(line)
+        if not line:
+            return None
+        if len(line) - line.endswith(b"\n") > MAX_LINE_BYTES:
+            return self._skipped(line)
+        return line.decode("utf-8", errors="replace")
+
+    def _skipped(self, start: bytearray) -> str:
+        """The rest of an over-long line read and dropped; what stands in for it (its size and id)."""
+        head, tail, read = bytes(start[:_SCAN_CHARS]), bytes(start[-_TAIL_BYTES:]), len(start)
+        start.clear()
+        while not tail.endswith(b"\n"):
+            chunk = self._binary.readline(_CHUNK_BYTES)
+            if not chunk:
+                break
+            read += len(chunk)
+            tail = (tail + chunk)[-_TAIL_BYTES:]
+        size = read - tail.endswith(b"\n")
+        # The tail may overlap the head (a line just over a small limit): keep each byte once.
+        overlap = max(0, len(head) - (read - len(tail)))
+        text = (head + tail[overlap:].rstrip(b"\r\n")).decode("utf-8", errors="replace")
+        return json.dumps({"jsonrpc": "2.0", "id": _recover_id(text), _TOO_LONG: size})
 
 
 def reply_for_unreadable(exc: Exception) -> JSONRPCError | None:
@@ -57,7 +157,21 @@ def reply_for_unreadable(exc: Exception) -> JSONRPCError | None:
             return None
         return _parse_error(first["msg"], _recover_id(text) if isinstance(text, str) else None)
     decoded = [error["input"] for error in errors if isinstance(error.get("input"), dict)]
-    return _not_json_rpc(next((_valid_id(d.get("id")) for d in decoded if "id" in d), None))
+    request_id = next((_valid_id(d.get("id")) for d in decoded if "id" in d), None)
+    too_long = next((d[_TOO_LONG] for d in decoded if isinstance(d.get(_TOO_LONG), int)), None)
+    if too_long is not None:
+        return _error_reply(
+            INVALID_REQUEST,
+            f"Invalid request: the line is {too_long:,} bytes, longer than the {_limit()} this server reads; "
+            "it was skipped unread",
+            request_id,
+        )
+    return _not_json_rpc(request_id)
+
+
+def _limit() -> str:
+    mib, rest = divmod(MAX_LINE_BYTES, 2**20)
+    return f"{mib} MiB" if mib and not rest else f"{MAX_LINE_BYTES:,} bytes"
 
 
 def _parse_error(pydantic_message: str, request_id: int | str | None) -> JSONRPCError:
