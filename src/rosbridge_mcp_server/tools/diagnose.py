@@ -51,8 +51,8 @@ SPEC = ToolSpec(
     name="diagnose",
     title="Diagnose the robot",
     description=(
-        "What is wrong: diagnostics, logs, stream rates, tf, lifecycle and graph in one look; a count, then "
-        'each problem and the call to make next. Read-only, ~1.5 s. Example: {"focus": "navigation"}'
+        "What is wrong, in one ~1.5 s look (diagnostics, logs, rates, tf, lifecycle, graph): each problem "
+        'and what to call next. Read-only. Example: {"focus": "navigation"}'
     ),
     hints=READS_ROBOT,
     output=DiagnoseAnswer,
@@ -63,7 +63,7 @@ async def run(
     ctx: ToolContext,
     focus: Annotated[
         str | None,
-        Field(description=f"{', '.join(list(FOCUSES)[:3])}, another area, or a node name, e.g. /amcl"),
+        Field(description=f"An area ({', '.join(list(FOCUSES)[:3])}, ...) or a node, e.g. /amcl"),
     ] = None,
 ) -> ToolAnswer:
     """Look at the robot once."""

@@ -47,8 +47,8 @@ SPEC = ToolSpec(
     name="read_logs",
     title="Robot log",
     description=(
-        f"The robot's /rosout since this server connected ({RING_LINES:,} lines, {RING_SECONDS / 60:.0f} "
-        'min), repeats folded. Read-only. Example: {"node": "*controller*", "text": "progress", "since": 60}'
+        f"The robot's /rosout since the server connected ({RING_LINES:,} lines, {RING_SECONDS / 60:.0f} "
+        'min), repeats folded. Read-only. Example: {"node": "*controller*", "since": 60}'
     ),
     hints=READS_ROBOT,
     output=LogsAnswer,
@@ -64,9 +64,7 @@ async def run(
     ] = "warn",
     node: Annotated[str | None, Field(description="Node name or glob, e.g. *costmap*")] = None,
     text: Annotated[str | None, Field(description="Text in the line, e.g. progress")] = None,
-    since: Annotated[
-        float | None, Field(gt=0, le=86_400, description="Only the last N seconds, e.g. 60")
-    ] = None,
+    since: Annotated[float | None, Field(gt=0, le=86_400, description="Last N seconds, e.g. 60")] = None,
     limit: Annotated[int, limit_arg(DEFAULT_LIMIT)] = DEFAULT_LIMIT,
     offset: OffsetArg = 0,
 ) -> ToolAnswer:

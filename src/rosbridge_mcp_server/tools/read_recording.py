@@ -68,7 +68,7 @@ SPEC = ToolSpec(
     title="Read a recording",
     description=(
         "No file: list them. Modes: summary (counts, rates, gaps), stats (fields), "
-        'messages (around at), plot, map with path. Example: {"file": "run1.mcap"}'
+        'messages (around at), plot, map (path). Example: {"file": "run1.mcap"}'
     ),
     hints=READS_ROBOT,
     output=ReadRecordingAnswer,

@@ -51,7 +51,7 @@ SPEC = ToolSpec(
     name="record",
     title="Record topics",
     description=(
-        "Record topics to an MCAP file on the server's host until duration, size cap or stop=true. Example: "
+        "Record topics to an MCAP file on the server's host, until duration, size cap or stop. Example: "
         '{"topics": ["/odom", "/tf*"], "duration": 30}'
     ),
     hints=ToolHints(read_only=False, destructive=False, idempotent=False),
@@ -72,7 +72,7 @@ async def run(
         str | None,
         Field(description='File name, e.g. "run1"'),
     ] = None,
-    stop: Annotated[bool, Field(description="e.g. true")] = False,
+    stop: Annotated[bool, Field(description="End running ones, e.g. true")] = False,
 ) -> ToolAnswer:
     """Choose the topics, make the file, record, and say what was written."""
     if stop:

@@ -49,10 +49,11 @@ def compact_output_schema(schema: dict[str, Any]) -> dict[str, Any]:
 
 
 def _shallow(prop: Any) -> Any:
-    """A field's schema with any object inside it reduced to ``{"type": "object"}``."""
+    """A field's schema with any object inside it reduced to ``{"type": "object"}``: a model's fields and a
+    mapping's value type alike (the answer's text says what is in it)."""
     if not isinstance(prop, dict):
         return prop
-    if "properties" in prop:
+    if "properties" in prop or "additionalProperties" in prop:
         kind = prop.get("type", "object")
         return {"type": kind}
     out = dict(prop)
