@@ -9,6 +9,7 @@ from __future__ import annotations
 
 __all__ = [
     "ALL_TOOL_NAMES",
+    "NAVIGATION_TOOL_NAMES",
     "ORIGINAL_TOOL_NAMES",
     "SAFETY_TOOL_NAMES",
     "TOOL_GROUPS",
@@ -42,20 +43,26 @@ WATCH_TOOL_NAMES = (
 #: Pictures of the robot's world: its map, its scan, a topic over time.
 VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
 SAFETY_TOOL_NAMES = ("stop_robot",)
-ALL_TOOL_NAMES = ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + VIEW_TOOL_NAMES + SAFETY_TOOL_NAMES
+#: Sending the robot somewhere on its map.
+NAVIGATION_TOOL_NAMES = ("navigate_to",)
+ALL_TOOL_NAMES = (
+    ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + VIEW_TOOL_NAMES + SAFETY_TOOL_NAMES + NAVIGATION_TOOL_NAMES
+)
 TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "all": ALL_TOOL_NAMES,
     "original": ORIGINAL_TOOL_NAMES,
     "watch": WATCH_TOOL_NAMES,
     "view": VIEW_TOOL_NAMES,
     "safety": SAFETY_TOOL_NAMES,
+    "navigation": NAVIGATION_TOOL_NAMES,
 }
 
 
 def select_tools(spec: str) -> tuple[str, ...]:
     """The tool names a ``--tools`` value stands for, in registration order.
 
-    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``)
+    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``,
+    ``navigation``)
     and tool names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
     """
     chosen: set[str] = set()

@@ -45,6 +45,9 @@ class Act:
     payload: Any  #: message / request / goal / value that will be sent
     rate_hz: float | None = None  #: publish streams only
     duration: float | None = None  #: publish streams only
+    #: What the act is judged against beyond itself: for a navigation goal, the robot's map, its pose and the
+    #: goal placed on it (a ``robot.navigation.Scene``), learnt just before the act was built; else None.
+    scene: Any = None
 
 
 Answer = Literal["accept", "decline", "cancel", "unsupported"]
