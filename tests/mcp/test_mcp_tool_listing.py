@@ -36,6 +36,7 @@ EXPECTED_PARAMETERS = {
     "view_scan": ["topic", "radius", "clearance", "max_size", "timeout"],
     "plot_topic": ["series", "duration", "max_size"],
     "stop_robot": [],
+    "navigate_to": ["goal", "frame", "forward", "left", "turn", "timeout"],
 }
 READ_ONLY = {
     "list_topics",

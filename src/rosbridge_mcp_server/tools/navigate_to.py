@@ -30,11 +30,12 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolImage,
     ToolSpec,
-    absolute_name,
 )
 
 __all__ = ["SPEC", "NavigateAnswer", "run"]
 
+#: The robot's frame (Nav2's robot_base_frame and move_base's default).
+BASE_FRAME = "base_link"
 #: How long the map and /tf are waited for before "not ready".
 _READY_WAIT = 3.0
 _MAX_TIMEOUT = 3600.0
@@ -53,32 +54,19 @@ class NavigateAnswer(BaseModel):
     """How the navigation ended; poses are [x m, y m, yaw degrees] in the map frame."""
 
     goal_id: str = Field(description="The goal's id (cancel_action takes it)")
-    action: str
     status: str = Field(description="succeeded, canceled, aborted, ... in the bridge's words")
     succeeded: bool
-    frame: str = Field(description="The map frame every pose is given in")
-    goal: list[list[float]] = Field(description="The goal pose(s)")
-    start: list[float] | None
     final: list[float] | None = Field(description="The robot's pose from /tf after the goal ended")
     distance_to_goal: float | None = Field(description="Metres from the final pose to the (last) goal")
-    heading_error: float | None = Field(description="Degrees between the final and the goal heading")
-    driven: float = Field(description="Metres driven, along the feedback's poses")
-    seconds: float
-    recoveries: int | None
-    feedback_count: int
     canceled_by: str | None
-    error: str | None = Field(description="The navigator's error code and message when it failed")
 
 
 SPEC = ToolSpec(
     name="navigate_to",
-    title="Send the robot somewhere",
+    title="Go somewhere",
     description=(
-        "Drive the robot to a pose on its map with Nav2 (ROS 1: move_base): x/y in metres and yaw in degrees "
-        "in the map frame, a named place from the policy's [places], or a move relative to the robot "
-        "(forward/left metres, turn degrees). The goal is checked against the map (free space with a margin) "
-        "and the policy's geofence before anything is sent; progress comes as notifications; ends with a map "
-        'picture. Examples: {"x": 2.0, "y": 1.5, "yaw": 90}, {"place": "dock"}, {"forward": 1.0, "turn": 90}'
+        "Drive the robot with Nav2/move_base to a map pose, a place or a relative move, checked on the map "
+        'and geofence first. Examples: {"goal": {"x": 2, "y": 1, "yaw": 90}}, {"goal": "dock"}, {"turn": 90}'
     ),
     hints=ACTS_ON_ROBOT,
     output=NavigateAnswer,
@@ -181,55 +169,64 @@ def _draw(
     return png_bytes(picture.image)
 
 
+_GOAL = '{"x": 2, "y": 1.5, "yaw": 90} (metres, DEGREES; no yaw: keep heading)'
+
+
+def _parse_goal(goal: Any) -> tuple[str, list[tuple[float, float, float | None]]]:
+    """A pose or poses given as ``goal``: ("pose", [one]) or ("waypoints", [...])."""
+    if isinstance(goal, dict):
+        return "pose", [_waypoint(goal, 0)]
+    if isinstance(goal, list) and goal and all(isinstance(v, int | float) for v in goal):
+        return "pose", [_waypoint(goal, 0)]
+    if isinstance(goal, list) and goal:
+        ways = [_waypoint(item, i) for i, item in enumerate(goal)]
+        return ("waypoints" if len(ways) > 1 else "pose"), ways
+    raise ToolFailure(f"goal must be a pose {_GOAL}, a place name, or a list of poses; got {goal!r}.")
+
+
 async def run(
     ctx: ToolContext,
     *,
-    x: Annotated[float | None, Field(description="Goal x, metres in the map frame (or `frame`)")] = None,
-    y: Annotated[float | None, Field(description="Goal y, metres")] = None,
-    yaw: Annotated[
-        float | None,
-        Field(description="Goal heading in DEGREES, counter-clockwise from +x; omitted: keep the robot's"),
+    goal: Annotated[
+        Any,
+        Field(
+            description=(
+                'Map pose, e.g. {"x": 2, "y": 1, "yaw": 90} (m, DEGREES); a [places] name; or poses (ROS 2)'
+            )
+        ),
     ] = None,
-    frame: Annotated[str, Field(description='Frame of x/y/yaw, e.g. odom; "" = the map\'s frame')] = "",
-    place: Annotated[str, Field(description="A named place from the policy's [places], e.g. dock")] = "",
-    forward: Annotated[float, Field(ge=-100, le=100, description="Relative move: metres ahead")] = 0.0,
-    left: Annotated[float, Field(ge=-100, le=100, description="Relative move: metres to the left")] = 0.0,
-    turn: Annotated[
-        float, Field(ge=-360, le=360, description="Relative move: degrees to turn, counter-clockwise")
-    ] = 0.0,
-    waypoints: Annotated[
-        list[Any] | None,
-        Field(description='Poses in a row (ROS 2), e.g. [{"x": 1, "y": 2, "yaw": 0}, {"x": 3, "y": 2}]'),
-    ] = None,
-    base_frame: Annotated[str, Field(description="The robot's frame, e.g. base_link")] = "base_link",
-    map_topic: Annotated[str, Field(description="The map to check the goal on")] = "/map",
-    action: Annotated[str, Field(description='Action name; "" = /navigate_to_pose (ROS 1: /move_base)')] = "",
-    timeout: Annotated[
-        float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds before the goal is cancelled, e.g. 120")
-    ] = 300.0,
+    frame: Annotated[str, Field(description='Goal frame, e.g. odom; "" = map')] = "",
+    forward: Annotated[float, Field(description="Metres ahead, e.g. 1.0")] = 0.0,
+    left: Annotated[float, Field(description="Metres left, e.g. -0.5")] = 0.0,
+    turn: Annotated[float, Field(description="Degrees left, e.g. 90")] = 0.0,
+    timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 120")] = 300.0,
 ) -> ToolAnswer:
     """Resolve the goal, check readiness and the map, send it, report progress, draw the outcome."""
-    absolute = x is not None or y is not None or yaw is not None
     relative = bool(forward or left or turn)
-    ways = [_waypoint(item, i) for i, item in enumerate(waypoints)] if waypoints else []
-    modes = [name for name, on in (("x/y", absolute), ("place", bool(place)), ("relative", relative)) if on]
-    if ways:
-        modes.append("waypoints")
-    if len(modes) > 1:
-        raise ToolFailure(f"Give one kind of goal, not {' and '.join(modes)}. Nothing was sent.")
-    if not modes:
+    for value, what, limit in ((forward, "forward", 100.0), (left, "left", 100.0), (turn, "turn", 360.0)):
+        if not math.isfinite(value) or abs(value) > limit:
+            raise ToolFailure(f"{what} must be within ±{limit:g}, not {value!r}. Nothing was sent.")
+    if isinstance(goal, str) and not goal.strip():
+        goal = None
+    if goal is not None and relative:
+        raise ToolFailure("Give a goal or a relative move (forward/left/turn), not both. Nothing was sent.")
+    if goal is None and not relative:
         raise ToolFailure(
-            'Say where to go: {"x": 2, "y": 1, "yaw": 90} (map frame, metres and degrees), {"place": NAME} '
-            'or {"forward": 1.0, "left": 0, "turn": 90} relative to the robot. Nothing was sent.'
+            f'Say where to go: goal {_GOAL} in the map frame, goal "PLACE", or forward/left/turn relative to '
+            "the robot. Nothing was sent."
         )
-    if absolute and (x is None or y is None):
-        raise ToolFailure("Give both x and y (metres in the map frame); yaw is optional. Nothing was sent.")
+    place = goal.strip() if isinstance(goal, str) else ""
+    kind, ways = ("place", []) if place else ("relative", []) if relative else _parse_goal(goal)
     places = dict(ctx.config.policy.places)
     if place and place not in places:
-        known = ", ".join(sorted(places)) or "none (add them to the policy's [places])"
+        known = ", ".join(sorted(places)) or "none (the policy has no [places])"
         raise ToolFailure(f"No place named {place!r}. Known places: {known}. Nothing was sent.")
-    if relative and frame:
-        raise ToolFailure("A relative move is in the robot's own frame; leave frame empty. Nothing was sent.")
+    if frame and kind != "pose":
+        raise ToolFailure(f"frame applies to one goal pose, not to a {kind}. Nothing was sent.")
+    x = y = yaw = None
+    if kind == "pose":
+        x, y, yaw = ways[0]
+        ways = []
 
     dialect = await ctx.client.dialect()
     ros1 = dialect.version == 1
@@ -244,10 +241,10 @@ async def run(
         default_action, action_type = "/navigate_through_poses", "nav2_msgs/action/NavigateThroughPoses"
     else:
         default_action, action_type = "/navigate_to_pose", "nav2_msgs/action/NavigateToPose"
-    name = absolute_name(action, "action") if action else default_action
-    namespace = name.rsplit("/", 1)[0]
-    map_name = absolute_name(map_topic, "map_topic")
-    base = base_frame.strip() or "base_link"
+    prefix = ""
+    name = default_action
+    map_name = "/map"
+    base = BASE_FRAME
 
     # Is Nav2 ready? Each missing piece is said, and nothing is sent.
     not_ready: list[str] = []
@@ -263,17 +260,17 @@ async def run(
     if isinstance(start, str):
         not_ready.append(f"no transform from {map_frame} to {base} on /tf: {start}")
     if not ros1 and hint is None:
-        state = await _navigator_state(ctx, namespace)
+        state = await _navigator_state(ctx, prefix)
         if state is not None:
             not_ready.append(state)
     if not_ready or grid is None or isinstance(start, str):
         raise ToolFailure(f"Nav2 is not ready: {'; '.join(not_ready)}. Nothing was sent.")
 
     # The goal's poses, in the frame they were given in.
-    if place:
+    if kind == "place":
         px, py, pyaw = places[place]
         poses = [GoalPose(map_frame, px, py, math.radians(pyaw))]
-    elif relative:
+    elif kind == "relative":
         c, s = math.cos(start.yaw), math.sin(start.yaw)
         poses = [
             GoalPose(
@@ -296,7 +293,12 @@ async def run(
         if heading is None:
             # Keep the robot's heading: its yaw in the map, seen from the goal's frame.
             origin = await frame_pose(ctx.client, ctx.graph, map_frame, given, _READY_WAIT)
-            heading = start.yaw - (origin.yaw if isinstance(origin, Pose2D) else 0.0)
+            if isinstance(origin, str):
+                raise ToolFailure(
+                    f"The goal's frame {given} cannot be placed in {map_frame}: {origin}. Give the goal in "
+                    f"{map_frame}, or check /tf (get_transform). Nothing was sent."
+                )
+            heading = start.yaw - origin.yaw
         poses = [GoalPose(given, _number(x, "x"), _number(y, "y"), heading)]
     scene = await survey(
         ctx.client,
@@ -420,22 +422,13 @@ def _answer(
         error = f"{result.get('error_code', 0)}: {result.get('error_msg', '')}".strip()
     data = NavigateAnswer(
         goal_id=outcome.goal_id,
-        action=outcome.action,
         status=outcome.status,
         succeeded=outcome.succeeded,
-        frame=frame,
-        goal=[_planar(goal) or [] for goal in goals],
-        start=_planar(start),
         final=_planar(final),
         distance_to_goal=distance,
-        heading_error=heading,
-        driven=round(driven, 2),
-        seconds=round(time.monotonic() - began, 1),
-        recoveries=recoveries[-1] if recoveries else None,
-        feedback_count=outcome.feedback_count,
         canceled_by=outcome.canceled_by,
-        error=error,
     )
+    seconds = time.monotonic() - began
     target = ", then ".join(f"({g.x:.2f}, {g.y:.2f}, {math.degrees(g.yaw):.0f}°)" for g in goals)
     head = f"Navigation to {target} in {frame}: {outcome.status}"
     if outcome.status == UNCONFIRMED_STATUS:
@@ -452,7 +445,9 @@ def _answer(
         lines.append(
             f"Robot now at ({final.x:.2f}, {final.y:.2f}, {math.degrees(final.yaw):.0f}°): "
             f"{distance:.2f} m and {abs(heading or 0):.0f}° from the goal; drove {driven:.2f} m in "
-            f"{data.seconds:g} s" + (f", {data.recoveries} recoveries" if data.recoveries else "") + "."
+            f"{seconds:.1f} s"
+            + (f", {recoveries[-1]} recoveries" if recoveries and recoveries[-1] else "")
+            + "."
         )
     else:
         lines.append("The robot's final pose is not known (/tf did not tell).")

@@ -206,11 +206,11 @@ class Navigator:
                 if abs(error) <= YAW_TOLERANCE:
                     self._stop(robot)
                     return True
-                linear, angular = 0.0, max(-wmax, min(wmax, 3.0 * error))
+                linear, angular = 0.0, max(-wmax, min(wmax, 4.0 * error + math.copysign(0.05, error)))
             else:
                 tx, ty = path[index]
                 error = _wrap(math.atan2(ty - robot.y, tx - robot.x) - robot.yaw)
-                linear = 0.0 if abs(error) > 0.6 else min(vmax, 2.0 * left + 0.02) * math.cos(error)
+                linear = 0.0 if abs(error) > 0.6 else min(vmax, 3.0 * left + 0.05) * math.cos(error)
                 angular = max(-wmax, min(wmax, 3.0 * error))
             robot.linear, robot.angular = linear, angular
             robot.command_time = time.monotonic()
