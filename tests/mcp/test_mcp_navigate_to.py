@@ -295,3 +295,29 @@ async def test_an_inactive_navigator_is_said_and_nothing_is_sent(make_sim: MakeS
     assert "bt_navigator is inactive, not active" in text
     assert not watcher.received
     assert not robot.world.goals
+
+
+async def test_waypoints_are_driven_in_a_row_on_ros2_and_refused_on_ros1(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    goal = [{"x": 4.0, "y": 7.0}, [2.5, 7.0, 180]]
+    if nav2.dialect == "ros1":
+        text = await session.error("navigate_to", {"goal": goal})
+        assert "NavigateThroughPoses" in text
+        return
+    result = await session.ok("navigate_to", {"goal": goal})
+    assert (result.structured_content or {})["succeeded"], text_of(result)
+    x, y, yaw = await pose_of(session)
+    assert math.hypot(x - 2.5, y - 7.0) < 0.2
+    assert yaw_error(yaw, 180) < 10
+    assert "(4.00, 7.00" in text_of(result)
+
+
+async def test_a_timeout_cancels_the_goal_and_stops_the_robot(session: Session, nav2: SimulatedRobot) -> None:
+    nav2.nav2.navigator.speed = 1.0  # a real robot's pace: it cannot arrive within the timeout
+    result = await session.ok("navigate_to", {"goal": {"x": 2.0, "y": 5.5}, "timeout": 1.0})
+    data = result.structured_content or {}
+    assert not data["succeeded"]
+    assert data["canceled_by"] == "timeout"
+    robot = nav2.nav2.robots[0]
+    await nav2.wait_for(lambda world: robot.linear == 0.0 and robot.angular == 0.0, timeout=0.5)
