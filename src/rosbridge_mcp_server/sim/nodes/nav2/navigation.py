@@ -32,6 +32,8 @@ YAW_TOLERANCE = 0.03
 LOOKAHEAD = 0.3
 TICK = 0.05
 FEEDBACK_EVERY = 4
+#: Ticks between republishing the rest of the plan on /plan (Nav2 replans about once a second).
+PLAN_EVERY = 20
 #: nav2_msgs NavigateToPose error: TF_ERROR (a frame we cannot place).
 TF_ERROR = 902
 
@@ -216,6 +218,9 @@ class Navigator:
             robot.command_time = time.monotonic()
             if tick % FEEDBACK_EVERY == 0:
                 feedback(self._feedback(robot, remaining, started, poses_remaining, ros1))
+            if tick and tick % PLAN_EVERY == 0:
+                rest = [(robot.x, robot.y), *path[index:]]
+                self.kit.publish(f"{robot.namespace}/plan", self.plan_message(rest, yaw))
             tick += 1
             await stop.wait(TICK)
 
