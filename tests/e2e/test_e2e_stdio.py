@@ -116,7 +116,7 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
 
         tools = await server.request("tools/list")
-        assert len(tools["result"]["tools"]) == 21
+        assert len(tools["result"]["tools"]) == 22
 
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
         assert topics["result"]["isError"] is False
