@@ -321,3 +321,32 @@ async def test_a_timeout_cancels_the_goal_and_stops_the_robot(session: Session, 
     assert data["canceled_by"] == "timeout"
     robot = nav2.nav2.robots[0]
     await nav2.wait_for(lambda world: robot.linear == 0.0 and robot.angular == 0.0, timeout=0.5)
+
+
+@pytest.mark.parametrize("mode", ["legacy", "auto"])
+async def test_navigation_confirm_asks_with_the_goal_and_a_decline_sends_nothing(
+    make_sim: MakeSim, mode: str
+) -> None:
+    """[navigation] confirm = "motion": the person is asked with the goal on the map, in the handshake
+    protocol (elicitation mid-call) and in 2026-07-28's input rounds (the question must read the same twice);
+    a decline sends nothing, an accept drives."""
+    from test_mcp_safety import Person
+
+    robot = await make_sim(dialect="ros2", world="nav2")
+    robot.nav2.navigator.speed = TEST_SPEED
+    rules = parse_policy({"navigation": {"confirm": "motion"}, "places": POLICY["places"]}, where="t.toml")
+    declining, accepting = Person("decline"), Person()
+    async with open_session(
+        robot.url, mode=mode, guard=None, policy=rules, elicitation_callback=declining
+    ) as opened:
+        refused = await opened.error("navigate_to", {"goal": "dock"})
+    assert "declined" in refused
+    assert not robot.world.goals
+    [question] = declining.questions
+    assert "Goal in map: x=3.00 y=3.00 m yaw=180°" in question
+    async with open_session(
+        robot.url, mode=mode, guard=None, policy=rules, elicitation_callback=accepting
+    ) as opened:
+        reached = await opened.ok("navigate_to", {"goal": "dock"})
+    assert (reached.structured_content or {})["succeeded"], text_of(reached)
+    assert len(accepting.questions) == 1

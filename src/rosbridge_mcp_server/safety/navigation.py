@@ -110,17 +110,12 @@ def navigation_refusal(act: Act, rules: NavigationRules) -> NavigationRefusal | 
 
 
 def goal_text(act: Act) -> str:
-    """Where a navigation goal sends the robot, in the map frame, for the person asked to confirm it."""
+    """Where a navigation goal sends the robot, in the map frame, for the person asked to confirm it.
+
+    Only the goal: the robot's own pose moves (localisation jitters), and the question must read the same when
+    a client answers it in a second round (protocol 2026-07-28 matches the answer to the exact question)."""
     scene = act.scene if isinstance(act.scene, Scene) else None
     if act.kind != "action" or scene is None or not scene.goals:
         return ""
-    parts = []
-    for goal in scene.goals:
-        away = ""
-        if scene.robot is not None:
-            away = f", {math.hypot(goal.x - scene.robot.x, goal.y - scene.robot.y):.1f} m from the robot"
-        parts.append(f"x={goal.x:.2f} y={goal.y:.2f} m yaw={math.degrees(goal.yaw):.0f}°{away}")
-    robot = ""
-    if scene.robot is not None:
-        robot = f" The robot is at x={scene.robot.x:.2f} y={scene.robot.y:.2f} m."
-    return f"Goal in {scene.map_frame}: {'; then '.join(parts)}.{robot}"
+    parts = [f"x={goal.x:.2f} y={goal.y:.2f} m yaw={math.degrees(goal.yaw):.0f}°" for goal in scene.goals]
+    return f"Goal in {scene.map_frame}: {'; then '.join(parts)}."
