@@ -92,15 +92,6 @@ def test_every_generated_call_ends_in_time_and_the_session_keeps_working(hosted:
     calls: Counter[str] = Counter()
     errors: Counter[str] = Counter()
 
-    @settings(
-        max_examples=EXAMPLES,
-        derandomize=True,
-        database=None,
-        deadline=None,
-        phases=[Phase.explicit, Phase.generate],
-        suppress_health_check=list(HealthCheck),
-    )
-    @given(tool_calls(hosted.schemas, hosted.vocabulary))
     def one_call(call: tuple[str, dict[str, Any]]) -> None:
         name, arguments = call
         deadline = call_deadline(arguments, hosted.schemas[name])
@@ -117,6 +108,21 @@ def test_every_generated_call_ends_in_time_and_the_session_keeps_working(hosted:
         assert not follow_up.is_error, text_of(follow_up)[:300]
         assert hosted.session.ros.connections_made == 1, "a call cost the rosbridge connection"
 
-    one_call()
+    def explore(schemas: dict[str, dict[str, Any]], examples: int) -> None:
+        settings(
+            max_examples=examples,
+            derandomize=True,
+            database=None,
+            deadline=None,
+            phases=[Phase.explicit, Phase.generate],
+            suppress_health_check=list(HealthCheck),
+        )(given(tool_calls(schemas, hosted.vocabulary))(one_call))()
+
+    explore(hosted.schemas, EXAMPLES)
+    # The tool is drawn evenly, but a derandomized run of EXAMPLES may still miss one (which one depends on
+    # the listed tools): those get a few examples of their own.
+    missed = {name: schema for name, schema in hosted.schemas.items() if name not in calls}
+    if missed:
+        explore(missed, 5 * len(missed))
     assert set(calls) == set(hosted.schemas), f"tools never called: {set(hosted.schemas) - set(calls)}"
     assert sum(calls.values()) - sum(errors.values()) > 0, "no generated call was valid"
