@@ -1,5 +1,6 @@
-"""The console's map panel draws the navigator's plan (its goal at the end) while a goal runs, and drops it
-once the goal has ended: on the simulated Nav2 world, whose navigator republishes /plan while it drives."""
+"""The console and navigation on the simulated Nav2 world: the map panel draws the navigator's plan (its goal
+at the end) while a goal runs and drops it once the goal has ended; the operator's E-STOP stops a navigating
+robot."""
 
 from __future__ import annotations
 
@@ -9,10 +10,17 @@ import math
 from collections.abc import Awaitable, Callable
 
 import websockets
+from console_harness import text_of
 
+from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.console import ConsoleHub, RobotView
 from rosbridge_mcp_server.console.mapview import PLAN_KEEP, MapPanel
 from rosbridge_mcp_server.robot.graph import RosGraph
+from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
+from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
@@ -58,3 +66,32 @@ async def test_the_panel_draws_the_plan_to_the_goal_while_the_robot_drives(make_
             await until(lambda: not panel.plan, PLAN_KEEP + 5.0)
         finally:
             panel.stop()
+
+
+async def test_the_console_estop_stops_a_navigating_robot_and_refuses_the_next_goal(
+    make_sim: MakeSim,
+) -> None:
+    """The operator's E-STOP cancels navigate_to's goal: the robot stands within 0.5 s, the call says so, and
+    the latch refuses the next goal until Release."""
+    robot = await make_sim(dialect="ros1", world="nav2")
+    robot.nav2.navigator.speed = 8.0
+    state = robot.nav2.robots[0]
+    config = Config(url=robot.url)
+    operator = Operator()
+    audit = Audit()
+    ros = RosbridgeClient(robot.url, request_timeout=5.0, reconnect_min=0.05, reconnect_max=0.2)
+    session = RobotSession(ros, PolicyGuard(config.policy, audit, operator))
+    hub = ConsoleHub([RobotView("robot", session, audit)], operator)
+    async with Client(build_server(session, config, console_view=hub.snapshot), mode="legacy") as client:
+        await ros.wait_connected(5)
+        driving = asyncio.create_task(client.call_tool("navigate_to", {"goal": {"x": 1.5, "y": 2.0}}))
+        await robot.wait_for(lambda world: state.linear > 0.1, timeout=15)
+        await hub.estop()
+        await robot.wait_for(lambda world: state.linear == 0.0 and state.angular == 0.0, timeout=0.5)
+        result = await asyncio.wait_for(driving, 10)
+        assert not result.is_error, text_of(result)
+        assert (result.structured_content or {})["canceled_by"] == "stop_robot"
+        refused = await client.call_tool("navigate_to", {"goal": {"x": 4.0, "y": 4.0}})
+        assert refused.is_error
+        assert "E-STOP" in text_of(refused)
+        assert hub.release()
