@@ -9,6 +9,7 @@ from __future__ import annotations
 
 __all__ = [
     "ALL_TOOL_NAMES",
+    "NAVIGATION_TOOL_NAMES",
     "ORIGINAL_TOOL_NAMES",
     "RECORD_TOOL_NAMES",
     "SAFETY_TOOL_NAMES",
@@ -45,10 +46,17 @@ WATCH_TOOL_NAMES = (
 #: Pictures of the robot's world: its map, its scan, a topic over time.
 VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
 SAFETY_TOOL_NAMES = ("stop_robot",)
+#: Sending the robot somewhere on its map.
+NAVIGATION_TOOL_NAMES = ("navigate_to",)
 #: Recordings: MCAP files written from topics, and read back.
 RECORD_TOOL_NAMES = ("record", "read_recording")
 ALL_TOOL_NAMES = (
-    ORIGINAL_TOOL_NAMES + WATCH_TOOL_NAMES + VIEW_TOOL_NAMES + SAFETY_TOOL_NAMES + RECORD_TOOL_NAMES
+    ORIGINAL_TOOL_NAMES
+    + WATCH_TOOL_NAMES
+    + VIEW_TOOL_NAMES
+    + SAFETY_TOOL_NAMES
+    + NAVIGATION_TOOL_NAMES
+    + RECORD_TOOL_NAMES
 )
 TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "all": ALL_TOOL_NAMES,
@@ -56,6 +64,7 @@ TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "watch": WATCH_TOOL_NAMES,
     "view": VIEW_TOOL_NAMES,
     "safety": SAFETY_TOOL_NAMES,
+    "navigation": NAVIGATION_TOOL_NAMES,
     "record": RECORD_TOOL_NAMES,
 }
 
@@ -63,7 +72,8 @@ TOOL_GROUPS: dict[str, tuple[str, ...]] = {
 def select_tools(spec: str) -> tuple[str, ...]:
     """The tool names a ``--tools`` value stands for, in registration order.
 
-    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``)
+    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``,
+    ``navigation``)
     and tool names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
     """
     chosen: set[str] = set()

@@ -5,7 +5,8 @@ tool; a fragment such as `"rate_hz": 10, "duration": 3` ("add ... to keep it mov
 before it. The calls go to the real command, ``python -m rosbridge_mcp_server --demo --console 0``, over stdio
 with the SDK's client. A goal id written as a placeholder (``"…"``) is filled with the id of a goal started
 first. ``list_robots`` is listed only with several robots, so its examples run on a two-robot server over the
-same simulated robot.
+same simulated robot; ``navigate_to`` needs a robot with Nav2 and a map, so its examples run on
+``--demo --demo-world nav2`` with the README's sample place (``dock``) in a policy.
 """
 
 from __future__ import annotations
@@ -30,6 +31,9 @@ WAIT = 60.0
 PLACEHOLDER = "…"
 #: Tools that are listed only when the server drives several robots.
 FLEET_ONLY = {"list_robots"}
+NAV2_ONLY = {"navigate_to"}
+#: The README's policy sample names the place ``dock``; on the Nav2 demo's map it is free space.
+NAV2_POLICY = "[places]\ndock = [1.0, 2.0, 90]\n"
 
 
 def tools_table(readme: Path) -> dict[str, list[dict[str, Any]]]:
@@ -116,18 +120,24 @@ async def _filled(mcp: Client, arguments: dict[str, Any]) -> dict[str, Any]:
     return {key: (running if value == PLACEHOLDER else value) for key, value in arguments.items()}
 
 
+@pytest.mark.timeout(240)  # navigate_to's examples drive the simulated robot at its real speed
 @pytest.mark.parametrize("readme", ["README.md", "README_ja.md"])
 async def test_every_tools_table_example_runs_on_the_demo_robot(
-    readme: str, sim_ros2: SimulatedRobot
+    readme: str, sim_ros2: SimulatedRobot, tmp_path: Path
 ) -> None:
     """Each example of the table is a call that succeeds on `--demo`; every tool the server lists is in it."""
     examples = tools_table(ROOT / readme)
     assert len(examples) >= 21, sorted(examples)
-    single = {name: calls for name, calls in examples.items() if name not in FLEET_ONLY}
+    single = {name: calls for name, calls in examples.items() if name not in FLEET_ONLY | NAV2_ONLY}
     fleet = {name: calls for name, calls in examples.items() if name in FLEET_ONLY}
+    nav2 = {name: calls for name, calls in examples.items() if name in NAV2_ONLY}
     assert all(single.values()), [name for name, calls in single.items() if not calls]
     failures, listed = await run_examples(["--demo", "--console", "0"], single)
     robots = ["--robot", f"a={sim_ros2.url}", "--robot", f"b={sim_ros2.url}"]
     fleet_failures, fleet_listed = await run_examples(robots, fleet)
-    assert failures + fleet_failures == [], "\n".join(failures + fleet_failures)
+    policy = tmp_path / "policy.toml"
+    policy.write_text(NAV2_POLICY, encoding="utf-8")
+    nav2_failures, _ = await run_examples(["--demo", "--demo-world", "nav2", "--policy", str(policy)], nav2)
+    problems = failures + fleet_failures + nav2_failures
+    assert problems == [], "\n".join(problems)
     assert (listed | fleet_listed) - set(examples) == set(), f"tools missing from {readme}'s table"

@@ -116,7 +116,9 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
 
         tools = await server.request("tools/list")
-        assert len(tools["result"]["tools"]) == 25  # 21 tools, read_logs, diagnose, record and read_recording
+        assert (
+            len(tools["result"]["tools"]) == 26
+        )  # the 21, read_logs, diagnose, navigate_to, record, read_recording
 
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
         assert topics["result"]["isError"] is False

@@ -38,6 +38,7 @@ EXPECTED_PARAMETERS = {
     "view_scan": ["topic", "radius", "clearance", "max_size", "timeout"],
     "plot_topic": ["series", "duration", "max_size"],
     "stop_robot": [],
+    "navigate_to": ["goal", "frame", "forward", "left", "turn", "timeout"],
     "record": ["topics", "duration", "max_megabytes", "name", "stop"],
     "read_recording": ["file", "mode", "fields", "at", "window", "topics"],
 }

@@ -193,3 +193,60 @@ def test_a_subtree_write_is_refused_when_a_deny_may_match_under_it(
     """A ROS 1 write replaces everything under its name, so a deny below it refuses it."""
     rules = NameRules(deny=(deny,))
     assert (rules.refusal(name, "parameters", subtree=True) is not None) is refused
+
+
+NAVIGATION = """
+[navigation]
+robot_radius = 0.3
+max_goal_distance = 12
+confirm = "motion"
+[navigation.allowed_zones]
+lab = [[0, 0], [10, 0], [10, 10], [0, 10]]
+[navigation.keep_out]
+stairs = [[8, 8], [9, 8], [9, 9.5]]
+[places]
+dock = [1.0, 2.0, 90]
+door = {x = 4, y = 5}
+"""
+
+
+def test_the_navigation_section_and_the_places_are_read(tmp_path: Path) -> None:
+    path = tmp_path / "policy.toml"
+    path.write_text(NAVIGATION, encoding="utf-8")
+    policy = load_policy(path)
+    nav = policy.navigation
+    assert nav.robot_radius == 0.3
+    assert nav.max_goal_distance == 12
+    assert nav.confirm == "motion"
+    assert nav.allowed_zones == (("lab", ((0, 0), (10, 0), (10, 10), (0, 10))),)
+    assert nav.keep_out == (("stairs", ((8, 8), (9, 8), (9, 9.5))),)
+    assert dict(policy.places) == {"dock": (1.0, 2.0, 90.0), "door": (4.0, 5.0, 0.0)}
+    described = "\n".join(policy.describe())
+    assert "[navigation] goals inside lab; none in stairs; at most 12 m away" in described
+    assert "[places] dock, door" in described
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ('[navigation]\nconfirm = "always"', "[navigation] confirm must be 'never' or 'motion'"),
+        ("[navigation]\nmax_goal_distance = -1", "[navigation] max_goal_distance must be a number of metres"),
+        (
+            "[navigation.keep_out]\nstairs = [[0, 0], [1, 1]]",
+            "[navigation.keep_out] stairs must be a polygon",
+        ),
+        (
+            '[navigation.allowed_zones]\nlab = [[0, 0], [1, "a"], [2, 2]]',
+            "allowed_zones] lab must be a polygon",
+        ),
+        ("[navigation]\nmax_goal_distanse = 3", "did you mean 'max_goal_distance'?"),
+        ('[places]\ndock = "here"', "[places] dock must be [x, y, yaw]"),
+        ("[places]\ndock = {x = 1, z = 2}", "[places] dock must be [x, y, yaw]"),
+    ],
+)
+def test_a_bad_navigation_value_is_an_error_saying_what_fits(text: str, fragment: str) -> None:
+    import tomllib
+
+    with pytest.raises(PolicyError) as raised:
+        parse_policy(tomllib.loads(text), where="p.toml")
+    assert fragment in str(raised.value)

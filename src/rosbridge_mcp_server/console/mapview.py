@@ -3,8 +3,11 @@
 While a page is open, the panel listens to ``/tf`` and ``/tf_static`` (a frame tree of its own) and to the map
 topic (``nav_msgs/OccupancyGrid``, latched). Twice a second it looks up the base frame in ``map`` (the map's
 own frame), or in ``odom`` when there is no map frame, and pushes the pose when it moved; the map picture is
-drawn again (off the event loop, with ``robot/maps.py``'s renderer and the robot's arrow) only when the map or
-the pose changed, at most once a second. It only listens: nothing here publishes or calls anything.
+drawn again (off the event loop, with ``robot/maps.py``'s renderer and the robot's arrow) only when the map,
+the pose or the plan changed, at most once a second. The navigator's plan (``plan`` beside the map topic, as
+Nav2 and move_base publish it while driving a goal) is drawn with its goal at the end, and dropped when no
+plan came for :data:`PLAN_KEEP` seconds (the goal ended). It only listens: nothing here publishes or calls
+anything.
 """
 
 from __future__ import annotations
@@ -20,7 +23,15 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.drawing import png_bytes
 from rosbridge_mcp_server.robot.frames import TF_TOPICS
-from rosbridge_mcp_server.robot.maps import Grid, MapError, Overlay, Pose2D, decode_grid, draw_map
+from rosbridge_mcp_server.robot.maps import (
+    Grid,
+    MapError,
+    Overlay,
+    Pose2D,
+    decode_grid,
+    decode_path,
+    draw_map,
+)
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.transforms import FrameTree, TransformError, frame_name
@@ -34,6 +45,7 @@ __all__ = [
     "DEFAULT_MAP_TOPIC",
     "MAP_FPS",
     "MAP_MAX_SIZE",
+    "PLAN_KEEP",
     "POSE_HZ",
     "MapPanel",
     "Picture",
@@ -51,6 +63,9 @@ MAP_MAX_SIZE = 420
 #: How soon a missing map topic, or a robot that was down, is looked for again (seconds).
 RETRY_EVERY = 2.0
 _GRID_TYPE = "nav_msgs/OccupancyGrid"
+_PATH_TYPE = "nav_msgs/Path"
+#: A plan older than this (seconds) is no longer drawn: Nav2 republishes its plan while a goal runs.
+PLAN_KEEP = 3.0
 
 
 @dataclass(frozen=True)
@@ -101,6 +116,10 @@ class MapPanel:
         self._tree = FrameTree()
         self._grid: Grid | None = None
         self._grid_seq = 0
+        #: The latest plan in the map's frame (its last point is the goal) and when it came.
+        self.plan: list[tuple[float, float]] = []
+        self._plan_at = -math.inf
+        self._plan_seq = 0
 
     # --- what the page reads -------------------------------------------------------------------------------
 
@@ -164,6 +183,7 @@ class MapPanel:
             async with asyncio.TaskGroup() as group:
                 group.create_task(self._transforms())
                 group.create_task(self._map())
+                group.create_task(self._plans())
                 group.create_task(self._poses())
         finally:
             if self._task is None:  # stopped, not restarted by choose(): let go of the map's cells
@@ -224,8 +244,33 @@ class MapPanel:
                 grid = self._grid
                 self._say(map_status=f"{topic}: {grid.width}x{grid.height} cells of {grid.resolution:.3g} m")
 
+    async def _plans(self) -> None:
+        topic = f"{self.topic.rsplit('/', 1)[0]}/plan"
+        while True:
+            try:
+                msg_type = await self._graph.topic_type(topic)
+                if msg_type and short_type_name(msg_type) == _PATH_TYPE:
+                    async with self._client.subscribe(topic, msg_type, queue_length=1, max_queue=1) as plans:
+                        while True:
+                            frame, points = decode_path(await plans.get())
+                            grid = self._grid
+                            if grid is not None and frame not in ("", grid.frame_id or "map"):
+                                continue  # drawn only in the map's own frame
+                            self.plan, self._plan_at = points, time.monotonic()
+                            self._plan_seq += 1
+            except RosbridgeError:
+                pass
+            # Not a sync: how soon to look again after the topic or the robot was missing.
+            await asyncio.sleep(RETRY_EVERY)
+
+    def _current_plan(self) -> list[tuple[float, float]]:
+        if self.plan and time.monotonic() - self._plan_at > PLAN_KEEP:
+            self.plan = []
+            self._plan_seq += 1
+        return self.plan
+
     async def _poses(self) -> None:
-        drawn: tuple[int, Any] | None = None
+        drawn: tuple[int, Any, int] | None = None
         last_draw = -math.inf
         while True:
             found = self._look_up()
@@ -244,12 +289,13 @@ class MapPanel:
                     self._say(status="live")
                     self._pushed()
             grid = self._grid
-            key = (self._grid_seq, self.pose)
+            plan = self._current_plan()
+            key = (self._grid_seq, self.pose, self._plan_seq)
             if grid is not None and key != drawn and time.monotonic() - last_draw >= 1 / MAP_FPS:
                 robot = None
                 if not isinstance(found, str) and found[0] == (grid.frame_id or "map"):
                     robot = found[1]
-                data, width, height = await asyncio.to_thread(_draw, grid, robot)
+                data, width, height = await asyncio.to_thread(_draw, grid, robot, plan)
                 drawn, last_draw = key, time.monotonic()
                 self.images += 1
                 self.image = Picture(self.images, self.topic, "image/png", data, width, height)
@@ -313,7 +359,7 @@ def _pose_event(frame: str, base: str, pose: Pose2D) -> dict[str, Any]:
     }
 
 
-def _draw(grid: Grid, robot: Pose2D | None) -> tuple[str, int, int]:
-    picture = draw_map(grid, max_size=MAP_MAX_SIZE, overlay=Overlay(robot=robot))
+def _draw(grid: Grid, robot: Pose2D | None, plan: list[tuple[float, float]]) -> tuple[str, int, int]:
+    picture = draw_map(grid, max_size=MAP_MAX_SIZE, overlay=Overlay(robot=robot, path=plan))
     data = png_bytes(picture.image)
     return base64.b64encode(data).decode("ascii"), picture.image.width, picture.image.height

@@ -26,6 +26,7 @@ from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, c
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
+from rosbridge_mcp_server.robot.navigation import Scene, goal_poses, navigation_goal, survey
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
 from rosbridge_mcp_server.robot.seam import Act, Acting, approved, carry_out
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, stamped
@@ -35,11 +36,13 @@ if TYPE_CHECKING:
 
 __all__ = [
     "PING_LIMIT",
+    "SCENE_TIMEOUT",
     "Published",
     "ServiceReply",
     "StreamProgress",
     "Streamed",
     "call_service",
+    "navigation_scene",
     "publish_once",
     "publish_stream",
     "require_action_server",
@@ -405,13 +408,16 @@ async def send_goal(
     goal: dict[str, Any],
     timeout: float,
     on_feedback: GoalFeedback | None = None,
+    scene: Scene | None = None,
 ) -> Goal:
     """Check the goal against the action server's type, run it until it ends, and return how it ended.
 
     *on_feedback* gets the running goal (``goal_id``, ``feedback_count``) and each feedback, so that a caller
     can name the goal (to cancel it) while it runs. The goal is tracked (seen by stop_robot and the E-STOP)
     from before anything of it is sent; right before the goal itself is sent, the send gate is asked, and a
-    goal whose cancel or timeout came first is not sent at all.
+    goal whose cancel or timeout came first is not sent at all. A navigation goal (``robot/navigation.py``) is
+    judged with the robot's map and pose: *scene* when the caller learnt them, else they are learnt here, so
+    that the guard judges a goal the same whichever tool sends it.
     """
     ticket = ctx.gate.ticket()  # a stop from now on voids this goal
     name = absolute_name(action, "action")
@@ -429,7 +435,11 @@ async def send_goal(
             looks_like="A goal",
         )
 
-    act = await approved(ctx, Act(tool, "action", name, wire_type, goal, given=_given(action, name)))
+    if scene is None and navigation_goal(action_type) is not None:
+        scene = await navigation_scene(ctx, name, action_type, goal)
+    act = await approved(
+        ctx, Act(tool, "action", name, wire_type, goal, given=_given(action, name), scene=scene)
+    )
     outcome: Goal = await carry_out(
         ctx,
         act,
@@ -444,6 +454,27 @@ async def send_goal(
         ),
     )
     return outcome
+
+
+#: How long a navigation goal sent by publish_action waits for the map and /tf before it is judged.
+SCENE_TIMEOUT = 3.0
+
+
+async def navigation_scene(ctx: Acting, action: str, action_type: str, goal: dict[str, Any]) -> Scene | None:
+    """The map (``<action's namespace>/map``) and the robot (``base_link``) as a navigation goal sent by name
+    is judged against; ``None`` when the goal's poses cannot be read (the guard says why)."""
+    poses = goal_poses(action_type, goal)
+    if isinstance(poses, str) or not poses:
+        return None
+    namespace = action.rsplit("/", 1)[0]
+    return await survey(
+        ctx.client,
+        ctx.graph,
+        map_topic=f"{namespace}/map",
+        base_frame="base_link",
+        poses=poses,
+        timeout=min(SCENE_TIMEOUT, ctx.config.request_timeout),
+    )
 
 
 async def require_action_server(graph: RosGraph, name: str, action_type: str | None = None) -> None:

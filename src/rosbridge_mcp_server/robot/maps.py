@@ -38,6 +38,7 @@ from rosbridge_mcp_server.robot.drawing import (
 __all__ = [
     "MARGIN_BOTTOM",
     "MARGIN_LEFT",
+    "OCCUPIED_FROM",
     "Grid",
     "MapError",
     "MapPicture",

@@ -59,6 +59,9 @@ class Act:
     duration: float | None = None  #: publish streams only
     effects: tuple[Effect, ...] = ()
     given: str | None = None
+    #: What the act is judged against beyond itself: for a navigation goal, the robot's map, its pose and the
+    #: goal placed on it (a ``robot.navigation.Scene``), learnt just before the act was built; else None.
+    scene: Any = None
 
 
 Answer = Literal["accept", "decline", "cancel", "unsupported"]

@@ -29,7 +29,9 @@ from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.navigation import navigation_goal
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
+from rosbridge_mcp_server.safety.navigation import goal_text, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
 from rosbridge_mcp_server.safety.policy import Policy
 
@@ -192,6 +194,9 @@ class PolicyGuard:
         rule = self._rule_refusal(act)
         if rule is not None:
             self._refuse(act, rule, f"Refused by the safety policy ({rule}); nothing was sent.")
+        place = navigation_refusal(act, self.policy.navigation)
+        if place is not None:
+            self._refuse(act, place.rule, place.text)
         approved, clamp = self._capped(act)
         if self._needs_person(approved):
             answer = await self._ask(approved, ask, clamp)
@@ -296,6 +301,12 @@ class PolicyGuard:
 
     def _needs_person(self, act: Act) -> bool:
         confirm = self.policy.confirm
+        if (
+            self.policy.navigation.confirm == "motion"
+            and act.kind == "action"
+            and navigation_goal(act.type) is not None
+        ):
+            return True
         if confirm == "always":
             return True
         if confirm == "motion":
@@ -375,6 +386,9 @@ def question(act: Act, clamp: str | None = None) -> str:
         lines.append(f"Repeated at {act.rate_hz:g} Hz{lasting}.")
     if clamp:
         lines.append(f"Note: {clamp}.")
+    where = goal_text(act)
+    if where:
+        lines.append(where)
     lines.append("Allow this?")
     return "\n".join(lines)
 

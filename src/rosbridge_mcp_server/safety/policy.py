@@ -24,6 +24,16 @@ robot uncapped). The file::
     enabled = true               # false: record refuses
     max_seconds = 600            # longest recording
     max_megabytes = 2000         # largest file
+    [navigation]                 # every navigation goal (navigate_to, or publish_action on Nav2 / move_base)
+    robot_radius = 0.25          # m kept free around a goal on the map (default 0.2)
+    max_goal_distance = 15       # m from the robot, straight line
+    confirm = "motion"           # "never" | "motion": ask the person before each navigation goal
+    [navigation.allowed_zones]   # polygons in the map frame, corners [x, y] in metres
+    lab = [[0, 0], [10, 0], [10, 10], [0, 10]]
+    [navigation.keep_out]
+    stairs = [[8, 8], [9, 8], [9, 9], [8, 9]]
+    [places]                     # named places for navigate_to: [x, y, yaw in degrees] in the map frame
+    dock = [1.0, 1.0, 90]
 """
 
 from __future__ import annotations
@@ -43,6 +53,7 @@ __all__ = [
     "CONFIRM_MODES",
     "DEFAULT_CONFIRM_TIMEOUT",
     "NameRules",
+    "NavigationRules",
     "Policy",
     "PolicyError",
     "PublishLimits",
@@ -132,6 +143,27 @@ class PublishLimits:
     max_duration: float | None = None
 
 
+#: A zone of the geofence: its name and corners (x, y) in the map frame, metres.
+Zone = tuple[str, tuple[tuple[float, float], ...]]
+NavigationConfirm = Literal["never", "motion"]
+
+
+@dataclass(frozen=True)
+class NavigationRules:
+    """``[navigation]``: where navigation goals may go (whatever tool sends them)."""
+
+    robot_radius: float | None = None
+    max_goal_distance: float | None = None
+    confirm: NavigationConfirm = "never"
+    allowed_zones: tuple[Zone, ...] = ()
+    keep_out: tuple[Zone, ...] = ()
+
+    @property
+    def configured(self) -> bool:
+        """Whether anything restricts goals beyond the map check every goal gets."""
+        return bool(self.max_goal_distance is not None or self.allowed_zones or self.keep_out)
+
+
 @dataclass(frozen=True)
 class RecordingLimits:
     """What ``record`` may do: whether it may record at all, and how long and how large at most."""
@@ -160,6 +192,9 @@ class Policy:
     velocity: VelocityCaps = field(default_factory=VelocityCaps)
     publish: PublishLimits = field(default_factory=PublishLimits)
     recording: RecordingLimits = field(default_factory=RecordingLimits)
+    navigation: NavigationRules = field(default_factory=NavigationRules)
+    #: Named places for navigate_to: name → (x m, y m, yaw degrees) in the map frame.
+    places: tuple[tuple[str, tuple[float, float, float]], ...] = ()
     source: str | None = None
 
     def rules_for(self, kind: str) -> tuple[str, NameRules]:
@@ -227,6 +262,22 @@ class Policy:
                 if rec.max_megabytes is not None:
                     parts.append(f"≤ {rec.max_megabytes:g} MB")
                 lines.append(f"  [recording] {', '.join(parts)}")
+        nav = self.navigation
+        if nav != NavigationRules():
+            parts = []
+            if nav.allowed_zones:
+                parts.append(f"goals inside {', '.join(name for name, _ in nav.allowed_zones)}")
+            if nav.keep_out:
+                parts.append(f"none in {', '.join(name for name, _ in nav.keep_out)}")
+            if nav.max_goal_distance is not None:
+                parts.append(f"at most {nav.max_goal_distance:g} m away")
+            if nav.robot_radius is not None:
+                parts.append(f"{nav.robot_radius:g} m clear on the map")
+            if nav.confirm != "never":
+                parts.append("the person confirms each goal")
+            lines.append(f"  [navigation] {'; '.join(parts)}")
+        if self.places:
+            lines.append(f"  [places] {', '.join(name for name, _ in self.places)}")
         return lines
 
 
@@ -248,12 +299,15 @@ _TOP_KEYS = (
     "velocity",
     "publish",
     "recording",
+    "navigation",
+    "places",
 )
 _RULE_KEYS = ("allow", "deny")
 _MOTION_KEYS = ("allow", "deny", "motion")
 _VELOCITY_KEYS = ("max_linear", "max_angular", "mode")
 _PUBLISH_KEYS = ("max_rate_hz", "max_duration")
 _RECORDING_KEYS = ("enabled", "max_seconds", "max_megabytes")
+_NAVIGATION_KEYS = ("robot_radius", "max_goal_distance", "confirm", "allowed_zones", "keep_out")
 
 
 def load_policy(path: str | Path, *, source: str = "--policy") -> Policy:
@@ -310,6 +364,8 @@ def parse_policy(data: Mapping[str, Any], *, where: str = "policy") -> Policy:
         velocity=_velocity(data, where),
         publish=_publish(data, where),
         recording=_recording(data, where),
+        navigation=_navigation(data, where),
+        places=_places(data, where),
         source=where,
     )
 
@@ -397,3 +453,76 @@ def _recording(data: Mapping[str, Any], where: str) -> RecordingLimits:
         max_seconds=_positive(table, "max_seconds", "recording", where, "seconds"),
         max_megabytes=_positive(table, "max_megabytes", "recording", where, "megabytes"),
     )
+
+
+def _navigation(data: Mapping[str, Any], where: str) -> NavigationRules:
+    table = _table(data, "navigation", where, _NAVIGATION_KEYS)
+    confirm = table.get("confirm", "never")
+    if confirm not in ("never", "motion"):
+        raise PolicyError(f"{where}: [navigation] confirm must be 'never' or 'motion', not {confirm!r}")
+    radius = _positive(table, "robot_radius", "navigation", where, "metres")
+    distance = _positive(table, "max_goal_distance", "navigation", where, "metres")
+    return NavigationRules(
+        robot_radius=radius,
+        max_goal_distance=distance,
+        confirm=confirm,
+        allowed_zones=_zones(table, "allowed_zones", where),
+        keep_out=_zones(table, "keep_out", where),
+    )
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        return None
+    return float(value)
+
+
+def _zones(table: Mapping[str, Any], key: str, where: str) -> tuple[Zone, ...]:
+    zones = table.get(key, {})
+    example = f"[navigation.{key}] lab = [[0, 0], [4, 0], [4, 3], [0, 3]]"
+    if not isinstance(zones, dict):
+        raise PolicyError(f"{where}: [navigation] {key} must be a table of named polygons, e.g. {example}")
+    out: list[Zone] = []
+    for name, corners in zones.items():
+        points: list[tuple[float, float]] = []
+        if isinstance(corners, list):
+            for corner in corners:
+                if isinstance(corner, list) and len(corner) == 2:
+                    x, y = _number(corner[0]), _number(corner[1])
+                    if x is not None and y is not None:
+                        points.append((x, y))
+                        continue
+                points = []
+                break
+        if len(points) < 3:
+            raise PolicyError(
+                f"{where}: [navigation.{key}] {name} must be a polygon of at least 3 corners [x, y] in "
+                f"metres, e.g. {example}; got {corners!r}"
+            )
+        out.append((name, tuple(points)))
+    return tuple(out)
+
+
+def _places(data: Mapping[str, Any], where: str) -> tuple[tuple[str, tuple[float, float, float]], ...]:
+    table = data.get("places", {})
+    example = "[places] dock = [1.0, 2.0, 90]  # x, y (m), yaw (degrees) in the map frame"
+    if not isinstance(table, dict):
+        raise PolicyError(f"{where}: places must be a table ([places]), e.g. {example}")
+    out: list[tuple[str, tuple[float, float, float]]] = []
+    for name, value in table.items():
+        if isinstance(value, dict):
+            unknown = set(value) - {"x", "y", "yaw"}
+            numbers = [_number(value.get(k, 0.0)) for k in ("x", "y", "yaw")]
+            ok = not unknown and "x" in value and "y" in value
+        elif isinstance(value, list) and len(value) in (2, 3):
+            numbers = [_number(v) for v in value] + ([0.0] if len(value) == 2 else [])
+            ok = True
+        else:
+            numbers, ok = [], False
+        if not ok or any(n is None for n in numbers):
+            raise PolicyError(
+                f"{where}: [places] {name} must be [x, y, yaw] or {{x, y, yaw}}, e.g. {example}"
+            )
+        x, y, yaw = (float(n) for n in numbers if n is not None)
+        out.append((name, (x, y, yaw)))
+    return tuple(out)

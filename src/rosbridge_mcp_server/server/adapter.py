@@ -192,7 +192,16 @@ def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedToo
             return _question_round(asking)
         except (RosbridgeError, ToolFailure) as exc:
             _log.info("%s failed: %s", spec.name, exc)
-            return CallToolResult(content=[TextContent(type="text", text=error_text(exc))], is_error=True)
+            # A failure may show why (navigate_to draws a refused goal on the map).
+            pictures = [
+                ImageContent(
+                    type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type
+                )
+                for image in getattr(exc, "images", ())
+            ]
+            return CallToolResult(
+                content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
+            )
         images = [
             ImageContent(
                 type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type

@@ -44,7 +44,7 @@ SPEC = ToolSpec(
     name="describe_type",
     title="Describe a type",
     description=(
-        "Show a message, service or action type's fields as an outline, with an example to send. "
+        "A message, service or action type's fields as an outline, with an example to send. "
         'Read-only. Example: {"type_name": "geometry_msgs/msg/Twist"}.'
     ),
     hints=READS_ROBOT,

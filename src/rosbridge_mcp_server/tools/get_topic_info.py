@@ -31,7 +31,7 @@ SPEC = ToolSpec(
     name="get_topic_info",
     title="Topic details",
     description=(
-        "Show a topic's type and the nodes publishing and subscribing. Read-only. "
+        "A topic's type and the nodes publishing and subscribing. Read-only. "
         'Example: {"topic": "/turtle1/pose"}.'
     ),
     hints=READS_ROBOT,

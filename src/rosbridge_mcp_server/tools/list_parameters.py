@@ -54,7 +54,7 @@ SPEC = ToolSpec(
     title="List parameters",
     description=(
         "List parameter names by node. Read-only. Full names: /node:name (ROS 2), /ns/name (ROS 1). "
-        'Example: {"node": "/turtlesim"} or {"filter": "*vel*"}.'
+        'Example: {"node": "/turtlesim"}.'
     ),
     hints=READS_ROBOT,
     output=ParametersAnswer,

@@ -43,7 +43,7 @@ SPEC = ToolSpec(
     title="List topics",
     description=(
         "List the robot's topics with their message types. Read-only; start here. Example: "
-        '{"filter": "scan"} (names and types).'
+        '{"filter": "scan"}.'
     ),
     hints=READS_ROBOT,
     output=TopicsAnswer,

@@ -52,9 +52,9 @@ SPEC = ToolSpec(
     name="plot_topic",
     title="Plot topics over time",
     description=(
-        "Chart numeric fields (dotted paths) of topics against time for some seconds, with min/max/mean/"
+        "Chart numeric fields (dotted paths) of topics over some seconds, with min/max/mean/"
         "last and rate. Read-only. Example: "
-        f'{{"series": {_EXAMPLE}, "duration": 5}}'
+        '{"series": ["/odom twist.twist.linear.x"], "duration": 5}'
     ),
     hints=READS_ROBOT,
     output=PlotAnswer,

@@ -34,7 +34,7 @@ SPEC = ToolSpec(
     name="publish_service",
     title="Call a service",
     description=(
-        "Call a ROS service and return its response; services can change the robot. Example: service "
+        "Call a service and return its response; can change the robot. Example: service "
         f"/add_two_ints, service_type example_interfaces/srv/AddTwoInts, request {_EXAMPLE}."
     ),
     hints=ACTS_ON_ROBOT,

@@ -36,7 +36,7 @@ SPEC = ToolSpec(
     name="set_parameter",
     title="Set a parameter",
     description=(
-        "Set one ROS parameter (read back to confirm); can change the robot. Example: "
+        "Set one parameter (read back to confirm); can change the robot. Example: "
         '{"name": "/turtlesim:background_r", "value": 200}. ROS 2 keeps the type: 2.0 for a double.'
     ),
     hints=_SETS_PARAMETER,

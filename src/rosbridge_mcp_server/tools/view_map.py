@@ -61,7 +61,7 @@ SPEC = ToolSpec(
     title="Map picture",
     description=(
         "An OccupancyGrid (map or costmap) as a picture with the robot (blue, from /tf), optionally a plan "
-        '(green) and a scan (red) on it. Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
+        '(green) and a scan (red). Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
         '"around_robot": 4}'
     ),
     hints=READS_ROBOT,

@@ -56,7 +56,7 @@ SPEC = ToolSpec(
     name="view_scan",
     title="Scan from above",
     description=(
-        "A LaserScan or PointCloud2 from above (forward up) with range rings and the footprint; gives the "
+        "A LaserScan or PointCloud2 from above (forward up) with range rings and the footprint; the "
         'nearest obstacle and free directions. Read-only. Example: {"topic": "/scan", "clearance": 1.0}'
     ),
     hints=READS_ROBOT,

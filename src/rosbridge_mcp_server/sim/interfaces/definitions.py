@@ -330,6 +330,10 @@ ROS1_ONLY: dict[str, str] = {
         "uint8 RECALLED        = 8\nuint8 LOST            = 9\n\nstring text\n"
     ),
     "actionlib_msgs/msg/GoalStatusArray": "Header header\nGoalStatus[] status_list\n",
+    # move_base_msgs (ROS 1's navigation stack; the Nav2 world's move_base)
+    "move_base_msgs/action/MoveBase": (
+        "geometry_msgs/PoseStamped target_pose\n---\n---\ngeometry_msgs/PoseStamped base_position\n"
+    ),
     # rosgraph_msgs
     "rosgraph_msgs/msg/Log": (
         "byte DEBUG=1\nbyte INFO=2\nbyte WARN=4\nbyte ERROR=8\nbyte FATAL=16\n"

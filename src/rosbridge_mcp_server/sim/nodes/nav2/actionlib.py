@@ -11,13 +11,20 @@ import asyncio
 import contextlib
 import itertools
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from rosbridge_mcp_server.sim.actions.common import ROS1_STATUS, time_msg
 from rosbridge_mcp_server.sim.nodes.kit import NodeKit
 
-__all__ = ["ActionlibServer"]
+__all__ = ["ActionlibServer", "Runner"]
+
+#: Runs a goal instead of the fixed steps: (goal, cancel, feedback) → (``succeeded``/``canceled``/``aborted``,
+#: result); feedback gets the action's feedback message.
+Runner = Callable[
+    [dict[str, Any], asyncio.Event, Callable[[dict[str, Any]], None]], Awaitable[tuple[str, dict[str, Any]]]
+]
+_STATES = {"succeeded": "SUCCEEDED", "canceled": "PREEMPTED", "aborted": "ABORTED"}
 
 STATUS_PERIOD = 0.2
 #: Finished goals stay in the status list this long (actionlib's default).
@@ -38,6 +45,7 @@ class ActionlibServer:
         steps: int,
         step: float,
         on_success: Callable[[dict[str, Any]], None] | None = None,
+        runner: Runner | None = None,
     ) -> None:
         self.kit = kit
         self.name = name
@@ -47,6 +55,7 @@ class ActionlibServer:
         self.steps = steps
         self.step = step
         self.on_success = on_success
+        self.runner = runner
         self._ids = itertools.count(1)
         #: goal id -> (status code, goal_id message, finished at (monotonic) or 0, cancel event)
         self._goals: dict[str, tuple[int, dict[str, Any], float, asyncio.Event]] = {}
@@ -90,6 +99,18 @@ class ActionlibServer:
 
     async def _run(self, goal_id: str, goal: dict[str, Any]) -> None:
         cancel = self._goals[goal_id][3]
+        if self.runner is not None:
+
+            def feedback(values: dict[str, Any]) -> None:
+                self._publish(
+                    "feedback",
+                    self.types["feedback"],
+                    {"header": self.kit.header(""), "status": self._status(goal_id), "feedback": values},
+                )
+
+            state, result = await self.runner(goal, cancel, feedback)
+            self._end(goal_id, _STATES.get(state, "ABORTED"), cancel, result)
+            return
         for _ in range(self.steps):
             if cancel.is_set():
                 break
@@ -103,11 +124,14 @@ class ActionlibServer:
         state = "PREEMPTED" if cancel.is_set() else "SUCCEEDED"
         if state == "SUCCEEDED" and self.on_success is not None:
             self.on_success(goal)
+        self._end(goal_id, state, cancel, {})
+
+    def _end(self, goal_id: str, state: str, cancel: asyncio.Event, result: dict[str, Any]) -> None:
         self._goals[goal_id] = (ROS1_STATUS[state], self._goals[goal_id][1], time.monotonic(), cancel)
         self._publish(
             "result",
             self.types["result"],
-            {"header": self.kit.header(""), "status": self._status(goal_id), "result": {}},
+            {"header": self.kit.header(""), "status": self._status(goal_id), "result": result},
         )
         self.publish_status()
         self.kit.world.notify()

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -110,11 +111,15 @@ class Motion:
         for robot in self.robots:
             self._publish_once(robot)
         kit = self.kit
+        last = time.monotonic()
         while True:
             await asyncio.sleep(TF_PERIOD)
+            # The time that really passed (a busy machine sleeps longer), so speeds hold in wall-clock time.
+            now = time.monotonic()
+            dt, last = min(now - last, 4 * TF_PERIOD), now
             for robot in self.robots:
                 moving = robot.linear or robot.angular
-                robot.step(TF_PERIOD)
+                robot.step(dt)
                 if moving:
                     kit.world.notify()
                 ns = robot.namespace

@@ -28,6 +28,7 @@ from rosbridge_mcp_server.sim.nodes.nav2.layout import (
 )
 from rosbridge_mcp_server.sim.nodes.nav2.lifecycle import Lifecycles
 from rosbridge_mcp_server.sim.nodes.nav2.motion import Motion
+from rosbridge_mcp_server.sim.nodes.nav2.navigation import Navigator
 from rosbridge_mcp_server.sim.nodes.nav2.params import NODE_PARAMETERS, common_parameters
 from rosbridge_mcp_server.sim.nodes.nav2.robot import Nav2Robot, pose
 from rosbridge_mcp_server.sim.nodes.nav2.surroundings import Surroundings, TurtleRoom
@@ -37,6 +38,8 @@ __all__ = ["GOAL_STEPS", "Nav2ActionServer", "Nav2World"]
 
 #: Steps a goal of a Nav2 action runs before it succeeds (one feedback each).
 GOAL_STEPS = 4
+#: The actions whose goals drive the robot along a plan (the others run GOAL_STEPS steps).
+DRIVING_ACTIONS = ("navigate_to_pose", "navigate_through_poses")
 
 
 def _yaw_of(orientation: Any) -> float:
@@ -65,6 +68,8 @@ class Nav2ActionServer(ActionServer):
         self.on_success = on_success
 
     async def run_goal(self, handle: GoalHandle, feedback: FeedbackFn) -> tuple[str, dict[str, Any]]:
+        if self.name.rsplit("/", 1)[-1] in DRIVING_ACTIONS:
+            return await self._navigate(handle, feedback)
         step = self.nav2.action_step
         for index in range(GOAL_STEPS):
             if handle.cancel.is_set():
@@ -77,6 +82,18 @@ class Nav2ActionServer(ActionServer):
         result = self.on_success(self.robot, handle.goal) if self.on_success is not None else {}
         self.nav2.kit.world.notify()
         return "succeeded", result
+
+    async def _navigate(self, handle: GoalHandle, feedback: FeedbackFn) -> tuple[str, dict[str, Any]]:
+        through = self.type.endswith("NavigateThroughPoses")
+
+        def send(values: dict[str, Any]) -> None:
+            if not through:
+                values.pop("number_of_poses_remaining", None)
+            feedback(values)
+
+        outcome = await self.nav2.navigator.navigate(self.robot, handle.goal, handle.cancel, send)
+        self.nav2.kit.world.notify()
+        return outcome.state, {"error_code": outcome.error_code, "error_msg": outcome.error_msg}
 
     def _feedback(self, goal: dict[str, Any], index: int) -> dict[str, Any]:
         left = GOAL_STEPS - index
@@ -123,12 +140,17 @@ class Nav2World:
         namespaces = [""] if robots == 1 else [f"/robot{i}" for i in range(1, robots + 1)]
         self.robots = [Nav2Robot(ns) for ns in namespaces]
         self.motion = Motion(kit, self.robots, surroundings or TurtleRoom())
+        #: Plans on the map and drives the robots to navigation goals (``navigator.speed`` scales speeds).
+        self.navigator = Navigator(kit, self._grid)
         self.lifecycles = Lifecycles(kit)
         #: /diagnostics, /rosout, the drivers' topics and the faults set on purpose (health.py).
         self.health = Health(kit, self.robots, faults)
         self.actions: list[Nav2ActionServer] = []
         #: Every node of the world (absolute names), for the plumbing every node gets.
         self.node_names: list[str] = []
+
+    def _grid(self) -> Any:
+        return self.motion.surroundings.grid()
 
     @property
     def surroundings(self) -> Surroundings:
@@ -353,10 +375,34 @@ class Nav2World:
             )
 
     def _actionlib_topics(self, robot: Nav2Robot) -> None:
-        """ROS 1: each action as an actionlib server over its five topics."""
+        """ROS 1: each action as an actionlib server over its five topics, and ROS 1's ``move_base``."""
         ns = robot.namespace
+        if self._type("move_base_msgs/msg/MoveBaseActionGoal") is not None:
+            self.kit.graph.node(f"{ns}/move_base")
+            ActionlibServer(
+                self.kit,
+                name=f"{ns}/move_base",
+                node=f"{ns}/move_base",
+                package="move_base_msgs",
+                action="MoveBase",
+                steps=GOAL_STEPS,
+                step=self.action_step,
+                runner=functools.partial(self._drive_ros1, robot, ros1_feedback=True),
+            )
         for name, leaf, node in NAV2_ACTIONS:
             if self._type(f"nav2_msgs/msg/{leaf}ActionGoal") is None:
+                continue
+            if name in DRIVING_ACTIONS:
+                ActionlibServer(
+                    self.kit,
+                    name=f"{ns}/{name}",
+                    node=f"{ns}/{node}",
+                    package="nav2_msgs",
+                    action=leaf,
+                    steps=GOAL_STEPS,
+                    step=self.action_step,
+                    runner=functools.partial(self._drive_ros1, robot, ros1_feedback=False),
+                )
                 continue
             behaviour = self._behaviours().get(name)
             on_success: Callable[[dict[str, Any]], None] | None = None
@@ -372,6 +418,25 @@ class Nav2World:
                 step=self.action_step,
                 on_success=on_success,
             )
+
+    async def _drive_ros1(
+        self,
+        robot: Nav2Robot,
+        goal: dict[str, Any],
+        cancel: asyncio.Event,
+        feedback: Callable[[dict[str, Any]], None],
+        *,
+        ros1_feedback: bool,
+    ) -> tuple[str, dict[str, Any]]:
+        def send(values: dict[str, Any]) -> None:
+            if not ros1_feedback:
+                values.pop("number_of_poses_remaining", None)
+            feedback(values)
+
+        outcome = await self.navigator.navigate(robot, goal, cancel, send, ros1=ros1_feedback)
+        self.kit.world.notify()
+        result = {} if ros1_feedback else {"error_code": outcome.error_code, "error_msg": outcome.error_msg}
+        return outcome.state, result
 
     def _parameters(self, robot: Nav2Robot) -> None:
         params = self.kit.world.params

@@ -1,0 +1,121 @@
+"""The guard's judgement of navigation goals: one rule for every goal that sends the robot somewhere,
+whichever tool sends it and however it is spelt (``navigate_to``; ``publish_action`` on Nav2's
+``NavigateToPose``, ``NavigateThroughPoses``, ``FollowWaypoints`` or ROS 1's ``move_base``).
+
+The act carries the scene it is judged against (``Act.scene``: the map, the robot's pose and the goal placed
+on the map, learnt by ``robot/acting.py`` just before). In order:
+
+1. the goal's poses must be readable and placeable in the map frame;
+2. every goal is on the map, in known free space, at least ``robot_radius`` from anything occupied or unknown
+   (checked whenever a map is known; with ``[navigation]`` zones or a distance limit a goal that cannot be
+   checked against the map is refused);
+3. ``[navigation]``: outside every keep-out zone, inside an allowed zone (when any is listed), at most
+   ``max_goal_distance`` from the robot.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from rosbridge_mcp_server.robot.navigation import (
+    DEFAULT_ROBOT_RADIUS,
+    Scene,
+    distance_problem,
+    goal_poses,
+    map_problem,
+    navigation_goal,
+    zone_problem,
+)
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.seam import Act
+    from rosbridge_mcp_server.safety.policy import NavigationRules
+
+__all__ = ["NavigationRefusal", "goal_text", "navigation_refusal"]
+
+
+@dataclass(frozen=True)
+class NavigationRefusal:
+    """The rule (for the audit) and the sentence for the model."""
+
+    rule: str
+    text: str
+
+
+def _refusal(rule: str, why: str, advice: str) -> NavigationRefusal:
+    return NavigationRefusal(rule, f"Refused: {why}; nothing was sent. {advice}".strip())
+
+
+_PICK = "Pick a goal in free space on the map (view_map shows it)."
+
+
+def navigation_refusal(act: Act, rules: NavigationRules) -> NavigationRefusal | None:
+    """Why the navigation goal *act* may not be sent, or ``None`` (also for any act that is no such goal)."""
+    if act.kind != "action" or navigation_goal(act.type) is None:
+        return None
+    poses = goal_poses(act.type, act.payload if isinstance(act.payload, dict) else {})
+    if isinstance(poses, str):
+        return _refusal("navigation: unreadable goal", f"the navigation goal cannot be read: {poses}", "")
+    scene = act.scene if isinstance(act.scene, Scene) else None
+    strict = rules.configured
+    if scene is None or len(scene.goals) != len(poses):
+        if not strict:
+            return None
+        why = "; ".join(scene.problems) if scene is not None and scene.problems else "no map or /tf was read"
+        return _refusal(
+            "[navigation] goal not placed",
+            f"the safety policy's [navigation] zones and limits need the goal placed on the map, and {why}",
+            "Make sure the map and /tf are published, or give the goal in the map frame.",
+        )
+    radius = rules.robot_radius if rules.robot_radius is not None else DEFAULT_ROBOT_RADIUS
+    if scene.grid is not None:
+        for goal in scene.goals:
+            problem = map_problem(scene.grid, goal, radius)
+            if problem is not None:
+                return _refusal(f"map: {problem}", problem, _PICK)
+    elif strict:
+        why = "; ".join(scene.problems) or "no map"
+        return _refusal(
+            "[navigation] no map",
+            f"the goal cannot be checked against the map ({why})",
+            "Start the map server, or ask the robot's operator.",
+        )
+    allowed = dict(rules.allowed_zones)
+    keep_out = dict(rules.keep_out)
+    for goal in scene.goals:
+        problem = zone_problem(goal, allowed, keep_out)
+        if problem is not None:
+            return _refusal(
+                f"[navigation] {problem}",
+                f"{problem} (safety policy)",
+                "Choose a goal inside the allowed area.",
+            )
+    if rules.max_goal_distance is not None:
+        if scene.robot is None:
+            return _refusal(
+                "[navigation] max_goal_distance: robot pose unknown",
+                f"the goal's distance cannot be checked against max_goal_distance "
+                f"{rules.max_goal_distance:g} m: {'; '.join(scene.problems) or 'the robot pose is unknown'}",
+                "",
+            )
+        for goal in scene.goals:
+            problem = distance_problem(goal, scene.robot, rules.max_goal_distance)
+            if problem is not None:
+                return _refusal(
+                    f"[navigation] {problem}", f"{problem} (safety policy)", "Choose a nearer goal."
+                )
+    return None
+
+
+def goal_text(act: Act) -> str:
+    """Where a navigation goal sends the robot, in the map frame, for the person asked to confirm it.
+
+    Only the goal: the robot's own pose moves (localisation jitters), and the question must read the same when
+    a client answers it in a second round (protocol 2026-07-28 matches the answer to the exact question)."""
+    scene = act.scene if isinstance(act.scene, Scene) else None
+    if act.kind != "action" or scene is None or not scene.goals:
+        return ""
+    parts = [f"x={goal.x:.2f} y={goal.y:.2f} m yaw={math.degrees(goal.yaw):.0f}°" for goal in scene.goals]
+    return f"Goal in {scene.map_frame}: {'; then '.join(parts)}."
