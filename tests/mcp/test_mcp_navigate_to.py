@@ -350,3 +350,60 @@ async def test_navigation_confirm_asks_with_the_goal_and_a_decline_sends_nothing
         reached = await opened.ok("navigate_to", {"goal": "dock"})
     assert (reached.structured_content or {})["succeeded"], text_of(reached)
     assert len(accepting.questions) == 1
+
+
+async def test_a_navigation_goal_sent_as_a_topic_or_a_service_call_meets_the_geofence_too(
+    session: Session, nav2: SimulatedRobot
+) -> None:
+    """With [navigation] limits, a goal by another carrier (actionlib's goal topic, ROS 2's send_goal service,
+    a goal pose topic) cannot be placed on the map, so it is refused: it would otherwise skip the geofence."""
+    stamped = {
+        "header": {"frame_id": "map"},
+        "pose": {"position": {"x": 9.0, "y": 2.0}, "orientation": {"w": 1.0}},
+    }
+    if nav2.dialect == "ros1":
+        carried = [
+            (
+                "publish_topic",
+                {
+                    "topic": "/move_base/goal",
+                    "message_type": "move_base_msgs/MoveBaseActionGoal",
+                    "message": {"goal": {"target_pose": stamped}},
+                },
+            ),
+            (
+                "publish_topic",
+                {
+                    "topic": "/move_base_simple/goal",
+                    "message_type": "geometry_msgs/PoseStamped",
+                    "message": stamped,
+                },
+            ),
+        ]
+    else:
+        carried = [
+            (
+                "publish_service",
+                {
+                    "service": "/navigate_to_pose/_action/send_goal",
+                    "service_type": "nav2_msgs/action/NavigateToPose_SendGoal",
+                    "request": {"goal_id": {"uuid": list(range(16))}, "goal": {"pose": stamped}},
+                },
+            ),
+            (
+                "publish_topic",
+                {"topic": "/goal_pose", "message_type": "geometry_msgs/msg/PoseStamped", "message": stamped},
+            ),
+        ]
+    before = len(nav2.world.goals)
+    async with watching(nav2) as watcher:
+        for tool, arguments in carried:
+            text = await session.error(tool, arguments)
+            assert "carries a navigation goal" in text, text
+            assert "nothing was sent" in text
+        # The same goal by publish_action is judged on the map (and refused for the keep-out zone).
+        assert "keep-out zone 'corner'" in await session.error("publish_action", raw_goal(nav2, 9.0, 2.0))
+    assert watcher.received == []
+    assert len(nav2.world.goals) == before
+    published = {topic for topic in nav2.world.published if "goal" in topic}
+    assert published == set(), published

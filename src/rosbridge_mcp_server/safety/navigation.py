@@ -11,6 +11,11 @@ on the map, learnt by ``robot/acting.py`` just before). In order:
    checked against the map is refused);
 3. ``[navigation]``: outside every keep-out zone, inside an allowed zone (when any is listed), at most
    ``max_goal_distance`` from the robot.
+
+A navigation goal can also travel as something else: ROS 1 actionlib's ``<action>/goal`` topic, ROS 2's
+``<action>/_action/send_goal`` service, or a goal pose topic (``/goal_pose``, ``/move_base_simple/goal``).
+Those carry no scene, so while ``[navigation]`` has zones or limits they are refused: the rules would
+otherwise not be checked at all.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from rosbridge_mcp_server.robot.effects import MOTION_GOAL_TOPICS
 from rosbridge_mcp_server.robot.navigation import (
     DEFAULT_ROBOT_RADIUS,
     Scene,
@@ -51,9 +57,44 @@ def _refusal(rule: str, why: str, advice: str) -> NavigationRefusal:
 _PICK = "Pick a goal in free space on the map (view_map shows it)."
 
 
+#: The last part of the usual navigation actions' names: a goal to one of them by another carrier is a
+#: navigation goal even when its type is not known.
+_NAVIGATION_ACTIONS = frozenset(
+    {"navigate_to_pose", "navigate_through_poses", "follow_waypoints", "move_base"}
+)
+
+
+def carries_navigation_goal(act: Act) -> bool:
+    """Whether *act*, not itself an action goal, sends a navigation goal: an actionlib goal topic or an
+    ``_action/send_goal`` call of a navigation action, or a goal pose topic."""
+    if act.kind == "topic":
+        if act.type.endswith("ActionGoal") and navigation_goal(act.type[: -len("Goal")]) is not None:
+            return True
+        if act.name in MOTION_GOAL_TOPICS or act.name.endswith(MOTION_GOAL_TOPICS):
+            return True
+    sends_goal = act.kind == "service" and act.type.endswith("_SendGoal")
+    if sends_goal and navigation_goal(act.type[: -len("_SendGoal")]) is not None:
+        return True
+    return any(
+        effect.kind == "action"
+        and effect.what == "goal"
+        and effect.name.rsplit("/", 1)[-1] in _NAVIGATION_ACTIONS
+        for effect in act.effects
+    )
+
+
 def navigation_refusal(act: Act, rules: NavigationRules) -> NavigationRefusal | None:
     """Why the navigation goal *act* may not be sent, or ``None`` (also for any act that is no such goal)."""
-    if act.kind != "action" or navigation_goal(act.type) is None:
+    if act.kind != "action":
+        if rules.configured and carries_navigation_goal(act):
+            return _refusal(
+                "[navigation] goal not sent as a goal",
+                f"{act.name} carries a navigation goal, and the safety policy's [navigation] zones and "
+                "limits are checked only where a goal is placed on the map",
+                "Send it with navigate_to, or publish_action on the navigation action.",
+            )
+        return None
+    if navigation_goal(act.type) is None:
         return None
     poses = goal_poses(act.type, act.payload if isinstance(act.payload, dict) else {})
     if isinstance(poses, str):
