@@ -2,7 +2,8 @@
 
 Found before (issue 25, finding 5): with ``max_rate_hz = 20`` eight 20 Hz streams side by side delivered ~160
 commands a second, and single publishes went out at ~700 a second. The bound is the send gate's: in any
-window of T seconds at most ``1 + 20 T`` messages leave for one topic. Counted on the robot (the time each
+window of T seconds at most ``2 + 20 T`` messages leave for one topic (one turn each 50 ms; a message a
+little late does not push the later turns back). Counted on the robot (the time each
 message arrived there), in both dialects; a little slack is left for the link bunching frames on arrival.
 """
 
@@ -56,7 +57,7 @@ async def test_eight_streams_side_by_side_share_one_rate_on_the_robot(sim: Simul
         )
     assert not any(result.is_error for result in results), [text_of(r) for r in results]
     times = moving_times(sim, 0.3)
-    assert busiest_second(times) <= 1 + RATE + ARRIVAL_SLACK, busiest_second(times)
+    assert busiest_second(times) <= 2 + RATE + ARRIVAL_SLACK, busiest_second(times)
     sent = sum(result.structured_content["count"] for result in results if result.structured_content)
     assert sent == len(times)
     # Together they filled the topic's rate: about 1.5 s worth (a stream whose next slot falls after its
@@ -74,7 +75,7 @@ async def test_single_publishes_at_once_reach_the_robot_at_the_rate(sim: Simulat
     assert not any(result.is_error for result in results), [text_of(r) for r in results]
     times = moving_times(sim, 0.2)
     assert len(times) == 30
-    assert busiest_second(times) <= 1 + RATE + ARRIVAL_SLACK, busiest_second(times)
+    assert busiest_second(times) <= 2 + RATE + ARRIVAL_SLACK, busiest_second(times)
     # 30 messages at most 20 a second take at least 29 / 20 s to go out (less the arrival slack).
     assert times[-1] - times[0] >= (30 - 1 - ARRIVAL_SLACK) / RATE
 

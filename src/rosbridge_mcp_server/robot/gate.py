@@ -92,10 +92,12 @@ class SendGate:
         """Wait until *act*'s topic may take another message, then :meth:`check`; ``False`` (nothing waited)
         when that would be after the loop time *latest*.
 
-        The time of each yes is kept, and the next message on the topic waits until the guard's
-        ``send_interval`` after it, whoever sends it: the caller writes its frame right after the yes, with
-        nothing awaited between, so in any window of T seconds at most ``1 + T / interval`` messages leave
-        for one topic. A stop during the wait ends it at once (with the refusal).
+        Each topic's next turn is kept, and the next message on the topic waits until the guard's
+        ``send_interval`` after the last turn (after the yes itself when it came an interval or more late),
+        whoever sends it: the caller writes its frame right after the yes, with nothing awaited between, so in
+        any window of T seconds at most ``2 + T / interval`` messages leave for one topic
+        (``1 + T / interval`` when no yes comes late). A stop during the wait ends it at once (with the
+        refusal).
         """
         interval = self._guard.send_interval(act)
         if interval > 0:
@@ -106,7 +108,12 @@ class SendGate:
                 self.check(ticket, act)
                 await self._wait_unless_stopped(due - loop.time())
             self.check(ticket, act)
-            self._next_slot[act.name] = loop.time() + interval
+            now = loop.time()
+            # A yes a little after its turn keeps the turns' grid (the next turn is one interval after this
+            # one's), so a stream at the cap is not pushed later by every hiccup of the loop; after a pause
+            # (or the first message) the grid starts again from now.
+            late = now - due
+            self._next_slot[act.name] = (due if 0.0 <= late < interval else now) + interval
             return True
         self.check(ticket, act)
         return True
