@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rosbridge_mcp_server.config import Config, ConfigError
-from rosbridge_mcp_server.fleet_config import load_fleet
+from rosbridge_mcp_server.config.fleet import load_fleet
 from rosbridge_mcp_server.safety import parse_policy
 
 BASE = Config(headers=(("Authorization", "Bearer base"),))

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rosbridge_mcp_server.config import ConfigError
-from rosbridge_mcp_server.http_config import load_http_settings, parse_bind, parse_tokens
+from rosbridge_mcp_server.config.http import load_http_settings, parse_bind, parse_tokens
 
 TOKEN = "0123456789abcdef0123"
 

@@ -8,7 +8,7 @@ from typing import NoReturn
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.config import LOG_LEVELS
-from rosbridge_mcp_server.http_config import DEFAULT_BIND
+from rosbridge_mcp_server.config.http import DEFAULT_BIND
 
 __all__ = ["PROG", "UsageError", "build_parser"]
 

@@ -24,10 +24,10 @@ from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
 from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.config.fleet import load_fleet
+from rosbridge_mcp_server.config.http import HttpSettings, is_loopback, load_http_settings
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
 from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls, runtime_dir
-from rosbridge_mcp_server.fleet_config import load_fleet
-from rosbridge_mcp_server.http_config import HttpSettings, is_loopback, load_http_settings
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
 from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio

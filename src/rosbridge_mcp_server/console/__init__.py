@@ -9,9 +9,9 @@ The web side (``serve.py``: uvicorn; ``web.py``: Starlette) is imported from its
 console is served, so a server without ``--console`` does not load them.
 """
 
+from rosbridge_mcp_server.config.console import ConsoleSettings, console_settings
 from rosbridge_mcp_server.console.hub import ConsoleHub, RobotView, summary_text
 from rosbridge_mcp_server.console.pages import static_text
-from rosbridge_mcp_server.console.settings import ConsoleSettings, console_settings
 
 __all__ = [
     "ConsoleHub",

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import uvicorn
 
+from rosbridge_mcp_server.config.console import ConsoleSettings
 from rosbridge_mcp_server.console.hub import ConsoleHub
-from rosbridge_mcp_server.console.settings import ConsoleSettings
 from rosbridge_mcp_server.console.web import console_app
 
 __all__ = ["RunningConsole", "open_console"]

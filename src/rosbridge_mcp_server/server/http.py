@@ -32,7 +32,7 @@ from mcp.server.mcpserver import MCPServer
 from mcp.server.transport_security import TransportSecuritySettings
 
 from rosbridge_mcp_server.config import ConfigError
-from rosbridge_mcp_server.http_config import MCP_PATH, HttpSettings, OAuthSettings
+from rosbridge_mcp_server.config.http import MCP_PATH, HttpSettings, OAuthSettings
 
 __all__ = ["JwtVerifier", "StaticTokens", "auth_options", "listen_http", "serve_http"]
 

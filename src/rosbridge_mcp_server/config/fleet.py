@@ -27,7 +27,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from rosbridge_mcp_server.config import Config, ConfigError, parse_url
+from rosbridge_mcp_server.config.robot import Config, ConfigError, parse_url
 from rosbridge_mcp_server.safety.policy import PolicyError, load_policy
 
 __all__ = ["NAME_PATTERN", "load_fleet"]

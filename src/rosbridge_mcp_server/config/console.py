@@ -11,7 +11,7 @@ import ipaddress
 from dataclasses import dataclass
 from pathlib import Path
 
-from rosbridge_mcp_server.config import ConfigError, parse_port
+from rosbridge_mcp_server.config.robot import ConfigError, parse_port
 
 __all__ = ["DEFAULT_CONSOLE_HOST", "ConsoleSettings", "console_settings"]
 

@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Literal
 from urllib.parse import urlsplit
 
-from rosbridge_mcp_server.config import ConfigError
+from rosbridge_mcp_server.config.robot import ConfigError
 
 __all__ = [
     "DEFAULT_BIND",
