@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+from rosbridge_mcp_server.cli.demo import demo_settings
 from rosbridge_mcp_server.config import Config, ConfigError
 from rosbridge_mcp_server.config.fleet import load_fleet
 from rosbridge_mcp_server.safety import parse_policy
@@ -70,5 +71,6 @@ def test_a_robot_named_twice_or_without_url_is_refused(tmp_path: Path) -> None:
         load_fleet(BASE, robots=["base"])
     with pytest.raises(ConfigError, match="named twice"):
         load_fleet(BASE, robots=["a=ws://x:1", "a=ws://y:1"])
-    with pytest.raises(ConfigError, match="--demo"):
-        load_fleet(Config(demo=True), robots=["a=ws://x:1"])
+    fleet = load_fleet(BASE, robots=["a=ws://x:1"])
+    with pytest.raises(ConfigError, match="--demo runs one simulated robot"):
+        demo_settings(True, fleet=fleet)

@@ -18,6 +18,7 @@ from urllib.parse import urlsplit
 from websockets.exceptions import WebSocketException
 
 from rosbridge_mcp_server import __version__
+from rosbridge_mcp_server.cli.demo import DemoSettings
 from rosbridge_mcp_server.client import Dialect, RosbridgeClient, RosInfo
 from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config, plain_text_warning
@@ -231,15 +232,16 @@ def policy_names_check(policy: Policy, present: dict[str, list[str]]) -> list[tu
     return lines
 
 
-async def run_check(config: Config, out: TextIO) -> int:
-    """Run the diagnosis against ``config.url``, writing to ``out``; 0 when healthy, 1 when not."""
+async def run_check(config: Config, out: TextIO, *, demo: DemoSettings | None = None) -> int:
+    """Run the diagnosis against ``config.url`` (the *demo* robot's, with ``--demo``), writing to ``out``; 0
+    when healthy, 1 when not."""
 
     def say(mark: str, text: str) -> None:
         out.write(f"[{mark}] {text}\n")
 
     out.write(f"rosbridge-mcp-server {__version__}: checking {config.url}\n")
-    if config.demo:
-        say(_NOTE, f"demo mode: this is the built-in simulated ROS {config.demo_dialect[-1]} robot")
+    if demo is not None:
+        say(_NOTE, f"demo mode: this is the built-in simulated ROS {demo.dialect[-1]} robot")
     for line in config.policy.describe():
         say(_NOTE, f"safety {line.strip()}" if not line.startswith(" ") else f"  {line.strip()}")
     warning = plain_text_warning(config.url)

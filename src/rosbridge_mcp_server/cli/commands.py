@@ -16,17 +16,18 @@ import os
 import signal
 import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
-from dataclasses import replace
 from pathlib import Path
 from typing import TextIO
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
 from rosbridge_mcp_server.cli.check import run_check
+from rosbridge_mcp_server.cli.demo import DemoSettings, demo_robot, demo_settings
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.config.console import ConsoleSettings, load_console_settings
 from rosbridge_mcp_server.config.fleet import load_fleet
 from rosbridge_mcp_server.config.http import HttpSettings, is_loopback, load_http_settings
-from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView, console_settings
+from rosbridge_mcp_server.console import ConsoleHub, RobotView
 from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls, runtime_dir
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
@@ -59,11 +60,6 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             url=options.url,
             timeout=options.timeout,
             log_level=options.log_level,
-            demo=options.demo,
-            demo_dialect=options.demo_dialect,
-            demo_world=options.demo_world,
-            demo_robots=options.demo_robots,
-            demo_faults=options.demo_fault,
             policy=options.policy,
             read_only=options.read_only,
             audit_log=options.audit_log,
@@ -73,9 +69,8 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             headers=options.header,
             tools=options.tools,
             record_dir=options.record_dir,
+            simulated=options.demo,
         )
-        if config.demo_faults:
-            _check_demo_faults(config)
         http = load_http_settings(
             env,
             transport=options.transport,
@@ -93,12 +88,20 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
             behind_tls_proxy=options.behind_tls_proxy,
         )
         fleet = load_fleet(config, robots=options.robot, robots_file=options.robots)
-        console = console_settings(
-            options.console if options.console is not None else env.get("ROSBRIDGE_MCP_CONSOLE") or None,
+        demo = demo_settings(
+            options.demo,
+            dialect=options.demo_dialect,
+            world=options.demo_world,
+            robots=options.demo_robots,
+            faults=options.demo_fault,
+            fleet=fleet,
+        )
+        console = load_console_settings(
+            env,
+            address=options.console,
             cert=options.console_cert,
             key=options.console_key,
             insecure=options.console_insecure,
-            source="--console" if options.console is not None else "ROSBRIDGE_MCP_CONSOLE",
         )
         if console is not None:
             same_port_check(console, http)
@@ -116,8 +119,8 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     )
     try:
         if command == "check":
-            return asyncio.run(check(config, sys.stdout, fleet))
-        asyncio.run(serve(config, audit_file, http, fleet, console, console_dir=runtime_dir(env)))
+            return asyncio.run(check(config, sys.stdout, fleet, demo=demo))
+        asyncio.run(serve(config, audit_file, http, fleet, console, console_dir=runtime_dir(env), demo=demo))
     except ConfigError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
@@ -260,47 +263,14 @@ async def _exit_after_cleanup(clients: Sequence[RosbridgeClient], exit_code: int
     os._exit(exit_code)
 
 
-def _check_demo_faults(config: Config) -> None:
-    """``--demo-fault`` names the simulated robot knows, on a dialect that has them (a ConfigError if not)."""
-    from rosbridge_mcp_server.sim.nodes.nav2.health import check_faults  # noqa: PLC0415
-
-    try:
-        check_faults(config.demo_faults, ros2=config.demo_dialect == "ros2")
-    except ValueError as exc:
-        raise ConfigError(f"--demo-fault: {exc}") from None
-
-
-@contextlib.asynccontextmanager
-async def demo_robot(config: Config) -> AsyncIterator[Config]:
-    """With ``--demo``: a simulated robot on a free local port, and ``config`` pointed at it."""
-    if not config.demo:
-        yield config
-        return
-    # Imported here: the simulated robot is only needed with --demo.
-    from rosbridge_mcp_server.sim import SimulatedRobot  # noqa: PLC0415
-
-    # The simulated robot logs like a rosbridge server, errors for expected misses included (e.g. ROS 1 has no
-    # /rosapi/get_ros_version); that log belongs to the robot, so it is shown only when debugging.
-    if config.log_level != "DEBUG":
-        logging.getLogger("rosbridge_mcp_server.sim").setLevel(logging.CRITICAL)
-    async with SimulatedRobot(
-        dialect=config.demo_dialect,
-        port=0,
-        world=config.demo_world,
-        robots=config.demo_robots,
-        faults=config.demo_faults,
-    ) as robot:
-        _log.info(
-            "demo mode: simulated ROS %s %s robot at %s",
-            config.demo_dialect[-1],
-            config.demo_world,
-            robot.url,
-        )
-        yield replace(config, url=robot.url)
-
-
-async def check(config: Config, out: TextIO, fleet: Sequence[tuple[str, Config]] = ()) -> int:
-    """The ``check`` command: diagnose the bridge (or the demo robot), or each robot of a *fleet* in turn;
+async def check(
+    config: Config,
+    out: TextIO,
+    fleet: Sequence[tuple[str, Config]] = (),
+    *,
+    demo: DemoSettings | None = None,
+) -> int:
+    """The ``check`` command: diagnose the bridge (or the *demo* robot), or each robot of a *fleet* in turn;
     0 when every one is healthy, 1 when not."""
     if fleet:
         worst = 0
@@ -312,8 +282,8 @@ async def check(config: Config, out: TextIO, fleet: Sequence[tuple[str, Config]]
         unhealthy = "" if worst == 0 else " (at least one is not healthy: see above)"
         out.write(f"\nchecked {len(fleet)} robots{unhealthy}\n")
         return worst
-    async with demo_robot(config) as effective:
-        return await run_check(effective, out)
+    async with demo_robot(config, demo) as effective:
+        return await run_check(effective, out, demo=demo)
 
 
 async def serve(
@@ -324,12 +294,13 @@ async def serve(
     console: ConsoleSettings | None = None,
     *,
     console_dir: Path | None = None,
+    demo: DemoSettings | None = None,
 ) -> None:
     """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
     Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names). With
     *console*, the operator console beside it (one person, one E-STOP for every robot); its URL is also
     written to a file in *console_dir* (this user's alone) while it runs."""
-    async with demo_robot(config) as effective:
+    async with demo_robot(config, demo) as effective:
         robots = list(fleet) or [("robot", effective)]
         entries: list[Robot] = []
         operator = Operator(present=console is not None)
@@ -389,7 +360,7 @@ async def serve(
                 "MCP client (Claude Desktop, MCP Inspector). To test the connection from a terminal, run "
                 "`%s check%s`. Ctrl-C stops it.",
                 PROG,
-                " --demo" if config.demo else "",
+                " --demo" if demo is not None else "",
             )
         async with _console(console, hub, console_dir):
             await serve_stdio(server)

@@ -1,4 +1,5 @@
-"""Where the operator console listens, and whether it may: ``--console [HOST:]PORT`` and its TLS options.
+"""Where the operator console listens, and whether it may: ``--console [HOST:]PORT`` /
+``ROSBRIDGE_MCP_CONSOLE`` and its TLS options (flags only).
 
 Loopback by default. Any other address shows the robot's camera and its stop button to a network, so it needs
 TLS (``--console-cert`` / ``--console-key``) or an explicit ``--console-insecure``; the session secret still
@@ -8,12 +9,14 @@ guards every request either way.
 from __future__ import annotations
 
 import ipaddress
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from rosbridge_mcp_server.config.robot import ConfigError, parse_port
+from rosbridge_mcp_server.config.robot import parse_port
+from rosbridge_mcp_server.config.sources import ConfigError, Setting, Sources
 
-__all__ = ["DEFAULT_CONSOLE_HOST", "ConsoleSettings", "console_settings"]
+__all__ = ["DEFAULT_CONSOLE_HOST", "ConsoleSettings", "console_settings", "load_console_settings"]
 
 DEFAULT_CONSOLE_HOST = "127.0.0.1"
 
@@ -35,6 +38,29 @@ class ConsoleSettings:
     @property
     def loopback(self) -> bool:
         return is_loopback(self.host)
+
+
+#: Where the console listens; its TLS options are flags only.
+CONSOLE = Setting("--console", "ROSBRIDGE_MCP_CONSOLE")
+
+
+def load_console_settings(
+    environ: Mapping[str, str],
+    *,
+    address: str | None = None,
+    cert: str | None = None,
+    key: str | None = None,
+    insecure: bool = False,
+) -> ConsoleSettings | None:
+    """:func:`console_settings` from ``--console`` (``None``: not given) or ``ROSBRIDGE_MCP_CONSOLE``."""
+    chosen = Sources({CONSOLE.flag: address}, environ).pick(CONSOLE)
+    return console_settings(
+        chosen.value if chosen is not None else None,
+        cert=cert,
+        key=key,
+        insecure=insecure,
+        source=chosen.source if chosen is not None else CONSOLE.flag,
+    )
 
 
 def console_settings(

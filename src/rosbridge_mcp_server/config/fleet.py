@@ -27,13 +27,22 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from rosbridge_mcp_server.config.robot import Config, ConfigError, parse_url
+from rosbridge_mcp_server.config.robot import Config, parse_url
+from rosbridge_mcp_server.config.sources import ConfigError, Setting, Sources
 from rosbridge_mcp_server.safety.policy import PolicyError, load_policy
 
 __all__ = ["NAME_PATTERN", "load_fleet"]
 
 NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,31}$")
 _KEYS = {"url", "headers", "ca_file", "client_cert", "client_key", "policy", "read_only"}
+# A robot's settings in its table of the fleet file (its file source).
+_URL = Setting("--robot", key="url")
+_HEADERS = Setting("--header", key="headers")
+_CA_FILE = Setting("--ca-file", key="ca_file")
+_CLIENT_CERT = Setting("--client-cert", key="client_cert")
+_CLIENT_KEY = Setting("--client-key", key="client_key")
+_POLICY = Setting("--policy", key="policy")
+_READ_ONLY = Setting("--read-only", key="read_only")
 
 
 def load_fleet(
@@ -53,14 +62,6 @@ def load_fleet(
         if name in fleet:
             raise ConfigError(f"--robot: the robot {name!r} is named twice")
         fleet[name] = replace(base, url=parse_url(url.strip(), source=f"--robot {name}"))
-    if base.demo and fleet:
-        raise ConfigError(
-            "--demo runs one simulated robot; it cannot be combined with --robot / --robots. To try a fleet "
-            "on simulated robots, start two (`rosbridge-sim-robot --port 9091` and "
-            "`rosbridge-sim-robot --port 9092`) and give --robot a=ws://127.0.0.1:9091 "
-            "--robot b=ws://127.0.0.1:9092; or --demo "
-            "--demo-world nav2 --demo-robots 2 for two namespaced robots on one bridge"
-        )
     return tuple(fleet.items())
 
 
@@ -97,26 +98,30 @@ def _from_file(base: Config, path: Path) -> list[tuple[str, Config]]:
 
 
 def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> Config:
+    # The one rule for a robot of the fleet: its table here is its file; no flag or variable names one robot
+    # (``--robot NAME=URL`` and a table of the same name are refused as naming it twice), and what its table
+    # leaves out is its default: the value every robot shares, chosen from flags and environment in *base*.
     unknown = set(entry) - _KEYS
     if unknown:
         raise ConfigError(f"{where}: unknown key {sorted(unknown)[0]!r}; known: {', '.join(sorted(_KEYS))}")
-    url = entry.get("url")
-    if not isinstance(url, str):
+    own = Sources(file=entry, file_source=where)
+    url = own.pick(_URL)
+    if url is None or not isinstance(url.value, str):
         raise ConfigError(f"{where}: url (a ws:// or wss:// URL) is required")
-    config = replace(base, url=parse_url(url, source=f"{where} url"))
+    config = replace(base, url=parse_url(url.value, source=url.source))
 
-    def file(key: str) -> str | None:
-        value = entry.get(key)
-        if value is None:
-            return getattr(base, key) if key != "policy" else None
-        if not isinstance(value, str) or not value:
-            raise ConfigError(f"{where}: {key} must be a file path")
-        resolved = folder / value
+    def file(setting: Setting) -> str | None:
+        chosen = own.pick(setting)
+        if chosen is None:
+            return getattr(base, str(setting.key)) if setting.key != "policy" else None
+        if not isinstance(chosen.value, str) or not chosen.value:
+            raise ConfigError(f"{where}: {setting.key} must be a file path")
+        resolved = folder / chosen.value
         if not resolved.is_file():
-            raise ConfigError(f"{where}: {key} {str(resolved)!r} does not exist")
+            raise ConfigError(f"{where}: {setting.key} {str(resolved)!r} does not exist")
         return str(resolved)
 
-    policy_path = file("policy")
+    policy_path = file(_POLICY)
     if policy_path is not None:
         try:
             policy = load_policy(policy_path, source=f"{where} policy")
@@ -127,11 +132,14 @@ def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> 
     read_only = entry.get("read_only", False)
     if not isinstance(read_only, bool):
         raise ConfigError(f"{where}: read_only must be true or false")
-    if read_only or base.policy.read_only:
+    # An on-only switch: the robot's own read_only, its policy file's, or every robot's (flag, variable or the
+    # shared policy file: base.policy) makes it read-only; none can make a read-only one writable.
+    if own.switch(_READ_ONLY) or base.policy.read_only:
         policy = policy.with_read_only()
     headers = base.headers
-    if "headers" in entry:
-        raw = entry["headers"]
+    given_headers = own.pick(_HEADERS)
+    if given_headers is not None:
+        raw = given_headers.value
         if not isinstance(raw, dict) or not all(isinstance(v, str) for v in raw.values()):
             raise ConfigError(f'{where}: headers must be a table of strings, e.g. {{ Authorization = "…" }}')
         headers = tuple((str(k), v) for k, v in raw.items())
@@ -139,9 +147,9 @@ def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> 
         config,
         policy=policy,
         headers=headers,
-        ca_file=file("ca_file"),
-        client_cert=file("client_cert"),
-        client_key=file("client_key"),
+        ca_file=file(_CA_FILE),
+        client_cert=file(_CLIENT_CERT),
+        client_key=file(_CLIENT_KEY),
     )
     config.ssl_context()
     return config

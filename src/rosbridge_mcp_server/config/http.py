@@ -1,6 +1,7 @@
 """How the MCP server is reached: stdio, or Streamable HTTP with its address, authentication and TLS.
 
-Read once by the CLI, like :mod:`~rosbridge_mcp_server.config` (flags win over the environment):
+Read once by the CLI; each setting chosen by the one rule of :mod:`.sources` (a flag beats the environment,
+which beats the default):
 
 * ``--transport stdio|http`` / ``ROSBRIDGE_MCP_TRANSPORT`` (default stdio);
 * ``--bind HOST:PORT`` / ``ROSBRIDGE_MCP_BIND`` (default ``127.0.0.1:8765``; the path is ``/mcp``);
@@ -35,7 +36,7 @@ from pathlib import Path
 from typing import Literal
 from urllib.parse import urlsplit
 
-from rosbridge_mcp_server.config.robot import ConfigError
+from rosbridge_mcp_server.config.sources import FLAG, ConfigError, Given, Setting, Sources
 
 __all__ = [
     "DEFAULT_BIND",
@@ -56,6 +57,24 @@ MCP_PATH = "/mcp"
 #: Shortest bearer token accepted: a guessable token on a robot's network is no authentication.
 MIN_TOKEN_LENGTH = 16
 _NAME = re.compile(r"^[A-Za-z0-9_.@-]{1,64}$")
+
+# Each setting's flag and environment variable: the one rule in :mod:`.sources` chooses among them.
+TRANSPORT = Setting("--transport", "ROSBRIDGE_MCP_TRANSPORT")
+BIND = Setting("--bind", "ROSBRIDGE_MCP_BIND")
+#: The flag names a file of ``name token`` lines; the variable holds the pairs themselves.
+AUTH_TOKENS = Setting("--auth-tokens", "ROSBRIDGE_MCP_AUTH_TOKENS")
+#: Repeatable flags; the variables hold comma lists.
+ALLOWED_HOSTS = Setting("--allow-host", "ROSBRIDGE_MCP_ALLOWED_HOSTS")
+ALLOWED_ORIGINS = Setting("--allow-origin", "ROSBRIDGE_MCP_ALLOWED_ORIGINS")
+TLS_CERT = Setting("--tls-cert", "ROSBRIDGE_MCP_TLS_CERT")
+TLS_KEY = Setting("--tls-key", "ROSBRIDGE_MCP_TLS_KEY")
+OAUTH_ISSUER = Setting("--oauth-issuer", "ROSBRIDGE_MCP_OAUTH_ISSUER")
+OAUTH_AUDIENCE = Setting("--oauth-audience", "ROSBRIDGE_MCP_OAUTH_AUDIENCE")
+OAUTH_JWKS = Setting("--oauth-jwks", "ROSBRIDGE_MCP_OAUTH_JWKS")
+OAUTH_RESOURCE = Setting("--oauth-resource", "ROSBRIDGE_MCP_OAUTH_RESOURCE")
+OAUTH_SCOPES = Setting("--oauth-scopes", "ROSBRIDGE_MCP_OAUTH_SCOPES")
+#: An on-only switch: a proxy in front terminates TLS.
+BEHIND_TLS_PROXY = Setting("--behind-tls-proxy", "ROSBRIDGE_MCP_BEHIND_TLS_PROXY")
 
 
 @dataclass(frozen=True)
@@ -120,10 +139,28 @@ def load_http_settings(
     behind_tls_proxy: bool = False,
 ) -> HttpSettings:
     """:class:`HttpSettings` from flags (``None``: not given) and the environment, or :class:`ConfigError`."""
-    chosen = (transport or environ.get("ROSBRIDGE_MCP_TRANSPORT", "").strip() or "stdio").lower()
+    sources = Sources(
+        {
+            TRANSPORT.flag: transport,
+            BIND.flag: bind,
+            AUTH_TOKENS.flag: auth_tokens,
+            ALLOWED_HOSTS.flag: list(allow_hosts) if allow_hosts else None,
+            ALLOWED_ORIGINS.flag: list(allow_origins) if allow_origins else None,
+            TLS_CERT.flag: tls_cert,
+            TLS_KEY.flag: tls_key,
+            OAUTH_ISSUER.flag: oauth_issuer,
+            OAUTH_AUDIENCE.flag: oauth_audience,
+            OAUTH_JWKS.flag: oauth_jwks,
+            OAUTH_RESOURCE.flag: oauth_resource,
+            OAUTH_SCOPES.flag: oauth_scopes,
+            BEHIND_TLS_PROXY.flag: behind_tls_proxy,
+        },
+        environ,
+    )
+    given_transport, transport_source = sources.text(TRANSPORT)
+    chosen = (given_transport or "stdio").lower()
     if chosen not in ("stdio", "http"):
-        source = "--transport" if transport else "ROSBRIDGE_MCP_TRANSPORT"
-        raise ConfigError(f"{source}: {chosen!r} is not a transport; use stdio or http")
+        raise ConfigError(f"{transport_source}: {chosen!r} is not a transport; use stdio or http")
     if chosen == "stdio":
         given = [
             name
@@ -139,30 +176,22 @@ def load_http_settings(
         if given:
             raise ConfigError(f"{given[0]} needs --transport http (stdio has no address and no tokens)")
         return HttpSettings()
-    bind_value, bind_source = _pick(bind, "--bind", environ, "ROSBRIDGE_MCP_BIND")
+    bind_value, bind_source = sources.text(BIND)
     host, port = parse_bind(bind_value or DEFAULT_BIND, source=bind_source)
-    tokens = _tokens(environ, auth_tokens)
-    cert, _ = _pick(tls_cert, "--tls-cert", environ, "ROSBRIDGE_MCP_TLS_CERT")
-    key, _ = _pick(tls_key, "--tls-key", environ, "ROSBRIDGE_MCP_TLS_KEY")
+    tokens = _tokens(sources.pick(AUTH_TOKENS))
+    cert, cert_source = sources.text(TLS_CERT)
+    key, key_source = sources.text(TLS_KEY)
     if key and not cert:
-        raise ConfigError("--tls-key needs --tls-cert")
-    for path, name in ((cert, "--tls-cert"), (key, "--tls-key")):
+        raise ConfigError(f"{key_source} needs --tls-cert")
+    for path, name in ((cert, cert_source), (key, key_source)):
         if path and not Path(path).is_file():
             raise ConfigError(f"{name}: {path!r} is not a readable file")
-    oauth = _oauth(
-        environ,
-        HttpSettings(transport="http", host=host, port=port, tls_cert=cert),
-        issuer=oauth_issuer,
-        audience=oauth_audience,
-        jwks=oauth_jwks,
-        resource=oauth_resource,
-        scopes=oauth_scopes,
-    )
+    oauth = _oauth(sources, HttpSettings(transport="http", host=host, port=port, tls_cert=cert))
     if oauth is not None and tokens:
         raise ConfigError("give either --auth-tokens or --oauth-issuer, not both")
-    proxied = behind_tls_proxy or _flag(environ, "ROSBRIDGE_MCP_BEHIND_TLS_PROXY")
-    hosts = _list(allow_hosts, environ, "ROSBRIDGE_MCP_ALLOWED_HOSTS")
-    origins = _list(allow_origins, environ, "ROSBRIDGE_MCP_ALLOWED_ORIGINS")
+    proxied = sources.switch(BEHIND_TLS_PROXY) is not None
+    hosts = _list(sources.pick(ALLOWED_HOSTS))
+    origins = _list(sources.pick(ALLOWED_ORIGINS))
     settings = HttpSettings(
         transport="http",
         host=host,
@@ -190,28 +219,12 @@ def load_http_settings(
     return settings
 
 
-def _flag(environ: Mapping[str, str], name: str) -> bool:
-    value = environ.get(name, "").strip().lower()
-    if value in ("", "0", "false", "no", "off"):
-        return False
-    if value in ("1", "true", "yes", "on"):
-        return True
-    raise ConfigError(f"{name}: {value!r} is not a yes or no (1, true, yes, on / 0, false, no, off)")
-
-
-def _pick(
-    flag: str | None, flag_name: str, environ: Mapping[str, str], env_name: str
-) -> tuple[str | None, str]:
-    if flag:
-        return flag, flag_name
-    value = environ.get(env_name, "").strip()
-    return (value or None), env_name
-
-
-def _list(flags: Sequence[str] | None, environ: Mapping[str, str], env_name: str) -> list[str]:
-    if flags:
-        return [item.strip() for item in flags if item.strip()]
-    return [item.strip() for item in environ.get(env_name, "").split(",") if item.strip()]
+def _list(chosen: Given | None) -> list[str]:
+    # Repeated flags, or one comma list in the variable.
+    if chosen is None:
+        return []
+    items = chosen.value if chosen.rank == FLAG else chosen.value.split(",")
+    return [item.strip() for item in items if item.strip()]
 
 
 def parse_bind(value: str, *, source: str) -> tuple[str, int]:
@@ -236,21 +249,22 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-def _tokens(environ: Mapping[str, str], path: str | None) -> tuple[tuple[str, str], ...]:
-    if path:
-        try:
-            info = os.stat(path)
-            text = Path(path).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ConfigError(f"--auth-tokens: cannot read {path!r}: {exc}") from None
-        if info.st_mode & (stat.S_IRWXG | stat.S_IRWXO):
-            # Not fatal (a container may mount it so), but worth a line: it holds the keys to the robot.
-            _log.warning("the token file %s can be read by other users (chmod 600 it)", path)
-        return parse_tokens(text.splitlines(), source=f"--auth-tokens {path}")
-    value = environ.get("ROSBRIDGE_MCP_AUTH_TOKENS", "")
-    if not value.strip():
+def _tokens(chosen: Given | None) -> tuple[tuple[str, str], ...]:
+    # The flag names a file of pairs; the variable holds the pairs themselves (hosts pass secrets that way).
+    if chosen is None:
         return ()
-    return parse_tokens(re.split(r"[\n,]", value), source="ROSBRIDGE_MCP_AUTH_TOKENS")
+    if chosen.rank != FLAG:
+        return parse_tokens(re.split(r"[\n,]", chosen.value), source=chosen.source)
+    path = chosen.value
+    try:
+        info = os.stat(path)
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"--auth-tokens: cannot read {path!r}: {exc}") from None
+    if info.st_mode & (stat.S_IRWXG | stat.S_IRWXO):
+        # Not fatal (a container may mount it so), but worth a line: it holds the keys to the robot.
+        _log.warning("the token file %s can be read by other users (chmod 600 it)", path)
+    return parse_tokens(text.splitlines(), source=f"--auth-tokens {path}")
 
 
 def parse_tokens(lines: Sequence[str], *, source: str) -> tuple[tuple[str, str], ...]:
@@ -282,21 +296,12 @@ def parse_tokens(lines: Sequence[str], *, source: str) -> tuple[tuple[str, str],
     return tuple(pairs)
 
 
-def _oauth(
-    environ: Mapping[str, str],
-    settings: HttpSettings,
-    *,
-    issuer: str | None,
-    audience: str | None,
-    jwks: str | None,
-    resource: str | None,
-    scopes: str | None,
-) -> OAuthSettings | None:
-    issuer, issuer_source = _pick(issuer, "--oauth-issuer", environ, "ROSBRIDGE_MCP_OAUTH_ISSUER")
-    audience, _ = _pick(audience, "--oauth-audience", environ, "ROSBRIDGE_MCP_OAUTH_AUDIENCE")
-    jwks, jwks_source = _pick(jwks, "--oauth-jwks", environ, "ROSBRIDGE_MCP_OAUTH_JWKS")
-    resource, resource_source = _pick(resource, "--oauth-resource", environ, "ROSBRIDGE_MCP_OAUTH_RESOURCE")
-    scopes, _ = _pick(scopes, "--oauth-scopes", environ, "ROSBRIDGE_MCP_OAUTH_SCOPES")
+def _oauth(sources: Sources, settings: HttpSettings) -> OAuthSettings | None:
+    issuer, issuer_source = sources.text(OAUTH_ISSUER)
+    audience, _ = sources.text(OAUTH_AUDIENCE)
+    jwks, jwks_source = sources.text(OAUTH_JWKS)
+    resource, resource_source = sources.text(OAUTH_RESOURCE)
+    scopes, _ = sources.text(OAUTH_SCOPES)
     if issuer is None:
         others = [
             name for name, value in (("audience", audience), ("jwks", jwks), ("resource", resource)) if value

@@ -1,25 +1,21 @@
-"""Configuration: read once from flags and the environment, validated into a frozen :class:`Config`.
+"""The robot's settings: read once from flags, the environment and the policy file into a frozen
+:class:`Config`.
 
-Precedence, highest first:
+Each setting is chosen by the one rule of :mod:`.sources` (flag > environment > file > default):
 
-1. ``--url``;
-2. ``--host`` / ``--port`` (a missing half comes from ``ROSBRIDGE_HOST`` / ``ROSBRIDGE_PORT``);
-3. ``ROSBRIDGE_URL``;
-4. ``ROSBRIDGE_HOST`` / ``ROSBRIDGE_PORT``;
-5. ``ws://localhost:9090``.
-
-So a flag always beats the environment, and within one source a URL beats host and port. Nothing else in the
-package reads the environment; :func:`load_config` is called once, from ``cli.run()``. The same rule holds for
-every other pair:
-
+* where rosbridge is: ``--url`` / ``ROSBRIDGE_URL``, or ``--host`` / ``ROSBRIDGE_HOST`` and ``--port`` /
+  ``ROSBRIDGE_PORT``, default ``ws://localhost:9090``. A URL beats host and port given in the same source or a
+  lower one; a host or port flag beats ``ROSBRIDGE_URL``, and its missing half comes from the environment;
 * ``--timeout`` / ``ROSBRIDGE_TIMEOUT``, ``--log-level`` / ``ROSBRIDGE_MCP_LOG_LEVEL``, ``--tools`` /
-  ``ROSBRIDGE_MCP_TOOLS``;
+  ``ROSBRIDGE_MCP_TOOLS``, ``--record-dir`` / ``ROSBRIDGE_MCP_RECORD_DIR``;
 * safety: ``--policy`` / ``ROSBRIDGE_MCP_POLICY`` (a TOML file), ``--read-only`` /
-  ``ROSBRIDGE_MCP_READ_ONLY=1`` (either one makes the server read-only), ``--audit-log`` /
-  ``ROSBRIDGE_MCP_AUDIT_LOG``;
+  ``ROSBRIDGE_MCP_READ_ONLY=1`` / the policy file's ``read_only = true`` (an on-only switch: any of them makes
+  the server read-only), ``--audit-log`` / ``ROSBRIDGE_MCP_AUDIT_LOG``;
 * connection security: ``--ca-file`` / ``ROSBRIDGE_CA_FILE``, ``--client-cert`` / ``ROSBRIDGE_CLIENT_CERT``,
   ``--client-key`` / ``ROSBRIDGE_CLIENT_KEY``, ``--header`` (repeatable) / ``ROSBRIDGE_HEADERS`` (one
   ``Name: value`` per line). Header values are secrets: they are never logged.
+
+Nothing else in the package reads the environment; the CLI calls :func:`load_config` once.
 """
 
 from __future__ import annotations
@@ -35,6 +31,7 @@ from typing import Literal
 from urllib.parse import urlsplit
 
 from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES, select_tools
+from rosbridge_mcp_server.config.sources import FLAG, ConfigError, Setting, Sources
 from rosbridge_mcp_server.safety.policy import Policy, PolicyError, load_policy
 
 __all__ = [
@@ -45,7 +42,6 @@ __all__ = [
     "MAX_TIMEOUT",
     "Config",
     "ConfigError",
-    "DemoDialect",
     "LogLevel",
     "load_config",
     "plain_text_warning",
@@ -59,33 +55,20 @@ MAX_TIMEOUT = 300.0
 
 LogLevel = Literal["DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL"]
 LOG_LEVELS: tuple[LogLevel, ...] = ("DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL")
-DemoDialect = Literal["ros1", "ros2"]
-DemoWorld = Literal["turtle", "nav2"]
-
-
-class ConfigError(ValueError):
-    """A configuration value is invalid; ``str()`` is one line saying which and how to fix it."""
 
 
 @dataclass(frozen=True)
 class Config:
     """Everything the server needs to know, validated.
 
-    ``url`` is the rosbridge WebSocket URL. With ``demo`` set the CLI starts a simulated robot and replaces
-    ``url`` with the simulator's own address before anything connects.
+    ``url`` is the rosbridge WebSocket URL. With ``--demo`` the CLI starts a simulated robot and replaces
+    ``url`` with the simulator's own address before anything connects (the demo's settings are the CLI's).
     """
 
     url: str = f"ws://{DEFAULT_HOST}:{DEFAULT_PORT}"
     request_timeout: float = DEFAULT_REQUEST_TIMEOUT
     connect_timeout: float = DEFAULT_CONNECT_TIMEOUT
     log_level: LogLevel = "INFO"
-    demo: bool = False
-    demo_dialect: DemoDialect = "ros2"
-    #: The demo robot's world: the turtle (default) or a Nav2-scale mobile robot, ``demo_robots`` of them.
-    demo_world: DemoWorld = "turtle"
-    demo_robots: int = 1
-    #: Faults the demo's Nav2 robot is broken with (``--demo-fault``), checked by the simulated robot.
-    demo_faults: tuple[str, ...] = ()
     policy: Policy = field(default_factory=Policy)
     audit_log: str | None = None
     ca_file: str | None = None
@@ -120,6 +103,26 @@ class Config:
         return context
 
 
+# Each setting's flag, environment variable and (where a file has it) key: the one rule in
+# :mod:`.sources` chooses among them.
+HOST = Setting("--host", "ROSBRIDGE_HOST")
+PORT = Setting("--port", "ROSBRIDGE_PORT")
+URL = Setting("--url", "ROSBRIDGE_URL")
+TIMEOUT = Setting("--timeout", "ROSBRIDGE_TIMEOUT")
+LOG_LEVEL = Setting("--log-level", "ROSBRIDGE_MCP_LOG_LEVEL")
+TOOLS = Setting("--tools", "ROSBRIDGE_MCP_TOOLS")
+POLICY = Setting("--policy", "ROSBRIDGE_MCP_POLICY")
+#: An on-only switch; its file is the policy file (``read_only = true``).
+READ_ONLY = Setting("--read-only", "ROSBRIDGE_MCP_READ_ONLY", key="read_only")
+AUDIT_LOG = Setting("--audit-log", "ROSBRIDGE_MCP_AUDIT_LOG")
+CA_FILE = Setting("--ca-file", "ROSBRIDGE_CA_FILE")
+CLIENT_CERT = Setting("--client-cert", "ROSBRIDGE_CLIENT_CERT")
+CLIENT_KEY = Setting("--client-key", "ROSBRIDGE_CLIENT_KEY")
+#: Repeatable flag; the variable holds one ``Name: value`` per line.
+HEADERS = Setting("--header", "ROSBRIDGE_HEADERS")
+RECORD_DIR = Setting("--record-dir", "ROSBRIDGE_MCP_RECORD_DIR")
+
+
 def load_config(
     environ: Mapping[str, str],
     *,
@@ -128,11 +131,6 @@ def load_config(
     url: str | None = None,
     timeout: str | float | None = None,
     log_level: str | None = None,
-    demo: bool = False,
-    demo_dialect: str = "ros2",
-    demo_world: str = "turtle",
-    demo_robots: int = 1,
-    demo_faults: str | None = None,
     policy: str | None = None,
     read_only: bool = False,
     audit_log: str | None = None,
@@ -142,94 +140,91 @@ def load_config(
     headers: Sequence[str] | None = None,
     tools: str | None = None,
     record_dir: str | None = None,
+    simulated: bool = False,
 ) -> Config:
     """Build a :class:`Config` from command-line values (``None`` = not given) and the environment.
 
-    Raises :class:`ConfigError` with a one-line message naming the bad value and its source.
+    *simulated*: the URL will be replaced by a simulated robot's (``--demo``), so it need not be
+    ``wss://`` for TLS files. Raises :class:`ConfigError` with a one-line message naming the bad value and
+    its source.
     """
-    resolved_url = _resolve_url(environ, host=host, port=port, url=url)
-    env_timeout = environ.get("ROSBRIDGE_TIMEOUT", "").strip()
-    if timeout is not None:
-        request_timeout = parse_timeout(timeout, source="--timeout")
-    elif env_timeout:
-        request_timeout = parse_timeout(env_timeout, source="ROSBRIDGE_TIMEOUT")
-    else:
-        request_timeout = DEFAULT_REQUEST_TIMEOUT
-    level_text = log_level if log_level is not None else environ.get("ROSBRIDGE_MCP_LOG_LEVEL")
-    level_source = "--log-level" if log_level is not None else "ROSBRIDGE_MCP_LOG_LEVEL"
-    level = _parse_log_level(level_text, source=level_source) if level_text else "INFO"
-    if demo_dialect not in ("ros1", "ros2"):
-        raise ConfigError(f"--demo-dialect must be ros1 or ros2, not {demo_dialect!r}")
-    if demo_world not in ("turtle", "nav2"):
-        raise ConfigError(f"--demo-world must be turtle or nav2, not {demo_world!r}")
-    if not 1 <= demo_robots <= 100 or (demo_robots > 1 and demo_world != "nav2"):
-        raise ConfigError(
-            f"--demo-robots must be 1-100 and more than 1 needs --demo-world nav2, not {demo_robots}"
-        )
-    faults = tuple(f.strip() for f in (demo_faults or "").split(",") if f.strip())
-    if faults and demo_world != "nav2":
-        raise ConfigError("--demo-fault needs --demo-world nav2")
-    tools_text = tools if tools is not None else environ.get("ROSBRIDGE_MCP_TOOLS", "").strip() or None
-    tools_source = "--tools" if tools is not None else "ROSBRIDGE_MCP_TOOLS"
-    chosen = _parse_tools(tools_text, source=tools_source) if tools_text is not None else None
-    config = Config(
-        url=resolved_url,
-        request_timeout=request_timeout,
-        log_level=level,
-        demo=demo,
-        demo_dialect="ros1" if demo_dialect == "ros1" else "ros2",
-        demo_world="nav2" if demo_world == "nav2" else "turtle",
-        demo_robots=demo_robots,
-        demo_faults=faults,
-        policy=_load_policy(environ, policy, read_only),
-        audit_log=_path(environ, audit_log, "--audit-log", "ROSBRIDGE_MCP_AUDIT_LOG"),
-        ca_file=_path(environ, ca_file, "--ca-file", "ROSBRIDGE_CA_FILE"),
-        client_cert=_path(environ, client_cert, "--client-cert", "ROSBRIDGE_CLIENT_CERT"),
-        client_key=_path(environ, client_key, "--client-key", "ROSBRIDGE_CLIENT_KEY"),
-        headers=_headers(environ, headers),
-        tools=chosen,
-        record_dir=_path(environ, record_dir, "--record-dir", "ROSBRIDGE_MCP_RECORD_DIR"),
+    sources = Sources(
+        {
+            HOST.flag: host,
+            PORT.flag: port,
+            URL.flag: url,
+            TIMEOUT.flag: timeout,
+            LOG_LEVEL.flag: log_level,
+            POLICY.flag: policy,
+            READ_ONLY.flag: read_only,
+            AUDIT_LOG.flag: audit_log,
+            CA_FILE.flag: ca_file,
+            CLIENT_CERT.flag: client_cert,
+            CLIENT_KEY.flag: client_key,
+            HEADERS.flag: list(headers) if headers else None,
+            TOOLS.flag: tools,
+            RECORD_DIR.flag: record_dir,
+        },
+        environ,
     )
-    _check_tls(config)
+    given_timeout = sources.pick(TIMEOUT)
+    level = sources.pick(LOG_LEVEL)
+    chosen_tools = sources.pick(TOOLS)
+    config = Config(
+        url=_resolve_url(sources),
+        request_timeout=(
+            parse_timeout(given_timeout.value, source=given_timeout.source)
+            if given_timeout is not None
+            else DEFAULT_REQUEST_TIMEOUT
+        ),
+        log_level=_parse_log_level(level.value, source=level.source) if level is not None else "INFO",
+        policy=_load_policy(sources),
+        audit_log=_path(sources, AUDIT_LOG),
+        ca_file=_path(sources, CA_FILE),
+        client_cert=_path(sources, CLIENT_CERT),
+        client_key=_path(sources, CLIENT_KEY),
+        headers=_headers(sources),
+        tools=_parse_tools(chosen_tools.value, source=chosen_tools.source) if chosen_tools else None,
+        record_dir=_path(sources, RECORD_DIR),
+    )
+    _check_tls(config, simulated=simulated)
     return config
 
 
-_TRUE = ("1", "true", "yes", "on")
-_FALSE = ("", "0", "false", "no", "off")
-
-
-def _load_policy(environ: Mapping[str, str], path: str | None, read_only: bool) -> Policy:
-    source = "--policy" if path is not None else "ROSBRIDGE_MCP_POLICY"
-    text = path if path is not None else environ.get("ROSBRIDGE_MCP_POLICY", "").strip()
+def _load_policy(sources: Sources) -> Policy:
+    chosen = sources.pick(POLICY)
     try:
-        loaded = load_policy(text, source=source) if text else Policy()
+        loaded = load_policy(chosen.value, source=chosen.source) if chosen is not None else Policy()
     except PolicyError as exc:
         raise ConfigError(str(exc)) from None
-    env_read_only = environ.get("ROSBRIDGE_MCP_READ_ONLY", "").strip().lower()
-    if env_read_only not in _TRUE + _FALSE:
-        raise ConfigError(f"ROSBRIDGE_MCP_READ_ONLY must be 1 or 0 (true or false), not {env_read_only!r}")
-    if read_only or env_read_only in _TRUE:
-        return loaded.with_read_only()
-    return loaded
+    # The switch's file is the policy file: --read-only or ROSBRIDGE_MCP_READ_ONLY=1 make it read-only, and
+    # ROSBRIDGE_MCP_READ_ONLY=0 (off, so not given) leaves the file's own read_only = true in force.
+    with_file = sources.with_file(
+        {"read_only": loaded.read_only}, chosen.source if chosen is not None else ""
+    )
+    return loaded.with_read_only() if with_file.switch(READ_ONLY) else loaded
 
 
-def _path(environ: Mapping[str, str], flag: str | None, flag_name: str, env_name: str) -> str | None:
-    value = flag if flag is not None else environ.get(env_name, "").strip() or None
-    if value is not None and not value.strip():
-        raise ConfigError(f"{flag_name} is empty; give a file path")
-    return value
+def _path(sources: Sources, setting: Setting) -> str | None:
+    chosen = sources.pick(setting)
+    if chosen is None:
+        return None
+    if not str(chosen.value).strip():
+        raise ConfigError(f"{chosen.source} is empty; give a file path")
+    return str(chosen.value)
 
 
 # An HTTP header name is a token (RFC 9110); values must not break the request line by line.
 _HEADER_NAME = re.compile(r"^[!#$%&'*+.^_`|~0-9A-Za-z-]+$")
 
 
-def _headers(environ: Mapping[str, str], flags: Sequence[str] | None) -> tuple[tuple[str, str], ...]:
-    if flags:
-        lines, source = list(flags), "--header"
-    else:
-        lines = [line for line in environ.get("ROSBRIDGE_HEADERS", "").splitlines() if line.strip()]
-        source = "ROSBRIDGE_HEADERS"
+def _headers(sources: Sources) -> tuple[tuple[str, str], ...]:
+    chosen = sources.pick(HEADERS)
+    if chosen is None:
+        return ()
+    source = chosen.source
+    lines = list(chosen.value) if chosen.rank == FLAG else chosen.value.splitlines()
+    lines = [line for line in lines if chosen.rank == FLAG or line.strip()]
     headers = []
     for line in lines:
         name, colon, value = line.partition(":")
@@ -244,11 +239,11 @@ def _headers(environ: Mapping[str, str], flags: Sequence[str] | None) -> tuple[t
     return tuple(headers)
 
 
-def _check_tls(config: Config) -> None:
+def _check_tls(config: Config, *, simulated: bool) -> None:
     uses_tls = config.ca_file is not None or config.client_cert is not None
     if config.client_key is not None and config.client_cert is None:
         raise ConfigError("--client-key / ROSBRIDGE_CLIENT_KEY needs --client-cert / ROSBRIDGE_CLIENT_CERT")
-    if uses_tls and not config.demo and urlsplit(config.url).scheme != "wss":
+    if uses_tls and not simulated and urlsplit(config.url).scheme != "wss":
         raise ConfigError(
             f"a CA file or client certificate is for TLS, but the URL is {config.url}; use a wss:// URL"
         )
@@ -293,23 +288,19 @@ def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:
     return None if len(chosen) == len(ALL_TOOL_NAMES) else chosen
 
 
-def _resolve_url(
-    environ: Mapping[str, str], *, host: str | None, port: str | int | None, url: str | None
-) -> str:
-    if url is not None:
-        return parse_url(url, source="--url")
-    if host is not None or port is not None:
-        host_text = host if host is not None else environ.get("ROSBRIDGE_HOST") or DEFAULT_HOST
-        host_source = "--host" if host is not None else "ROSBRIDGE_HOST"
-        port_value = port if port is not None else environ.get("ROSBRIDGE_PORT") or DEFAULT_PORT
-        port_source = "--port" if port is not None else "ROSBRIDGE_PORT"
-        return _url_from(host_text, host_source, port_value, port_source)
-    env_url = environ.get("ROSBRIDGE_URL", "").strip()
-    if env_url:
-        return parse_url(env_url, source="ROSBRIDGE_URL")
-    env_host = environ.get("ROSBRIDGE_HOST", "").strip() or DEFAULT_HOST
-    env_port = environ.get("ROSBRIDGE_PORT", "").strip() or DEFAULT_PORT
-    return _url_from(env_host, "ROSBRIDGE_HOST", env_port, "ROSBRIDGE_PORT")
+def _resolve_url(sources: Sources) -> str:
+    # A URL beats host and port given in the same source or a lower one; a host or a port in a higher source
+    # beats it, and the other half then comes from its own sources (``--host`` with ``ROSBRIDGE_PORT``).
+    url, host, port = sources.pick(URL), sources.pick(HOST), sources.pick(PORT)
+    parts = [given.rank for given in (host, port) if given is not None]
+    if url is not None and (not parts or url.rank <= min(parts)):
+        return parse_url(url.value, source=url.source)
+    return _url_from(
+        host.value if host is not None else DEFAULT_HOST,
+        host.source if host is not None else HOST.env or HOST.flag,
+        port.value if port is not None else DEFAULT_PORT,
+        port.source if port is not None else PORT.env or PORT.flag,
+    )
 
 
 def _url_from(host: str, host_source: str, port: str | int, port_source: str) -> str:
