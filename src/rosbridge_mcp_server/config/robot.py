@@ -15,7 +15,8 @@ Each setting is chosen by the one rule of :mod:`.sources` (flag > environment > 
   ``--client-key`` / ``ROSBRIDGE_CLIENT_KEY``, ``--header`` (repeatable) / ``ROSBRIDGE_HEADERS`` (one
   ``Name: value`` per line). Header values are secrets: they are never logged.
 
-Nothing else in the package reads the environment; the CLI calls :func:`load_config` once.
+The CLI calls :func:`load_config` once. Besides this package only the platform's folders are read from the
+environment (``XDG_DATA_HOME`` for the default recording folder, the console's runtime folder).
 """
 
 from __future__ import annotations
