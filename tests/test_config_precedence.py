@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import asyncio
 import socket
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -249,3 +251,27 @@ async def test_the_command_line_connects_where_the_winning_source_says(
         assert await asyncio.to_thread(run, ["check", "--timeout", "5", *argv], env) == code, (argv, env)
         out = capsys.readouterr().out
         assert ("Healthy" in out) is (code == 0)
+
+
+@pytest.mark.parametrize(
+    "module",
+    [
+        "rosbridge_mcp_server.config",
+        "rosbridge_mcp_server.config.console",
+        "rosbridge_mcp_server.config.fleet",
+        "rosbridge_mcp_server.config.http",
+        "rosbridge_mcp_server.console",
+        "rosbridge_mcp_server.cli.demo",
+    ],
+)
+def test_each_settings_module_imports_first_in_a_fresh_interpreter(module: str) -> None:
+    """No import cycle between the config package, the console that reads its settings, and the CLI."""
+    done = subprocess.run(
+        [sys.executable, "-c", f"import {module}"], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert done.returncode == 0, done.stderr
+
+
+def test_the_robots_config_holds_no_demo_setting() -> None:
+    """The demo's settings are the command line's (cli/demo.py), not a robot's."""
+    assert not [name for name in Config.__dataclass_fields__ if name.startswith("demo")]
