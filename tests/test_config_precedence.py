@@ -4,6 +4,7 @@ setting that has more than one; and a bad value is refused naming where it came 
 from __future__ import annotations
 
 import asyncio
+import re
 import socket
 import subprocess
 import sys
@@ -275,3 +276,21 @@ def test_each_settings_module_imports_first_in_a_fresh_interpreter(module: str) 
 def test_the_robots_config_holds_no_demo_setting() -> None:
     """The demo's settings are the command line's (cli/demo.py), not a robot's."""
     assert not [name for name in Config.__dataclass_fields__ if name.startswith("demo")]
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: load_config({"ROSBRIDGE_MCP_POLICY": "p.toml"}, policy=""), "--policy is empty"),
+        (lambda: load_config({}, audit_log=" "), "--audit-log is empty"),
+        (
+            lambda: load_http_settings({"ROSBRIDGE_MCP_BIND": "127.0.0.1:9"}, transport="http", bind=""),
+            "--bind: ''",
+        ),
+        (lambda: load_http_settings({}, transport="http", tls_cert=""), "--tls-cert is empty"),
+    ],
+)
+def test_an_empty_flag_is_refused_by_name_not_taken_for_absent(call: Any, message: str) -> None:
+    """`--policy "$POLICY"` with the variable unset must not quietly mean "no policy" (nor the variable's)."""
+    with pytest.raises(ConfigError, match=f"^{re.escape(message)}"):
+        call()

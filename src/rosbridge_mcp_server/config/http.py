@@ -177,10 +177,13 @@ def load_http_settings(
             raise ConfigError(f"{given[0]} needs --transport http (stdio has no address and no tokens)")
         return HttpSettings()
     bind_value, bind_source = sources.text(BIND)
-    host, port = parse_bind(bind_value or DEFAULT_BIND, source=bind_source)
+    host, port = parse_bind(bind_value if bind_value is not None else DEFAULT_BIND, source=bind_source)
     tokens = _tokens(sources.pick(AUTH_TOKENS))
     cert, cert_source = sources.text(TLS_CERT)
     key, key_source = sources.text(TLS_KEY)
+    for path, name in ((cert, cert_source), (key, key_source)):
+        if path is not None and not path.strip():
+            raise ConfigError(f"{name} is empty; give a file path")
     if key and not cert:
         raise ConfigError(f"{key_source} needs --tls-cert")
     for path, name in ((cert, cert_source), (key, key_source)):

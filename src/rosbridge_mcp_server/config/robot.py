@@ -194,6 +194,8 @@ def load_config(
 
 def _load_policy(sources: Sources) -> Policy:
     chosen = sources.pick(POLICY)
+    if chosen is not None and not str(chosen.value).strip():
+        raise ConfigError(f"{chosen.source} is empty; give a policy file (TOML, docs/safety.md)")
     try:
         loaded = load_policy(chosen.value, source=chosen.source) if chosen is not None else Policy()
     except PolicyError as exc:
