@@ -21,9 +21,9 @@ one twist, said where they are read:
   switch therefore only ever tightens: ``ROSBRIDGE_MCP_READ_ONLY=0`` cannot make a read-only policy file
   writable;
 * a fleet robot's own table: a flag or environment variable names every robot's value (``--ca-file``), the
-  robot's table in the fleet file names that robot's; so for one robot of a fleet, ``--robot NAME=URL`` (its
-  flag) > its table in ``--robots`` (its file) > the value every robot shares (its default, itself chosen by
-  this rule).
+  robot's table in the fleet file names that robot's; so for one robot of a fleet, its table in ``--robots``
+  (its file) > the value every robot shares (its default, itself chosen by this rule). No flag names one
+  robot's setting but ``--robot NAME=URL``, and naming one robot both ways is refused.
 """
 
 from __future__ import annotations
