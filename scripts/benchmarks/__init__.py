@@ -2,7 +2,7 @@
 
     uv run python scripts/bench.py                       # against a simulated robot in its own process
     uv run python scripts/bench.py --url ws://robot:9090 # against any rosbridge (sim-only rows become n/a)
-    uv run python scripts/bench.py --quick               # tiny counts, ~10 s (the smoke test)
+    uv run python scripts/bench.py --quick               # tiny counts, ~2 min (the smoke test)
     uv run python scripts/bench.py --only latency        # some items: latency, concurrency, throughput, ...
     uv run python scripts/bench.py --json bench-$(date -u +%Y%m%d-%H%M).json
 
@@ -43,6 +43,13 @@ What is measured:
 14. recording (``--only recording``): ``record`` of a Nav2-like load (scan, odom, tf, a 640×480 camera)
     against what a raw subscriber received, ``list_topics`` while it records against idle, and the summary
     time of a large recording (from the MCAP index).
+15. the server alone over the floor (``--only edge``; issue 26, item 8): every tool row on the simulated robot
+    by JSON-RPC lines against the rosbridge requests it makes, p50/p90 and "floor + X ms"; with ``--url``
+    ``list_topics`` and ``get_node_info`` on that bridge; with ``--ros-mcp PYTHON`` ros-mcp beside it.
+
+The package: ``harness`` (what every item shares), one module per item, ``run`` (the order, the table, the
+command line), ``internals`` (the only module that imports the product's internals, and why), ``servers/``
+(the reference servers it starts) and ``decompose`` (a profiling aid, run on its own).
 
 The table goes to stdout (Markdown, so it can be pasted into docs/performance.md), progress to stderr.
 The exit status is 0 when every measurement ran, whatever the figures; 1 when something errored.
