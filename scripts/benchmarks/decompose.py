@@ -1,9 +1,9 @@
 """Where the time of one tool call goes: a profiling aid for the misses in docs/performance.md.
 
-    uv run python scripts/bench/decompose.py               # our stdio transport (asyncio pipes)
-    uv run python scripts/bench/decompose.py --sdk-stdio   # the MCP SDK's (worker threads)
-    uv run python scripts/bench/decompose.py --url ws://127.0.0.1:9090   # a running bridge instead
-    uv run python scripts/bench/decompose.py --raw-client  # JSON-RPC lines on the pipes, no client SDK
+    uv run python scripts/benchmarks/decompose.py               # our stdio transport (asyncio pipes)
+    uv run python scripts/benchmarks/decompose.py --sdk-stdio   # the MCP SDK's (worker threads)
+    uv run python scripts/benchmarks/decompose.py --url ws://127.0.0.1:9090   # a running bridge instead
+    uv run python scripts/benchmarks/decompose.py --raw-client  # JSON-RPC lines on the pipes, no client SDK
 
 It starts a simulated robot and ``timed_server.py`` (our unchanged server with stopwatches around
 ``MCPServer._handle_call_tool`` and ``RosbridgeClient.call_service``), then makes the same tool call
@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import importlib.util
 import json
 import statistics
 import sys
@@ -33,16 +32,11 @@ from websockets.asyncio.client import connect
 
 __all__ = ["main"]
 
-_spec = importlib.util.spec_from_file_location(
-    "bench_script", Path(__file__).resolve().parent.parent / "bench.py"
-)
-if _spec is None or _spec.loader is None:
-    raise ImportError("scripts/bench.py not found next to scripts/bench/")
-bench = importlib.util.module_from_spec(_spec)
-sys.modules["bench_script"] = bench  # dataclasses look their module up while the class is built
-_spec.loader.exec_module(bench)
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # scripts/, so the package imports
 
-TIMED_SERVER = Path(__file__).resolve().parent / "timed_server.py"
+from benchmarks import harness as bench
+
+TIMED_SERVER = Path(__file__).resolve().parent / "servers" / "timed_server.py"
 
 
 def median_ms(samples: list[float]) -> float:
