@@ -119,12 +119,6 @@ class Connection:
         self._sweep_at = 0.0
         self.reader = asyncio.create_task(self._read(), name=f"rosbridge reader ({name})")
 
-    @property
-    def held_fragments(self) -> tuple[int, int]:
-        """Partial messages held for reassembly, and their characters (diagnostics; bounded)."""
-        assembler = self._decoder.assembler
-        return assembler.pending, assembler.held_chars
-
     async def _read(self) -> None:
         decoder = self._decoder
         pending = self.pending

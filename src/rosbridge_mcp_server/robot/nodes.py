@@ -66,7 +66,7 @@ async def node_details(graph: RosGraph, node: str) -> NodeDetails:
     so there the node list comes first.
     """
     info = await graph.ros_info()
-    listed_first = info.version == 2 and not info.status_replies
+    listed_first = not (await graph.capabilities()).node_details_of_unknown_safe
     if listed_first:
         known = await node_names(graph)
         if node not in known:

@@ -52,6 +52,7 @@ class RosGraph:
 
         self.ros_info = rosapi.ros_info
         self.dialect = rosapi.dialect
+        self.capabilities = rosapi.capabilities
         self.rosapi = rosapi.call
 
         self.topics = topics.topics

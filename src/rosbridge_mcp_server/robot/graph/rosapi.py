@@ -13,7 +13,7 @@ from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from rosbridge_mcp_server.client import Dialect, RosInfo
+from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosInfo
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.messages import TypeDef
 
@@ -86,6 +86,10 @@ class Rosapi:
             self._cache_owner = dialect.info
             self._known = ConnectionKnowledge()
         return dialect
+
+    async def capabilities(self) -> BridgeCapabilities:
+        """What the bridge can do (decided once per connection by the client): asked instead of its name."""
+        return (await self.dialect()).capabilities
 
     async def call(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
         """Call ``/rosapi/<name>``; a missing rosapi is a :class:`ServiceError` saying how to start it."""
