@@ -140,7 +140,7 @@ async def _ordering_check(
         # The client measures the same in the background after connecting; compare with its conclusion.
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(session.ordering_known.wait(), max(config.request_timeout, 5.0))
-    lanes = session.lanes_by_default if session is not None else info.may_be_in_order
+    lanes = session.lanes_by_default if session is not None else caps.calls_may_queue
     if info.version == 1:
         how = "rosbridge 0.11 runs each call in a thread of its own"
     elif caps.status_replies:
