@@ -1,4 +1,4 @@
-"""Layers the import graph alone does not show: who imports ``wire/``, who reads frames, who tells bridges apart.
+"""Layers an import graph does not show: who imports ``wire/``, who reads frames, who tells bridges apart.
 
 Read from the source (``ast``), so a rule broken anywhere in ``src`` fails here with the file and line.
 """
