@@ -8,8 +8,9 @@ first, and on the others only to word an unknown node's error.
 
 A node list or topic list this connection saw within the last :data:`RECENT_SECONDS` is reused: rosapi 2.1.0
 answers one call at a time (5-90 ms each on the Jazzy lab), so a listing saved is a call's time saved, and a
-model asking about several nodes one after another (or right after ``list_nodes``) pays for one listing. A node the recent list does not hold is looked
-up in a fresh list, so a node never listed never reaches ``node_details``.
+model asking about several nodes one after another (or right after ``list_nodes``) pays for one listing. A
+node the recent list does not hold is looked up in a fresh list, so a node never listed never reaches
+``node_details``.
 """
 
 from __future__ import annotations
