@@ -35,7 +35,6 @@ class Session:
     __slots__ = (
         "connection",
         "dialect",
-        "goals_block",
         "info",
         "lanes_by_default",
         "number",
@@ -51,16 +50,16 @@ class Session:
         self.dialect = Dialect(info)
         #: 1 for the first connection of a client, 2 after the first reconnect, ...
         self.number = number
-        # Derived once per connection, so the hot path does not recompute them.
-        self.lanes_by_default = info.may_be_in_order
+        caps = self.dialect.capabilities
+        # Read off the capabilities once per connection, so the hot path does not look them up.
+        self.lanes_by_default = caps.calls_may_queue
         #: Set once whether calls hold each other up is known (told by the bridge's answers, measured, or
         #: given up on: then the connection is taken to be in order). See :mod:`.ordering`.
         self.ordering_known = asyncio.Event()
         if info.version == 1 or info.calls_threaded is not None:
             self.ordering_known.set()
-        self.goals_block = info.goals_may_block
-        self.spread_calls = info.one_call_per_connection
-        self.send_service_timeout = info.honours_service_timeout
+        self.spread_calls = caps.one_call_per_connection
+        self.send_service_timeout = caps.service_timeout_field
 
     @property
     def capabilities(self) -> BridgeCapabilities:
