@@ -81,7 +81,8 @@ async def test_send_action_goal_returns_the_result_and_streams_feedback(
 async def test_a_running_goal_can_be_cancelled_from_the_main_connection(
     robot2: SimulatedRobot, make_client: MakeClient
 ) -> None:
-    """cancel_action_goal reaches a goal running on its lane, even on an in-order (Humble) bridge."""
+    """A cancel on the main connection alone reaches a goal running on its lane, even on an in-order (Humble)
+    bridge."""
     client = await make_client(robot2)
     registry = GoalRegistry(client)
     goal = asyncio.create_task(
@@ -89,7 +90,8 @@ async def test_a_running_goal_can_be_cancelled_from_the_main_connection(
     )
     await robot2.wait_for(running_goal_with_feedback)
     [handle] = registry.running("/fibonacci")
-    await client.cancel_action_goal("/fibonacci", handle.goal_id)
+    cancel = await client.cancel_goal("/fibonacci", handle.goal_id)
+    assert (cancel.on_main, cancel.on_lane, cancel.reaches) == (True, False, True)
     result = await asyncio.wait_for(goal, 5.0)
     assert result.status_code == 5
     assert len(result.result["sequence"]) < LONG_ORDER + 1

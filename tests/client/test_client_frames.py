@@ -24,7 +24,8 @@ async def test_fragmented_replies_and_messages_are_reassembled(
     client = await make_client(robot)
     topics = await client.call_service("/rosapi/topics")
     assert "/chatter" in topics["topics"]
-    assert (await client.wait_for_message("/chatter", "std_msgs/String", 3.0))["data"].startswith("Hello")
+    async with client.subscribe("/chatter", "std_msgs/String", max_queue=1) as sub:
+        assert (await sub.get(3.0))["data"].startswith("Hello")
     assert client.session is not None
     assembler = client.session.connection._decoder.assembler
     assert assembler.completed >= 2

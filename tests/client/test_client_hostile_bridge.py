@@ -121,17 +121,13 @@ async def test_garbage_frames_cost_one_log_line_each_and_nothing_else(
         assert client.connections_made == 1
 
 
-async def test_partial_fragments_from_a_bridge_stay_bounded_in_memory(hostile: HostileBridge) -> None:
-    """100 MB of fragments that never complete: at most 32 partial messages and 64 Mi characters are held."""
+async def test_partial_fragments_from_a_bridge_leave_the_connection_answering(hostile: HostileBridge) -> None:
+    """100 MB of fragments that never complete: the connection still answers (what the decoder holds of them
+    is bounded: tests/protocol/test_protocol_inbound.py)."""
     async with RosbridgeClient(hostile.url, reconnect_min=0.05, reconnect_max=0.2) as client:
         await client.wait_connected(5.0)
         # On the main connection: a lane would hold the fragments (ordering is not measured here).
         await client.call_service("/hostile/fragments", timeout=20.0, isolated=False)
-        session = client.session
-        assert session is not None
-        buffers, chars = session.connection.held_fragments
-        assert buffers <= 32
-        assert chars <= 64 * 1024 * 1024
-        assert chars > 0, "the fragments did arrive"
         await client.call_service("/hostile/after", timeout=5.0)
+        assert client.connected
         assert client.connections_made == 1

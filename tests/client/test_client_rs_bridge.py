@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 
 import pytest
@@ -56,3 +57,34 @@ async def test_a_goal_timing_out_is_cancelled_on_its_own_connection_without_a_wa
     assert caught.value.status == 5
     ours = [r for r in caplog.records if not r.name.startswith("rosbridge_mcp_server.sim")]
     assert not [r.getMessage() for r in ours if r.levelno >= logging.WARNING]
+
+
+async def test_a_cancel_on_the_main_connection_alone_does_not_reach_its_goal_and_says_so(
+    make_sim: MakeSim, make_client: MakeClient
+) -> None:
+    """Only the goal's own connection may cancel it there: the main connection's copy is refused and the
+    client says it does not reach the goal; the lane's copy ends it CANCELED."""
+    robot = await make_sim(dialect="ros2", server="rs", action_step=0.05)
+    client = await make_client(robot)
+    registry = GoalRegistry(client)
+    running = asyncio.create_task(
+        ros2.send_action_goal(
+            registry, "/fibonacci", "example_interfaces/Fibonacci", {"order": 400}, timeout=30
+        )
+    )
+    try:
+        await robot.wait_for(lambda world: any(g.feedback_count >= 1 for g in world.goals.values()))
+        [goal] = registry.running("/fibonacci")
+        alone = await client.cancel_goal(goal.action, goal.goal_id)
+        assert (alone.on_main, alone.on_lane, alone.reaches) == (True, False, False)
+        await client.call_service("/rosapi/get_time")  # a barrier: the refusal came before its answer
+        [sim_goal] = robot.world.goals.values()
+        assert not sim_goal.cancel_requested
+        assert not sim_goal.finished
+        both = await client.cancel_goal(goal.action, goal.goal_id, goal.lane)
+        assert (both.on_main, both.on_lane, both.reaches) == (True, True, True)
+        ended = await asyncio.wait_for(running, 5.0)
+        assert ended.status_code == 5
+    finally:
+        running.cancel()
+        await asyncio.gather(running, return_exceptions=True)

@@ -106,17 +106,21 @@ async def test_publish_advertises_once_and_reuses_the_advertisement(
     assert all("/chatter_in" not in c.advertisements for c in sim_ros2.bridge.connections.values())
 
 
-async def test_wait_for_message_returns_the_next_message(client: RosbridgeClient) -> None:
-    """wait_for_message subscribes, returns one message, and unsubscribes."""
-    msg = await client.wait_for_message("/chatter", "std_msgs/String", 3.0)
+async def test_one_message_read_in_a_subscription_block_leaves_no_subscription(
+    client: RosbridgeClient,
+) -> None:
+    """A subscription opened for one message returns it and is gone once its block ends."""
+    async with client.subscribe("/chatter", "std_msgs/String", max_queue=1) as sub:
+        msg = await sub.get(3.0)
     assert "data" in msg
     assert client.topics.subscriptions == {}
 
 
-async def test_wait_for_message_times_out_on_a_silent_topic(client: RosbridgeClient) -> None:
+async def test_waiting_for_a_message_times_out_on_a_silent_topic(client: RosbridgeClient) -> None:
     """No message within the timeout raises RequestTimeoutError naming the topic."""
     with pytest.raises(RequestTimeoutError, match="a message on /nobody_publishes_here"):
-        await client.wait_for_message("/nobody_publishes_here", "std_msgs/String", 0.2)
+        async with client.subscribe("/nobody_publishes_here", "std_msgs/String", max_queue=1) as sub:
+            await sub.get(0.2)
 
 
 async def test_a_drop_interrupts_a_waiting_consumer_and_the_subscription_comes_back(

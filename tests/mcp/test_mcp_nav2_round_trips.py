@@ -85,10 +85,12 @@ async def test_get_node_info_asks_no_service_types_it_can_tell(
     list unless the node turns out unknown."""
     await session.ok("list_actions")
     calls = await asked(nav2, session, "get_node_info", {"node": "/controller_server"})
-    expected = {"/rosapi/node_details": 1, "/rosapi/topics": 1}
-    if nav2.dialect == "ros2":
-        expected["/rosapi/nodes"] = 1  # rosapi 2.x never answers node_details for an unknown node
-    assert calls == expected
+    listings = {name: calls.pop(name) for name in ("/rosapi/nodes", "/rosapi/topics") if name in calls}
+    assert calls == {"/rosapi/node_details": 1}
+    # A node list or topic list seen within the last second (the log keeper's look, say) is reused.
+    assert listings.get("/rosapi/topics", 0) <= 1
+    # rosapi 2.x never answers node_details for an unknown node: there a node list decides first.
+    assert listings.get("/rosapi/nodes", 0) <= (1 if nav2.dialect == "ros2" else 0)
 
 
 async def test_get_node_info_of_an_unknown_node_says_so(session: Session) -> None:
@@ -138,13 +140,16 @@ async def test_a_type_missing_from_the_kept_list_is_looked_up_again(make_sim: Ma
 
 
 async def test_get_node_info_on_rosbridge_server_rs_is_one_round_trip(make_sim: MakeSim) -> None:
-    """rosbridge-server-rs: node_details and topics side by side, no node list first."""
+    """rosbridge-server-rs: node_details and topics side by side (or a topic list seen within the last
+    second), no node list first."""
     robot = await make_sim(dialect="ros2", world="nav2", server="rs")
     async with open_session(robot.url) as opened:
         await warmed_up(opened.ros)
         await opened.ok("list_actions")
         calls = await asked(robot, opened, "get_node_info", {"node": "/controller_server"})
-    assert calls == {"/rosapi/node_details": 1, "/rosapi/topics": 1}
+    topics = calls.pop("/rosapi/topics", 0)
+    assert calls == {"/rosapi/node_details": 1}
+    assert topics <= 1
 
 
 async def test_an_unknown_node_on_rosbridge_server_rs_is_worded_from_the_node_list(make_sim: MakeSim) -> None:

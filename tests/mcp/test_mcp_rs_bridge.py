@@ -111,7 +111,7 @@ async def test_a_goal_another_client_started_cannot_be_cancelled_by_its_rosbridg
     assert "omit goal_id to cancel every goal" in text
     session = rs.ros.session
     assert session is not None
-    assert session.cancel_owner_only is True
+    assert session.capabilities.cancel_by_owner_only
 
 
 async def test_on_rosbridge_suite_a_goal_another_client_started_is_cancelled_by_its_rosbridge_id(

@@ -158,7 +158,8 @@ async def test_while_listening_the_bridge_subscribes_for_us(session: Session) ->
     for _ in range(20):
         if session.progress:
             break
-        await session.ros.wait_for_message("/chatter", None, 5.0)
+        async with session.ros.subscribe("/chatter", max_queue=1) as chatter:
+            await chatter.get(5.0)
     assert session.progress
     info = await session.ok("get_topic_info", {"topic": "/chatter"})
     await listening

@@ -185,6 +185,16 @@ def test_fragment_memory_is_bounded_by_dropping_the_oldest() -> None:
     assert assembler.add({"op": "fragment", "id": "m9", "data": "y", "num": 1, "total": 2}) == "xy"
 
 
+def test_a_connections_decoder_holds_at_most_32_partial_messages_and_64_mi_characters() -> None:
+    """100 MB of fragments that never complete, fed to a connection's decoder with its default bounds."""
+    decoder = protocol.InboundDecoder()
+    chunk = "x" * 1_000_000
+    for n in range(100):
+        decoder.feed(json.dumps({"op": "fragment", "id": f"f{n}", "data": chunk, "num": 0, "total": 9}))
+    assert decoder.assembler.pending <= 32
+    assert 0 < decoder.assembler.held_chars <= 64 * 1024 * 1024
+
+
 def test_a_fragmented_message_larger_than_the_character_bound_is_dropped() -> None:
     """One message bigger than max_chars is dropped with a ProtocolError."""
     assembler = FragmentAssembler(max_chars=100)

@@ -19,7 +19,7 @@ from websockets.exceptions import WebSocketException
 
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.demo import DemoSettings
-from rosbridge_mcp_server.client import Dialect, RosbridgeClient, RosInfo
+from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosbridgeClient, RosInfo
 from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config, plain_text_warning
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
@@ -122,7 +122,9 @@ async def _message_check(graph: RosGraph, info: RosInfo) -> tuple[str, str]:
     return _OK, f"messages: a {twist} is checked before it is published{how}"
 
 
-async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo) -> tuple[str, str]:
+async def _ordering_check(
+    config: Config, client: RosbridgeClient, info: RosInfo, caps: BridgeCapabilities
+) -> tuple[str, str]:
     """Calls queue behind a slow one or not, measured, and whether the client treats the bridge so."""
     try:
         queued = await call_ordering(
@@ -139,10 +141,10 @@ async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo
         # The client measures the same in the background after connecting; compare with its conclusion.
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(session.ordering_known.wait(), max(config.request_timeout, 5.0))
-    lanes = session.lanes_by_default if session is not None else info.may_be_in_order
+    lanes = session.lanes_by_default if session is not None else caps.calls_may_queue
     if info.version == 1:
         how = "rosbridge 0.11 runs each call in a thread of its own"
-    elif info.status_replies:
+    elif caps.status_replies:
         how = "from the bridge's status answers"
     else:
         how = "measured on connecting"
@@ -170,11 +172,11 @@ async def _ordering_check(config: Config, client: RosbridgeClient, info: RosInfo
     )
 
 
-def _bridge_lines(info: RosInfo) -> list[tuple[str, str]]:
+def _bridge_lines(info: RosInfo, caps: BridgeCapabilities) -> list[tuple[str, str]]:
     """Which bridge this looks like, and how goals are cancelled on it, as judged from its answers."""
     if info.version == 1:
         return [(_NOTE, "cancel path: a goal's cancel is published on <action>/cancel (actionlib)")]
-    if info.status_replies:
+    if caps.status_replies:
         implementation = (
             "implementation: answers a refused op with an error status (rosbridge-server-rs does; "
             "rosbridge_suite never)"
@@ -279,8 +281,9 @@ async def run_check(config: Config, out: TextIO, *, demo: DemoSettings | None = 
         say(_OK, "rosapi answers")
         results = _features(info)
         results.append(await _message_check(graph, info))
-        results += _bridge_lines(info)
-        results.append(await _ordering_check(config, client, info))
+        caps = await client.capabilities()
+        results += _bridge_lines(info, caps)
+        results.append(await _ordering_check(config, client, info, caps))
         results.append(await _action_check(graph, info, actions))
         for mark, text in results:
             say(mark, text)

@@ -8,9 +8,11 @@ import itertools
 import logging
 import ssl
 from collections.abc import Callable, Coroutine, Sequence
+from dataclasses import dataclass
 from types import TracebackType
 from typing import Any, Final, Literal, Protocol, Self
 
+from rosbridge_mcp_server.client.capabilities import BridgeCapabilities
 from rosbridge_mcp_server.client.connection import Connection, open_connection
 from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.client.goal_lane import GoalLane, GoalLanes
@@ -25,7 +27,7 @@ from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
 
-__all__ = ["RosbridgeClient", "SessionWatcher"]
+__all__ = ["GoalCancel", "RosbridgeClient", "SessionWatcher"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
@@ -318,6 +320,10 @@ class RosbridgeClient:
         """How the bridge spells types and time fields (one :class:`Dialect` per connection)."""
         return (await self._wait_session()).dialect
 
+    async def capabilities(self) -> BridgeCapabilities:
+        """What the bridge can do (decided once per connection, :mod:`.capabilities`)."""
+        return (await self._wait_session()).capabilities
+
     # --- background helpers -------------------------------------------------------------------------
 
     def run_in_background(self, coro: Coroutine[Any, Any, Any], name: str) -> asyncio.Task[Any]:
@@ -495,11 +501,6 @@ class RosbridgeClient:
             compression=compression,
         )
 
-    async def wait_for_message(self, topic: str, msg_type: str | None, timeout: float) -> dict[str, Any]:
-        """The next message on *topic*, within *timeout* seconds."""
-        async with self.subscribe(topic, msg_type, max_queue=1) as sub:
-            return await sub.get(timeout)
-
     async def ping(self, timeout: float | None = None) -> float:
         """Round-trip a WebSocket ping on the main connection; returns the seconds it took.
 
@@ -517,34 +518,53 @@ class RosbridgeClient:
         session = self.session
         return session is not None and await session.handled(timeout)
 
-    # --- action goals: ids, lanes and the cancel op (what a goal means is robot/goals' job) ---------
+    # --- action goals: ids, lanes and cancels (what a goal means is robot/goals' job) ----------------
 
     def new_goal_id(self, action: str) -> str:
         """A goal id unique across every client of the bridge (rosbridge's goal table is process-wide)."""
         return self._ids.goal_id(action)
 
-    async def open_goal_lane(self, goal_id: str, what: str, timeout: float) -> GoalLane:
-        """A connection of its own for goal *goal_id*, opened within *timeout*; ``lane.close()`` after."""
-        return await self._goal_lanes.open(goal_id, what, timeout)
+    async def open_goal_lane(self, action: str, goal_id: str, what: str, timeout: float) -> GoalLane:
+        """A connection of its own for goal *goal_id* of *action*, opened within *timeout*; ``lane.close()``
+        after. :class:`NotConnectedError` at once when there is no session (a goal is never queued)."""
+        session = self.require_session()
+        return await self._goal_lanes.open(action, goal_id, what, session.capabilities, timeout)
 
-    async def cancel_action_goal(self, action: str, goal_id: str) -> None:
-        """Ask the bridge to cancel goal *goal_id*, on the main connection.
+    async def cancel_goal(self, action: str, goal_id: str, lane: GoalLane | None = None) -> GoalCancel:
+        """Send goal *goal_id*'s cancel on every connection a bridge may need it on; what reached it.
 
-        rosbridge_suite keeps one goal table per process, so there this reaches a goal running on a lane
-        (or on another client's connection) too; rosbridge-server-rs only lets the connection that started
-        a goal cancel it (``robot/goals`` also sends the cancel on the goal's own lane). No reply comes; the
-        goal's result says what happened.
+        The main connection first: on a bridge whose goals hold their connection up (2.1.0's and Humble's
+        defaults) the goal's own *lane* reads its copy only after the goal ended. The lane's copy is for a
+        bridge that lets only the starting connection cancel (rosbridge-server-rs, which refuses the main
+        connection's copy with an error ``status``: expected here, so not logged). Each bridge acts on one of
+        the two and ignores the other.
         """
-        await self.require_session().cancel_goal(action, goal_id)
-        self.unhandled_acts = True
+        session = self.session
+        if session is not None and session.capabilities.status_replies:
+            conn = session.connection
+            conn.expect(goal_id, f"the refusal of goal {goal_id}'s cancel", _REFUSAL_SECONDS)
+            asyncio.get_running_loop().call_later(_REFUSAL_SECONDS, conn.forget, goal_id)
+        on_main = session is not None and await session.try_cancel_goal(action, goal_id)
+        if on_main:
+            self.unhandled_acts = True
+        on_lane = lane is not None and await lane.try_cancel()
+        caps = (
+            lane.capabilities if lane is not None else session.capabilities if session is not None else None
+        )
+        reaches = caps is not None and (
+            (on_main and not caps.cancel_by_owner_only) or (on_lane and not caps.goals_hold_connection)
+        )
+        return GoalCancel(on_main, on_lane, reaches)
 
-    async def cancel_action_goal_heard(self, action: str, goal_id: str, timeout: float) -> str | None:
-        """Cancel goal *goal_id* on the main connection and tell whether the bridge refused it.
+    async def cancel_goal_heard(self, action: str, goal_id: str, timeout: float) -> str | None:
+        """Cancel goal *goal_id* (another client's, by its rosbridge id) on the main connection and tell
+        whether the bridge refused it.
 
         Returns the bridge's refusal (an error ``status`` naming the goal: rosbridge-server-rs answers
         "unknown active goal" for a goal another connection started) if it came before the answer to a call
         sent after the cancel, else ``None``: rosbridge_suite cancels silently, and ignores an id it does
-        not know just as silently. A refusal is also kept on the session (:attr:`Session.cancel_owner_only`).
+        not know just as silently. A refusal is also learnt: the session's capabilities then say
+        ``cancel_by_owner_only``.
         """
         session = self.require_session()
         conn = session.connection
@@ -559,6 +579,24 @@ class RosbridgeClient:
             frame = heard.result()
         finally:
             conn.forget(goal_id)
-        text = str(frame.get("msg") or "the bridge refused the cancel")
-        session.cancel_owner_only = True
-        return text
+        session.learn_cancel_by_owner_only()
+        return str(frame.get("msg") or "the bridge refused the cancel")
+
+
+@dataclass(frozen=True, slots=True)
+class GoalCancel:
+    """Where a goal's cancel went: on the main connection, on the goal's own lane, and whether one of them
+    surely reaches the goal on this bridge (else the goal is cancelled again once a connection is back)."""
+
+    on_main: bool
+    on_lane: bool
+    reaches: bool
+
+    @property
+    def sent(self) -> bool:
+        """The cancel went out on at least one connection."""
+        return self.on_main or self.on_lane
+
+
+#: How long the main connection takes a refusal of our own goal's cancel as expected (not logged).
+_REFUSAL_SECONDS: Final = 5.0

@@ -66,18 +66,16 @@ class ReplyWaiter:
 class GoalStream:
     """An action goal waiting for feedback frames and one result."""
 
-    __slots__ = ("dropped_feedback", "max_feedback", "queue", "what")
+    __slots__ = ("max_feedback", "queue", "what")
 
     def __init__(self, what: str, max_feedback: int = 256) -> None:
         self.what = what
         self.queue: asyncio.Queue[tuple[str, dict[str, Any]] | BaseException] = asyncio.Queue()
         self.max_feedback = max_feedback
-        self.dropped_feedback = 0
 
     def deliver(self, op: str, frame: dict[str, Any]) -> None:
         # Feedback beyond the bound is dropped (a slow on_feedback must not grow memory); results never are.
         if op == "action_feedback" and self.queue.qsize() >= self.max_feedback:
-            self.dropped_feedback += 1
             return
         self.queue.put_nowait((op, frame))
 
@@ -118,12 +116,6 @@ class Connection:
         self._sweep: asyncio.TimerHandle | None = None
         self._sweep_at = 0.0
         self.reader = asyncio.create_task(self._read(), name=f"rosbridge reader ({name})")
-
-    @property
-    def held_fragments(self) -> tuple[int, int]:
-        """Partial messages held for reassembly, and their characters (diagnostics; bounded)."""
-        assembler = self._decoder.assembler
-        return assembler.pending, assembler.held_chars
 
     async def _read(self) -> None:
         decoder = self._decoder

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from typing import Any, Final, Literal
 
+from rosbridge_mcp_server.client.capabilities import BridgeCapabilities, capabilities_of
 from rosbridge_mcp_server.wire import dialect as rules
 from rosbridge_mcp_server.wire.dialect import ActionTypeNames, Ros1ActionTypes, RosInfo
 
@@ -24,13 +25,16 @@ _QOS_SENT: Final = (
 
 
 class Dialect:
-    """How the bridge of one session spells types, time fields, goal states and subscription options."""
+    """How the bridge of one session spells types, time fields, goal states and subscription options, and
+    what it can do (:attr:`capabilities`, decided once here)."""
 
-    __slots__ = ("info", "version")
+    __slots__ = ("capabilities", "info", "version")
 
     def __init__(self, info: RosInfo) -> None:
         self.info = info
         self.version: Literal[1, 2] = info.version
+        #: What this bridge can do, named (what ``robot/`` asks instead of which bridge it is).
+        self.capabilities: BridgeCapabilities = capabilities_of(info)
 
     @classmethod
     def for_version(cls, version: int) -> Dialect:
@@ -138,7 +142,7 @@ class Dialect:
     def drops_large_cbor(self) -> bool:
         """A CBOR message above the connection's fragment size never comes (ROS 2 rosbridge_suite cannot
         fragment a CBOR frame, 10 MB by default): read it once more as JSON, which it fragments."""
-        return self.version == 2
+        return self.capabilities.drops_large_cbor
 
 
 _BY_VERSION: Final = {1: Dialect(RosInfo(version=1)), 2: Dialect(RosInfo(version=2))}

@@ -2,7 +2,9 @@
 
 rosbridge 2.0.x (Humble) runs a goal inside the connection's one incoming thread until the goal ends, so a
 goal on the shared connection would block every other tool and its own cancel; a lane of its own keeps the
-main connection free. What a goal means (timeouts, cancels, what a drop leaves running) is ``robot/goals``.
+main connection free. The lane hands its goal's frames on as typed events (``wire/goals.py``); which
+connections a cancel goes on is :meth:`RosbridgeClient.cancel_goal`'s. What a goal means (timeouts, what a
+drop leaves running) is ``robot/goals``.
 """
 
 from __future__ import annotations
@@ -10,45 +12,59 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from rosbridge_mcp_server.client.capabilities import BridgeCapabilities
 from rosbridge_mcp_server.client.connection import Connection, GoalStream
 from rosbridge_mcp_server.client.session import send_quietly
 from rosbridge_mcp_server.errors import NotConnectedError
 from rosbridge_mcp_server.wire import protocol
+from rosbridge_mcp_server.wire.goals import GoalEvent, goal_event
 
 __all__ = ["GoalLane", "GoalLanes"]
 
 
 class GoalLane:
-    """One goal's connection: frames for ``goal_id`` arrive in :meth:`next`."""
+    """One goal's connection: what the bridge says of goal ``goal_id`` of ``action`` arrives in :meth:`next`.
+
+    ``capabilities`` are those of the bridge the goal went to (the session the lane was opened under).
+    """
 
     def __init__(
-        self, connection: Connection, goal_id: str, what: str, on_close: Callable[[GoalLane], None]
+        self,
+        connection: Connection,
+        action: str,
+        goal_id: str,
+        what: str,
+        *,
+        capabilities: BridgeCapabilities,
+        on_close: Callable[[GoalLane], None],
     ) -> None:
         self.connection = connection
+        self.action = action
         self.goal_id = goal_id
+        self.capabilities = capabilities
         self._stream = GoalStream(what)
         self._on_close = on_close
         connection.pending[goal_id] = self._stream
 
-    async def send_goal(self, action: str, action_type: str, goal: dict[str, Any]) -> None:
+    async def send_goal(self, action_type: str, goal: dict[str, Any]) -> None:
         """Send the goal itself (with feedback) on the lane, under the lane's goal id."""
         await self.connection.send(
-            protocol.send_action_goal(action, action_type, goal, id=self.goal_id, feedback=True)
+            protocol.send_action_goal(self.action, action_type, goal, id=self.goal_id, feedback=True)
         )
 
-    async def try_cancel(self, action: str) -> bool:
+    async def try_cancel(self) -> bool:
         """Send the goal's cancel on the lane if it is open; False when it could not be sent."""
-        return await send_quietly(self.connection, protocol.cancel_action_goal(action, id=self.goal_id))
+        return await send_quietly(self.connection, protocol.cancel_action_goal(self.action, id=self.goal_id))
 
-    async def next(self) -> tuple[str, dict[str, Any]]:
-        """The next ``action_feedback`` or ``action_result`` frame, as ``(op, frame)``.
+    async def next(self) -> GoalEvent:
+        """The next thing the bridge said of the goal: feedback, its end, or a refusal (typed events).
 
         :class:`ConnectionLostError` when the lane drops (the goal keeps running on the robot).
         """
         item = await self._stream.queue.get()
         if isinstance(item, BaseException):
             raise item
-        return item
+        return goal_event(*item)
 
     def close(self) -> None:
         """Stop listening and close the lane in the background."""
@@ -70,13 +86,16 @@ class GoalLanes:
         self._close = close
         self._open: set[GoalLane] = set()
 
-    async def open(self, goal_id: str, what: str, timeout: float) -> GoalLane:
-        """A connection of its own for goal *goal_id*, opened within *timeout*; ``lane.close()`` after."""
+    async def open(
+        self, action: str, goal_id: str, what: str, capabilities: BridgeCapabilities, timeout: float
+    ) -> GoalLane:
+        """A connection of its own for goal *goal_id* of *action*, opened within *timeout*; ``lane.close()``
+        after."""
         try:
             conn = await self._open_lane(timeout)
         except NotConnectedError as exc:
             raise NotConnectedError(self._url, f"could not open a lane for the goal: {exc.reason}") from None
-        lane = GoalLane(conn, goal_id, what, self._forget)
+        lane = GoalLane(conn, action, goal_id, what, capabilities=capabilities, on_close=self._forget)
         self._open.add(lane)
         return lane
 

@@ -8,11 +8,13 @@ can never inherit a fact about the old one: the client swaps the whole object.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import itertools
 import logging
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from rosbridge_mcp_server.client.capabilities import BridgeCapabilities
 from rosbridge_mcp_server.client.connection import Connection
 from rosbridge_mcp_server.client.detect import detect
 from rosbridge_mcp_server.client.dialect import Dialect
@@ -31,10 +33,8 @@ class Session:
     """The main connection to the bridge, with the bridge's :class:`RosInfo` detected on it."""
 
     __slots__ = (
-        "cancel_owner_only",
         "connection",
         "dialect",
-        "goals_block",
         "info",
         "lanes_by_default",
         "number",
@@ -50,19 +50,27 @@ class Session:
         self.dialect = Dialect(info)
         #: 1 for the first connection of a client, 2 after the first reconnect, ...
         self.number = number
-        # Derived once per connection, so the hot path does not recompute them.
-        self.lanes_by_default = info.may_be_in_order
+        caps = self.dialect.capabilities
+        # Read off the capabilities once per connection, so the hot path does not look them up.
+        self.lanes_by_default = caps.calls_may_queue
         #: Set once whether calls hold each other up is known (told by the bridge's answers, measured, or
         #: given up on: then the connection is taken to be in order). See :mod:`.ordering`.
         self.ordering_known = asyncio.Event()
         if info.version == 1 or info.calls_threaded is not None:
             self.ordering_known.set()
-        self.goals_block = info.goals_may_block
-        self.spread_calls = info.one_call_per_connection
-        self.send_service_timeout = info.honours_service_timeout
-        #: The bridge refused to cancel a goal another connection started (rosbridge-server-rs does); None
-        #: until a cancel of such a goal has been answered or not.
-        self.cancel_owner_only: bool | None = info.cancel_owner_only
+        self.spread_calls = caps.one_call_per_connection
+        self.send_service_timeout = caps.service_timeout_field
+
+    @property
+    def capabilities(self) -> BridgeCapabilities:
+        """What the bridge behind this session can do (decided once, in :mod:`.capabilities`)."""
+        return self.dialect.capabilities
+
+    def learn_cancel_by_owner_only(self) -> None:
+        """The bridge refused to cancel a goal another connection started: only the starter may cancel."""
+        caps = self.dialect.capabilities
+        if not caps.cancel_by_owner_only:
+            self.dialect.capabilities = dataclasses.replace(caps, cancel_by_owner_only=True)
 
     @property
     def is_open(self) -> bool:

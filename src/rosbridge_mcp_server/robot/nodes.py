@@ -3,7 +3,14 @@
 ``/rosapi/nodes`` lists full node names on both lines. ``/rosapi/node_details`` of an unknown node: ROS 1
 (0.11.17) answers empty lists; rosbridge-server-rs never answers (each call is a task of its own there, so
 the silence holds nothing up); rosbridge_suite's ROS 2 rosapi fails in its handler (2.1.0's rosapi dies), so
-on that bridge a node is looked up in the list first, and on the others only to word an unknown node's error.
+where the client says that is unsafe (``node_details_of_unknown_safe``) a node is looked up in a node list
+first, and on the others only to word an unknown node's error.
+
+A node list or topic list this connection saw within the last :data:`RECENT_SECONDS` is reused: rosapi 2.1.0
+answers one call at a time (5-90 ms each on the Jazzy lab), so a listing saved is a call's time saved, and a
+model asking about several nodes one after another (or right after ``list_nodes``) pays for one listing. A
+node the recent list does not hold is looked up in a fresh list, so a node never listed never reaches
+``node_details``.
 """
 
 from __future__ import annotations
@@ -20,7 +27,14 @@ from rosbridge_mcp_server.robot.names import did_you_mean
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.graph import RosGraph, TopicEntry
 
-__all__ = ["UNANSWERED_SECONDS", "NodeDetails", "UnknownNodeError", "node_details", "node_names"]
+__all__ = [
+    "RECENT_SECONDS",
+    "UNANSWERED_SECONDS",
+    "NodeDetails",
+    "UnknownNodeError",
+    "node_details",
+    "node_names",
+]
 
 # rosapi 0.11 answers one look-up at a time anyway; ROS 2 nodes offer ~7 services each.
 _LOOKUPS_AT_ONCE = 8
@@ -28,6 +42,8 @@ _LOOKUPS_AT_ONCE = 8
 #: node: after this long without an answer the node list is asked, so an unknown node is an error in well
 #: under a second, while a known node's details are still awaited.
 UNANSWERED_SECONDS = 0.5
+#: How old a node list or topic list this connection saw may be to be reused for one node's details.
+RECENT_SECONDS = 1.0
 
 
 class UnknownNodeError(NotOnRobotError):
@@ -54,7 +70,9 @@ class NodeDetails:
 async def node_names(graph: RosGraph) -> list[str]:
     """Every node, sorted, once."""
     values = await graph.rosapi("nodes")
-    return sorted(set(_strings(values.get("nodes"))))
+    names = sorted(set(_strings(values.get("nodes"))))
+    graph.saw_nodes(names)
+    return names
 
 
 async def node_details(graph: RosGraph, node: str) -> NodeDetails:
@@ -63,17 +81,22 @@ async def node_details(graph: RosGraph, node: str) -> NodeDetails:
     One round trip on the happy path where the bridge's answer for an unknown node is harmless: ROS 1 answers
     it with empty lists, rosbridge-server-rs with silence; the node list is asked only then, to word the
     error. rosbridge_suite's ROS 2 rosapi must never be asked about an unknown node (it kills rosapi 2.1.0),
-    so there the node list comes first.
+    so there a node list comes first: one seen within :data:`RECENT_SECONDS` if it holds the node, else a
+    fresh one. The topics' types come from a topic list seen as recently, or a fresh one.
     """
     info = await graph.ros_info()
-    listed_first = info.version == 2 and not info.status_replies
+    listed_first = not (await graph.capabilities()).node_details_of_unknown_safe
     if listed_first:
-        known = await node_names(graph)
-        if node not in known:
-            raise UnknownNodeError(node, known)
-        details, topics = await asyncio.gather(graph.rosapi("node_details", {"node": node}), graph.topics())
+        recent = graph.recent_nodes(RECENT_SECONDS)
+        if recent is None or node not in recent:
+            known = await node_names(graph)
+            if node not in known:
+                raise UnknownNodeError(node, known)
+        details, (topics, reused) = await asyncio.gather(
+            graph.rosapi("node_details", {"node": node}), _topics(graph)
+        )
     else:
-        details, topics = await _details_or_unknown(graph, node)
+        details, (topics, reused) = await _details_or_unknown(graph, node)
     publishes = sorted(_strings(details.get("publishing")))
     subscribes = sorted(_strings(details.get("subscribing")))
     served = sorted(set(_strings(details.get("services"))))
@@ -83,6 +106,9 @@ async def node_details(graph: RosGraph, node: str) -> NodeDetails:
         if node not in known:
             raise UnknownNodeError(node, known)
     topic_types = {entry.name: entry.type for entry in topics}
+    if reused and any(_listed(name) and name not in topic_types for name in (*publishes, *subscribes)):
+        # A topic newer than the recent list: its type is in a fresh one.
+        topic_types = {entry.name: entry.type for entry in await graph.topics()}
     service_types = await _service_types(graph, served, info.version)
     return NodeDetails(
         name=node,
@@ -92,12 +118,14 @@ async def node_details(graph: RosGraph, node: str) -> NodeDetails:
     )
 
 
-async def _details_or_unknown(graph: RosGraph, node: str) -> tuple[dict[str, Any], list[TopicEntry]]:
+async def _details_or_unknown(
+    graph: RosGraph, node: str
+) -> tuple[dict[str, Any], tuple[list[TopicEntry], bool]]:
     """``node_details`` and the topics side by side; when the details have not come after
     :data:`UNANSWERED_SECONDS` (rosbridge-server-rs says nothing for an unknown node), the node list decides
     whether to wait on or to raise :class:`UnknownNodeError`."""
     asking = asyncio.ensure_future(graph.rosapi("node_details", {"node": node}))
-    listing = asyncio.ensure_future(graph.topics())
+    listing = asyncio.ensure_future(_topics(graph))
     try:
         done, _ = await asyncio.wait({asking}, timeout=UNANSWERED_SECONDS)
         if not done:
@@ -111,6 +139,12 @@ async def _details_or_unknown(graph: RosGraph, node: str) -> tuple[dict[str, Any
                 task.cancel()
         # Retrieve what a failed or abandoned task holds, so nothing is logged as never retrieved.
         await asyncio.gather(asking, listing, return_exceptions=True)
+
+
+async def _topics(graph: RosGraph) -> tuple[list[TopicEntry], bool]:
+    """The topic list this connection saw within :data:`RECENT_SECONDS` (and True), else a fresh one."""
+    recent = graph.recent_topics(RECENT_SECONDS)
+    return (recent, True) if recent is not None else (await graph.topics(), False)
 
 
 async def _service_types(graph: RosGraph, services: list[str], version: int) -> list[str]:
@@ -168,6 +202,12 @@ def _action_service_type(graph: RosGraph, service: str) -> str:
     suffix = _ACTION_SERVICES.get(leaf)
     action_type = graph.known_action_type(action) if suffix else None
     return f"{action_type}{suffix}" if action_type and "/action/" in action_type else ""
+
+
+def _listed(topic: str) -> bool:
+    """Whether rosapi's topic list names *topic*: it leaves hidden topics out (a part starting with ``_``,
+    such as an action's ``/_action/feedback``), which newer rosapi's ``node_details`` names."""
+    return not any(part.startswith("_") for part in topic.split("/"))
 
 
 def _strings(value: Any) -> list[str]:

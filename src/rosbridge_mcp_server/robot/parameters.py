@@ -113,9 +113,9 @@ async def parameter_groups(
                 raise
             raise ParameterError(_no_parameter_service(node, nodes=await node_names(graph))) from None
         return [(node, sorted(local_names))] if local_names else []
-    if info.status_replies:
-        # rosbridge-server-rs's built-in rosapi answers get_param_names safely (it kills rosapi 2.1.0, which
-        # never answers with a status): one call instead of one per node.
+    if (await graph.capabilities()).get_param_names_safe:
+        # rosbridge-server-rs's built-in rosapi answers get_param_names safely (it kills rosapi 2.1.0):
+        # one call instead of one per node.
         try:
             values = await graph.rosapi("get_param_names")
         except (ServiceError, RequestTimeoutError):

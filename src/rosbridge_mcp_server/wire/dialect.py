@@ -58,7 +58,8 @@ class RosInfo:
     rosbridge_suite never). ``cancel_owner_only``: only the connection that started a goal may cancel it.
     The distro says nothing here: rosbridge 2.1.0 runs a connection's calls in order on Jazzy and Kilted
     alike, later releases changed the launch defaults, and a launch file may override them. What was
-    verified on which bridge: docs/rosbridge-behaviour.md.
+    verified on which bridge: docs/rosbridge-behaviour.md. What this means a bridge can do is decided once, in
+    ``client/capabilities.py``; nothing above the client reads these fields.
     """
 
     version: Literal[1, 2]

@@ -5,7 +5,8 @@
   running now, and the ledger of goals a drop cut off, cancelled once as soon as the connection is back;
 * :mod:`.ros2` and :mod:`.ros1`: the two strategies; :mod:`.actionlib`: ROS 1's topics and cancel message.
 
-The client only provides what is connection-level: a goal's own lane and the cancel op.
+The client owns what is connection-level: a goal's own lane, the typed events the bridge sends of it, and
+which connections a cancel goes on (what the bridge can do is the client's to know).
 """
 
 from __future__ import annotations
@@ -98,9 +99,10 @@ async def cancel_goals(
     """Cancel one goal (by id) or every goal of *action* (ours: those *goals* tracks, and others'); *by*
     names who asked.
 
-    ROS 2: ``cancel_action_goal`` for our goals, on the main connection and on the goal's own lane (see
-    :mod:`.ros2`). A goal of another client given by its goal UUID goes to the action's own
-    ``<action>/_action/cancel_goal`` service, which every bridge reaches; given by its rosbridge id, it is
+    ROS 2: our goals are cancelled by the client on every connection the bridge may need
+    (:meth:`RosbridgeClient.cancel_goal`). A goal of another client given by its goal UUID goes to the
+    action's own ``<action>/_action/cancel_goal`` service, which every bridge reaches; given by its rosbridge
+    id, it is
     cancelled on the main connection, and the report carries the bridge's refusal if it sent one
     (rosbridge-server-rs lets only the starting connection cancel). Every goal: our own cancels plus that
     service with a zero goal id and zero stamp. ROS 1: a ``actionlib_msgs/GoalID`` on ``<ns>/cancel`` (empty
@@ -120,14 +122,14 @@ async def cancel_goals(
             raise NotConnectedError(client.url, f"could not publish on {ns}/cancel")
         return CancelReport(ns, 1, goal_id, canceled_ours, unknown)
     for entry in ours:
-        if not any(await ros2.cancel_on_both(client, entry)):
+        if not (await client.cancel_goal(entry.action, entry.goal_id, entry.lane)).sent:
             raise NotConnectedError(client.url, f"could not send the cancel of goal {entry.goal_id}")
     if goal_id is not None and ours:
         return CancelReport(ns, 2, goal_id, canceled_ours, False)
     if goal_id is not None:
         uuid = _uuid_bytes(goal_id)
         if uuid is None:
-            refused = await client.cancel_action_goal_heard(
+            refused = await client.cancel_goal_heard(
                 ns, goal_id, min(client.request_timeout, _REFUSAL_WAIT_SECONDS)
             )
             return CancelReport(ns, 2, goal_id, [], True, refused=refused)

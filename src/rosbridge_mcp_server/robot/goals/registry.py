@@ -133,11 +133,8 @@ class GoalRegistry:
         for goal in self.running():
             if goal.dialect != 2:
                 continue
-            if session is not None and await session.try_cancel_goal(goal.action, goal.goal_id):
-                self.client.unhandled_acts = True  # the client waits for them before it closes
-            # rosbridge-server-rs cancels only on the connection that started the goal.
-            if goal.cancel_on_owner is not None:
-                await goal.cancel_on_owner()
+            # On the main connection and on the goal's own lane: the client knows which the bridge acts on.
+            await self.client.cancel_goal(goal.action, goal.goal_id, goal.lane)
         for entry in self._cut_off.values():
             logger.warning(
                 "The client is closing; goal %s on %s, left running by a drop, was not cancelled",

@@ -14,6 +14,8 @@ docs/rosbridge-behaviour.md has what was verified on which bridge release.
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.robot.graph.actions import ActionEntry, Actions
@@ -43,8 +45,8 @@ class RosGraph:
     learns about the connection (its ROS version, a new connection) the others see.
     """
 
-    def __init__(self, client: RosbridgeClient) -> None:
-        rosapi = Rosapi(client)
+    def __init__(self, client: RosbridgeClient, *, clock: Callable[[], float] = time.monotonic) -> None:
+        rosapi = Rosapi(client, clock=clock)
         topics = Topics(rosapi)
         services = Services(rosapi)
         actions = Actions(rosapi, topics)
@@ -52,6 +54,9 @@ class RosGraph:
 
         self.ros_info = rosapi.ros_info
         self.dialect = rosapi.dialect
+        self.capabilities = rosapi.capabilities
+        self.saw_nodes = rosapi.saw_nodes
+        self.recent_nodes = rosapi.recent_nodes
         self.rosapi = rosapi.call
 
         self.topics = topics.topics
@@ -60,6 +65,7 @@ class RosGraph:
         self.unknown_topic = topics.unknown_topic
         self.remember_publishing = topics.remember_publishing
         self.topic_details = topics.topic_details
+        self.recent_topics = topics.recent_topics
 
         self.service_names = services.service_names
         self.service_names_seen = services.service_names_seen

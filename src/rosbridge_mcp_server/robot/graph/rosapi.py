@@ -9,11 +9,12 @@ packages installed.
 from __future__ import annotations
 
 import asyncio
+import time
 from collections.abc import Awaitable, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from rosbridge_mcp_server.client import Dialect, RosInfo
+from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosInfo
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.messages import TypeDef
 
@@ -59,13 +60,18 @@ class ConnectionKnowledge:
     refuses_unknown_fields: bool | None = None
     # The names of the last service listing on this connection (None before the first one).
     service_names: tuple[str, ...] | None = None
+    # The last node list and topic list (name, type) this connection saw, each with when (the graph's clock).
+    nodes_seen: tuple[float, tuple[str, ...]] | None = None
+    topics_seen: tuple[float, tuple[tuple[str, str], ...]] | None = None
 
 
 class Rosapi:
     """``/rosapi/...`` calls on one client, and what the connection they last went over has learnt."""
 
-    def __init__(self, client: RosbridgeClient) -> None:
+    def __init__(self, client: RosbridgeClient, *, clock: Callable[[], float] = time.monotonic) -> None:
         self.client = client
+        #: When a listing was seen (seconds; tests give a clock of their own).
+        self.clock = clock
         self._cache_owner: RosInfo | None = None
         self._known = ConnectionKnowledge()
 
@@ -86,6 +92,20 @@ class Rosapi:
             self._cache_owner = dialect.info
             self._known = ConnectionKnowledge()
         return dialect
+
+    async def capabilities(self) -> BridgeCapabilities:
+        """What the bridge can do (decided once per connection by the client): asked instead of its name."""
+        return (await self.dialect()).capabilities
+
+    def saw_nodes(self, names: Iterable[str]) -> None:
+        """Note the node list this connection just got (see :meth:`recent_nodes`)."""
+        self._known.nodes_seen = (self.clock(), tuple(names))
+
+    def recent_nodes(self, max_age: float) -> tuple[str, ...] | None:
+        """The node list this connection saw within the last *max_age* seconds, or None (call :meth:`ros_info`
+        first, so an earlier connection's list is forgotten)."""
+        seen = self._known.nodes_seen
+        return seen[1] if seen is not None and self.clock() - seen[0] <= max_age else None
 
     async def call(self, name: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
         """Call ``/rosapi/<name>``; a missing rosapi is a :class:`ServiceError` saying how to start it."""

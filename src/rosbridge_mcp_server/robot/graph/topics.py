@@ -47,7 +47,16 @@ class Topics:
         names = strings(values.get("topics"))
         types = strings(values.get("types"))
         entries = {name: (types[i] if i < len(types) else "") for i, name in enumerate(names)}
-        return [TopicEntry(name, entries[name]) for name in sorted(entries)]
+        listed = [TopicEntry(name, entries[name]) for name in sorted(entries)]
+        self._known.topics_seen = (self._rosapi.clock(), tuple((e.name, e.type) for e in listed))
+        return listed
+
+    def recent_topics(self, max_age: float) -> list[TopicEntry] | None:
+        """The topic list this connection saw within the last *max_age* seconds, or None."""
+        seen = self._known.topics_seen
+        if seen is None or self._rosapi.clock() - seen[0] > max_age:
+            return None
+        return [TopicEntry(name, type_) for name, type_ in seen[1]]
 
     async def topic_type(self, topic: str) -> str:
         """The type of ``topic``, or ``""`` when it is not in the graph."""
