@@ -27,9 +27,7 @@ from typing import TYPE_CHECKING, Any
 from PIL import ImageDraw
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.frames import look_up_transform
-from rosbridge_mcp_server.robot.listening import listen
-from rosbridge_mcp_server.robot.maps import (
+from rosbridge_mcp_server.pictures.maps import (
     MARGIN_BOTTOM,
     MARGIN_LEFT,
     OCCUPIED_FROM,
@@ -42,6 +40,8 @@ from rosbridge_mcp_server.robot.maps import (
     draw_map,
     yaw_of,
 )
+from rosbridge_mcp_server.robot.frames import look_up_transform
+from rosbridge_mcp_server.robot.listening import listen
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.transforms import TransformError
 

@@ -11,10 +11,10 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
+from rosbridge_mcp_server.pictures.drawing import png_bytes
+from rosbridge_mcp_server.pictures.maps import Grid, Pose2D
 from rosbridge_mcp_server.robot.acting import send_goal
-from rosbridge_mcp_server.robot.drawing import png_bytes
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
-from rosbridge_mcp_server.robot.maps import Grid, Pose2D
 from rosbridge_mcp_server.robot.navigation import (
     GoalPose,
     Scene,

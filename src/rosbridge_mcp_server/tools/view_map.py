@@ -8,8 +8,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.drawing import png_bytes
-from rosbridge_mcp_server.robot.maps import (
+from rosbridge_mcp_server.pictures.drawing import png_bytes
+from rosbridge_mcp_server.pictures.maps import (
     Grid,
     MapError,
     MapPicture,
@@ -19,7 +19,7 @@ from rosbridge_mcp_server.robot.maps import (
     decode_path,
     draw_map,
 )
-from rosbridge_mcp_server.robot.scans import ScanError, decode_scan, to_frame
+from rosbridge_mcp_server.pictures.scans import ScanError, decode_scan, to_frame
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,

@@ -10,8 +10,8 @@ from typing import Any
 import pytest
 from PIL import Image
 
-from rosbridge_mcp_server.robot.drawing import OBSTACLE_COLOUR, PATH_COLOUR, ROBOT_COLOUR
-from rosbridge_mcp_server.robot.maps import (
+from rosbridge_mcp_server.pictures.drawing import OBSTACLE_COLOUR, PATH_COLOUR, ROBOT_COLOUR
+from rosbridge_mcp_server.pictures.maps import (
     MARGIN_BOTTOM,
     MARGIN_LEFT,
     MapError,

@@ -23,8 +23,7 @@ from typing import Any
 
 from PIL import Image, ImageChops, ImageDraw
 
-from rosbridge_mcp_server.robot.budget import budget_problem
-from rosbridge_mcp_server.robot.drawing import (
+from rosbridge_mcp_server.pictures.drawing import (
     OBSTACLE_COLOUR,
     PATH_COLOUR,
     TEXT_COLOUR,
@@ -34,6 +33,7 @@ from rosbridge_mcp_server.robot.drawing import (
     label,
     ticks,
 )
+from rosbridge_mcp_server.robot.budget import budget_problem
 
 __all__ = [
     "MARGIN_BOTTOM",
