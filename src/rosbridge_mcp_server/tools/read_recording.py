@@ -15,8 +15,9 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.pictures.charts import draw_chart, stats
 from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.maps import MapError, Overlay, Pose2D, decode_grid, draw_map, yaw_of
+from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
 from rosbridge_mcp_server.pictures.summary import summarize
+from rosbridge_mcp_server.robot.occupancy import MapError, Pose2D, decode_grid, yaw_of
 from rosbridge_mcp_server.robot.recording.files import (
     PathRefused,
     list_recordings,
