@@ -1,15 +1,18 @@
 """The layers of docs/architecture.md, held from the source: each package imports only the packages below it,
-Pillow is imported only where pictures are drawn, and ``robot/`` loads no picture code at run time."""
+Pillow is imported only where pictures are drawn, ``robot/`` loads no picture code at run time, and its
+texts name no MCP tool (what to try next is worded at the MCP edge, ``server/advice.py``)."""
 
 from __future__ import annotations
 
 import ast
+import re
 import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import rosbridge_mcp_server
+from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
 
 PACKAGE = Path(rosbridge_mcp_server.__file__).parent
 
@@ -130,3 +133,62 @@ def test_the_simulated_robot_imports_nothing_of_the_server() -> None:
         if _ours(module) not in {None, SIMULATOR}
     ]
     assert offenders == []
+
+
+#: Where robot/ still names MCP tools in its texts, by file, and how often each. The list only shrinks: what
+#: to try next is a typed hint (errors.Hint) that server/advice.py words. ``stop_robot`` is who asked a stream
+#: or a goal to stop (an actor's name the answers repeat); ``list_parameters`` in known_types.py is the ROS
+#: service of that name, not the tool. diagnosis.py's next calls are still written in robot/.
+TOOL_NAMES_LEFT: dict[str, dict[str, int]] = {
+    "robot/acting.py": {"stop_robot": 2},
+    "robot/activity.py": {"stop_robot": 2},
+    "robot/gate.py": {"stop_robot": 1},
+    "robot/known_types.py": {"list_parameters": 1},
+    "robot/diagnosis.py": {
+        "list_nodes": 3,
+        "read_logs": 3,
+        "get_transform": 3,
+        "publish_service": 1,
+        "get_node_info": 2,
+        "subscribe_topic": 3,
+        "get_topic_info": 3,
+        "plot_topic": 1,
+    },
+}
+#: Being restructured by the bridge-profile work (issue 26 item 2): their texts are not counted yet.
+NOT_COUNTED = ("robot/goals/", "robot/nodes.py", "robot/parameters.py", "robot/graph/")
+
+
+def _texts(path: Path) -> Iterator[ast.Constant]:
+    """The string constants of *path* that can reach a reader: not docstrings, not ``__all__``."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skipped: set[int] = set()
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef) and body:
+            first = body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant):
+                skipped.add(id(first.value))
+        if isinstance(node, ast.Assign) and any(
+            isinstance(target, ast.Name) and target.id == "__all__" for target in node.targets
+        ):
+            skipped.update(id(item) for item in ast.walk(node.value))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in skipped:
+            yield node
+
+
+def test_the_domain_names_no_mcp_tool_but_the_listed_ones() -> None:
+    """robot/ and errors.py say what went wrong; the tools to call next are named at the MCP edge."""
+    names = "|".join(sorted(ALL_TOOL_NAMES, key=len, reverse=True))
+    tool = re.compile(rf"(?<![\w/])({names})(?![\w/])")
+    found: dict[str, dict[str, int]] = {}
+    for path in sorted([*(PACKAGE / "robot").rglob("*.py"), PACKAGE / "errors.py"]):
+        where = path.relative_to(PACKAGE).as_posix()
+        if where.startswith(NOT_COUNTED):
+            continue
+        for text in _texts(path):
+            for match in tool.finditer(text.value):
+                counts = found.setdefault(where, {})
+                counts[match.group(1)] = counts.get(match.group(1), 0) + 1
+    assert found == TOOL_NAMES_LEFT

@@ -97,7 +97,7 @@ async def run(
     try:
         path = resolve_recording(directory, file)
     except PathRefused as exc:
-        raise ToolFailure(str(exc)) from None
+        raise ToolFailure.carrying(exc) from None
     try:
         summary = await asyncio.to_thread(summarize_recording, path)
     except NotARecording as exc:
