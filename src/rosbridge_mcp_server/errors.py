@@ -85,6 +85,8 @@ class Advice(enum.Enum):
     RECORDINGS = enum.auto()
     #: No recording of that name: the recordings are listed.
     NO_RECORDING = enum.auto()
+    #: No node of that name: the nodes are listed.
+    NODES = enum.auto()
 
 
 @dataclass(frozen=True)

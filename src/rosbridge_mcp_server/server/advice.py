@@ -37,6 +37,7 @@ WORDS: Final[dict[Advice, str]] = {
     Advice.SERVICE_TYPES: "; list_services shows them.",
     Advice.RECORDINGS: " (read_recording without a file lists them).",
     Advice.NO_RECORDING: "; read_recording without a file lists them.",
+    Advice.NODES: "; list_nodes lists the nodes.",
 }
 
 
