@@ -136,13 +136,10 @@ def test_the_simulated_robot_imports_nothing_of_the_server() -> None:
 
 
 #: Where robot/ still names MCP tools in its texts, by file, and how often each. The list only shrinks: what
-#: to try next is a typed hint (errors.Hint) that server/advice.py words. ``stop_robot`` is who asked a stream
-#: or a goal to stop (an actor's name the answers repeat); ``list_parameters`` in known_types.py is the ROS
-#: service of that name, not the tool.
+#: to try next is a typed hint (errors.Hint) that server/advice.py words, and diagnose's next calls typed
+#: steps that tools/diagnose.py words. ``list_parameters`` in known_types.py is the ROS service of that name,
+#: not the tool.
 TOOL_NAMES_LEFT: dict[str, dict[str, int]] = {
-    "robot/acting.py": {"stop_robot": 2},
-    "robot/activity.py": {"stop_robot": 2},
-    "robot/gate.py": {"stop_robot": 1},
     "robot/known_types.py": {"list_parameters": 1},
 }
 #: Being restructured by the bridge-profile work (issue 26 item 2): their texts are not counted yet.

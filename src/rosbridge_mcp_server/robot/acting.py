@@ -167,8 +167,8 @@ class Streamed:
     stopped: bool = False  #: ended early because stop_robot (or the operator's E-STOP) asked
     #: How the safety policy changed the message before it was sent (velocity caps in clamp mode), or None.
     adjusted: str | None = None
-    #: Who stopped it early, when ``stopped``.
-    stopped_by: str = "stop_robot"
+    #: Who stopped it early, when ``stopped`` (the stop's ``by``: "stop_robot", or the operator's E-STOP).
+    stopped_by: str = ""
     #: Ended before ``planned``: the topic's rate cap, shared with every other sender on it, left no slot
     #: within the stream's duration.
     rate_limited: bool = False
@@ -219,7 +219,7 @@ async def publish_stream(
     every = max(1, round(rate / 5))  # progress about five times a second at most
     loop = asyncio.get_running_loop()
     stopped = False
-    stopped_by = "stop_robot"
+    stopped_by = ""  # who, once stopped: the stream's or the gate's stopper
     rate_limited = False
     try:
         # Registered before anything of it is sent (the ping included), so that stop_robot and the E-STOP
