@@ -72,7 +72,7 @@ def picture(result: Any) -> Image.Image:
 
 
 def green_pixels(image: Image.Image) -> int:
-    """Pixels of the path colour (robot/drawing.PATH_COLOUR)."""
+    """Pixels of the path colour (pictures/drawing.PATH_COLOUR)."""
     from rosbridge_mcp_server.pictures.drawing import PATH_COLOUR
 
     raw = image.convert("RGB").tobytes()
