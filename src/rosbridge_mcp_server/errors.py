@@ -81,7 +81,7 @@ class Advice(enum.Enum):
     ACTION_TYPES = enum.auto()
     #: A service type rosapi can describe only in use: the services in use are listed.
     SERVICE_TYPES = enum.auto()
-    #: A recording that is not there, or a path outside the recording directory: the recordings are listed.
+    #: A path outside the recording directory: the recordings in it are listed.
     RECORDINGS = enum.auto()
     #: No recording of that name: the recordings are listed.
     NO_RECORDING = enum.auto()
