@@ -23,19 +23,26 @@ The tree::
     └── ProtocolError               a frame that breaks the rosbridge v2 protocol
 
 Each error's ``str()`` is a sentence a person (or a model) can act on: it says what was tried, where,
-and what to check. The MCP layer turns these into tool errors at one place (``server/adapter.py``).
+and what to check. What the model can call next names MCP tools, which the domain does not know: an error
+carries it as a typed fact (:class:`Hint`, set with :meth:`Advised.advise`), and the MCP edge words it
+(``server/advice.py``) when it turns the error into a tool error (``server/adapter.py``).
 """
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Sequence
-from typing import Literal
+from dataclasses import dataclass, replace
+from typing import Literal, Self
 
 __all__ = [
     "ActionError",
+    "Advice",
+    "Advised",
     "ConnectionLostError",
     "FrameTooLargeError",
     "GoalTimeoutError",
+    "Hint",
     "InvalidMessageError",
     "NotConnectedError",
     "NotOnRobotError",
@@ -49,7 +56,68 @@ __all__ = [
 ]
 
 
-class RosbridgeError(Exception):
+class Advice(enum.Enum):
+    """What the model can do next after an error, as a fact: the MCP edge words it, naming the tools."""
+
+    #: The topic has another type (names: the graph's type): publish that type, or find another topic.
+    TOPIC_TYPE = enum.auto()
+    #: A service name that nothing offers: the services are listed.
+    SERVICES = enum.auto()
+    #: A service name the bridge did not find in the graph: check the name against the services.
+    SERVICE_NAME = enum.auto()
+    #: An action name nobody serves: the actions are listed.
+    ACTIONS = enum.auto()
+    #: A topic that is not in the graph: the topics are listed, or the type can be given to wait.
+    TOPICS_OR_TYPE = enum.auto()
+    #: A name ROS refuses: check it against the topics, services and actions.
+    NAME = enum.auto()
+    #: A parameter name of the wrong form: the parameters are listed.
+    PARAMETER_NAMES = enum.auto()
+    #: A parameter write the policy cannot judge: write one parameter at a time instead.
+    ONE_PARAMETER = enum.auto()
+    #: A type the bridge does not know: the types in use are listed with the topics, services and actions.
+    TYPES_IN_USE = enum.auto()
+    #: An action type rosapi cannot describe: the action's type is listed, and a goal is checked when sent.
+    ACTION_TYPES = enum.auto()
+    #: A service type rosapi can describe only in use: the services in use are listed.
+    SERVICE_TYPES = enum.auto()
+    #: A path outside the recording directory: the recordings in it are listed.
+    RECORDINGS = enum.auto()
+    #: No recording of that name: the recordings are listed.
+    NO_RECORDING = enum.auto()
+    #: No node of that name: the nodes are listed.
+    NODES = enum.auto()
+
+
+@dataclass(frozen=True)
+class Hint:
+    """What to try after an error: an :class:`Advice` and the names it involves (e.g. a topic's type), and
+    what a layer above said after the error's text (``tail``), which stays after the advice."""
+
+    advice: Advice
+    names: tuple[str, ...] = ()
+    tail: str = ""
+
+
+class Advised(Exception):  # noqa: N818: a mixin of errors, never raised alone
+    """An error whose text the MCP edge completes with what to try (``hint``; ``None``: nothing to add)."""
+
+    hint: Hint | None = None
+
+    def advise(self, advice: Advice | Hint | None, *names: str) -> Self:
+        """This error, carrying what to try next (an :class:`Advice` and its names, or another's ``hint``)."""
+        self.hint = advice if not isinstance(advice, Advice) else Hint(advice, names)
+        return self
+
+    @classmethod
+    def carrying(cls, error: Advised, tail: str = "") -> Self:
+        """*error*'s text and hint as this kind of error, with *tail* said last (after the advice, if any)."""
+        if error.hint is None:
+            return cls(f"{error}{tail}")
+        return cls(str(error)).advise(replace(error.hint, tail=error.hint.tail + tail))
+
+
+class RosbridgeError(Advised):
     """Base of every error raised by the rosbridge client."""
 
 
@@ -155,10 +223,8 @@ class ServiceError(RosbridgeError):
         self.message = message
         if _RS_NOT_IN_GRAPH in message:
             # The bridge's words are about its own needs; the model needs to hear what is wrong.
-            text = (
-                f"Service {service} is not in the ROS graph (the bridge said: {message}); check the name "
-                "with list_services"
-            )
+            text = f"Service {service} is not in the ROS graph (the bridge said: {message})"
+            self.advise(Advice.SERVICE_NAME)
         else:
             text = f"Service call {service} failed: {message}"
         super().__init__(text)

@@ -8,8 +8,9 @@ import logging
 import pytest
 from client_harness import MakeClient, MakeSim
 
-from rosbridge_mcp_server.errors import GoalTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import Advice, GoalTimeoutError, Hint, ServiceError
 from rosbridge_mcp_server.robot.goals import GoalRegistry, ros2
+from rosbridge_mcp_server.server.advice import advised
 
 
 async def test_a_refused_subscribe_is_logged_with_the_bridges_words(
@@ -38,7 +39,12 @@ async def test_a_missing_service_fails_with_a_sentence_naming_it(
         await client.call_service("/no_such_service")
     assert caught.value.not_in_graph
     assert str(caught.value).startswith("Service /no_such_service is not in the ROS graph")
-    assert "list_services" in str(caught.value)
+    # What to try is a fact the MCP edge words (tests/mcp/test_mcp_rs_bridge.py sees it name list_services).
+    assert caught.value.hint == Hint(Advice.SERVICE_NAME)
+    assert advised(caught.value).endswith(
+        "(the bridge said: type is required when interface is absent from ROS graph); check the name with "
+        "list_services"
+    )
 
 
 async def test_a_goal_timing_out_is_cancelled_on_its_own_connection_without_a_warning(

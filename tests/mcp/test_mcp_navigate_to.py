@@ -72,8 +72,8 @@ def picture(result: Any) -> Image.Image:
 
 
 def green_pixels(image: Image.Image) -> int:
-    """Pixels of the path colour (robot/drawing.PATH_COLOUR)."""
-    from rosbridge_mcp_server.robot.drawing import PATH_COLOUR
+    """Pixels of the path colour (pictures/drawing.PATH_COLOUR)."""
+    from rosbridge_mcp_server.pictures.drawing import PATH_COLOUR
 
     raw = image.convert("RGB").tobytes()
     return sum(1 for i in range(0, len(raw), 3) if tuple(raw[i : i + 3]) == PATH_COLOUR)

@@ -12,7 +12,7 @@ from mcp.types import CallToolResult, ImageContent
 from mcp_harness import Session, text_of
 from PIL import Image
 
-from rosbridge_mcp_server.robot.drawing import SERIES_COLOURS
+from rosbridge_mcp_server.pictures.drawing import SERIES_COLOURS
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import TURTLE_HOME
 

@@ -13,8 +13,8 @@ from mcp_harness import Session, open_session, text_of
 from PIL import Image
 
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.robot.drawing import OBSTACLE_COLOUR, PATH_COLOUR, ROBOT_COLOUR
-from rosbridge_mcp_server.robot.maps import MARGIN_BOTTOM, MARGIN_LEFT
+from rosbridge_mcp_server.pictures.drawing import OBSTACLE_COLOUR, PATH_COLOUR, ROBOT_COLOUR
+from rosbridge_mcp_server.pictures.maps import MARGIN_BOTTOM, MARGIN_LEFT
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.nodes.navigation import PLAN_GOAL
 from rosbridge_mcp_server.sim.world import TURTLE_ARENA, TURTLE_HOME

@@ -20,8 +20,8 @@ from mcp.types import CallToolResult, ImageContent
 from mcp_harness import Session, open_session
 from PIL import Image
 
-from rosbridge_mcp_server.robot.drawing import ROBOT_COLOUR
-from rosbridge_mcp_server.robot.maps import MARGIN_BOTTOM, MARGIN_LEFT
+from rosbridge_mcp_server.pictures.drawing import ROBOT_COLOUR
+from rosbridge_mcp_server.pictures.maps import MARGIN_BOTTOM, MARGIN_LEFT
 
 REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
 

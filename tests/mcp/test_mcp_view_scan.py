@@ -14,7 +14,7 @@ from mcp_harness import Session, open_session, text_of
 from PIL import Image
 
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.robot.drawing import OBSTACLE_COLOUR
+from rosbridge_mcp_server.pictures.drawing import OBSTACLE_COLOUR
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.nodes.room import PILLAR
 from rosbridge_mcp_server.sim.world import TURTLE_ARENA, TURTLE_HOME

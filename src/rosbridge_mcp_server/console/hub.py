@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.console.mapview import MapPanel, Picture, trying_again
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.images import ImageError, decode_compressed, decode_raw, encode_picture
+from rosbridge_mcp_server.pictures.images import ImageError, decode_compressed, decode_raw, encode_picture
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.seam import Act

@@ -3,7 +3,7 @@
 While a page is open, the panel listens to ``/tf`` and ``/tf_static`` (a frame tree of its own) and to the map
 topic (``nav_msgs/OccupancyGrid``, latched). Twice a second it looks up the base frame in ``map`` (the map's
 own frame), or in ``odom`` when there is no map frame, and pushes the pose when it moved; the map picture is
-drawn again (off the event loop, with ``robot/maps.py``'s renderer and the robot's arrow) only when the map,
+drawn again (off the event loop, with ``pictures/maps.py``'s drawing and the robot's arrow) only when the map,
 the pose or the plan changed, at most once a second. The navigator's plan (``plan`` beside the map topic, as
 Nav2 and move_base publish it while driving a goal) is drawn with its goal at the end, and dropped when no
 plan came for :data:`PLAN_KEEP` seconds (the goal ended). It only listens: nothing here publishes or calls
@@ -21,19 +21,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
-from rosbridge_mcp_server.robot.drawing import png_bytes
+from rosbridge_mcp_server.pictures.drawing import png_bytes
+from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
 from rosbridge_mcp_server.robot.frames import TF_TOPICS
-from rosbridge_mcp_server.robot.maps import (
-    Grid,
-    MapError,
-    Overlay,
-    Pose2D,
-    decode_grid,
-    decode_path,
-    draw_map,
-)
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
+from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_grid, decode_path
 from rosbridge_mcp_server.robot.transforms import FrameTree, TransformError, frame_name
 
 if TYPE_CHECKING:

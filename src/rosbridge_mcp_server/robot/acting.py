@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.client import Dialect
-from rosbridge_mcp_server.errors import NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import Advice, NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.effects import parameter_write, service_effects, topic_effects
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
@@ -123,9 +123,8 @@ async def _checked_message(
     graph_type = await ctx.graph.publishing_type(name)
     if graph_type and not dialect.same_type(graph_type, bridge_type):
         raise NotSentError(
-            f"Topic {name} has type {graph_type}, not {bridge_type}; rosbridge would drop the message. "
-            f"Publish a {graph_type} message, or choose another topic (list_topics shows each topic's type)."
-        )
+            f"Topic {name} has type {graph_type}, not {bridge_type}; rosbridge would drop the message."
+        ).advise(Advice.TOPIC_TYPE, graph_type)
     require_fit(
         _as_read(dialect, message),
         typedefs,
@@ -168,8 +167,8 @@ class Streamed:
     stopped: bool = False  #: ended early because stop_robot (or the operator's E-STOP) asked
     #: How the safety policy changed the message before it was sent (velocity caps in clamp mode), or None.
     adjusted: str | None = None
-    #: Who stopped it early, when ``stopped``.
-    stopped_by: str = "stop_robot"
+    #: Who stopped it early, when ``stopped`` (the stop's ``by``: "stop_robot", or the operator's E-STOP).
+    stopped_by: str = ""
     #: Ended before ``planned``: the topic's rate cap, shared with every other sender on it, left no slot
     #: within the stream's duration.
     rate_limited: bool = False
@@ -220,7 +219,7 @@ async def publish_stream(
     every = max(1, round(rate / 5))  # progress about five times a second at most
     loop = asyncio.get_running_loop()
     stopped = False
-    stopped_by = "stop_robot"
+    stopped_by = ""  # who, once stopped: the stream's or the gate's stopper
     rate_limited = False
     try:
         # Registered before anything of it is sent (the ping included), so that stop_robot and the E-STOP
@@ -390,8 +389,8 @@ async def call_service(
             raise
         ctx.graph.forget_service(act.name)
         hint = did_you_mean(act.name, await ctx.graph.service_names())
-        raise NotSentError(
-            f"Service {act.name} is not offered by any node.{hint} Call list_services to see the services."
+        raise NotSentError(f"Service {act.name} is not offered by any node.{hint}").advise(
+            Advice.SERVICES
         ) from exc
     return ServiceReply(act.name, srv_type, response)
 
@@ -481,9 +480,7 @@ async def require_action_server(graph: RosGraph, name: str, action_type: str | N
     """Fail fast on an action nobody serves, or (given *action_type*) on a type that is not the server's."""
     hint = await graph.missing_action(name)
     if hint is not None:
-        raise NotSentError(
-            f"No action server {name} is running on the robot.{hint} Call list_actions to see the actions."
-        )
+        raise NotSentError(f"No action server {name} is running on the robot.{hint}").advise(Advice.ACTIONS)
     if action_type is None:
         return
     found = await graph.action_type(name)
@@ -504,9 +501,8 @@ async def stop_goals(ctx: Acting, *, action: str, goal_id: str | None = None) ->
     hint = await ctx.graph.missing_action(name)
     if hint is not None:
         raise NotSentError(
-            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint} Call "
-            "list_actions to see the actions."
-        )
+            f"No action server {name} is running on the robot, so there is nothing to cancel.{hint}"
+        ).advise(Advice.ACTIONS)
     return await cancel_goals(ctx.goals, name, goal_id)
 
 

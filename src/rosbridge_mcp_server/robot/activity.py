@@ -45,7 +45,7 @@ class Stream:
     stop_requested: asyncio.Event = field(default_factory=asyncio.Event)
     ended: asyncio.Event = field(default_factory=asyncio.Event)
     #: Who asked it to stop, for its answer ("stop_robot", or "E-STOP on the operator console").
-    stopped_by: str = "stop_robot"
+    stopped_by: str = ""
 
     async def unless_stopped(self, step: Awaitable[Any]) -> bool:
         """Run *step* unless stop_robot asks this stream to stop first (then *step* is cancelled); ``True``
@@ -122,7 +122,7 @@ class SessionActivity:
     def streams(self) -> list[Stream]:
         return list(self._streams)
 
-    async def stop_streams(self, timeout: float, by: str = "stop_robot") -> tuple[list[Stream], list[Stream]]:
+    async def stop_streams(self, timeout: float, by: str) -> tuple[list[Stream], list[Stream]]:
         """Ask every stream to stop (``by`` is who asks) and wait up to ``timeout`` s; returns (ended, still
         running).
 

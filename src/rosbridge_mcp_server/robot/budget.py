@@ -2,11 +2,11 @@
 
 Anyone on the robot's ROS graph can publish what the watch tools read, and a message's declared size need not
 match its bytes: a 320 kB PNG that declares 13000 × 13000 pixels at 16 bits decodes to gigabytes. So every
-decoder (``images.py``, ``maps.py``, ``scans.py``) first works out, from the sizes the message *declares*
-(a compressed image's header, a raw image's width × height, a map's width × height, a scan's beams, a cloud's
-width × height × point_step), what decoding it would hold in memory at once, and refuses before decoding or
-allocating anything when that is over :data:`DECODE_BUDGET`. The refusal names the declared size, the memory
-it would take and the budget. Pure: no I/O.
+decoder (``occupancy.py``; ``pictures/``'s ``images.py`` and ``scans.py``) first works out, from the sizes the
+message *declares* (a compressed image's header, a raw image's width × height, a map's width × height, a
+scan's beams, a cloud's width × height × point_step), what decoding it would hold in memory at once, and
+refuses before decoding or allocating anything when that is over :data:`DECODE_BUDGET`. The refusal names the
+declared size, the memory it would take and the budget. Pure: no I/O.
 
 The budget fits every real sensor with room to spare: an 8K colour frame (33 M pixels, ~133 MB as Pillow holds
 it), a 1280 × 720 depth image (~48 MB), a 7,000² map (~245 MB), a 100,000-beam scan (~22 MB).

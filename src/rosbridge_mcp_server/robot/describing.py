@@ -18,7 +18,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
 from rosbridge_mcp_server.client import Dialect
-from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError, UnknownTypeError
+from rosbridge_mcp_server.errors import (
+    Advice,
+    NotOnRobotError,
+    RequestTimeoutError,
+    ServiceError,
+    UnknownTypeError,
+)
 from rosbridge_mcp_server.robot.type_outline import TypeOutline, clean_typedefs, outline_type
 
 if TYPE_CHECKING:
@@ -72,9 +78,7 @@ async def describe_type(graph: RosGraph, type_name: str) -> Description:
         else "ROS 2 type names look like `geometry_msgs/msg/Twist`, `std_srvs/srv/SetBool`, "
         "`example_interfaces/action/Fibonacci`."
     )
-    raise UnknownTypeError(
-        type_name, f"{hint} list_topics, list_services and list_actions show the types in use."
-    )
+    raise UnknownTypeError(type_name, hint).advise(Advice.TYPES_IN_USE)
 
 
 async def _installed_kinds(graph: RosGraph, type_name: str, kinds: tuple[Kind, ...]) -> tuple[Kind, ...]:
@@ -106,14 +110,13 @@ async def _installed_kinds(graph: RosGraph, type_name: str, kinds: tuple[Kind, .
     if "action" in kinds and len(kinds) == 1:
         raise CannotDescribe(
             "This bridge's rosapi cannot describe action types (that needs Humble 2.0.2 / Jazzy 2.3.0 or "
-            "later); list_actions shows the action's type, and publish_action checks a goal against it."
-        )
+            "later)"
+        ).advise(Advice.ACTION_TYPES)
     if "service" in kinds and "service" not in safe and len(kinds) == 1:
         raise CannotDescribe(
             f"No running service has the type {package}/srv/{name}, and this bridge's rosapi (no "
-            "/rosapi/interfaces) can only describe service types in use without risk; list_services shows "
-            "them."
-        )
+            "/rosapi/interfaces) can only describe service types in use without risk"
+        ).advise(Advice.SERVICE_TYPES)
     return tuple(safe)
 
 
@@ -156,8 +159,8 @@ async def _part(graph: RosGraph, service: str, bridge_name: str, version: int) -
         if exc.not_in_graph and service.startswith("action_"):
             raise CannotDescribe(
                 "This bridge's rosapi cannot describe action types (that needs Humble 2.0.2 / Jazzy 2.3.0 or "
-                "later); list_actions shows the action's type, and publish_action checks a goal against it."
-            ) from exc
+                "later)"
+            ).advise(Advice.ACTION_TYPES) from exc
         if exc.not_in_graph:
             raise
         # rosapi raised while loading the type (ROS 1 sends the exception text): the type is not there.

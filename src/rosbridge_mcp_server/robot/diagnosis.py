@@ -26,13 +26,14 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import enum
 import itertools
 import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Final, Literal
 
-from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.errors import Advice, Advised, RosbridgeError
 from rosbridge_mcp_server.robot.diagnostics import StatusBoard
 from rosbridge_mcp_server.robot.log_keeper import DIAGNOSTICS_TOPICS
 from rosbridge_mcp_server.robot.logs import level_rank
@@ -50,6 +51,8 @@ __all__ = [
     "WINDOW",
     "Diagnosis",
     "Finding",
+    "Look",
+    "Step",
     "UnknownFocusError",
     "areas_for",
     "diagnose",
@@ -86,20 +89,54 @@ _BRIDGE_NODES: Final = ("/rosbridge_websocket", "/rosapi", "/rosapi_params")
 _ACTIVE: Final = 3
 
 
-class UnknownFocusError(ValueError):
+class UnknownFocusError(Advised, ValueError):
     """A ``focus`` that is no area, no focus word and no node of the graph."""
+
+
+class Look(enum.Enum):
+    """What to look at next about a finding; the diagnose tool says which call does it."""
+
+    #: A node's log, from info up (names: the node).
+    NODE_LOG = enum.auto()
+    #: The nodes of the graph.
+    NODES = enum.auto()
+    #: Who publishes and reads a topic (names: the topic).
+    TOPIC = enum.auto()
+    #: Activate a lifecycle node through its change_state service (names: the node).
+    ACTIVATE = enum.auto()
+    #: One node's topics and services (names: the node; none: the node named before).
+    NODE = enum.auto()
+    #: One message of a topic (names: the topic).
+    ONE_MESSAGE = enum.auto()
+    #: A message of a topic, waiting a while for it (names: the topic).
+    WAIT_MESSAGE = enum.auto()
+    #: A topic's stamps over a few seconds (names: the topic).
+    STAMPS = enum.auto()
+    #: One transform (names: target frame, source frame).
+    TRANSFORM = enum.auto()
+    #: One transform, waiting a while for it (names: target frame, source frame).
+    TRANSFORM_WAIT = enum.auto()
+
+
+@dataclass(frozen=True)
+class Step:
+    """One thing to look at next: what, the names it involves, and why (said after it, may be empty)."""
+
+    look: Look
+    names: tuple[str, ...] = ()
+    why: str = ""
 
 
 @dataclass(frozen=True)
 class Finding:
     """One thing wrong: a problem or a warning, its area, what it is about (a topic, frame pair, node or
-    status name), one sentence, what to call next, the nodes it concerns, and details."""
+    status name), one sentence, what to look at next, the nodes it concerns, and details."""
 
     severity: Literal["problem", "warning"]
     area: str
     subject: str
     summary: str
-    next: str
+    next: tuple[Step, ...]
     nodes: tuple[str, ...] = ()
     details: dict[str, Any] = field(default_factory=dict)
 
@@ -114,6 +151,9 @@ class Diagnosis:
     seconds: float
     streams: dict[str, float | None] = field(default_factory=dict)
     frames: list[str] = field(default_factory=list)
+    #: How many more of an area's things were left out of its findings: "diagnostics" statuses not OK,
+    #: "logs" groups of warnings and errors (the tool says where to read them).
+    left_out: dict[str, int] = field(default_factory=dict)
 
     @property
     def problems(self) -> int:
@@ -141,8 +181,8 @@ def areas_for(
         return AREAS, None, node
     raise UnknownFocusError(
         f"focus {focus!r} is neither one of {', '.join(FOCUSES)} nor a node of the graph (e.g. "
-        f"{', '.join(sorted(known)[:3]) or '/amcl'}); list_nodes lists the nodes."
-    )
+        f"{', '.join(sorted(known)[:3]) or '/amcl'})"
+    ).advise(Advice.NODES)
 
 
 # --- the look --------------------------------------------------------------------------------------------
@@ -250,6 +290,7 @@ async def diagnose(
     areas, kinds, focus_node = areas_for(focus, nodes)
     ros2 = dialect.version == 2
     checked: dict[str, str] = {}
+    left_out: dict[str, int] = {}
     unavailable: dict[str, str] = {}
     findings: list[Finding] = []
     frames: set[str] = set()
@@ -329,7 +370,7 @@ async def diagnose(
         if not any(t in topics for t in DIAGNOSTICS_TOPICS):
             unavailable["diagnostics"] = "the robot has no /diagnostics topic"
         else:
-            findings += _diagnostics(board, checked)
+            findings += _diagnostics(board, checked, left_out)
     if "streams" in areas:
         findings += _streams(
             keeper, streams=streams, heard=heard, pubsub=pubsub, window=window, checked=checked
@@ -348,13 +389,15 @@ async def diagnose(
                 "the log subscription is not open yet (the server connects in the background)"
             )
         else:
-            findings += _logs(keeper, checked)
+            findings += _logs(keeper, checked, left_out)
     if focus_node is not None:
         findings = [f for f in findings if focus_node in f.nodes or f.subject == focus_node]
     order = {area: i for i, area in enumerate(AREAS)}
     findings.sort(key=lambda f: (f.severity != "problem", order.get(f.area, 99)))
     rates = {t: heard[t].rate if t in heard else None for t in streams}
-    diagnosis = Diagnosis(findings, checked, unavailable, time.monotonic() - began, streams=rates)
+    diagnosis = Diagnosis(
+        findings, checked, unavailable, time.monotonic() - began, streams=rates, left_out=left_out
+    )
     diagnosis.frames = sorted(frames)
     return diagnosis
 
@@ -386,7 +429,7 @@ def _graph(
                     "graph",
                     node,
                     f"Node {node} is gone: in the graph at {since}, not now (crashed? stopped?).",
-                    f'read_logs {{"node": "{node}", "level": "info"}} for its last words; list_nodes',
+                    (Step(Look.NODE_LOG, (node,), "for its last words"), Step(Look.NODES)),
                     nodes=(node,),
                     details={"seen_at": since},
                 )
@@ -402,7 +445,7 @@ def _graph(
                         topic,
                         f"Nothing reads {topic}: no node would drive the robot (is the base driver or "
                         "twist_mux running?).",
-                        f'get_topic_info {{"topic": "{topic}"}}',
+                        (Step(Look.TOPIC, (topic,)),),
                         nodes=_others(pubs),
                     )
                 )
@@ -414,7 +457,7 @@ def _graph(
                     "graph",
                     topic,
                     f"Nobody publishes {topic}, which {', '.join(readers[:4])} read.",
-                    f'get_topic_info {{"topic": "{topic}"}}; list_nodes',
+                    (Step(Look.TOPIC, (topic,)), Step(Look.NODES)),
                     nodes=readers,
                 )
             )
@@ -438,8 +481,7 @@ def _lifecycle(states: Mapping[str, str], checked: dict[str, str]) -> list[Findi
                 "lifecycle",
                 node,
                 summary,
-                f'activate it: publish_service {{"service": "{node}/change_state", "request": '
-                '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes); get_node_info',
+                (Step(Look.ACTIVATE, (node,)), Step(Look.NODE)),
                 nodes=(node,),
                 details={"state": state},
             )
@@ -449,7 +491,7 @@ def _lifecycle(states: Mapping[str, str], checked: dict[str, str]) -> list[Findi
     return out
 
 
-def _diagnostics(board: StatusBoard, checked: dict[str, str]) -> list[Finding]:
+def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str, int]) -> list[Finding]:
     out = []
     statuses = board.statuses()
     not_ok = [s for s in statuses if s.level != 0]
@@ -466,7 +508,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str]) -> list[Finding]:
                 f"{status.level_name} {status.name}{hardware}: {status.message or '(no message)'}"
                 + (f" [{values}]" if values else "")
                 + f" ({ago:.0f} s ago)",
-                f'subscribe_topic {{"topic": "{status.topic}", "count": 1}}',
+                (Step(Look.ONE_MESSAGE, (status.topic,)),),
                 nodes=(_status_node(status.name),),
                 details={
                     "level": status.level_name,
@@ -479,9 +521,9 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str]) -> list[Finding]:
     if statuses:
         ok = len(statuses) - len(not_ok)
         more = len(not_ok) - MAX_STATUS_FINDINGS
-        checked["diagnostics"] = f"{len(statuses)} statuses, {ok} OK" + (
-            f" ({more} more not OK: subscribe_topic /diagnostics)" if more > 0 else ""
-        )
+        checked["diagnostics"] = f"{len(statuses)} statuses, {ok} OK"
+        if more > 0:
+            left_out["diagnostics"] = more
     else:
         checked["diagnostics"] = "no status has arrived yet"
     return out
@@ -523,8 +565,7 @@ def _streams(
                     f"arrived in {window:g} s"
                     + (f" (it ran at {before:.1f} Hz earlier)" if before else "")
                     + ".",
-                    f'subscribe_topic {{"topic": "{topic}", "timeout": 5}}; '
-                    f'get_node_info {{"node": "{pubs[0]}"}}',
+                    (Step(Look.WAIT_MESSAGE, (topic,)), Step(Look.NODE, (pubs[0],))),
                     nodes=pubs,
                     details={"rate_hz": 0.0, "earlier_hz": before},
                 )
@@ -538,7 +579,7 @@ def _streams(
                     "streams",
                     topic,
                     f"{topic} runs at {rate:.1f} Hz, under half the {before:.1f} Hz measured earlier.",
-                    f'plot_topic {{"series": ["{topic} header.stamp.sec"], "duration": 5}}',
+                    (Step(Look.STAMPS, (topic,)),),
                     nodes=pubs,
                     details={"rate_hz": round(rate, 2), "earlier_hz": round(before, 2)},
                 )
@@ -617,7 +658,7 @@ def _tf(
                     child,
                     f"Frame {child} has {len(found)} parents ({', '.join(sorted(found))}): two nodes publish "
                     "it, and tf keeps jumping between them.",
-                    'get_topic_info {"topic": "/tf"} to see who publishes',
+                    (Step(Look.TOPIC, ("/tf",), "to see who publishes"),),
                 )
             )
     stamps = [e.stamp for e in edges.values() if not e.static and e.stamp is not None]
@@ -633,7 +674,7 @@ def _tf(
                     f"{edge.parent} -> {child}",
                     f"Transform {edge.parent} → {child} is stale: stamped {newest - edge.stamp:.1f} s before "
                     "the newest transform.",
-                    f'get_transform {{"target_frame": "{edge.parent}", "source_frame": "{child}"}}',
+                    (Step(Look.TRANSFORM, (edge.parent, child)),),
                 )
             )
     base = next((f for f in ("base_footprint", "base_link") if f in frames), None)
@@ -647,7 +688,7 @@ def _tf(
                 "tf",
                 "odom -> base",
                 "No base frame (base_footprint or base_link) in tf: the robot's own frame is missing.",
-                'get_transform {"target_frame": "odom", "source_frame": "base_link", "timeout": 5}',
+                (Step(Look.TRANSFORM_WAIT, ("odom", "base_link")),),
             )
         )
     if base is not None:
@@ -678,7 +719,7 @@ def _tf(
                 "tf",
                 f"{upper} -> {lower}",
                 summary,
-                f'get_transform {{"target_frame": "{upper}", "source_frame": "{lower}", "timeout": 5}}',
+                (Step(Look.TRANSFORM_WAIT, (upper, lower)),),
             )
         )
     roots = sorted({_ancestors(f, edges)[-1] for f in frames})
@@ -686,7 +727,7 @@ def _tf(
     return out, frames
 
 
-def _logs(keeper: LogKeeper, checked: dict[str, str]) -> list[Finding]:
+def _logs(keeper: LogKeeper, checked: dict[str, str], left_out: dict[str, int]) -> list[Finding]:
     out = []
     now = time.time()
     folds = keeper.ring.tally.folds()
@@ -700,7 +741,7 @@ def _logs(keeper: LogKeeper, checked: dict[str, str]) -> list[Finding]:
                 "logs",
                 entry.node,
                 entry.describe(now),
-                f'read_logs {{"node": "{entry.node}", "level": "info"}}',
+                (Step(Look.NODE_LOG, (entry.node,)),),
                 nodes=(entry.node,),
                 details={"level": entry.level, "count": entry.count, "text": entry.text},
             )
@@ -708,12 +749,9 @@ def _logs(keeper: LogKeeper, checked: dict[str, str]) -> list[Finding]:
     since = time.strftime("%H:%M:%S", time.localtime(keeper.listening_since or now))
     errors = sum(f.count for f in folds if level_rank(f.level) >= level_rank("error"))
     warnings = sum(f.count for f in folds if f.level == "warn")
-    more = (
-        f", {len(folds) - MAX_LOG_FINDINGS} more groups in read_logs" if len(folds) > MAX_LOG_FINDINGS else ""
-    )
-    checked["logs"] = (
-        f"{errors} errors, {warnings} warnings since {since} ({len(keeper.ring)} lines kept{more})"
-    )
+    if len(folds) > MAX_LOG_FINDINGS:
+        left_out["logs"] = len(folds) - MAX_LOG_FINDINGS
+    checked["logs"] = f"{errors} errors, {warnings} warnings since {since} ({len(keeper.ring)} lines kept)"
     return out
 
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from rosbridge_mcp_server.client import Dialect
-from rosbridge_mcp_server.errors import NotSentError
+from rosbridge_mcp_server.errors import Advice, NotSentError
 from rosbridge_mcp_server.robot.names import parameter_name
 
 __all__ = [
@@ -160,8 +160,8 @@ def service_effects(service: str, type_name: str, request: Any, ros_version: int
 def _unreadable(service: str, what: str) -> NotSentError:
     return NotSentError(
         f"The request to {service} does not name plainly which parameters it {what}, so the safety policy "
-        "could not judge it; nothing was sent. Use set_parameter, or give each parameter's name as text."
-    )
+        "could not judge it; nothing was sent."
+    ).advise(Advice.ONE_PARAMETER)
 
 
 def _rosapi_parameter(service: str, request: Any, ros_version: int, what: str) -> Effect:

@@ -44,7 +44,7 @@ class SendGate:
     def __init__(self, guard: Guard) -> None:
         self._guard = guard
         self._stops = 0
-        self._stopped_by = "stop_robot"
+        self._stopped_by = ""  # set by every stop(): no refusal names it before one
         self._stopped = asyncio.Event()
         #: topic → the loop time from which the next message on it may go out
         self._next_slot: dict[str, float] = {}

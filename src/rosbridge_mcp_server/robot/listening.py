@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 from rosbridge_mcp_server.errors import (
+    Advice,
     NotOnRobotError,
     NotSentError,
     RequestTimeoutError,
@@ -152,10 +153,7 @@ async def read_topic(
         msg_type = graph_type
     else:
         missing, _ = await graph.unknown_topic(name, " (nothing publishes it)")
-        raise NotOnRobotError(
-            f"{missing} Call list_topics to see the topics, or give message_type to wait for a publisher "
-            "that has not started yet."
-        )
+        raise NotOnRobotError(missing).advise(Advice.TOPICS_OR_TYPE)
     typedefs = await _typedefs_or_none(graph, msg_type)
     if fields and typedefs and (problem := unknown_field_path(msg_type, typedefs, fields)):
         raise NotSentError(f"{problem} Nothing was subscribed; fix fields or leave them out.")

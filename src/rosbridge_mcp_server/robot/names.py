@@ -5,7 +5,7 @@ from __future__ import annotations
 import difflib
 import re
 
-from rosbridge_mcp_server.errors import NotSentError
+from rosbridge_mcp_server.errors import Advice, NotSentError
 
 __all__ = [
     "MAX_NAME_CHARS",
@@ -43,7 +43,7 @@ def absolute_name(name: str, what: str) -> str:
     answers nothing (a publish is "sent" and lost), so an invalid name is refused here.
     """
     if len(name) > 2 * MAX_NAME_CHARS:
-        raise NotSentError(_too_long(what, len(name)))
+        raise NotSentError(_too_long(what, len(name))).advise(Advice.NAME)
     text = absolute(name)
     if text == "/":
         raise NotSentError(f"The {what} name is empty; give a name such as /turtle1/cmd_vel.")
@@ -55,7 +55,7 @@ def absolute_name(name: str, what: str) -> str:
             "node; give the full name, e.g. /turtle1/cmd_vel."
         )
     if len(text) > MAX_NAME_CHARS:
-        raise NotSentError(_too_long(what, len(text)))
+        raise NotSentError(_too_long(what, len(text))).advise(Advice.NAME)
     bad = _NAME_BAD_CHAR.search(text)
     if bad is not None:
         raise NotSentError(
@@ -95,9 +95,8 @@ def parameter_name(name: str, ros_version: int) -> str:
     node, sep, local = text.partition(":")
     if not sep or not node.strip("/") or not local or ":" in local:
         raise NotSentError(
-            f"{text!r} is not a ROS 2 parameter name: they look like /node:name, e.g. "
-            "/turtlesim:background_r (list_parameters shows them)."
-        )
+            f"{text!r} is not a ROS 2 parameter name: they look like /node:name, e.g. /turtlesim:background_r"
+        ).advise(Advice.PARAMETER_NAMES)
     return f"{absolute(node)}:{local}"
 
 
@@ -112,15 +111,14 @@ def check_name_for_ros(name: str, what: str, ros_version: int) -> None:
         if token is not None:
             raise NotSentError(
                 f"The {what} name {_shown(name)} has a part starting with a digit ({token.group(1)!r}), "
-                "which ROS 2 names do not allow. Check the name with list_topics / list_services / "
-                "list_actions."
-            )
+                "which ROS 2 names do not allow."
+            ).advise(Advice.NAME)
 
 
 def _too_long(what: str, length: int) -> str:
     return (
         f"The {what} name is {length} characters long, more than the {MAX_NAME_CHARS} a ROS name can have "
-        "(ROS 2's limit). Check the name with list_topics / list_services / list_actions."
+        "(ROS 2's limit)."
     )
 
 

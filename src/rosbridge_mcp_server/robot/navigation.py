@@ -10,8 +10,7 @@ whether that place is fit to go to.
   known free space with a margin for the robot's size, inside the allowed zones and outside the keep-out
   zones, not too far. The guard (``safety/``) applies them with the policy's values, so one rule holds for
   every path a goal can take;
-* :func:`draw_scene` draws it all: the map, the zones, the robot, the goal and (after a drive) the path
-  driven.
+* ``pictures/navigation.py`` draws it all (the map, the zones, the robot, the goal, the path driven).
 
 Pure but for :func:`survey`; no MCP.
 """
@@ -24,25 +23,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from PIL import ImageDraw
-
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.listening import listen
-from rosbridge_mcp_server.robot.maps import (
-    MARGIN_BOTTOM,
-    MARGIN_LEFT,
-    OCCUPIED_FROM,
-    Grid,
-    MapError,
-    MapPicture,
-    Overlay,
-    Pose2D,
-    decode_grid,
-    draw_map,
-    yaw_of,
-)
 from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.occupancy import OCCUPIED_FROM, Grid, MapError, Pose2D, decode_grid, yaw_of
 from rosbridge_mcp_server.robot.transforms import TransformError
 
 if TYPE_CHECKING:
@@ -56,7 +41,6 @@ __all__ = [
     "Polygon",
     "Scene",
     "distance_problem",
-    "draw_scene",
     "goal_poses",
     "map_problem",
     "navigation_goal",
@@ -335,61 +319,3 @@ async def survey(
         goals=tuple(placed),
         problems=tuple(problems),
     )
-
-
-# --- drawing ---------------------------------------------------------------------------------------------
-
-_GOAL_COLOUR = (220, 40, 160)
-_START_COLOUR = (120, 120, 120)
-_KEEP_OUT_COLOUR = (210, 30, 30)
-_ALLOWED_COLOUR = (30, 150, 60)
-
-
-def draw_scene(
-    grid: Grid,
-    *,
-    robot: Pose2D | None,
-    goals: Sequence[Pose2D],
-    start: Pose2D | None = None,
-    driven: Sequence[tuple[float, float]] = (),
-    allowed: Mapping[str, Polygon] | None = None,
-    keep_out: Mapping[str, Polygon] | None = None,
-    max_size: int = 640,
-) -> MapPicture:
-    """The map around the robot, the goal(s), the start and the path driven, with the zones outlined: the
-    robot blue, the path green, the goals magenta, the start grey, allowed zones green, keep-out red."""
-    points = [(p.x, p.y) for p in goals] + list(driven)
-    for pose in (robot, start):
-        if pose is not None:
-            points.append((pose.x, pose.y))
-    window = None
-    if points:
-        pad = 1.5
-        xs, ys = [x for x, _ in points], [y for _, y in points]
-        span = max(max(xs) - min(xs), max(ys) - min(ys)) / 2 + pad
-        cx, cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
-        window = (cx - span, cy - span, cx + span, cy + span)
-    picture = draw_map(grid, max_size=max_size, overlay=Overlay(robot=robot, path=driven), window=window)
-    draw = ImageDraw.Draw(picture.image)
-    x_min, y_min, _, _ = picture.window
-    scale = picture.pixels_per_metre
-    height = picture.image.size[1]
-
-    def pixel(x: float, y: float) -> tuple[float, float]:
-        return (MARGIN_LEFT + (x - x_min) * scale, height - MARGIN_BOTTOM - (y - y_min) * scale)
-
-    for zones, colour in ((allowed or {}, _ALLOWED_COLOUR), (keep_out or {}, _KEEP_OUT_COLOUR)):
-        for polygon in zones.values():
-            corners = [pixel(x, y) for x, y in polygon]
-            if len(corners) >= 2:
-                draw.line([*corners, corners[0]], fill=colour, width=2)
-    if start is not None:
-        sx, sy = pixel(start.x, start.y)
-        draw.rectangle((sx - 4, sy - 4, sx + 4, sy + 4), outline=_START_COLOUR, width=2)
-    for goal in goals:
-        gx, gy = pixel(goal.x, goal.y)
-        radius = 7
-        draw.ellipse((gx - radius, gy - radius, gx + radius, gy + radius), outline=_GOAL_COLOUR, width=3)
-        tip = (gx + 2 * radius * math.cos(goal.yaw), gy - 2 * radius * math.sin(goal.yaw))
-        draw.line((gx, gy, *tip), fill=_GOAL_COLOUR, width=3)
-    return picture

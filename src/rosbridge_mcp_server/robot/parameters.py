@@ -83,7 +83,7 @@ def parse_name(name: str, version: int) -> ParameterName:
     try:
         full = parameter_name(name, version)
     except NotSentError as exc:
-        raise ParameterError(str(exc)) from None
+        raise ParameterError.carrying(exc) from None
     if version == 1:
         return ParameterName(full)
     node, _, local = full.partition(":")

@@ -49,6 +49,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.robot.seam import Answer, AskPerson, SendToLink
+from rosbridge_mcp_server.server.advice import advised
 from rosbridge_mcp_server.server.checks import CheckedTool
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
 from rosbridge_mcp_server.server.sdk import (
@@ -100,7 +101,7 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
 
 def error_text(exc: RosbridgeError | ToolFailure) -> str:
     """The sentence a model sees for a failed tool call: the error's own text, plus what to try."""
-    text = _sentence(str(exc))
+    text = _sentence(advised(exc))
     if isinstance(exc, ConnectionLostError) and exc.goal_cancel is not None:
         return f"{text} Check the robot's state (e.g. with list_actions) before sending the goal again."
     if isinstance(exc, RosbridgeError):

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel
 
 from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, nesting_text, payload_problem
+from rosbridge_mcp_server.errors import Advised
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.seam import AskPerson, Guard, nobody_to_ask
@@ -147,7 +148,7 @@ class ToolContext:
         return self.robot.gate
 
 
-class ToolFailure(Exception):
+class ToolFailure(Advised):
     """A tool could not do what was asked (an unknown topic, a malformed argument, a goal that timed out).
 
     ``str()`` is a sentence saying what happened and what to try. The server turns it into an ``isError``

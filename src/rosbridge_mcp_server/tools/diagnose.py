@@ -5,11 +5,20 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-from typing import Annotated, Any
+from collections.abc import Callable, Sequence
+from typing import Annotated, Any, Final
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.diagnosis import FOCUSES, Diagnosis, Finding, UnknownFocusError, diagnose
+from rosbridge_mcp_server.robot.diagnosis import (
+    FOCUSES,
+    Diagnosis,
+    Finding,
+    Look,
+    Step,
+    UnknownFocusError,
+    diagnose,
+)
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
 
@@ -75,13 +84,13 @@ async def run(
     try:
         found = await diagnose(ctx.client, ctx.graph, keeper, focus=focus)
     except UnknownFocusError as exc:
-        raise ToolFailure(f"Unknown {exc}") from None
+        raise ToolFailure(f"Unknown {exc}").advise(exc.hint) from None
     data = DiagnoseAnswer(
         problems=found.problems,
         warnings=found.warnings,
         focus=focus,
         findings=[_model(f) for f in found.findings],
-        checked=found.checked,
+        checked=checked_texts(found),
         unavailable=found.unavailable,
         streams={t: None if r is None else round(r, 2) for t, r in found.streams.items()},
         frames=found.frames,
@@ -90,13 +99,51 @@ async def run(
     return ToolAnswer(text=_text(found, focus), data=data)
 
 
+#: Each thing to look at next as the call that does it (robot/diagnosis.py names no tool).
+_CALLS: Final[dict[Look, Callable[..., str]]] = {
+    Look.NODE_LOG: lambda node: f'read_logs {{"node": "{node}", "level": "info"}}',
+    Look.NODES: lambda: "list_nodes",
+    Look.TOPIC: lambda topic: f'get_topic_info {{"topic": "{topic}"}}',
+    Look.ACTIVATE: lambda node: (
+        f'activate it: publish_service {{"service": "{node}/change_state", "request": '
+        '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes)'
+    ),
+    Look.NODE: lambda node=None: "get_node_info" if node is None else f'get_node_info {{"node": "{node}"}}',
+    Look.ONE_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "count": 1}}',
+    Look.WAIT_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "timeout": 5}}',
+    Look.STAMPS: lambda topic: f'plot_topic {{"series": ["{topic} header.stamp.sec"], "duration": 5}}',
+    Look.TRANSFORM: lambda target, source: (
+        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}"}}'
+    ),
+    Look.TRANSFORM_WAIT: lambda target, source: (
+        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5}}'
+    ),
+}
+
+
+def next_text(steps: Sequence[Step]) -> str:
+    """What to look at next, as calls: ``read_logs {"node": "/amcl", "level": "info"}; list_nodes``."""
+    return "; ".join(_CALLS[step.look](*step.names) + (f" {step.why}" if step.why else "") for step in steps)
+
+
+def checked_texts(found: Diagnosis) -> dict[str, str]:
+    """What each area checked, with where to read what its findings left out."""
+    checked = dict(found.checked)
+    if more := found.left_out.get("diagnostics"):
+        checked["diagnostics"] += f" ({more} more not OK: subscribe_topic /diagnostics)"
+    if more := found.left_out.get("logs"):
+        # "... (N lines kept)" → "... (N lines kept, M more groups in read_logs)"
+        checked["logs"] = f"{checked['logs'].removesuffix(')')}, {more} more groups in read_logs)"
+    return checked
+
+
 def _model(finding: Finding) -> FindingModel:
     return FindingModel(
         severity=finding.severity,
         area=finding.area,
         subject=finding.subject,
         summary=finding.summary,
-        next=finding.next,
+        next=next_text(finding.next),
         nodes=list(finding.nodes),
         details=finding.details,
     )
@@ -120,7 +167,7 @@ def _text(found: Diagnosis, focus: str | None) -> str:
     used = len(head)
     shown = 0
     for finding in found.findings:
-        row = f"{finding.severity.upper()} [{finding.area}] {finding.summary}\n  → {finding.next}"
+        row = f"{finding.severity.upper()} [{finding.area}] {finding.summary}\n  → {next_text(finding.next)}"
         if shown and used + len(row) + 1 > budget - 600:
             break
         lines.append(row)
@@ -128,7 +175,7 @@ def _text(found: Diagnosis, focus: str | None) -> str:
         shown += 1
     if shown < len(found.findings):
         lines.append(f"{len(found.findings) - shown} more findings in the structured content.")
-    checked = "; ".join(f"{area}: {what}" for area, what in found.checked.items())
+    checked = "; ".join(f"{area}: {what}" for area, what in checked_texts(found).items())
     lines.append(f"Checked in {found.seconds:.1f} s — {checked}.")
     if found.unavailable:
         lines.append("Not checked: " + "; ".join(f"{a}: {why}" for a, why in found.unavailable.items()) + ".")

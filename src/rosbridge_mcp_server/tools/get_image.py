@@ -8,7 +8,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.client import Dialect
-from rosbridge_mcp_server.robot.images import (
+from rosbridge_mcp_server.pictures.images import (
     Encoded,
     ImageError,
     ImageFormat,

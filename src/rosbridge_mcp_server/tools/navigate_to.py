@@ -11,18 +11,18 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
+from rosbridge_mcp_server.pictures.drawing import png_bytes
+from rosbridge_mcp_server.pictures.navigation import draw_scene
 from rosbridge_mcp_server.robot.acting import send_goal
-from rosbridge_mcp_server.robot.drawing import png_bytes
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
-from rosbridge_mcp_server.robot.maps import Grid, Pose2D
 from rosbridge_mcp_server.robot.navigation import (
     GoalPose,
     Scene,
-    draw_scene,
     frame_pose,
     read_map,
     survey,
 )
+from rosbridge_mcp_server.robot.occupancy import Grid, Pose2D
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,

@@ -7,8 +7,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.charts import draw_chart, stats
-from rosbridge_mcp_server.robot.drawing import png_bytes
+from rosbridge_mcp_server.pictures.charts import draw_chart, stats
+from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.robot.series import FieldError, Series, TopicFields, collect
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,

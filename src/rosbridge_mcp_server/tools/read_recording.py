@@ -13,9 +13,11 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.charts import draw_chart, stats
-from rosbridge_mcp_server.robot.drawing import png_bytes
-from rosbridge_mcp_server.robot.maps import MapError, Overlay, Pose2D, decode_grid, draw_map, yaw_of
+from rosbridge_mcp_server.pictures.charts import draw_chart, stats
+from rosbridge_mcp_server.pictures.drawing import png_bytes
+from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
+from rosbridge_mcp_server.pictures.summary import summarize
+from rosbridge_mcp_server.robot.occupancy import MapError, Pose2D, decode_grid, yaw_of
 from rosbridge_mcp_server.robot.recording.files import (
     PathRefused,
     list_recordings,
@@ -30,7 +32,6 @@ from rosbridge_mcp_server.robot.recording.reading import (
     summarize_recording,
 )
 from rosbridge_mcp_server.robot.series import FieldError
-from rosbridge_mcp_server.robot.summary import summarize
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -96,7 +97,7 @@ async def run(
     try:
         path = resolve_recording(directory, file)
     except PathRefused as exc:
-        raise ToolFailure(str(exc)) from None
+        raise ToolFailure.carrying(exc) from None
     try:
         summary = await asyncio.to_thread(summarize_recording, path)
     except NotARecording as exc:

@@ -108,7 +108,7 @@ async def run(
     try:
         path, fd = create_recording(directory, name)
     except PathRefused as exc:
-        raise ToolFailure(str(exc)) from None
+        raise ToolFailure.carrying(exc) from None
     except OSError as exc:
         raise ToolFailure(
             f"Cannot write in the recording directory {str(directory)!r}: {exc.strerror or exc}. Set "

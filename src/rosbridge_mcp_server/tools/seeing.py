@@ -9,8 +9,8 @@ from typing import Any, Literal
 
 from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.listening import listen
-from rosbridge_mcp_server.robot.maps import Pose2D
 from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.occupancy import Pose2D
 from rosbridge_mcp_server.robot.transforms import TransformError
 from rosbridge_mcp_server.tools.base import ToolContext, ToolFailure, absolute_name
 

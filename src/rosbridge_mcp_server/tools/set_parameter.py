@@ -61,7 +61,7 @@ async def run(
     try:
         outcome = await set_parameter(ctx, tool=SPEC.name, name=name, value=value)
     except ParameterError as exc:
-        raise ToolFailure(f"{exc} Nothing was set.") from None
+        raise ToolFailure.carrying(exc, " Nothing was set.") from None
     answer = SetParameterAnswer(
         name=outcome.name, previous=outcome.before, value=outcome.after, applied=outcome.applied
     )

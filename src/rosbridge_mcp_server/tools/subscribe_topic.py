@@ -6,8 +6,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
+from rosbridge_mcp_server.pictures.summary import FieldPathError, select_fields, summarize
 from rosbridge_mcp_server.robot.listening import read_topic
-from rosbridge_mcp_server.robot.summary import FieldPathError, select_fields, summarize
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,

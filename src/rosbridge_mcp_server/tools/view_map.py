@@ -8,18 +8,10 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.drawing import png_bytes
-from rosbridge_mcp_server.robot.maps import (
-    Grid,
-    MapError,
-    MapPicture,
-    Overlay,
-    Pose2D,
-    decode_grid,
-    decode_path,
-    draw_map,
-)
-from rosbridge_mcp_server.robot.scans import ScanError, decode_scan, to_frame
+from rosbridge_mcp_server.pictures.drawing import png_bytes
+from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay, draw_map
+from rosbridge_mcp_server.pictures.scans import ScanError, decode_scan, to_frame
+from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_grid, decode_path
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,

@@ -8,9 +8,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.drawing import png_bytes
-from rosbridge_mcp_server.robot.messages import short_type_name
-from rosbridge_mcp_server.robot.scans import (
+from rosbridge_mcp_server.pictures.drawing import png_bytes
+from rosbridge_mcp_server.pictures.scans import (
     Nearest,
     ScanError,
     ScanPoints,
@@ -21,6 +20,7 @@ from rosbridge_mcp_server.robot.scans import (
     free_sectors,
     nearest,
 )
+from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,

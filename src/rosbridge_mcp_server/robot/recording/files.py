@@ -15,6 +15,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from rosbridge_mcp_server.errors import Advice, Advised
+
 __all__ = [
     "MCAP_MAGIC",
     "PathRefused",
@@ -31,7 +33,7 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 
 
-class PathRefused(ValueError):
+class PathRefused(Advised, ValueError):
     """A path outside the recording directory, or a name that cannot be a recording; ``str()`` says why."""
 
 
@@ -55,9 +57,8 @@ def _inside(directory: Path, given: str) -> Path:
     target = (candidate if candidate.is_absolute() else root / candidate).resolve()
     if target != root and root not in target.parents:
         raise PathRefused(
-            f"{given!r} is outside the recording directory {str(root)!r}; name a file inside it "
-            "(read_recording without a file lists them)."
-        )
+            f"{given!r} is outside the recording directory {str(root)!r}; name a file inside it"
+        ).advise(Advice.RECORDINGS)
     return target
 
 
@@ -65,9 +66,8 @@ def resolve_recording(directory: Path, given: str) -> Path:
     """An existing file inside ``directory``; :class:`PathRefused` otherwise."""
     target = _inside(directory, given.strip())
     if not target.is_file():
-        raise PathRefused(
-            f"There is no recording {given!r} in {str(directory.resolve())!r}; read_recording without a file "
-            "lists them."
+        raise PathRefused(f"There is no recording {given!r} in {str(directory.resolve())!r}").advise(
+            Advice.NO_RECORDING
         )
     return target
 

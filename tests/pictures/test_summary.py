@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from rosbridge_mcp_server.robot.summary import ARRAY_LIMIT, HEAD, FieldPathError, select_fields, summarize
+from rosbridge_mcp_server.pictures.summary import ARRAY_LIMIT, HEAD, FieldPathError, select_fields, summarize
 
 
 def laser_scan(count: int) -> dict[str, object]:

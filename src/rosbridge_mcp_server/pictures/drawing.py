@@ -1,6 +1,6 @@
 """What the robot's pictures share: colours, a font, round tick steps, a scale bar, a robot marker, PNG bytes.
 
-The maps, scans and charts of ``robot/maps.py``, ``robot/scans.py`` and ``robot/charts.py`` are drawn with
+The maps, scans and charts of ``maps.py``, ``scans.py`` and ``charts.py`` are drawn with
 Pillow only. Pure: no I/O; the tools run the drawing in a worker thread.
 """
 

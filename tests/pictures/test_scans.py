@@ -9,8 +9,8 @@ from typing import Any
 
 import pytest
 
-from rosbridge_mcp_server.robot.drawing import OBSTACLE_COLOUR, ROBOT_COLOUR
-from rosbridge_mcp_server.robot.scans import (
+from rosbridge_mcp_server.pictures.drawing import OBSTACLE_COLOUR, ROBOT_COLOUR
+from rosbridge_mcp_server.pictures.scans import (
     ScanError,
     decode_cloud,
     decode_scan,

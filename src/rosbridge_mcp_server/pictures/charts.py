@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from PIL import Image, ImageDraw
 
-from rosbridge_mcp_server.robot.drawing import SERIES_COLOURS, TEXT_COLOUR, font, label, ticks
+from rosbridge_mcp_server.pictures.drawing import SERIES_COLOURS, TEXT_COLOUR, font, label, ticks
 from rosbridge_mcp_server.robot.series import Series
 
 __all__ = ["Stats", "draw_chart", "stats"]

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from rosbridge_mcp_server.robot.charts import draw_chart, stats
-from rosbridge_mcp_server.robot.drawing import SERIES_COLOURS
+from rosbridge_mcp_server.pictures.charts import draw_chart, stats
+from rosbridge_mcp_server.pictures.drawing import SERIES_COLOURS
 from rosbridge_mcp_server.robot.series import FieldError, Series, unit_of, value_at
 
 ODOM = {"twist": {"twist": {"linear": {"x": 0.5, "y": 0.0}}}, "ranges": [1.0, None], "ok": True, "name": "a"}

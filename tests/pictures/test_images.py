@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 from PIL import Image
 
-from rosbridge_mcp_server.robot.images import ImageError, decode_compressed, decode_raw, encode_picture
+from rosbridge_mcp_server.pictures.images import ImageError, decode_compressed, decode_raw, encode_picture
 
 
 def raw_image(

@@ -10,18 +10,9 @@ from typing import Any
 import pytest
 from PIL import Image
 
-from rosbridge_mcp_server.robot.drawing import OBSTACLE_COLOUR, PATH_COLOUR, ROBOT_COLOUR
-from rosbridge_mcp_server.robot.maps import (
-    MARGIN_BOTTOM,
-    MARGIN_LEFT,
-    MapError,
-    MapPicture,
-    Overlay,
-    Pose2D,
-    decode_grid,
-    decode_path,
-    draw_map,
-)
+from rosbridge_mcp_server.pictures.drawing import OBSTACLE_COLOUR, PATH_COLOUR, ROBOT_COLOUR
+from rosbridge_mcp_server.pictures.maps import MARGIN_BOTTOM, MARGIN_LEFT, MapPicture, Overlay, draw_map
+from rosbridge_mcp_server.robot.occupancy import MapError, Pose2D, decode_grid, decode_path
 
 
 def grid_message(

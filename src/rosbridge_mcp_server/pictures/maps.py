@@ -1,30 +1,21 @@
-"""``nav_msgs/OccupancyGrid`` messages as pictures, with the robot, a planned path and a laser scan on them.
+"""``nav_msgs/OccupancyGrid`` maps as pictures, with the robot, a planned path and a laser scan on them.
 
-A map's cells are ``-1`` unknown, ``0`` free, ``100`` occupied, and (in costmaps) costs in between. Drawn like
-rviz: free white, occupied black, unknown grey, costs shaded from yellow to purple. Cells are one byte each
-from the moment they arrive (a 4,000² map is 16 MB, never a list of Python objects beyond the one the JSON
-decoder made); when a large map is shrunk, a pixel over any occupied cell stays occupied, so one-cell walls
-survive.
-
-A map whose declared width × height would take more than the decode budget (``budget.py``; the cells and the
-few copies drawing makes, :data:`_CELL_COST` bytes a cell) is refused before its data is touched.
+The grid itself (``robot/occupancy.py``: cells one byte each, ``-1`` unknown, ``0`` free, ``100`` occupied,
+costs in between) is drawn like rviz: free white, occupied black, unknown grey, costs shaded from yellow to
+purple. When a large map is shrunk, a pixel over any occupied cell stays occupied, so one-cell walls survive.
 
 Pure: no I/O. Coordinates are metres in the map's frame; the grid may be rotated in it (``info.origin``).
 """
 
 from __future__ import annotations
 
-import base64
 import math
-from array import array
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 from PIL import Image, ImageChops, ImageDraw
 
-from rosbridge_mcp_server.robot.budget import budget_problem
-from rosbridge_mcp_server.robot.drawing import (
+from rosbridge_mcp_server.pictures.drawing import (
     OBSTACLE_COLOUR,
     PATH_COLOUR,
     TEXT_COLOUR,
@@ -34,68 +25,21 @@ from rosbridge_mcp_server.robot.drawing import (
     label,
     ticks,
 )
+from rosbridge_mcp_server.robot.occupancy import OCCUPIED_FROM, Grid, Pose2D
 
 __all__ = [
     "MARGIN_BOTTOM",
     "MARGIN_LEFT",
-    "OCCUPIED_FROM",
-    "Grid",
-    "MapError",
     "MapPicture",
     "Overlay",
-    "Pose2D",
     "Shares",
-    "decode_grid",
-    "decode_path",
     "draw_map",
 ]
 
-#: Occupied from this value on (map_server's occupied_thresh 0.65).
-OCCUPIED_FROM = 65
 #: Pixels left of and below the map for the axes' labels: map point (x, y) is drawn at
 #: (MARGIN_LEFT + (x - x_min) · px/m, map height in pixels - (y - y_min) · px/m) for an unrotated grid.
 MARGIN_LEFT = 44
 MARGIN_BOTTOM = 38
-#: Bytes per cell while a map is decoded and drawn: the cells, the cropped and ranked copies, the walls kept
-#: when shrinking (two more), all one byte a cell.
-_CELL_COST = 5
-
-
-class MapError(ValueError):
-    """A message that is not a usable occupancy grid; ``str()`` says which field is wrong."""
-
-
-@dataclass(frozen=True)
-class Pose2D:
-    """A position (metres) and heading (radians, counter-clockwise from +x) in a plane."""
-
-    x: float
-    y: float
-    yaw: float
-
-
-@dataclass(frozen=True)
-class Grid:
-    """An occupancy grid: cells as one unsigned byte each (``-1`` is 255), row 0 at the origin."""
-
-    width: int
-    height: int
-    resolution: float
-    origin: Pose2D
-    frame_id: str
-    cells: bytes
-
-    def to_cell(self, x: float, y: float) -> tuple[float, float]:
-        """Map-frame metres → (column, row) in cells (fractional; the grid may be rotated)."""
-        dx, dy = x - self.origin.x, y - self.origin.y
-        c, s = math.cos(self.origin.yaw), math.sin(self.origin.yaw)
-        return ((c * dx + s * dy) / self.resolution, (-s * dx + c * dy) / self.resolution)
-
-    def to_map(self, col: float, row: float) -> tuple[float, float]:
-        """(column, row) in cells → map-frame metres."""
-        gx, gy = col * self.resolution, row * self.resolution
-        c, s = math.cos(self.origin.yaw), math.sin(self.origin.yaw)
-        return (self.origin.x + c * gx - s * gy, self.origin.y + s * gx + c * gy)
 
 
 @dataclass(frozen=True)
@@ -126,70 +70,6 @@ class MapPicture:
     window: tuple[float, float, float, float]  # x_min, y_min, x_max, y_max
     pixels_per_metre: float
     scale_bar: float
-
-
-def decode_grid(message: Mapping[str, Any]) -> Grid:
-    """An ``OccupancyGrid`` message (``data`` ints from JSON, an int8 ``array`` from CBOR, bytes, or base64)
-    as a :class:`Grid`."""
-    info = message.get("info")
-    if not isinstance(info, Mapping):
-        raise MapError("The message has no 'info' (MapMetaData): is it a nav_msgs/OccupancyGrid?")
-    width, height = info.get("width"), info.get("height")
-    resolution = info.get("resolution")
-    if not isinstance(width, int) or not isinstance(height, int) or width <= 0 or height <= 0:
-        raise MapError(f"The map's size is {width!r} x {height!r} cells; both must be positive.")
-    if not isinstance(resolution, int | float) or not resolution > 0 or not math.isfinite(resolution):
-        raise MapError(f"The map's resolution is {resolution!r}; it must be positive metres per cell.")
-    problem = budget_problem("The map", f"{width}x{height} cells", width * height * _CELL_COST)
-    if problem is not None:
-        raise MapError(problem)
-    data = message.get("data")
-    if isinstance(data, str):
-        cells = base64.b64decode(data)
-    elif isinstance(data, bytes | bytearray):
-        cells = bytes(data)
-    elif isinstance(data, array) and data.itemsize == 1:
-        # A CBOR typed array (tag 72, int8): its bytes are the cells, no list of ints in between.
-        cells = data.tobytes()
-    elif isinstance(data, list):
-        try:
-            cells = array("b", data).tobytes()
-        except (OverflowError, TypeError):
-            raise MapError("The map's data holds values that are not int8 cells (-1 to 100).") from None
-    else:
-        raise MapError("The map message has no 'data' array.")
-    if len(cells) != width * height:
-        raise MapError(f"The map has {len(cells)} cells of data; {width} x {height} needs {width * height}.")
-    origin = info.get("origin")
-    origin = origin if isinstance(origin, Mapping) else {}
-    position = origin.get("position")
-    position = position if isinstance(position, Mapping) else {}
-    header = message.get("header")
-    frame = header.get("frame_id", "") if isinstance(header, Mapping) else ""
-    return Grid(
-        width=width,
-        height=height,
-        resolution=float(resolution),
-        origin=Pose2D(
-            _number(position.get("x")), _number(position.get("y")), yaw_of(origin.get("orientation"))
-        ),
-        frame_id=str(frame).lstrip("/"),
-        cells=cells,
-    )
-
-
-def yaw_of(quaternion: object) -> float:
-    """The rotation about z of a ``geometry_msgs/Quaternion`` (identity when missing or malformed)."""
-    if not isinstance(quaternion, Mapping):
-        return 0.0
-    x, y, z, w = (_number(quaternion.get(k), 1.0 if k == "w" else 0.0) for k in ("x", "y", "z", "w"))
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-
-
-def _number(value: object, default: float = 0.0) -> float:
-    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
-        return float(value)
-    return default
 
 
 def shares(grid: Grid, histogram: Sequence[int]) -> Shares:
@@ -326,24 +206,3 @@ def _draw_axes(
             draw.text((MARGIN_LEFT - 6, py), label(value), fill=TEXT_COLOUR, font=small, anchor="rm")
     draw.text((MARGIN_LEFT + out_w - 2, out_h + 4), "x m", fill=TEXT_COLOUR, font=small, anchor="ra")
     draw.text((2, 2), "y m", fill=TEXT_COLOUR, font=small)
-
-
-def decode_path(message: Mapping[str, Any]) -> tuple[str, list[tuple[float, float]]]:
-    """A ``nav_msgs/Path``: its frame and the (x, y) of its poses (malformed poses skipped)."""
-    header = message.get("header")
-    frame = str(header.get("frame_id", "")).lstrip("/") if isinstance(header, Mapping) else ""
-    points: list[tuple[float, float]] = []
-    poses = message.get("poses")
-    for stamped in poses if isinstance(poses, list) else ():
-        pose = stamped.get("pose") if isinstance(stamped, Mapping) else None
-        position = pose.get("position") if isinstance(pose, Mapping) else None
-        if isinstance(position, Mapping):
-            x, y = position.get("x"), position.get("y")
-            if (
-                isinstance(x, int | float)
-                and isinstance(y, int | float)
-                and math.isfinite(x)
-                and math.isfinite(y)
-            ):
-                points.append((float(x), float(y)))
-    return frame, points

@@ -26,8 +26,7 @@ from typing import Any
 
 from PIL import Image, ImageDraw
 
-from rosbridge_mcp_server.robot.budget import budget_problem
-from rosbridge_mcp_server.robot.drawing import (
+from rosbridge_mcp_server.pictures.drawing import (
     OBSTACLE_COLOUR,
     ROBOT_COLOUR,
     TEXT_COLOUR,
@@ -36,6 +35,7 @@ from rosbridge_mcp_server.robot.drawing import (
     label,
     nice_step,
 )
+from rosbridge_mcp_server.robot.budget import budget_problem
 
 __all__ = [
     "Nearest",
