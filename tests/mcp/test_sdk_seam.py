@@ -7,6 +7,7 @@ These fail by name when an SDK upgrade changes what a function relies on, instea
 from __future__ import annotations
 
 import ast
+import contextlib
 import contextvars
 from pathlib import Path
 from typing import Any
@@ -108,11 +109,8 @@ async def test_the_sdk_stdio_transport_hands_on_unreadable_lines_as_exceptions_w
             blank = await read_stream.receive()  # the second line, read before the streams close
             assert isinstance(blank, Exception)
             assert reply_for_unreadable(blank) is None
-            with anyio.fail_after(5):
-                try:
-                    await read_stream.receive()
-                except anyio.EndOfStream:
-                    pass  # stdin's end, after its two lines
+            with anyio.fail_after(5), contextlib.suppress(anyio.EndOfStream):
+                await read_stream.receive()  # stdin's end, after its two lines
         await write_stream.aclose()
         await read_stream.aclose()
 
