@@ -9,7 +9,7 @@ chose, its failures becoming ``isError`` results:
 * a :class:`~rosbridge_mcp_server.errors.RosbridgeError` or a
   :class:`~rosbridge_mcp_server.tools.base.ToolFailure` → its sentence (plus what to try, for client errors);
 * arguments that do not fit the parameters → one line per wrong argument (:func:`arguments_text`, used by
-  ``calls.py``), instead of pydantic's dump;
+  ``checks.py``), instead of pydantic's dump;
 * anything else is a bug: logged with its traceback on stderr, and the model gets a generic error.
 """
 
