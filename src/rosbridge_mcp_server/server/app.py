@@ -30,7 +30,7 @@ from mcp import MCPError
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.robot.seam import Act
 from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
-from rosbridge_mcp_server.server.checks import CallParams, ToolCalls
+from rosbridge_mcp_server.server.checks import ToolCalls
 from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, console_app
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
 from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
@@ -229,12 +229,13 @@ def build_fleet_server(
         lifespan=lifespan,
         get_tool_input_schema=calls.input_schema,
         on_list_tools=calls.list_tools,
+        on_call_tool=calls.call_tool,
         on_list_resources=list_resources,
         on_read_resource=read_resource,
         on_list_prompts=list_prompts,
     )
-    # tools/call with arguments of any JSON kind: those that are no object get our sentence (checks.py).
-    server.add_request_handler("tools/call", CallParams, calls.call_tool)
+    # Arguments that are no object get our sentence before the SDK checks the request's shape (checks.py).
+    server.middleware.append(calls.arguments_kind)
     if app is not None:
         server.extensions[APPS_EXTENSION] = {}
     return server

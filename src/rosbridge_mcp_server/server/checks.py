@@ -4,7 +4,8 @@ Whatever the transport (stdio, Streamable HTTP, in-memory) and protocol era, a `
 
 1. a tool the server withholds (acting tools of a read-only server) is refused with a sentence saying why,
    and audited; any other unknown name is the SDK's "Unknown tool: ..." as before;
-2. arguments that are no JSON object are one sentence saying so, naming what the tool takes;
+2. arguments that are no JSON object are one sentence saying so, naming what the tool takes (the one check
+   made before the SDK validates the request's shape, as server middleware: :meth:`ToolCalls.arguments_kind`);
 3. with several robots, the ``robot`` argument is taken off the call and chooses the robots it runs on
    (``fleet.py``); a missing or unknown one is refused with the robots' names, and an acting tool on a
    read-only robot of the fleet is refused (the server's ``robot_check``);
@@ -20,11 +21,12 @@ A refusal is the ``isError`` result the tool itself would give; nothing reaches 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from mcp.server import ServerRequestContext
 from mcp.server.auth.middleware.auth_context import get_access_token
+from mcp.server.context import CallNext, HandlerResult
 from mcp.types import (
     CallToolRequestParams,
     CallToolResult,
@@ -43,7 +45,7 @@ from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_lis
 if TYPE_CHECKING:
     from rosbridge_mcp_server.server.fleet import Fleet, Robot
 
-__all__ = ["CallParams", "RobotCheck", "ToolCalls", "UnlistedAnswer", "refusal_result"]
+__all__ = ["RobotCheck", "ToolCalls", "UnlistedAnswer", "refusal_result"]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
 
@@ -51,13 +53,6 @@ _log = logging.getLogger("rosbridge_mcp_server.server")
 UnlistedAnswer = Callable[[str, dict[str, Any], "str | None"], "str | None"]
 #: Refuses a listed tool on the robots chosen for it: (tool, robots, arguments, caller) -> a refusal, or None.
 RobotCheck = Callable[[EdgeTool, "tuple[Robot, ...]", dict[str, Any], "str | None"], "str | None"]
-
-
-class CallParams(CallToolRequestParams):
-    """``tools/call`` params with ``arguments`` of any JSON kind, so that arguments that are no object get a
-    tool's error naming what it takes (rather than a bare "Invalid request parameters")."""
-
-    arguments: Any = None
 
 
 def refusal_result(text: str) -> CallToolResult:
@@ -98,24 +93,32 @@ class ToolCalls:
     ) -> ListToolsResult:
         return ListToolsResult(tools=self._listed)
 
+    async def arguments_kind(self, ctx: ServerRequestContext[Any, Any], call_next: CallNext) -> HandlerResult:
+        """Server middleware: a listed tool called with arguments that are no JSON object gets a tool's error
+        naming what it takes, instead of the SDK's bare "Invalid request parameters" (the SDK checks the
+        request's shape before any handler runs; middleware runs before that)."""
+        if ctx.method == "tools/call" and isinstance(ctx.params, Mapping):
+            name = ctx.params.get("name")
+            arguments = ctx.params.get("arguments")
+            tool = self._tools.get(name) if isinstance(name, str) else None
+            if tool is not None and arguments is not None and not isinstance(arguments, dict):
+                takes = parameter_listing(tool.input_schema)
+                return refusal_result(
+                    f"Invalid arguments for {tool.name}: the arguments must be a JSON object of named "
+                    f"arguments, not {_kind(arguments)}; nothing was sent. It takes: {takes}."
+                )
+        return await call_next(ctx)
+
     async def call_tool(
         self, ctx: ServerRequestContext[Any, Any], params: CallToolRequestParams
     ) -> CallToolResult | InputRequiredResult:
         name = params.name
-        given: Any = params.arguments
-        arguments: Any = {} if given is None else given
+        arguments: dict[str, Any] = params.arguments or {}
         tool = self._tools.get(name)
         caller = _caller()
         if tool is None:
-            refusal = None
-            if self._unlisted is not None and isinstance(arguments, dict):
-                refusal = self._unlisted(name, arguments, caller)
+            refusal = self._unlisted(name, arguments, caller) if self._unlisted is not None else None
             return refusal_result(refusal or f"Unknown tool: {name}")
-        if not isinstance(arguments, dict):
-            return refusal_result(
-                f"Invalid arguments for {name}: the arguments must be a JSON object of named arguments, not "
-                f"{_kind(arguments)}; nothing was sent. It takes: {parameter_listing(tool.input_schema)}."
-            )
         robots: tuple[Robot, ...] = self._fleet.robots[:1]
         if tool.on_robot:
             if self._fleet.several:
