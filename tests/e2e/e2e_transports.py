@@ -42,19 +42,22 @@ class Served:
     drain: asyncio.Task[None] | None = None
 
     @contextlib.asynccontextmanager
-    async def connect(self, token: str | None = TOKEN, **client: Any) -> AsyncIterator[Client]:
-        """An initialized MCP session (the handshake, as Claude Desktop and Inspector connect)."""
+    async def connect(
+        self, token: str | None = TOKEN, mode: str = "legacy", **client: Any
+    ) -> AsyncIterator[Client]:
+        """An initialized MCP session: the handshake, as Claude Desktop and Inspector connect, or with
+        ``mode="auto"`` the 2026-07-28 protocol (``server/discover``, no session)."""
         if self.transport == "stdio":
             parameters = StdioServerParameters(
                 command=sys.executable, args=["-m", "rosbridge_mcp_server", *self.flags], env=self.env
             )
-            async with Client(parameters, mode="legacy", **client) as session:
+            async with Client(parameters, mode=mode, **client) as session:
                 yield session
             return
         headers = {"Authorization": f"Bearer {token}"} if token else {}
         async with (
             httpx2.AsyncClient(headers=headers, timeout=httpx2.Timeout(WAIT, read=300)) as http,
-            Client(streamable_http_client(self.url, http_client=http), mode="legacy", **client) as session,
+            Client(streamable_http_client(self.url, http_client=http), mode=mode, **client) as session,
         ):
             yield session
 

@@ -1,221 +1,140 @@
-"""Each use of MCP SDK internals (``server/sdk.py``) still has its effect on the installed SDK.
+"""Each use of MCP SDK internals (``server/sdk.py``) still has its effect on the installed SDK, and no other
+module of the product uses one.
 
 These fail by name when an SDK upgrade changes what a function relies on, instead of somewhere in a tool call.
 """
 
 from __future__ import annotations
 
-import inspect
-from typing import Annotated, Any
+import ast
+import contextlib
+import contextvars
+from pathlib import Path
+from typing import Any
 
 import anyio
 from mcp.client.session import ClientSession
-from mcp.server.mcpserver import Context, MCPServer
+from mcp.server import Server
+from mcp.server.stdio import stdio_server
 from mcp.shared.memory import create_client_server_memory_streams
-from mcp.types import CallToolResult, TextContent, ToolAnnotations
-from pydantic import BaseModel, Field, ValidationError
+from mcp.types import INVALID_REQUEST, JSONRPCError, ListToolsResult, Tool
 
-from mcp import Client
-from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
-from rosbridge_mcp_server.server.sdk import (
-    argument_pre_parse,
-    replace_output_schema,
-    serve_streams,
-    tool_from_handler,
-    tool_with_handler,
-)
+import rosbridge_mcp_server
+from rosbridge_mcp_server.server.sdk import answering_stream
+from rosbridge_mcp_server.server.stdio import reply_for_unreadable
+
+SRC = Path(rosbridge_mcp_server.__file__).parent
 
 
-class _Doubled(BaseModel):
-    value: int
+def _server() -> Server[Any]:
+    async def list_tools(ctx: Any, params: Any) -> ListToolsResult:
+        return ListToolsResult(tools=[Tool(name="noop", input_schema={"type": "object"})])
+
+    return Server("seam", on_list_tools=list_tools)
 
 
-PARAMETERS = [
-    inspect.Parameter(
-        "number",
-        inspect.Parameter.POSITIONAL_OR_KEYWORD,
-        annotation=Annotated[int, Field(description="a number, e.g. 2")],
-    )
-]
-contexts: list[object] = []
+async def test_an_unreadable_line_is_answered_on_the_write_stream_and_serving_goes_on() -> None:
+    """The transport hands an unreadable line on as an exception: answered under its id with the reply
+    given, as a message the client reads; the next requests on the same streams are served."""
+    server = _server()
+    unreadable = ValueError("not JSON")
+    answered: list[Exception] = []
 
+    def reply_for(exc: Exception) -> JSONRPCError | None:
+        answered.append(exc)
+        return JSONRPCError(jsonrpc="2.0", id=7, error={"code": INVALID_REQUEST, "message": "unreadable"})
 
-async def _double(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
-    contexts.append(mcp_context)
-    number = arguments["number"]
-    return CallToolResult(
-        content=[TextContent(type="text", text=str(number * 2))], structured_content={"value": number * 2}
-    )
-
-
-def _reword(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
-    return f"{tool} wants {', '.join(schema['properties'])} ({error.error_count()} wrong)"
-
-
-def _tool() -> Any:
-    return tool_from_handler(
-        _double,
-        PARAMETERS,
-        _Doubled,
-        name="double",
-        title="Double",
-        description="Doubles a number.",
-        annotations=ToolAnnotations(title="Double", read_only_hint=True),
-    )
-
-
-def _checked_server(
-    check: Any = lambda tool, arguments, schema: None, unlisted: Any = None, **kwargs: Any
-) -> MCPServer[Any]:
-    tool = _tool()
-    checks = ToolCallChecks(
-        [CheckedTool.of("double", tool.parameters, PARAMETERS)],
-        argument_check=check,
-        argument_error=_reword,
-        unlisted=unlisted,
-    )
-    return MCPServer("seam", tools=[tool], middleware=[checks], **kwargs)
-
-
-async def test_argument_errors_are_worded_by_our_function() -> None:
-    """A call whose arguments do not fit is an isError result with our sentence, not pydantic's dump."""
-    async with Client(_checked_server()) as client:
-        result = await client.call_tool("double", {"number": "many"})
-    assert result.is_error
-    assert isinstance(result.content[0], TextContent)
-    assert result.content[0].text == "double wants number (1 wrong)"
-
-
-async def test_the_argument_check_sees_the_arguments_as_sent_before_the_sdk_converts_them() -> None:
-    """Unknown keys and booleans reach the check (the SDK drops the one and converts the other after)."""
-    seen: list[dict[str, Any]] = []
-
-    def check(tool: str, arguments: dict[str, Any], schema: dict[str, Any]) -> str | None:
-        seen.append(dict(arguments))
-        return f"{tool}: no" if "extra" in arguments else None
-
-    async with Client(_checked_server(check)) as client:
-        refused = await client.call_tool("double", {"number": True, "extra": 1})
-        accepted = await client.call_tool("double", {"number": 2})
-    assert seen == [{"number": True, "extra": 1}, {"number": 2}]
-    assert refused.is_error
-    assert isinstance(refused.content[0], TextContent)
-    assert refused.content[0].text == "double: no"
-    assert accepted.structured_content == {"value": 4}
-
-
-async def test_the_tool_has_the_parameters_given_and_its_handler_gets_them_with_the_sdk_context() -> None:
-    """The input schema is the parameters given (not the handler's **arguments nor its context); it runs."""
-    contexts.clear()
-    async with Client(MCPServer("seam", tools=[_tool()])) as client:
-        [listed] = (await client.list_tools()).tools
-        result = await client.call_tool("double", {"number": 21})
-    assert list(listed.input_schema["properties"]) == ["number"]
-    assert listed.input_schema["properties"]["number"]["description"] == "a number, e.g. 2"
-    assert listed.input_schema["required"] == ["number"]
-    assert len(contexts) == 1
-    assert isinstance(contexts[0], Context)
-    assert listed.annotations is not None
-    assert listed.annotations.read_only_hint is True
-    assert not result.is_error
-    assert result.structured_content == {"value": 42}
-
-
-async def test_a_replaced_output_schema_is_the_one_clients_see() -> None:
-    """replace_output_schema changes the listed output schema, given the one the SDK derived."""
-    tool = _tool()
-    seen: list[dict[str, Any]] = []
-
-    def replace(derived: dict[str, Any]) -> dict[str, Any]:
-        seen.append(derived)
-        return {**derived, "description": "replaced"}
-
-    replace_output_schema(tool, replace)
-    async with Client(MCPServer("seam", tools=[tool])) as client:
-        [listed] = (await client.list_tools()).tools
-    assert seen
-    assert seen[0]["properties"] == {"value": {"title": "Value", "type": "integer"}}
-    assert listed.output_schema is not None
-    assert listed.output_schema["description"] == "replaced"
-
-
-async def test_a_tool_copied_with_another_handler_runs_that_handler_with_the_templates_schemas() -> None:
-    """Two servers from one template: each call reaches its own server's handler, validated by the template's
-    argument model, and both list the template's replaced output schema."""
-    template = _tool()
-    replace_output_schema(template, lambda derived: {**derived, "description": "shared"})
-    tripled: list[int] = []
-
-    async def _triple(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
-        tripled.append(arguments["number"])
-        value = arguments["number"] * 3
-        return CallToolResult(
-            content=[TextContent(type="text", text=str(value))], structured_content={"value": value}
-        )
-
-    doubling = MCPServer("seam", tools=[tool_with_handler(template, _double)])
-    tripling = MCPServer("seam", tools=[tool_with_handler(template, _triple)])
-    async with Client(doubling) as first, Client(tripling) as second:
-        doubled = await first.call_tool("double", {"number": 5})
-        thrice = await second.call_tool("double", {"number": "5"})
-        wrong = await second.call_tool("double", {"number": "many"})
-        [listed] = (await second.list_tools()).tools
-    assert (doubled.structured_content, thrice.structured_content) == ({"value": 10}, {"value": 15})
-    assert tripled == [5]  # converted by the template's argument model before the handler saw it
-    assert wrong.is_error
-    assert listed.output_schema is not None
-    assert listed.output_schema["description"] == "shared"
-
-
-async def test_serve_streams_serves_an_mcp_server_on_the_streams_it_is_given() -> None:
-    """A client on the other end of the streams initializes, lists and calls tools."""
-    server = MCPServer("seam", tools=[_tool()])
     async with (
-        create_client_server_memory_streams() as (client_streams, server_streams),
+        create_client_server_memory_streams() as ((client_read, client_write), (server_read, server_write)),
         anyio.create_task_group() as group,
     ):
-        group.start_soon(serve_streams, server, *server_streams)
-        async with ClientSession(*client_streams) as session:
-            with anyio.fail_after(10):
+        answering = answering_stream(server_read, server_write, reply_for)
+        group.start_soon(server.run, answering, server_write, server.create_initialization_options())
+        with anyio.fail_after(10):
+            await client_write.send(unreadable)  # type: ignore[arg-type]
+            reply = await client_read.receive()
+            async with ClientSession(client_read, client_write) as session:
                 await session.initialize()
                 listed = await session.list_tools()
-                result = await session.call_tool("double", {"number": 2})
         group.cancel_scope.cancel()
-    assert [tool.name for tool in listed.tools] == ["double"]
-    assert result.structured_content == {"value": 4}
+    assert answered == [unreadable]
+    assert not isinstance(reply, Exception)
+    assert isinstance(reply.message, JSONRPCError)
+    assert (reply.message.id, reply.message.error.message) == (7, "unreadable")
+    assert [tool.name for tool in listed.tools] == ["noop"]
 
 
-async def test_the_checks_answer_unlisted_tools_they_know_and_leave_others_to_the_sdk() -> None:
-    """A withheld tool gets our answer; any other unknown name still gets the SDK's "Unknown tool"."""
+async def test_the_sdk_stdio_transport_hands_on_unreadable_lines_as_exceptions_with_the_senders_context() -> (
+    None
+):
+    """What the wrapper relies on: the SDK's stdio read stream yields an exception for a line it cannot read
+    (answered by our ``reply_for_unreadable`` under the line's id) and keeps the sender's context in
+    ``last_context``, which the wrapper shows the server's runner."""
 
-    def unlisted(name: str, arguments: dict[str, Any]) -> str | None:
-        return f"withheld, arguments {sorted(arguments)}" if name == "withheld" else None
+    class Lines:
+        def __init__(self, lines: list[str]) -> None:
+            self._lines = iter(lines)
 
-    async with Client(_checked_server(unlisted=unlisted), mode="legacy") as client:
-        ours = await client.call_tool("withheld", {"a": 1})
-        theirs = await client.call_tool("other", {})
-    assert ours.is_error
-    assert ours.content[0].text == "withheld, arguments ['a']"  # type: ignore[union-attr]
-    assert theirs.is_error
-    assert "Unknown tool: other" in theirs.content[0].text  # type: ignore[union-attr]
+        def __aiter__(self) -> Lines:
+            return self
+
+        async def __anext__(self) -> str:
+            await anyio.lowlevel.checkpoint()
+            try:
+                return next(self._lines)
+            except StopIteration:
+                raise StopAsyncIteration from None
+
+    written: list[str] = []
+
+    class Out:
+        async def write(self, text: str) -> None:
+            written.append(text)
+
+        async def flush(self) -> None:
+            return None
+
+    stdin: Any = Lines(['{"jsonrpc": "2.0", "id": 3, "method": "tools/list", \n', "\n"])
+    stdout: Any = Out()
+    async with stdio_server(stdin=stdin, stdout=stdout) as (read_stream, write_stream):
+        answering = answering_stream(read_stream, write_stream, reply_for_unreadable)
+        with anyio.fail_after(5):
+            item = await read_stream.receive()
+            assert isinstance(item, Exception)
+            reply = reply_for_unreadable(item)
+            assert reply is not None
+            assert reply.id == 3
+            assert isinstance(read_stream.last_context, contextvars.Context)
+            assert answering.last_context is read_stream.last_context
+            blank = await read_stream.receive()  # the second line, read before the streams close
+            assert isinstance(blank, Exception)
+            assert reply_for_unreadable(blank) is None
+            with anyio.fail_after(5), contextlib.suppress(anyio.EndOfStream):
+                await read_stream.receive()  # stdin's end, after its two lines
+        await write_stream.aclose()
+        await read_stream.aclose()
 
 
-async def test_the_sdk_reads_json_text_as_the_pre_parse_says_and_the_checks_name_it() -> None:
-    """The SDK's pre-parse turns "null" for an int into None (and leaves "7" alone); the checks validate
-    that, so the call gets our sentence (naming the text) instead of the SDK's own validation error."""
-    pre_parse = argument_pre_parse(_tool())
-    assert pre_parse({"number": "null"}) == {"number": None}
-    assert pre_parse({"number": "7"}) == {"number": "7"}
-    tool = _tool()
-    checks = ToolCallChecks(
-        [CheckedTool.of("double", tool.parameters, PARAMETERS, argument_pre_parse(tool))],
-        argument_check=lambda tool, arguments, schema: None,
-        argument_error=_reword,
-    )
-    async with Client(MCPServer("seam", tools=[tool], middleware=[checks])) as client:
-        result = await client.call_tool("double", {"number": "null"})
-    assert result.is_error
-    assert isinstance(result.content[0], TextContent)
-    assert result.content[0].text == (
-        "double wants number (1 wrong) number was given as the text 'null', which is read as JSON."
-    )
+def test_no_module_but_sdk_py_uses_an_sdk_private_name() -> None:
+    """No ``mcp`` import outside ``server/sdk.py`` names a private module or attribute (``_name``), or the
+    undocumented ``mcp.shared.message``, and nothing reaches an SDK object's private attribute."""
+    offenders: list[str] = []
+    for path in sorted(SRC.rglob("*.py")):
+        if path == SRC / "server" / "sdk.py":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "mcp":
+                parts = node.module.split(".")
+                names = [alias.name for alias in node.names]
+                if any(p.startswith("_") for p in parts) or any(n.startswith("_") for n in names):
+                    offenders.append(f"{path.relative_to(SRC)}: from {node.module} import {', '.join(names)}")
+                if node.module == "mcp.shared.message":
+                    offenders.append(f"{path.relative_to(SRC)}: mcp.shared.message")
+            if isinstance(node, ast.Attribute) and node.attr in {
+                "_lowlevel_server",
+                "fn_metadata",
+                "_tool_manager",
+            }:
+                offenders.append(f"{path.relative_to(SRC)}:{node.lineno}: .{node.attr}")
+    assert offenders == []

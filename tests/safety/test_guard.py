@@ -12,12 +12,12 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
-from rosbridge_mcp_server.robot.seam import Act, Answer
+from rosbridge_mcp_server.robot.seam import Act, Answer, AskPerson, asking
 from rosbridge_mcp_server.robot.velocity import measure
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard, parse_policy, question
 
 
-class Person:
+class Person(AskPerson):
     """Answers every question with ``answer`` and keeps the questions."""
 
     def __init__(self, answer: Answer = "accept") -> None:
@@ -219,7 +219,7 @@ async def test_a_person_who_cannot_be_asked_because_asking_failed_has_not_said_y
         raise RuntimeError("client went away")
 
     with pytest.raises(PolicyRefusal, match=r"Could not ask"):
-        await guard({"confirm": "always"}).approve(cmd(twist(0.1)), broken)
+        await guard({"confirm": "always"}).approve(cmd(twist(0.1)), asking(broken))
 
 
 async def test_rules_refuse_before_anyone_is_asked() -> None:
@@ -283,7 +283,7 @@ async def test_a_person_who_does_not_answer_in_time_has_said_no() -> None:
 
     g = guard({"confirm": "always", "confirm_timeout": 0.05})
     with pytest.raises(PolicyRefusal, match=r"did not answer the confirmation .* within 0\.05 s"):
-        await g.approve(cmd(twist(0.1)), silent)
+        await g.approve(cmd(twist(0.1)), asking(silent))
 
 
 async def test_a_huge_payload_is_cut_in_the_audit_file_with_its_length() -> None:

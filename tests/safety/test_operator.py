@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.robot.seam import Act, Answer, nobody_to_ask
+from rosbridge_mcp_server.robot.seam import Act, Answer, asking, nobody_to_ask
 from rosbridge_mcp_server.safety import LATCH_RULE, Audit, AuditEntry, Operator, PolicyGuard, parse_policy
 
 WAIT = 5.0
@@ -80,7 +80,7 @@ async def test_an_elicitation_answer_wins_and_the_console_is_not_asked() -> None
     async def yes(question: str) -> Answer:
         return "accept"
 
-    assert await guard.approve(twist_act(), yes) == twist_act()
+    assert await guard.approve(twist_act(), asking(yes)) == twist_act()
     assert operator.pending == []
 
 

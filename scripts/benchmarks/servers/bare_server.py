@@ -51,7 +51,8 @@ def main() -> None:
         # Imported only here: the startup and memory reference must not load our package.
         from rosbridge_mcp_server.server.stdio import serve_stdio  # noqa: PLC0415
 
-        asyncio.run(serve_stdio(server))
+        # Our transport serves the SDK's low-level server, which a bare MCPServer is built on.
+        asyncio.run(serve_stdio(server._lowlevel_server))
     else:
         server.run("stdio")
 

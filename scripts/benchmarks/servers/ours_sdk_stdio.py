@@ -1,4 +1,4 @@
-"""``rosbridge-mcp-server`` served by ``MCPServer.run_stdio_async`` (the SDK's stdio transport, bare).
+"""``rosbridge-mcp-server`` served on the SDK's stdio transport, bare (as ``Server.run`` on its streams).
 
 Since #18 our server also serves stdio through the SDK's transport, wrapped only to answer the lines it cannot
 read (``rosbridge_mcp_server.server.stdio``); before, it read the pipes itself to save the transport's worker
@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from mcp.server.mcpserver import MCPServer
+from mcp.server import Server
+from mcp.server.stdio import stdio_server
 
 from rosbridge_mcp_server.cli import commands as cli
 from rosbridge_mcp_server.cli import main
@@ -18,8 +19,9 @@ from rosbridge_mcp_server.cli import main
 __all__: list[str] = []
 
 
-async def _serve_through_the_sdk(server: MCPServer[Any]) -> None:
-    await server.run_stdio_async()
+async def _serve_through_the_sdk(server: Server[Any]) -> None:
+    async with stdio_server() as (read_stream, write_stream):
+        await server.run(read_stream, write_stream, server.create_initialization_options())
 
 
 if __name__ == "__main__":

@@ -2,8 +2,8 @@
 
 It runs the unchanged server (the console script's ``main``) after wrapping three coroutines with timers:
 
-* ``MCPServer._handle_call_tool`` — everything the server does for one tool call after the SDK has read
-  and parsed the request, up to the result it hands back to the SDK;
+* ``ToolCalls.call_tool`` (``server/checks.py``) — everything the server does for one tool call after the
+  SDK has read and parsed the request, up to the result it hands back to the SDK;
 * ``RosbridgeClient.call_service`` — each rosbridge round trip made inside that;
 * the stdio transport is our own (or, with ``--sdk-stdio``, the MCP SDK's worker-thread one).
 
@@ -22,11 +22,10 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from mcp.server.mcpserver import MCPServer
-
 from rosbridge_mcp_server.cli import commands as cli
 from rosbridge_mcp_server.cli import main
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.server.checks import ToolCalls
 
 __all__: list[str] = []
 
@@ -53,7 +52,7 @@ def _dump() -> None:
 
 
 if __name__ == "__main__":
-    MCPServer._handle_call_tool = _timed("handler", MCPServer._handle_call_tool)  # type: ignore[method-assign]
+    ToolCalls.call_tool = _timed("handler", ToolCalls.call_tool)  # type: ignore[method-assign]
     RosbridgeClient.call_service = _timed("rosbridge", RosbridgeClient.call_service)  # type: ignore[method-assign]
     if "--sdk-stdio" in sys.argv:
         sys.argv.remove("--sdk-stdio")

@@ -334,11 +334,11 @@ async def serve(
         console_view = hub.snapshot if hub is not None else None
         if http is not None and http.transport == "http":
             # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
-            from rosbridge_mcp_server.server.http import auth_options, listen_http, serve_http  # noqa: PLC0415
+            from rosbridge_mcp_server.server.http import listen_http, serve_http  # noqa: PLC0415
 
             # The MCP listener first: when its port is taken, it is named and nothing else has started.
             sock = listen_http(http)
-            server = build_fleet_server(entries, effective, console_view=console_view, **auth_options(http))
+            server = build_fleet_server(entries, effective, console_view=console_view)
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
             # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
             # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as

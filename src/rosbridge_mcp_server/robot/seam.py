@@ -11,7 +11,7 @@ implements the guard; nothing here knows a policy or MCP.
 from __future__ import annotations
 
 from collections.abc import Awaitable, Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 from rosbridge_mcp_server.errors import PolicyRefusal
@@ -34,6 +34,7 @@ __all__ = [
     "SendToLink",
     "Timeouts",
     "approved",
+    "asking",
     "carry_out",
     "nobody_to_ask",
 ]
@@ -62,14 +63,43 @@ class Act:
     #: What the act is judged against beyond itself: for a navigation goal, the robot's map, its pose and the
     #: goal placed on it (a ``robot.navigation.Scene``), learnt just before the act was built; else None.
     scene: Any = None
+    #: Who asked for it, for the audit: the name the MCP transport authenticated (a token's name, a JWT's
+    #: subject); ``None`` when not known (stdio). :func:`approved` writes the call's own in.
+    caller: str | None = None
 
 
 Answer = Literal["accept", "decline", "cancel", "unsupported"]
-#: Asks the person at the MCP client a yes/no question (the server's elicitation).
-AskPerson = Callable[[str], Awaitable[Answer]]
 #: Sends the person at the MCP client to a URL (``question``, ``url``, an id for the request): their answer
-#: is given there; "accept" only means they went. An :data:`AskPerson` may carry one as ``by_link``.
+#: is given there; "accept" only means they went.
 SendToLink = Callable[[str, str, str], Awaitable[Answer]]
+
+
+class AskPerson:
+    """The person at the MCP client, asked a yes/no question (the server's elicitation): ``await ask(text)``.
+
+    This one has nobody to ask (no MCP client, or one without elicitation): every question is
+    ``"unsupported"``; the MCP edge gives a call its own. ``by_link`` is set when the client can also open a
+    URL for the person: the guard then sends them to this call's approval on the operator console.
+    """
+
+    by_link: SendToLink | None = None
+
+    async def __call__(self, question: str) -> Answer:
+        return "unsupported"
+
+
+class _Asking(AskPerson):
+    def __init__(self, ask: Callable[[str], Awaitable[Answer]], by_link: SendToLink | None) -> None:
+        self._ask = ask
+        self.by_link = by_link
+
+    async def __call__(self, question: str) -> Answer:
+        return await self._ask(question)
+
+
+def asking(ask: Callable[[str], Awaitable[Answer]], by_link: SendToLink | None = None) -> AskPerson:
+    """An :class:`AskPerson` that asks with *ask* (and sends to a link with *by_link*, when given)."""
+    return _Asking(ask, by_link)
 
 
 class Guard(Protocol):
@@ -117,9 +147,8 @@ class _AllowAll:
 ALLOW_ALL: Guard = _AllowAll()
 
 
-async def nobody_to_ask(question: str) -> Answer:
-    """The default :data:`AskPerson`: nobody to ask (no MCP client, or one without elicitation)."""
-    return "unsupported"
+#: The default :class:`AskPerson`: nobody to ask (no MCP client, or one without elicitation).
+nobody_to_ask = AskPerson()
 
 
 class Timeouts(Protocol):
@@ -143,6 +172,8 @@ class Acting(Protocol):
     @property
     def ask_person(self) -> AskPerson: ...
     @property
+    def caller(self) -> str | None: ...
+    @property
     def activity(self) -> SessionActivity: ...
     @property
     def goals(self) -> GoalRegistry: ...
@@ -151,7 +182,10 @@ class Acting(Protocol):
 
 
 async def approved(ctx: Acting, act: Act) -> Act:
-    """*act* as the guard approved it (perhaps clamped); a refusal is recorded, then raised."""
+    """*act* as the guard approved it (perhaps clamped), named with the call's caller; a refusal is recorded,
+    then raised."""
+    if act.caller is None and ctx.caller is not None:
+        act = replace(act, caller=ctx.caller)
     try:
         return await ctx.guard.approve(act, ctx.ask_person)
     except PolicyRefusal as exc:

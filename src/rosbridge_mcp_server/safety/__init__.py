@@ -12,8 +12,6 @@ from rosbridge_mcp_server.safety.guard import (
     Audit,
     AuditEntry,
     PolicyGuard,
-    calling_as,
-    current_caller,
     question,
 )
 from rosbridge_mcp_server.safety.operator import Operator, PendingConfirmation
@@ -40,8 +38,6 @@ __all__ = [
     "PublishLimits",
     "StopReport",
     "VelocityCaps",
-    "calling_as",
-    "current_caller",
     "emergency_stop",
     "load_policy",
     "parse_policy",

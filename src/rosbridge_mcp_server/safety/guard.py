@@ -18,13 +18,11 @@ is one audit line (:class:`Audit`): on stderr, and as JSON in the audit file whe
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import contextvars
 import dataclasses
 import datetime
 import json
 import logging
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
@@ -47,8 +45,6 @@ __all__ = [
     "Audit",
     "AuditEntry",
     "PolicyGuard",
-    "calling_as",
-    "current_caller",
     "moves",
     "question",
 ]
@@ -77,25 +73,6 @@ _VERBS = {
 }
 
 
-#: Who is making the current call (a token's name or a JWT's subject), for the audit; None on stdio.
-_CALLER: contextvars.ContextVar[str | None] = contextvars.ContextVar("rosbridge_mcp_caller", default=None)
-
-
-def current_caller() -> str | None:
-    """The caller the server named for the call being handled (``None``: not known, e.g. stdio)."""
-    return _CALLER.get()
-
-
-@contextlib.contextmanager
-def calling_as(caller: str | None) -> Iterator[None]:
-    """Name the caller of everything audited inside the block (the server sets it around each tool call)."""
-    token = _CALLER.set(caller)
-    try:
-        yield
-    finally:
-        _CALLER.reset(token)
-
-
 class Audit:
     """One line per acting decision on stderr, and a JSON line in ``stream`` (the audit file) when given."""
 
@@ -113,7 +90,7 @@ class Audit:
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
         level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
-        caller = current_caller()
+        caller = act.caller
         written = f" (written {act.given!r})" if act.given is not None else ""
         effects = f" [{'; '.join(e.describe() for e in act.effects)}]" if act.effects else ""
         _log.log(
@@ -322,8 +299,8 @@ class PolicyGuard:
                     if self.operator is None or not self.operator.present:
                         return "no console"
                     return await self.operator.ask(text, act)
-                # An AskPerson whose client can open a URL carries a SendToLink as ``by_link`` (seam.py).
-                link = getattr(ask, "by_link", None)
+                # A person whose client can open a URL comes with a way to send them there (seam.py).
+                link = ask.by_link
                 operator = self.operator
                 if link is not None and operator is not None and operator.present and operator.link_base:
                     # The client can open a URL: it sends the person to this call's approval on the console,

@@ -1,12 +1,15 @@
-"""Tool modules as MCP tools: parameters from ``run``, output schema from the spec, errors as results.
+"""Every tool as the MCP edge serves it: one definition, one model of its arguments, one handler.
 
-Each tool module gives a ``SPEC`` and a ``run(ctx, ...)``; here each becomes an MCP tool whose parameters are
-the ``run`` parameters (plus the SDK's own ``Context``), whose output schema is the spec's model, and whose
-failures become ``isError`` results:
+:func:`edge_tool` is the one way a tool is made: the tool modules (their ``SPEC`` and ``run``, through
+:func:`module_tool`), ``list_robots`` (``fleet.py``) and ``show_console`` (``console_app.py``) alike. A tool
+module's tool lists ``run``'s parameters (compact, ``tools/schemas.py``) and the spec's output model, and its
+handler runs ``run`` with a fresh :class:`~rosbridge_mcp_server.tools.base.ToolContext` on each robot the call
+chose, its failures becoming ``isError`` results:
 
 * a :class:`~rosbridge_mcp_server.errors.RosbridgeError` or a
   :class:`~rosbridge_mcp_server.tools.base.ToolFailure` → its sentence (plus what to try, for client errors);
-* arguments that do not fit the parameters → one line per wrong argument, instead of pydantic's dump;
+* arguments that do not fit the parameters → one line per wrong argument (:func:`arguments_text`, used by
+  ``checks.py``), instead of pydantic's dump;
 * anything else is a bug: logged with its traceback on stderr, and the model gets a generic error.
 """
 
@@ -20,13 +23,13 @@ import hashlib
 import inspect
 import logging
 import typing
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Mapping
+from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
-from mcp.server.elicitation import render_elicitation_schema
-from mcp.server.mcpserver import Context
-from mcp.server.mcpserver.tools import Tool
+from mcp.server import ServerRequestContext
+from mcp.server.elicitation import elicit_url, elicit_with_validation, render_elicitation_schema
 from mcp.types import (
     CallToolResult,
     ElicitRequest,
@@ -35,9 +38,10 @@ from mcp.types import (
     ImageContent,
     InputRequiredResult,
     TextContent,
+    Tool,
     ToolAnnotations,
 )
-from pydantic import BaseModel, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
 from rosbridge_mcp_server.errors import (
     ActionError,
@@ -48,29 +52,204 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.seam import Answer, AskPerson, SendToLink
+from rosbridge_mcp_server.robot.seam import Answer, AskPerson
 from rosbridge_mcp_server.server.advice import advised
-from rosbridge_mcp_server.server.checks import CheckedTool
-from rosbridge_mcp_server.server.fleet import Fleet, Robot, selected
-from rosbridge_mcp_server.server.sdk import (
-    argument_pre_parse,
-    replace_output_schema,
-    tool_from_handler,
-    tool_with_handler,
-)
 from rosbridge_mcp_server.tools.arguments import parameter_listing
-from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
+from rosbridge_mcp_server.tools.base import (
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolHints,
+    ToolImage,
+    ToolSpec,
+)
 from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema
 
+if typing.TYPE_CHECKING:
+    from rosbridge_mcp_server.server.fleet import Robot
+
 __all__ = [
+    "EdgeTool",
+    "Handler",
+    "ToolCall",
+    "arguments_model",
     "arguments_text",
+    "edge_tool",
     "error_text",
     "inline_refs",
+    "module_tool",
     "tool_annotations",
-    "tool_from_module",
 ]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
+
+
+@dataclass(frozen=True)
+class ToolCall:
+    """One ``tools/call`` as the edge read it: the robots it runs on (chosen by its ``robot`` argument, or the
+    only one), who makes it (the name the transport authenticated; ``None`` on stdio), the person's answers it
+    carries (2026-07-28), and the MCP request (to report progress and to ask the person)."""
+
+    request: ServerRequestContext[Any, Any]
+    robots: tuple[Robot, ...]
+    caller: str | None = None
+    input_responses: Mapping[str, Any] | None = None
+
+
+#: What runs a tool: the call and its arguments, validated once into the tool's own model.
+Handler = Callable[[ToolCall, BaseModel], Awaitable[CallToolResult | InputRequiredResult]]
+
+
+@dataclass(frozen=True)
+class EdgeTool:
+    """A tool as the edge serves it: its ``tools/list`` entry (without the fleet's ``robot`` argument), the
+    strict model its arguments are validated with (once), and its handler.
+
+    ``on_robot``: the call runs on a robot (a fleet's calls name one); ``list_robots`` and ``show_console``
+    are about every robot at once. ``acts_on``: what an acting tool acts through (``None`` for a reading one).
+    """
+
+    definition: Tool
+    arguments: type[BaseModel]
+    handler: Handler
+    on_robot: bool = True
+    acts_on: typing.Literal["topic", "service", "action", "parameter"] | None = None
+
+    @property
+    def name(self) -> str:
+        return self.definition.name
+
+    @property
+    def input_schema(self) -> dict[str, Any]:
+        return self.definition.input_schema
+
+
+def arguments_model(name: str, parameters: list[inspect.Parameter]) -> type[BaseModel]:
+    """The strict model of a tool's arguments: *parameters* (annotations resolved) as fields, nothing else."""
+    fields: dict[str, Any] = {
+        p.name: (p.annotation, ... if p.default is inspect.Parameter.empty else p.default) for p in parameters
+    }
+    model: type[BaseModel] = create_model(
+        f"{name}Arguments", __config__=ConfigDict(extra="forbid", arbitrary_types_allowed=True), **fields
+    )
+    return model
+
+
+def edge_tool(
+    *,
+    name: str,
+    title: str | None,
+    description: str,
+    annotations: ToolAnnotations,
+    arguments: type[BaseModel],
+    output: type[BaseModel] | None,
+    handler: Handler,
+    on_robot: bool = True,
+    acts_on: typing.Literal["topic", "service", "action", "parameter"] | None = None,
+    meta: dict[str, Any] | None = None,
+) -> EdgeTool:
+    """The one way a tool is made: its definition as listed (compact input and output schemas, said where
+    clients read them: no argument beyond the model's), its arguments' model and its handler."""
+    input_schema = {**compact_input_schema(arguments.model_json_schema()), "additionalProperties": False}
+    output_schema = None if output is None else compact_output_schema(inline_refs(output.model_json_schema()))
+    definition = Tool(
+        name=name,
+        title=title,
+        description=description,
+        input_schema=input_schema,
+        output_schema=output_schema,
+        annotations=annotations,
+        _meta=meta,
+    )
+    return EdgeTool(definition, arguments, handler, on_robot, acts_on)
+
+
+@functools.cache
+def module_tool(module: ModuleType) -> EdgeTool:
+    """*module* (its ``SPEC`` and ``run``) as a tool: every call gets a fresh :class:`ToolContext` on each
+    robot it runs on.
+
+    A call runs on the robots the edge chose for it, with each robot's client, guard and activity (shared by
+    every tool of the robot, so that stop_robot sees what the others started); stop_robot chosen for every
+    robot runs on each and says what it did on each. Made once per process: every server (one per MCP
+    session over HTTP, one per test) serves the same tools.
+    """
+    spec: ToolSpec = module.SPEC
+    run: Callable[..., Awaitable[ToolAnswer]] = module.run
+    # The tool's parameters are run()'s, minus its ToolContext. Annotations are resolved here: the modules
+    # use postponed annotations.
+    hints = typing.get_type_hints(run, include_extras=True)
+    run_parameters = list(inspect.signature(run).parameters.values())[1:]
+    model = arguments_model(spec.name, [p.replace(annotation=hints[p.name]) for p in run_parameters])
+    names = tuple(model.model_fields)
+
+    async def handle(call: ToolCall, arguments: BaseModel) -> CallToolResult | InputRequiredResult:
+        values = {name: getattr(arguments, name) for name in names}
+        if len(call.robots) == 1:
+            return await _run_on(spec, run, call, call.robots[0], values)
+        answers = await asyncio.gather(*(_run_on(spec, run, call, robot, values) for robot in call.robots))
+        return _merged([robot.name for robot in call.robots], answers)
+
+    return edge_tool(
+        name=spec.name,
+        title=spec.title,
+        description=spec.description,
+        annotations=tool_annotations(spec.hints),
+        arguments=model,
+        output=spec.output,
+        handler=handle,
+        acts_on=spec.acts_on,
+    )
+
+
+async def _run_on(
+    spec: ToolSpec,
+    run: Callable[..., Awaitable[ToolAnswer]],
+    call: ToolCall,
+    robot: Robot,
+    arguments: dict[str, Any],
+) -> CallToolResult | InputRequiredResult:
+    session = call.request.session
+
+    async def report_progress(progress: float, total: float | None, message: str | None) -> None:
+        try:
+            await session.report_progress(progress, total, message)
+        except Exception:
+            # Progress is a courtesy; a client that went away must not fail the goal.
+            _log.debug("could not send a progress notification", exc_info=True)
+
+    ctx = ToolContext(
+        robot=robot.session,
+        config=robot.config,
+        report_progress=report_progress,
+        ask_person=_Asker(call),
+        caller=call.caller,
+    )
+    try:
+        answer = await run(ctx, **arguments)
+    except _AskInNextRound as asking:
+        return _question_round(asking)
+    except (RosbridgeError, ToolFailure) as exc:
+        _log.info("%s failed: %s", spec.name, exc)
+        # A failure may show why (navigate_to draws a refused goal on the map).
+        pictures = _images(getattr(exc, "images", ()))
+        return CallToolResult(
+            content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
+        )
+    return CallToolResult(
+        content=[TextContent(type="text", text=answer.text), *_images(answer.images)],
+        structured_content=answer.data.model_dump(mode="json"),
+    )
+
+
+def _images(images: typing.Iterable[ToolImage]) -> list[ImageContent]:
+    return [
+        ImageContent(
+            type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type
+        )
+        for image in images
+    ]
+
 
 _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
     (
@@ -148,109 +327,6 @@ _UNION_KINDS = {"dict[str,any]": "a JSON object", "str": "a string", "float": "a
 def _short(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
-
-
-def tool_from_module(module: ModuleType, fleet: Fleet) -> tuple[Tool, CheckedTool]:
-    """*module* (its ``SPEC`` and ``run``) as an MCP tool; every call gets a fresh :class:`ToolContext`.
-
-    A call runs on the robot the server's checks chose for it (the only one, without a fleet), with that
-    robot's client, guard and activity (shared by every tool of the robot, so that stop_robot sees what the
-    others started); stop_robot chosen for every robot runs on each and says what it did on each.
-    With the tool comes what the server's checks (``checks.py``) need to check its arguments first.
-    """
-    spec: ToolSpec = module.SPEC
-    run: Callable[..., Awaitable[ToolAnswer]] = module.run
-    template, checked = _template(module)
-
-    async def call_tool(
-        mcp_context: Context[Any, Any], **arguments: Any
-    ) -> CallToolResult | InputRequiredResult:
-        robots = selected(fleet)
-        if len(robots) == 1:
-            return await call_on(robots[0], mcp_context, arguments)
-        answers = await asyncio.gather(*(call_on(robot, mcp_context, arguments) for robot in robots))
-        return _merged([robot.name for robot in robots], answers)
-
-    async def call_on(
-        robot: Robot, mcp_context: Context[Any, Any], arguments: dict[str, Any]
-    ) -> CallToolResult | InputRequiredResult:
-        async def report_progress(progress: float, total: float | None, message: str | None) -> None:
-            try:
-                await mcp_context.report_progress(progress, total, message)
-            except Exception:
-                # Progress is a courtesy; a client that went away must not fail the goal.
-                _log.debug("could not send a progress notification", exc_info=True)
-
-        ctx = ToolContext(
-            robot=robot.session,
-            config=robot.config,
-            report_progress=report_progress,
-            ask_person=_asker(mcp_context),
-        )
-        try:
-            answer = await run(ctx, **arguments)
-        except _AskInNextRound as asking:
-            return _question_round(asking)
-        except (RosbridgeError, ToolFailure) as exc:
-            _log.info("%s failed: %s", spec.name, exc)
-            # A failure may show why (navigate_to draws a refused goal on the map).
-            pictures = [
-                ImageContent(
-                    type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type
-                )
-                for image in getattr(exc, "images", ())
-            ]
-            return CallToolResult(
-                content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
-            )
-        images = [
-            ImageContent(
-                type="image", data=base64.b64encode(image.data).decode("ascii"), mime_type=image.mime_type
-            )
-            for image in answer.images
-        ]
-        return CallToolResult(
-            content=[TextContent(type="text", text=answer.text), *images],
-            structured_content=answer.data.model_dump(mode="json"),
-        )
-
-    tool = tool_with_handler(template, call_tool)
-    tool.parameters = fleet.schema_with_robot(checked.schema, spec.name, acting=not spec.hints.read_only)
-    return tool, checked
-
-
-@functools.cache
-def _template(module: ModuleType) -> tuple[Tool, CheckedTool]:
-    """*module*'s tool as every server lists it, with no handler yet, and its argument checks.
-
-    Made once per process: deriving a tool's schemas from its parameters builds pydantic models (~4 ms a
-    tool), and every server (one per MCP session over HTTP, one per test) lists the same tools.
-    """
-    spec: ToolSpec = module.SPEC
-    run: Callable[..., Awaitable[ToolAnswer]] = module.run
-    # The tool's parameters are run()'s, minus its ToolContext. Annotations are resolved here: the modules
-    # use postponed annotations.
-    hints = typing.get_type_hints(run, include_extras=True)
-    run_parameters = list(inspect.signature(run).parameters.values())[1:]
-    parameters = [p.replace(annotation=hints[p.name]) for p in run_parameters]
-
-    async def unbound(mcp_context: Context[Any, Any], **arguments: Any) -> CallToolResult:
-        raise RuntimeError(f"{spec.name}: a tool template is never called")
-
-    tool = tool_from_handler(
-        unbound,
-        parameters,
-        spec.output,
-        name=spec.name,
-        title=spec.title,
-        description=spec.description,
-        annotations=tool_annotations(spec.hints),
-    )
-    # What the argument checks hold every call to, said where clients read it.
-    own = {**compact_input_schema(tool.parameters), "additionalProperties": False}
-    tool.parameters = own
-    replace_output_schema(tool, lambda schema: compact_output_schema(inline_refs(schema)))
-    return tool, CheckedTool.of(spec.name, own, parameters, argument_pre_parse(tool))
 
 
 def _merged(names: list[str], answers: list[CallToolResult | InputRequiredResult]) -> CallToolResult:
@@ -338,7 +414,7 @@ class _AskInNextRound(BaseException):
         self.question = question
 
 
-class _Asker:
+class _Asker(AskPerson):
     """The person at the MCP client, asked through elicitation (``unsupported`` when the client cannot).
 
     Handshake sessions (up to 2025-11-25) get an ``elicitation/create`` request in the middle of the call.
@@ -350,27 +426,28 @@ class _Asker:
     sessions): the guard then sends the person to this call's approval on the operator console, when one runs.
     """
 
-    def __init__(self, mcp_context: Context[Any, Any]) -> None:
-        self._context = mcp_context
-        capabilities = mcp_context.client_capabilities
-        version = mcp_context.protocol_version
+    def __init__(self, call: ToolCall) -> None:
+        self._call = call
+        request = call.request
+        capabilities = request.session.client_capabilities
+        version = request.protocol_version
         can_link = (
             capabilities is not None
             and capabilities.elicitation is not None
             and capabilities.elicitation.url is not None
             and (version is None or version < _INPUT_ROUNDS_FROM)
         )
-        self.by_link: SendToLink | None = self._send_to_link if can_link else None
+        self.by_link = self._send_to_link if can_link else None
 
     async def __call__(self, question: str) -> Answer:
-        mcp_context = self._context
-        capabilities = mcp_context.client_capabilities
+        request = self._call.request
+        capabilities = request.session.client_capabilities
         if capabilities is None or capabilities.elicitation is None:
             return "unsupported"
-        version = mcp_context.protocol_version
+        version = request.protocol_version
         if version is not None and version >= _INPUT_ROUNDS_FROM:
             key = "confirm-" + hashlib.sha256(question.encode()).hexdigest()[:24]
-            response = (mcp_context.input_responses or {}).get(key)
+            response = (self._call.input_responses or {}).get(key)
             if not isinstance(response, ElicitResult):
                 raise _AskInNextRound(key, question)
             if response.action != "accept":
@@ -379,7 +456,9 @@ class _Asker:
         if capabilities.elicitation.form is None and capabilities.elicitation.url is not None:
             return "unsupported"  # a URL-only client answers by link, or not at all
         try:
-            result = await mcp_context.elicit(question, schema=_Confirmation)
+            result = await elicit_with_validation(
+                request.session, question, _Confirmation, related_request_id=request.request_id
+            )
         except Exception:
             _log.info("asking the person failed", exc_info=True)
             return "unsupported"
@@ -388,23 +467,22 @@ class _Asker:
         return result.action
 
     async def _send_to_link(self, question: str, url: str, elicitation_id: str) -> Answer:
+        request = self._call.request
         message = f"Approve or deny this on the robot's operator console:\n{question}"
         try:
-            result = await self._context.elicit_url(message, url, elicitation_id)
+            result = await elicit_url(
+                request.session, message, url, elicitation_id, related_request_id=request.request_id
+            )
         except asyncio.CancelledError:
             # Answered on the console (or the call ended) while the client still shows the link: tell it the
             # out-of-band part is over, so it can close its prompt.
             with contextlib.suppress(Exception):
-                await self._context.session.send_elicit_complete(elicitation_id)
+                await request.session.send_elicit_complete(elicitation_id)
             raise
         except Exception:
             _log.info("sending the person to the console failed", exc_info=True)
             return "unsupported"
         return result.action
-
-
-def _asker(mcp_context: Context[Any, Any]) -> AskPerson:
-    return _Asker(mcp_context)
 
 
 def _question_round(asking: _AskInNextRound) -> InputRequiredResult:

@@ -1,7 +1,10 @@
-"""The MCP server: ``build_server`` registers every tool module on an ``MCPServer``.
+"""The MCP server: ``build_server`` serves every tool on the SDK's low-level ``Server``.
 
-The rosbridge client connects in the background from the server's lifespan, so ``initialize`` and
-``tools/list`` work while the robot is down; tools then fail fast with the not-connected text naming the URL.
+The low-level server is the SDK's documented way to own the schemas and results exactly (docs/architecture.md
+says why we chose it): ``checks.py`` answers ``tools/list`` and ``tools/call``, ``console_app.py`` the MCP
+App's resource. The rosbridge client connects in the background from the server's lifespan, so ``initialize``
+and ``tools/list`` work while the robot is down; tools then fail fast with the not-connected text naming the
+URL.
 """
 
 from __future__ import annotations
@@ -11,18 +14,27 @@ import logging
 import typing
 from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
-from typing import Any, Literal
+from typing import Any
 
-from mcp.server.mcpserver import MCPServer
+from mcp.server import Server, ServerRequestContext
+from mcp.types import (
+    INVALID_PARAMS,
+    ListPromptsResult,
+    ListResourcesResult,
+    PaginatedRequestParams,
+    ReadResourceRequestParams,
+    ReadResourceResult,
+)
 
+from mcp import MCPError
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.robot.seam import Act
-from rosbridge_mcp_server.server.adapter import arguments_text, tool_from_module
-from rosbridge_mcp_server.server.checks import CheckedTool, ToolCallChecks
-from rosbridge_mcp_server.server.console_app import CONSOLE_APP_TOOL, console_app
-from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, Fleet, Robot, list_robots_tool
+from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
+from rosbridge_mcp_server.server.checks import ToolCalls
+from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, console_app
+from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
 from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
-from rosbridge_mcp_server.tools.arguments import argument_problem
+from rosbridge_mcp_server.tools.base import ToolSpec
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.config import Config
@@ -87,11 +99,10 @@ def build_server(
     config: Config,
     *,
     console_view: Callable[[], dict[str, Any]] | None = None,
-    **transport: Any,
-) -> MCPServer[None]:
-    """An ``MCPServer`` with every tool, driving one robot (its client started and closed by the server's
+) -> Server[None]:
+    """A server with every tool, driving one robot (its client started and closed by the server's
     lifespan); see :func:`build_fleet_server`."""
-    return build_fleet_server([Robot("robot", config, robot)], config, console_view=console_view, **transport)
+    return build_fleet_server([Robot("robot", config, robot)], config, console_view=console_view)
 
 
 def build_fleet_server(
@@ -99,19 +110,17 @@ def build_fleet_server(
     config: Config,
     *,
     console_view: Callable[[], dict[str, Any]] | None = None,
-    **transport: Any,
-) -> MCPServer[None]:
-    """An ``MCPServer`` driving *robots* (each client started and closed by the server's lifespan).
+) -> Server[None]:
+    """The SDK's low-level ``Server`` driving *robots* (each client started and closed by its lifespan).
 
     Every act on a robot is first approved by its session's guard (the server as ``serve`` runs it: a
     :class:`~rosbridge_mcp_server.safety.PolicyGuard` for the robot's policy, audited). *config* chooses the
     tools and, when read-only, withholds the acting ones. Every tool call first goes through the checks of
-    ``checks.py`` (the SDK's server middleware), on any transport. With several robots every tool takes a
-    ``robot`` argument and ``list_robots`` is listed (``fleet.py``). The tools record what they set going in
-    each robot's session, which the operator console's E-STOP shares. With *console_view* (the console's
-    snapshot) the server also offers the console's read-only view as an MCP App: ``show_console`` and its
-    ``ui://`` resource (``server/console_app.py``). *transport* goes to ``MCPServer`` as it is (``auth`` and
-    ``token_verifier`` for HTTP).
+    ``checks.py``, on any transport. With several robots every tool takes a ``robot`` argument and
+    ``list_robots`` is listed (``fleet.py``). The tools record what they set going in each robot's session,
+    which the operator console's E-STOP shares. With *console_view* (the console's snapshot) the server also
+    offers the console's read-only view as an MCP App: ``show_console`` and its ``ui://`` resource
+    (``server/console_app.py``). Authentication is the transport's (``http.py``).
     """
     fleet = Fleet(robots)
     policy = config.policy
@@ -130,7 +139,7 @@ def build_fleet_server(
             robot.session.keep_logs()
 
     @asynccontextmanager
-    async def lifespan(_server: MCPServer[None]) -> AsyncIterator[None]:
+    async def lifespan(_server: Server[None]) -> AsyncIterator[None]:
         async with contextlib.AsyncExitStack() as started:
             for robot in fleet.robots:
                 client = robot.session.client
@@ -145,81 +154,100 @@ def build_fleet_server(
                 )
             yield None
 
-    adapted = [tool_from_module(module, fleet) for module in modules]
-    tools = [tool for tool, _ in adapted]
-    checked = [check for _, check in adapted]
+    # Every tool is made the same way (adapter.edge_tool), in the order it is listed.
+    tools: list[EdgeTool] = [module_tool(module) for module in modules]
     if fleet.several:
-        listing = list_robots_tool(fleet)
-        tools.append(listing)
-        checked.append(CheckedTool.of(LIST_ROBOTS, listing.parameters, []))
-    if console_view is not None:
-        # The console's app tool takes no arguments: an unknown one is refused like any tool's.
-        checked.append(CheckedTool.of(CONSOLE_APP_TOOL, {"type": "object", "properties": {}}, []))
+        tools.append(list_robots_tool(fleet))
+    app = console_app(console_view) if console_view is not None else None
+    if app is not None:
+        tools.append(app.tool)
     # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
-    withheld = {m.SPEC.name for m in chosen} - {m.SPEC.name for m in modules}
+    withheld: dict[str, ToolSpec] = {
+        m.SPEC.name: m.SPEC for m in chosen if m.SPEC.hints.read_only is False and m not in modules
+    }
 
-    def unlisted(name: str, arguments: dict[str, Any]) -> str | None:
+    def unlisted(name: str, arguments: dict[str, Any], caller: str | None) -> str | None:
         """A withheld acting tool called by name anyway: refused, and audited like any refusal."""
-        if name not in withheld:
+        spec = withheld.get(name)
+        if spec is None:
             return None
         for robot in fleet.robots:
             robot.session.guard.record(
-                Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only"
+                _withheld_act(spec.name, spec.acts_on, arguments, caller), "withheld: read-only"
             )
         return (
             f"{name} is not available: this server is read-only (its operator started it with --read-only or "
             "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
         )
 
-    # Acting tools, which a read-only robot of a fleet refuses; stopping is allowed everywhere.
-    acting = {m.SPEC.name for m in modules if not m.SPEC.hints.read_only} - {stop_robot.SPEC.name}
-
-    def robot_check(name: str, chosen: tuple[Robot, ...], arguments: dict[str, Any]) -> str | None:
-        """An acting tool on a read-only robot of the fleet: refused, and audited on that robot."""
-        if name not in acting:
+    def robot_check(
+        tool: EdgeTool, chosen: tuple[Robot, ...], arguments: dict[str, Any], caller: str | None
+    ) -> str | None:
+        """An acting tool on a read-only robot of the fleet: refused, and audited on that robot. Stopping is
+        allowed everywhere."""
+        if tool.acts_on is None or tool.name == stop_robot.SPEC.name:
             return None
-        targets = chosen or fleet.robots[:1]
-        refusal = fleet.read_only_refusal(name, targets)
+        refusal = fleet.read_only_refusal(tool.name, chosen)
         if refusal is not None:
-            for robot in targets:
+            for robot in chosen:
                 if robot.config.policy.read_only:
                     robot.session.guard.record(
-                        Act(name, _KIND_OF.get(name, "topic"), "", "", arguments), "withheld: read-only"
+                        _withheld_act(tool.name, tool.acts_on, arguments, caller), "withheld: read-only"
                     )
         return refusal
 
-    checks = ToolCallChecks(
-        checked,
-        argument_check=argument_problem,
-        argument_error=arguments_text,
-        unlisted=unlisted,
-        fleet=fleet,
-        fleet_wide=(CONSOLE_APP_TOOL,),
-        robot_check=robot_check,
-    )
+    calls = ToolCalls(tools, fleet, unlisted=unlisted, robot_check=robot_check)
+
+    async def list_resources(
+        ctx: ServerRequestContext[None], params: PaginatedRequestParams | None
+    ) -> ListResourcesResult:
+        return ListResourcesResult(resources=[app.resource] if app is not None else [])
+
+    async def read_resource(
+        ctx: ServerRequestContext[None], params: ReadResourceRequestParams
+    ) -> ReadResourceResult:
+        contents = app.read(str(params.uri)) if app is not None else None
+        if contents is None:
+            raise MCPError(code=INVALID_PARAMS, message=f"Unknown resource: {params.uri}")
+        return ReadResourceResult(contents=[contents])
+
+    async def list_prompts(
+        ctx: ServerRequestContext[None], params: PaginatedRequestParams | None
+    ) -> ListPromptsResult:
+        return ListPromptsResult(prompts=[])
+
     some_read_only = fleet.read_only_names if not read_only else []
-    return MCPServer(
-        name=SERVER_NAME,
+    server: Server[None] = Server(
+        SERVER_NAME,
+        version=__version__,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
         instructions=INSTRUCTIONS
         + (_FLEET_NOTE if fleet.several else "")
         + (_READ_ONLY_NOTE if read_only else "")
         + (_READ_ONLY_ROBOTS_NOTE.format(names=", ".join(some_read_only)) if some_read_only else ""),
-        version=__version__,
-        tools=tools,
-        extensions=[console_app(console_view)] if console_view is not None else None,
         lifespan=lifespan,
-        log_level=config.log_level,
-        middleware=[checks],
-        **transport,
+        get_tool_input_schema=calls.input_schema,
+        on_list_tools=calls.list_tools,
+        on_call_tool=calls.call_tool,
+        on_list_resources=list_resources,
+        on_read_resource=read_resource,
+        on_list_prompts=list_prompts,
     )
+    # Arguments that are no object get our sentence before the SDK checks the request's shape (checks.py).
+    server.middleware.append(calls.arguments_kind)
+    if app is not None:
+        server.extensions[APPS_EXTENSION] = {}
+    return server
 
 
-#: What a withheld tool would have acted on, for its audit line.
-_KIND_OF: dict[str, Literal["topic", "service", "action", "parameter"]] = {
-    "publish_service": "service",
-    "publish_action": "action",
-    "cancel_action": "action",
-    "set_parameter": "parameter",
-}
+def _withheld_act(
+    name: str,
+    acts_on: typing.Literal["topic", "service", "action", "parameter"] | None,
+    arguments: dict[str, Any],
+    caller: str | None,
+) -> Act:
+    """The audit's act for an acting tool refused before it ran: what it acts through, and its arguments."""
+    if acts_on is None:
+        raise ValueError(f"{name} acts on the robot but its ToolSpec does not say through what (acts_on)")
+    return Act(name, acts_on, "", "", arguments, caller=caller)

@@ -2,9 +2,9 @@
 activity, guard).
 
 With one robot nothing here shows: tools take no ``robot`` argument and ``tools/list`` is as before. With
-several, the server's checks (``checks.py``) take the ``robot`` argument off every call before the SDK sees it
-(:meth:`Fleet.choose`) and the call runs on that robot (:func:`selected`, a context variable the tool adapter
-reads); ``stop_robot`` without one stops every robot. ``list_robots`` says what each robot is.
+several, the edge (``checks.py``) takes the ``robot`` argument off every call before the tool's arguments
+are validated (:meth:`Fleet.choose`) and hands the chosen robots to the tool's handler with the call;
+``stop_robot`` without one stops every robot. ``list_robots`` says what each robot is.
 
 A robot whose policy is read-only (``read_only = true`` in the fleet file, or the whole server read-only) is
 read-only in a fleet too: an acting tool's ``robot`` property offers only the robots that may act, and a call
@@ -14,25 +14,22 @@ nothing reaches its bridge (which may be another robot's too). ``stop_robot`` st
 
 from __future__ import annotations
 
-import contextlib
-import contextvars
 import typing
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 from urllib.parse import urlsplit, urlunsplit
 
-from mcp.server.mcpserver.tools import Tool
 from mcp.types import CallToolResult, TextContent, ToolAnnotations
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.server.sdk import tool_from_handler
+from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall, arguments_model, edge_tool
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.config import Config
     from rosbridge_mcp_server.robot.session import RobotSession
 
-__all__ = ["LIST_ROBOTS", "ROBOT_ARGUMENT", "STOP_ALL", "Fleet", "Robot", "list_robots_tool", "selected"]
+__all__ = ["LIST_ROBOTS", "ROBOT_ARGUMENT", "STOP_ALL", "Fleet", "Robot", "list_robots_tool"]
 
 ROBOT_ARGUMENT = "robot"
 #: The tool about the fleet itself: it runs on no robot and takes no ``robot`` argument.
@@ -48,11 +45,6 @@ class Robot:
     name: str
     config: Config
     session: RobotSession
-
-
-_SELECTED: contextvars.ContextVar[tuple[Robot, ...] | None] = contextvars.ContextVar(
-    "rosbridge_mcp_robots", default=None
-)
 
 
 class Fleet:
@@ -137,24 +129,6 @@ class Fleet:
         return {**schema, "properties": properties, "required": required}
 
 
-@contextlib.contextmanager
-def selecting(robots: tuple[Robot, ...]) -> Iterator[None]:
-    """Run the calls inside the block on *robots* (the checks set it around each tool call)."""
-    token = _SELECTED.set(robots)
-    try:
-        yield
-    finally:
-        _SELECTED.reset(token)
-
-
-def selected(fleet: Fleet) -> tuple[Robot, ...]:
-    """The robots the current call runs on: those chosen for it, else the only one."""
-    chosen = _SELECTED.get()
-    if chosen:
-        return chosen
-    return fleet.robots[:1]
-
-
 class RobotRow(BaseModel):
     """One robot as list_robots shows it."""
 
@@ -171,10 +145,10 @@ class RobotsAnswer(BaseModel):
     robots: list[RobotRow]
 
 
-def list_robots_tool(fleet: Fleet) -> Tool:
+def list_robots_tool(fleet: Fleet) -> EdgeTool:
     """The ``list_robots`` tool: each robot's connection, ROS version and policy summary."""
 
-    async def handler(mcp_context: Any) -> CallToolResult:
+    async def handler(call: ToolCall, arguments: BaseModel) -> CallToolResult:
         rows = [_row(robot) for robot in fleet.robots]
         lines = [
             f"{row.name}: {'connected' if row.connected else 'not connected'}"
@@ -187,10 +161,7 @@ def list_robots_tool(fleet: Fleet) -> Tool:
             structured_content=RobotsAnswer(robots=rows).model_dump(mode="json"),
         )
 
-    return tool_from_handler(
-        handler,
-        [],
-        RobotsAnswer,
+    return edge_tool(
         name=LIST_ROBOTS,
         title="List the robots",
         description=(
@@ -198,6 +169,10 @@ def list_robots_tool(fleet: Fleet) -> Tool:
             "other tool takes one of these names as its robot argument."
         ),
         annotations=ToolAnnotations(read_only_hint=True, open_world_hint=False),
+        arguments=arguments_model(LIST_ROBOTS, []),
+        output=RobotsAnswer,
+        handler=handler,
+        on_robot=False,
     )
 
 

@@ -1,11 +1,11 @@
 """MCP over Streamable HTTP (the SDK's transport), with bearer-token or OAuth 2.1 authentication.
 
-Everything here is the SDK's documented surface: ``MCPServer(auth=AuthSettings, token_verifier=...)`` puts
-its bearer middleware in front of ``/mcp`` (401 with ``WWW-Authenticate: Bearer ...`` for a missing or bad
-token, 403 for a missing scope) and, in OAuth mode, serves the protected-resource metadata (RFC 9728) the MCP
-spec asks for at ``/.well-known/oauth-protected-resource/mcp``; ``streamable_http_app`` checks ``Host`` and
-``Origin`` against the allowed lists (DNS-rebinding protection); uvicorn serves the app, with TLS when given
-a certificate.
+Everything here is the SDK's documented surface: ``Server.streamable_http_app(auth=AuthSettings,
+token_verifier=...)`` puts its bearer middleware in front of ``/mcp`` (401 with ``WWW-Authenticate: Bearer
+...`` for a missing or bad token, 403 for a missing scope) and, in OAuth mode, serves the protected-resource
+metadata (RFC 9728) the MCP spec asks for at ``/.well-known/oauth-protected-resource/mcp``;
+``streamable_http_app`` checks ``Host`` and ``Origin`` against the allowed lists (DNS-rebinding protection);
+uvicorn serves the app, with TLS when given a certificate.
 
 Two verifiers: :class:`StaticTokens` (``name token`` pairs; the caller is the token's name) and
 :class:`JwtVerifier` (signature against the issuer's JWKS, ``iss``, ``aud``, ``exp``; the caller is the
@@ -26,9 +26,9 @@ from typing import Any
 
 import jwt
 import uvicorn
+from mcp.server import Server
 from mcp.server.auth.provider import AccessToken
 from mcp.server.auth.settings import AuthSettings
-from mcp.server.mcpserver import MCPServer
 from mcp.server.transport_security import TransportSecuritySettings
 
 from rosbridge_mcp_server.config import ConfigError
@@ -117,7 +117,8 @@ class JwtVerifier:
 
 
 def auth_options(settings: HttpSettings) -> dict[str, Any]:
-    """``MCPServer`` keyword arguments for the settings' authentication (none without tokens or OAuth)."""
+    """``Server.streamable_http_app`` keyword arguments for the settings' authentication (none without tokens
+    or OAuth)."""
     if settings.oauth is not None:
         oauth = settings.oauth
         return {
@@ -142,8 +143,9 @@ def auth_options(settings: HttpSettings) -> dict[str, Any]:
     return {}
 
 
-def http_app(server: MCPServer[Any], settings: HttpSettings) -> Any:
-    """The Starlette app serving *server* at ``/mcp`` with the DNS-rebinding protection of *settings*."""
+def http_app(server: Server[Any], settings: HttpSettings) -> Any:
+    """The Starlette app serving *server* at ``/mcp`` with the authentication and the DNS-rebinding protection
+    of *settings*."""
     return server.streamable_http_app(
         streamable_http_path=MCP_PATH,
         transport_security=TransportSecuritySettings(
@@ -152,11 +154,12 @@ def http_app(server: MCPServer[Any], settings: HttpSettings) -> Any:
             allowed_origins=list(settings.allowed_origins),
         ),
         host=settings.host,
+        **auth_options(settings),
     )
 
 
 async def serve_http(
-    server: MCPServer[Any], settings: HttpSettings, *, sock: socket.socket | None = None
+    server: Server[Any], settings: HttpSettings, *, sock: socket.socket | None = None
 ) -> None:
     """Serve *server* over Streamable HTTP until SIGTERM / Ctrl-C (or cancellation).
 

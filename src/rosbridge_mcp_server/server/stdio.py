@@ -26,14 +26,13 @@ from typing import TYPE_CHECKING, Any, BinaryIO, cast
 
 import anyio
 from mcp.server.stdio import stdio_server
-from mcp.shared.message import SessionMessage
 from mcp.types import INVALID_REQUEST, PARSE_ERROR, ErrorData, JSONRPCError
 from pydantic import ValidationError
 
-from rosbridge_mcp_server.server.sdk import serve_streams
+from rosbridge_mcp_server.server.sdk import answering_stream
 
 if TYPE_CHECKING:
-    from mcp.server.mcpserver import MCPServer
+    from mcp.server import Server
 
 __all__ = ["MAX_LINE_BYTES", "reply_for_unreadable", "serve_stdio"]
 
@@ -51,13 +50,14 @@ _TAIL_BYTES = 1000
 _CHUNK_BYTES = 1024 * 1024
 
 
-async def serve_stdio(server: MCPServer[Any]) -> None:
+async def serve_stdio(server: Server[Any]) -> None:
     """Serve ``server`` on this process's stdin/stdout until stdin closes."""
     with _stdin_lines() as lines:
         # The SDK's transport only iterates over its stdin (``async for line in stdin``).
         stdin = cast("anyio.AsyncFile[str] | None", lines)
         async with stdio_server(stdin=stdin) as (read_stream, write_stream):
-            await serve_streams(server, _Answering(read_stream, write_stream), write_stream)
+            answering = answering_stream(read_stream, write_stream, reply_for_unreadable)
+            await server.run(answering, write_stream, server.create_initialization_options())
 
 
 @contextlib.contextmanager
@@ -261,43 +261,3 @@ def _string_end(text: str, start: int) -> int:
         if backslashes % 2 == 0:
             return i
         i += 1
-
-
-class _Answering:
-    """The SDK stdio transport's read stream, with every line it could not read answered, not dropped."""
-
-    def __init__(self, inner: Any, write_stream: Any) -> None:
-        self._inner = inner
-        self._write_stream = write_stream
-
-    @property
-    def last_context(self) -> Any:
-        # The SDK restores the sender's context variables from its own stream, when it has one.
-        return getattr(self._inner, "last_context", None)
-
-    async def receive(self) -> SessionMessage:
-        while True:
-            item = await self._inner.receive()
-            if not isinstance(item, Exception):
-                return cast("SessionMessage", item)
-            reply = reply_for_unreadable(item)
-            if reply is not None:
-                await self._write_stream.send(SessionMessage(reply))
-
-    def __aiter__(self) -> _Answering:
-        return self
-
-    async def __anext__(self) -> SessionMessage:
-        try:
-            return await self.receive()
-        except anyio.EndOfStream:
-            raise StopAsyncIteration from None
-
-    async def aclose(self) -> None:
-        await self._inner.aclose()
-
-    async def __aenter__(self) -> _Answering:
-        return self
-
-    async def __aexit__(self, *exc_info: object) -> None:
-        await self.aclose()

@@ -1,7 +1,7 @@
 """Checks every tool's arguments get first, before they are converted to the tool's parameters.
 
-The MCP SDK converts arguments leniently: it ignores keys a tool does not take (a typo such as ``mesage``
-published an empty message) and takes ``true`` for the number 1. Here, before that:
+Conversion to the parameters is lenient (pydantic's): it would take ``true`` for the number 1, and JSON text
+given for an object is read as the object (models often send objects as strings). Here, before that:
 
 * a key the tool does not take is an error naming it (the input schemas say ``additionalProperties: false``);
 * a boolean given for a number is an error;
@@ -9,17 +9,21 @@ published an empty message) and takes ``true`` for the number 1. Here, before th
   and a message, request or goal at most :data:`~rosbridge_mcp_server.client.frames.MAX_NESTING` levels
   and what rosbridge takes in one frame (:func:`~rosbridge_mcp_server.client.frames.payload_problem`).
 
-Each refusal names the argument and the limit.
+Each refusal names the argument and the limit. :func:`read_json_text` then reads JSON text given for an
+argument that is not plain text, and checks what it read as it checks an object given as one.
 """
 
 from __future__ import annotations
 
 import difflib
+import json
 from typing import Any
+
+from pydantic import BaseModel
 
 from rosbridge_mcp_server.tools.base import payload_problem
 
-__all__ = ["MAX_TEXT_ARGUMENT", "argument_problem", "parameter_listing"]
+__all__ = ["MAX_TEXT_ARGUMENT", "argument_problem", "parameter_listing", "read_json_text"]
 
 #: Longest plain string argument: names and ids are far shorter (a ROS name has at most 247 characters).
 MAX_TEXT_ARGUMENT = 1000
@@ -44,6 +48,37 @@ def argument_problem(tool: str, arguments: dict[str, Any], schema: dict[str, Any
     if problems:
         return f"Invalid arguments for {tool}: {'; '.join(problems)}. Nothing was sent."
     return None
+
+
+def read_json_text(
+    tool: str, arguments: dict[str, Any], model: type[BaseModel]
+) -> tuple[dict[str, Any], str | None]:
+    """*arguments* with JSON text read, and the sentence refusing what was read (or ``None``).
+
+    A string given for a parameter of *model* that is not plain ``str`` is read as JSON when it holds an
+    object, a list or ``null`` (``"request": "null"`` is ``None``, ``"goal": "{...}"`` an object);
+    anything else stays the string it was (what the MCP SDK's own tool functions do, kept so that a call
+    behaves as it did). An object or list so read is checked like one given as such (nesting, size, text).
+    The dict given is left alone.
+    """
+    read = dict(arguments)
+    fields = model.model_fields
+    for key, value in arguments.items():
+        field = fields.get(key)
+        if field is None or not isinstance(value, str) or field.annotation is str:
+            continue
+        try:
+            parsed = json.loads(value)
+        except (ValueError, RecursionError):
+            continue  # not JSON, or JSON too deep to read: validation takes or refuses the string
+        if isinstance(parsed, str | int | float):
+            continue  # a number or a boolean (an int) stays the text it was; validation says what it wants
+        read[key] = parsed
+        if isinstance(parsed, dict | list):
+            problem = payload_problem(parsed)
+            if problem is not None:
+                return read, f"Invalid arguments for {tool}: {key}: {problem}. Nothing was sent."
+    return read, None
 
 
 def parameter_listing(schema: dict[str, Any]) -> str:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import BaseModel
 
@@ -70,6 +70,8 @@ class ToolSpec:
 
     ``output`` is the pydantic model of the structured content of a successful answer; the server publishes
     its JSON schema as the tool's output schema. Answers carry an instance of it, so they fit by construction.
+    ``acts_on`` is what an acting tool acts through (the audit line of a call refused before it ran names it);
+    every acting tool says it, and no reading tool does: a spec without it fails where it is written.
     """
 
     name: str
@@ -77,6 +79,13 @@ class ToolSpec:
     description: str
     hints: ToolHints
     output: type[BaseModel]
+    acts_on: Literal["topic", "service", "action", "parameter"] | None = None
+
+    def __post_init__(self) -> None:
+        if not self.hints.read_only and self.acts_on is None:
+            raise TypeError(f"{self.name}: an acting tool's ToolSpec must say acts_on= (topic, service, ...)")
+        if self.hints.read_only and self.acts_on is not None:
+            raise TypeError(f"{self.name}: a reading tool acts on nothing; leave acts_on out of its ToolSpec")
 
 
 @dataclass(frozen=True)
@@ -109,8 +118,8 @@ async def _no_progress(progress: float, total: float | None, message: str | None
 @dataclass(frozen=True)
 class ToolContext:
     """What one tool call may use: the robot's session (shared by every call on that robot), the robot's
-    configuration, and the call's own ways to ask the person at the MCP client (elicitation) and to report
-    progress.
+    configuration, and the call's own: ways to ask the person at the MCP client (elicitation) and to report
+    progress, and who is calling (the name the transport authenticated, for the audit; ``None`` on stdio).
 
     It is the :class:`~rosbridge_mcp_server.robot.seam.Acting` every checked send in ``robot/`` takes: the
     session's parts are read through it (``ctx.client``, ``ctx.graph``, ``ctx.guard``, ...).
@@ -120,6 +129,7 @@ class ToolContext:
     config: Config
     report_progress: ProgressReporter = field(default=_no_progress)
     ask_person: AskPerson = field(default=nobody_to_ask)
+    caller: str | None = None
 
     @property
     def client(self) -> RosbridgeClient:
@@ -161,10 +171,7 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
     if value is None:
         return {}
     if isinstance(value, dict):
-        # Checked here too: the SDK turns an argument given as JSON text into an object before the tool runs.
-        problem = payload_problem(value)
-        if problem is not None:
-            raise ToolFailure(f"The {what} {problem}. Nothing was sent.")
+        # Checked by the MCP edge, as given or as read from JSON text (tools/arguments.py).
         return value
     text = value.strip()
     if not text:

@@ -40,6 +40,7 @@ SPEC = ToolSpec(
         "A waiting publish_action ends too."
     ),
     hints=ACTS_ON_ROBOT,
+    acts_on="action",
     output=CancelAnswer,
 )
 

@@ -69,6 +69,7 @@ SPEC = ToolSpec(
         'and geofence. Example: {"forward": 1, "turn": 90}'
     ),
     hints=ACTS_ON_ROBOT,
+    acts_on="action",
     output=NavigateAnswer,
 )
 

@@ -62,6 +62,7 @@ SPEC = ToolSpec(
         "progress; on timeout the goal is cancelled."
     ),
     hints=ACTS_ON_ROBOT,
+    acts_on="action",
     output=GoalAnswer,
 )
 

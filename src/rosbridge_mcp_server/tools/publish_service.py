@@ -38,6 +38,7 @@ SPEC = ToolSpec(
         f"/add_two_ints, service_type example_interfaces/srv/AddTwoInts, request {_EXAMPLE}."
     ),
     hints=ACTS_ON_ROBOT,
+    acts_on="service",
     output=ServiceAnswer,
 )
 

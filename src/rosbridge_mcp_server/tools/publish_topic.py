@@ -53,6 +53,7 @@ SPEC = ToolSpec(
         "publishing, ending a Twist stream with zeros."
     ),
     hints=ACTS_ON_ROBOT,
+    acts_on="topic",
     output=PublishAnswer,
 )
 

@@ -55,6 +55,7 @@ SPEC = ToolSpec(
         '{"topics": ["/odom", "/tf*"], "duration": 30}'
     ),
     hints=ToolHints(read_only=False, destructive=False, idempotent=False),
+    acts_on="topic",
     output=RecordAnswer,
 )
 

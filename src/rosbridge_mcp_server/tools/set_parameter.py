@@ -40,6 +40,7 @@ SPEC = ToolSpec(
         '{"name": "/turtlesim:background_r", "value": 200}. ROS 2 keeps the type: 2.0 for a double.'
     ),
     hints=_SETS_PARAMETER,
+    acts_on="parameter",
     output=SetParameterAnswer,
 )
 

@@ -30,6 +30,7 @@ SPEC = ToolSpec(
     ),
     # It acts on the robot, but only ever takes motion away; repeating it is harmless.
     hints=ToolHints(read_only=False, destructive=False, idempotent=True),
+    acts_on="topic",
     output=StopAnswer,
 )
 
@@ -39,11 +40,13 @@ async def run(ctx: ToolContext) -> ToolAnswer:
     report = await emergency_stop(ctx.robot)
     # Stopping is never put to the policy; each stop that went out is still audited.
     for topic, type_name, message in report.zero_messages:
-        ctx.guard.record(Act(SPEC.name, "topic", topic, type_name, message), "e-stop")
+        ctx.guard.record(Act(SPEC.name, "topic", topic, type_name, message, caller=ctx.caller), "e-stop")
     for action, goal_id in report.goals:
-        ctx.guard.record(Act(SPEC.name, "action", action, "", {"cancel": goal_id}), "e-stop")
+        ctx.guard.record(
+            Act(SPEC.name, "action", action, "", {"cancel": goal_id}, caller=ctx.caller), "e-stop"
+        )
     if not report.did_anything:
-        ctx.guard.record(Act(SPEC.name, "topic", "", "", None), "e-stop: nothing to stop")
+        ctx.guard.record(Act(SPEC.name, "topic", "", "", None, caller=ctx.caller), "e-stop: nothing to stop")
     data = StopAnswer(
         streams_stopped=report.streams_stopped,
         streams_still_running=report.streams_still_running,
