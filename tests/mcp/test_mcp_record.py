@@ -338,3 +338,29 @@ async def test_a_bridge_outage_shows_as_a_gap_and_the_recording_goes_on(
     assert topic["gaps"][0]["seconds"] >= 0.9
     assert topic["messages"] > 25  # before and after the outage
     assert "gaps" in text_of(result)
+
+
+async def test_a_recording_leaves_other_tools_the_topic_as_json(session_dir: tuple[Session, Path]) -> None:
+    """record asks for /scan as CBOR; the bridge then sends CBOR to every listener of /scan on the connection,
+    and subscribe_topic and view_scan beside the recording still read plain JSON ranges (seen as a bug:
+    "Error executing tool subscribe_topic", "The scan has no 'ranges' array")."""
+    session, _ = session_dir
+    recording = asyncio.create_task(
+        session.ok("record", {"topics": ["/scan"], "duration": 60, "name": "scan"})
+    )
+    try:
+        async with asyncio.timeout(10):  # the recorder's subscription shows on the robot's graph
+            while True:
+                info = await session.ok("get_topic_info", {"topic": "/scan"})
+                if info.structured_content["subscribers"]:
+                    break
+                await asyncio.sleep(0.05)
+        read = await session.ok("subscribe_topic", {"topic": "/scan", "count": 2})
+        messages = read.structured_content["messages"]
+        assert messages
+        assert all("ranges" in m["message"] for m in messages), messages
+        await session.ok("view_scan", {"topic": "/scan"})
+    finally:
+        await session.ok("record", {"stop": True})
+        result = await asyncio.wait_for(recording, 10)
+    assert result.structured_content["topics"][0]["messages"] >= 1

@@ -17,6 +17,7 @@ from rosbridge_mcp_server.client.session import Session, send_quietly
 from rosbridge_mcp_server.client.subscription import Subscription
 from rosbridge_mcp_server.errors import NotSentError
 from rosbridge_mcp_server.wire import protocol
+from rosbridge_mcp_server.wire.cbor import json_shaped
 
 __all__ = ["Advert", "Topics"]
 
@@ -176,8 +177,16 @@ class Topics:
         """Route an incoming message to every local listener of its topic."""
         subs = self.subscriptions.get(event.topic)
         if subs:
+            as_json: dict[str, Any] | None = None
             for sub in subs.values():
-                sub.deliver(event.msg)
+                if event.binary and sub.compression is None:
+                    # Another listener's CBOR reached this one too (one subscription per topic per
+                    # connection, the strongest compression wins): it gets the JSON form it asked for.
+                    if as_json is None:
+                        as_json = json_shaped(event.msg)
+                    sub.deliver(as_json)
+                else:
+                    sub.deliver(event.msg)
 
     def fail_all(self, exc: BaseException) -> None:
         """Raise *exc* in every consumer waiting on a subscription (the connection dropped)."""

@@ -13,13 +13,14 @@ Pure: no I/O.
 
 from __future__ import annotations
 
+import base64
 import sys
 from array import array
 from typing import Any, Final
 
 import cbor2
 
-__all__ = ["TYPED_ARRAY_CODES", "decode_cbor"]
+__all__ = ["TYPED_ARRAY_CODES", "decode_cbor", "json_shaped"]
 
 #: RFC 8746 tag → array typecode, for the little-endian tags rosbridge writes (TAGGED_ARRAY_FORMATS).
 TYPED_ARRAY_CODES: Final = {
@@ -71,4 +72,22 @@ def _typed_arrays(item: Any) -> Any:
         if _SWAP and values.itemsize > 1:
             values.byteswap()
         return values
+    return item
+
+
+def json_shaped(item: Any) -> Any:
+    """A decoded CBOR message as rosbridge's JSON would have carried it: typed arrays as lists, ``uint8[]``
+    bytes as a base64 string. A new object (the CBOR listener's message is left alone).
+
+    rosbridge keeps one subscription per topic per connection and sends every listener of it the strongest
+    compression any of them asked for, so a listener that asked for JSON can receive a CBOR frame.
+    """
+    if isinstance(item, dict):
+        return {key: json_shaped(value) for key, value in item.items()}
+    if isinstance(item, list):
+        return [json_shaped(value) for value in item]
+    if isinstance(item, array):
+        return item.tolist()
+    if isinstance(item, bytes | bytearray):
+        return base64.b64encode(item).decode("ascii")
     return item

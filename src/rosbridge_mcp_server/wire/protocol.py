@@ -233,6 +233,9 @@ class PublishEvent:
 
     topic: str
     msg: dict[str, Any]
+    #: It came as a binary CBOR frame: typed arrays as ``array.array``, ``uint8[]`` as bytes (a listener that
+    #: asked for JSON gets :func:`~rosbridge_mcp_server.wire.cbor.json_shaped` of it).
+    binary: bool = False
 
 
 @dataclass(slots=True)
@@ -289,7 +292,10 @@ class InboundDecoder:
                 return Notice("warning", "binary frame nested too deep to decode ignored")
             if not isinstance(item, dict):
                 return Notice("warning", f"binary frame of {len(data)} bytes that is not a CBOR map ignored")
-            return self.route(item)
+            event = self.route(item)
+            if isinstance(event, PublishEvent):
+                event.binary = True
+            return event
         try:
             frame = _decoder.decode(data)
         except ValueError as exc:
