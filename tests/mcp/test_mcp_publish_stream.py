@@ -171,3 +171,6 @@ async def test_a_stream_running_when_the_server_stops_ends_with_zero_on_a_busy_b
         await robot.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 3, WAIT)
     call.cancel()
     await robot.world.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)
+    sent = [message.msg for message in robot.world.published[CMD_VEL]]
+    assert len(sent) >= 4
+    assert STILL not in sent[:-1], sent
