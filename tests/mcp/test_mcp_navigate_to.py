@@ -23,11 +23,15 @@ from PIL import Image
 
 from rosbridge_mcp_server.safety import parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.sim.world import TURTLE_HOME
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 #: The sim drives this many times faster than a real robot, so that a test drive takes a second or two.
 TEST_SPEED = 8.0
+#: A goal that may go: 0.3 m straight ahead of the robot at home, facing the way it faces (reached in a
+#: fraction of a second; a goal behind it costs two turns, seconds at the controller's gentle approach).
+CONTROL = (TURTLE_HOME + 0.3, TURTLE_HOME)
 
 POLICY = {
     "navigation": {
@@ -192,12 +196,12 @@ async def test_a_goal_the_map_or_the_policy_rules_out_is_refused_on_both_paths_a
         assert why in raw
         assert "nothing was sent" in raw
         # A goal that may go is seen by the raw socket: the watcher would have seen the refused ones.
-        control = await session.call("publish_action", dict(raw_goal(nav2, 4.5, 5.5), timeout=30))
+        control = await session.call("publish_action", dict(raw_goal(nav2, *CONTROL), timeout=30))
         await watcher.wait_for_any()
     assert not control.is_error, text_of(control)
     sent = watcher.received
     if nav2.dialect == "ros1":
-        assert [m["goal"]["target_pose"]["pose"]["position"]["x"] for m in sent] == [4.5]
+        assert [m["goal"]["target_pose"]["pose"]["position"]["x"] for m in sent] == [CONTROL[0]]
     else:
         assert len({status["goal_info"]["goal_id"]["uuid"] for m in sent for status in m["status_list"]}) == 1
 
