@@ -144,7 +144,6 @@ async def test_a_topic_we_publish_keeps_its_type(session: Session, sim: Simulate
     assert f"Topic /notes has type {types_for(sim)['string']}" in text
     await session.ok("publish_topic", {**strings, "message": {"data": "b"}})
     await sim.world.wait_for(lambda w: len(w.published.get("/notes", ())) == 2)
-    assert [message.msg for message in sim.world.published["/notes"]] == [{"data": ""}] * 2
     assert [m.msg["data"] for m in sim.world.published["/notes"]] == ["a", "b"]
 
 
