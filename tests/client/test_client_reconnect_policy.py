@@ -37,34 +37,35 @@ def test_the_backoff_ceiling_is_short_on_this_machine_and_the_local_network(url:
 async def test_a_call_between_attempts_prompts_one_at_once(
     make_sim: MakeSim, make_client: MakeClient
 ) -> None:
-    """With a long backoff, a call after the bridge's return connects now instead of failing for seconds."""
+    """With a long backoff, a call after the bridge's return connects now instead of failing for seconds.
+
+    The loop's next attempt is 15 s away at the earliest (a backoff from 30 s): a call that waited for it
+    could not be answered within its 10 s, however loaded the machine."""
     robot = await make_sim()
-    client = await make_client(robot, reconnect_min=6.0, reconnect_max=30.0)
+    client = await make_client(robot, reconnect_min=30.0, reconnect_max=60.0)
     await robot.stop()
     await client.wait_disconnected(5.0)
     await robot.start()
-    loop = asyncio.get_running_loop()
-    start = loop.time()
-    await client.call_service("/rosapi/topics", timeout=3.0)
-    assert loop.time() - start < 1.0
+    await asyncio.wait_for(client.call_service("/rosapi/topics", timeout=10.0), 10.0)
     assert client.connections_made == 2
 
 
-async def test_a_local_bridge_is_back_within_a_second_of_its_return_after_a_long_outage(
+async def test_a_local_bridge_is_retried_on_the_short_ceiling_and_is_back_after_a_long_outage(
     make_sim: MakeSim, make_client: MakeClient
 ) -> None:
-    """Down for 2.5 s with the default backoff (0.2 s doubling to 5 s): connected within 1 s of the return."""
+    """Down for 2.5 s with the default backoff (0.2 s doubling to 5 s): the local bridge's ceiling is half a
+    second, and the client is back by itself (no call prompting it). How soon after the return is the
+    benchmark's figure (scripts/bench.py), not a bound here."""
     robot = await make_sim()
     client = await make_client(robot, reconnect_min=0.2, reconnect_max=5.0)
+    assert client.reconnect_cap == LOCAL_RECONNECT_MAX
     await robot.stop()
     await client.wait_disconnected(5.0)
     # The outage itself, not a synchronisation: the backoff grows while the bridge is away.
     await asyncio.sleep(2.5)
     await robot.start()
-    loop = asyncio.get_running_loop()
-    start = loop.time()
-    await client.wait_connected(3.0)
-    assert loop.time() - start < 1.0
+    await client.wait_connected(5.0)
+    assert client.connections_made == 2
 
 
 @pytest.fixture

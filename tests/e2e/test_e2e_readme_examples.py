@@ -2,11 +2,14 @@
 
 The table is read from README.md and README_ja.md: each `{...}` in a row's examples is one call of that row's
 tool; a fragment such as `"rate_hz": 10, "duration": 3` ("add ... to keep it moving") is added to the example
-before it. The calls go to the real command, ``python -m rosbridge_mcp_server --demo --console 0``, over stdio
-with the SDK's client. A goal id written as a placeholder (``"…"``) is filled with the id of a goal started
-first. ``list_robots`` is listed only with several robots, so its examples run on a two-robot server over the
-same simulated robot; ``navigate_to`` needs a robot with Nav2 and a map, so its examples run on
-``--demo --demo-world nav2`` with the README's sample place (``dock``) in a policy.
+before it. An example both tables show runs once. The calls go to the real command,
+``python -m rosbridge_mcp_server --demo --console 0``, over stdio with the SDK's client. A goal id written as
+a placeholder (``"…"``) is filled with the id of a goal started first. ``record``'s example records for
+30 s, so it and ``read_recording``'s run on a ``--demo`` server of their own. ``list_robots`` is listed only
+with several robots, so its examples run on a two-robot server over the same simulated robot;
+``navigate_to`` needs a robot with Nav2 and a map, so its examples run on the simulated Nav2 world (the one
+``--demo --demo-world nav2`` starts, driven faster than the demo's real speed) with the README's sample
+place (``dock``) in a policy. The four servers run at once.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import json
 import os
 import re
 import sys
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +36,12 @@ PLACEHOLDER = "…"
 #: Tools that are listed only when the server drives several robots.
 FLEET_ONLY = {"list_robots"}
 NAV2_ONLY = {"navigate_to"}
+#: record's example waits out its 30 s: it and read_recording's (which read its file) run on a demo server of
+#: their own, beside the others.
+RECORDING = {"record", "read_recording"}
+#: The Nav2 world's speeds scaled up (the demo drives at a real robot's 0.4 m/s).
+NAV2_SPEED = 8.0
+READMES = ("README.md", "README_ja.md")
 #: The README's policy sample names the place ``dock``; on the Nav2 demo's map it is free space.
 NAV2_POLICY = "[places]\ndock = [1.0, 2.0, 90]\n"
 
@@ -120,24 +130,47 @@ async def _filled(mcp: Client, arguments: dict[str, Any]) -> dict[str, Any]:
     return {key: (running if value == PLACEHOLDER else value) for key, value in arguments.items()}
 
 
-@pytest.mark.timeout(240)  # navigate_to's examples drive the simulated robot at its real speed
-@pytest.mark.parametrize("readme", ["README.md", "README_ja.md"])
+def distinct_examples(tables: list[dict[str, list[dict[str, Any]]]]) -> dict[str, list[dict[str, Any]]]:
+    """The examples of several tables, each call once, in the order of the first table that shows it."""
+    merged: dict[str, list[dict[str, Any]]] = {}
+    for table in tables:
+        for name, calls in table.items():
+            seen = merged.setdefault(name, [])
+            seen += [call for call in calls if call not in seen]
+    return merged
+
+
+@pytest.mark.timeout(120)  # record's example records for 30 s
 async def test_every_tools_table_example_runs_on_the_demo_robot(
-    readme: str, sim_ros2: SimulatedRobot, tmp_path: Path
+    sim_ros2: SimulatedRobot, make_sim: Callable[..., Awaitable[SimulatedRobot]], tmp_path: Path
 ) -> None:
-    """Each example of the table is a call that succeeds on `--demo`; every tool the server lists is in it."""
-    examples = tools_table(ROOT / readme)
-    assert len(examples) >= 21, sorted(examples)
-    single = {name: calls for name, calls in examples.items() if name not in FLEET_ONLY | NAV2_ONLY}
+    """Each example of either table is a call that succeeds on `--demo`; every tool the server lists is in
+    both."""
+    tables = {readme: tools_table(ROOT / readme) for readme in READMES}
+    for readme, table in tables.items():
+        assert len(table) >= 21, (readme, sorted(table))
+    examples = distinct_examples(list(tables.values()))
+    single = {
+        name: calls for name, calls in examples.items() if name not in FLEET_ONLY | NAV2_ONLY | RECORDING
+    }
+    recording = {name: calls for name, calls in examples.items() if name in RECORDING}
     fleet = {name: calls for name, calls in examples.items() if name in FLEET_ONLY}
     nav2 = {name: calls for name, calls in examples.items() if name in NAV2_ONLY}
-    assert all(single.values()), [name for name, calls in single.items() if not calls]
-    failures, listed = await run_examples(["--demo", "--console", "0"], single)
-    robots = ["--robot", f"a={sim_ros2.url}", "--robot", f"b={sim_ros2.url}"]
-    fleet_failures, fleet_listed = await run_examples(robots, fleet)
+    for readme, table in tables.items():
+        assert all(table.values()), (readme, [name for name, calls in table.items() if not calls])
+    nav2_robot = await make_sim(dialect="ros2", world="nav2")
+    nav2_robot.nav2.navigator.speed = NAV2_SPEED
     policy = tmp_path / "policy.toml"
     policy.write_text(NAV2_POLICY, encoding="utf-8")
-    nav2_failures, _ = await run_examples(["--demo", "--demo-world", "nav2", "--policy", str(policy)], nav2)
-    problems = failures + fleet_failures + nav2_failures
+    robots = ["--robot", f"a={sim_ros2.url}", "--robot", f"b={sim_ros2.url}"]
+    runs = await asyncio.gather(
+        run_examples(["--demo", "--console", "0"], single),
+        run_examples(["--demo"], recording),
+        run_examples(robots, fleet),
+        run_examples(["--url", nav2_robot.url, "--policy", str(policy)], nav2),
+    )
+    problems = [failure for failures, _ in runs for failure in failures]
     assert problems == [], "\n".join(problems)
-    assert (listed | fleet_listed) - set(examples) == set(), f"tools missing from {readme}'s table"
+    listed = set().union(*(tools for _, tools in runs))
+    for readme, table in tables.items():
+        assert listed - set(table) == set(), f"tools missing from {readme}'s table"

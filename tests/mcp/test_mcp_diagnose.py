@@ -233,16 +233,20 @@ async def test_a_rate_far_below_the_one_seen_before_is_a_warning() -> None:
     assert "under half" in data["findings"][0]["summary"]
 
 
-async def test_diagnose_answers_within_a_second_and_a_half_of_its_window() -> None:
-    async with broken("ros2", ()) as (_robot, session):
-        began = time.monotonic()
-        result = await session.ok("diagnose")
-        took = time.monotonic() - began
+async def test_diagnose_listens_to_every_stream_side_by_side() -> None:
+    """The streams are heard in one window, all at once (one window per topic would take ten seconds): the
+    robot sees every stream subscribed at the same time. How long diagnose takes is the benchmark's figure
+    (scripts/bench.py), not a bound here."""
+    streams = ("/scan", "/odom", "/tf", "/imu/data", "/joint_states")
+    async with broken("ros2", ()) as (robot, session):
+        assert not any(robot.bridge.has_subscribers(topic) for topic in streams if topic != "/tf")
+        call = asyncio.create_task(session.ok("diagnose"))
+        # /scan, subscribed, notifies the world ten times a second: the check is made again until it holds.
+        await robot.world.wait_for(lambda _: all(robot.bridge.has_subscribers(t) for t in streams), WAIT)
+        result = await asyncio.wait_for(call, WAIT)
     data: dict[str, Any] | None = result.structured_content
     assert data is not None
-    # The figure that counts is the benchmark's p50 (scripts/bench.py); here only a bound that catches a
-    # serial look (one window per topic would take ten seconds).
-    assert took < 5.0, took
+    assert data["findings"] == [], data
 
 
 async def test_a_frame_with_two_parents_and_a_stale_transform_are_named() -> None:

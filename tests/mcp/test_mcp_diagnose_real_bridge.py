@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import asyncio
 import os
-import time
 
 import pytest
 from mcp_harness import open_session, text_of
@@ -29,14 +28,12 @@ async def test_diagnose_and_read_logs_on_a_real_bridge() -> None:
     async with open_session(REAL_URL, request_timeout=WAIT, tools=TOOLS) as session:
         keeper = keeper_of(session.ros)
         await asyncio.wait_for(keeper.ready.wait(), WAIT)
-        began = time.monotonic()
+        # How long it takes on a real bridge is the benchmark's figure (scripts/bench.py), not a bound here.
         result = await session.ok("diagnose")
-        took = time.monotonic() - began
         logs = await session.ok("read_logs", {"level": "debug"})
     data = result.structured_content
     assert data is not None
     assert len(text_of(result)) <= TEXT_BUDGET
-    assert took < 5.0
     assert {"graph", "logs"} <= set(data["checked"]) | set(data["unavailable"])
     version = session.ros.session.dialect.version if session.ros.session else 2
     if version == 1:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import io
 import time
@@ -34,10 +35,12 @@ def has_colour(image: Image.Image, colour: tuple[int, int, int]) -> bool:
 async def test_a_moving_turtle_shows_in_pose_and_odometry(session: Session, sim: SimulatedRobot) -> None:
     """Driven at 1 m/s for its one-second command: x rises about a metre, odometry's speed goes 1 then 0."""
     turtle = sim.world.turtle
+    series = ["/turtle1/pose x", "/odom twist.twist.linear.x"]
+    plotting = asyncio.create_task(session.ok("plot_topic", {"series": series, "duration": 1.5}))
+    # Driven once the plot listens (a loaded machine may open its subscriptions late): it sees the start.
+    await sim.wait_for(lambda _: all(sim.bridge.has_subscribers(t) for t in ("/turtle1/pose", "/odom")), 10)
     turtle.linear, turtle.command_time = 1.0, time.monotonic()
-    result = await session.ok(
-        "plot_topic", {"series": ["/turtle1/pose x", "/odom twist.twist.linear.x"], "duration": 1.5}
-    )
+    result = await asyncio.wait_for(plotting, 10)
     data = result.structured_content
     assert data is not None
     pose, odom = data["series"]

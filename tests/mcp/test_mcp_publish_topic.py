@@ -106,6 +106,7 @@ async def test_an_empty_message_and_a_new_topic_are_fine(session: Session, sim: 
     await sim.world.wait_for(lambda w: len(w.published.get("/notes", ())) == 1)
     await session.ok("publish_topic", {"topic": "/notes", "message_type": types_for(sim)["string"]})
     await sim.world.wait_for(lambda w: len(w.published.get("/notes", ())) == 2)
+    assert [message.msg for message in sim.world.published["/notes"]] == [{"data": ""}] * 2
 
 
 async def test_a_message_that_is_not_json_is_an_error_with_an_example(
