@@ -335,3 +335,16 @@ def test_demo_with_robots_says_how_to_try_a_fleet_on_simulated_robots(
     err = capsys.readouterr().err
     assert "rosbridge-sim-robot --port 9091" in err
     assert "--demo-robots 2" in err
+
+
+def test_the_commands_that_do_not_serve_start_without_the_mcp_sdk() -> None:
+    """`check`, `console-url`, `--help` and a refused command line import no MCP SDK (about a second of CPU at
+    every start); the serving command imports it when it serves."""
+    code = (
+        "import sys, rosbridge_mcp_server.cli;"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] == 'mcp'))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=30, check=True
+    )
+    assert done.stdout.strip() == "[]"

@@ -13,7 +13,7 @@ from typing import Any
 from mcp.server import Server
 from mcp.server.stdio import stdio_server
 
-from rosbridge_mcp_server.cli import commands as cli
+from rosbridge_mcp_server import server as cli
 from rosbridge_mcp_server.cli import main
 
 __all__: list[str] = []

@@ -22,7 +22,7 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from rosbridge_mcp_server.cli import commands as cli
+from rosbridge_mcp_server import server as cli
 from rosbridge_mcp_server.cli import main
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.server.checks import ToolCalls

@@ -17,7 +17,7 @@ import signal
 import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from pathlib import Path
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
 from rosbridge_mcp_server.cli.check import run_check
@@ -31,7 +31,9 @@ from rosbridge_mcp_server.console import ConsoleHub, RobotView
 from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls, runtime_dir
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
-from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.server import Robot
 
 __all__ = ["PROG", "check", "configure_logging", "demo_robot", "open_audit_log", "run", "serve"]
 
@@ -300,6 +302,10 @@ async def serve(
     Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names). With
     *console*, the operator console beside it (one person, one E-STOP for every robot); its URL is also
     written to a file in *console_dir* (this user's alone) while it runs."""
+    # The MCP SDK is imported here, by the one command that serves: `check`, `console-url`, `--help` and a
+    # refused command line start without it (about a second of CPU less each).
+    from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio  # noqa: PLC0415
+
     async with demo_robot(config, demo) as effective:
         robots = list(fleet) or [("robot", effective)]
         entries: list[Robot] = []
