@@ -17,7 +17,7 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import Advice, NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
@@ -28,19 +28,25 @@ from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.navigation import Scene, goal_poses, navigation_goal, survey
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
-from rosbridge_mcp_server.robot.seam import Act, Acting, approved, carry_out
+from rosbridge_mcp_server.robot.seam import Act, AskPerson, Guard, approved, carry_out
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, stamped
 
 if TYPE_CHECKING:
+    from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.gate import SendGate
+    from rosbridge_mcp_server.robot.goals import GoalRegistry
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = [
     "PING_LIMIT",
     "SCENE_TIMEOUT",
+    "Acting",
     "Published",
     "ServiceReply",
     "StreamProgress",
     "Streamed",
+    "Timeouts",
     "call_service",
     "navigation_scene",
     "publish_once",
@@ -52,6 +58,37 @@ __all__ = [
 ]
 
 _log = logging.getLogger(__name__)
+
+
+class Timeouts(Protocol):
+    """The one setting an act reads (the server's ``Config`` is one)."""
+
+    @property
+    def request_timeout(self) -> float: ...
+
+
+class Acting(Protocol):
+    """What an act needs: a robot session's parts and the call's own (a tool's ``ToolContext`` is one)."""
+
+    @property
+    def client(self) -> RosbridgeClient: ...
+    @property
+    def config(self) -> Timeouts: ...
+    @property
+    def graph(self) -> RosGraph: ...
+    @property
+    def guard(self) -> Guard: ...
+    @property
+    def ask_person(self) -> AskPerson: ...
+    @property
+    def caller(self) -> str | None: ...
+    @property
+    def activity(self) -> SessionActivity: ...
+    @property
+    def goals(self) -> GoalRegistry: ...
+    @property
+    def gate(self) -> SendGate: ...
+
 
 #: Longest wait for the bridge's pong before a publish (less when the configured request timeout is shorter).
 PING_LIMIT = 3.0

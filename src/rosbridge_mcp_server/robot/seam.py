@@ -12,27 +12,19 @@ from __future__ import annotations
 
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import Any, Literal, Protocol
 
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.effects import Effect
 
-if TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.robot.activity import SessionActivity
-    from rosbridge_mcp_server.robot.gate import SendGate
-    from rosbridge_mcp_server.robot.goals import GoalRegistry
-    from rosbridge_mcp_server.robot.graph import RosGraph
-
 __all__ = [
     "ALLOW_ALL",
     "Act",
-    "Acting",
     "Answer",
+    "Approving",
     "AskPerson",
     "Guard",
     "SendToLink",
-    "Timeouts",
     "approved",
     "asking",
     "carry_out",
@@ -151,37 +143,19 @@ ALLOW_ALL: Guard = _AllowAll()
 nobody_to_ask = AskPerson()
 
 
-class Timeouts(Protocol):
-    """The one setting an act reads (the server's ``Config`` is one)."""
+class Approving(Protocol):
+    """What the seam reads of a call to approve and carry out an act (a tool's ``ToolContext`` is one; all an
+    act needs is :class:`rosbridge_mcp_server.robot.acting.Acting`)."""
 
-    @property
-    def request_timeout(self) -> float: ...
-
-
-class Acting(Protocol):
-    """What an act needs: a robot session's parts and the call's own (a tool's ``ToolContext`` is one)."""
-
-    @property
-    def client(self) -> RosbridgeClient: ...
-    @property
-    def config(self) -> Timeouts: ...
-    @property
-    def graph(self) -> RosGraph: ...
     @property
     def guard(self) -> Guard: ...
     @property
     def ask_person(self) -> AskPerson: ...
     @property
     def caller(self) -> str | None: ...
-    @property
-    def activity(self) -> SessionActivity: ...
-    @property
-    def goals(self) -> GoalRegistry: ...
-    @property
-    def gate(self) -> SendGate: ...
 
 
-async def approved(ctx: Acting, act: Act) -> Act:
+async def approved(ctx: Approving, act: Act) -> Act:
     """*act* as the guard approved it (perhaps clamped), named with the call's caller; a refusal is recorded,
     then raised."""
     if act.caller is None and ctx.caller is not None:
@@ -193,7 +167,7 @@ async def approved(ctx: Acting, act: Act) -> Act:
         raise
 
 
-async def carry_out(ctx: Acting, act: Act, send: Callable[[], Awaitable[Any]]) -> Any:
+async def carry_out(ctx: Approving, act: Act, send: Callable[[], Awaitable[Any]]) -> Any:
     """Run *send* for an approved *act* and tell the guard how it went."""
     try:
         result = await send()

@@ -66,7 +66,8 @@ from rosbridge_mcp_server.tools.base import (
 from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema
 
 if typing.TYPE_CHECKING:
-    from rosbridge_mcp_server.server.fleet import Robot
+    from rosbridge_mcp_server.config import Config
+    from rosbridge_mcp_server.robot.session import RobotSession
 
 __all__ = [
     "EdgeTool",
@@ -82,6 +83,17 @@ __all__ = [
 ]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
+
+
+class Robot(typing.Protocol):
+    """A robot a call runs on, as the edge reads it (``server.fleet.Robot`` is one)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def config(self) -> Config: ...
+    @property
+    def session(self) -> RobotSession: ...
 
 
 @dataclass(frozen=True)

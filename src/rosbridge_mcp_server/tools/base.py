@@ -121,7 +121,7 @@ class ToolContext:
     configuration, and the call's own: ways to ask the person at the MCP client (elicitation) and to report
     progress, and who is calling (the name the transport authenticated, for the audit; ``None`` on stdio).
 
-    It is the :class:`~rosbridge_mcp_server.robot.seam.Acting` every checked send in ``robot/`` takes: the
+    It is the :class:`~rosbridge_mcp_server.robot.acting.Acting` every checked send in ``robot/`` takes: the
     session's parts are read through it (``ctx.client``, ``ctx.graph``, ``ctx.guard``, ...).
     """
 
