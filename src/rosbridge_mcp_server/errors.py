@@ -87,6 +87,10 @@ class Advice(enum.Enum):
     NO_RECORDING = enum.auto()
     #: No node of that name: the nodes are listed.
     NODES = enum.auto()
+    #: A node that is not running: the running nodes are listed.
+    RUNNING_NODES = enum.auto()
+    #: A message type the bridge does not know: the topics show the types in use.
+    TOPIC_TYPES = enum.auto()
 
 
 @dataclass(frozen=True)

@@ -121,3 +121,21 @@ async def test_a_missing_or_outside_recording_points_at_read_recording(
         f"'/etc/hostname' is outside the recording directory {str(directory.resolve())!r}; name a file "
         "inside it (read_recording without a file lists them)."
     )
+
+
+async def test_a_node_that_is_not_running_points_at_list_nodes(session: Session) -> None:
+    text = await session.error("get_node_info", {"node": "/no_such_node"})
+    assert "Node /no_such_node is not running." in text
+    assert text.endswith(" Call list_nodes to see the nodes.")
+
+
+async def test_an_unknown_message_type_names_its_form_and_list_topics(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    ros2 = sim.dialect == "ros2"
+    text = await session.error(
+        "publish_topic",
+        {"topic": "/new_topic", "message_type": "no_pkg/Nothing", "message": {}},
+    )
+    form = "`geometry_msgs/msg/Twist`" if ros2 else "`geometry_msgs/Twist`"
+    assert f"type names look like {form}; list_topics shows the types in use." in text, text

@@ -20,7 +20,7 @@ import contextlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.errors import NotOnRobotError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import Advice, NotOnRobotError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
 from rosbridge_mcp_server.robot.names import did_you_mean
 
@@ -52,9 +52,8 @@ class UnknownNodeError(NotOnRobotError):
     def __init__(self, node: str, known: list[str]) -> None:
         self.node = node
         self.known = known
-        super().__init__(
-            f"Node {node} is not running.{did_you_mean(node, known)} Call list_nodes to see the nodes."
-        )
+        super().__init__(f"Node {node} is not running.{did_you_mean(node, known)}")
+        self.advise(Advice.RUNNING_NODES)
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,8 @@ WORDS: Final[dict[Advice, str]] = {
     Advice.RECORDINGS: " (read_recording without a file lists them).",
     Advice.NO_RECORDING: "; read_recording without a file lists them.",
     Advice.NODES: "; list_nodes lists the nodes.",
+    Advice.RUNNING_NODES: " Call list_nodes to see the nodes.",
+    Advice.TOPIC_TYPES: "; list_topics shows the types in use.",
 }
 
 

@@ -12,7 +12,7 @@ import logging
 from typing import Any
 
 from rosbridge_mcp_server.client import Dialect, RosInfo
-from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError, UnknownTypeError
+from rosbridge_mcp_server.errors import Advice, RequestTimeoutError, ServiceError, UnknownTypeError
 from rosbridge_mcp_server.robot.graph.rosapi import ConnectionKnowledge, Rosapi, is_missing_service, strings
 from rosbridge_mcp_server.robot.known_types import ros1_load_failure
 from rosbridge_mcp_server.robot.messages import TypeDef, typedefs_from_rosapi
@@ -41,7 +41,7 @@ class TypeDefinitions:
         if typedefs is None:
             return {}  # rosapi loaded the type but could not describe it: rosbridge alone will judge
         if not typedefs:
-            raise UnknownTypeError(type_name, _type_hint(info))
+            raise UnknownTypeError(type_name, _type_hint(info)).advise(Advice.TOPIC_TYPES)
         return typedefs
 
     async def service_request_typedefs(self, type_name: str) -> dict[str, TypeDef] | None:
@@ -137,10 +137,10 @@ class TypeDefinitions:
         if installed is not None and bridge_name not in installed:
             installed = await self.installed_interfaces(fresh=True)
         if installed is not None and bridge_name not in installed:
-            raise UnknownTypeError(type_name, _type_hint(info))
+            raise UnknownTypeError(type_name, _type_hint(info)).advise(Advice.TOPIC_TYPES)
 
 
 def _type_hint(info: RosInfo) -> str:
     if info.version == 1:
-        return "ROS 1 type names look like `geometry_msgs/Twist`; list_topics shows the types in use."
-    return "ROS 2 type names look like `geometry_msgs/msg/Twist`; list_topics shows the types in use."
+        return "ROS 1 type names look like `geometry_msgs/Twist`"
+    return "ROS 2 type names look like `geometry_msgs/msg/Twist`"
