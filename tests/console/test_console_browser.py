@@ -129,8 +129,9 @@ async def test_estop_stops_a_running_stream_and_refuses_acting_calls_until_relea
         # Release is good news: not in the red of refusals and of the e-stop.
         released = page.locator("#audit li").first.locator(".outcome")
         await expect(released).to_have_text("e-stop released", timeout=WAIT_MS)
-        colour = await released.evaluate("node => getComputedStyle(node).color")
-        assert colour == "rgb(45, 122, 45)", colour
+        # Asked until it holds: the page redraws the audit list as events arrive, and a style read from a node
+        # that was just replaced is empty.
+        await expect(released).to_have_css("color", "rgb(45, 122, 45)", timeout=WAIT_MS)
         allowed = await console.call("publish_topic", twist_call(0.2))
         assert not allowed.is_error, text_of(allowed)
         await sim_ros2.wait_for(lambda world: moving(sim_ros2)[-1] == 0.2, timeout=5)
@@ -214,7 +215,7 @@ async def test_the_colour_camera_is_the_default_and_the_map_keeps_its_aspect(
         # The pose wraps between its parts only: every number with its unit stays on one line.
         await expect(page.locator("#pose span").first).to_be_visible(timeout=WAIT_MS)
         for part in await page.locator("#pose span").all():
-            assert await part.evaluate("node => getComputedStyle(node).whiteSpace") == "nowrap"
+            await expect(part).to_have_css("white-space", "nowrap", timeout=WAIT_MS)
 
 
 async def test_a_lost_robot_marks_the_last_pose_map_and_frame_stale(sim_ros2: SimulatedRobot) -> None:
