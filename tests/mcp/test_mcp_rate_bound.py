@@ -23,8 +23,8 @@ RATE = 20.0
 ARRIVAL_SLACK = 1
 
 
-def capped() -> Policy:
-    return parse_policy({"publish": {"max_rate_hz": RATE}}, where="test-policy.toml")
+def capped(rate: float = RATE) -> Policy:
+    return parse_policy({"publish": {"max_rate_hz": rate}}, where="test-policy.toml")
 
 
 def moving_times(sim: SimulatedRobot, speed: float) -> list[float]:
@@ -81,9 +81,14 @@ async def test_single_publishes_at_once_reach_the_robot_at_the_rate(sim: Simulat
 
 
 async def test_a_stream_at_the_rate_alone_is_not_held_back(sim: SimulatedRobot) -> None:
-    """The cap shares the rate; a single stream at exactly max_rate_hz still sends all it planned."""
-    async with open_session(sim.url, guard=None, policy=capped()) as session:
-        result = await session.ok("publish_topic", twist(sim, 0.4, rate_hz=RATE, duration=1.0))
+    """The cap shares the rate; a single stream at exactly max_rate_hz still sends all it planned.
+
+    At 5 Hz: the gate keeps its grid of turns through any hiccup of the loop shorter than a turn (200 ms
+    here), which is the property; a longer stall costs turns by design (a burst to catch up would break the
+    cap), and a CI machine under load has stalled 150 ms, three of 20 Hz's 50 ms turns."""
+    rate = 5.0
+    async with open_session(sim.url, guard=None, policy=capped(rate)) as session:
+        result = await session.ok("publish_topic", twist(sim, 0.4, rate_hz=rate, duration=2.0))
     assert result.structured_content is not None
-    assert result.structured_content["count"] == 20, text_of(result)
-    assert len(moving_times(sim, 0.4)) == 20
+    assert result.structured_content["count"] == 10, text_of(result)
+    assert len(moving_times(sim, 0.4)) == 10
