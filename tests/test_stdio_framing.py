@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import asyncio
 import io
+from collections.abc import Callable
 
 import pytest
 from mcp.types import JSONRPCError, jsonrpc_message_adapter
@@ -79,19 +81,37 @@ def test_the_sdk_transports_failures_are_answered_with_the_id_they_carry() -> No
     assert (array.id, array.error.code) == (None, -32600)
 
 
+def _from_stream(data: bytes) -> stdio._BoundedLines:
+    """The lines a pipe gives (on the event loop, a piece bounded by the reader's limit), fed in 7 bytes."""
+    reader = asyncio.StreamReader(limit=stdio._CHUNK_BYTES)
+    for start in range(0, len(data), 7):
+        reader.feed_data(data[start : start + 7])
+    reader.feed_eof()
+    return stdio._BoundedLines.from_stream(reader)
+
+
+def _from_file(data: bytes) -> stdio._BoundedLines:
+    """The lines a terminal or a regular file gives (read by a worker thread)."""
+    return stdio._BoundedLines.from_file(io.BytesIO(data))
+
+
+@pytest.mark.parametrize("source", [_from_stream, _from_file], ids=["pipe", "file"])
 async def test_lines_up_to_the_limit_pass_and_a_longer_one_is_answered_naming_it(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, source: Callable[[bytes], stdio._BoundedLines]
 ) -> None:
     """With the limit at 40 bytes: a 40-byte line passes whole; a longer one (its id last, read after the
-    limit) stands in as -32600 naming its size under its id; the next line is read as it was sent."""
+    limit) stands in as -32600 naming its size under its id; the next line is read as it was sent, and a
+    last line without its newline too."""
     monkeypatch.setattr(stdio, "MAX_LINE_BYTES", 40)
     monkeypatch.setattr(stdio, "_CHUNK_BYTES", 16)
     exact = b'{"jsonrpc": "2.0", "method": "x", "a":1}'
     over = b'{"jsonrpc": "2.0", "method": "tools/list", "params": {"x": "' + b"y" * 100 + b'"}, "id": 9}'
     after = b'{"jsonrpc":"2.0","id":10,"method":"p"}'
+    last = b'{"jsonrpc":"2.0","id":11,"method":"q"}'
     assert len(exact) == 40
-    lines = stdio._BoundedLines(io.BytesIO(exact + b"\n" + over + b"\n" + after + b"\n"))
-    read = [line async for line in lines]
+    read = [line async for line in source(exact + b"\n" + over + b"\n" + after + b"\n" + last)]
+    assert len(read) == 4
+    assert read[3] == last.decode()
     assert read[0] == exact.decode() + "\n"
     assert read[2] == after.decode() + "\n"
     reply = _reply(read[1])

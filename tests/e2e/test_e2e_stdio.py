@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import signal
 import socket
 import sys
@@ -258,6 +259,71 @@ async def test_a_request_read_from_a_file_is_answered_through_the_sdk_transport(
     assert len(answers) == 1, stderr.decode()
     assert answers[0]["result"]["serverInfo"]["name"] == "rosbridge"
     assert code == 0, stderr.decode()
+
+
+async def test_a_host_giving_one_socket_for_stdin_and_stdout_is_served_and_gets_it_back_blocking() -> None:
+    """Node's child_process (what Electron hosts run on) gives a socket pair, not pipes. One socket as both
+    stdin and stdout, the demo robot: the handshake, a tool call and an unreadable line are answered on it;
+    at the end of input the server exits 0 and the socket's file description, shared with us, is blocking
+    again (the event loop had made it non-blocking)."""
+    ours, theirs = socket.socketpair()
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        "-m",
+        "rosbridge_mcp_server",
+        "--demo",
+        stdin=theirs,
+        stdout=theirs,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    reader, writer = await asyncio.open_connection(sock=ours)
+    lines = [
+        json.dumps(
+            {
+                "jsonrpc": "2.0",
+                "id": 1,
+                "method": "initialize",
+                "params": {
+                    "protocolVersion": "2025-06-18",
+                    "capabilities": {},
+                    "clientInfo": {"name": "e2e-test", "version": "0"},
+                },
+            }
+        ),
+        json.dumps({"jsonrpc": "2.0", "method": "notifications/initialized"}),
+        "not json",
+        json.dumps(
+            {
+                "jsonrpc": "2.0",
+                "id": 2,
+                "method": "tools/call",
+                "params": {"name": "list_topics", "arguments": {}},
+            }
+        ),
+    ]
+    answers: dict[object, dict[str, Any]] = {}
+    try:
+        writer.write(("\n".join(lines) + "\n").encode())
+        while len(answers) < 3:
+            raw = await asyncio.wait_for(reader.readline(), WAIT)
+            assert raw, "the server closed its end"
+            message = json.loads(raw)
+            if "id" in message:
+                answers[message["id"]] = message
+        writer.write_eof()
+        code = await asyncio.wait_for(process.wait(), WAIT)
+        blocking = os.get_blocking(theirs.fileno())
+    finally:
+        writer.close()
+        theirs.close()
+        if process.returncode is None:
+            process.kill()
+        _out, stderr = await process.communicate()
+    assert answers[1]["result"]["serverInfo"]["name"] == "rosbridge"
+    assert answers[None]["error"]["code"] == -32700
+    assert "/turtle1/pose" in answers[2]["result"]["content"][0]["text"]
+    assert code == 0, stderr.decode()
+    assert blocking
 
 
 async def _initialized(server: StdioServer) -> None:

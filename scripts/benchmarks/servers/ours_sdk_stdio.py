@@ -1,9 +1,9 @@
 """``rosbridge-mcp-server`` served on the SDK's stdio transport, bare (as ``Server.run`` on its streams).
 
-Since #18 our server also serves stdio through the SDK's transport, wrapped only to answer the lines it cannot
-read (``rosbridge_mcp_server.server.stdio``); before, it read the pipes itself to save the transport's worker
-thread hand-offs. The "SDK's stdio" rows of the benchmark now show what the wrapper costs (nothing measurable
-expected) and would notice if either changed.
+Our server gives the SDK's transport its stdin and stdout on asyncio pipes
+(``rosbridge_mcp_server.server.stdio``); left to itself the transport reads and writes through anyio worker
+threads. The "SDK's stdio" rows of the benchmark show what those thread hand-offs cost, and would notice if
+either changed.
 """
 
 from __future__ import annotations

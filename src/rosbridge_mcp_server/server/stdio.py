@@ -1,27 +1,40 @@
-"""MCP over stdin/stdout: the SDK's own stdio transport, with every line it cannot read answered.
+"""MCP over stdin/stdout: the SDK's stdio transport fed through asyncio pipes, every line it cannot read
+answered.
 
-The SDK's transport (``mcp.server.stdio.stdio_server``) hands a line it cannot read (not JSON, JSON nested
-deeper than its parser allows, not JSON-RPC) on as an exception, which the SDK only logs at debug level: the
-client would wait forever. Here each gets the JSON-RPC error reply (-32700 / -32600) under the request's id
-when the text shows it, so every line gets an answer. The transport also keeps stray output off the wire
-(fd 1 points at stderr and fd 0 at the null device while serving).
+The SDK's transport (``mcp.server.stdio.stdio_server``) takes the streams it reads and writes as arguments.
+Left to itself it wraps stdin and stdout in anyio worker threads: every line read, every write and every flush
+is a hand-off to a thread and back, three per tool call, which cost 0.3-0.7 ms of each call's latency on our
+machines (``docs/performance.md``). When the host gives us pipes or sockets, as every MCP host does, we hand
+it streams read and written from the event loop instead (:class:`_PipeOut`,
+:meth:`_BoundedLines.from_stream`); a terminal or a regular file keeps the worker threads (a person typing
+JSON needs no speed, and a terminal's file description is shared with the shell, which must not be left
+non-blocking).
+
+The transport hands a line it cannot read (not JSON, JSON nested deeper than its parser allows, not JSON-RPC)
+on as an exception, which the SDK only logs at debug level: the client would wait forever. Here each gets the
+JSON-RPC error reply (-32700 / -32600) under the request's id when the text shows it, so every line gets an
+answer.
+
+Stray output stays off the wire, as with the SDK's own transport: while serving, fd 0 points at the null
+device and fd 1 at stderr, the wire is served from private duplicates, and both are restored on the way out.
 
 Lines are bounded: the transport reads a line whole, so a client could make the server hold any amount of
-memory with one line. We give it stdin's lines ourselves (:class:`_BoundedLines`, from a private copy of fd 0,
-fd 0 itself pointed at the null device as the SDK does): a line longer than :data:`MAX_LINE_BYTES` is read to
-its end without being kept (its first 64 KiB and last 1,000 bytes are kept to find its id) and answered
-``-32600`` naming the limit.
+memory with one line. We give it stdin's lines ourselves (:class:`_BoundedLines`): a line longer than
+:data:`MAX_LINE_BYTES` is read to its end without being kept (its first 64 KiB and last 1,000 bytes are kept
+to find its id) and answered ``-32600`` naming the limit.
 """
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import json
 import logging
 import os
 import re
+import stat
 import sys
-from collections.abc import Iterator
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import TYPE_CHECKING, Any, BinaryIO, cast
 
 import anyio
@@ -49,15 +62,101 @@ _TOO_LONG = "rosbridge_mcp_line_too_long"
 _TAIL_BYTES = 1000
 _CHUNK_BYTES = 1024 * 1024
 
+#: Streams for the SDK's transport: what it reads lines from and what it writes them to (None: its own).
+_Streams = tuple["anyio.AsyncFile[str] | None", "anyio.AsyncFile[str] | None"]
+
 
 async def serve_stdio(server: Server[Any]) -> None:
     """Serve ``server`` on this process's stdin/stdout until stdin closes."""
+    async with (
+        _wire() as (stdin, stdout),
+        stdio_server(stdin=stdin, stdout=stdout) as (read_stream, write_stream),
+    ):
+        answering = answering_stream(read_stream, write_stream, reply_for_unreadable)
+        await server.run(answering, write_stream, server.create_initialization_options())
+
+
+@contextlib.asynccontextmanager
+async def _wire() -> AsyncIterator[_Streams]:
+    """The streams for the SDK's transport: asyncio pipes when fd 0 and fd 1 are pipes or sockets; else
+    stdin's lines read by a worker thread and stdout left to the SDK (both ``None``: stdin is not fd 0)."""
+    if sys.platform != "win32" and _is_pipe_or_socket(0) and _is_pipe_or_socket(1):
+        async with _pipes() as streams:
+            yield streams
+        return
     with _stdin_lines() as lines:
         # The SDK's transport only iterates over its stdin (``async for line in stdin``).
-        stdin = cast("anyio.AsyncFile[str] | None", lines)
-        async with stdio_server(stdin=stdin) as (read_stream, write_stream):
-            answering = answering_stream(read_stream, write_stream, reply_for_unreadable)
-            await server.run(answering, write_stream, server.create_initialization_options())
+        yield cast("anyio.AsyncFile[str] | None", lines), None
+
+
+def _is_pipe_or_socket(fd: int) -> bool:
+    try:
+        mode = os.fstat(fd).st_mode
+    except OSError:
+        return False
+    return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
+
+
+@contextlib.asynccontextmanager
+async def _pipes() -> AsyncIterator[_Streams]:
+    """stdin's lines and a stdout writer on the event loop, from private duplicates of fd 0 and fd 1 while
+    fd 0 points at the null device and fd 1 at stderr."""
+    import fcntl  # noqa: PLC0415 - POSIX only
+
+    wire_in = fcntl.fcntl(0, fcntl.F_DUPFD_CLOEXEC, 3)
+    wire_out = fcntl.fcntl(1, fcntl.F_DUPFD_CLOEXEC, 3)
+    null = os.open(os.devnull, os.O_RDONLY)
+    try:
+        os.dup2(null, 0)
+        os.dup2(2, 1)
+    finally:
+        os.close(null)
+    loop = asyncio.get_running_loop()
+    read_transport: asyncio.ReadTransport | None = None
+    writer: asyncio.StreamWriter | None = None
+    try:
+        reader = asyncio.StreamReader(limit=_CHUNK_BYTES)
+        read_transport, _ = await loop.connect_read_pipe(
+            lambda: asyncio.StreamReaderProtocol(reader), os.fdopen(wire_in, "rb", buffering=0, closefd=False)
+        )
+        write_transport, write_protocol = await loop.connect_write_pipe(
+            asyncio.streams.FlowControlMixin, os.fdopen(wire_out, "wb", buffering=0, closefd=False)
+        )
+        writer = asyncio.StreamWriter(write_transport, write_protocol, None, loop)
+        yield (
+            cast("anyio.AsyncFile[str]", _BoundedLines.from_stream(reader)),
+            cast("anyio.AsyncFile[str]", _PipeOut(writer)),
+        )
+    finally:
+        if read_transport is not None:
+            read_transport.close()
+        if writer is not None:
+            # What is still buffered goes out before the wire is handed back (the host may be waiting for it).
+            with contextlib.suppress(OSError, TimeoutError):
+                await asyncio.wait_for(writer.drain(), 5)
+            writer.close()
+        # The event loop made the wire non-blocking; a host passing one socket as both ends shares that flag.
+        for fd in (wire_in, wire_out):
+            with contextlib.suppress(OSError):
+                os.set_blocking(fd, True)
+        os.dup2(wire_in, 0)
+        os.dup2(wire_out, 1)
+        os.close(wire_in)
+        os.close(wire_out)
+
+
+class _PipeOut:
+    """stdout for the SDK's transport (it calls ``write`` then ``flush`` for each message): written from the
+    event loop, ``flush`` waiting only while the host reads slower than we write."""
+
+    def __init__(self, writer: asyncio.StreamWriter) -> None:
+        self._writer = writer
+
+    async def write(self, text: str) -> None:
+        self._writer.write(text.encode())
+
+    async def flush(self) -> None:
+        await self._writer.drain()
 
 
 @contextlib.contextmanager
@@ -81,7 +180,7 @@ def _stdin_lines() -> Iterator[_BoundedLines | None]:
     os.close(null)
     binary = os.fdopen(private, "rb")
     try:
-        yield _BoundedLines(binary)
+        yield _BoundedLines.from_file(binary)
     finally:
         with contextlib.suppress(OSError):
             os.dup2(private, 0)
@@ -89,47 +188,70 @@ def _stdin_lines() -> Iterator[_BoundedLines | None]:
 
 
 class _BoundedLines:
-    """The lines of *binary* as text (bad UTF-8 replaced, as the SDK's transport does), none longer than
+    """Lines as text (bad UTF-8 replaced, as the SDK's transport does), none longer than
     :data:`MAX_LINE_BYTES`: an over-long line is read to its end without being kept, and handed on as a small
-    JSON object that is no JSON-RPC message, which :func:`reply_for_unreadable` answers."""
+    JSON object that is no JSON-RPC message, which :func:`reply_for_unreadable` answers.
 
-    def __init__(self, binary: BinaryIO) -> None:
-        self._binary = binary
+    ``readline(n)`` gives the next piece of a line: at most about ``n`` bytes, ending at a newline when one
+    comes first; ``b""`` at the end.
+    """
+
+    def __init__(self, readline: Callable[[int], Awaitable[bytes]]) -> None:
+        self._readline = readline
+
+    @classmethod
+    def from_file(cls, binary: BinaryIO) -> _BoundedLines:
+        """From a blocking file: each piece read by a worker thread."""
+        return cls(lambda n: anyio.to_thread.run_sync(binary.readline, n))
+
+    @classmethod
+    def from_stream(cls, reader: asyncio.StreamReader) -> _BoundedLines:
+        """From an asyncio stream (whose limit bounds a piece): read on the event loop."""
+
+        async def readline(n: int) -> bytes:
+            try:
+                return await reader.readuntil(b"\n")
+            except asyncio.IncompleteReadError as exc:
+                return exc.partial  # the end: what is left of the last line
+            except asyncio.LimitOverrunError:
+                return await reader.read(n)  # no newline within the reader's limit: a piece of a long line
+
+        return cls(readline)
 
     def __aiter__(self) -> _BoundedLines:
         return self
 
     async def __anext__(self) -> str:
-        line = await anyio.to_thread.run_sync(self._read_line)
+        line = await self._read_line()
         if line is None:
             raise StopAsyncIteration
         return line
 
-    def _read_line(self) -> str | None:
-        # Read in chunks into one growing buffer: a line is held once (readline with a limit of 64 MiB would
+    async def _read_line(self) -> str | None:
+        # Read in pieces into one growing buffer: a line is held once (one read with a limit of 64 MiB would
         # hold its pieces and their join, twice the limit), and an over-long one is dropped at the limit.
         line = bytearray()
         while True:
-            chunk = self._binary.readline(_CHUNK_BYTES)
+            chunk = await self._readline(_CHUNK_BYTES)
             if not chunk:
                 break
             line += chunk
             if chunk.endswith(b"\n"):
                 break
             if len(line) > MAX_LINE_BYTES:
-                return self._skipped(line)
+                return await self._skipped(line)
         if not line:
             return None
         if len(line) - line.endswith(b"\n") > MAX_LINE_BYTES:
-            return self._skipped(line)
+            return await self._skipped(line)
         return line.decode("utf-8", errors="replace")
 
-    def _skipped(self, start: bytearray) -> str:
+    async def _skipped(self, start: bytearray) -> str:
         """The rest of an over-long line read and dropped; what stands in for it (its size and id)."""
         head, tail, read = bytes(start[:_SCAN_CHARS]), bytes(start[-_TAIL_BYTES:]), len(start)
         start.clear()
         while not tail.endswith(b"\n"):
-            chunk = self._binary.readline(_CHUNK_BYTES)
+            chunk = await self._readline(_CHUNK_BYTES)
             if not chunk:
                 break
             read += len(chunk)
