@@ -25,6 +25,17 @@ from mcp.client.streamable_http import streamable_http_client
 from mcp import Client
 
 WAIT = 30.0
+#: The handshake's first request as a client writes it by hand (id 1, the 2025 era).
+INITIALIZE = {
+    "jsonrpc": "2.0",
+    "id": 1,
+    "method": "initialize",
+    "params": {
+        "protocolVersion": "2025-06-18",
+        "capabilities": {},
+        "clientInfo": {"name": "e2e-test", "version": "0"},
+    },
+}
 TOKEN = "operator-token-0123456789abcdef"
 TOKENS = f"operator {TOKEN}\nci second-token-0123456789abcdef"
 

@@ -13,20 +13,10 @@ from typing import Any
 import httpx2
 import pytest
 import trustme
-from e2e_transports import TOKEN, WAIT, serving, stop
+from e2e_transports import INITIALIZE, TOKEN, WAIT, serving, stop
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-INITIALIZE = {
-    "jsonrpc": "2.0",
-    "id": 1,
-    "method": "initialize",
-    "params": {
-        "protocolVersion": "2025-06-18",
-        "capabilities": {},
-        "clientInfo": {"name": "security-test", "version": "0"},
-    },
-}
 PUBLISH = {
     "jsonrpc": "2.0",
     "id": 2,

@@ -12,7 +12,7 @@ import httpx2
 import jwt
 import pytest
 from cryptography.hazmat.primitives.asymmetric import rsa
-from e2e_transports import WAIT, serving
+from e2e_transports import INITIALIZE, WAIT, serving
 from jwt.algorithms import RSAAlgorithm
 
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -20,16 +20,6 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 ISSUER = "https://auth.example.com"
 AUDIENCE = "rosbridge-mcp"
 RESOURCE = "https://robot.example.com/mcp"
-INITIALIZE = {
-    "jsonrpc": "2.0",
-    "id": 1,
-    "method": "initialize",
-    "params": {
-        "protocolVersion": "2025-06-18",
-        "capabilities": {},
-        "clientInfo": {"name": "oauth-test", "version": "0"},
-    },
-}
 
 
 @pytest.fixture(scope="module")

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from e2e_transports import INITIALIZE
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -245,17 +246,7 @@ async def test_a_request_read_from_a_file_is_answered_through_the_sdk_transport(
     """stdin a regular file, not a pipe: the SDK's own transport answers, then the server exits at EOF."""
     # Only initialize: the SDK ends the session at EOF and cancels requests still being handled, so a file
     # that ends right after a tools/list would race it.
-    initialize = {
-        "jsonrpc": "2.0",
-        "id": 1,
-        "method": "initialize",
-        "params": {
-            "protocolVersion": "2025-06-18",
-            "capabilities": {},
-            "clientInfo": {"name": "e2e-test", "version": "0"},
-        },
-    }
-    answers, stderr, code = await _answers_to_file(tmp_path, [json.dumps(initialize)])
+    answers, stderr, code = await _answers_to_file(tmp_path, [json.dumps(INITIALIZE)])
     assert len(answers) == 1, stderr.decode()
     assert answers[0]["result"]["serverInfo"]["name"] == "rosbridge"
     assert code == 0, stderr.decode()
@@ -278,18 +269,7 @@ async def test_a_host_giving_one_socket_for_stdin_and_stdout_is_served_and_gets_
     )
     reader, writer = await asyncio.open_connection(sock=ours)
     lines = [
-        json.dumps(
-            {
-                "jsonrpc": "2.0",
-                "id": 1,
-                "method": "initialize",
-                "params": {
-                    "protocolVersion": "2025-06-18",
-                    "capabilities": {},
-                    "clientInfo": {"name": "e2e-test", "version": "0"},
-                },
-            }
-        ),
+        json.dumps(INITIALIZE),
         json.dumps({"jsonrpc": "2.0", "method": "notifications/initialized"}),
         "not json",
         json.dumps(
