@@ -343,7 +343,7 @@ async def _on_a_bridge(ctx: Context) -> list[Row]:
         for subject in subjects:
             await subject.call()
         # A real bridge takes 5-100 ms a call (2.1.0: one at a time per connection, a tenth of its answers
-        # ~80 ms late): small blocks, all the rounds (100 calls a subject), so a median is not one outlier away.
+        # ~80 ms late): small blocks, all the rounds (100 calls a subject), so an outlier moves no median.
         counts = {"block": max(2, plan.block // 4)}
         await interleave(
             subjects, Plan(**{**dataclasses.asdict(plan), **counts, "warmup": min(plan.warmup, 5)})
