@@ -24,9 +24,10 @@ from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.cli.demo import DemoSettings, demo_robot, demo_settings
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
+from rosbridge_mcp_server.config.addresses import is_loopback
 from rosbridge_mcp_server.config.console import ConsoleSettings, load_console_settings
 from rosbridge_mcp_server.config.fleet import load_fleet
-from rosbridge_mcp_server.config.http import HttpSettings, is_loopback, load_http_settings
+from rosbridge_mcp_server.config.http import HttpSettings, load_http_settings
 from rosbridge_mcp_server.console import ConsoleHub, RobotView
 from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls, runtime_dir
 from rosbridge_mcp_server.robot.session import RobotSession

@@ -8,11 +8,11 @@ guards every request either way.
 
 from __future__ import annotations
 
-import ipaddress
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from rosbridge_mcp_server.config.addresses import is_loopback
 from rosbridge_mcp_server.config.robot import parse_port
 from rosbridge_mcp_server.config.sources import ConfigError, Setting, Sources
 
@@ -115,13 +115,3 @@ def _split(address: str, source: str) -> tuple[str, int]:
     if port_text.strip() == "0":
         return host, 0  # any free port; the URL printed names the one taken
     return host, parse_port(port_text, source=source)
-
-
-def is_loopback(host: str) -> bool:
-    """Whether ``host`` names this machine only (``localhost``, 127.0.0.0/8, ::1)."""
-    if host.lower() == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False

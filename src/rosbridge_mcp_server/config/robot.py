@@ -32,6 +32,7 @@ from typing import Literal
 from urllib.parse import urlsplit
 
 from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES, select_tools
+from rosbridge_mcp_server.config.addresses import is_loopback
 from rosbridge_mcp_server.config.sources import FLAG, ConfigError, Setting, Sources
 from rosbridge_mcp_server.safety.policy import Policy, PolicyError, load_policy
 
@@ -265,22 +266,13 @@ def plain_text_warning(url: str) -> str | None:
     """A warning for a plain ws:// URL to another machine: commands and any token travel unencrypted."""
     parts = urlsplit(url)
     host = parts.hostname or ""
-    if parts.scheme != "ws" or _is_loopback(host):
+    if parts.scheme != "ws" or is_loopback(host):
         return None
     return (
         f"rosbridge at {url} is reached over plain ws://: anyone on the network path can read and inject "
         "robot commands. Use wss:// (rosbridge's certfile/keyfile, or a TLS proxy) for a robot off this "
         "machine."
     )
-
-
-def _is_loopback(host: str) -> bool:
-    if host.lower() in ("localhost", "localhost.localdomain") or host.lower().endswith(".localhost"):
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:
