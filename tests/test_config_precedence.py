@@ -15,9 +15,10 @@ import pytest
 
 from rosbridge_mcp_server.cli import run
 from rosbridge_mcp_server.config import Config, ConfigError, load_config
-from rosbridge_mcp_server.config.console import load_console_settings
+from rosbridge_mcp_server.config.console import console_runtime_dir, load_console_settings
 from rosbridge_mcp_server.config.fleet import load_fleet
 from rosbridge_mcp_server.config.http import load_http_settings
+from rosbridge_mcp_server.config.robot import default_record_dir
 from rosbridge_mcp_server.config.sources import ENV, FILE, FLAG, Setting, Sources
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -84,7 +85,7 @@ ROBOT_SETTINGS: list[tuple[str, str, Any, str, str, Any]] = [
     ("log_level", "ROSBRIDGE_MCP_LOG_LEVEL", "DEBUG", "ERROR", "log_level", "INFO"),
     ("tools", "ROSBRIDGE_MCP_TOOLS", "watch", "view", "tools", None),
     ("audit_log", "ROSBRIDGE_MCP_AUDIT_LOG", "flag.jsonl", "env.jsonl", "audit_log", None),
-    ("record_dir", "ROSBRIDGE_MCP_RECORD_DIR", "/flag", "/env", "record_dir", None),
+    ("record_dir", "ROSBRIDGE_MCP_RECORD_DIR", "/flag", "/env", "record_dir", default_record_dir({})),
     ("headers", "ROSBRIDGE_HEADERS", ["X-From: flag"], "X-From: env", "headers", ()),
 ]
 
@@ -294,3 +295,37 @@ def test_an_empty_flag_is_refused_by_name_not_taken_for_absent(call: Any, messag
     """`--policy "$POLICY"` with the variable unset must not quietly mean "no policy" (nor the variable's)."""
     with pytest.raises(ConfigError, match=f"^{re.escape(message)}"):
         call()
+
+
+def test_the_recording_folder_is_chosen_with_the_configuration(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--record-dir`` > ``ROSBRIDGE_MCP_RECORD_DIR`` > ``$XDG_DATA_HOME/...`` > ``~/.local/share/...``, read
+    from the environment given to ``load_config`` (not from the process's at the time of a tool call)."""
+    monkeypatch.setenv("HOME", "/home/someone")
+    share = Path("/home/someone/.local/share/rosbridge-mcp-server/recordings")
+    data = {"XDG_DATA_HOME": "/data"}
+    assert load_config({}).record_dir == share
+    assert load_config(data).record_dir == Path("/data/rosbridge-mcp-server/recordings")
+    assert load_config({"XDG_DATA_HOME": "relative/data"}).record_dir == share  # the spec: absolute only
+    assert load_config({"XDG_DATA_HOME": "  "}).record_dir == share
+    assert load_config({**data, "ROSBRIDGE_MCP_RECORD_DIR": "/env"}).record_dir == Path("/env")
+    assert load_config(data, record_dir="~/rec").record_dir == Path("/home/someone/rec")
+    monkeypatch.setenv("XDG_DATA_HOME", "/process")
+    assert load_config({}).record_dir == share
+    assert Config().record_dir == Path("/process/rosbridge-mcp-server/recordings")  # built directly
+
+
+def test_the_console_runtime_folder_is_chosen_with_the_configuration(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``ROSBRIDGE_MCP_RUNTIME_DIR`` > ``$XDG_RUNTIME_DIR/...`` > the platform's cache folder."""
+    monkeypatch.setenv("HOME", "/home/someone")
+    monkeypatch.setattr(sys, "platform", "linux")
+    runtime = {"XDG_RUNTIME_DIR": "/run/user/1000"}
+    assert console_runtime_dir({}) == Path("/home/someone/.cache/rosbridge-mcp-server")
+    assert console_runtime_dir(runtime) == Path("/run/user/1000/rosbridge-mcp-server")
+    assert console_runtime_dir({**runtime, "ROSBRIDGE_MCP_RUNTIME_DIR": "/mine"}) == Path("/mine")
+    assert console_runtime_dir({**runtime, "ROSBRIDGE_MCP_RUNTIME_DIR": " "}) == Path(
+        "/run/user/1000/rosbridge-mcp-server"
+    )
+    monkeypatch.setattr(sys, "platform", "darwin")
+    assert console_runtime_dir({}) == Path("/home/someone/Library/Caches/rosbridge-mcp-server")
+    monkeypatch.setattr(sys, "platform", "win32")
+    assert console_runtime_dir({"LOCALAPPDATA": "/appdata"}) == Path("/appdata/rosbridge-mcp-server")

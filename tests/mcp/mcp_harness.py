@@ -10,7 +10,8 @@ import asyncio
 import re
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from mcp.types import CallToolResult, TextContent
@@ -97,8 +98,9 @@ async def open_session(
         connect_timeout=2.0,
         policy=policy or Policy(),
         tools=tools,
-        record_dir=record_dir,
     )
+    if record_dir is not None:
+        config = replace(config, record_dir=Path(record_dir))
     ros = RosbridgeClient(
         url,
         connect_timeout=config.connect_timeout,

@@ -6,6 +6,7 @@ Read from the source (``ast``), so a rule broken anywhere in ``src`` fails here 
 from __future__ import annotations
 
 import ast
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -129,5 +130,77 @@ def test_no_module_outside_the_client_asks_which_bridge_it_is() -> None:
         f"{name}:{line} reads {what}"
         for name, tree in _modules(outside=PROTOCOL_PACKAGES)
         for line, what in _brand_questions(tree)
+    ]
+    assert found == []
+
+
+#: The packages that own settings: ``config/`` reads them (flag > environment > file > default), ``cli/``
+#: hands it the process's environment.
+SETTING_OWNERS = ("config", "cli")
+#: A variable a lookup by name reads as a setting: ours, and the platform's folders.
+_SETTING_VARIABLE = re.compile(
+    r"^(ROSBRIDGE_[A-Z0-9_]*|XDG_[A-Z0-9_]+|LOCALAPPDATA|APPDATA|USERPROFILE|HOME)$"
+)
+
+
+def _environment_reads(tree: ast.Module) -> Iterator[tuple[int, str]]:
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr in ("environ", "environb", "getenv", "getenvb"):
+            yield node.lineno, f"os.{node.attr}"
+        elif isinstance(node, ast.ImportFrom) and node.module == "os":
+            for alias in node.names:
+                if alias.name in ("environ", "environb", "getenv", "getenvb"):
+                    yield node.lineno, f"from os import {alias.name}"
+        elif isinstance(node, ast.Attribute) and node.attr in ("expanduser", "expandvars"):
+            yield node.lineno, node.attr  # HOME (and any variable) behind a path
+        elif (
+            isinstance(node, ast.Attribute)
+            and node.attr == "home"
+            and getattr(node.value, "id", "") == "Path"
+        ):
+            yield node.lineno, "Path.home"
+        else:
+            looked_up: list[ast.expr] = []
+            if isinstance(node, ast.Subscript):
+                looked_up = [node.slice]
+            elif (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Attribute)
+                and node.func.attr == "get"
+            ):
+                looked_up = node.args[:1]
+            for key in looked_up:
+                if (
+                    isinstance(key, ast.Constant)
+                    and isinstance(key.value, str)
+                    and _SETTING_VARIABLE.match(key.value)
+                ):
+                    yield node.lineno, f"the variable {key.value}"
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        'base = os.environ.get("XDG_DATA_HOME", "").strip()',  # robot/recording/files.py did
+        'named = environ.get("ROSBRIDGE_MCP_RUNTIME_DIR", "").strip()',  # console/address.py did (a mapping)
+        'xdg = env["XDG_RUNTIME_DIR"]',
+        "from os import getenv",
+        'level = os.getenv("LEVEL")',
+        'root = Path.home() / ".cache"',
+        'folder = Path("~/rec").expanduser()',
+    ],
+)
+def test_the_environment_check_catches_a_read(source: str) -> None:
+    """The check below sees each way a module read a setting from the environment itself."""
+    assert list(_environment_reads(ast.parse(source)))
+
+
+def test_no_module_outside_config_and_cli_reads_the_environment() -> None:
+    """Configuration has one owner: ``config/`` chooses each setting (the recording folder's default, the
+    console's runtime folder included) from the environment ``cli/`` gives it, and passes the value down."""
+    found = [
+        f"{name}:{line} reads {what}"
+        for name, tree in _modules(outside=SETTING_OWNERS)
+        for line, what in _environment_reads(tree)
     ]
     assert found == []

@@ -24,11 +24,12 @@ from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.cli.demo import DemoSettings, demo_robot, demo_settings
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config, plain_text_warning
-from rosbridge_mcp_server.config.console import ConsoleSettings, load_console_settings
+from rosbridge_mcp_server.config.addresses import is_loopback
+from rosbridge_mcp_server.config.console import ConsoleSettings, console_runtime_dir, load_console_settings
 from rosbridge_mcp_server.config.fleet import load_fleet
-from rosbridge_mcp_server.config.http import HttpSettings, is_loopback, load_http_settings
+from rosbridge_mcp_server.config.http import HttpSettings, load_http_settings
 from rosbridge_mcp_server.console import ConsoleHub, RobotView
-from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls, runtime_dir
+from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
 
@@ -122,7 +123,9 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
     try:
         if command == "check":
             return asyncio.run(check(config, sys.stdout, fleet, demo=demo))
-        asyncio.run(serve(config, audit_file, http, fleet, console, console_dir=runtime_dir(env), demo=demo))
+        asyncio.run(
+            serve(config, audit_file, http, fleet, console, console_dir=console_runtime_dir(env), demo=demo)
+        )
     except ConfigError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
@@ -149,7 +152,7 @@ def console_url(args: Sequence[str], env: Mapping[str, str]) -> int:
     except UsageError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
-    directory = runtime_dir(env)
+    directory = console_runtime_dir(env)
     found = list(console_urls(directory))
     for pid, url in found:
         print(f"{url}  (process {pid})" if len(found) > 1 else url)

@@ -8,15 +8,23 @@ guards every request either way.
 
 from __future__ import annotations
 
-import ipaddress
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from rosbridge_mcp_server.config.addresses import is_loopback
 from rosbridge_mcp_server.config.robot import parse_port
 from rosbridge_mcp_server.config.sources import ConfigError, Setting, Sources
 
-__all__ = ["DEFAULT_CONSOLE_HOST", "ConsoleSettings", "console_settings", "load_console_settings"]
+__all__ = [
+    "DEFAULT_CONSOLE_HOST",
+    "RUNTIME_DIR",
+    "ConsoleSettings",
+    "console_runtime_dir",
+    "console_settings",
+    "load_console_settings",
+]
 
 DEFAULT_CONSOLE_HOST = "127.0.0.1"
 
@@ -42,6 +50,9 @@ class ConsoleSettings:
 
 #: Where the console listens; its TLS options are flags only.
 CONSOLE = Setting("--console", "ROSBRIDGE_MCP_CONSOLE")
+#: This user's directory for a running console's URL file (an environment variable only, no flag).
+RUNTIME_DIR = "ROSBRIDGE_MCP_RUNTIME_DIR"
+_APP = "rosbridge-mcp-server"
 
 
 def load_console_settings(
@@ -117,11 +128,20 @@ def _split(address: str, source: str) -> tuple[str, int]:
     return host, parse_port(port_text, source=source)
 
 
-def is_loopback(host: str) -> bool:
-    """Whether ``host`` names this machine only (``localhost``, 127.0.0.0/8, ::1)."""
-    if host.lower() == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
+def console_runtime_dir(environ: Mapping[str, str]) -> Path:
+    """This user's directory for the console's URL file (:mod:`rosbridge_mcp_server.console.address`):
+    ``ROSBRIDGE_MCP_RUNTIME_DIR``, else ``$XDG_RUNTIME_DIR/rosbridge-mcp-server`` (Linux), else
+    ``%LOCALAPPDATA%\\rosbridge-mcp-server`` (Windows), else ``~/Library/Caches/rosbridge-mcp-server`` (macOS)
+    or ``~/.cache/rosbridge-mcp-server``. A blank variable is the same as none."""
+    named = environ.get(RUNTIME_DIR, "").strip()
+    if named:
+        return Path(named)
+    xdg = environ.get("XDG_RUNTIME_DIR", "").strip()
+    if xdg:
+        return Path(xdg) / _APP
+    local = environ.get("LOCALAPPDATA", "").strip()
+    if sys.platform == "win32" and local:
+        return Path(local) / _APP
+    if sys.platform == "darwin":
+        return Path.home() / "Library" / "Caches" / _APP
+    return Path.home() / ".cache" / _APP

@@ -24,7 +24,6 @@ Tokens are secrets: they are kept as given only to compare with, and never shown
 from __future__ import annotations
 
 import contextlib
-import ipaddress
 import logging
 import os
 import re
@@ -36,6 +35,7 @@ from pathlib import Path
 from typing import Literal
 from urllib.parse import urlsplit
 
+from rosbridge_mcp_server.config.addresses import is_loopback
 from rosbridge_mcp_server.config.sources import FLAG, ConfigError, Given, Setting, Sources
 
 __all__ = [
@@ -240,16 +240,6 @@ def parse_bind(value: str, *, source: str) -> tuple[str, int]:
     if not 0 <= port < 65536:
         raise ConfigError(f"{source}: port {port} is not between 0 (any free port) and 65535")
     return host, port
-
-
-def is_loopback(host: str) -> bool:
-    """Whether *host* is this machine only (127.0.0.0/8, ::1, ``localhost``)."""
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def _tokens(chosen: Given | None) -> tuple[tuple[str, str], ...]:

@@ -15,14 +15,16 @@ Each setting is chosen by the one rule of :mod:`.sources` (flag > environment > 
   ``--client-key`` / ``ROSBRIDGE_CLIENT_KEY``, ``--header`` (repeatable) / ``ROSBRIDGE_HEADERS`` (one
   ``Name: value`` per line). Header values are secrets: they are never logged.
 
-The CLI calls :func:`load_config` once. Besides this package only the platform's folders are read from the
-environment (``XDG_DATA_HOME`` for the default recording folder, the console's runtime folder).
+The CLI calls :func:`load_config` once, with its environment; the platform's folders are read from it here too
+(``XDG_DATA_HOME`` for the default recording folder, :func:`default_record_dir`). No module outside
+``config/`` and ``cli/`` reads the environment (``tests/safety/test_layers.py`` holds it).
 """
 
 from __future__ import annotations
 
 import ipaddress
 import math
+import os
 import re
 import ssl
 from collections.abc import Mapping, Sequence
@@ -32,6 +34,7 @@ from typing import Literal
 from urllib.parse import urlsplit
 
 from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES, select_tools
+from rosbridge_mcp_server.config.addresses import is_loopback
 from rosbridge_mcp_server.config.sources import FLAG, ConfigError, Setting, Sources
 from rosbridge_mcp_server.safety.policy import Policy, PolicyError, load_policy
 
@@ -44,6 +47,7 @@ __all__ = [
     "Config",
     "ConfigError",
     "LogLevel",
+    "default_record_dir",
     "load_config",
     "plain_text_warning",
 ]
@@ -78,8 +82,10 @@ class Config:
     headers: tuple[tuple[str, str], ...] = field(default=(), repr=False)
     #: Names of the tools a host sees; ``None`` is every tool.
     tools: tuple[str, ...] | None = None
-    #: Where ``record`` writes and ``read_recording`` reads (``--record-dir``); ``None``: the default.
-    record_dir: str | None = None
+    #: Where ``record`` writes and ``read_recording`` reads: ``--record-dir`` (``~`` expanded), else
+    #: :func:`default_record_dir` of the environment the configuration was read from (of this process's
+    #: environment for a :class:`Config` built directly).
+    record_dir: Path = field(default_factory=lambda: default_record_dir(os.environ))
 
     def ssl_context(self) -> ssl.SSLContext | None:
         """The TLS context for wss:// with a private CA or a client certificate; ``None`` for the default.
@@ -186,7 +192,7 @@ def load_config(
         client_key=_path(sources, CLIENT_KEY),
         headers=_headers(sources),
         tools=_parse_tools(chosen_tools.value, source=chosen_tools.source) if chosen_tools else None,
-        record_dir=_path(sources, RECORD_DIR),
+        record_dir=_record_dir(sources, environ),
     )
     _check_tls(config, simulated=simulated)
     return config
@@ -206,6 +212,18 @@ def _load_policy(sources: Sources) -> Policy:
         {"read_only": loaded.read_only}, chosen.source if chosen is not None else ""
     )
     return loaded.with_read_only() if with_file.switch(READ_ONLY) else loaded
+
+
+def default_record_dir(environ: Mapping[str, str]) -> Path:
+    """``$XDG_DATA_HOME/rosbridge-mcp-server/recordings`` (``~/.local/share/...`` when unset or relative)."""
+    base = environ.get("XDG_DATA_HOME", "").strip()
+    root = Path(base) if base and Path(base).is_absolute() else Path.home() / ".local" / "share"
+    return root / "rosbridge-mcp-server" / "recordings"
+
+
+def _record_dir(sources: Sources, environ: Mapping[str, str]) -> Path:
+    given = _path(sources, RECORD_DIR)
+    return Path(given).expanduser() if given is not None else default_record_dir(environ)
 
 
 def _path(sources: Sources, setting: Setting) -> str | None:
@@ -265,22 +283,13 @@ def plain_text_warning(url: str) -> str | None:
     """A warning for a plain ws:// URL to another machine: commands and any token travel unencrypted."""
     parts = urlsplit(url)
     host = parts.hostname or ""
-    if parts.scheme != "ws" or _is_loopback(host):
+    if parts.scheme != "ws" or is_loopback(host):
         return None
     return (
         f"rosbridge at {url} is reached over plain ws://: anyone on the network path can read and inject "
         "robot commands. Use wss:// (rosbridge's certfile/keyfile, or a TLS proxy) for a robot off this "
         "machine."
     )
-
-
-def _is_loopback(host: str) -> bool:
-    if host.lower() in ("localhost", "localhost.localdomain") or host.lower().endswith(".localhost"):
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def _parse_tools(value: str, *, source: str) -> tuple[str, ...] | None:

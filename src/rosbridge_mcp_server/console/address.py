@@ -3,9 +3,9 @@
 Under an MCP host (Claude Desktop and others) the server's stderr is a log file the person may not find, so
 each running console also writes its URL to ``console-<pid>.url`` in a directory of this user's (mode 0700,
 the file 0600), and ``rosbridge-mcp-server console-url`` prints the URLs of the consoles running now. The
-directory: ``ROSBRIDGE_MCP_RUNTIME_DIR``, else ``$XDG_RUNTIME_DIR/rosbridge-mcp-server`` (Linux), else
-``%LOCALAPPDATA%\\rosbridge-mcp-server`` (Windows), else ``~/Library/Caches/rosbridge-mcp-server`` (macOS) or
-``~/.cache/rosbridge-mcp-server``. The file goes away when the server stops.
+directory is chosen by the configuration (:func:`rosbridge_mcp_server.config.console.console_runtime_dir`:
+``ROSBRIDGE_MCP_RUNTIME_DIR``, else the platform's runtime or cache folder) and given here. The file goes away
+when the server stops.
 """
 
 from __future__ import annotations
@@ -13,29 +13,10 @@ from __future__ import annotations
 import contextlib
 import os
 import stat
-import sys
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["ConsoleAddressFile", "console_urls", "runtime_dir"]
-
-_APP = "rosbridge-mcp-server"
-
-
-def runtime_dir(environ: Mapping[str, str]) -> Path:
-    """This user's directory for the console's address (see the module's docstring)."""
-    named = environ.get("ROSBRIDGE_MCP_RUNTIME_DIR", "").strip()
-    if named:
-        return Path(named)
-    xdg = environ.get("XDG_RUNTIME_DIR", "").strip()
-    if xdg:
-        return Path(xdg) / _APP
-    local = environ.get("LOCALAPPDATA", "").strip()
-    if sys.platform == "win32" and local:
-        return Path(local) / _APP
-    if sys.platform == "darwin":
-        return Path.home() / "Library" / "Caches" / _APP
-    return Path.home() / ".cache" / _APP
+__all__ = ["ConsoleAddressFile", "console_urls"]
 
 
 class ConsoleAddressFile:

@@ -21,7 +21,6 @@ from rosbridge_mcp_server.robot.occupancy import MapError, Pose2D, decode_grid, 
 from rosbridge_mcp_server.robot.recording.files import (
     PathRefused,
     list_recordings,
-    recording_directory,
     resolve_recording,
 )
 from rosbridge_mcp_server.robot.recording.reading import (
@@ -91,7 +90,7 @@ async def run(
         list[str] | None, Field(max_length=50, description='map: map, path; e.g. ["/map", "/odom"]')
     ] = None,
 ) -> ToolAnswer:
-    directory = recording_directory(ctx.config.record_dir)
+    directory = ctx.config.record_dir
     if file is None:
         return await asyncio.to_thread(_listing, directory)
     try:

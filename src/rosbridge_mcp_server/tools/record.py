@@ -10,7 +10,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording, recording_directory
+from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording
 from rosbridge_mcp_server.robot.recording.recorder import (
     NoTopicMatched,
     RecordingResult,
@@ -105,7 +105,7 @@ async def run(
         chosen = await choose_topics(ctx.graph, topics)
     except NoTopicMatched as exc:
         raise ToolFailure(f"{exc} Nothing was recorded.") from None
-    directory = recording_directory(ctx.config.record_dir)
+    directory = ctx.config.record_dir
     try:
         path, fd = create_recording(directory, name)
     except PathRefused as exc:

@@ -1,4 +1,5 @@
-"""Where recordings live: the recording directory, and every path held inside it.
+"""Where recordings live: every path held inside the recording directory (``Config.record_dir``, chosen by
+:mod:`rosbridge_mcp_server.config.robot`).
 
 A name given by a model is a path relative to the directory (``run1.mcap``, ``today/run1.mcap``) or an
 absolute path that lands inside it. Whatever it is, the path is resolved with every symlink followed and must
@@ -22,9 +23,7 @@ __all__ = [
     "PathRefused",
     "RecordingEntry",
     "create_recording",
-    "default_record_dir",
     "list_recordings",
-    "recording_directory",
     "resolve_recording",
 ]
 
@@ -35,18 +34,6 @@ _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 
 class PathRefused(Advised, ValueError):
     """A path outside the recording directory, or a name that cannot be a recording; ``str()`` says why."""
-
-
-def default_record_dir() -> Path:
-    """``$XDG_DATA_HOME/rosbridge-mcp-server/recordings`` (``~/.local/share/...`` when unset)."""
-    base = os.environ.get("XDG_DATA_HOME", "").strip()
-    root = Path(base) if base and Path(base).is_absolute() else Path.home() / ".local" / "share"
-    return root / "rosbridge-mcp-server" / "recordings"
-
-
-def recording_directory(configured: str | None) -> Path:
-    """The recording directory: ``--record-dir`` (``~`` expanded), else :func:`default_record_dir`."""
-    return Path(configured).expanduser() if configured else default_record_dir()
 
 
 def _inside(directory: Path, given: str) -> Path:
