@@ -3,8 +3,8 @@
 The MCP HTTP listener, the console and the robot URL's plain-text warning each had a rule of their own; they
 disagreed on ``localhost.localdomain`` and ``*.localhost`` (loopback for the robot URL only), on letter case
 (``LOCALHOST`` loopback for the console, not for HTTP) and, with Python 3.13, on IPv4-mapped ``::ffff:127.x``.
-The one rule takes the narrower answer everywhere: a host it does not recognise sends each caller down its
-safe path (refuse, or warn).
+The one rule takes the narrower answer where a name or address may leave the machine, and reads ``localhost``
+in any letter case: a host it does not recognise sends each caller down its safe path (refuse, or warn).
 """
 
 from __future__ import annotations
@@ -38,7 +38,8 @@ RULE: list[tuple[str, bool]] = [
     ("::127.0.0.1", False),  # IPv4-compatible (deprecated)
     ("127.1", False),  # a short form inet_aton reads, ipaddress does not
     ("2130706433", False),  # 127.0.0.1 as one number
-    ("LOCALHOST", False),
+    ("LOCALHOST", True),  # names are case-insensitive
+    ("LocalHost", True),
     ("localhost.", False),  # absolute: some resolvers ask DNS
     ("localhost.localdomain", False),
     ("robot.localhost", False),
@@ -97,7 +98,7 @@ def test_the_console_needs_tls_or_insecure_off_loopback(host: str, loopback: boo
     ("url", "warns"),
     [
         ("ws://localhost:9090", False),
-        ("ws://LOCALHOST:9090", False),  # a URL's host is case-insensitive: read lower-cased
+        ("ws://LOCALHOST:9090", False),  # a URL's host is case-insensitive
         ("ws://127.0.0.2:9090", False),
         ("ws://[::1]:9090", False),
         ("ws://localhost.localdomain:9090", True),  # was no warning

@@ -7,8 +7,8 @@ the canonical forms count:
 
 * an IPv4 address in ``127.0.0.0/8``;
 * ``::1``, bare or in brackets (``[::1]``, as in a URL), with or without a zone (``::1%lo``);
-* the name ``localhost``, written so (a URL's host is lower-cased before it is asked; ``LOCALHOST`` given to
-  ``--bind`` or ``--console`` is not recognised, the narrower of the rules this one replaced).
+* the name ``localhost`` in any letter case (names are case-insensitive, and every resolver answers
+  ``LOCALHOST`` from the same ``/etc/hosts`` line).
 
 Not loopback: ``0.0.0.0`` and ``::`` (every interface), an empty host, any other address, IPv4-mapped
 ``::ffff:127.0.0.1`` (its ``is_loopback`` changed with Python 3.13; refused on every version here), short
@@ -31,7 +31,7 @@ def is_loopback(host: str) -> bool:
             address: ipaddress.IPv4Address | ipaddress.IPv6Address = ipaddress.IPv6Address(host[1:-1])
         except ValueError:
             return False
-    elif host == "localhost":
+    elif host.lower() == "localhost":
         return True
     else:
         try:
