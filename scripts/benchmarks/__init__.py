@@ -46,6 +46,11 @@ What is measured:
 15. the server alone over the floor (``--only edge``; issue 26, item 8): every tool row on the simulated robot
     by JSON-RPC lines against the rosbridge requests it makes, p50/p90 and "floor + X ms"; with ``--url``
     ``list_topics`` and ``get_node_info`` on that bridge; with ``--ros-mcp PYTHON`` ros-mcp beside it.
+16. stops and reconnects (``--only stops``; issue 26: what tests used to time with wall clocks), each on
+    simulated robots of its own: ``stop_robot`` with a velocity stream running (to its answer, to the zero a
+    raw subscriber receives, non-zero commands after the answer) and with a ``navigate_to`` goal running on
+    the Nav2 world (to its answer, to ``/odom`` standing still); the bridge killed and restarted on its port
+    (to ``list_topics`` succeeding, and no command replayed).
 
 The package: ``harness`` (what every item shares), one module per item, ``run`` (the order, the table, the
 command line), ``internals`` (the only module that imports the product's internals, and why), ``servers/``

@@ -276,9 +276,8 @@ def tail(errlog: IO[str], lines: int = 15) -> str:
         return "(unreadable)"
 
 
-@contextlib.asynccontextmanager
-async def simulated_robot(
-    errlog: IO[str],
+def simulated_robot_command(
+    port: int,
     *,
     fast_topic: bool = False,
     camera_size: str = CAMERA_SIZE,
@@ -286,14 +285,9 @@ async def simulated_robot(
     world: str = "turtle",
     server: str = "rosbridge_suite",
     faults: str = "",
-) -> AsyncIterator[str]:
-    """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL.
-
-    The 1 kHz topic is a separate robot's (``fast_topic``): its publishing loop costs the sim ~6 % of a core
-    even with nobody subscribed, which would blur the CPU figures of everything else.
-    """
-    port = free_port()
-    command = [
+) -> list[str]:
+    """``python -m rosbridge_mcp_server.sim`` on ``port`` with these options (``simulated_robot`` runs it)."""
+    return [
         sys.executable,
         "-m",
         "rosbridge_mcp_server.sim",
@@ -312,6 +306,34 @@ async def simulated_robot(
         "--log-level",
         "WARNING",
     ]
+
+
+@contextlib.asynccontextmanager
+async def simulated_robot(
+    errlog: IO[str],
+    *,
+    fast_topic: bool = False,
+    camera_size: str = CAMERA_SIZE,
+    map_cells: int | None = None,
+    world: str = "turtle",
+    server: str = "rosbridge_suite",
+    faults: str = "",
+) -> AsyncIterator[str]:
+    """Run ``python -m rosbridge_mcp_server.sim`` in its own process; yield its URL.
+
+    The 1 kHz topic is a separate robot's (``fast_topic``): its publishing loop costs the sim ~6 % of a core
+    even with nobody subscribed, which would blur the CPU figures of everything else.
+    """
+    port = free_port()
+    command = simulated_robot_command(
+        port,
+        fast_topic=fast_topic,
+        camera_size=camera_size,
+        map_cells=map_cells,
+        world=world,
+        server=server,
+        faults=faults,
+    )
     log.info("starting the simulated robot: %s", " ".join(command[1:]))
     process = await asyncio.create_subprocess_exec(
         *command, stdin=asyncio.subprocess.DEVNULL, stdout=errlog, stderr=errlog, cwd=REPO

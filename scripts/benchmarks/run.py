@@ -49,6 +49,7 @@ from benchmarks.memory import measure_memory
 from benchmarks.nav2 import measure_nav2
 from benchmarks.recording import measure_recording
 from benchmarks.startup import measure_startup
+from benchmarks.stops import measure_stops
 from benchmarks.streamable_http import measure_http
 from benchmarks.throughput import measure_throughput
 from benchmarks.view import measure_view
@@ -72,6 +73,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("diagnose", "13", "diagnose and the log ring", measure_diagnose, 300.0),
     ("recording", "14", "recording", measure_recording, 300.0),
     ("edge", "15", "the server alone over the floor (issue 26 item 8)", measure_edge, 300.0),
+    ("stops", "16", "stop_robot and reconnects, as the robot sees them", measure_stops, 240.0),
 ]
 
 
