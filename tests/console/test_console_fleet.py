@@ -72,7 +72,9 @@ async def test_one_estop_stops_every_robot_and_latches_them_all(
             assert "E-STOP" in text_of(refused)
         snapshot = hub.snapshot()
         assert [robot["name"] for robot in snapshot["robots"]] == ["jazzy", "noetic"]
-        assert {entry["robot"] for entry in snapshot["audit"] if entry["outcome"] == "e-stop"} == set(sims)
+        # Each robot's stop is audited as the console's, never as a stop_robot call.
+        stops = {(e["robot"], e["tool"]) for e in snapshot["audit"] if e["outcome"] == "e-stop"}
+        assert stops == {(name, "console") for name in sims}
         assert hub.release()
         for name in sims:
             assert not (await client.call_tool("publish_topic", stream(name))).is_error

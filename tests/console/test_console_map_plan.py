@@ -91,6 +91,7 @@ async def test_the_console_estop_stops_a_navigating_robot_and_refuses_the_next_g
         result = await asyncio.wait_for(driving, 10)
         assert not result.is_error, text_of(result)
         assert (result.structured_content or {})["canceled_by"] == "estop"
+        assert "(cancelled by E-STOP on the operator console)" in text_of(result)
         refused = await client.call_tool("navigate_to", {"goal": {"x": 4.0, "y": 4.0}})
         assert refused.is_error
         assert "E-STOP" in text_of(refused)

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import asyncio
+import json
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import replace
 from typing import Any
 
+import websockets
 from mcp_harness import text_of
 
 from mcp import Client
@@ -180,3 +183,44 @@ def _without_robot(tool: dict[str, Any]) -> dict[str, Any]:
     schema["properties"] = {k: v for k, v in schema["properties"].items() if k != "robot"}
     schema["required"] = [name for name in schema.get("required", []) if name != "robot"]
     return {**tool, "input_schema": schema}
+
+
+async def test_each_robots_service_listing_is_its_own_and_follows_its_changes(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot
+) -> None:
+    """list_services on two robots in turn answers each robot's own listing every time, and a service offered
+    on one shows in its next listing while the other's stays as it was."""
+    async with fleet_session({"jazzy": sim_ros2, "noetic": sim_ros1}) as client:
+        rounds = []
+        for _ in range(3):
+            rounds.append(
+                {
+                    name: await client.call_tool("list_services", {"robot": name})
+                    for name in ("jazzy", "noetic")
+                }
+            )
+        first = {name: text_of(result) for name, result in rounds[0].items()}
+        assert first["jazzy"] != first["noetic"]
+        assert "std_srvs/srv/Empty" in first["jazzy"]
+        assert "std_srvs/Empty" in first["noetic"]
+        assert "std_srvs/srv/" not in first["noetic"]
+        for later in rounds[1:]:
+            assert {name: text_of(result) for name, result in later.items()} == first
+        async with websockets.connect(sim_ros2.url) as provider:
+            await provider.send(
+                json.dumps({"op": "advertise_service", "service": "/dyn", "type": "std_srvs/srv/Trigger"})
+            )
+            # No acknowledgement exists in rosbridge: wait until rosapi lists it (a look-up is the barrier).
+            async with RosbridgeClient(sim_ros2.url) as probe:
+                await probe.wait_connected(WAIT)
+                for _ in range(100):
+                    if "/dyn" in (await probe.call_service("/rosapi/services", {}))["services"]:
+                        break
+                    await asyncio.sleep(0)
+                else:
+                    raise AssertionError("rosapi never listed /dyn")
+            changed = text_of(await client.call_tool("list_services", {"robot": "jazzy"}))
+            again = text_of(await client.call_tool("list_services", {"robot": "noetic"}))
+    assert "/dyn (std_srvs/srv/Trigger)" in changed
+    assert "/dyn" not in first["jazzy"]
+    assert again == first["noetic"]

@@ -278,7 +278,7 @@ async def test_stop_robot_stops_the_robot_and_ends_the_goal(session: Session, na
     data = result.structured_content or {}
     assert not data["succeeded"]
     assert data["canceled_by"] == "stop_robot"
-    assert "stop_robot" in text_of(result)
+    assert "(cancelled by stop_robot)" in text_of(result)
     assert (stopped.structured_content or {})["goals_cancelled"]
 
 

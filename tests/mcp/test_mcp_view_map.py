@@ -218,3 +218,87 @@ async def test_a_map_too_large_for_one_cbor_frame_is_read_as_json_with_a_note(ma
     assert data is not None
     assert data["cells"] == [500, 500]
     assert any("did not arrive as CBOR within 1 s" in note for note in data["notes"])
+
+
+def robot_pixels(image: Image.Image) -> int:
+    """How many pixels of the picture have about the robot's colour."""
+    return sum(
+        count
+        for count, colour in image.getcolors(image.width * image.height) or []
+        if all(abs(a - b) <= 16 for a, b in zip(colour, ROBOT_COLOUR, strict=True))  # type: ignore[arg-type]
+    )
+
+
+def grid_message(origin: tuple[float, float], yaw: float = 0.0) -> dict[str, Any]:
+    """A free 1 m x 1 m grid (10 x 10 cells of 0.1 m) in the map frame, its origin at ``origin``, turned by
+    ``yaw`` radians."""
+    return {
+        "header": {"frame_id": "map"},
+        "info": {
+            "resolution": 0.1,
+            "width": 10,
+            "height": 10,
+            "origin": {
+                "position": {"x": origin[0], "y": origin[1], "z": 0.0},
+                "orientation": {"z": math.sin(yaw / 2), "w": math.cos(yaw / 2)},
+            },
+        },
+        "data": [0] * 100,
+    }
+
+
+async def view_grid(sim: SimulatedRobot, grid: dict[str, Any], calls: list[dict[str, Any]]) -> list[Any]:
+    """view_map of *grid* (latched on /test/small_map) once per argument set in *calls*."""
+    grid_type = "nav_msgs/msg/OccupancyGrid" if sim.dialect == "ros2" else "nav_msgs/OccupancyGrid"
+    async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
+        await publisher.wait_connected(5.0)
+        await publisher.publish("/test/small_map", grid_type, grid, latch=True)
+        async with open_session(sim.url) as session:
+            return [await session.ok("view_map", {"topic": "/test/small_map", **call}) for call in calls]
+
+
+async def test_a_robot_off_the_map_is_said_to_be_off_it_with_where_and_how_far(sim: SimulatedRobot) -> None:
+    """A 1 m map at (0, 0)..(1, 1), the turtle at (4, 5): not drawn, and the text says it is off the map,
+    where, and how far (5 m from the map's corner)."""
+    sim.world.turtle.x, sim.world.turtle.y = 4.0, 5.0
+    results = await view_grid(sim, grid_message((0.0, 0.0)), [{}, {"around_robot": 2}])
+    for result in results:
+        data = result.structured_content
+        assert data is not None
+        assert data["robot"] == pytest.approx([4.0, 5.0, 0.0], abs=0.01)
+        said = (
+            "The robot (base_link at x=4 y=5 in map) is OFF THE MAP, 5 m outside its extent (x 0..1, "
+            "y 0..1 m), so the picture cannot show it."
+        )
+        assert data["notes"][0] == said
+        text = text_of(result)
+        assert "robot base_link at x=4 y=5 yaw=0° (off the map: not drawn)" in text
+        assert said in text
+        assert "blue arrow" not in text
+        assert robot_pixels(picture_of(result)) == 0
+
+
+async def test_a_robot_on_the_map_is_drawn_and_not_said_to_be_off_it(sim: SimulatedRobot) -> None:
+    """The same 1 m map with the turtle at (0.5, 0.5) on it: drawn, no word of being off the map."""
+    sim.world.turtle.x, sim.world.turtle.y = 0.5, 0.5
+    [result] = await view_grid(sim, grid_message((0.0, 0.0)), [{}])
+    data = result.structured_content
+    assert data is not None
+    assert data["robot"] == pytest.approx([0.5, 0.5, 0.0], abs=0.01)
+    assert data["notes"] == []
+    assert "robot base_link at x=0.5 y=0.5 yaw=0° (blue arrow)" in text_of(result)
+    assert "OFF THE MAP" not in text_of(result)
+    assert robot_pixels(picture_of(result)) > 0
+
+
+async def test_off_a_rotated_map_the_distance_is_to_its_nearest_edge(sim: SimulatedRobot) -> None:
+    """The 1 m map at (5, 0) turned 90° covers x 4..5, y 0..1: the turtle at (2, 0.5) is 2 m off it."""
+    sim.world.turtle.x, sim.world.turtle.y = 2.0, 0.5
+    [result] = await view_grid(sim, grid_message((5.0, 0.0), math.pi / 2), [{}])
+    data = result.structured_content
+    assert data is not None
+    assert data["robot"] == pytest.approx([2.0, 0.5, 0.0], abs=0.01)
+    assert (
+        "(base_link at x=2 y=0.5 in map) is OFF THE MAP, 2 m outside its extent (x 4..5, y 0..1 m)"
+        in (data["notes"][0])
+    )

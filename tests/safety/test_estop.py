@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-from typing import Any
+from typing import Any, get_args
 
 import pytest
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import NotConnectedError
 from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.robot.goals import run_goal
 from rosbridge_mcp_server.robot.seam import ALLOW_ALL
 from rosbridge_mcp_server.robot.session import RobotSession
-from rosbridge_mcp_server.safety import emergency_stop
+from rosbridge_mcp_server.safety import Presser, emergency_stop
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 5.0
@@ -68,7 +69,7 @@ async def test_a_running_stream_ends_and_its_last_message_is_zero(sim: Simulated
         moving = {"linear": {"x": 0.8, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.4}}
         task = asyncio.create_task(stream(client, activity, CMD_VEL, twist_type(sim), moving))
         await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 3, WAIT)
-        report = await emergency_stop(robot)
+        report = await emergency_stop(robot, by="stop_robot")
         assert task.done()
         assert task.result() >= 3  # it ended by itself, on the request, not by a cancel
         # A barrier: a service reply on the same connection comes after every publish sent before it.
@@ -92,7 +93,7 @@ async def test_a_twist_stamped_stop_keeps_the_frame_and_carries_the_time(sim: Si
         await client.wait_connected(WAIT)
         await client.publish("/base/cmd_vel", type_name, message)
         activity.published("/base/cmd_vel", type_name, message)
-        await emergency_stop(robot)
+        await emergency_stop(robot, by="stop_robot")
         await client.call_service("/rosapi/get_time", {})
     last = sim.world.published["/base/cmd_vel"][-1].msg
     assert is_zero(last)
@@ -125,7 +126,7 @@ async def test_a_stream_that_will_not_end_is_reported_and_the_zero_still_goes_ou
         task = asyncio.create_task(stubborn())
         await asyncio.wait_for(running.wait(), WAIT)
         # The stream never ends by itself: a stop that waited for it would not answer at all.
-        report = await asyncio.wait_for(emergency_stop(robot), 2 * WAIT)
+        report = await asyncio.wait_for(emergency_stop(robot, by="stop_robot"), 2 * WAIT)
         assert not task.done()
         await sim_ros2.world.wait_for(
             lambda w: bool(w.published.get(CMD_VEL)) and is_zero(w.published[CMD_VEL][-1].msg), WAIT
@@ -160,7 +161,7 @@ async def test_a_stream_that_does_not_look_at_the_request_is_cancelled(sim_ros2:
         await client.wait_connected(WAIT)
         task = asyncio.create_task(oblivious())
         await asyncio.wait_for(running.wait(), WAIT)
-        report = await emergency_stop(robot)
+        report = await emergency_stop(robot, by="stop_robot")
     assert task.cancelled()
     assert report.streams_stopped == [CMD_VEL]
     assert report.streams_still_running == []
@@ -184,9 +185,73 @@ async def test_without_a_connection_the_stop_still_ends_the_streams_and_says_wha
         await sim.world.wait_for(lambda w: CMD_VEL in w.published, WAIT)
         await sim.stop()
         await client.wait_disconnected(WAIT)
-        report = await emergency_stop(robot)
+        report = await emergency_stop(robot, by="stop_robot")
         assert task.done()
     assert report.streams_stopped == [CMD_VEL]
     assert report.zeroed_topics == []
     assert report.failures
     assert "not connected" in report.failures[0]
+
+
+#: Each presser as every answer of what its stop ended must name it: (voided calls and ended streams,
+#: a cancelled goal's canceled_by). Written out here, not read from the code, so a mislabel fails.
+PRESSED_BY: dict[str, tuple[str, str]] = {
+    "stop_robot": ("stop_robot", "stop_robot"),
+    "console": ("E-STOP on the operator console", "estop"),
+}
+
+
+def test_every_presser_has_its_expected_names() -> None:
+    """A presser added without saying how its stops are named fails here."""
+    assert set(get_args(Presser)) == set(PRESSED_BY)
+
+
+@pytest.mark.parametrize("by", list(PRESSED_BY))
+async def test_each_presser_is_named_by_what_its_stop_ended(sim: SimulatedRobot, by: Presser) -> None:
+    """A call approved before the stop, a running stream and a running goal: each says who stopped it."""
+    name, canceled_by = PRESSED_BY[by]
+    client = RosbridgeClient(sim.url)
+    robot = RobotSession(client, ALLOW_ALL)
+    ros2 = sim.dialect == "ros2"
+    action_type = "example_interfaces/action/Fibonacci" if ros2 else "actionlib_tutorials/FibonacciAction"
+    async with client:
+        await client.wait_connected(WAIT)
+        ticket = robot.gate.ticket()
+        assert robot.gate.refusal(ticket) is None
+        moving = {"linear": {"x": 0.5, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+        streaming = asyncio.create_task(stream(client, robot.activity, CMD_VEL, twist_type(sim), moving))
+        goal = asyncio.create_task(
+            run_goal(robot.goals, "/fibonacci", action_type, {"order": 40}, timeout=10.0)
+        )
+        await sim.world.wait_for(
+            lambda w: (
+                len(w.published.get(CMD_VEL, ())) >= 2
+                and any(not g.finished and g.feedback_count >= 1 for g in w.goals.values())
+            ),
+            WAIT,
+        )
+        [running] = robot.activity.streams
+        report = await emergency_stop(robot, by=by)
+        outcome = await asyncio.wait_for(goal, WAIT)
+        await asyncio.wait_for(streaming, WAIT)
+    assert report.streams_stopped == [CMD_VEL]
+    assert len(report.goals_cancelled) == 1
+    assert running.stopped_by == name
+    refusal = robot.gate.refusal(ticket)
+    assert refusal is not None
+    assert refusal.startswith(f"Stopped: {name} stopped this call")
+    assert outcome.canceled_by == canceled_by
+
+
+async def test_a_stop_by_no_known_presser_is_refused_before_it_voids_anything(
+    sim_ros2: SimulatedRobot,
+) -> None:
+    """``by`` must be a real presser: an unknown one is a clear error, and nothing is stopped under it."""
+    client = RosbridgeClient(sim_ros2.url)
+    robot = RobotSession(client, ALLOW_ALL)
+    async with client:
+        await client.wait_connected(WAIT)
+        ticket = robot.gate.ticket()
+        with pytest.raises(ValueError, match="unknown presser 'someone'; one of stop_robot, console"):
+            await emergency_stop(robot, by="someone")  # type: ignore[arg-type]
+        assert robot.gate.refusal(ticket) is None

@@ -27,7 +27,7 @@ from rosbridge_mcp_server.pictures.images import ImageError, decode_compressed, 
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.seam import Act
-from rosbridge_mcp_server.safety import Audit, AuditEntry, Operator, emergency_stop
+from rosbridge_mcp_server.safety import PRESSER_NAMES, Audit, AuditEntry, Operator, Presser, emergency_stop
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -54,8 +54,10 @@ CAMERA_MAX_SIZE = 480
 LOOK_EVERY = 0.25
 #: Longest payload text in an audit line on the page.
 PAYLOAD_SHOWN = 240
-#: Who stopped a stream, in its answer to the model.
-ESTOP_BY = "E-STOP on the operator console"
+#: The E-STOP button as the stop's presser (also the tool column of its audit lines), and how the answers of
+#: what it stopped name it.
+ESTOP_PRESSER: Presser = "console"
+ESTOP_BY = PRESSER_NAMES[ESTOP_PRESSER]
 _IMAGE_TYPES = ("sensor_msgs/Image", "sensor_msgs/CompressedImage")
 
 
@@ -264,13 +266,13 @@ class ConsoleHub:
             robot.session.gate.stop(ESTOP_BY)
         reports = []
         for robot in self.robots:
-            report = await emergency_stop(robot.session, by=ESTOP_BY)
+            report = await emergency_stop(robot.session, by=ESTOP_PRESSER)
             for topic, type_name, message in report.zero_messages:
-                robot.audit.write(Act("console", "topic", topic, type_name, message), "e-stop")
+                robot.audit.write(Act(ESTOP_PRESSER, "topic", topic, type_name, message), "e-stop")
             for action, goal_id in report.goals:
-                robot.audit.write(Act("console", "action", action, "", {"cancel": goal_id}), "e-stop")
+                robot.audit.write(Act(ESTOP_PRESSER, "action", action, "", {"cancel": goal_id}), "e-stop")
             if not report.did_anything:
-                robot.audit.write(Act("console", "topic", "", "", None), "e-stop: nothing to stop")
+                robot.audit.write(Act(ESTOP_PRESSER, "topic", "", "", None), "e-stop: nothing to stop")
             reports.append(
                 {
                     "robot": robot.name,

@@ -74,6 +74,20 @@ class Grid:
         c, s = math.cos(self.origin.yaw), math.sin(self.origin.yaw)
         return (self.origin.x + c * gx - s * gy, self.origin.y + s * gx + c * gy)
 
+    def extent(self) -> tuple[float, float, float, float]:
+        """The map-frame box the grid covers: (x_min, y_min, x_max, y_max), metres (of its corners when the
+        grid is rotated in its frame)."""
+        corners = [self.to_map(col, row) for col in (0, self.width) for row in (0, self.height)]
+        xs, ys = [x for x, _ in corners], [y for _, y in corners]
+        return (min(xs), min(ys), max(xs), max(ys))
+
+    def outside(self, x: float, y: float) -> float:
+        """How far map-frame point (x, y) is outside the grid, metres: 0 on it, else to its nearest edge."""
+        col, row = self.to_cell(x, y)
+        beyond_col = max(0.0, -col, col - self.width)
+        beyond_row = max(0.0, -row, row - self.height)
+        return math.hypot(beyond_col, beyond_row) * self.resolution
+
 
 def decode_grid(message: Mapping[str, Any]) -> Grid:
     """An ``OccupancyGrid`` message (``data`` ints from JSON, an int8 ``array`` from CBOR, bytes, or base64)

@@ -6,7 +6,7 @@ What this server set going on a robot (``robot/activity.py``) and its velocity r
 are domain, imported from ``robot/``.
 """
 
-from rosbridge_mcp_server.safety.estop import StopReport, emergency_stop
+from rosbridge_mcp_server.safety.estop import PRESSER_NAMES, Presser, StopReport, emergency_stop
 from rosbridge_mcp_server.safety.guard import (
     LATCH_RULE,
     Audit,
@@ -27,6 +27,7 @@ from rosbridge_mcp_server.safety.policy import (
 
 __all__ = [
     "LATCH_RULE",
+    "PRESSER_NAMES",
     "Audit",
     "AuditEntry",
     "NameRules",
@@ -35,6 +36,7 @@ __all__ = [
     "Policy",
     "PolicyError",
     "PolicyGuard",
+    "Presser",
     "PublishLimits",
     "StopReport",
     "VelocityCaps",

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Final, Literal, get_args
 
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.goals import CanceledBy, cancel_goals
@@ -17,12 +17,31 @@ from rosbridge_mcp_server.robot.velocity import zero_command
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.session import RobotSession
 
-__all__ = ["HANDLED_SECONDS", "STREAM_STOP_SECONDS", "StopReport", "emergency_stop"]
+__all__ = [
+    "HANDLED_SECONDS",
+    "PRESSER_NAMES",
+    "STREAM_STOP_SECONDS",
+    "Presser",
+    "StopReport",
+    "emergency_stop",
+]
 
 #: How long the streams get to end after their cancel before the zero messages go out anyway.
 STREAM_STOP_SECONDS = 0.5
 #: How long the stop waits for the bridge to show it handled everything sent before (one call's round trip).
 HANDLED_SECONDS = 2.0
+
+#: Who pressed the stop: the stop_robot tool, or the E-STOP button of the operator console. (The audit's
+#: tool column of each stop is the presser's key.)
+Presser = Literal["stop_robot", "console"]
+#: How each presser is named in the answers of what its stop ended: voided calls' refusals, ended streams.
+PRESSER_NAMES: Final[dict[Presser, str]] = {
+    "stop_robot": "stop_robot",
+    "console": "E-STOP on the operator console",
+}
+#: What each presser's cancelled goals say in ``canceled_by``.
+_CANCELED_BY: Final[dict[Presser, CanceledBy]] = {"stop_robot": "stop_robot", "console": "estop"}
+_PRESSERS: Final[tuple[Presser, ...]] = get_args(Presser)
 
 
 @dataclass
@@ -46,11 +65,13 @@ class StopReport:
         )
 
 
-async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> StopReport:
+async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
     """On *robot*: end every stream, publish one zero command on every velocity topic used, cancel every
     running goal.
 
-    ``by`` (who stops: ``stop_robot``, or the operator's E-STOP) is what each ended stream's answer names.
+    ``by`` is who pressed the stop (there is no default: every caller says it). Its name
+    (:data:`PRESSER_NAMES`) is what each voided call's refusal and each ended stream's answer say; each
+    cancelled goal's ``canceled_by`` is ``stop_robot`` or ``estop`` (the console).
 
     First, before anything awaits, the robot's send gate voids every call that began before this stop:
     whatever was approved (or being approved) then sends nothing more, whether or not it is registered yet.
@@ -58,11 +79,14 @@ async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> Stop
     streams' last messages, the zero commands, the cancels): what the robot gets after this returns is
     nothing of what ran before it.
     """
+    if by not in _PRESSERS:  # a caller mypy does not see: refused before anything, so none is mislabelled
+        raise ValueError(f"emergency_stop: unknown presser {by!r}; one of {', '.join(_PRESSERS)}")
+    name, source = PRESSER_NAMES[by], _CANCELED_BY[by]
     client, activity = robot.client, robot.activity
-    robot.gate.stop(by)
+    robot.gate.stop(name)
     report = StopReport()
     # Streams first: a stream still running after the zero message would set the robot moving again.
-    ended, running = await activity.stop_streams(STREAM_STOP_SECONDS, by=by)
+    ended, running = await activity.stop_streams(STREAM_STOP_SECONDS, by=name)
     report.streams_stopped = [entry.topic for entry in ended]
     report.streams_still_running = [entry.topic for entry in running]
 
@@ -84,7 +108,6 @@ async def emergency_stop(robot: RobotSession, *, by: str = "stop_robot") -> Stop
                 report.zeroed_topics.append(target.topic)
                 report.zero_messages.append((target.topic, target.type, message))
 
-    source: CanceledBy = "stop_robot" if by == "stop_robot" else "estop"
     for goal in robot.goals.running():
         try:
             await cancel_goals(robot.goals, goal.action, goal.goal_id, by=source)

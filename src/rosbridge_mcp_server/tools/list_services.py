@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import functools
+import threading
 from dataclasses import dataclass
 from typing import Annotated
 
@@ -130,14 +130,38 @@ class _Grouping:
     head: str
 
 
-@functools.lru_cache(maxsize=4)
+#: How many listings' groupings are remembered: a fleet has one listing per robot.
+_GROUPINGS_KEPT = 4
+#: The groupings remembered, least recently used first: (the listing itself, its ROS version, its grouping).
+#: Each listing is held here, so while it is remembered no other tuple can be that object.
+_groupings: list[tuple[tuple[ServiceEntry, ...], int, _Grouping]] = []
+_groupings_lock = threading.Lock()  # servers on other threads' loops (a test's, an HTTP host's) share it
+
+
 def _grouped(services: tuple[ServiceEntry, ...], version: int) -> _Grouping:
     """The grouping of the unfiltered listing of ``services``.
 
-    Remembered for the last few listings (a fleet has one per robot): while the services and their types stay
-    the same the graph hands out the same listing, so grouping ~400 names (~1 ms) is done once; finding it
-    again costs the key's hash (~60 µs for 392 services).
+    Remembered for the last few listings (a fleet has one per robot), by the listing's identity: while the
+    services and their types stay the same the graph hands out the very same tuple
+    (``robot/graph/services.py``), so grouping ~400 names (~1 ms) is done once, and finding it again compares
+    a few references (hashing the tuple, as a cache keyed on its value would, costs ~60 µs for 392 services).
+    Any other tuple, even an equal one, is grouped afresh.
     """
+    with _groupings_lock:
+        for index, (listing, listed_version, grouping) in enumerate(_groupings):
+            if listing is services and listed_version == version:
+                if index != len(_groupings) - 1:
+                    _groupings.append(_groupings.pop(index))
+                return grouping
+    grouping = _group(services, version)
+    with _groupings_lock:
+        _groupings.append((services, version, grouping))
+        if len(_groupings) > _GROUPINGS_KEPT:
+            del _groupings[0]
+    return grouping
+
+
+def _group(services: tuple[ServiceEntry, ...], version: int) -> _Grouping:
     own, groups = _split([(service.name, service.type) for service in services], version)
     return _Grouping(
         own=own,

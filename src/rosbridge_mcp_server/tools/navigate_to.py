@@ -46,7 +46,8 @@ _CANCELLED_BY = {
     "timeout": "cancelled: it did not finish within the timeout",
     "request_cancelled": "cancelled because the tool call was cancelled",
     "cancel_action": "cancelled by cancel_action",
-    "stop_robot": "cancelled by stop_robot (or the operator's E-STOP)",
+    "stop_robot": "cancelled by stop_robot",
+    "estop": "cancelled by E-STOP on the operator console",
 }
 
 

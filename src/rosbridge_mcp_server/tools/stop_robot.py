@@ -37,7 +37,7 @@ SPEC = ToolSpec(
 
 async def run(ctx: ToolContext) -> ToolAnswer:
     """Stop the streams, zero the velocity topics, cancel the goals, and say what was done."""
-    report = await emergency_stop(ctx.robot)
+    report = await emergency_stop(ctx.robot, by="stop_robot")
     # Stopping is never put to the policy; each stop that went out is still audited.
     for topic, type_name, message in report.zero_messages:
         ctx.guard.record(Act(SPEC.name, "topic", topic, type_name, message, caller=ctx.caller), "e-stop")

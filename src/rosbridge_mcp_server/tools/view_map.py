@@ -154,6 +154,9 @@ async def run(
         notes=notes,
         tf_wait=min(_TF_WAIT, timeout),
     )
+    off_map = _off_map(grid, robot, base_frame.strip())
+    if off_map is not None:
+        notes.insert(0, off_map)  # first: the model must not take the robot for missing
     window = None
     if around_robot:
         if robot is None:
@@ -175,7 +178,7 @@ async def run(
         notes=notes,
         path_heard=path_message is not None,
     )
-    text = _text(answer, base_frame, picture.image.size)
+    text = _text(answer, base_frame, picture.image.size, drawn=off_map is None)
     return ToolAnswer(text=text, data=answer, images=(ToolImage(data, "image/png"),))
 
 
@@ -262,11 +265,29 @@ def _answer(
     )
 
 
+def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
+    """The note that the robot is outside the grid (so the picture cannot show it): where it is and how far
+    outside the grid's extent; ``None`` when it is on the grid or not known."""
+    if robot is None:
+        return None
+    outside = grid.outside(robot.x, robot.y)
+    if outside <= 0:
+        return None
+    x_min, y_min, x_max, y_max = (round(v, 2) for v in grid.extent())
+    x, y, frame = round(robot.x, 2), round(robot.y, 2), grid.frame_id or "map"
+    # Rounded up: a robot a millimetre off the map is not said to be 0 m off it.
+    return (
+        f"The robot ({base_frame} at x={x:g} y={y:g} in {frame}) is OFF THE MAP, "
+        f"{math.ceil(outside * 100) / 100:g} m outside its extent (x {x_min:g}..{x_max:g}, "
+        f"y {y_min:g}..{y_max:g} m), so the picture cannot show it."
+    )
+
+
 def _planar(pose: Pose2D) -> list[float]:
     return [round(pose.x, 3), round(pose.y, 3), round(math.degrees(pose.yaw), 1)]
 
 
-def _text(answer: MapAnswer, base_frame: str, size: tuple[int, int]) -> str:
+def _text(answer: MapAnswer, base_frame: str, size: tuple[int, int], *, drawn: bool) -> str:
     (width, height), resolution = answer.cells, answer.resolution
     x, y, yaw = answer.origin
     shares = answer.shares
@@ -280,7 +301,8 @@ def _text(answer: MapAnswer, base_frame: str, size: tuple[int, int]) -> str:
     ]
     if answer.robot is not None:
         rx, ry, ryaw = answer.robot
-        parts.append(f"robot {base_frame} at x={rx:g} y={ry:g} yaw={ryaw:g}° (blue arrow)")
+        shown = "(blue arrow)" if drawn else "(off the map: not drawn)"
+        parts.append(f"robot {base_frame} at x={rx:g} y={ry:g} yaw={ryaw:g}° {shown}")
     if answer.path_poses is not None:
         parts.append(f"path {answer.path_poses} poses (green)")
     if answer.scan_hits is not None:
