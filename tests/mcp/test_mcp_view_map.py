@@ -267,7 +267,7 @@ async def test_a_robot_off_the_map_is_said_to_be_off_it_with_where_and_how_far(s
         assert data is not None
         assert data["robot"] == pytest.approx([4.0, 5.0, 0.0], abs=0.01)
         said = (
-            "The robot (base_link at x=4 y=5 in map) is OFF THE MAP, 5 m outside its extent (x 0..1, "
+            "The robot (base_link at x=4 y=5 in map) is off the map, 5 m outside its extent (x 0..1, "
             "y 0..1 m), so the picture cannot show it."
         )
         assert data["notes"][0] == said
@@ -287,7 +287,7 @@ async def test_a_robot_on_the_map_is_drawn_and_not_said_to_be_off_it(sim: Simula
     assert data["robot"] == pytest.approx([0.5, 0.5, 0.0], abs=0.01)
     assert data["notes"] == []
     assert "robot base_link at x=0.5 y=0.5 yaw=0° (blue arrow)" in text_of(result)
-    assert "OFF THE MAP" not in text_of(result)
+    assert "off the map" not in text_of(result)
     assert robot_pixels(picture_of(result)) > 0
 
 
@@ -299,6 +299,6 @@ async def test_off_a_rotated_map_the_distance_is_to_its_nearest_edge(sim: Simula
     assert data is not None
     assert data["robot"] == pytest.approx([2.0, 0.5, 0.0], abs=0.01)
     assert (
-        "(base_link at x=2 y=0.5 in map) is OFF THE MAP, 2 m outside its extent (x 4..5, y 0..1 m)"
+        "(base_link at x=2 y=0.5 in map) is off the map, 2 m outside its extent (x 4..5, y 0..1 m)"
         in (data["notes"][0])
     )

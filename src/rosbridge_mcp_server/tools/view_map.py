@@ -277,7 +277,7 @@ def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
     x, y, frame = round(robot.x, 2), round(robot.y, 2), grid.frame_id or "map"
     # Rounded up: a robot a millimetre off the map is not said to be 0 m off it.
     return (
-        f"The robot ({base_frame} at x={x:g} y={y:g} in {frame}) is OFF THE MAP, "
+        f"The robot ({base_frame} at x={x:g} y={y:g} in {frame}) is off the map, "
         f"{math.ceil(outside * 100) / 100:g} m outside its extent (x {x_min:g}..{x_max:g}, "
         f"y {y_min:g}..{y_max:g} m), so the picture cannot show it."
     )
