@@ -3,17 +3,22 @@
 The browser is Debian's Chromium (``/usr/bin/chromium``, or ``CHROMIUM`` in the environment) driven by
 Playwright from PyPI; Playwright's own browser download is never used. Without Chromium the browser tests skip
 and say why; ``.ci/run`` installs it.
+
+``race_harness.py`` builds its E-STOP races on :func:`served_console` (through a slow link, with longer
+timeouts) and keeps only what is theirs: the delaying proxy, the raw watcher socket, the race itself.
 """
 
 from __future__ import annotations
 
 import asyncio
+import json
 import os
 import shutil
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 from typing import Any
+from urllib.parse import urlsplit
 
 import pytest
 from mcp.types import CallToolResult, TextContent
@@ -23,12 +28,15 @@ from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView
 from rosbridge_mcp_server.console.serve import RunningConsole, open_console
+from rosbridge_mcp_server.console.web import SECRET_HEADER
 from rosbridge_mcp_server.robot.activity import SessionActivity
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard
 from rosbridge_mcp_server.server import build_server
 
 CONNECT_WAIT = 5.0
+#: How long a console request may take to answer.
+HTTP_WAIT = 15.0
 
 CHROMIUM_ARGS = [
     "--headless",
@@ -69,25 +77,66 @@ class Console:
     running: RunningConsole
     mcp: Client
     operator: Operator
-    activity: SessionActivity
+    robot: RobotSession
+    audit: Audit
 
     @property
     def url(self) -> str:
         return self.running.url
 
+    @property
+    def activity(self) -> SessionActivity:
+        return self.robot.activity
+
     async def call(self, name: str, arguments: dict[str, Any]) -> CallToolResult:
         return await self.mcp.call_tool(name, arguments)
+
+    async def post(self, path: str) -> tuple[int, Any]:
+        """POST *path* to the console with its secret, as the page does; (status, JSON answer)."""
+        parts = urlsplit(self.running.base_url)
+        assert parts.hostname is not None
+        assert parts.port is not None
+        reader, writer = await asyncio.open_connection(parts.hostname, parts.port)
+        try:
+            head = (
+                f"POST {path} HTTP/1.1\r\nHost: {parts.hostname}:{parts.port}\r\nConnection: close\r\n"
+                f"{SECRET_HEADER}: {self.running.secret}\r\nContent-Type: application/json\r\n"
+                "Content-Length: 2\r\n\r\n{}"
+            )
+            writer.write(head.encode())
+            await writer.drain()
+            async with asyncio.timeout(HTTP_WAIT):
+                raw = await reader.read()
+        finally:
+            writer.close()
+        header, _, body = raw.partition(b"\r\n\r\n")
+        return int(header.split()[1]), json.loads(body or b"null")
 
 
 @asynccontextmanager
 async def served_console(
-    url: str, policy: Policy | None = None, elicitation_callback: Any = None
+    url: str,
+    policy: Policy | None = None,
+    elicitation_callback: Any = None,
+    *,
+    request_timeout: float = 5.0,
+    connect_timeout: float = 2.0,
+    connect_wait: float = CONNECT_WAIT,
 ) -> AsyncIterator[Console]:
     """The server as ``serve --console`` wires it (one operator, audit, guard and activity), on port 0; the
-    MCP client answers elicitations with ``elicitation_callback`` when given (else it cannot ask)."""
-    config = Config(url=url, request_timeout=5.0, connect_timeout=2.0, policy=policy or Policy())
+    MCP client answers elicitations with ``elicitation_callback`` when given (else it cannot ask).
+
+    The rosbridge client has *request_timeout* and *connect_timeout*; the console opens once it has connected,
+    within *connect_wait* seconds (a slow link wants more of all three)."""
+    config = Config(
+        url=url, request_timeout=request_timeout, connect_timeout=connect_timeout, policy=policy or Policy()
+    )
     ros = RosbridgeClient(
-        url, connect_timeout=2.0, request_timeout=5.0, reconnect_min=0.05, reconnect_max=0.2
+        url,
+        connect_timeout=connect_timeout,
+        request_timeout=request_timeout,
+        reconnect_min=0.05,
+        reconnect_max=0.2,
     )
     operator = Operator()
     audit = Audit()
@@ -110,9 +159,9 @@ async def served_console(
     hosting = asyncio.create_task(host())
     try:
         mcp = await ready
-        await ros.wait_connected(CONNECT_WAIT)
+        await ros.wait_connected(connect_wait)
         async with open_console(ConsoleSettings(port=0), hub) as running:
-            yield Console(running, mcp, operator, robot.activity)
+            yield Console(running, mcp, operator, robot, audit)
     finally:
         stop.set()
         await hosting

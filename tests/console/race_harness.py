@@ -4,8 +4,9 @@ robot is watched on the robot itself and on a raw rosbridge socket.
 
 * :class:`DelayingProxy` sits between the server and the bridge and holds every TCP chunk ``delay`` seconds
   each way (order kept): a slow link, as a robot on Wi-Fi has;
-* :func:`race_console` is the server as ``serve --console`` wires it (one operator, audit, guard), its
-  rosbridge client going through the proxy, with an MCP client session;
+* :func:`race_console` is ``console_harness.served_console`` (the server as ``serve --console`` wires it,
+  with an MCP client session) with its rosbridge client going through the proxy, a raw socket watching the
+  robot and the moment the console's audit shows a call allowed;
 * :func:`run_race` presses E-STOP during a 10 Hz ``publish_topic`` stream and a ``publish_action`` goal and
   counts the velocity commands and the goal progress the robot got after E-STOP answered.
 
@@ -29,17 +30,10 @@ from typing import Any
 from urllib.parse import urlsplit
 
 import websockets
-from mcp.types import CallToolResult, TextContent
+from console_harness import Console, served_console, text_of
 
 from mcp import Client
-from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.config import Config
-from rosbridge_mcp_server.console import ConsoleHub, ConsoleSettings, RobotView
-from rosbridge_mcp_server.console.serve import RunningConsole, open_console
-from rosbridge_mcp_server.console.web import SECRET_HEADER
-from rosbridge_mcp_server.robot.session import RobotSession
-from rosbridge_mcp_server.safety import Audit, AuditEntry, Operator, Policy, PolicyGuard
-from rosbridge_mcp_server.server import build_server
+from rosbridge_mcp_server.safety import AuditEntry, Policy
 from rosbridge_mcp_server.sim import World
 
 CMD_VEL = "/turtle1/cmd_vel"
@@ -65,10 +59,6 @@ def types_of(dialect: str) -> dict[str, str]:
         "feedback_topic": f"{FIB}/feedback",
         "feedback": "actionlib_tutorials/FibonacciActionFeedback",
     }
-
-
-def text_of(result: CallToolResult) -> str:
-    return "\n".join(block.text for block in result.content if isinstance(block, TextContent))
 
 
 def moving(message: dict[str, Any]) -> bool:
@@ -178,38 +168,20 @@ class Watcher:
 
 @dataclass
 class RaceConsole:
+    """The served console and its MCP session, with what the races watch it by."""
+
     dialect: str
     world: World | None  #: the simulated robot's own record; None on a real bridge
-    mcp: Client
-    running: RunningConsole
-    operator: Operator
-    robot: RobotSession
+    console: Console
     watcher: Watcher
     marker_socket: Any
-    allowed: asyncio.Event
+    allowed: asyncio.Event  #: set when the console's audit shows a call allowed
     observe: float
     marks: int = 0
 
-    async def post(self, path: str) -> tuple[int, Any]:
-        """POST *path* to the console with its secret, as the page does; (status, JSON answer)."""
-        parts = urlsplit(self.running.base_url)
-        assert parts.hostname is not None
-        assert parts.port is not None
-        reader, writer = await asyncio.open_connection(parts.hostname, parts.port)
-        try:
-            head = (
-                f"POST {path} HTTP/1.1\r\nHost: {parts.hostname}:{parts.port}\r\nConnection: close\r\n"
-                f"{SECRET_HEADER}: {self.running.secret}\r\nContent-Type: application/json\r\n"
-                "Content-Length: 2\r\n\r\n{}"
-            )
-            writer.write(head.encode())
-            await writer.drain()
-            async with asyncio.timeout(WAIT):
-                raw = await reader.read()
-        finally:
-            writer.close()
-        header, _, body = raw.partition(b"\r\n\r\n")
-        return int(header.split()[1]), json.loads(body or b"null")
+    @property
+    def mcp(self) -> Client:
+        return self.console.mcp
 
     async def mark(self) -> str:
         """Publish a marker through the raw socket and wait until the watcher has seen it."""
@@ -240,22 +212,6 @@ async def race_console(
         url = robot_url
         if delay > 0:
             url = (await stack.enter_async_context(DelayingProxy(robot_url, delay))).url
-        config = Config(url=url, request_timeout=10.0, connect_timeout=5.0, policy=policy or Policy())
-        ros = RosbridgeClient(
-            url, connect_timeout=5.0, request_timeout=10.0, reconnect_min=0.05, reconnect_max=0.2
-        )
-        operator = Operator()
-        audit = Audit()
-        robot = RobotSession(ros, PolicyGuard(config.policy, audit, operator))
-        hub = ConsoleHub([RobotView("robot", robot, audit)], operator)
-        allowed = asyncio.Event()
-
-        def on_audit(entry: AuditEntry) -> None:
-            # What the console shows: the moment a call is allowed, the person presses E-STOP.
-            if entry["outcome"] in ("allowed", "confirmed") and entry["tool"] != "console":
-                allowed.set()
-
-        audit.listen(on_audit)
         watcher = Watcher()
         raw = await stack.enter_async_context(websockets.connect(robot_url))
         watched = [(CMD_VEL, types["twist"]), (MARKER, types["string"])]
@@ -275,39 +231,26 @@ async def race_console(
         marker_socket = await stack.enter_async_context(websockets.connect(robot_url))
         await marker_socket.send(json.dumps({"op": "advertise", "topic": MARKER, "type": types["string"]}))
 
-        ready: asyncio.Future[Client] = asyncio.get_running_loop().create_future()
-        stop = asyncio.Event()
+        console = await stack.enter_async_context(
+            served_console(url, policy, request_timeout=10.0, connect_timeout=5.0, connect_wait=WAIT)
+        )
+        allowed = asyncio.Event()
 
-        async def host() -> None:
-            try:
-                server = build_server(robot, config, console_view=hub.snapshot)
-                async with Client(server, mode="legacy") as mcp:
-                    ready.set_result(mcp)
-                    await stop.wait()
-            except BaseException as exc:
-                if not ready.done():
-                    ready.set_exception(exc)
-                raise
+        def on_audit(entry: AuditEntry) -> None:
+            # What the console shows: the moment a call is allowed, the person presses E-STOP.
+            if entry["outcome"] in ("allowed", "confirmed") and entry["tool"] != "console":
+                allowed.set()
 
-        hosting = asyncio.create_task(host())
-        try:
-            mcp = await ready
-            await ros.wait_connected(WAIT)
-            async with open_console(ConsoleSettings(port=0), hub) as running:
-                race = RaceConsole(
-                    dialect, world, mcp, running, operator, robot, watcher, marker_socket, allowed, observe
-                )
-                # The subscriptions are live once a first marker comes back.
-                async with asyncio.timeout(WAIT):
-                    while True:
-                        with contextlib.suppress(TimeoutError):
-                            async with asyncio.timeout(0.5):
-                                await race.mark()
-                                break
-                yield race
-        finally:
-            stop.set()
-            await hosting
+        console.audit.listen(on_audit)
+        race = RaceConsole(dialect, world, console, watcher, marker_socket, allowed, observe)
+        # The subscriptions are live once a first marker comes back.
+        async with asyncio.timeout(WAIT):
+            while True:
+                with contextlib.suppress(TimeoutError):
+                    async with asyncio.timeout(0.5):
+                        await race.mark()
+                        break
+        yield race
 
 
 @dataclass
@@ -367,7 +310,7 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
     if press_after > 0:
         # Where in the calls' lives the press lands (approval, ping, first messages, goal start).
         await asyncio.sleep(press_after)
-    status, answer = await race.post("/api/estop")
+    status, answer = await race.console.post("/api/estop")
     answered = time.monotonic()
     assert status == 200, answer
     goals_then = world.goals if world is not None else {}
@@ -389,7 +332,7 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
             progress_after += 1 + record.feedback_count  # a goal the robot took after E-STOP answered
         else:
             progress_after += record.feedback_count - progress_then[gid]
-    status, released = await race.post("/api/release")
+    status, released = await race.console.post("/api/release")
     assert status == 200, released
     return RaceResult(
         estop=answer["robots"][0],

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import asyncio
 
-from race_harness import CMD_VEL, FIB, race_console, text_of, types_of
+from console_harness import text_of
+from race_harness import CMD_VEL, FIB, race_console, types_of
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 

@@ -85,7 +85,8 @@ async def test_a_stream_at_the_rate_alone_is_not_held_back(sim: SimulatedRobot) 
 
     At 5 Hz: the gate keeps its grid of turns through any hiccup of the loop shorter than a turn (200 ms
     here), which is the property; a longer stall costs turns by design (a burst to catch up would break the
-    cap), and a CI machine under load has stalled 150 ms, three of 20 Hz's 50 ms turns."""
+    cap), and a CI machine under load has stalled 150 ms, three of 20 Hz's 50 ms turns. At 5 Hz this no longer
+    sees turns that drift; tests/robot/test_gate_rate_grid.py holds the grid at 20 Hz on a virtual clock."""
     rate = 5.0
     async with open_session(sim.url, guard=None, policy=capped(rate)) as session:
         result = await session.ok("publish_topic", twist(sim, 0.4, rate_hz=rate, duration=2.0))

@@ -17,7 +17,7 @@ Each setting is chosen by the one rule of :mod:`.sources` (flag > environment > 
 
 The CLI calls :func:`load_config` once, with its environment; the platform's folders are read from it here too
 (``XDG_DATA_HOME`` for the default recording folder, :func:`default_record_dir`). No module outside
-``config/`` and ``cli/`` reads the environment (``tests/safety/test_layers.py`` holds it).
+``config/`` and ``cli/`` reads the environment (``tests/safety/test_layering.py`` holds it).
 """
 
 from __future__ import annotations
