@@ -22,7 +22,7 @@ import functools
 import re
 import subprocess
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -59,6 +59,10 @@ class Source:
 def source(where: str, text: str) -> Source:
     """*text* as if it were the module at *where* (for showing a rule catch what it forbids)."""
     return Source(where, ast.parse(text, filename=where))
+
+
+#: A scan of one module: (line, what it found) for each finding.
+Scan = Callable[[ast.Module], Iterator[tuple[int, str]]]
 
 
 @functools.cache
@@ -267,14 +271,19 @@ def _brand_questions(tree: ast.Module) -> Iterator[tuple[int, str]]:
             yield node.lineno, f"{owner_name}.{node.attr}"
 
 
-def brand_questions(sources: Iterable[Source]) -> list[str]:
-    """What detection saw, read outside the packages that speak the protocol."""
+def reads(sources: Iterable[Source], scan: Scan, *, outside: frozenset[str]) -> list[str]:
+    """``where:line reads what`` for each finding of *scan* in the modules outside the packages *outside*."""
     return [
         f"{src.where}:{line} reads {what}"
         for src in sources
-        if src.top not in PROTOCOL_PACKAGES
-        for line, what in _brand_questions(src.tree)
+        if src.top not in outside
+        for line, what in scan(src.tree)
     ]
+
+
+def brand_questions(sources: Iterable[Source]) -> list[str]:
+    """What detection saw, read outside the packages that speak the protocol."""
+    return reads(sources, _brand_questions, outside=PROTOCOL_PACKAGES)
 
 
 def test_nothing_above_the_client_imports_the_wire_protocol() -> None:
@@ -337,17 +346,12 @@ def _environment_reads(tree: ast.Module) -> Iterator[tuple[int, str]]:
                     and isinstance(key.value, str)
                     and _SETTING_VARIABLE.match(key.value)
                 ):
-                    yield node.lineno, f"the variable {key.value}"
+                    yield key.lineno, f"the variable {key.value}"
 
 
 def environment_reads(sources: Iterable[Source]) -> list[str]:
     """Settings read from the environment outside ``config/`` and ``cli/``."""
-    return [
-        f"{src.where}:{line} reads {what}"
-        for src in sources
-        if src.top not in SETTING_OWNERS
-        for line, what in _environment_reads(src.tree)
-    ]
+    return reads(sources, _environment_reads, outside=SETTING_OWNERS)
 
 
 def test_no_module_outside_config_and_cli_reads_the_environment() -> None:
