@@ -95,8 +95,8 @@ async def open_session(
     config = Config(
         url=url,
         request_timeout=request_timeout,
-        # Room for a loaded machine: a tool call waits this long for a connection attempt in progress (a refused
-        # port still answers at once). CI, with coverage on two cores, once saw 2 s pass.
+        # Room for a loaded machine: a tool call waits this long for a connection attempt in progress (a
+        # refused port still answers at once). CI, with coverage on two cores, once saw 2 s pass.
         connect_timeout=5.0,
         policy=policy or Policy(),
         tools=tools,
