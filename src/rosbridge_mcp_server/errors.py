@@ -103,7 +103,7 @@ class Hint:
     tail: str = ""
 
 
-class Advised(Exception):  # noqa: N818 - a mixin of errors, never raised alone
+class Advised(Exception):  # a mixin of errors, never raised alone
     """An error whose text the MCP edge completes with what to try (``hint``; ``None``: nothing to add)."""
 
     hint: Hint | None = None
