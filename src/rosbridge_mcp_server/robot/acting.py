@@ -28,7 +28,7 @@ from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.navigation import Scene, goal_poses, navigation_goal, survey
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
-from rosbridge_mcp_server.robot.seam import Act, AskPerson, Guard, approved, carry_out
+from rosbridge_mcp_server.robot.seam import Act, Approving, approved, carry_out
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, stamped
 
 if TYPE_CHECKING:
@@ -67,8 +67,9 @@ class Timeouts(Protocol):
     def request_timeout(self) -> float: ...
 
 
-class Acting(Protocol):
-    """What an act needs: a robot session's parts and the call's own (a tool's ``ToolContext`` is one)."""
+class Acting(Approving, Protocol):
+    """What an act needs: what the seam reads to approve it (the guard, who to ask, the caller), the robot
+    session's parts and the call's own (a tool's ``ToolContext`` is one)."""
 
     @property
     def client(self) -> RosbridgeClient: ...
@@ -76,12 +77,6 @@ class Acting(Protocol):
     def config(self) -> Timeouts: ...
     @property
     def graph(self) -> RosGraph: ...
-    @property
-    def guard(self) -> Guard: ...
-    @property
-    def ask_person(self) -> AskPerson: ...
-    @property
-    def caller(self) -> str | None: ...
     @property
     def activity(self) -> SessionActivity: ...
     @property
