@@ -11,6 +11,7 @@ timeouts) and keeps only what is theirs: the delaying proxy, the raw watcher soc
 from __future__ import annotations
 
 import asyncio
+import importlib.util
 import json
 import os
 import shutil
@@ -57,6 +58,12 @@ def chromium_path() -> str | None:
 
 
 def need_chromium() -> str:
+    """Chromium's path, or a skip saying what is missing: Playwright (the ``browser`` group) or Chromium."""
+    if importlib.util.find_spec("playwright") is None:
+        pytest.skip(
+            "Playwright is not installed: `uv sync --group browser` (.ci/run does it), to run the console's "
+            "browser tests"
+        )
     path = chromium_path()
     if path is None:
         pytest.skip(
