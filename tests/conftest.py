@@ -23,6 +23,15 @@ TEST_ROBOT_DEFAULTS: dict[str, Any] = {"action_step": 0.05, "slow_service_second
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 
 
+#: Workers per core for ``-n auto``: the tests mostly wait on sockets and timers, so a core keeps four busy.
+WORKERS_PER_CORE = 4
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """``-n auto`` fits the machine: four workers a core (eight on two cores), at most sixteen."""
+    return max(1, min(16, WORKERS_PER_CORE * (os.cpu_count() or 1)))
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_cmdline_main(config: pytest.Config) -> None:
     """Against a real bridge the tests run one at a time (no xdist workers): they share its one graph."""

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 from test_e2e_stdio import StdioServer, _finish, _start
 
-WAIT = 20.0
+WAIT = 60.0
 
 
 async def _call(server: StdioServer, name: str, arguments: dict[str, Any]) -> dict[str, Any]:

@@ -11,7 +11,7 @@ from typing import Any
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 30.0
+WAIT = 90.0  # a bound on an event, not a pause: a busy machine (load 10 on 2 cores) still passes
 CMD_VEL = "/turtle1/cmd_vel"
 POLICY = """
 confirm = "motion"
