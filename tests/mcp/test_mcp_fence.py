@@ -207,7 +207,8 @@ async def test_every_motion_goal_the_fence_rules_out_is_refused_by_every_carrier
 
 async def test_kilted_through_poses_are_read_as_nav_msgs_goals(make_sim: MakeSim) -> None:
     """Kilted's NavigateThroughPoses takes ``poses`` as nav_msgs/Goals: a waypoint in keep-out is refused by
-    both carriers (not read as one pose at (0, 0)); free waypoints in that shape are driven."""
+    both carriers (not read as one pose at (0, 0)); free waypoints in that shape are driven, navigate_to's
+    too."""
     robot = await make_sim(dialect="ros2", world="nav2", distro="kilted")
     robot.nav2.navigator.speed = 8.0
     policy = parse_policy(POLICY, where="fence.toml")
@@ -222,8 +223,12 @@ async def test_kilted_through_poses_are_read_as_nav_msgs_goals(make_sim: MakeSim
         free = {"poses": {"header": {"frame_id": "map"}, "goals": [stamped(4.5, 7.5), stamped(3.0, 7.5)]}}
         done = await session.ok("publish_action", dict(carriers(robot, "navigate_through_poses", free)[0][1]))
         assert "succeeded" in text_of(done).lower(), text_of(done)
-    here = robot.nav2.robots[0]
-    assert math.hypot(here.x - 3.0, here.y - 7.5) < 0.2
+        here = robot.nav2.robots[0]
+        assert math.hypot(here.x - 3.0, here.y - 7.5) < 0.2
+        # navigate_to's own waypoints go out in Kilted's shape too.
+        driven = await session.ok("navigate_to", {"goal": [[4.0, 7.0], [5.0, 7.5, 0]]})
+        assert (driven.structured_content or {})["succeeded"], text_of(driven)
+    assert math.hypot(here.x - 5.0, here.y - 7.5) < 0.2
 
 
 async def test_the_robot_footprint_is_judged_not_the_goal_point(nav2: SimulatedRobot) -> None:
