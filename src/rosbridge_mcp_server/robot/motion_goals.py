@@ -148,8 +148,8 @@ def carried_goal(kind: str, name: str, type_name: str, payload: Any) -> CarriedG
         action_name, _, hidden = parent.rpartition("/")
         sends = hidden == "_action" and leaf == "send_goal"
         by_name = sends and action_name.rsplit("/", 1)[-1] in MOTION_ACTION_NAMES
-        if (action is not None and "_SendGoal" in type_name) or by_name:
-            return CarriedGoal(action, body.get("goal"), action_name or name)
+        if (action is not None and ("_SendGoal" in type_name or sends)) or by_name:
+            return CarriedGoal(action, body.get("goal"), action_name if sends else name)
     return None
 
 

@@ -87,9 +87,11 @@ def navigation_refusal(act: Act, rules: NavigationRules) -> NavigationRefusal | 
             "Send a goal with poses on the map (navigate_to), or ask the robot's operator.",
         )
     scene = act.scene if isinstance(act.scene, Scene) else None
-    if scene is None or len(scene.goals) != motion.placed_count:
-        if not strict:
-            return None
+    # A path is driven from wherever the robot is: with zones, where it is must be known too.
+    if (scene is None or len(scene.goals) != motion.placed_count) and not strict:
+        return None
+    robot_needed = strict and motion.path and scene is not None and scene.robot is None
+    if scene is None or len(scene.goals) != motion.placed_count or robot_needed:
         why = "; ".join(scene.problems) if scene is not None and scene.problems else "no map or /tf was read"
         return _refusal(
             "[navigation] goal not placed",
