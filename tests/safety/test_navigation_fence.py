@@ -74,3 +74,16 @@ def test_a_drive_is_asked_about_by_its_distance_not_by_where_the_robot_stands() 
     assert goal_text(act) == "Drives the robot 0.50 m backward along its heading."
     spin = Act("publish_action", "action", "/spin", "nav2_msgs/action/Spin", {"target_yaw": 1.0})
     assert goal_text(spin) == "Turns the robot in place."
+
+
+def test_a_path_too_long_to_check_is_refused_not_sampled() -> None:
+    """2,000 pieces of 7 m across a 6 m map would be 280,000 samples: refused at once, naming the length."""
+    corners = [Pose2D(0.5, 0.5, 0.0), Pose2D(5.5, 5.5, 0.0)]
+    goals = tuple(corners[i % 2] for i in range(2000))
+    scene = Scene("/map", "base_link", grid=GRID, robot=Pose2D(0.5, 0.5, 0.0), goals=goals)
+    poses = [stamped(goal.x, goal.y) for goal in goals]
+    goal = {"path": {"header": {"frame_id": "map"}, "poses": poses}}
+    act = Act("publish_action", "action", "/follow_path", "nav2_msgs/action/FollowPath", goal, scene=scene)
+    refusal = navigation_refusal(act, NONE)
+    assert refusal is not None
+    assert "14135 m in all, too long to check on the map" in refusal.text

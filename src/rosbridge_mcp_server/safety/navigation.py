@@ -119,6 +119,10 @@ def _straight_drives(motion: Motion, scene: Scene) -> list[tuple[Pose2D, Pose2D]
     return list(itertools.pairwise(points))
 
 
+#: Most map cells a goal's straight drives are checked at (a 100 m path on a 5 cm map is 4,000).
+MAX_MAP_SAMPLES = 200_000
+
+
 def _map_refusal(
     motion: Motion, scene: Scene, drives: list[tuple[Pose2D, Pose2D]], radius: float, strict: bool
 ) -> NavigationRefusal | None:
@@ -132,6 +136,11 @@ def _map_refusal(
             "Start the map server, or ask the robot's operator.",
         )
     in_place = motion.along == 0.0
+    length = sum(math.hypot(end.x - start.x, end.y - start.y) for start, end in drives)
+    if length / (scene.grid.resolution / 2) > MAX_MAP_SAMPLES:
+        # Each straight piece is sampled every half cell: a bound keeps one goal from stalling the server.
+        too_long = f"the straight drives of this goal are {length:.0f} m in all, too long to check on the map"
+        return _refusal(f"map: {too_long}", too_long, "Send a shorter path.")
     for goal in () if in_place else scene.goals:
         problem = map_problem(scene.grid, goal, radius)
         if problem is not None:
