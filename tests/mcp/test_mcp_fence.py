@@ -386,6 +386,8 @@ async def test_a_drive_on_heading_speed_meets_the_velocity_cap(nav2: SimulatedRo
                 assert "nothing was sent" in text
             else:
                 assert not result.is_error, text
+                if tool == "publish_topic":
+                    assert "lowered the goal's speed to the [velocity] max_linear cap" in text, text
         if mode == "refuse":
             assert not watcher.seen
             return

@@ -140,7 +140,7 @@ async def publish_once(
         ctx.activity.published(act.name, act.type, act.payload)
 
     await carry_out(ctx, act, send)
-    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    adjusted = _adjusted(act.type, body, act.payload)
     return Published(act.name, act.type, act.payload, adjusted)
 
 
@@ -168,6 +168,16 @@ async def _checked_message(
         looks_like=f"A {bridge_type} message",
     )
     return name, bridge_type, message
+
+
+def _adjusted(type_name: str, before: Any, after: Any) -> str | None:
+    """How the guard changed a message before it was sent, or ``None``: a velocity command scaled to the caps,
+    or a motion goal's speed (DriveOnHeading, BackUp, carried by a topic) lowered to them."""
+    if after == before:
+        return None
+    if is_velocity_type(type_name):
+        return clamp_text(type_name, before, after)
+    return "lowered the goal's speed to the [velocity] max_linear cap"
 
 
 def _given(written: str, canonical: str) -> str | None:
@@ -300,7 +310,7 @@ async def publish_stream(
         if cancelled:
             ctx.guard.record(act, f"cancelled after {sent} of {planned}")
     ctx.guard.record(act, f"{f'stopped by {stopped_by} after' if stopped else 'sent'} {sent} of {planned}")
-    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    adjusted = _adjusted(act.type, body, act.payload)
     return Streamed(
         act.name,
         act.type,
