@@ -314,6 +314,9 @@ async def test_navigation_confirm_motion_asks_for_every_goal_by_any_carrier(nav2
         assert not unasked, "\n".join(unasked)
         assert len(person.questions) == len(calls)
         assert not watcher.seen
+    # The person is told where the goal is, whatever carried it.
+    assert "Goal in map: x=4.00 y=7.00 m" in person.questions[0]
+    assert any("Drives the robot 0.50 m forward along its heading." in q for q in person.questions)
     assert nav2.nav2.robots[0].x == pytest.approx(HOME)
 
 
