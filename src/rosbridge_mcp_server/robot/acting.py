@@ -25,8 +25,9 @@ from rosbridge_mcp_server.robot.effects import parameter_write, service_effects,
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit
+from rosbridge_mcp_server.robot.motion_goals import carried_goal, read_motion
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
-from rosbridge_mcp_server.robot.navigation import Scene, goal_poses, navigation_goal, survey
+from rosbridge_mcp_server.robot.navigation import Scene, survey
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
 from rosbridge_mcp_server.robot.seam import Act, Approving, approved, carry_out
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, stamped
@@ -48,7 +49,7 @@ __all__ = [
     "Streamed",
     "Timeouts",
     "call_service",
-    "navigation_scene",
+    "motion_scene",
     "publish_once",
     "publish_stream",
     "require_action_server",
@@ -124,6 +125,7 @@ async def publish_once(
             body,
             effects=topic_effects(name, bridge_type),
             given=_given(topic, name),
+            scene=await motion_scene(ctx, "topic", name, bridge_type, body),
         ),
     )
 
@@ -138,7 +140,7 @@ async def publish_once(
         ctx.activity.published(act.name, act.type, act.payload)
 
     await carry_out(ctx, act, send)
-    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    adjusted = _adjusted(act.type, body, act.payload)
     return Published(act.name, act.type, act.payload, adjusted)
 
 
@@ -166,6 +168,16 @@ async def _checked_message(
         looks_like=f"A {bridge_type} message",
     )
     return name, bridge_type, message
+
+
+def _adjusted(type_name: str, before: Any, after: Any) -> str | None:
+    """How the guard changed a message before it was sent, or ``None``: a velocity command scaled to the caps,
+    or a motion goal's speed (DriveOnHeading, BackUp, carried by a topic) lowered to them."""
+    if after == before:
+        return None
+    if is_velocity_type(type_name):
+        return clamp_text(type_name, before, after)
+    return "lowered the goal's speed to the [velocity] max_linear cap"
 
 
 def _given(written: str, canonical: str) -> str | None:
@@ -240,6 +252,7 @@ async def publish_stream(
             duration=duration,
             effects=topic_effects(name, bridge_type),
             given=_given(topic, name),
+            scene=await motion_scene(ctx, "topic", name, bridge_type, body),
         ),
     )
     rate = act.rate_hz or rate_hz
@@ -297,7 +310,7 @@ async def publish_stream(
         if cancelled:
             ctx.guard.record(act, f"cancelled after {sent} of {planned}")
     ctx.guard.record(act, f"{f'stopped by {stopped_by} after' if stopped else 'sent'} {sent} of {planned}")
-    adjusted = clamp_text(act.type, body, act.payload) if act.payload != body else None
+    adjusted = _adjusted(act.type, body, act.payload)
     return Streamed(
         act.name,
         act.type,
@@ -403,8 +416,19 @@ async def call_service(
 
     # What the call does (an action's goal, parameter writes, motion) is judged too, not only its name.
     effects = service_effects(name, srv_type, request, dialect.version)
+    scene = await motion_scene(ctx, "service", name, srv_type, request)
     act = await approved(
-        ctx, Act(tool, "service", name, srv_type, request, effects=effects, given=_given(service, name))
+        ctx,
+        Act(
+            tool,
+            "service",
+            name,
+            srv_type,
+            request,
+            effects=effects,
+            given=_given(service, name),
+            scene=scene,
+        ),
     )
     try:
         response = await carry_out(
@@ -446,9 +470,10 @@ async def send_goal(
     *on_feedback* gets the running goal (``goal_id``, ``feedback_count``) and each feedback, so that a caller
     can name the goal (to cancel it) while it runs. The goal is tracked (seen by stop_robot and the E-STOP)
     from before anything of it is sent; right before the goal itself is sent, the send gate is asked, and a
-    goal whose cancel or timeout came first is not sent at all. A navigation goal (``robot/navigation.py``) is
-    judged with the robot's map and pose: *scene* when the caller learnt them, else they are learnt here, so
-    that the guard judges a goal the same whichever tool sends it.
+    goal whose cancel or timeout came first is not sent at all. A motion goal (``robot/motion_goals.py``) is
+    judged with the robot's map and pose: *scene* when the caller learnt them, else they are learnt here (as
+    for a goal carried by a topic or a service), so that the guard judges a goal the same whichever tool and
+    carrier sends it.
     """
     ticket = ctx.gate.ticket()  # a stop from now on voids this goal
     name = absolute_name(action, "action")
@@ -466,8 +491,8 @@ async def send_goal(
             looks_like="A goal",
         )
 
-    if scene is None and navigation_goal(action_type) is not None:
-        scene = await navigation_scene(ctx, name, action_type, goal)
+    if scene is None:
+        scene = await motion_scene(ctx, "action", name, wire_type, goal)
     act = await approved(
         ctx, Act(tool, "action", name, wire_type, goal, given=_given(action, name), scene=scene)
     )
@@ -487,23 +512,27 @@ async def send_goal(
     return outcome
 
 
-#: How long a navigation goal sent by publish_action waits for the map and /tf before it is judged.
+#: How long a motion goal not sent by navigate_to waits for the map and /tf before it is judged.
 SCENE_TIMEOUT = 3.0
 
 
-async def navigation_scene(ctx: Acting, action: str, action_type: str, goal: dict[str, Any]) -> Scene | None:
-    """The map (``<action's namespace>/map``) and the robot (``base_link``) as a navigation goal sent by name
-    is judged against; ``None`` when the goal's poses cannot be read (the guard says why)."""
-    poses = goal_poses(action_type, goal)
-    if isinstance(poses, str) or not poses:
+async def motion_scene(ctx: Acting, kind: str, name: str, type_name: str, payload: Any) -> Scene | None:
+    """The map (``<namespace>/map``) and the robot (``base_link``) a motion goal the act carries is judged
+    against, whichever carrier (``robot/motion_goals.py``); ``None`` when it carries none, or one the fence
+    cannot read or place (the guard says why)."""
+    carried = carried_goal(kind, name, type_name, payload)
+    if carried is None:
         return None
-    namespace = action.rsplit("/", 1)[0]
+    motion = read_motion(carried)
+    if isinstance(motion, str) or motion.unplaceable is not None:
+        return None
     return await survey(
         ctx.client,
         ctx.graph,
-        map_topic=f"{namespace}/map",
+        map_topic=f"{carried.namespace}/map",
         base_frame="base_link",
-        poses=poses,
+        poses=motion.poses,
+        along=motion.along,
         timeout=min(SCENE_TIMEOUT, ctx.config.request_timeout),
     )
 

@@ -1,15 +1,15 @@
-"""Navigation goals on the robot's map: which action goals send the robot somewhere, where they send it, and
-whether that place is fit to go to.
+"""Motion goals on the robot's map: where they send the robot, and whether that place is fit to go to.
 
-* :func:`navigation_goal` tells a navigation goal (Nav2 ``NavigateToPose``, ``NavigateThroughPoses``,
-  ``FollowWaypoints``; ROS 1 ``move_base``) by its action type, and reads the poses out of it
-  (:func:`goal_poses`), however the goal was spelt (``navigate_to`` or ``publish_action``);
+* ``robot/motion_goals.py`` tells a motion goal by its type in any spelling and by any carrier, and reads what
+  it asks for (poses, a path, a drive along the robot's heading, or why it cannot be placed);
 * :func:`survey` learns what a judgement needs from the robot: the latest map, where the robot is on it and
-  where each goal's frame is (``/tf``), as one :class:`Scene`;
-* :func:`map_problem`, :func:`zone_problem` and :func:`distance_problem` are the checks, pure: inside the map,
-  known free space with a margin for the robot's size, inside the allowed zones and outside the keep-out
-  zones, not too far. The guard (``safety/``) applies them with the policy's values, so one rule holds for
-  every path a goal can take;
+  where each goal's frame is (``/tf``), as one :class:`Scene`, with a drive along the heading placed from the
+  robot's pose;
+* :func:`map_problem`, :func:`path_map_problem`, :func:`zone_problem` and :func:`distance_problem` are the
+  checks, pure: inside the map, known free space with a margin for the robot's size (and no obstacle on a
+  straight drive), the robot's footprint (a disc) outside the keep-out zones and inside an allowed zone, at
+  the goal and along a straight drive, not too far. The guard (``safety/``) applies them with the policy's
+  values, so one rule holds for every path a goal can take;
 * ``pictures/navigation.py`` draws it all (the map, the zones, the robot, the goal, the path driven).
 
 Pure but for :func:`survey`; no MCP.
@@ -21,13 +21,14 @@ import asyncio
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.listening import listen
 from rosbridge_mcp_server.robot.messages import short_type_name
-from rosbridge_mcp_server.robot.occupancy import OCCUPIED_FROM, Grid, MapError, Pose2D, decode_grid, yaw_of
+from rosbridge_mcp_server.robot.motion_goals import GoalPose
+from rosbridge_mcp_server.robot.occupancy import OCCUPIED_FROM, Grid, MapError, Pose2D, decode_grid
 from rosbridge_mcp_server.robot.transforms import TransformError
 
 if TYPE_CHECKING:
@@ -36,91 +37,23 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_ROBOT_RADIUS",
-    "NAVIGATION_GOALS",
     "GoalPose",
     "Polygon",
     "Scene",
     "distance_problem",
-    "goal_poses",
     "map_problem",
-    "navigation_goal",
+    "path_map_problem",
     "point_in_polygon",
     "survey",
     "zone_problem",
 ]
 
-#: The margin (m) kept between a goal and anything occupied or unknown on the map, when the policy names none.
+#: The margin (m) kept between a goal and anything occupied or unknown on the map, and the robot's footprint
+#: (a disc of this radius) judged against the zones, when the policy names none.
 DEFAULT_ROBOT_RADIUS = 0.2
-
-#: Navigation actions by type (``pkg/Name``, either dialect) → the goal field holding its pose(s).
-NAVIGATION_GOALS: dict[str, str] = {
-    "nav2_msgs/NavigateToPose": "pose",
-    "nav2_msgs/NavigateThroughPoses": "poses",
-    "nav2_msgs/FollowWaypoints": "poses",
-    "move_base_msgs/MoveBase": "target_pose",
-}
 
 #: A polygon in the map frame: its corners (x, y) in metres.
 Polygon = tuple[tuple[float, float], ...]
-
-
-def navigation_goal(action_type: str) -> str | None:
-    """The goal field holding the poses when *action_type* sends the robot somewhere, else ``None``.
-
-    ``nav2_msgs/action/NavigateToPose``, ``nav2_msgs/NavigateToPose`` and ROS 1's
-    ``move_base_msgs/MoveBaseAction`` are all recognised."""
-    short = short_type_name(action_type.strip())
-    if short.endswith("Action"):
-        short = short[: -len("Action")]
-    return NAVIGATION_GOALS.get(short)
-
-
-@dataclass(frozen=True)
-class GoalPose:
-    """One pose a goal asks for, as written in it: frame (``""`` when the header names none), x, y, yaw."""
-
-    frame: str
-    x: float
-    y: float
-    yaw: float
-
-
-def _finite(value: object) -> float | None:
-    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
-        return float(value)
-    return None
-
-
-def goal_poses(action_type: str, goal: Mapping[str, Any]) -> list[GoalPose] | str:
-    """The poses of a navigation goal, or a sentence saying why they cannot be read (e.g. a non-finite x)."""
-    key = navigation_goal(action_type)
-    if key is None:
-        return []
-    value = goal.get(key)
-    stamped = value if isinstance(value, list) else [value] if value is not None else []
-    if not stamped:
-        return f"the goal has no {key} to go to"
-    out: list[GoalPose] = []
-    for index, item in enumerate(stamped):
-        where = f"{key}[{index}]" if isinstance(value, list) else key
-        if not isinstance(item, Mapping):
-            return f"{where} is not a geometry_msgs/PoseStamped"
-        header = item.get("header")
-        frame = str(header.get("frame_id", "")).lstrip("/") if isinstance(header, Mapping) else ""
-        body = item.get("pose")
-        body = body if isinstance(body, Mapping) else {}
-        position = body.get("position")
-        position = position if isinstance(position, Mapping) else {}
-        x, y = _finite(position.get("x", 0.0)), _finite(position.get("y", 0.0))
-        if x is None or y is None:
-            return f"{where}.pose.position is not a finite point"
-        orientation = body.get("orientation")
-        if isinstance(orientation, Mapping) and any(
-            _finite(orientation.get(k, 0.0)) is None for k in ("x", "y", "z", "w")
-        ):
-            return f"{where}.pose.orientation is not a finite quaternion"
-        out.append(GoalPose(frame, x, y, yaw_of(orientation)))
-    return out
 
 
 @dataclass(frozen=True)
@@ -201,14 +134,102 @@ def map_problem(grid: Grid, pose: Pose2D, radius: float) -> str | None:
     return None
 
 
-def zone_problem(pose: Pose2D, allowed: Mapping[str, Polygon], keep_out: Mapping[str, Polygon]) -> str | None:
-    """Why *pose* breaks the geofence: inside a keep-out zone, or (when zones are allowed) outside all."""
+def _point_segment(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    length = dx * dx + dy * dy
+    t = 0.0 if length == 0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length))
+    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+
+
+def _crosses(
+    a: tuple[float, float], b: tuple[float, float], c: tuple[float, float], d: tuple[float, float]
+) -> bool:
+    def side(p: tuple[float, float], q: tuple[float, float], r: tuple[float, float]) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    return side(a, b, c) * side(a, b, d) < 0 and side(c, d, a) * side(c, d, b) < 0
+
+
+def edge_distance(
+    a: tuple[float, float], b: tuple[float, float], polygon: Sequence[tuple[float, float]]
+) -> float:
+    """The least distance between the segment *a*-*b* (a point when they are equal) and *polygon*'s edges."""
+    best = math.inf
+    for i in range(len(polygon)):
+        c, d = polygon[i], polygon[(i + 1) % len(polygon)]
+        if _crosses(a, b, c, d):
+            return 0.0
+        best = min(best, _point_segment(a, c, d), _point_segment(b, c, d), _point_segment(c, a, b),
+                   _point_segment(d, a, b))  # fmt: skip
+    return best
+
+
+def _where(pose: Pose2D, start: Pose2D | None) -> str:
+    if start is None:
+        return f"the goal ({pose.x:.2f}, {pose.y:.2f})"
+    if (start.x, start.y) == (pose.x, pose.y):
+        return f"the robot's pose ({pose.x:.2f}, {pose.y:.2f})"
+    return f"the straight drive from ({start.x:.2f}, {start.y:.2f}) to ({pose.x:.2f}, {pose.y:.2f})"
+
+
+def zone_problem(
+    pose: Pose2D,
+    allowed: Mapping[str, Polygon],
+    keep_out: Mapping[str, Polygon],
+    radius: float = 0.0,
+    start: Pose2D | None = None,
+) -> str | None:
+    """Why the robot's footprint (a disc of *radius*) at *pose* — or swept along the straight drive from
+    *start* — breaks the geofence: any of it inside a keep-out zone, or (when zones are allowed) not all of it
+    inside one allowed zone; ``None`` when it keeps to them."""
+    a = (start.x, start.y) if start is not None else (pose.x, pose.y)
+    b = (pose.x, pose.y)
+    where = _where(pose, start)
     for name, polygon in keep_out.items():
-        if point_in_polygon(pose.x, pose.y, polygon):
-            return f"the goal ({pose.x:.2f}, {pose.y:.2f}) is inside the keep-out zone {name!r}"
-    if allowed and not any(point_in_polygon(pose.x, pose.y, polygon) for polygon in allowed.values()):
+        if point_in_polygon(*b, polygon) and start is None:
+            return f"{where} is inside the keep-out zone {name!r}"
+        if point_in_polygon(*a, polygon) or point_in_polygon(*b, polygon):
+            return f"{where} enters the keep-out zone {name!r}"
+        gap = edge_distance(a, b, polygon)
+        if gap == 0.0:
+            return f"{where} passes through the keep-out zone {name!r}"
+        if gap < radius:
+            return (
+                f"the robot's footprint (radius {radius:g} m) at {where} reaches {radius - gap:.2f} m into "
+                f"the keep-out zone {name!r}"
+            )
+    if allowed and not any(
+        point_in_polygon(*a, polygon)
+        and point_in_polygon(*b, polygon)
+        and edge_distance(a, b, polygon) >= radius
+        for polygon in allowed.values()
+    ):
         names = ", ".join(repr(name) for name in allowed)
-        return f"the goal ({pose.x:.2f}, {pose.y:.2f}) is outside every allowed zone ({names})"
+        if start is None and not any(point_in_polygon(*b, polygon) for polygon in allowed.values()):
+            return f"{where} is outside every allowed zone ({names})"
+        return (
+            f"the robot's footprint (radius {radius:g} m) at {where} is not inside one allowed zone ({names})"
+        )
+    return None
+
+
+def path_map_problem(grid: Grid, start: Pose2D, end: Pose2D) -> str | None:
+    """Why the straight drive from *start* to *end* cannot be driven on *grid*: it leaves the map, or crosses
+    an obstacle or unknown space (its centre line, sampled every half cell); ``None`` when it is clear."""
+    length = math.hypot(end.x - start.x, end.y - start.y)
+    steps = max(1, math.ceil(length / (grid.resolution / 2)))
+    where = _where(end, start)
+    for step in range(1, steps + 1):
+        x = start.x + (end.x - start.x) * step / steps
+        y = start.y + (end.y - start.y) * step / steps
+        col, row = grid.to_cell(x, y)
+        if not (0 <= col < grid.width and 0 <= row < grid.height):
+            return f"{where} leaves the map at ({x:.2f}, {y:.2f})"
+        value = grid.cells[int(row) * grid.width + int(col)]
+        if OCCUPIED_FROM <= value <= 100:
+            return f"{where} runs into an obstacle at ({x:.2f}, {y:.2f})"
+        if value > 100:
+            return f"{where} crosses unknown space at ({x:.2f}, {y:.2f})"
     return None
 
 
@@ -282,9 +303,11 @@ async def survey(
     poses: Sequence[GoalPose],
     timeout: float,
     grid: Grid | None = None,
+    along: float | None = None,
 ) -> Scene:
     """The map (unless given), the robot's pose on it and the goal's poses placed in its frame, learnt
-    together; what could not be learnt is a problem of the scene, never an exception."""
+    together; what could not be learnt is a problem of the scene, never an exception. With *along* (a drive
+    of that many metres along the robot's heading; 0: in place) the goal is where that drive ends."""
     problems: list[str] = []
     if grid is None:
         try:
@@ -303,6 +326,9 @@ async def survey(
     if isinstance(robot, str):
         problems.append(f"no transform from {map_frame} to {base_frame}: {robot}")
     placed: list[Pose2D] = []
+    if along is not None and not isinstance(robot, str):
+        c, s = math.cos(robot.yaw), math.sin(robot.yaw)
+        placed.append(Pose2D(robot.x + c * along, robot.y + s * along, robot.yaw))
     for pose in poses:
         frame = pose.frame or map_frame
         origin = where[frame]

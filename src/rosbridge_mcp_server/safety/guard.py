@@ -27,9 +27,9 @@ from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.robot.navigation import navigation_goal
+from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
-from rosbridge_mcp_server.safety.navigation import goal_text, navigation_refusal
+from rosbridge_mcp_server.safety.navigation import act_motion, goal_text, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
 from rosbridge_mcp_server.safety.policy import Policy
 
@@ -247,6 +247,9 @@ class PolicyGuard:
 
     def _capped(self, act: Act) -> tuple[Act, str | None]:
         caps = self.policy.velocity
+        motion = act_motion(act)
+        if isinstance(motion, Motion) and motion.speed is not None:
+            return self._goal_speed_capped(act, motion.speed)
         if act.kind != "topic" or not is_velocity_type(act.type):
             return act, None
         if caps.max_linear is None and caps.max_angular is None:
@@ -276,13 +279,26 @@ class PolicyGuard:
         clamped = dataclasses.replace(act, payload=payload)
         return clamped, clamp_text(act.type, act.payload, payload)
 
+    def _goal_speed_capped(self, act: Act, speed: float) -> tuple[Act, str | None]:
+        """A motion goal's own speed (DriveOnHeading, BackUp) under ``[velocity] max_linear``, refused or
+        clamped as a velocity command is."""
+        cap = self.policy.velocity.max_linear
+        if cap is None or speed <= cap:
+            return act, None
+        rule = f"[velocity] max_linear {cap:g} m/s; the goal asks {speed:g} m/s"
+        if self.policy.velocity.mode == "refuse":
+            self._refuse(
+                act,
+                rule,
+                f"Refused by the safety policy ({rule}); nothing was sent. Send a goal within the cap.",
+            )
+        payload = with_speed(act.kind, act.payload, cap)
+        return dataclasses.replace(act, payload=payload), f"speed clamped from {speed:g} to {cap:g} m/s"
+
     def _needs_person(self, act: Act) -> bool:
         confirm = self.policy.confirm
-        if (
-            self.policy.navigation.confirm == "motion"
-            and act.kind == "action"
-            and navigation_goal(act.type) is not None
-        ):
+        if self.policy.navigation.confirm == "motion" and act_motion(act) is not None:
+            # Every motion goal, by any carrier (robot/motion_goals.py).
             return True
         if confirm == "always":
             return True
@@ -330,11 +346,14 @@ def moves(act: Act, policy: Policy) -> bool:
     """Whether ``act`` moves the robot, as ``confirm = "motion"`` judges it.
 
     A velocity command (Twist / TwistStamped on any topic), an action goal (``publish_action``, or a goal sent
-    through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a known motion command
+    through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a motion goal by any
+    carrier and in any type spelling (``robot/motion_goals.py``), a known motion command
     or service (``robot/effects.py``: joint trajectories, goal poses, turtlesim's teleports, Gazebo's
     set-state services, ...) and a topic or service the policy's ``[topics]`` / ``[services] motion`` names.
     """
     if act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type)):
+        return True
+    if act_motion(act) is not None:
         return True
     if any(e.kind == "motion" or (e.kind == "action" and e.what == "goal") for e in act.effects):
         return True

@@ -24,10 +24,10 @@ robot uncapped). The file::
     enabled = true               # false: record refuses
     max_seconds = 600            # longest recording
     max_megabytes = 2000         # largest file
-    [navigation]                 # every navigation goal (navigate_to, or publish_action on Nav2 / move_base)
-    robot_radius = 0.25          # m kept free around a goal on the map (default 0.2)
+    [navigation]                 # every motion goal (Nav2, move_base) by any carrier (robot/motion_goals.py)
+    robot_radius = 0.25          # m: the robot's footprint, clear on the map and of the zones (default 0.2)
     max_goal_distance = 15       # m from the robot, straight line
-    confirm = "motion"           # "never" | "motion": ask the person before each navigation goal
+    confirm = "motion"           # "never" | "motion": ask the person before each motion goal
     [navigation.allowed_zones]   # polygons in the map frame, corners [x, y] in metres
     lab = [[0, 0], [10, 0], [10, 10], [0, 10]]
     [navigation.keep_out]
@@ -150,7 +150,8 @@ NavigationConfirm = Literal["never", "motion"]
 
 @dataclass(frozen=True)
 class NavigationRules:
-    """``[navigation]``: where navigation goals may go (whatever tool sends them)."""
+    """``[navigation]``: where motion goals may take the robot's footprint (whatever tool or carrier sends
+    them); with zones or a distance set, a goal the fence cannot place is refused."""
 
     robot_radius: float | None = None
     max_goal_distance: float | None = None
@@ -272,7 +273,7 @@ class Policy:
             if nav.max_goal_distance is not None:
                 parts.append(f"at most {nav.max_goal_distance:g} m away")
             if nav.robot_radius is not None:
-                parts.append(f"{nav.robot_radius:g} m clear on the map")
+                parts.append(f"a footprint of radius {nav.robot_radius:g} m")
             if nav.confirm != "never":
                 parts.append("the person confirms each goal")
             lines.append(f"  [navigation] {'; '.join(parts)}")

@@ -152,7 +152,7 @@ class SimulatedRobot:
         self.ssl = ssl
         self.world = World(dialect)
         self.graph = Graph()
-        self.registry = InterfaceRegistry(dialect, rosapi=rosapi)
+        self.registry = InterfaceRegistry(dialect, rosapi=rosapi, distro=config.distro)
         self.bridge = Bridge(config, self.registry, self.world, self.graph)
         self._nodes = WorldNodes(
             self.bridge,

@@ -149,6 +149,19 @@ async def _navigator_state(ctx: ToolContext, namespace: str) -> str | None:
     return None
 
 
+async def _takes_goals(ctx: ToolContext, action_type: str) -> bool:
+    """Whether the action's goal takes its poses as one ``nav_msgs/Goals`` (Kilted on), not as a list."""
+    try:
+        typedefs = await ctx.graph.action_goal_typedefs(action_type)
+    except RosbridgeError:
+        return False
+    return any(
+        name.lstrip("_") == "poses" and length == -1 and base.endswith("/Goals")
+        for typedef in (typedefs or {}).values()
+        for name, base, length in typedef.fields()
+    )
+
+
 def _draw(
     grid: Grid,
     *,
@@ -326,6 +339,8 @@ async def run(
     stamped = [_pose_msg(map_frame, goal) for goal in goals]
     if ros1:
         body: dict[str, Any] = {"target_pose": stamped[0]}
+    elif ways and await _takes_goals(ctx, action_type):
+        body = {"poses": {"header": {"frame_id": map_frame}, "goals": stamped}}
     elif ways:
         body = {"poses": stamped}
     else:

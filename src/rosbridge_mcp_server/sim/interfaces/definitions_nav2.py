@@ -7,7 +7,7 @@ has no lifecycle, but the world keeps one graph for both dialects).
 
 from __future__ import annotations
 
-__all__ = ["NAV2"]
+__all__ = ["KILTED", "NAV2"]
 
 #: nav2_msgs' error codes every Nav2 result starts with (each action adds its own from 100 on).
 _ERRORS = "uint16 NONE=0\nuint16 UNKNOWN=1\n"
@@ -243,4 +243,16 @@ NAV2: dict[str, str] = {
     ),
     "robot_localization/srv/SetPose": "geometry_msgs/PoseWithCovarianceStamped pose\n---\n",
     "robot_localization/srv/ToggleFilterProcessing": "bool on\n---\nbool status\n",
+}
+
+#: What Kilted (and Rolling) changed: NavigateThroughPoses and ComputePathThroughPoses take their poses as one
+#: ``nav_msgs/Goals`` (a header and the poses), not as a list of PoseStamped.
+KILTED: dict[str, str] = {
+    "nav_msgs/msg/Goals": "std_msgs/Header header\ngeometry_msgs/PoseStamped[] goals\n",
+    "nav2_msgs/action/NavigateThroughPoses": NAV2["nav2_msgs/action/NavigateThroughPoses"].replace(
+        "geometry_msgs/PoseStamped[] poses\n", "nav_msgs/Goals poses\n", 1
+    ),
+    "nav2_msgs/action/ComputePathThroughPoses": NAV2["nav2_msgs/action/ComputePathThroughPoses"].replace(
+        "geometry_msgs/PoseStamped[] goals\n", "nav_msgs/Goals goals\n", 1
+    ),
 }

@@ -33,7 +33,7 @@ from .base import (
 )
 from .cbor_form import cbor_form
 from .definitions import COMMON, ROS1_ONLY, ROS2_ONLY, ROSAPI_2_1, to_ros1_text
-from .definitions_nav2 import NAV2
+from .definitions_nav2 import KILTED, NAV2
 from .ros1 import Ros1Conversion
 from .ros2 import Ros2Conversion
 from .specs import Cat, FieldSpec, MessageSpec, ParsedTable, parse_table
@@ -46,11 +46,13 @@ _ROS1_PACKAGE_PATH = "/opt/ros/noetic/share"
 
 
 @functools.cache
-def _table_for(dialect: Dialect, rosapi: str) -> ParsedTable:
+def _table_for(dialect: Dialect, rosapi: str, distro: str = "") -> ParsedTable:
     # Parsed once per process: the specs are never mutated after linking, so robots share them. (Two threads
     # missing at once may both parse; either table is right.)
     if dialect == "ros2":
         texts = {**COMMON, **NAV2, **ROS2_ONLY}
+        if distro in KILTED_ON:
+            texts.update(KILTED)
         if rosapi == "2.1.0":
             for key, text in ROSAPI_2_1.items():
                 if text is None:
@@ -63,6 +65,10 @@ def _table_for(dialect: Dialect, rosapi: str) -> ParsedTable:
     return parse_table(dialect, texts)
 
 
+#: The distros whose nav2_msgs take ``nav_msgs/Goals`` (:data:`~.definitions_nav2.KILTED`).
+KILTED_ON = ("kilted", "rolling")
+
+
 def _finite_or_none(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
@@ -71,18 +77,24 @@ class InterfaceRegistry:
     """Every interface type the simulated robot knows, in one dialect.
 
     ``clock`` gives "now" in seconds for header stamps and ``"now"`` times (default: wall clock); ``rosapi``
-    ``"2.1.0"`` (ROS 2) has rosapi_msgs as rosbridge_suite 2.1.0 ships them. The parsed definitions are
+    ``"2.1.0"`` (ROS 2) has rosapi_msgs as rosbridge_suite 2.1.0 ships them; ``distro`` (ROS 2) picks the
+    interfaces that changed between distros (Kilted's nav2_msgs). The parsed definitions are
     shared by every registry of a dialect, the per-registry caches are small dicts.
     """
 
     def __init__(
-        self, dialect: Dialect, *, clock: Callable[[], float] | None = None, rosapi: str = "newest"
+        self,
+        dialect: Dialect,
+        *,
+        clock: Callable[[], float] | None = None,
+        rosapi: str = "newest",
+        distro: str = "",
     ) -> None:
         if dialect not in ("ros1", "ros2"):
             raise ValueError(f"unknown dialect {dialect!r}")
         self.dialect: Dialect = dialect
         self._clock = clock or time.time
-        self._table = _table_for(dialect, rosapi)
+        self._table = _table_for(dialect, rosapi, distro)
         self._packages: set[str] = set()
         self._modules: dict[tuple[str, str], dict[str, Kind]] = {}
         for key in self._table.msg_names:

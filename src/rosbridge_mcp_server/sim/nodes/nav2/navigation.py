@@ -61,14 +61,17 @@ def _yaw_of(orientation: Any) -> float:
 def targets_of(goal: dict[str, Any]) -> list[Target] | str:
     """The poses a navigation goal asks for, in the map frame, or why they cannot be placed.
 
-    NavigateToPose ``pose``, NavigateThroughPoses ``poses``, move_base ``target_pose``; ``odom`` is placed
-    through the world's fixed map → odom transform, any other frame but ``map`` (or none) is a TF error."""
+    NavigateToPose ``pose``, NavigateThroughPoses ``poses`` (Kilted: ``poses.goals``), move_base
+    ``target_pose``; ``odom`` is placed through the world's fixed map → odom transform, any other frame but
+    ``map`` (or none) is a TF error."""
     stamped: list[Any] = []
     for key in ("pose", "target_pose"):
         if isinstance(goal.get(key), dict):
             stamped.append(goal[key])
     if not stamped:
         poses = goal.get("poses")
+        if isinstance(poses, dict):  # Kilted: nav_msgs/Goals, the poses under "goals"
+            poses = poses.get("goals")
         stamped = list(poses) if isinstance(poses, list) else []
     if not stamped:
         return "the goal holds no pose"

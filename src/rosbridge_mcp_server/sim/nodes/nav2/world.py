@@ -66,6 +66,12 @@ class Nav2ActionServer(ActionServer):
         self.nav2 = world
         self.robot = robot
         self.on_success = on_success
+        #: Every goal this server accepted, as it arrived (tests read what got through).
+        self.received: list[dict[str, Any]] = []
+
+    def accepts(self, goal: dict[str, Any], goal_key: str) -> bool:
+        self.received.append(goal)
+        return True
 
     async def run_goal(self, handle: GoalHandle, feedback: FeedbackFn) -> tuple[str, dict[str, Any]]:
         if self.name.rsplit("/", 1)[-1] in DRIVING_ACTIONS:
@@ -453,6 +459,8 @@ class Nav2World:
         pose_msg = goal.get("pose") or goal.get("goal")
         if pose_msg is None:
             poses = goal.get("poses") or goal.get("goals") or []
+            if isinstance(poses, dict):  # Kilted's nav_msgs/Goals
+                poses = poses.get("goals") or []
             pose_msg = poses[-1] if poses else None
         if not isinstance(pose_msg, dict):
             return None
