@@ -2,6 +2,12 @@
 
 ``/tf_static`` is latched (ROS 1) / transient-local (ROS 2), so its links arrive as soon as we subscribe;
 ``/tf`` links arrive at the publishers' rates. Both subscriptions are closed afterwards.
+
+A robot under a namespace (``robot/namespaces.py``) has its tf on ``<namespace>/tf`` and
+``<namespace>/tf_static`` (its frames unprefixed, as the simulated fleet and most multi-robot Nav2 setups
+remap it), or shares the root ``/tf`` with its frames prefixed (``robot2/base_link``): both are handled, a
+frame not heard of being looked for under the namespace's prefix too. With no namespace given and no ``/tf``
+at the root, the one namespace with a tf is used (several: ``SeveralNamespacesError``).
 """
 
 from __future__ import annotations
@@ -13,15 +19,21 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.errors import RequestTimeoutError
+from rosbridge_mcp_server.robot.namespaces import find_namespace, namespace_name
 from rosbridge_mcp_server.robot.transforms import FrameTree, Lookup, TransformError
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.graph import RosGraph
 
-__all__ = ["TF_TOPICS", "FoundTransform", "look_up_transform"]
+__all__ = ["TF_TOPICS", "FoundTransform", "look_up_transform", "tf_topics"]
 
 TF_TOPICS = ("/tf", "/tf_static")
+
+
+def tf_topics(namespace: str) -> tuple[str, str]:
+    """``/tf`` and ``/tf_static`` under *namespace* (``""``: the root ones)."""
+    return f"{namespace}/tf", f"{namespace}/tf_static"
 
 
 @dataclass(frozen=True)
@@ -31,16 +43,57 @@ class FoundTransform:
     lookup: Lookup
     age: float | None
     waited: float
+    #: The robot's namespace whose tf answered (``""``: the root's), and the sentence saying it was found.
+    namespace: str = ""
+    note: str | None = None
+
+
+async def _tf_present(graph: RosGraph, namespace: str) -> dict[str, str]:
+    types = {topic: await graph.topic_type(topic) for topic in tf_topics(namespace)}
+    return {topic: msg_type for topic, msg_type in types.items() if msg_type}
+
+
+async def _sources(graph: RosGraph, namespace: str | None) -> tuple[str, dict[str, str], str | None]:
+    """(namespace, tf topic → type, note): the robot's tf topics, found when no namespace is given."""
+    wanted = "" if namespace is None else namespace_name(namespace)
+    present = await _tf_present(graph, wanted)
+    note = None
+    if not present and namespace is None:
+        found = await find_namespace(graph, None, "/tf", kind="topic", present=False)
+        if not found.namespace:
+            found = await find_namespace(graph, None, "/tf_static", kind="topic", present=False)
+        if found.namespace:
+            wanted, note = found.namespace, found.note
+            present = await _tf_present(graph, wanted)
+    elif not present and wanted:
+        present = await _tf_present(graph, "")  # one /tf shared, the robot's frames prefixed
+    if not present:
+        where = " or ".join(tf_topics(wanted))
+        raise TransformError(f"Neither {where} is in the ROS graph: nothing publishes transforms.")
+    return wanted, present, note
+
+
+def _named(tree: FrameTree, frame: str, prefix: str) -> str:
+    """*frame*, or its name under the namespace's prefix (``robot2/base_link``) when only that is known."""
+    if prefix and not tree.knows(frame) and tree.knows(f"{prefix}/{frame.lstrip('/')}"):
+        return f"{prefix}/{frame.lstrip('/')}"
+    return frame
 
 
 async def look_up_transform(
-    client: RosbridgeClient, graph: RosGraph, target: str, source: str, *, timeout: float
+    client: RosbridgeClient,
+    graph: RosGraph,
+    target: str,
+    source: str,
+    *,
+    timeout: float,
+    namespace: str | None = "",
 ) -> FoundTransform:
-    """``target ← source`` from the links heard within ``timeout``; else :class:`TransformError`."""
-    types = {topic: await graph.topic_type(topic) for topic in TF_TOPICS}
-    present = {topic: msg_type for topic, msg_type in types.items() if msg_type}
-    if not present:
-        raise TransformError("Neither /tf nor /tf_static is in the ROS graph: nothing publishes transforms.")
+    """``target ← source`` from the links heard within ``timeout``; else :class:`TransformError`.
+
+    *namespace*: the robot's (``""``: the root's tf; ``None``: found, see the module's docstring)."""
+    namespace, present, note = await _sources(graph, namespace)
+    prefix = namespace.strip("/")
     tree = FrameTree()
     start = time.monotonic()
     changed = asyncio.Event()
@@ -50,7 +103,8 @@ async def look_up_transform(
         async with client.subscribe(topic, msg_type, max_queue=100) as sub:
             while True:
                 message = await sub.get()
-                if tree.add_message(message, static=topic == "/tf_static", received=time.monotonic()):
+                static = topic.endswith("/tf_static")
+                if tree.add_message(message, static=static, received=time.monotonic()):
                     changed.set()
 
     tasks = [asyncio.create_task(pump(topic, msg_type)) for topic, msg_type in present.items()]
@@ -58,13 +112,13 @@ async def look_up_transform(
         deadline = start + timeout
         while True:
             try:
-                found = tree.lookup(target, source)
+                found = tree.lookup(_named(tree, target, prefix), _named(tree, source, prefix))
             except TransformError as exc:
                 last_error = exc
             else:
                 now = time.monotonic()
                 age = None if found.newest_received is None else now - found.newest_received
-                return FoundTransform(found, age, now - start)
+                return FoundTransform(found, age, now - start, namespace, note)
             left = deadline - time.monotonic()
             if left <= 0:
                 break
@@ -78,7 +132,8 @@ async def look_up_transform(
         # Shielded unsubscribes run in each task's own `async with` exit.
         await asyncio.gather(*tasks, return_exceptions=True)
     assert last_error is not None
-    raise TransformError(f"Within {timeout:g} s: {last_error}") from None
+    on = f" on {' and '.join(present)}" if namespace else ""
+    raise TransformError(f"Within {timeout:g} s{on}: {last_error}") from None
 
 
 async def _first_of(changed: asyncio.Event, tasks: list[asyncio.Task[None]]) -> None:

@@ -7,7 +7,9 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.frames import look_up_transform
+from rosbridge_mcp_server.robot.namespaces import SeveralNamespacesError
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
+from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, choose_one, given_namespace
 
 __all__ = ["SPEC", "TransformAnswer", "run"]
 
@@ -42,6 +44,7 @@ class TransformAnswer(BaseModel):
     chain: list[str] = Field(description="Frames walked, target first")
     age: float | None = Field(description="Seconds since the newest moving link arrived; None if all static")
     static: bool = Field(description="True when every link used came from /tf_static")
+    namespace: str = Field(default="", description='The robot\'s namespace whose tf answered ("" = none)')
 
 
 SPEC = ToolSpec(
@@ -61,9 +64,22 @@ async def run(
     target_frame: Annotated[str, Field(description="Frame to express the answer in, e.g. odom or map")],
     source_frame: Annotated[str, Field(description="Frame to locate, e.g. base_link")],
     timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to listen, e.g. 3")] = 3.0,
+    namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Listen to /tf and /tf_static until the frames connect, then compose the links."""
-    found = await look_up_transform(ctx.client, ctx.graph, target_frame, source_frame, timeout=timeout)
+    try:
+        found = await look_up_transform(
+            ctx.client,
+            ctx.graph,
+            target_frame,
+            source_frame,
+            timeout=timeout,
+            namespace=given_namespace(ctx, namespace),
+        )
+    except SeveralNamespacesError as exc:
+        raise choose_one(
+            exc, SPEC.name, {"target_frame": target_frame, "source_frame": source_frame}
+        ) from None
     lookup = found.lookup
     t = lookup.transform.translation
     q = lookup.transform.rotation
@@ -78,6 +94,7 @@ async def run(
         chain=list(lookup.chain),
         age=round(found.age, 3) if found.age is not None else None,
         static=lookup.static_only,
+        namespace=found.namespace,
     )
     freshness = "static links only" if answer.static else f"newest link {answer.age:.3f} s old"
     text = (
@@ -87,6 +104,10 @@ async def run(
         f"y={answer.rotation.y:g} z={answer.rotation.z:g} w={answer.rotation.w:g}); chain "
         f"{' → '.join(answer.chain)}; {freshness}."
     )
+    if found.note is not None:
+        text = f"{found.note}\n{text}"
+    elif found.namespace:
+        text += f" (tf of {found.namespace})"
     return ToolAnswer(text=text, data=answer)
 
 

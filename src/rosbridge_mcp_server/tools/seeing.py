@@ -63,10 +63,15 @@ async def first_message(
     return heard.messages[0].message
 
 
-async def planar_pose(ctx: ToolContext, target: str, source: str, timeout: float) -> Pose2D | str:
-    """Where ``source`` is in ``target`` (x, y, yaw) from /tf and /tf_static, or why it is not known."""
+async def planar_pose(
+    ctx: ToolContext, target: str, source: str, timeout: float, *, namespace: str = ""
+) -> Pose2D | str:
+    """Where ``source`` is in ``target`` (x, y, yaw) from /tf and /tf_static (the robot's *namespace*'s), or
+    why it is not known."""
     try:
-        found = await look_up_transform(ctx.client, ctx.graph, target, source, timeout=timeout)
+        found = await look_up_transform(
+            ctx.client, ctx.graph, target, source, timeout=timeout, namespace=namespace
+        )
     except TransformError as exc:
         return str(exc)
     t = found.lookup.transform

@@ -1,0 +1,137 @@
+"""Robots under a namespace on one bridge (the sim's Nav2 fleet, ``robots=2``: ``/robot1``, ``/robot2``), in
+both dialects: ``navigate_to``, ``get_transform``, ``view_map`` and ``view_scan`` take ``namespace`` and use
+that robot's action, map, scan and tf; without one, several robots are an error listing each robot's exact
+call (checked against the tool's schema, and run); the one robot left with the names is found and said."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any
+
+import jsonschema
+import pytest
+from mcp_harness import Session, open_session, text_of
+
+from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.sim.world import TURTLE_HOME
+
+MakeSim = Callable[..., Awaitable[SimulatedRobot]]
+
+TOOLS = ("navigate_to", "get_transform", "view_map", "view_scan", "diagnose")
+#: A goal 0.4 m ahead of a robot at home (both robots start there), facing the way it faces.
+GOAL = {"x": round(TURTLE_HOME + 0.4, 3), "y": round(TURTLE_HOME, 3), "yaw": 0}
+
+
+@pytest.fixture(params=["ros2", "ros1"])
+async def fleet(request: pytest.FixtureRequest, make_sim: MakeSim) -> SimulatedRobot:
+    robot = await make_sim(dialect=request.param, world="nav2", robots=2)
+    robot.nav2.navigator.speed = 8.0
+    return robot
+
+
+@pytest.fixture
+async def session(fleet: SimulatedRobot) -> AsyncIterator[Session]:
+    async with open_session(fleet.url, tools=TOOLS) as opened:
+        yield opened
+
+
+def suggested_calls(text: str) -> list[tuple[str, dict[str, Any]]]:
+    """Every ``→ tool {json}`` line of an answer."""
+    calls = []
+    for line in text.splitlines():
+        found = re.match(r"^→ (\w+) (\{.*\})$", line.strip())
+        if found:
+            calls.append((found.group(1), json.loads(found.group(2))))
+    return calls
+
+
+async def schema_of(session: Session, tool: str) -> dict[str, Any]:
+    listed = await session.mcp.list_tools()
+    return next(t.input_schema for t in listed.tools if t.name == tool)
+
+
+async def check_suggestions(session: Session, tool: str, text: str) -> list[dict[str, Any]]:
+    """The answer lists one call per robot, each valid against the tool's schema."""
+    calls = suggested_calls(text)
+    assert [name for name, _ in calls] == [tool, tool], text
+    assert [arguments["namespace"] for _, arguments in calls] == ["/robot1", "/robot2"], text
+    schema = await schema_of(session, tool)
+    for _, arguments in calls:
+        jsonschema.validate(arguments, schema)
+    return [arguments for _, arguments in calls]
+
+
+async def test_navigate_to_with_a_namespace_drives_that_robot_only(
+    session: Session, fleet: SimulatedRobot
+) -> None:
+    first, second = fleet.nav2.robots
+    before = (first.x, first.y)
+    result = await session.ok("navigate_to", {"goal": GOAL, "namespace": "/robot2"})
+    assert (result.structured_content or {})["succeeded"], text_of(result)
+    assert math.hypot(second.x - GOAL["x"], second.y - GOAL["y"]) < 0.2
+    assert (first.x, first.y) == before
+
+
+async def test_navigate_to_without_a_namespace_lists_each_robots_call_and_they_run(
+    session: Session, fleet: SimulatedRobot
+) -> None:
+    goals = len(fleet.world.goals)
+    text = await session.error("navigate_to", {"goal": GOAL})
+    assert "Nothing was guessed, nothing was sent." in text
+    assert len(fleet.world.goals) == goals
+    calls = await check_suggestions(session, "navigate_to", text)
+    assert all(call["goal"] == GOAL for call in calls)
+    result = await session.ok("navigate_to", calls[1])
+    assert (result.structured_content or {})["succeeded"], text_of(result)
+    second = fleet.nav2.robots[1]
+    assert math.hypot(second.x - GOAL["x"], second.y - GOAL["y"]) < 0.2
+
+
+async def test_get_transform_reads_the_robots_own_tf(session: Session, fleet: SimulatedRobot) -> None:
+    second = fleet.nav2.robots[1]
+    second.x, second.y = TURTLE_HOME + 1.0, TURTLE_HOME - 0.5
+    fleet.world.notify()
+    arguments = {"target_frame": "map", "source_frame": "base_link", "namespace": "/robot2", "timeout": 5}
+    result = await session.ok("get_transform", arguments)
+    data = result.structured_content or {}
+    assert data["namespace"] == "/robot2"
+    assert abs(data["translation"]["x"] - second.x) < 0.05
+    assert abs(data["translation"]["y"] - second.y) < 0.05
+
+
+async def test_get_transform_without_a_namespace_lists_each_robots_call(session: Session) -> None:
+    text = await session.error("get_transform", {"target_frame": "map", "source_frame": "base_link"})
+    for arguments in await check_suggestions(session, "get_transform", text):
+        result = await session.ok("get_transform", arguments)
+        assert (result.structured_content or {})["namespace"] == arguments["namespace"]
+
+
+@pytest.mark.parametrize("tool", ["view_map", "view_scan"])
+async def test_pictures_take_the_namespace_or_list_each_robots_call(session: Session, tool: str) -> None:
+    result = await session.ok(tool, {"namespace": "/robot1"})
+    assert (result.structured_content or {})["topic"] == (
+        "/robot1/map" if tool == "view_map" else "/robot1/scan"
+    )
+    text = await session.error(tool, {})
+    for arguments in await check_suggestions(session, tool, text):
+        await session.ok(tool, arguments)
+
+
+async def test_view_map_places_the_namespaced_robot_from_its_tf(
+    session: Session, fleet: SimulatedRobot
+) -> None:
+    second = fleet.nav2.robots[1]
+    result = await session.ok("view_map", {"namespace": "/robot2", "path_topic": "/plan"})
+    robot = (result.structured_content or {})["robot"]
+    assert robot is not None, text_of(result)
+    assert abs(robot[0] - second.x) < 0.1
+    assert abs(robot[1] - second.y) < 0.1
+
+
+async def test_a_bad_namespace_is_refused_naming_it(session: Session) -> None:
+    text = await session.error("get_transform", {"target_frame": "map", "source_frame": "base_link",
+                                                 "namespace": "robot 2"})  # fmt: skip
+    assert "namespace 'robot 2' is not a ROS namespace" in text
