@@ -135,3 +135,47 @@ async def test_a_bad_namespace_is_refused_naming_it(session: Session) -> None:
     text = await session.error("get_transform", {"target_frame": "map", "source_frame": "base_link",
                                                  "namespace": "robot 2"})  # fmt: skip
     assert "namespace 'robot 2' is not a ROS namespace" in text
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_diagnose_checks_each_robots_tf_and_finds_a_fault_on_robot2(
+    make_sim: MakeSim, dialect: str
+) -> None:
+    fleet = await make_sim(dialect=dialect, world="nav2", robots=2)
+    async with open_session(fleet.url, tools=TOOLS) as session:
+        healthy = await session.ok("diagnose", {"focus": "tf"})
+        fleet.nav2.robots[1].quiet.add("odom->base_footprint")  # robot2's odometry tf stops
+        result = await session.ok("diagnose", {"focus": "tf"})
+        schema = await schema_of(session, "get_transform")
+    data = healthy.structured_content or {}
+    assert data["unavailable"] == {}, text_of(healthy)
+    assert data["checked"]["tf"].startswith("/robot1/tf: "), data["checked"]
+    assert "/robot2/tf: " in data["checked"]["tf"]
+    assert data["findings"] == [], text_of(healthy)
+    assert {"/robot1:base_link", "/robot2:base_link"} <= set(data["frames"])
+    text = text_of(result)
+    findings = (result.structured_content or {})["findings"]
+    assert [f["subject"] for f in findings] == ["/robot2 odom -> base_footprint"], text
+    assert "(tf of /robot2)" in findings[0]["summary"]
+    call = findings[0]["next"]
+    assert call == (
+        'get_transform {"target_frame": "odom", "source_frame": "base_footprint", "timeout": 5, '
+        '"namespace": "/robot2"}'
+    )
+    assert f"→ {call}" in text
+    jsonschema.validate(json.loads(call.removeprefix("get_transform ")), schema)
+
+
+async def test_diagnose_never_calls_a_robot_healthy_when_it_skipped_its_tf(make_sim: MakeSim) -> None:
+    """The turtle world with its tf taken out of the graph: the answer says tf was not checked."""
+    robot = await make_sim(dialect="ros2")
+    for name in list(robot.graph.nodes):
+        for topic in ("/tf", "/tf_static"):
+            while robot.graph.nodes[name].publishes.get(topic):
+                robot.graph.remove_publisher(name, topic)
+    async with open_session(robot.url, tools=TOOLS) as session:
+        result = await session.ok("diagnose", {"focus": "tf"})
+    text = text_of(result)
+    assert not text.startswith("No problem found."), text
+    assert text.startswith("No problem found in the areas checked (not checked: tf) (focus: tf)."), text
+    assert "Not checked: tf: the robot has no /tf or /tf_static topic" in text

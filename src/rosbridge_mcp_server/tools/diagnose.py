@@ -12,6 +12,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.diagnosis import (
     FOCUSES,
+    MAX_STREAMS,
     Diagnosis,
     Finding,
     Look,
@@ -112,13 +113,19 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.ONE_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "count": 1}}',
     Look.WAIT_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "timeout": 5}}',
     Look.STAMPS: lambda topic: f'plot_topic {{"series": ["{topic} header.stamp.sec"], "duration": 5}}',
-    Look.TRANSFORM: lambda target, source: (
-        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}"}}'
+    Look.TRANSFORM: lambda target, source, namespace="": (
+        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}"{_in(namespace)}}}'
     ),
-    Look.TRANSFORM_WAIT: lambda target, source: (
-        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5}}'
+    Look.TRANSFORM_WAIT: lambda target, source, namespace="": (
+        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5'
+        f"{_in(namespace)}}}"
     ),
 }
+
+
+def _in(namespace: str) -> str:
+    """The ``namespace`` argument of a suggested call, when the finding is a namespaced robot's."""
+    return f', "namespace": "{namespace}"' if namespace else ""
 
 
 def next_text(steps: Sequence[Step]) -> str:
@@ -129,6 +136,8 @@ def next_text(steps: Sequence[Step]) -> str:
 def checked_texts(found: Diagnosis) -> dict[str, str]:
     """What each area checked, with where to read what its findings left out."""
     checked = dict(found.checked)
+    if more := found.left_out.get("streams"):
+        checked["streams"] += f" ({more} more not measured: at most {MAX_STREAMS} at once)"
     if more := found.left_out.get("diagnostics"):
         checked["diagnostics"] += f" ({more} more not OK: subscribe_topic /diagnostics)"
     if more := found.left_out.get("logs"):
@@ -150,6 +159,8 @@ def _model(finding: Finding) -> FindingModel:
 
 
 def _count(found: Diagnosis) -> str:
+    if not found.findings and found.unavailable:
+        return f"No problem found in the areas checked (not checked: {', '.join(found.unavailable)})"
     if not found.findings:
         return "No problem found"
     parts = []
@@ -176,7 +187,7 @@ def _text(found: Diagnosis, focus: str | None) -> str:
     if shown < len(found.findings):
         lines.append(f"{len(found.findings) - shown} more findings in the structured content.")
     checked = "; ".join(f"{area}: {what}" for area, what in checked_texts(found).items())
-    lines.append(f"Checked in {found.seconds:.1f} s — {checked}.")
+    lines.append(f"Checked in {found.seconds:.1f} s — {checked or 'nothing'}.")
     if found.unavailable:
         lines.append("Not checked: " + "; ".join(f"{a}: {why}" for a, why in found.unavailable.items()) + ".")
     return "\n".join(lines)
