@@ -5,6 +5,7 @@ call (checked against the tool's schema, and run); the one robot left with the n
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 import re
@@ -13,8 +14,10 @@ from typing import Any
 
 import jsonschema
 import pytest
+import websockets
 from mcp_harness import Session, open_session, text_of
 
+from rosbridge_mcp_server.safety import parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import TURTLE_HOME
 
@@ -179,3 +182,106 @@ async def test_diagnose_never_calls_a_robot_healthy_when_it_skipped_its_tf(make_
     assert not text.startswith("No problem found."), text
     assert text.startswith("No problem found in the areas checked (not checked: tf) (focus: tf)."), text
     assert "Not checked: tf: the robot has no /tf or /tf_static topic" in text
+
+
+def leave_graph(robot: SimulatedRobot, namespace: str) -> None:
+    """Every node under *namespace* leaves the graph (its topics, services and actions go with it)."""
+    graph = robot.graph
+    for name in [n for n in graph.nodes if n.startswith(f"{namespace}/")]:
+        info = graph.nodes[name]
+        for topic, count in list(info.publishes.items()):
+            for _ in range(count):
+                graph.remove_publisher(name, topic)
+        for topic, count in list(info.subscribes.items()):
+            for _ in range(count):
+                graph.remove_subscriber(name, topic)
+        for service in list(info.services):
+            graph.remove_service(service)
+        del graph.nodes[name]
+    for action in [a for a in graph.actions if a.startswith(f"{namespace}/")]:
+        del graph.actions[action]
+
+
+async def test_the_one_robot_with_the_names_is_found_and_said(make_sim: MakeSim) -> None:
+    """ROS 2 (the ROS 1 master never forgets a topic's type): only /robot2 is left on the bridge."""
+    fleet = await make_sim(dialect="ros2", world="nav2", robots=2)
+    fleet.nav2.navigator.speed = 8.0
+    leave_graph(fleet, "/robot1")
+    async with open_session(fleet.url, tools=TOOLS) as session:
+        transform = await session.ok("get_transform", {"target_frame": "map", "source_frame": "base_link"})
+        scan = await session.ok("view_scan", {})
+        drive = await session.ok("navigate_to", {"goal": GOAL})
+    assert text_of(transform).startswith("Using namespace /robot2: /tf is not in the graph, /robot2/tf is.")
+    assert (transform.structured_content or {})["namespace"] == "/robot2"
+    assert text_of(scan).startswith("Using namespace /robot2: /scan is not in the graph")
+    assert (scan.structured_content or {})["topic"] == "/robot2/scan"
+    assert text_of(drive).startswith("Using namespace /robot2: /navigate_to_pose is not in the graph")
+    second = fleet.nav2.robots[1]
+    assert math.hypot(second.x - GOAL["x"], second.y - GOAL["y"]) < 0.2
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_prefixed_frames_on_one_shared_tf_are_found_under_the_namespace(
+    make_sim: MakeSim, dialect: str
+) -> None:
+    """The other multi-robot setup: one /tf, each robot's frames prefixed (robot2/odom → robot2/base_link);
+    a raw client publishes robot2's link on the turtle robot's /tf."""
+    robot = await make_sim(dialect=dialect)
+    tf_type = "tf2_msgs/msg/TFMessage" if dialect == "ros2" else "tf2_msgs/TFMessage"
+    link = {
+        "header": {"frame_id": "robot2/odom", "stamp": {"sec": 1, "nanosec": 0}},
+        "child_frame_id": "robot2/base_link",
+        "transform": {"translation": {"x": 1.5, "y": -0.5, "z": 0.0}, "rotation": {"w": 1.0}},
+    }
+
+    async def publish(ws: Any) -> None:
+        await ws.send(json.dumps({"op": "advertise", "topic": "/tf", "type": tf_type}))
+        while True:  # a tf publisher at 20 Hz, as a robot's would be
+            await ws.send(json.dumps({"op": "publish", "topic": "/tf", "msg": {"transforms": [link]}}))
+            await asyncio.sleep(0.05)
+
+    async with websockets.connect(robot.url) as ws, open_session(robot.url, tools=TOOLS) as session:
+        publisher = asyncio.create_task(publish(ws))
+        try:
+            arguments = {"target_frame": "odom", "source_frame": "base_link", "namespace": "/robot2"}
+            result = await session.ok("get_transform", {**arguments, "timeout": 5})
+        finally:
+            publisher.cancel()
+    data = result.structured_content or {}
+    assert data["target_frame"] == "robot2/odom"
+    assert data["source_frame"] == "robot2/base_link"
+    assert data["translation"] == {"x": 1.5, "y": -0.5, "z": 0.0}
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_the_fence_judges_a_namespaced_goal_by_that_robots_map_and_pose(
+    make_sim: MakeSim, dialect: str
+) -> None:
+    """A goal to /robot2 by any carrier is placed with /robot2's map and tf: one too far from robot2 (not
+    from the origin) is refused, one near it goes, under a policy with a maximum goal distance."""
+    fleet = await make_sim(dialect=dialect, world="nav2", robots=2)
+    fleet.nav2.navigator.speed = 8.0
+    policy = parse_policy({"navigation": {"max_goal_distance": 2.0}}, where="test.toml")
+    action, action_type, key = (
+        ("/robot2/navigate_to_pose", "nav2_msgs/action/NavigateToPose", "pose")
+        if dialect == "ros2"
+        else ("/robot2/move_base", "move_base_msgs/MoveBaseAction", "target_pose")
+    )
+
+    def goal(x: float, y: float) -> dict[str, Any]:
+        stamped = {
+            "header": {"frame_id": "map"},
+            "pose": {"position": {"x": x, "y": y}, "orientation": {"w": 1}},
+        }
+        return {"action_name": action, "action_type": action_type, "goal": {key: stamped}, "timeout": 30}
+
+    async with open_session(
+        fleet.url, guard=None, policy=policy, tools=(*TOOLS, "publish_action")
+    ) as session:
+        far = await session.error("publish_action", goal(TURTLE_HOME + 3.0, TURTLE_HOME))
+        near = await session.call("publish_action", goal(GOAL["x"], GOAL["y"]))
+    assert "beyond the maximum goal distance 2 m" in far, far
+    assert "3.00 m from the robot" in far, far
+    assert not near.is_error, text_of(near)
+    second = fleet.nav2.robots[1]
+    assert math.hypot(second.x - GOAL["x"], second.y - GOAL["y"]) < 0.2

@@ -23,12 +23,17 @@ from rosbridge_mcp_server.robot.namespaces import find_namespace, namespace_name
 from rosbridge_mcp_server.robot.transforms import FrameTree, Lookup, TransformError
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["TF_TOPICS", "FoundTransform", "look_up_transform", "tf_topics"]
 
 TF_TOPICS = ("/tf", "/tf_static")
+#: On a tf shared by several robots, how long a look-up waits for the robot's prefixed frames before it
+#: answers with a plain frame of that name (another robot's, or one frame all share, such as ``map``).
+SHARED_SETTLE = 1.0
 
 
 def tf_topics(namespace: str) -> tuple[str, str]:
@@ -54,7 +59,8 @@ async def _tf_present(graph: RosGraph, namespace: str) -> dict[str, str]:
 
 
 async def _sources(graph: RosGraph, namespace: str | None) -> tuple[str, dict[str, str], str | None]:
-    """(namespace, tf topic → type, note): the robot's tf topics, found when no namespace is given."""
+    """(namespace, tf topic → type, note): the robot's tf topics (the root's when it has none of its own),
+    found when no namespace is given."""
     wanted = "" if namespace is None else namespace_name(namespace)
     present = await _tf_present(graph, wanted)
     note = None
@@ -68,16 +74,17 @@ async def _sources(graph: RosGraph, namespace: str | None) -> tuple[str, dict[st
     elif not present and wanted:
         present = await _tf_present(graph, "")  # one /tf shared, the robot's frames prefixed
     if not present:
-        where = " or ".join(tf_topics(wanted))
+        where = " nor ".join(tf_topics(wanted)) + (" (nor the root's /tf)" if wanted else "")
         raise TransformError(f"Neither {where} is in the ROS graph: nothing publishes transforms.")
     return wanted, present, note
 
 
-def _named(tree: FrameTree, frame: str, prefix: str) -> str:
-    """*frame*, or its name under the namespace's prefix (``robot2/base_link``) when only that is known."""
-    if prefix and not tree.knows(frame) and tree.knows(f"{prefix}/{frame.lstrip('/')}"):
-        return f"{prefix}/{frame.lstrip('/')}"
-    return frame
+def _named(tree: FrameTree, frame: str, prefix: str, *, shared: bool) -> str:
+    """*frame* under the namespace's prefix (``robot2/base_link``) when that is known and the tf is shared
+    by several robots (or the plain frame is not known), else *frame*."""
+    prefixed = f"{prefix}/{frame.lstrip('/')}"
+    known = prefix and not frame.lstrip("/").startswith(f"{prefix}/") and tree.knows(prefixed)
+    return prefixed if known and (shared or not tree.knows(frame)) else frame
 
 
 async def look_up_transform(
@@ -94,10 +101,11 @@ async def look_up_transform(
     *namespace*: the robot's (``""``: the root's tf; ``None``: found, see the module's docstring)."""
     namespace, present, note = await _sources(graph, namespace)
     prefix = namespace.strip("/")
+    shared = bool(namespace) and not any(topic.startswith(f"{namespace}/") for topic in present)
     tree = FrameTree()
     start = time.monotonic()
+    settle = start + min(SHARED_SETTLE, timeout) if shared else start
     changed = asyncio.Event()
-    last_error: TransformError | None = None
 
     async def pump(topic: str, msg_type: str) -> None:
         async with client.subscribe(topic, msg_type, max_queue=100) as sub:
@@ -108,32 +116,56 @@ async def look_up_transform(
                     changed.set()
 
     tasks = [asyncio.create_task(pump(topic, msg_type)) for topic, msg_type in present.items()]
+
+    def names() -> tuple[str, str]:
+        return _named(tree, target, prefix, shared=shared), _named(tree, source, prefix, shared=shared)
+
     try:
-        deadline = start + timeout
-        while True:
-            try:
-                found = tree.lookup(_named(tree, target, prefix), _named(tree, source, prefix))
-            except TransformError as exc:
-                last_error = exc
-            else:
-                now = time.monotonic()
-                age = None if found.newest_received is None else now - found.newest_received
-                return FoundTransform(found, age, now - start, namespace, note)
-            left = deadline - time.monotonic()
-            if left <= 0:
-                break
-            changed.clear()
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(left):
-                    await _first_of(changed, tasks)
+        found = await _wait_for(tree, names, changed, tasks, settle=settle, deadline=start + timeout)
     finally:
         for task in tasks:
             task.cancel()
         # Shielded unsubscribes run in each task's own `async with` exit.
         await asyncio.gather(*tasks, return_exceptions=True)
-    assert last_error is not None
-    on = f" on {' and '.join(present)}" if namespace else ""
-    raise TransformError(f"Within {timeout:g} s{on}: {last_error}") from None
+    if isinstance(found, TransformError):
+        on = f" on {' and '.join(present)}" if namespace else ""
+        raise TransformError(f"Within {timeout:g} s{on}: {found}") from None
+    now = time.monotonic()
+    age = None if found.newest_received is None else now - found.newest_received
+    return FoundTransform(found, age, now - start, namespace, note)
+
+
+async def _wait_for(
+    tree: FrameTree,
+    names: Callable[[], tuple[str, str]],
+    changed: asyncio.Event,
+    tasks: list[asyncio.Task[None]],
+    *,
+    settle: float,
+    deadline: float,
+) -> Lookup | TransformError:
+    """The look-up of *names* once the links connect them (a plain frame, not the robot's prefixed one, only
+    from *settle* on), else the last reason it could not be made."""
+    last_error = TransformError("no link was heard")
+    while True:
+        wanted = names()
+        try:
+            found = tree.lookup(*wanted)
+        except TransformError as exc:
+            last_error = exc
+            until = deadline
+        else:
+            prefixed = all("/" in name for name in wanted)
+            if time.monotonic() >= settle or prefixed:
+                return found
+            until = settle  # a plain frame: the robot's prefixed one may still come
+        left = min(until, deadline) - time.monotonic()
+        if left <= 0 and time.monotonic() >= deadline:
+            return last_error
+        changed.clear()
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(max(left, 0)):
+                await _first_of(changed, tasks)
 
 
 async def _first_of(changed: asyncio.Event, tasks: list[asyncio.Task[None]]) -> None:
