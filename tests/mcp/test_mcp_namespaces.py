@@ -149,6 +149,8 @@ async def test_diagnose_checks_each_robots_tf_and_finds_a_fault_on_robot2(
         healthy = await session.ok("diagnose", {"focus": "tf"})
         fleet.nav2.robots[1].quiet.add("odom->base_footprint")  # robot2's odometry tf stops
         result = await session.ok("diagnose", {"focus": "tf"})
+        robot1 = await session.ok("diagnose", {"focus": "navigation", "namespace": "/robot1"})
+        robot2 = await session.ok("diagnose", {"focus": "navigation", "namespace": "/robot2"})
         schema = await schema_of(session, "get_transform")
     data = healthy.structured_content or {}
     assert data["unavailable"] == {}, text_of(healthy)
@@ -167,6 +169,13 @@ async def test_diagnose_checks_each_robots_tf_and_finds_a_fault_on_robot2(
     )
     assert f"→ {call}" in text
     jsonschema.validate(json.loads(call.removeprefix("get_transform ")), schema)
+    # A namespace narrows the look to that robot's tf and streams.
+    one, two = robot1.structured_content or {}, robot2.structured_content or {}
+    assert one["findings"] == [], text_of(robot1)
+    assert one["checked"]["tf"].startswith("/robot1/tf: ")
+    assert "/robot2" not in one["checked"]["tf"]
+    assert all(topic.startswith("/robot1/") for topic in one["streams"]), one["streams"]
+    assert [f["subject"] for f in two["findings"]] == ["/robot2 odom -> base_footprint"], text_of(robot2)
 
 
 async def test_diagnose_never_calls_a_robot_healthy_when_it_skipped_its_tf(make_sim: MakeSim) -> None:

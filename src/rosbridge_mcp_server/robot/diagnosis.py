@@ -296,8 +296,11 @@ async def diagnose(
     *,
     focus: str | None = None,
     window: float = WINDOW,
+    namespace: str | None = None,
 ) -> Diagnosis:
-    """Look at the robot once (see the module docstring); :class:`UnknownFocusError` for a bad *focus*."""
+    """Look at the robot once (see the module docstring); :class:`UnknownFocusError` for a bad *focus*.
+
+    *namespace* (``""``: the root) narrows the streams and tf to one robot of several on the bridge."""
     began = time.monotonic()
     dialect = await graph.dialect()
     entries, nodes = await asyncio.gather(graph.topics(), node_names(graph))
@@ -311,14 +314,19 @@ async def diagnose(
     frames: set[str] = set()
 
     tf_spaces = _tf_namespaces(topics)
-    streams = _key_streams(topics, kinds, left_out) if "streams" in areas or "tf" in areas else {}
+    streams_of = topics
+    if namespace is not None:
+        tf_spaces = [space for space in tf_spaces if space == namespace]
+        if namespace:
+            streams_of = {t: ty for t, ty in topics.items() if t.startswith(f"{namespace}/")}
+    streams = _key_streams(streams_of, kinds, left_out) if "streams" in areas or "tf" in areas else {}
     if "streams" not in areas:
         streams = {t: k for t, k in streams.items() if k == "tf"}
         left_out.pop("streams", None)
     listen: dict[str, tuple[str, bool]] = {t: (topics[t], k == "tf") for t, k in streams.items()}
     if "tf" in areas:
-        for namespace in tf_spaces:
-            for topic in (f"{namespace}/tf", f"{namespace}/tf_static"):
+        for space in tf_spaces:
+            for topic in (f"{space}/tf", f"{space}/tf_static"):
                 if topic in topics:
                     listen[topic] = (topics[topic], True)
     if "diagnostics" in areas:
@@ -394,7 +402,9 @@ async def diagnose(
             keeper, streams=streams, heard=heard, pubsub=pubsub, window=window, checked=checked
         )
     if "tf" in areas:
-        if not tf_spaces:
+        if not tf_spaces and namespace:
+            unavailable["tf"] = f"the robot has no {namespace}/tf or {namespace}/tf_static topic"
+        elif not tf_spaces:
             unavailable["tf"] = "the robot has no /tf or /tf_static topic, at the root or under a namespace"
         else:
             frames = _tf_trees(

@@ -21,6 +21,7 @@ from rosbridge_mcp_server.robot.diagnosis import (
     diagnose,
 )
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, given_namespace
 from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
 
 __all__ = ["SPEC", "DiagnoseAnswer", "run"]
@@ -75,6 +76,7 @@ async def run(
         str | None,
         Field(description=f"An area ({', '.join(list(FOCUSES)[:3])}, ...) or a node, e.g. /amcl"),
     ] = None,
+    namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Look at the robot once."""
     keeper = ctx.robot.keep_logs()
@@ -83,7 +85,9 @@ async def run(
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(keeper.ready.wait(), READY_WAIT)
     try:
-        found = await diagnose(ctx.client, ctx.graph, keeper, focus=focus)
+        found = await diagnose(
+            ctx.client, ctx.graph, keeper, focus=focus, namespace=given_namespace(ctx, namespace)
+        )
     except UnknownFocusError as exc:
         raise ToolFailure(f"Unknown {exc}").advise(exc.hint) from None
     data = DiagnoseAnswer(

@@ -107,7 +107,7 @@ async def run(
     if found.note is not None:
         text = f"{found.note}\n{text}"
     elif found.namespace:
-        text += f" (tf of {found.namespace})"
+        text = f"{text.removesuffix('.')} (tf of {found.namespace})."
     return ToolAnswer(text=text, data=answer)
 
 
