@@ -294,3 +294,15 @@ async def test_the_fence_judges_a_namespaced_goal_by_that_robots_map_and_pose(
     assert not near.is_error, text_of(near)
     second = fleet.nav2.robots[1]
     assert math.hypot(second.x - GOAL["x"], second.y - GOAL["y"]) < 0.2
+
+
+async def test_view_map_of_a_robots_topic_places_that_robot_without_a_namespace(
+    session: Session, fleet: SimulatedRobot
+) -> None:
+    """{"topic": "/robot2/map"}: the robot drawn is robot2, from /robot2/tf (several robots' tf, no guess)."""
+    second = fleet.nav2.robots[1]
+    second.x += 1.0
+    result = await session.ok("view_map", {"topic": "/robot2/map"})
+    robot = (result.structured_content or {})["robot"]
+    assert robot is not None, text_of(result)
+    assert abs(robot[0] - second.x) < 0.1

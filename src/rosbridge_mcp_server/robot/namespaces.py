@@ -30,6 +30,7 @@ __all__ = [
     "under",
 ]
 
+MAX_NAMESPACE_CHARS = 256
 _PART = r"[A-Za-z_][A-Za-z0-9_]*"
 _NAMESPACE = re.compile(rf"^(/{_PART})+$")
 
@@ -59,6 +60,8 @@ def namespace_name(text: str) -> str:
     value = text.strip().rstrip("/")
     if not value:
         return ""
+    if len(value) > MAX_NAMESPACE_CHARS:
+        raise ValueError(f"namespace is {len(value)} characters long; a ROS namespace here is at most 256")
     if not value.startswith("/"):
         value = f"/{value}"
     if not _NAMESPACE.match(value):

@@ -51,8 +51,8 @@ SPEC = ToolSpec(
     name="get_transform",
     title="Frame transform",
     description=(
-        "Where source_frame is in target_frame, from /tf and /tf_static. Read-only. Example: "
-        '{"target_frame": "odom", "source_frame": "base_link"}: translation (m), rotation.'
+        "Where source_frame is in target_frame (/tf, /tf_static). Read-only. Example: "
+        '{"target_frame": "odom", "source_frame": "base_link"}'
     ),
     hints=READS_ROBOT,
     output=TransformAnswer,
@@ -61,7 +61,7 @@ SPEC = ToolSpec(
 
 async def run(
     ctx: ToolContext,
-    target_frame: Annotated[str, Field(description="Frame to express the answer in, e.g. odom or map")],
+    target_frame: Annotated[str, Field(description="Answer in this frame, e.g. map")],
     source_frame: Annotated[str, Field(description="Frame to locate, e.g. base_link")],
     timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to listen, e.g. 3")] = 3.0,
     namespace: NamespaceArgument = None,

@@ -26,13 +26,8 @@ from rosbridge_mcp_server.tools.seeing import typed_topic
 
 __all__ = ["NamespaceArgument", "choose_one", "given_namespace", "namespaced_topic"]
 
-NamespaceArgument = Annotated[
-    str | None,
-    Field(
-        max_length=256,
-        description='The robot\'s namespace, e.g. /robot2 ("" = none; omitted: found)',
-    ),
-]
+#: Omitted: found; ``""``: none (the tools/list budget keeps the description to an example).
+NamespaceArgument = Annotated[str | None, Field(description="e.g. /robot2")]
 
 
 def given_namespace(ctx: ToolContext, namespace: str | None) -> str | None:

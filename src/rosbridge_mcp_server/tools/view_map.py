@@ -22,7 +22,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, namespaced_topic
+from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, given_namespace, namespaced_topic
 from rosbridge_mcp_server.tools.seeing import first_message, is_type, planar_pose, typed_topic
 
 __all__ = ["SPEC", "MapAnswer", "run"]
@@ -56,8 +56,8 @@ SPEC = ToolSpec(
     name="view_map",
     title="Map picture",
     description=(
-        "An OccupancyGrid (map or costmap) as a picture with the robot (blue, from /tf), optionally a plan "
-        '(green) and a scan (red). Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
+        "A map or costmap as a picture: the robot (blue, from /tf), a plan (green), a scan (red). "
+        'Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
         '"around_robot": 4}'
     ),
     hints=READS_ROBOT,
@@ -164,7 +164,8 @@ async def run(
         scan_message=scan_message,
         notes=notes,
         tf_wait=min(_TF_WAIT, timeout),
-        namespace=ns,
+        namespace=ns if ns or given_namespace(ctx, namespace) is not None else None,
+        topic=name,
     )
     off_map = _off_map(grid, robot, base_frame.strip())
     if off_map is not None:
@@ -203,7 +204,8 @@ async def _overlay(
     scan_message: dict[str, Any] | None,
     notes: list[str],
     tf_wait: float,
-    namespace: str = "",
+    namespace: str | None = "",
+    topic: str = "",
 ) -> tuple[Overlay, Pose2D | None]:
     """The robot's pose, the path and the scan hits in the map's frame (each placed through /tf)."""
     path_frame, path = decode_path(path_message) if path_message is not None else ("", [])
@@ -217,7 +219,7 @@ async def _overlay(
     async def pose(source: str, what: str) -> Pose2D | None:
         if source == frame:
             return Pose2D(0.0, 0.0, 0.0)
-        found = await planar_pose(ctx, frame, source, tf_wait, namespace=namespace)
+        found = await planar_pose(ctx, frame, source, tf_wait, namespace=namespace, topic=topic)
         if isinstance(found, str):
             notes.append(f"{what} not drawn: {found}")
             return None

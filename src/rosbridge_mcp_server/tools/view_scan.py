@@ -57,7 +57,7 @@ SPEC = ToolSpec(
     name="view_scan",
     title="Scan from above",
     description=(
-        "A LaserScan or PointCloud2 from above (forward up) with range rings and the footprint; the "
+        "A LaserScan or PointCloud2 from above (forward up), with the "
         'nearest obstacle and free directions. Read-only. Example: {"topic": "/scan", "clearance": 1.0}'
     ),
     hints=READS_ROBOT,
