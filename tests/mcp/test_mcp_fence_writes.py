@@ -9,7 +9,9 @@ arrive in order, so anything it sent before the barrier has arrived when the bar
 from __future__ import annotations
 
 import asyncio
+import io
 import itertools
+import json
 import math
 from collections.abc import Awaitable, Callable
 from typing import Any
@@ -119,14 +121,20 @@ def target(arguments: dict[str, Any]) -> str:
 async def test_writes_to_what_the_fence_reads_are_refused_while_zones_are_set(nav2: SimulatedRobot) -> None:
     """No [topics] or [services] rules at all: [navigation]'s keep-out alone refuses every fence write,
     by name and by type, and none of them reaches the robot."""
-    async with open_session(nav2.url, guard=None, policy=rules()) as session:
+    stream = io.StringIO()
+    guard = PolicyGuard(rules(), Audit(stream))
+    async with open_session(nav2.url, guard=guard, policy=rules()) as session:
         texts = {target(args): await session.error(tool, args) for tool, args in fence_writes(nav2)}
         await barrier(session, nav2)
+    audit = {entry["name"]: entry for entry in map(json.loads, stream.getvalue().splitlines())}
     for name, text in texts.items():
         assert f"on {name} writes what the safety fence and localisation read" in text, text
         assert "allow_fence_writes" in text
         assert name not in nav2.world.published
         assert nav2.world.service_calls.get(name, 0) == 0
+        assert audit[name]["outcome"] == "refused"
+        assert audit[name]["detail"] == f"[navigation] fence write: {name}"
+        assert [effect["kind"] for effect in audit[name]["effects"]] == ["fence"]
 
 
 async def test_allow_fence_writes_lets_only_what_it_names_through(nav2: SimulatedRobot) -> None:
@@ -185,12 +193,35 @@ def motion_writes(sim: SimulatedRobot) -> list[tuple[str, dict[str, Any]]]:
         "message_type": spelt(sim, "sensor_msgs/msg/Joy"),
         "message": {"axes": [1.0, 0.0], "buttons": [1]},
     }
-    return [("publish_topic", joy), *fence_writes(sim)[2:]]
+    writes = [("publish_topic", joy), *fence_writes(sim)[2:]]
+    if sim.dialect == "ros2":
+        change = {"transition": {"id": 4, "label": "deactivate"}}
+        manage = {"command": 1}  # PAUSE
+        writes += [
+            (
+                "publish_service",
+                {
+                    "service": "/controller_server/change_state",
+                    "service_type": "lifecycle_msgs/srv/ChangeState",
+                    "request": change,
+                },
+            ),
+            (
+                "publish_service",
+                {
+                    "service": "/lifecycle_manager_navigation/manage_nodes",
+                    "service_type": "nav2_msgs/srv/ManageLifecycleNodes",
+                    "request": manage,
+                },
+            ),
+        ]
+    return writes
 
 
 async def test_confirm_motion_asks_before_a_joystick_and_every_fence_write(nav2: SimulatedRobot) -> None:
     """confirm = "motion", no zones: /joy (teleop turns it into velocity), /initialpose, /speed_limit, the
-    masks and the map are each asked about; declined, none reaches the robot."""
+    masks, the map, AMCL's and map_server's services, a controller's lifecycle transition and Nav2's lifecycle
+    manager are each asked about; declined, none reaches the robot."""
     person = Person("decline")
     policy = parse_policy({"confirm": "motion"}, where="test.toml")
     writes = motion_writes(nav2)
