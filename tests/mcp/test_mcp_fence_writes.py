@@ -17,7 +17,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
-from mcp_harness import Session, open_session
+from mcp_harness import Session, open_session, text_of
 from test_mcp_effects import Person, watching
 
 from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard, parse_policy
@@ -152,20 +152,44 @@ async def test_allow_fence_writes_lets_only_what_it_names_through(nav2: Simulate
     assert "allow_fence_writes" in text
 
 
+def odom_goal(sim: SimulatedRobot, x: float, y: float) -> dict[str, Any]:
+    """publish_action's arguments for a navigation goal to (x, y) in the odom frame, in the robot's dialect:
+    the navigator places it through its own (true) transforms, the fence through what /tf says."""
+    pose = {"position": {"x": x, "y": y}, "orientation": {"w": 1.0}}
+    stamped = {"header": {"frame_id": "odom"}, "pose": pose}
+    if sim.dialect == "ros1":
+        return {
+            "action_name": "/move_base",
+            "action_type": "move_base_msgs/MoveBaseAction",
+            "goal": {"target_pose": stamped},
+        }
+    return {
+        "action_name": "/navigate_to_pose",
+        "action_type": "nav2_msgs/action/NavigateToPose",
+        "goal": {"pose": stamped},
+    }
+
+
 async def test_a_forged_tf_cannot_carry_a_goal_into_keep_out(nav2: SimulatedRobot) -> None:
-    """The attack of finding 2: a 50 Hz /tf stream moving map→odom 1.5 m, then a goal in odom whose true place
-    is in the keep-out zone. The stream is refused, the goal is judged where it truly is, and the robot never
-    enters the zone."""
-    stream = {**forged_tf(nav2, 4.0, 3.0), "rate_hz": 50, "duration": 2}
+    """The attack of finding 2: a 50 Hz /tf stream moving map→odom 1.5 m, and while it runs a goal in odom
+    whose true place is in the keep-out zone. The stream is refused, the goal is judged where it truly is, and
+    the robot never enters the zone."""
+    stream = {**forged_tf(nav2, 4.0, 3.0), "rate_hz": 50, "duration": 3}
     robot = nav2.nav2.robots[0]
     async with open_session(nav2.url, guard=None, policy=rules()) as session:
-        refused = await session.error("publish_topic", stream)
-        goal = await session.error("navigate_to", {"goal": {"x": -2.0, "y": 1.0, "yaw": 0}, "frame": "odom"})
+        streaming = asyncio.create_task(session.call("publish_topic", stream))
+        forged = asyncio.create_task(nav2.wait_for(lambda world: "/tf" in world.published, timeout=10))
+        await asyncio.wait({streaming, forged}, return_when=asyncio.FIRST_COMPLETED)
+        goal = await session.call("publish_action", {**odom_goal(nav2, -2.0, 1.0), "timeout": 30})
+        refused = await streaming
+        forged.cancel()
         await barrier(session, nav2)
-    assert "/tf writes what the safety fence and localisation read" in refused
-    assert "pit" in goal, goal
+    assert math.hypot(robot.x - 3.544, robot.y - 6.544) > 1.0, (robot.x, robot.y)
+    assert refused.is_error
+    assert "/tf writes what the safety fence and localisation read" in text_of(refused)
+    assert goal.is_error
+    assert "pit" in text_of(goal), text_of(goal)
     assert "/tf" not in nav2.world.published
-    assert math.hypot(robot.x - 3.544, robot.y - 6.544) > 1.0
 
 
 async def test_a_forged_map_to_base_link_in_a_fleet_cannot_stretch_max_goal_distance(
