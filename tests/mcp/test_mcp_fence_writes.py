@@ -192,21 +192,41 @@ async def test_a_forged_tf_cannot_carry_a_goal_into_keep_out(nav2: SimulatedRobo
     assert "/tf" not in nav2.world.published
 
 
-async def test_a_forged_map_to_base_link_in_a_fleet_cannot_stretch_max_goal_distance(
-    make_sim: MakeSim,
-) -> None:
-    """In a namespaced fleet a forged ``map → base_link`` on /robot1/tf once let a goal 5 m away through
-    max_goal_distance = 2; the write is refused by name (namespaced) and by type."""
+async def test_a_forged_map_to_base_link_in_a_fleet_cannot_stretch_the_distance(make_sim: MakeSim) -> None:
+    """In a namespaced fleet a forged ``map → base_link`` on /robot1/tf, streamed while a goal 5 m away is
+    sent, once let it through max_goal_distance = 2 (the robot drove 4.98 m). The stream is refused by name
+    (namespaced) as it is by type under another name; the goal is judged from the true pose."""
     sim = await make_sim(dialect="ros2", world="nav2", robots=2)
+    sim.nav2.navigator.speed = TEST_SPEED
+    robot = sim.nav2.robots[0]
+    start = (robot.x, robot.y)
+    goal_x, goal_y = start[0] - 4.0, start[1] + 3.0
     policy = parse_policy({"navigation": {"max_goal_distance": 2.0}}, where="test.toml")
-    forged = forged_tf(sim, 9.0, 5.5, parent="robot1/map", child="robot1/base_link")
+    forged = forged_tf(sim, goal_x + 0.5, goal_y, child="base_link")
+    stream = {**forged, "topic": "/robot1/tf", "rate_hz": 50, "duration": 3}
+    stamped = {"header": {"frame_id": "map"}, "pose": {"position": {"x": goal_x, "y": goal_y}}}
+    goal = {
+        "action_name": "/robot1/navigate_to_pose",
+        "action_type": "nav2_msgs/action/NavigateToPose",
+        "goal": {"pose": {**stamped, "pose": {**stamped["pose"], "orientation": {"w": 1.0}}}},
+        "timeout": 30,
+    }
     async with open_session(sim.url, guard=None, policy=policy) as session:
-        texts = [
-            await session.error("publish_topic", {**forged, "topic": "/robot1/tf"}),
-            await session.error("publish_topic", {**forged, "topic": "/robot1/elsewhere"}),
-        ]
+        streaming = asyncio.create_task(session.call("publish_topic", stream))
+        arrived = asyncio.create_task(sim.wait_for(lambda world: "/robot1/tf" in world.published, timeout=10))
+        await asyncio.wait({streaming, arrived}, return_when=asyncio.FIRST_COMPLETED)
+        sent = await session.call("publish_action", goal)
+        refused = await streaming
+        arrived.cancel()
+        elsewhere = await session.call("publish_topic", {**forged, "topic": "/robot1/elsewhere"})
         await barrier(session, sim)
-    assert all("writes what the safety fence and localisation read" in text for text in texts)
+    assert math.hypot(robot.x - start[0], robot.y - start[1]) < 0.5, (start, robot.x, robot.y)
+    assert refused.is_error
+    assert sent.is_error
+    assert "max_goal_distance" in text_of(sent) or "maximum goal distance" in text_of(sent), text_of(sent)
+    assert elsewhere.is_error
+    for text in (text_of(refused), text_of(elsewhere)):
+        assert "writes what the safety fence and localisation read" in text
     assert "/robot1/tf" not in sim.world.published
     assert "/robot1/elsewhere" not in sim.world.published
 
