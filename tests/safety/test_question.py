@@ -85,3 +85,13 @@ def test_every_number_is_shown_whole() -> None:
 def test_shown_text_keeps_plain_text() -> None:
     assert shown_text("Hello, wörld — 地図") == '"Hello, wörld — 地図"'
     assert shown_text('say "hi"\\') == '"say \\"hi\\"\\\\"'
+
+
+def test_a_name_from_the_robot_in_the_head_is_escaped_and_capped() -> None:
+    """A ROS 2 parameter's name is kept as written (no whitespace, but any other character)."""
+    name = "/turtlesim:\u202e" + "p" * 5000
+    text = question(Act("set_parameter", "parameter", name, "", 9.0))
+    assert "\u202e" not in text
+    assert "/turtlesim:\\u202epppp" in text
+    assert "  value: 9.0" in text
+    assert len(text) < 2000

@@ -40,6 +40,8 @@ LINES_SHOWN = 200
 ITEMS_WALKED = 64
 #: The longest field name shown whole (names come from the message, which the model writes).
 NAME_SHOWN = 80
+#: The longest line of the question's head shown whole (a name, what the act does).
+HEADER_SHOWN = 400
 
 _NOUNS = {"topic": "topic", "service": "service", "action": "action", "parameter": "parameter"}
 _PAYLOADS = {"topic": "message", "service": "request", "action": "goal", "parameter": "value"}
@@ -58,9 +60,13 @@ def shown_text(text: str) -> str:
     """*text* in double quotes, every control and invisible character escaped (``\\n``, ``\\u202e``).
 
     (A small local helper: the project's text-sanitising module may replace it.)"""
+    return '"' + _escaped(text, quotes=True) + '"'
+
+
+def _escaped(text: str, *, quotes: bool) -> str:
     out = []
     for ch in text:
-        if ch in '"\\':
+        if quotes and ch in '"\\':
             out.append("\\" + ch)
         elif ch in "\n\r\t":
             out.append({"\n": "\\n", "\r": "\\r", "\t": "\\t"}[ch])
@@ -69,7 +75,15 @@ def shown_text(text: str) -> str:
             out.append(f"\\u{code:04x}" if code <= 0xFFFF else f"\\U{code:08x}")
         else:
             out.append(ch)
-    return '"' + "".join(out) + '"'
+    return "".join(out)
+
+
+def _header(line: str) -> str:
+    """A line of the question's head (it may hold names the model or the robot spelt), escaped and cut at
+    :data:`HEADER_SHOWN` characters with the cut said, so it cannot push the values down."""
+    if len(line) > HEADER_SHOWN:
+        line = f"{line[:HEADER_SHOWN]}… ({len(line)} characters, {len(line) - HEADER_SHOWN} not shown)"
+    return _escaped(line, quotes=False)
 
 
 def _number(value: Any) -> str:
@@ -179,6 +193,7 @@ def question(act: Act, clamp: str | None = None) -> str:
     where = goal_text(act)
     if where:
         lines.append(where)
+    lines = [_header(line) for line in lines]
     lines += payload_lines(act.payload, payload_kind)
     lines.append("Allow this?")
     return "\n".join(lines)
