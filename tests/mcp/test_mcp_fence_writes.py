@@ -176,7 +176,10 @@ async def test_a_forged_tf_cannot_carry_a_goal_into_keep_out(nav2: SimulatedRobo
     the robot never enters the zone."""
     stream = {**forged_tf(nav2, 4.0, 3.0), "rate_hz": 50, "duration": 3}
     robot = nav2.nav2.robots[0]
-    async with open_session(nav2.url, guard=None, policy=rules()) as session:
+    tf_type = spelt(nav2, "tf2_msgs/msg/TFMessage")
+    async with watching(nav2) as watcher, open_session(nav2.url, guard=None, policy=rules()) as session:
+        await watcher.subscribe("/tf", tf_type)
+        await watcher.wait_for("/tf", lambda message: True)  # the robot's own: the raw socket hears /tf
         streaming = asyncio.create_task(session.call("publish_topic", stream))
         forged = asyncio.create_task(nav2.wait_for(lambda world: "/tf" in world.published, timeout=10))
         await asyncio.wait({streaming, forged}, return_when=asyncio.FIRST_COMPLETED)
@@ -190,6 +193,8 @@ async def test_a_forged_tf_cannot_carry_a_goal_into_keep_out(nav2: SimulatedRobo
     assert goal.is_error
     assert "pit" in text_of(goal), text_of(goal)
     assert "/tf" not in nav2.world.published
+    heard = [t["transform"]["translation"] for m in watcher.seen["/tf"] for t in m["transforms"]]
+    assert not any((t["x"], t["y"]) == (4.0, 3.0) for t in heard)
 
 
 async def test_a_forged_map_to_base_link_in_a_fleet_cannot_stretch_the_distance(make_sim: MakeSim) -> None:
