@@ -162,6 +162,10 @@ def test_a_name_no_parameter_can_have_is_refused(written: str, version: int, fra
         ("/speed_limit", "nav2_msgs/msg/SpeedLimit", "fence"),
         ("/limits", "nav2_msgs/SpeedLimit", "fence"),
         ("/odom", "nav_msgs/msg/Odometry", "fence"),
+        ("/scan", "sensor_msgs/msg/LaserScan", "fence"),
+        ("/camera/points", "sensor_msgs/msg/PointCloud2", "fence"),
+        ("/imu/data", "sensor_msgs/Imu", "fence"),
+        ("/local_costmap/footprint", "geometry_msgs/msg/Polygon", "fence"),
     ],
 )
 def test_what_moves_the_robot_or_the_fence_is_known_by_type_and_by_name(

@@ -24,8 +24,9 @@ ROS reaches the same effect several ways, and a rule written for one of them mus
   Gazebo's ``reset_world`` and ``reset_simulation``). A policy may name more (``[services] motion``).
   A joystick message (``sensor_msgs/Joy``) is motion too: teleop turns it into velocity.
 * **What the fence reads** (kind ``fence``): the robot's transforms (``/tf``, ``/tf_static``), a pose
-  estimate (``/initialpose``; any ``PoseWithCovarianceStamped``), odometry, the map and Nav2's costmap filter
-  masks and their info, the speed limit; and the services that relocalise or reload the map (AMCL's
+  estimate (``/initialpose``; any ``PoseWithCovarianceStamped``), odometry, the sensors localisation and the
+  collision monitor read (scans, point clouds, IMU), the map and Nav2's costmap filter masks and their info,
+  the robot's footprint, the speed limit; and the services that relocalise or reload the map (AMCL's
   ``set_initial_pose`` and ``request_nomotion_update``, map_server's ``load_map``, ...). Decided by type
   (:data:`FENCE_TOPIC_TYPES`, :data:`FENCE_SERVICE_TYPES`) and by the name's last part
   (:data:`FENCE_TOPIC_LEAVES`, :data:`FENCE_SERVICE_LEAVES`), so ``/robot1/tf`` is ``/tf``'s kind. Writing
@@ -165,6 +166,9 @@ FENCE_TOPIC_TYPES = {
     "nav2_msgs/Costmap": "a costmap",
     "nav2_msgs/CostmapFilterInfo": "which mask Nav2's costmap filters read",
     "nav2_msgs/SpeedLimit": "Nav2's speed limit",
+    "sensor_msgs/LaserScan": "a laser scan, which localisation, the costmaps and the collision monitor read",
+    "sensor_msgs/PointCloud2": "a point cloud, which the costmaps and the collision monitor read",
+    "sensor_msgs/Imu": "IMU readings, which localisation reads",
 }
 #: The last part of such a topic's usual name, whatever type it is sent with.
 FENCE_TOPIC_LEAVES = {
@@ -176,6 +180,7 @@ FENCE_TOPIC_LEAVES = {
     "map_updates": "an update of the map",
     "speed_limit": FENCE_TOPIC_TYPES["nav2_msgs/SpeedLimit"],
     "costmap_filter_info": FENCE_TOPIC_TYPES["nav2_msgs/CostmapFilterInfo"],
+    "footprint": "the robot's footprint, which Nav2 keeps clear of obstacles",
 }
 #: A topic whose name ends so is a costmap filter mask (``/keepout_filter_mask``, ``/speed_filter_mask``).
 _MASK_SUFFIX = "filter_mask"
