@@ -82,12 +82,15 @@ async def open_session(
     policy: Policy | None = None,
     tools: tuple[str, ...] | None = None,
     record_dir: str | None = None,
+    extensions: tuple[Any, ...] = (),
+    tasks: bool = True,
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
 
     ``mode="auto"`` speaks the 2026-07-28 protocol instead (in-process: direct dispatch, no JSON-RPC framing).
     With ``policy`` the server runs under that safety policy (``guard=None``: the server's own PolicyGuard);
-    ``tools`` picks the tools as ``--tools`` does; ``record_dir`` is ``--record-dir``.
+    ``tools`` picks the tools as ``--tools`` does; ``record_dir`` is ``--record-dir``; ``extensions`` are the
+    client's (e.g. the tasks extension's ad); ``tasks=False`` is ``--no-tasks``.
 
     The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
     pytest-asyncio sets a fixture up and tears it down in different tasks.
@@ -116,8 +119,10 @@ async def open_session(
     async def host() -> None:
         try:
             robot = guarded(ros, config) if guard is None else RobotSession(ros, guard)
-            server = build_server(robot, config)
-            async with Client(server, mode=mode, elicitation_callback=elicitation_callback) as mcp:
+            server = build_server(robot, config, tasks=tasks)
+            async with Client(
+                server, mode=mode, elicitation_callback=elicitation_callback, extensions=list(extensions)
+            ) as mcp:
                 ready.set_result(Session(mcp, ros))
                 await stop.wait()
         except BaseException as exc:

@@ -124,7 +124,16 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         if command == "check":
             return asyncio.run(check(config, sys.stdout, fleet, demo=demo))
         asyncio.run(
-            serve(config, audit_file, http, fleet, console, console_dir=console_runtime_dir(env), demo=demo)
+            serve(
+                config,
+                audit_file,
+                http,
+                fleet,
+                console,
+                console_dir=console_runtime_dir(env),
+                demo=demo,
+                tasks=not options.no_tasks,
+            )
         )
     except ConfigError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -300,6 +309,7 @@ async def serve(
     *,
     console_dir: Path | None = None,
     demo: DemoSettings | None = None,
+    tasks: bool = True,
 ) -> None:
     """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
     Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names). With
@@ -347,7 +357,7 @@ async def serve(
 
             # The MCP listener first: when its port is taken, it is named and nothing else has started.
             sock = listen_http(http)
-            server = build_fleet_server(entries, effective, console_view=console_view)
+            server = build_fleet_server(entries, effective, console_view=console_view, tasks=tasks)
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
             # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
             # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as
@@ -360,7 +370,7 @@ async def serve(
                 signal.signal(signal.SIGTERM, previous)
                 sock.close()
             return
-        server = build_fleet_server(entries, effective, console_view=console_view)
+        server = build_fleet_server(entries, effective, console_view=console_view, tasks=tasks)
         _stop_on_signals([robot.session.client for robot in entries])
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.

@@ -12,6 +12,11 @@ call:
   out on the write stream as a ``mcp.shared.message.SessionMessage`` (the transport's message type, not
   exported), and the server's runner restores the sender's context variables from the read stream's
   ``last_context`` when it has one (``mcp.shared._stream_protocols``), which the wrapper passes through.
+* :func:`task_session`: a tool call run as a task (``server/tasks.py``) is the same call handed on through the
+  documented server middleware (``call_next(replace(ctx, ...))``) with a request context whose ``session``
+  is this stand-in: the request's own session in everything but ``report_progress``, which becomes the task's
+  status line. It relies on the tool handlers reaching progress only through ``ctx.session.report_progress``
+  (ours do: ``adapter.py``) and on the runner handing ``ctx.session`` on untouched.
 """
 
 from __future__ import annotations
@@ -23,7 +28,7 @@ import anyio
 from mcp.shared.message import SessionMessage
 from mcp.types import JSONRPCError
 
-__all__ = ["answering_stream"]
+__all__ = ["answering_stream", "task_session"]
 
 #: The reply for an unreadable line (the exception the transport handed on), or None to answer nothing.
 ReplyFor = Callable[[Exception], JSONRPCError | None]
@@ -74,3 +79,23 @@ class _Answering:
 
     async def __aexit__(self, *exc_info: object) -> None:
         await self.aclose()
+
+
+def task_session(inner: Any, on_progress: Callable[[str], None]) -> Any:
+    """*inner* (a request's ``ServerSession``) with its ``report_progress`` told to *on_progress* as one line
+    (the message, else "progress of total") instead of sent to the client."""
+    return _TaskSession(inner, on_progress)
+
+
+class _TaskSession:
+    def __init__(self, inner: Any, on_progress: Callable[[str], None]) -> None:
+        self._inner = inner
+        self._on_progress = on_progress
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._inner, name)
+
+    async def report_progress(
+        self, progress: float, total: float | None = None, message: str | None = None
+    ) -> None:
+        self._on_progress(message or (f"{progress:g} of {total:g}" if total else f"{progress:g}"))
