@@ -37,6 +37,8 @@ class Session:
     mcp: Client
     ros: RosbridgeClient
     progress: list[tuple[float, float | None, str | None]] = field(default_factory=list)
+    #: The robot session the server drives (for what the console does beside the MCP client: E-STOP).
+    robot: RobotSession | None = None
 
     async def call(self, name: str, arguments: dict[str, Any] | None = None) -> CallToolResult:
         """Call a tool, recording its progress notifications."""
@@ -123,7 +125,7 @@ async def open_session(
             async with Client(
                 server, mode=mode, elicitation_callback=elicitation_callback, extensions=list(extensions)
             ) as mcp:
-                ready.set_result(Session(mcp, ros))
+                ready.set_result(Session(mcp, ros, robot=robot))
                 await stop.wait()
         except BaseException as exc:
             if not ready.done():
