@@ -312,3 +312,24 @@ async def test_no_tasks_runs_every_call_to_its_end(nav2: SimulatedRobot) -> None
         )
     assert isinstance(result, CallToolResult)
     assert (result.structured_content or {})["succeeded"]
+
+
+async def test_a_stop_while_the_person_is_asked_voids_the_task(nav2: SimulatedRobot) -> None:
+    """stop_robot voids every call begun before it: a task waiting for the person's yes is one, so a yes given
+    after the stop sends nothing."""
+    policy = {**POLICY, "confirm": "always"}
+    before = len(nav2.world.goals)
+    async with tasks_session(nav2, policy=policy, elicitation_callback=Nobody()) as session:
+        task_id = await start_task(session.mcp, "navigate_to", {"goal": {"x": 2.5, "y": 7.5}})
+        asked = await poll(session.mcp, task_id, lambda shown: shown["status"] == "input_required")
+        await session.ok("stop_robot")
+        ((key, _),) = asked["inputRequests"].items()
+        answer = {key: {"action": "accept", "content": {"approve": True}}}
+        request = UpdateTaskRequest(params=UpdateParams(task_id=task_id, input_responses=answer))
+        await session.mcp.session.send_request(request, _ANY)
+        final = await poll(session.mcp, task_id, ended)
+    assert final["status"] == "completed", final
+    assert final["statusMessage"].startswith("Stopped by stop_robot")
+    assert CallToolResult.model_validate(final["result"]).is_error
+    assert "nothing" in result_text(final)
+    assert len(nav2.world.goals) == before

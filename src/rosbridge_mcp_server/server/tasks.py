@@ -119,6 +119,13 @@ class _Task:
     ended_at: float | None = None
     ended_wall: float | None = None
     cancelled_by: str | None = None
+    #: The send gates of the robots an acting task runs on, with their stop counts when it began.
+    gates: list[tuple[SendGate, Ticket]] = field(default_factory=list)
+
+    def stopped_by(self) -> str | None:
+        """Who stopped the robot since this task began (``stop_robot``, the console's E-STOP), or ``None``."""
+        stopped = [gate.stopped_by for gate, ticket in self.gates if gate.ticket().stops != ticket.stops]
+        return stopped[-1] if stopped else None
 
     def change(self, status: str, message: str | None) -> None:
         self.status, self.message, self.updated = status, message, time.time()
@@ -247,9 +254,9 @@ class TaskBoard:
         assert self._group is not None
         self._prune()
         task = _Task(uuid.uuid4().hex, name, _caller(), modern, message=f"{name} started")
+        task.gates = self._gates(name, arguments)
         self._tasks[task.task_id] = task
-        gates = self._gates(name, arguments)
-        self._group.start_soon(self._run, task, ctx, call_next, gates)
+        self._group.start_soon(self._run, task, ctx, call_next)
         _log.info("%s runs as task %s", name, task.task_id)
         shown = task.view(self._keep, modern=modern)
         return {"resultType": "task", **shown} if modern else {"task": shown}
@@ -268,7 +275,6 @@ class TaskBoard:
         task: _Task,
         ctx: ServerRequestContext[Any, Any],
         call_next: CallNext,
-        gates: list[tuple[SendGate, Ticket]],
     ) -> None:
         params: dict[str, Any] = dict(ctx.params or {})
         params.pop("task", None)
@@ -280,10 +286,18 @@ class TaskBoard:
                     asked = _input_requests(result)
                     if not asked:
                         break
-                    params = {**params, "inputResponses": await self._ask(task, asked)}
+                    answers = await self._ask(task, asked)
+                    if (who := task.stopped_by()) is not None:
+                        # A stop voids every call begun before it: a yes given after it sends nothing.
+                        task.result = _voided(who)
+                        task.end(
+                            "completed", f"Stopped by {who}: {task.tool} ended before anything was sent."
+                        )
+                        return
+                    params = {**params, "inputResponses": answers}
                 task.result = dict(result) if isinstance(result, Mapping) else {}
                 task.result.pop("resultType", None)
-                task.end("completed", _ended_text(task.tool, task.result, gates))
+                task.end("completed", _ended_text(task.tool, task.result, task.stopped_by()))
                 return
         except MCPError as exc:
             task.error = exc.error.model_dump(mode="json", exclude_none=True)
@@ -343,7 +357,13 @@ class TaskBoard:
         return task
 
     async def _get(self, ctx: ServerRequestContext[Any, Any], params: TaskIdParams) -> dict[str, Any]:
-        return self._find(ctx, params.task_id).view(self._keep, modern=_modern(ctx))
+        task = self._find(ctx, params.task_id)
+        if task.status == "input_required" and task.stopped_by() is not None:
+            # Stopped while the person was asked: the question is void; the run ends (and says so).
+            task.answered.set()
+            with anyio.move_on_after(CANCEL_WAIT):
+                await task.done.wait()
+        return task.view(self._keep, modern=_modern(ctx))
 
     async def _result(self, ctx: ServerRequestContext[Any, Any], params: TaskIdParams) -> dict[str, Any]:
         task = self._find(ctx, params.task_id)
@@ -428,7 +448,16 @@ def _input_requests(result: HandlerResult) -> dict[str, Any] | None:
     return None
 
 
-def _ended_text(tool: str, result: Mapping[str, Any], gates: list[tuple[SendGate, Ticket]]) -> str:
+def _voided(who: str) -> dict[str, Any]:
+    """The answer of a task a stop voided while the person was asked (the send gate's words)."""
+    text = (
+        f"Stopped: {who} stopped this call before it was sent, so nothing of it went to the robot. Do not "
+        "send it again unless the user asks you to."
+    )
+    return {"content": [{"type": "text", "text": text}], "isError": True}
+
+
+def _ended_text(tool: str, result: Mapping[str, Any], stopped: str | None) -> str:
     """The status line of an ended task: who stopped it, when a stop came during it; its answer's first
     line."""
     first = ""
@@ -437,9 +466,8 @@ def _ended_text(tool: str, result: Mapping[str, Any], gates: list[tuple[SendGate
             first = str(block.get("text", "")).split("\n", 1)[0]
             break
     first = first if len(first) <= 200 else first[:197] + "..."
-    stopped = [gate.stopped_by for gate, ticket in gates if gate.ticket().stops != ticket.stops]
-    if stopped:
-        return f"Stopped by {stopped[-1]}: {tool} ended. {first}".rstrip()
+    if stopped is not None:
+        return f"Stopped by {stopped}: {tool} ended. {first}".rstrip()
     failed = " (failed)" if result.get("isError") else ""
     return f"{tool} ended{failed}: {first}".rstrip(": ")
 
