@@ -29,8 +29,7 @@ import time
 import uuid
 from collections.abc import AsyncIterator, Mapping
 from contextlib import asynccontextmanager
-from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import anyio
@@ -42,6 +41,7 @@ from mcp.types import INTERNAL_ERROR, INVALID_PARAMS, MISSING_REQUIRED_CLIENT_CA
 
 from mcp import MCPError
 from rosbridge_mcp_server.server.sdk import task_session
+from rosbridge_mcp_server.server.task_state import TERMINAL, TaskState, ended_text, voided
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.gate import SendGate, Ticket
@@ -59,15 +59,12 @@ KEEP_SECONDS = 600.0
 MAX_RUNNING = 8
 #: Tasks kept at once (running or ended); the oldest ended one goes first.
 MAX_KEPT = 64
-#: How often a client is asked to poll.
-POLL_MS = 500
 #: How long tasks/cancel waits for the run to end (its goal cancelled, its stream's zero sent).
 CANCEL_WAIT = 10.0
 _MODERN_FROM = "2026-07-28"
 #: The tools whose run a stop ends (their goal or stream); reading tools go on after one.
 _ACTING = frozenset({"navigate_to", "publish_action", "publish_topic"})
 _LONG = ("navigate_to", "publish_action", "plot_topic", "publish_topic", "record", "subscribe_topic")
-_TERMINAL = frozenset({"completed", "failed", "cancelled"})
 #: What cancelling each tool's run stops on the robot (its own cancel path).
 _STOPS = {
     "navigate_to": "its navigation goal was cancelled on the robot",
@@ -99,69 +96,6 @@ class TaskUpdateParams(RequestParams):
     input_responses: dict[str, Any]
 
 
-@dataclass
-class _Task:
-    task_id: str
-    tool: str
-    caller: str | None
-    modern: bool
-    created: float = field(default_factory=time.time)
-    updated: float = field(default_factory=time.time)
-    status: str = "working"
-    message: str | None = None
-    result: dict[str, Any] | None = None
-    error: dict[str, Any] | None = None
-    input_requests: dict[str, Any] = field(default_factory=dict)
-    answers: dict[str, Any] = field(default_factory=dict)
-    answered: anyio.Event = field(default_factory=anyio.Event)
-    done: anyio.Event = field(default_factory=anyio.Event)
-    scope: anyio.CancelScope | None = None
-    ended_at: float | None = None
-    ended_wall: float | None = None
-    cancelled_by: str | None = None
-    #: The send gates of the robots an acting task runs on, with their stop counts when it began.
-    gates: list[tuple[SendGate, Ticket]] = field(default_factory=list)
-
-    def stopped_by(self) -> str | None:
-        """Who stopped the robot since this task began (``stop_robot``, the console's E-STOP), or ``None``."""
-        stopped = [gate.stopped_by for gate, ticket in self.gates if gate.ticket().stops != ticket.stops]
-        return stopped[-1] if stopped else None
-
-    def change(self, status: str, message: str | None) -> None:
-        self.status, self.message, self.updated = status, message, time.time()
-
-    def end(self, status: str, message: str | None) -> None:
-        self.change(status, message)
-        self.input_requests = {}
-        self.ended_at = time.monotonic()
-        self.ended_wall = time.time()
-        self.done.set()
-
-    def view(self, keep: float, *, modern: bool) -> dict[str, Any]:
-        """The task as ``tasks/get`` shows it in the caller's dialect."""
-        # Kept *keep* seconds after the end: while running, that many from now.
-        until = (self.ended_wall if self.ended_wall is not None else time.time()) + keep
-        ttl = int((until - self.created) * 1000)
-        shown: dict[str, Any] = {
-            "taskId": self.task_id,
-            "status": self.status,
-            "createdAt": _iso(self.created),
-            "lastUpdatedAt": _iso(self.updated),
-        }
-        if self.message:
-            shown["statusMessage"] = self.message
-        if not modern:
-            return {**shown, "ttl": ttl, "pollInterval": POLL_MS}
-        shown.update(ttlMs=ttl, pollIntervalMs=POLL_MS)
-        if self.status == "completed" and self.result is not None:
-            shown["result"] = self.result
-        elif self.status == "failed" and self.error is not None:
-            shown["error"] = self.error
-        elif self.status == "input_required":
-            shown["inputRequests"] = self.input_requests
-        return shown
-
-
 class TaskBoard:
     """The tasks of one server: started by :meth:`middleware`, run in the group :meth:`running` holds open
     (the server's lifespan), answered by the ``tasks/*`` methods :meth:`register` adds."""
@@ -178,7 +112,7 @@ class TaskBoard:
         self._keep = keep_seconds
         self._max_running = max_running
         self._max_kept = max_kept
-        self._tasks: dict[str, _Task] = {}
+        self._tasks: dict[str, TaskState] = {}
         self._group: anyio.abc.TaskGroup | None = None
 
     def register(self, server: Server[Any]) -> None:
@@ -201,7 +135,7 @@ class TaskBoard:
             finally:
                 self._group = None
                 for task in self._tasks.values():
-                    if task.status not in _TERMINAL:
+                    if task.status not in TERMINAL:
                         task.cancelled_by = "the server shut down"
                 group.cancel_scope.cancel()
 
@@ -253,7 +187,7 @@ class TaskBoard:
     ) -> dict[str, Any]:
         assert self._group is not None
         self._prune()
-        task = _Task(uuid.uuid4().hex, name, _caller(), modern, message=f"{name} started")
+        task = TaskState(uuid.uuid4().hex, name, _caller(), modern, message=f"{name} started")
         task.gates = self._gates(name, arguments)
         self._tasks[task.task_id] = task
         self._group.start_soon(self._run, task, ctx, call_next)
@@ -272,7 +206,7 @@ class TaskBoard:
 
     async def _run(
         self,
-        task: _Task,
+        task: TaskState,
         ctx: ServerRequestContext[Any, Any],
         call_next: CallNext,
     ) -> None:
@@ -289,7 +223,7 @@ class TaskBoard:
                     answers = await self._ask(task, asked)
                     if (who := task.stopped_by()) is not None:
                         # A stop voids every call begun before it: a yes given after it sends nothing.
-                        task.result = _voided(who)
+                        task.result = voided(who)
                         task.end(
                             "completed", f"Stopped by {who}: {task.tool} ended before anything was sent."
                         )
@@ -297,7 +231,7 @@ class TaskBoard:
                     params = {**params, "inputResponses": answers}
                 task.result = dict(result) if isinstance(result, Mapping) else {}
                 task.result.pop("resultType", None)
-                task.end("completed", _ended_text(task.tool, task.result, task.stopped_by()))
+                task.end("completed", ended_text(task.tool, task.result, task.stopped_by()))
                 return
         except MCPError as exc:
             task.error = exc.error.model_dump(mode="json", exclude_none=True)
@@ -309,17 +243,17 @@ class TaskBoard:
             task.end("failed", task.error["message"])
             return
         finally:
-            if task.status not in _TERMINAL:
+            if task.status not in TERMINAL:
                 by = task.cancelled_by or "the server shut down"
                 what = _STOPS.get(task.tool, "its reading ended")
                 task.end("cancelled", f"Cancelled by {by}: {task.tool} stopped; {what}.")
         # Left the scope without an answer: tasks/cancel cancelled it (the finally above said so).
 
-    def _progress(self, task: _Task, text: str) -> None:
+    def _progress(self, task: TaskState, text: str) -> None:
         if task.status == "working":
             task.change("working", f"{task.tool}: {text}")
 
-    async def _ask(self, task: _Task, asked: dict[str, Any]) -> dict[str, Any]:
+    async def _ask(self, task: TaskState, asked: dict[str, Any]) -> dict[str, Any]:
         """Wait for the person's answers to *asked* through ``tasks/update``; the answers so far."""
         task.input_requests = asked
         task.answered = anyio.Event()
@@ -336,7 +270,7 @@ class TaskBoard:
 
     # --- the tasks/* methods -------------------------------------------------------------------------
 
-    def _find(self, ctx: ServerRequestContext[Any, Any], task_id: str) -> _Task:
+    def _find(self, ctx: ServerRequestContext[Any, Any], task_id: str) -> TaskState:
         if _modern(ctx) and not _declares_tasks(ctx):
             raise MCPError(
                 code=MISSING_REQUIRED_CLIENT_CAPABILITY,
@@ -380,7 +314,7 @@ class TaskBoard:
     async def _cancel(self, ctx: ServerRequestContext[Any, Any], params: TaskIdParams) -> dict[str, Any]:
         task = self._find(ctx, params.task_id)
         modern = _modern(ctx)
-        if task.status in _TERMINAL:
+        if task.status in TERMINAL:
             if modern:
                 return {}
             raise MCPError(
@@ -405,8 +339,8 @@ class TaskBoard:
 
     # --- bounds --------------------------------------------------------------------------------------
 
-    def _running(self) -> list[_Task]:
-        return [task for task in self._tasks.values() if task.status not in _TERMINAL]
+    def _running(self) -> list[TaskState]:
+        return [task for task in self._tasks.values() if task.status not in TERMINAL]
 
     def _prune(self) -> None:
         now = time.monotonic()
@@ -446,31 +380,3 @@ def _input_requests(result: HandlerResult) -> dict[str, Any] | None:
         asked = result.get("inputRequests")
         return dict(asked) if isinstance(asked, Mapping) else None
     return None
-
-
-def _voided(who: str) -> dict[str, Any]:
-    """The answer of a task a stop voided while the person was asked (the send gate's words)."""
-    text = (
-        f"Stopped: {who} stopped this call before it was sent, so nothing of it went to the robot. Do not "
-        "send it again unless the user asks you to."
-    )
-    return {"content": [{"type": "text", "text": text}], "isError": True}
-
-
-def _ended_text(tool: str, result: Mapping[str, Any], stopped: str | None) -> str:
-    """The status line of an ended task: who stopped it, when a stop came during it; its answer's first
-    line."""
-    first = ""
-    for block in result.get("content", []):
-        if isinstance(block, Mapping) and block.get("type") == "text":
-            first = str(block.get("text", "")).split("\n", 1)[0]
-            break
-    first = first if len(first) <= 200 else first[:197] + "..."
-    if stopped is not None:
-        return f"Stopped by {stopped}: {tool} ended. {first}".rstrip()
-    failed = " (failed)" if result.get("isError") else ""
-    return f"{tool} ended{failed}: {first}".rstrip(": ")
-
-
-def _iso(stamp: float) -> str:
-    return datetime.fromtimestamp(stamp, UTC).isoformat().replace("+00:00", "Z")
