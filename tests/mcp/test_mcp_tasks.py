@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import io
 import json
 import math
 from collections.abc import AsyncIterator, Awaitable, Callable, Iterable
@@ -38,7 +39,10 @@ from mcp_harness import Session, open_session
 from pydantic import ConfigDict, TypeAdapter
 
 from mcp import Client, MCPError
-from rosbridge_mcp_server.safety import emergency_stop, parse_policy
+from rosbridge_mcp_server.console.hub import ConsoleHub, RobotView
+from rosbridge_mcp_server.safety import Audit, Operator, emergency_stop, parse_policy
+from rosbridge_mcp_server.server.fleet import Fleet
+from rosbridge_mcp_server.server.tasks import TaskBoard
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
@@ -333,3 +337,26 @@ async def test_a_stop_while_the_person_is_asked_voids_the_task(nav2: SimulatedRo
     assert CallToolResult.model_validate(final["result"]).is_error
     assert "nothing" in result_text(final)
     assert len(nav2.world.goals) == before
+
+
+async def test_the_console_lists_running_tasks(nav2: SimulatedRobot) -> None:
+    """The operator console's snapshot has a row for each running task: its tool, status and line."""
+    boards: list[TaskBoard] = []
+
+    def board(fleet: Fleet) -> TaskBoard:
+        boards.append(TaskBoard(fleet))
+        return boards[-1]
+
+    async with tasks_session(nav2, tasks=board) as session:
+        assert session.robot is not None
+        hub = ConsoleHub([RobotView("robot", session.robot, Audit(io.StringIO()))], Operator())
+        hub.tasks = boards[0].running_tasks
+        assert hub.snapshot()["tasks"] == []
+        task_id = await start_task(session.mcp, "navigate_to", {"goal": {"x": 1.5, "y": 9.0}})
+        await poll(session.mcp, task_id, lambda shown: "m to go" in shown.get("statusMessage", ""))
+        (row,) = hub.snapshot()["tasks"]
+        await cancel_task(session.mcp, task_id)
+        after = hub.snapshot()["tasks"]
+    assert (row["id"], row["tool"], row["status"]) == (task_id, "navigate_to", "working")
+    assert "m to go" in row["message"]
+    assert after == []

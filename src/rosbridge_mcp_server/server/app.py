@@ -100,7 +100,7 @@ def build_server(
     config: Config,
     *,
     console_view: Callable[[], dict[str, Any]] | None = None,
-    tasks: bool = True,
+    tasks: bool | TaskBoard = True,
 ) -> Server[None]:
     """A server with every tool, driving one robot (its client started and closed by the server's
     lifespan); see :func:`build_fleet_server`."""
@@ -112,7 +112,7 @@ def build_fleet_server(
     config: Config,
     *,
     console_view: Callable[[], dict[str, Any]] | None = None,
-    tasks: bool = True,
+    tasks: bool | TaskBoard = True,
 ) -> Server[None]:
     """The SDK's low-level ``Server`` driving *robots* (each client started and closed by its lifespan).
 
@@ -124,10 +124,11 @@ def build_fleet_server(
     which the operator console's E-STOP shares. With *console_view* (the console's snapshot) the server also
     offers the console's read-only view as an MCP App: ``show_console`` and its ``ui://`` resource
     (``server/console_app.py``). Authentication is the transport's (``http.py``). With *tasks* (unless
-    ``--no-tasks``) long work runs as an MCP task for a client that can follow one (``server/tasks.py``).
+    ``--no-tasks``) long work runs as an MCP task for a client that can follow one (``server/tasks.py``); a
+    :class:`TaskBoard` given is the one used (the console lists its tasks).
     """
     fleet = Fleet(robots)
-    board = TaskBoard(fleet) if tasks else None
+    board = tasks if isinstance(tasks, TaskBoard) else TaskBoard(fleet) if tasks else None
     policy = config.policy
     # Read-only when the server is, or when every robot is (a fleet file may make each read-only).
     read_only = policy.read_only or not fleet.acting_names

@@ -139,9 +139,20 @@ class TaskBoard:
                         task.cancelled_by = "the server shut down"
                 group.cancel_scope.cancel()
 
-    def summary(self) -> list[str]:
-        """The running tasks, a line each (the console's list)."""
-        return [f"{t.tool}: {t.status}, {t.message or ''}".rstrip(", ") for t in self._running()]
+    def running_tasks(self) -> list[dict[str, Any]]:
+        """The tasks running now, a row each (the operator console's list): tool, status, line, caller."""
+        now = time.time()
+        return [
+            {
+                "id": task.task_id,
+                "tool": task.tool,
+                "status": task.status,
+                "message": task.message,
+                "caller": task.caller,
+                "seconds": round(now - task.created, 1),
+            }
+            for task in self._running()
+        ]
 
     # --- starting ------------------------------------------------------------------------------------
 
