@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import Any
 
 from test_e2e_stdio import WAIT, StdioServer, _finish, _start
@@ -110,3 +111,56 @@ async def test_the_servers_shutdown_cancels_a_running_task_on_the_robot(make_sim
     await robot.wait_for(lambda w: goal.finished, WAIT)
     assert goal.cancel_requested
     assert goal.status == 5  # CANCELED
+
+
+async def test_a_confirmation_asked_mid_task_shows_as_input_required(
+    make_sim: MakeSim, tmp_path: Path
+) -> None:
+    """2025-11-25: the question goes out as ``elicitation/create`` while the task says ``input_required``
+    with the question; the person's yes lets the goal go and the task goes on to its end."""
+    robot = await make_sim(dialect="ros2", action_step=0.05)
+    policy = tmp_path / "policy.toml"
+    policy.write_text('confirm = "always"\n')
+    server = await _start("--url", robot.url, "--policy", str(policy))
+    kept: list[dict[str, Any]] = []
+    try:
+        await server.request(
+            "initialize",
+            {
+                "protocolVersion": "2025-11-25",
+                "capabilities": {"tasks": {"cancel": {}}, "elicitation": {"form": {}}},
+                "clientInfo": {"name": "e2e-tasks", "version": "0"},
+            },
+        )
+        await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
+        arguments = {**FIBONACCI, "goal": {"order": 5}, "timeout": 60}
+        await server.send(
+            {
+                "jsonrpc": "2.0",
+                "id": 50,
+                "method": "tools/call",
+                "params": {"name": "publish_action", "arguments": arguments, "task": {"ttl": 60000}},
+            }
+        )
+        # The task's answer and the question come in either order.
+        while not (_asked(kept) and any(m.get("id") == 50 for m in kept)):
+            kept.append(await server.read_message())
+        task_id = next(m for m in kept if m.get("id") == 50 and "result" in m)["result"]["task"]["taskId"]
+        question = _asked(kept)
+        assert question is not None
+        waiting = (await server.request("tasks/get", {"taskId": task_id}))["result"]
+        assert robot.world.goals == {}  # nothing sent while the person is asked
+        yes = {"action": "accept", "content": {"approve": True}}
+        await server.send({"jsonrpc": "2.0", "id": question["id"], "result": yes})
+        answer = (await server.request("tasks/result", {"taskId": task_id}))["result"]
+    finally:
+        _rest, stderr, code = await _finish(server)
+    assert code == 0, stderr.decode()
+    assert waiting["status"] == "input_required"
+    assert waiting["statusMessage"] == question["params"]["message"]
+    assert "publish_action" in waiting["statusMessage"]
+    assert answer["structuredContent"]["status"] == "succeeded", answer
+
+
+def _asked(messages: list[dict[str, Any]]) -> dict[str, Any] | None:
+    return next((m for m in messages if m.get("method") == "elicitation/create"), None)

@@ -15,8 +15,10 @@ call:
 * :func:`task_session`: a tool call run as a task (``server/tasks.py``) is the same call handed on through the
   documented server middleware (``call_next(replace(ctx, ...))``) with a request context whose ``session``
   is this stand-in: the request's own session in everything but ``report_progress``, which becomes the task's
-  status line. It relies on the tool handlers reaching progress only through ``ctx.session.report_progress``
-  (ours do: ``adapter.py``) and on the runner handing ``ctx.session`` on untouched.
+  status line, and ``elicit_form`` / ``elicit_url``, during which the task waits for the person, sent on the
+  session's own channel (``related_request_id=None``: the call's request was answered with the task). It
+  relies on the tool handlers reaching progress and the person only through ``ctx.session`` (ours do:
+  ``adapter.py``) and on the runner handing ``ctx.session`` on untouched.
 """
 
 from __future__ import annotations
@@ -81,16 +83,22 @@ class _Answering:
         await self.aclose()
 
 
-def task_session(inner: Any, on_progress: Callable[[str], None]) -> Any:
+def task_session(
+    inner: Any, on_progress: Callable[[str], None], on_asking: Callable[[str | None], None] | None = None
+) -> Any:
     """*inner* (a request's ``ServerSession``) with its ``report_progress`` told to *on_progress* as one line
-    (the message, else "progress of total") instead of sent to the client."""
-    return _TaskSession(inner, on_progress)
+    (the message, else "progress of total") instead of sent to the client; *on_asking* is told the question
+    when an elicitation is sent, and ``None`` when its answer came (or it failed)."""
+    return _TaskSession(inner, on_progress, on_asking or (lambda question: None))
 
 
 class _TaskSession:
-    def __init__(self, inner: Any, on_progress: Callable[[str], None]) -> None:
+    def __init__(
+        self, inner: Any, on_progress: Callable[[str], None], on_asking: Callable[[str | None], None]
+    ) -> None:
         self._inner = inner
         self._on_progress = on_progress
+        self._on_asking = on_asking
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._inner, name)
@@ -99,3 +107,23 @@ class _TaskSession:
         self, progress: float, total: float | None = None, message: str | None = None
     ) -> None:
         self._on_progress(message or (f"{progress:g} of {total:g}" if total else f"{progress:g}"))
+
+    async def elicit_form(self, message: str, *args: Any, **kwargs: Any) -> Any:
+        self._on_asking(message)
+        try:
+            return await self._inner.elicit_form(message, *args, **_standalone(kwargs))
+        finally:
+            self._on_asking(None)
+
+    async def elicit_url(self, message: str, *args: Any, **kwargs: Any) -> Any:
+        self._on_asking(message)
+        try:
+            return await self._inner.elicit_url(message, *args, **_standalone(kwargs))
+        finally:
+            self._on_asking(None)
+
+
+def _standalone(kwargs: dict[str, Any]) -> dict[str, Any]:
+    """A task's question goes on the session's own channel: the request it came with was answered long ago
+    (with the task), so its back-channel is gone (``NoBackChannelError``)."""
+    return {**kwargs, "related_request_id": None}

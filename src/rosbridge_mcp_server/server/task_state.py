@@ -51,6 +51,15 @@ class TaskState:
         stopped = [gate.stopped_by for gate, ticket in self.gates if gate.ticket().stops != ticket.stops]
         return stopped[-1] if stopped else None
 
+    def asking(self, question: str | None) -> None:
+        """A question sent to the person mid-run (2025-11-25) and, with ``None``, its answer come."""
+        if self.status in TERMINAL:
+            return
+        if question is not None:
+            self.change("input_required", question)
+        else:
+            self.change("working", f"{self.tool}: answered, going on")
+
     def change(self, status: str, message: str | None) -> None:
         self.status, self.message, self.updated = status, message, time.time()
 

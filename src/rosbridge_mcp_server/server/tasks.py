@@ -223,7 +223,8 @@ class TaskBoard:
     ) -> None:
         params: dict[str, Any] = dict(ctx.params or {})
         params.pop("task", None)
-        call = replace(ctx, session=task_session(ctx.session, lambda text: self._progress(task, text)))
+        session = task_session(ctx.session, lambda text: self._progress(task, text), task.asking)
+        call = replace(ctx, session=session)
         try:
             with anyio.CancelScope() as task.scope:
                 while True:
