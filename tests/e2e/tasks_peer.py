@@ -1,7 +1,8 @@
 """Run by ``test_e2e_tasks_peer.py`` in a separate virtual environment that has FastMCP's tasks client
 (``fastmcp-tasks``), which is no dependency of ours: it drives our server over stdio as a tasks host would.
 
-Usage: ``python tasks_peer.py SERVER_PYTHON ROBOT_URL``. Prints one JSON object: what it saw.
+Usage: ``python tasks_peer.py stdio SERVER_PYTHON ROBOT_URL`` (it starts the server) or
+``python tasks_peer.py http MCP_URL TOKEN``. Prints one JSON object: what it saw.
 """
 
 from __future__ import annotations
@@ -12,14 +13,19 @@ import sys
 from typing import Any
 
 from fastmcp import Client
-from fastmcp.client.transports import StdioTransport
+from fastmcp.client.transports import StdioTransport, StreamableHttpTransport
 from fastmcp_tasks.client import call_tool_task
 
 TERMINAL = ("completed", "failed", "cancelled")
 
 
-async def main(python: str, url: str) -> dict[str, Any]:
-    transport = StdioTransport(python, ["-m", "rosbridge_mcp_server", "--url", url, "--log-level", "WARNING"])
+async def main(how: str, first: str, second: str) -> dict[str, Any]:
+    transport: Any
+    if how == "http":
+        transport = StreamableHttpTransport(first, auth=second)
+    else:
+        server = ["-m", "rosbridge_mcp_server", "--url", second, "--log-level", "WARNING"]
+        transport = StdioTransport(first, server)
     seen: dict[str, Any] = {"messages": []}
     async with Client(transport) as client:
         # A drive as a task, polled to its end by hand, then its answer fetched.
@@ -49,4 +55,4 @@ async def main(python: str, url: str) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    print(json.dumps(asyncio.run(main(sys.argv[1], sys.argv[2]))))
+    print(json.dumps(asyncio.run(main(sys.argv[1], sys.argv[2], sys.argv[3]))))
