@@ -15,6 +15,7 @@ import io
 import json
 import math
 from collections.abc import AsyncIterator, Awaitable, Callable, Iterable
+from pathlib import Path
 from typing import Any, Literal
 
 import pytest
@@ -360,3 +361,41 @@ async def test_the_console_lists_running_tasks(nav2: SimulatedRobot) -> None:
     assert (row["id"], row["tool"], row["status"]) == (task_id, "navigate_to", "working")
     assert "m to go" in row["message"]
     assert after == []
+
+
+async def test_tasks_cancel_ends_a_velocity_stream_with_a_zero(sim_ros2: SimulatedRobot) -> None:
+    """A publish_topic stream as a task: tasks/cancel ends it, the last command the robot got is the zero,
+    and the task says so."""
+    cmd_vel = "/turtle1/cmd_vel"
+    twist = {"linear": {"x": 0.3}, "angular": {"z": 0.1}}
+    arguments = {
+        "topic": cmd_vel,
+        "message_type": "geometry_msgs/msg/Twist",
+        "message": twist,
+        "rate_hz": 10,
+        "duration": 30,
+    }
+    async with tasks_session(sim_ros2, policy={}) as session:
+        task_id = await start_task(session.mcp, "publish_topic", arguments)
+        await sim_ros2.wait_for(lambda world: len(world.published.get(cmd_vel, [])) >= 3, timeout=10.0)
+        await cancel_task(session.mcp, task_id)
+        shown = await poll(session.mcp, task_id, ended)
+    last = sim_ros2.world.published[cmd_vel][-1].msg
+    assert shown["status"] == "cancelled"
+    assert "its stream ended" in shown["statusMessage"]
+    assert last["linear"]["x"] == 0.0
+    assert last["angular"]["z"] == 0.0
+    assert len(sim_ros2.world.published[cmd_vel]) < 100  # ended long before its 30 s
+
+
+async def test_a_recording_as_a_task_shows_messages_and_bytes(
+    sim_ros2: SimulatedRobot, tmp_path: Path
+) -> None:
+    async with tasks_session(sim_ros2, policy={}, record_dir=str(tmp_path)) as session:
+        task_id = await start_task(session.mcp, "record", {"topics": ["/turtle1/pose"], "duration": 2})
+        seen: list[dict[str, Any]] = []
+        final = await poll(session.mcp, task_id, ended, seen)
+    assert final["status"] == "completed", final
+    assert any("messages" in shown.get("statusMessage", "") for shown in seen), seen
+    data = CallToolResult.model_validate(final["result"]).structured_content or {}
+    assert (tmp_path / data["file"]).exists()
