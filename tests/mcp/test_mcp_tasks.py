@@ -399,3 +399,28 @@ async def test_a_recording_as_a_task_shows_messages_and_bytes(
     assert any("messages" in shown.get("statusMessage", "") for shown in seen), seen
     data = CallToolResult.model_validate(final["result"]).structured_content or {}
     assert (tmp_path / data["file"]).exists()
+
+
+async def test_beyond_the_running_bound_a_long_call_runs_as_a_plain_call(nav2: SimulatedRobot) -> None:
+    def board(fleet: Fleet) -> TaskBoard:
+        return TaskBoard(fleet, max_running=1)
+
+    async with tasks_session(nav2, tasks=board) as session:
+        task_id = await start_task(session.mcp, "navigate_to", {"goal": {"x": 1.5, "y": 9.0}})
+        second = await session.mcp.session.call_tool(
+            "subscribe_topic", {"topic": "/odom", "duration": 0.5}, allow_claimed=True
+        )
+        await cancel_task(session.mcp, task_id)
+    assert isinstance(second, CallToolResult)
+    assert not second.is_error
+
+
+async def test_an_answer_is_dropped_once_its_keeping_time_is_over(nav2: SimulatedRobot) -> None:
+    def board(fleet: Fleet) -> TaskBoard:
+        return TaskBoard(fleet, keep_seconds=0.0)
+
+    async with tasks_session(nav2, tasks=board) as session:
+        task_id = await start_task(session.mcp, "subscribe_topic", {"topic": "/odom", "duration": 0.3})
+        with pytest.raises(MCPError, match="Task not found") as gone:
+            await poll(session.mcp, task_id, lambda shown: False)
+    assert "kept 0 minutes after its task ends" in str(gone.value)

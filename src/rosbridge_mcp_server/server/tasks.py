@@ -10,7 +10,8 @@ run in the call:
   answer to a confirmation (``input_required`` with the same question and the same matching as a 2026-07-28
   call's); ``tasks/cancel`` cancels the run.
 * **2025-11-25** (tasks as an experimental feature): the request carries ``params.task``; ``tasks/get``,
-  ``tasks/result`` (waits for the end) and ``tasks/cancel``; a confirmation is asked as in a plain call.
+  ``tasks/result`` (waits for the end) and ``tasks/cancel``; a confirmation goes out as ``elicitation/create``
+  on the session's channel while the task shows ``input_required`` with the question.
 
 Long work is ``navigate_to``, ``publish_action``, ``record`` (not its ``stop``), ``plot_topic``, and
 ``publish_topic`` / ``subscribe_topic`` given a ``duration``. Any other call, a client that cannot follow a
