@@ -51,6 +51,8 @@ What is measured:
     raw subscriber receives, non-zero commands after the answer) and with a ``navigate_to`` goal running on
     the Nav2 world (to its answer, to ``/odom`` standing still); the bridge killed and restarted on its port
     (to ``list_topics`` succeeding, and no command replayed).
+17. MCP tasks (``--only tasks``): ``tasks/get`` on a running task (a ``subscribe_topic`` with a duration,
+    started by a 2026-07-28 client advertising the tasks extension) against the no-op tool, interleaved.
 
 The package: ``harness`` (what every item shares), one module per item, ``run`` (the order, the table, the
 command line), ``internals`` (the only module that imports the product's internals, and why), ``servers/``

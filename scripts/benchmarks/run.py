@@ -51,6 +51,7 @@ from benchmarks.recording import measure_recording
 from benchmarks.startup import measure_startup
 from benchmarks.stops import measure_stops
 from benchmarks.streamable_http import measure_http
+from benchmarks.tasks import measure_tasks
 from benchmarks.throughput import measure_throughput
 from benchmarks.view import measure_view
 from benchmarks.watch import measure_watch
@@ -74,6 +75,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("recording", "14", "recording", measure_recording, 300.0),
     ("edge", "15", "the server alone over the floor (issue 26 item 8)", measure_edge, 300.0),
     ("stops", "16", "stop_robot and reconnects, as the robot sees them", measure_stops, 240.0),
+    ("tasks", "17", "tasks/get on a running MCP task", measure_tasks, 120.0),
 ]
 
 

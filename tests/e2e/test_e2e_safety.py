@@ -120,7 +120,7 @@ async def test_a_policy_over_stdio_caps_confirms_stops_and_audits(tmp_path: Path
     assert allowed["isError"] is False
     [question] = client.questions
     assert "Tool: publish_topic" in question
-    assert '"x": 0.3' in question
+    assert "  linear.x: 0.3\n" in question
     assert stopped["isError"] is False
     assert received == [0.3, 0.0]
     audit_lines = [line for line in stderr.splitlines() if "rosbridge_mcp_server.audit:" in line]

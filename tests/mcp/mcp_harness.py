@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import re
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -24,7 +24,9 @@ from rosbridge_mcp_server.robot.seam import ALLOW_ALL, Guard
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import Policy, PolicyGuard
-from rosbridge_mcp_server.server import build_server
+from rosbridge_mcp_server.server import Robot, build_server
+from rosbridge_mcp_server.server.fleet import Fleet
+from rosbridge_mcp_server.server.tasks import TaskBoard
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CONNECT_WAIT = 5.0
@@ -37,6 +39,8 @@ class Session:
     mcp: Client
     ros: RosbridgeClient
     progress: list[tuple[float, float | None, str | None]] = field(default_factory=list)
+    #: The robot session the server drives (for what the console does beside the MCP client: E-STOP).
+    robot: RobotSession | None = None
 
     async def call(self, name: str, arguments: dict[str, Any] | None = None) -> CallToolResult:
         """Call a tool, recording its progress notifications."""
@@ -82,12 +86,16 @@ async def open_session(
     policy: Policy | None = None,
     tools: tuple[str, ...] | None = None,
     record_dir: str | None = None,
+    extensions: tuple[Any, ...] = (),
+    tasks: bool | Callable[[Fleet], TaskBoard] = True,
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
 
     ``mode="auto"`` speaks the 2026-07-28 protocol instead (in-process: direct dispatch, no JSON-RPC framing).
     With ``policy`` the server runs under that safety policy (``guard=None``: the server's own PolicyGuard);
-    ``tools`` picks the tools as ``--tools`` does; ``record_dir`` is ``--record-dir``.
+    ``tools`` picks the tools as ``--tools`` does; ``record_dir`` is ``--record-dir``; ``extensions`` are the
+    client's (e.g. the tasks extension's ad); ``tasks=False`` is ``--no-tasks``, a function makes the server's
+    task board (to watch it).
 
     The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
     pytest-asyncio sets a fixture up and tears it down in different tasks.
@@ -116,9 +124,12 @@ async def open_session(
     async def host() -> None:
         try:
             robot = guarded(ros, config) if guard is None else RobotSession(ros, guard)
-            server = build_server(robot, config)
-            async with Client(server, mode=mode, elicitation_callback=elicitation_callback) as mcp:
-                ready.set_result(Session(mcp, ros))
+            board = tasks(Fleet([Robot("robot", config, robot)])) if callable(tasks) else tasks
+            server = build_server(robot, config, tasks=board)
+            async with Client(
+                server, mode=mode, elicitation_callback=elicitation_callback, extensions=list(extensions)
+            ) as mcp:
+                ready.set_result(Session(mcp, ros, robot=robot))
                 await stop.wait()
         except BaseException as exc:
             if not ready.done():

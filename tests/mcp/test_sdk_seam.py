@@ -9,18 +9,21 @@ from __future__ import annotations
 import ast
 import contextlib
 import contextvars
+import dataclasses
 from pathlib import Path
 from typing import Any
 
 import anyio
+import pytest
 from mcp.client.session import ClientSession
 from mcp.server import Server
 from mcp.server.stdio import stdio_server
 from mcp.shared.memory import create_client_server_memory_streams
-from mcp.types import INVALID_REQUEST, JSONRPCError, ListToolsResult, Tool
+from mcp.types import INVALID_REQUEST, CallToolResult, JSONRPCError, ListToolsResult, TextContent, Tool
 
 import rosbridge_mcp_server
-from rosbridge_mcp_server.server.sdk import answering_stream
+from mcp import Client
+from rosbridge_mcp_server.server.sdk import answering_stream, task_session
 from rosbridge_mcp_server.server.stdio import reply_for_unreadable
 
 SRC = Path(rosbridge_mcp_server.__file__).parent
@@ -138,3 +141,44 @@ def test_no_module_but_sdk_py_uses_an_sdk_private_name() -> None:
             }:
                 offenders.append(f"{path.relative_to(SRC)}:{node.lineno}: .{node.attr}")
     assert offenders == []
+
+
+@pytest.mark.parametrize("mode", ["legacy", "auto"])
+async def test_a_call_handed_on_with_the_task_session_reports_progress_to_the_task_alone(mode: str) -> None:
+    """What ``server/tasks.py`` relies on: server middleware may hand a ``tools/call`` on with a request
+    context whose session is :func:`task_session`'s; the handler's ``report_progress`` then reaches the task's
+    line and not the client, everything else of the session still works (the client's capabilities), and
+    ``call_next`` gives the call's answer in its wire form."""
+    lines: list[str] = []
+    wire: list[Any] = []
+
+    async def call_tool(ctx: Any, params: Any) -> CallToolResult:
+        await ctx.session.report_progress(1, 4, "one of four")
+        await ctx.session.report_progress(2, 4)
+        assert ctx.session.client_capabilities is not None
+        return CallToolResult(content=[TextContent(type="text", text="done")])
+
+    async def middleware(ctx: Any, call_next: Any) -> Any:
+        if ctx.method != "tools/call":
+            return await call_next(ctx)
+        answer = await call_next(dataclasses.replace(ctx, session=task_session(ctx.session, lines.append)))
+        wire.append(answer)
+        return answer
+
+    async def list_tools(ctx: Any, params: Any) -> ListToolsResult:
+        return ListToolsResult(tools=[Tool(name="noop", input_schema={"type": "object"})])
+
+    server: Server[Any] = Server("seam", on_list_tools=list_tools, on_call_tool=call_tool)
+    server.middleware.append(middleware)
+    progress: list[Any] = []
+
+    async def on_progress(*args: Any) -> None:
+        progress.append(args)
+
+    async with Client(server, mode=mode) as client:
+        result = await client.call_tool("noop", {}, progress_callback=on_progress)
+    assert lines == ["one of four", "2 of 4"]
+    assert progress == []
+    assert isinstance(wire[0], dict)
+    assert wire[0]["content"] == [{"type": "text", "text": "done"}]
+    assert isinstance(result.content[0], TextContent)

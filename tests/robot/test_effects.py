@@ -137,3 +137,78 @@ def test_a_parameter_name_is_made_the_one_the_robot_acts_on(
 def test_a_name_no_parameter_can_have_is_refused(written: str, version: int, fragment: str) -> None:
     with pytest.raises(NotSentError, match=fragment):
         parameter_name(written, version)
+
+
+# --- issue 35: effects by type as well as by name --------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("topic", "type_name", "kind"),
+    [
+        ("/joy", "sensor_msgs/msg/Joy", "motion"),
+        ("/robot1/teleop/joy_in", "sensor_msgs/Joy", "motion"),
+        ("/tf", "tf2_msgs/msg/TFMessage", "fence"),
+        ("/robot1/tf", "tf2_msgs/TFMessage", "fence"),
+        ("/robot1/tf_static", "tf2_msgs/msg/TFMessage", "fence"),
+        ("/my_transforms", "tf2_msgs/msg/TFMessage", "fence"),
+        ("/tf", "std_msgs/msg/String", "fence"),
+        ("/initialpose", "geometry_msgs/msg/PoseWithCovarianceStamped", "fence"),
+        ("/relocalise_here", "geometry_msgs/PoseWithCovarianceStamped", "fence"),
+        ("/map", "nav_msgs/msg/OccupancyGrid", "fence"),
+        ("/keepout_filter_mask", "nav_msgs/msg/OccupancyGrid", "fence"),
+        ("/robot2/speed_filter_mask", "std_msgs/msg/String", "fence"),
+        ("/costmap_filter_info", "nav2_msgs/msg/CostmapFilterInfo", "fence"),
+        ("/my_filter_info", "nav2_msgs/msg/CostmapFilterInfo", "fence"),
+        ("/speed_limit", "nav2_msgs/msg/SpeedLimit", "fence"),
+        ("/limits", "nav2_msgs/SpeedLimit", "fence"),
+        ("/odom", "nav_msgs/msg/Odometry", "fence"),
+        ("/scan", "sensor_msgs/msg/LaserScan", "fence"),
+        ("/camera/points", "sensor_msgs/msg/PointCloud2", "fence"),
+        ("/imu/data", "sensor_msgs/Imu", "fence"),
+        ("/local_costmap/footprint", "geometry_msgs/msg/Polygon", "fence"),
+    ],
+)
+def test_what_moves_the_robot_or_the_fence_is_known_by_type_and_by_name(
+    topic: str, type_name: str, kind: str
+) -> None:
+    (effect,) = topic_effects(topic, type_name)
+    assert (effect.kind, effect.name) == (kind, topic)
+    assert effect.why  # said in words to the person and the audit
+
+
+@pytest.mark.parametrize(
+    ("service", "type_name", "kind"),
+    [
+        ("/reset", "std_srvs/srv/Empty", "motion"),
+        ("/gazebo/reset_world", "std_srvs/Empty", "motion"),
+        ("/reset_simulation", "std_srvs/srv/Empty", "motion"),
+        ("/controller_server/change_state", "lifecycle_msgs/srv/ChangeState", "motion"),
+        ("/renamed/transition", "lifecycle_msgs/srv/ChangeState", "motion"),
+        ("/lifecycle_manager_navigation/manage_nodes", "nav2_msgs/srv/ManageLifecycleNodes", "motion"),
+        ("/controller_manager/switch_controller", "controller_manager_msgs/srv/SwitchController", "motion"),
+        ("/set_initial_pose", "nav2_msgs/srv/SetInitialPose", "fence"),
+        ("/robot1/request_nomotion_update", "std_srvs/srv/Empty", "fence"),
+        ("/map_server/load_map", "nav2_msgs/srv/LoadMap", "fence"),
+        ("/somewhere/else", "nav2_msgs/srv/LoadMap", "fence"),
+        ("/ekf/set_pose", "robot_localization/srv/SetPose", "fence"),
+    ],
+)
+def test_services_that_move_the_robot_or_the_fence_are_known(service: str, type_name: str, kind: str) -> None:
+    (effect,) = service_effects(service, type_name, {}, 2)
+    assert (effect.kind, effect.name) == (kind, service)
+
+
+@pytest.mark.parametrize("type_name", ["rosapi_msgs/srv/SetParam", "rosapi/SetParam"])
+@pytest.mark.parametrize("service", ["/rosapi/set_param", "/robot1/rosapi/set_param", "/innocent"])
+def test_rosapi_set_param_under_any_name_is_a_parameter_write(service: str, type_name: str) -> None:
+    request = {"name": "/turtlesim:background_r", "value": "255"}
+    assert service_effects(service, type_name, request, 2) == (
+        Effect("parameter", "/turtlesim:background_r", "set"),
+    )
+
+
+def test_set_parameters_under_another_name_is_a_parameter_write() -> None:
+    request = {"parameters": [{"name": "max_vel_x", "value": {}}]}
+    assert service_effects("/controller_server/renamed", "rcl_interfaces/srv/SetParameters", request, 2) == (
+        Effect("parameter", "/controller_server:max_vel_x", "set"),
+    )

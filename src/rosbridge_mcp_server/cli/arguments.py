@@ -130,6 +130,12 @@ def build_parser(command: str) -> _Parser:
         ),
     )
     parser.add_argument(
+        "--no-tasks",
+        action="store_true",
+        help="never answer a long call (a drive, a goal, a recording) with an MCP task: every call runs to "
+        "its end, as for a client without tasks",
+    )
+    parser.add_argument(
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )

@@ -26,6 +26,7 @@ from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.messages import find_problems, typedefs_from_rosapi
 from rosbridge_mcp_server.robot.names import did_you_mean
+from rosbridge_mcp_server.safety.bridge_globs import bridge_arguments
 from rosbridge_mcp_server.safety.policy import Policy
 
 __all__ = ["run_check", "unreachable_advice"]
@@ -234,6 +235,26 @@ def policy_names_check(policy: Policy, present: dict[str, list[str]]) -> list[tu
     return lines
 
 
+def bridge_glob_lines(policy: Policy, ros_version: int) -> list[str]:
+    """The rosbridge launch arguments that hold *policy*'s allow lists at the bridge too, as ``check``'s
+    lines (none when the policy has no allow list)."""
+    globs = bridge_arguments(policy, ros_version)
+    if not globs.arguments:
+        return []
+    lines = [
+        f"[{_NOTE}] rosbridge can refuse what the policy's allow lists do not name by itself too (defence in "
+        "depth; docs/deployment.md). Launch it with:",
+        f"    {globs.launch(ros_version)}",
+    ]
+    if ros_version == 2 and "topics_glob" in globs.arguments:
+        lines += ["  or, on rosbridge 4.2 and later:", f"    {globs.launch(ros_version, split_topics=True)}"]
+    lines += [f"  - {note}" for note in globs.notes]
+    lines.append(
+        "  - the bridge cannot hold deny lists, velocity caps, confirmations or [navigation]: the server does"
+    )
+    return [line + "\n" for line in lines]
+
+
 async def run_check(config: Config, out: TextIO, *, demo: DemoSettings | None = None) -> int:
     """Run the diagnosis against ``config.url`` (the *demo* robot's, with ``--demo``), writing to ``out``; 0
     when healthy, 1 when not."""
@@ -269,6 +290,7 @@ async def run_check(config: Config, out: TextIO, *, demo: DemoSettings | None = 
         say(_OK, f"rosbridge reachable at {config.url}")
         distro = info.distro or ("unknown distro" if info.version == 2 else "Melodic/Noetic line")
         say(_OK, f"ROS {info.version} ({distro})")
+        out.writelines(bridge_glob_lines(config.policy, info.version))
 
         graph = RosGraph(client)
         try:

@@ -124,7 +124,16 @@ def run(argv: Sequence[str] | None = None, environ: Mapping[str, str] | None = N
         if command == "check":
             return asyncio.run(check(config, sys.stdout, fleet, demo=demo))
         asyncio.run(
-            serve(config, audit_file, http, fleet, console, console_dir=console_runtime_dir(env), demo=demo)
+            serve(
+                config,
+                audit_file,
+                http,
+                fleet,
+                console,
+                console_dir=console_runtime_dir(env),
+                demo=demo,
+                tasks=not options.no_tasks,
+            )
         )
     except ConfigError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
@@ -300,6 +309,7 @@ async def serve(
     *,
     console_dir: Path | None = None,
     demo: DemoSettings | None = None,
+    tasks: bool = True,
 ) -> None:
     """Serve MCP on stdin/stdout until the client closes stdin, or over HTTP (``http``); until SIGTERM /
     Ctrl-C either way. With a *fleet*, drive each of its robots (else the one ``config`` names). With
@@ -308,6 +318,8 @@ async def serve(
     # The MCP SDK is imported here, by the one command that serves: `check`, `console-url`, `--help` and a
     # refused command line start without it (about a second of CPU less each).
     from rosbridge_mcp_server.server import Robot, build_fleet_server, serve_stdio  # noqa: PLC0415
+    from rosbridge_mcp_server.server.fleet import Fleet  # noqa: PLC0415
+    from rosbridge_mcp_server.server.tasks import TaskBoard  # noqa: PLC0415
 
     async with demo_robot(config, demo) as effective:
         robots = list(fleet) or [("robot", effective)]
@@ -340,6 +352,9 @@ async def serve(
             entries.append(Robot(name, robot_config, session))
             views.append(RobotView(name, session, audit))
         hub = ConsoleHub(views, operator) if console is not None else None
+        board = TaskBoard(Fleet(entries)) if tasks else None
+        if hub is not None and board is not None:
+            hub.tasks = board.running_tasks
         console_view = hub.snapshot if hub is not None else None
         if http is not None and http.transport == "http":
             # Imported here: uvicorn and the HTTP stack are only needed for HTTP.
@@ -347,7 +362,7 @@ async def serve(
 
             # The MCP listener first: when its port is taken, it is named and nothing else has started.
             sock = listen_http(http)
-            server = build_fleet_server(entries, effective, console_view=console_view)
+            server = build_fleet_server(entries, effective, console_view=console_view, tasks=board or False)
             # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
             # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
             # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as
@@ -360,7 +375,7 @@ async def serve(
                 signal.signal(signal.SIGTERM, previous)
                 sock.close()
             return
-        server = build_fleet_server(entries, effective, console_view=console_view)
+        server = build_fleet_server(entries, effective, console_view=console_view, tasks=board or False)
         _stop_on_signals([robot.session.client for robot in entries])
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.

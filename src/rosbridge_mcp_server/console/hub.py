@@ -17,7 +17,7 @@ import json
 import logging
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -82,6 +82,8 @@ class ConsoleHub:
             raise ValueError("the console needs at least one robot")
         self.robots = list(robots)
         self.operator = operator
+        #: The MCP tasks running now, a row each (the server sets it when it serves tasks).
+        self.tasks: Callable[[], list[dict[str, Any]]] = list
         self._entries: deque[dict[str, Any]] = deque(maxlen=AUDIT_KEPT)
         self._version = 0
         self._changed = asyncio.Event()
@@ -180,6 +182,7 @@ class ConsoleHub:
         latched = self.operator.latched
         return {
             "robots": self._live_state(),
+            "tasks": self.tasks(),
             "estop": {"latched": latched is not None, "by": latched},
             "pending": [
                 {

@@ -19,8 +19,21 @@ ROS reaches the same effect several ways, and a rule written for one of them mus
   bt_navigator) (:data:`MOTION_GOAL_TOPICS`).
 * **Motion by service.** A service that moves the robot or a body of it: by type
   (:data:`MOTION_SERVICE_TYPES`: turtlesim's teleports, Gazebo's set-state services, MoveIt's
-  ``ExecuteKnownTrajectory``) or, when the type is not known, by the name's last part
-  (:data:`MOTION_SERVICE_LEAVES`). A policy may name more (``[services] motion``).
+  ``ExecuteKnownTrajectory``, lifecycle transitions, Nav2's lifecycle managers, controller switches) or by
+  the name's last part (:data:`MOTION_SERVICE_LEAVES`: also resets, which teleport: turtlesim's ``/reset``,
+  Gazebo's ``reset_world`` and ``reset_simulation``). A policy may name more (``[services] motion``).
+  A joystick message (``sensor_msgs/Joy``) is motion too: teleop turns it into velocity.
+* **What the fence reads** (kind ``fence``): the robot's transforms (``/tf``, ``/tf_static``), a pose
+  estimate (``/initialpose``; any ``PoseWithCovarianceStamped``), odometry, the sensors localisation and the
+  collision monitor read (scans, point clouds, IMU), the map and Nav2's costmap filter masks and their info,
+  the robot's footprint, the speed limit; and the services that relocalise or reload the map (AMCL's
+  ``set_initial_pose`` and ``request_nomotion_update``, map_server's ``load_map``, ...). Decided by type
+  (:data:`FENCE_TOPIC_TYPES`, :data:`FENCE_SERVICE_TYPES`) and by the name's last part
+  (:data:`FENCE_TOPIC_LEAVES`, :data:`FENCE_SERVICE_LEAVES`), so ``/robot1/tf`` is ``/tf``'s kind. Writing
+  them moves the world under the safety fence's zones (``safety/fence.py``).
+* **Parameter writes by type as well as by name**: rosapi's ``SetParam`` / ``DeleteParam`` in both spellings
+  (``rosapi/SetParam``, ``rosapi_msgs/srv/SetParam``) and ``rcl_interfaces`` ``SetParameters`` under any
+  name meet ``[parameters]`` as ``/rosapi/set_param`` and ``<node>/set_parameters`` do.
 
 Every name here is canonical (:mod:`rosbridge_mcp_server.robot.names`): what the robot will act on, so that a
 rule written for ``/turtlesim:background_r`` holds for ``/turtlesim//:background_r`` too.
@@ -36,6 +49,10 @@ from rosbridge_mcp_server.errors import Advice, NotSentError
 from rosbridge_mcp_server.robot.names import parameter_name
 
 __all__ = [
+    "FENCE_SERVICE_LEAVES",
+    "FENCE_SERVICE_TYPES",
+    "FENCE_TOPIC_LEAVES",
+    "FENCE_TOPIC_TYPES",
     "MOTION_GOAL_TOPICS",
     "MOTION_SERVICE_LEAVES",
     "MOTION_SERVICE_TYPES",
@@ -46,7 +63,7 @@ __all__ = [
     "topic_effects",
 ]
 
-EffectKind = Literal["action", "parameter", "motion"]
+EffectKind = Literal["action", "parameter", "motion", "fence"]
 
 
 @dataclass(frozen=True)
@@ -55,15 +72,21 @@ class Effect:
 
     kind: EffectKind
     name: str  #: canonical: the action, the parameter (ROS 2 ``/node:name``, ROS 1 ``/ns/name``), the service
-    #: "goal", "cancel" or "result" (an action); "set" or "delete" (a parameter); "move" (motion)
+    #: "goal", "cancel" or "result" (an action); "set" or "delete" (a parameter); "move" (motion); "write"
+    #: (fence: what the safety fence or localisation reads)
     what: str
     #: A ROS 1 parameter write: everything under ``name`` is replaced as well.
     subtree: bool = False
+    #: Why it is motion or a fence write, in words (e.g. "teleop turns it into velocity"); "" when plain.
+    why: str = ""
 
     def describe(self) -> str:
         """E.g. ``a goal of action /fibonacci`` or ``a set of parameter /turtlesim:background_r``."""
+        because = f" ({self.why})" if self.why else ""
         if self.kind == "motion":
-            return f"motion of the robot through {self.name}"
+            return f"motion of the robot through {self.name}{because}"
+        if self.kind == "fence":
+            return f"a change of what the safety fence and localisation read, through {self.name}{because}"
         under = " and everything under it" if self.subtree else ""
         return f"a {self.what} of {self.kind} {self.name}{under}"
 
@@ -76,8 +99,11 @@ MOTION_TOPIC_TYPES = frozenset(
         "control_msgs/JointJog",
         "ackermann_msgs/AckermannDrive",
         "ackermann_msgs/AckermannDriveStamped",
+        "sensor_msgs/Joy",
     }
 )
+#: Why a motion command type moves the robot, where that is not plain.
+_MOTION_WHY = {"sensor_msgs/Joy": "a joystick: teleop turns it into velocity"}
 #: Topics a navigation stack takes a goal pose on (the robot then drives there).
 MOTION_GOAL_TOPICS = ("/move_base_simple/goal", "/goal_pose")
 
@@ -93,8 +119,23 @@ MOTION_SERVICE_TYPES = frozenset(
         "gazebo_msgs/SetJointTrajectory",
         "ros_gz_interfaces/SetEntityPose",
         "moveit_msgs/ExecuteKnownTrajectory",
+        "lifecycle_msgs/ChangeState",
+        "nav2_msgs/ManageLifecycleNodes",
+        "controller_manager_msgs/SwitchController",
     }
 )
+#: Why a motion service moves the robot, by type or by the name's last part, where that is not plain.
+_MOTION_SERVICE_WHY = {
+    "lifecycle_msgs/ChangeState": "a lifecycle transition: it can start, stop or unguard the robot's motion",
+    "change_state": "a lifecycle transition: it can start, stop or unguard the robot's motion",
+    "nav2_msgs/ManageLifecycleNodes": "starts, pauses or resets Nav2's nodes",
+    "manage_nodes": "starts, pauses or resets Nav2's nodes",
+    "controller_manager_msgs/SwitchController": "switches the robot's motion controllers",
+    "switch_controller": "switches the robot's motion controllers",
+    "reset": "a reset: it may put the robot back where it started",
+    "reset_world": "a world reset: it puts the robot back where it started",
+    "reset_simulation": "a simulation reset: it puts the robot back where it started",
+}
 #: The last part of a motion service's usual name, for when its type is not known.
 MOTION_SERVICE_LEAVES = frozenset(
     {
@@ -106,13 +147,77 @@ MOTION_SERVICE_LEAVES = frozenset(
         "set_model_configuration",
         "set_entity_pose",
         "execute_kinematic_path",
+        "reset",
+        "reset_world",
+        "reset_simulation",
+        "change_state",
+        "manage_nodes",
+        "switch_controller",
     }
 )
 
+#: Message types whose messages change what the safety fence or localisation reads: type → what they are.
+FENCE_TOPIC_TYPES = {
+    "tf2_msgs/TFMessage": "the robot's transforms, which place the robot and its goals on the map",
+    "geometry_msgs/PoseWithCovarianceStamped": "a pose estimate: it relocalises the robot",
+    "nav_msgs/Odometry": "odometry, which localisation reads",
+    "nav_msgs/OccupancyGrid": "a map or a costmap filter mask (Nav2's keep-out and speed masks)",
+    "map_msgs/OccupancyGridUpdate": "an update of a map or costmap",
+    "nav2_msgs/Costmap": "a costmap",
+    "nav2_msgs/CostmapFilterInfo": "which mask Nav2's costmap filters read",
+    "nav2_msgs/SpeedLimit": "Nav2's speed limit",
+    "sensor_msgs/LaserScan": "a laser scan, which localisation, the costmaps and the collision monitor read",
+    "sensor_msgs/PointCloud2": "a point cloud, which the costmaps and the collision monitor read",
+    "sensor_msgs/Imu": "IMU readings, which localisation reads",
+}
+#: The last part of such a topic's usual name, whatever type it is sent with.
+FENCE_TOPIC_LEAVES = {
+    "tf": FENCE_TOPIC_TYPES["tf2_msgs/TFMessage"],
+    "tf_static": FENCE_TOPIC_TYPES["tf2_msgs/TFMessage"],
+    "initialpose": "the initial pose: it relocalises the robot",
+    "amcl_pose": FENCE_TOPIC_TYPES["geometry_msgs/PoseWithCovarianceStamped"],
+    "map": "the map",
+    "map_updates": "an update of the map",
+    "speed_limit": FENCE_TOPIC_TYPES["nav2_msgs/SpeedLimit"],
+    "costmap_filter_info": FENCE_TOPIC_TYPES["nav2_msgs/CostmapFilterInfo"],
+    "footprint": "the robot's footprint, which Nav2 keeps clear of obstacles",
+}
+#: A topic whose name ends so is a costmap filter mask (``/keepout_filter_mask``, ``/speed_filter_mask``).
+_MASK_SUFFIX = "filter_mask"
+#: Service types that relocalise the robot or replace its map: type → what they do.
+FENCE_SERVICE_TYPES = {
+    "nav2_msgs/SetInitialPose": "it relocalises the robot",
+    "nav2_msgs/LoadMap": "it replaces the map or a costmap filter mask",
+    "nav_msgs/LoadMap": "it replaces the map",
+    "nav_msgs/SetMap": "it replaces the map and the pose",
+    "robot_localization/SetPose": "it relocalises the robot",
+    "robot_localization/SetDatum": "it moves localisation's origin",
+}
+#: The last part of such a service's usual name, whatever its type.
+FENCE_SERVICE_LEAVES = {
+    "set_initial_pose": "it relocalises the robot",
+    "request_nomotion_update": "it updates localisation without motion",
+    "reinitialize_global_localization": "it scatters localisation over the whole map",
+    "global_localization": "it scatters localisation over the whole map",
+    "load_map": "it replaces the map or a costmap filter mask",
+    "change_map": "it replaces the map",
+    "set_map": "it replaces the map and the pose",
+    "set_pose": "it relocalises the robot",
+    "set_datum": "it moves localisation's origin",
+}
+
 _ROS2_ACTION_SERVICES = {"send_goal": "goal", "cancel_goal": "cancel", "get_result": "result"}
-_ROSAPI_PARAMETER_TYPES = {"rosapi/SetParam": "set", "rosapi/DeleteParam": "delete"}
-_ROSAPI_PARAMETER_SERVICES = {"/rosapi/set_param": "set", "/rosapi/delete_param": "delete"}
+_ROSAPI_PARAMETER_TYPES = {
+    "rosapi/SetParam": "set",
+    "rosapi/DeleteParam": "delete",
+    "rosapi_msgs/SetParam": "set",
+    "rosapi_msgs/DeleteParam": "delete",
+}
+#: rosapi's services by the name's last two parts: ``/rosapi/set_param``, and ``/<ns>/rosapi/set_param``
+#: (ROS 2 rosapi 2.2+ names them after its node).
+_ROSAPI_PARAMETER_SERVICES = {"rosapi/set_param": "set", "rosapi/delete_param": "delete"}
 _ROS2_SET_PARAMETERS = ("set_parameters", "set_parameters_atomically")
+_ROS2_SET_PARAMETERS_TYPES = ("rcl_interfaces/SetParameters", "rcl_interfaces/SetParametersAtomically")
 _RECONFIGURE_LISTS = ("bools", "ints", "strs", "doubles")
 
 
@@ -121,7 +226,8 @@ def topic_effects(topic: str, type_name: str) -> tuple[Effect, ...]:
 
     ROS 1 actionlib: ``<action>/goal`` with a ``…ActionGoal`` message is a goal of ``<action>``;
     ``<action>/cancel`` with ``actionlib_msgs/GoalID`` a cancel of it. A motion command other than a velocity
-    command (a joint trajectory, a goal pose for the navigation stack, also under a namespace) is motion.
+    command (a joint trajectory, a joystick, a goal pose for the navigation stack, also under a namespace) is
+    motion; a message the fence or localisation reads (by type or by name) a fence write.
     """
     parent, _, leaf = topic.rpartition("/")
     short = Dialect.short_type(type_name) if "/" in type_name else type_name
@@ -130,7 +236,12 @@ def topic_effects(topic: str, type_name: str) -> tuple[Effect, ...]:
     if leaf == "cancel" and short == "actionlib_msgs/GoalID":
         return (Effect("action", parent or "/", "cancel"),)
     if short in MOTION_TOPIC_TYPES or topic in MOTION_GOAL_TOPICS or topic.endswith(MOTION_GOAL_TOPICS):
-        return (Effect("motion", topic, "move"),)
+        return (Effect("motion", topic, "move", why=_MOTION_WHY.get(short, "")),)
+    fence = FENCE_TOPIC_TYPES.get(short) or FENCE_TOPIC_LEAVES.get(leaf)
+    if fence is None and leaf.endswith(_MASK_SUFFIX):
+        fence = FENCE_TOPIC_TYPES["nav_msgs/OccupancyGrid"]
+    if fence is not None:
+        return (Effect("fence", topic, "write", why=fence),)
     return ()
 
 
@@ -145,15 +256,19 @@ def service_effects(service: str, type_name: str, request: Any, ros_version: int
     action_parent, _, hidden = parent.rpartition("/")
     if hidden == "_action" and leaf in _ROS2_ACTION_SERVICES:
         return (Effect("action", action_parent or "/", _ROS2_ACTION_SERVICES[leaf]),)
-    rosapi = _ROSAPI_PARAMETER_TYPES.get(short) or _ROSAPI_PARAMETER_SERVICES.get(service)
+    rosapi = _ROSAPI_PARAMETER_TYPES.get(short) or _ROSAPI_PARAMETER_SERVICES.get(f"{hidden}/{leaf}")
     if rosapi is not None:
         return (_rosapi_parameter(service, request, ros_version, rosapi),)
-    if leaf in _ROS2_SET_PARAMETERS and ros_version == 2:
+    if short in _ROS2_SET_PARAMETERS_TYPES or (leaf in _ROS2_SET_PARAMETERS and ros_version == 2):
         return _ros2_set_parameters(service, parent, request)
-    if leaf == "set_parameters" and ros_version == 1:
+    if short == "dynamic_reconfigure/Reconfigure" or (leaf == "set_parameters" and ros_version == 1):
         return _reconfigure(service, parent, request)
     if short in MOTION_SERVICE_TYPES or leaf in MOTION_SERVICE_LEAVES:
-        return (Effect("motion", service, "move"),)
+        why = _MOTION_SERVICE_WHY.get(short) or _MOTION_SERVICE_WHY.get(leaf, "")
+        return (Effect("motion", service, "move", why=why),)
+    fence = FENCE_SERVICE_TYPES.get(short) or FENCE_SERVICE_LEAVES.get(leaf)
+    if fence is not None:
+        return (Effect("fence", service, "write", why=fence),)
     return ()
 
 

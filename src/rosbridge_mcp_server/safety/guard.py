@@ -29,9 +29,11 @@ from typing import IO, TYPE_CHECKING, Any, NoReturn
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
+from rosbridge_mcp_server.safety.fence import fence_refusal, writes_fence
 from rosbridge_mcp_server.safety.navigation import act_motion, goal_text, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
 from rosbridge_mcp_server.safety.policy import Policy
+from rosbridge_mcp_server.safety.question import question
 
 if TYPE_CHECKING:
     # Only for annotations: the acting layer imports this package's velocity rules, so a runtime import here
@@ -41,7 +43,6 @@ if TYPE_CHECKING:
 __all__ = [
     "AUDIT_PAYLOAD_LIMIT",
     "LATCH_RULE",
-    "QUESTION_LIMIT",
     "Audit",
     "AuditEntry",
     "PolicyGuard",
@@ -51,8 +52,6 @@ __all__ = [
 
 _log = logging.getLogger("rosbridge_mcp_server.audit")
 
-#: Longest message shown to the person in full; a camera image is not something to read in a dialog.
-QUESTION_LIMIT = 4000
 #: Longest audit file line; beyond it the payload is cut, with its full length noted.
 AUDIT_PAYLOAD_LIMIT = 16_000
 
@@ -62,15 +61,6 @@ LATCH_RULE = "e-stop latched by the operator"
 
 #: One audit line as a dict (the audit file's JSON, before the payload is cut).
 AuditEntry = dict[str, Any]
-
-_NOUNS = {"topic": "topic", "service": "service", "action": "action", "parameter": "parameter"}
-_PAYLOADS = {"topic": "message", "service": "request", "action": "goal", "parameter": "value"}
-_VERBS = {
-    "topic": "publish on",
-    "service": "call the service",
-    "action": "send a goal to",
-    "parameter": "set the parameter",
-}
 
 
 class Audit:
@@ -126,7 +116,13 @@ class Audit:
             entry["given"] = act.given
         if act.effects:
             entry["effects"] = [
-                {"kind": e.kind, "name": e.name, "what": e.what, **({"subtree": True} if e.subtree else {})}
+                {
+                    "kind": e.kind,
+                    "name": e.name,
+                    "what": e.what,
+                    **({"subtree": True} if e.subtree else {}),
+                    **({"why": e.why} if e.why else {}),
+                }
                 for e in act.effects
             ]
         if caller is not None:
@@ -171,7 +167,7 @@ class PolicyGuard:
         rule = self._rule_refusal(act)
         if rule is not None:
             self._refuse(act, rule, f"Refused by the safety policy ({rule}); nothing was sent.")
-        place = navigation_refusal(act, self.policy.navigation)
+        place = navigation_refusal(act, self.policy.navigation) or fence_refusal(act, self.policy.navigation)
         if place is not None:
             self._refuse(act, place.rule, place.text)
         approved, clamp = self._capped(act)
@@ -225,8 +221,9 @@ class PolicyGuard:
         for effect in act.effects:
             # Judged as if the matching tool had been used: a goal sent through its topic or service meets
             # [actions], a parameter set through a service meets [parameters]. A cancel only stops what the
-            # robot does (cancel_action asks no rule either); motion by service has no section of its own.
-            if effect.kind == "motion" or effect.what == "cancel":
+            # robot does (cancel_action asks no rule either); motion by service has no section of its own,
+            # and a fence write meets [navigation] (fence_refusal).
+            if effect.kind in ("motion", "fence") or effect.what == "cancel":
                 continue
             section, rules = policy.rules_for(effect.kind)
             refusal = rules.refusal(effect.name, section, subtree=effect.subtree)
@@ -297,8 +294,8 @@ class PolicyGuard:
 
     def _needs_person(self, act: Act) -> bool:
         confirm = self.policy.confirm
-        if self.policy.navigation.confirm == "motion" and act_motion(act) is not None:
-            # Every motion goal, by any carrier (robot/motion_goals.py).
+        if self.policy.navigation.confirm == "motion" and (act_motion(act) is not None or writes_fence(act)):
+            # Every motion goal, by any carrier (robot/motion_goals.py), and every write to what the fence reads.
             return True
         if confirm == "always":
             return True
@@ -347,46 +344,20 @@ def moves(act: Act, policy: Policy) -> bool:
 
     A velocity command (Twist / TwistStamped on any topic), an action goal (``publish_action``, or a goal sent
     through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a motion goal by any
-    carrier and in any type spelling (``robot/motion_goals.py``), a known motion command
-    or service (``robot/effects.py``: joint trajectories, goal poses, turtlesim's teleports, Gazebo's
-    set-state services, ...) and a topic or service the policy's ``[topics]`` / ``[services] motion`` names.
+    carrier and in any type spelling (``robot/motion_goals.py``), a known motion command or service
+    (``robot/effects.py``: joint trajectories, joysticks, goal poses, turtlesim's teleports and resets, Gazebo's
+    set-state and reset services, lifecycle transitions, ...), a write to what the fence or localisation reads
+    (``/tf``, ``/initialpose``, the map, masks, the speed limit: the robot then moves differently) and a topic or
+    service the policy's ``[topics]`` / ``[services] motion`` names.
     """
     if act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type)):
         return True
     if act_motion(act) is not None:
         return True
-    if any(e.kind == "motion" or (e.kind == "action" and e.what == "goal") for e in act.effects):
+    if any(e.kind in ("motion", "fence") or (e.kind == "action" and e.what == "goal") for e in act.effects):
         return True
     listed = {"service": policy.motion_services, "topic": policy.motion_topics}.get(act.kind, ())
     return any(fnmatchcase(act.name, pattern) for pattern in listed)
-
-
-def question(act: Act, clamp: str | None = None) -> str:
-    """What the person is asked: exactly what would be sent, and by which tool."""
-    payload_kind = _PAYLOADS.get(act.kind, "payload")
-    body = json.dumps(act.payload, ensure_ascii=False, default=str)
-    if len(body) > QUESTION_LIMIT:
-        body = f"{body[:QUESTION_LIMIT]}… ({len(body) - QUESTION_LIMIT} more characters not shown)"
-    lines = [
-        f"The AI assistant wants to {_VERBS.get(act.kind, 'act on')} {act.name} on the robot.",
-        f"Tool: {act.tool}",
-        f"{_NOUNS.get(act.kind, act.kind).capitalize()}: {act.name}",
-    ]
-    if act.type:
-        lines.append(f"Type: {act.type}")
-    if act.effects:
-        lines.append(f"What it does: {'; '.join(e.describe() for e in act.effects)}.")
-    lines.append(f"{payload_kind.capitalize()}: {body}")
-    if act.rate_hz is not None:
-        lasting = f" for {act.duration:g} s" if act.duration is not None else " until stopped"
-        lines.append(f"Repeated at {act.rate_hz:g} Hz{lasting}.")
-    if clamp:
-        lines.append(f"Note: {clamp}.")
-    where = goal_text(act)
-    if where:
-        lines.append(where)
-    lines.append("Allow this?")
-    return "\n".join(lines)
 
 
 def _answer_text(act: Act, answer: str, policy: Policy) -> str:

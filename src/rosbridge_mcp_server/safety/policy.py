@@ -28,6 +28,7 @@ robot uncapped). The file::
     robot_radius = 0.25          # m: the robot's footprint, clear on the map and of the zones (default 0.2)
     max_goal_distance = 15       # m from the robot, straight line
     confirm = "motion"           # "never" | "motion": ask the person before each motion goal
+    allow_fence_writes = ["/initialpose"]  # what the fence reads that may still be written (default: none)
     [navigation.allowed_zones]   # polygons in the map frame, corners [x, y] in metres
     lab = [[0, 0], [10, 0], [10, 10], [0, 10]]
     [navigation.keep_out]
@@ -158,6 +159,9 @@ class NavigationRules:
     confirm: NavigationConfirm = "never"
     allowed_zones: tuple[Zone, ...] = ()
     keep_out: tuple[Zone, ...] = ()
+    #: Globs of topics and services that change what the fence reads (``/tf``, ``/initialpose``, the map,
+    #: ...) and may still be written while zones or limits are set; by default none may.
+    allow_fence_writes: tuple[str, ...] = ()
 
     @property
     def configured(self) -> bool:
@@ -276,6 +280,9 @@ class Policy:
                 parts.append(f"a footprint of radius {nav.robot_radius:g} m")
             if nav.confirm != "never":
                 parts.append("the person confirms each goal")
+            if nav.configured:
+                fence = ", ".join(nav.allow_fence_writes) or "none"
+                parts.append(f"writes to what the fence reads (/tf, /initialpose, /map, ...): only {fence}")
             lines.append(f"  [navigation] {'; '.join(parts)}")
         if self.places:
             lines.append(f"  [places] {', '.join(name for name, _ in self.places)}")
@@ -308,7 +315,14 @@ _MOTION_KEYS = ("allow", "deny", "motion")
 _VELOCITY_KEYS = ("max_linear", "max_angular", "mode")
 _PUBLISH_KEYS = ("max_rate_hz", "max_duration")
 _RECORDING_KEYS = ("enabled", "max_seconds", "max_megabytes")
-_NAVIGATION_KEYS = ("robot_radius", "max_goal_distance", "confirm", "allowed_zones", "keep_out")
+_NAVIGATION_KEYS = (
+    "robot_radius",
+    "max_goal_distance",
+    "confirm",
+    "allowed_zones",
+    "keep_out",
+    "allow_fence_writes",
+)
 
 
 def load_policy(path: str | Path, *, source: str = "--policy") -> Policy:
@@ -469,6 +483,9 @@ def _navigation(data: Mapping[str, Any], where: str) -> NavigationRules:
         confirm=confirm,
         allowed_zones=_zones(table, "allowed_zones", where),
         keep_out=_zones(table, "keep_out", where),
+        allow_fence_writes=(
+            _globs(table, "allow_fence_writes", "navigation", where) if "allow_fence_writes" in table else ()
+        ),
     )
 
 

@@ -33,6 +33,7 @@ from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
 from rosbridge_mcp_server.server.checks import ToolCalls
 from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, console_app
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
+from rosbridge_mcp_server.server.tasks import TaskBoard
 from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
 from rosbridge_mcp_server.tools.base import ToolSpec
 
@@ -99,10 +100,11 @@ def build_server(
     config: Config,
     *,
     console_view: Callable[[], dict[str, Any]] | None = None,
+    tasks: bool | TaskBoard = True,
 ) -> Server[None]:
     """A server with every tool, driving one robot (its client started and closed by the server's
     lifespan); see :func:`build_fleet_server`."""
-    return build_fleet_server([Robot("robot", config, robot)], config, console_view=console_view)
+    return build_fleet_server([Robot("robot", config, robot)], config, console_view=console_view, tasks=tasks)
 
 
 def build_fleet_server(
@@ -110,6 +112,7 @@ def build_fleet_server(
     config: Config,
     *,
     console_view: Callable[[], dict[str, Any]] | None = None,
+    tasks: bool | TaskBoard = True,
 ) -> Server[None]:
     """The SDK's low-level ``Server`` driving *robots* (each client started and closed by its lifespan).
 
@@ -120,9 +123,12 @@ def build_fleet_server(
     ``list_robots`` is listed (``fleet.py``). The tools record what they set going in each robot's session,
     which the operator console's E-STOP shares. With *console_view* (the console's snapshot) the server also
     offers the console's read-only view as an MCP App: ``show_console`` and its ``ui://`` resource
-    (``server/console_app.py``). Authentication is the transport's (``http.py``).
+    (``server/console_app.py``). Authentication is the transport's (``http.py``). With *tasks* (unless
+    ``--no-tasks``) long work runs as an MCP task for a client that can follow one (``server/tasks.py``); a
+    :class:`TaskBoard` given is the one used (the console lists its tasks).
     """
     fleet = Fleet(robots)
+    board = tasks if isinstance(tasks, TaskBoard) else TaskBoard(fleet) if tasks else None
     policy = config.policy
     # Read-only when the server is, or when every robot is (a fleet file may make each read-only).
     read_only = policy.read_only or not fleet.acting_names
@@ -152,7 +158,12 @@ def build_fleet_server(
                     where,
                     client.url,
                 )
-            yield None
+            if board is None:
+                yield None
+                return
+            # Tasks end before the connections close: their cancels and zero commands still reach the robot.
+            async with board.running():
+                yield None
 
     # Every tool is made the same way (adapter.edge_tool), in the order it is listed.
     tools: list[EdgeTool] = [module_tool(module) for module in modules]
@@ -236,6 +247,8 @@ def build_fleet_server(
     )
     # Arguments that are no object get our sentence before the SDK checks the request's shape (checks.py).
     server.middleware.append(calls.arguments_kind)
+    if board is not None:
+        board.register(server)
     if app is not None:
         server.extensions[APPS_EXTENSION] = {}
     return server

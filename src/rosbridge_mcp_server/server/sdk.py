@@ -12,6 +12,13 @@ call:
   out on the write stream as a ``mcp.shared.message.SessionMessage`` (the transport's message type, not
   exported), and the server's runner restores the sender's context variables from the read stream's
   ``last_context`` when it has one (``mcp.shared._stream_protocols``), which the wrapper passes through.
+* :func:`task_session`: a tool call run as a task (``server/tasks.py``) is the same call handed on through the
+  documented server middleware (``call_next(replace(ctx, ...))``) with a request context whose ``session``
+  is this stand-in: the request's own session in everything but ``report_progress``, which becomes the task's
+  status line, and ``elicit_form`` / ``elicit_url``, during which the task waits for the person, sent on the
+  session's own channel (``related_request_id=None``: the call's request was answered with the task). It
+  relies on the tool handlers reaching progress and the person only through ``ctx.session`` (ours do:
+  ``adapter.py``) and on the runner handing ``ctx.session`` on untouched.
 """
 
 from __future__ import annotations
@@ -23,7 +30,7 @@ import anyio
 from mcp.shared.message import SessionMessage
 from mcp.types import JSONRPCError
 
-__all__ = ["answering_stream"]
+__all__ = ["answering_stream", "task_session"]
 
 #: The reply for an unreadable line (the exception the transport handed on), or None to answer nothing.
 ReplyFor = Callable[[Exception], JSONRPCError | None]
@@ -74,3 +81,49 @@ class _Answering:
 
     async def __aexit__(self, *exc_info: object) -> None:
         await self.aclose()
+
+
+def task_session(
+    inner: Any, on_progress: Callable[[str], None], on_asking: Callable[[str | None], None] | None = None
+) -> Any:
+    """*inner* (a request's ``ServerSession``) with its ``report_progress`` told to *on_progress* as one line
+    (the message, else "progress of total") instead of sent to the client; *on_asking* is told the question
+    when an elicitation is sent, and ``None`` when its answer came (or it failed)."""
+    return _TaskSession(inner, on_progress, on_asking or (lambda question: None))
+
+
+class _TaskSession:
+    def __init__(
+        self, inner: Any, on_progress: Callable[[str], None], on_asking: Callable[[str | None], None]
+    ) -> None:
+        self._inner = inner
+        self._on_progress = on_progress
+        self._on_asking = on_asking
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._inner, name)
+
+    async def report_progress(
+        self, progress: float, total: float | None = None, message: str | None = None
+    ) -> None:
+        self._on_progress(message or (f"{progress:g} of {total:g}" if total else f"{progress:g}"))
+
+    async def elicit_form(self, message: str, *args: Any, **kwargs: Any) -> Any:
+        self._on_asking(message)
+        try:
+            return await self._inner.elicit_form(message, *args, **_standalone(kwargs))
+        finally:
+            self._on_asking(None)
+
+    async def elicit_url(self, message: str, *args: Any, **kwargs: Any) -> Any:
+        self._on_asking(message)
+        try:
+            return await self._inner.elicit_url(message, *args, **_standalone(kwargs))
+        finally:
+            self._on_asking(None)
+
+
+def _standalone(kwargs: dict[str, Any]) -> dict[str, Any]:
+    """A task's question goes on the session's own channel: the request it came with was answered long ago
+    (with the task), so its back-channel is gone (``NoBackChannelError``)."""
+    return {**kwargs, "related_request_id": None}

@@ -86,10 +86,19 @@ function renderPending(pending) {
   }
 }
 
-function renderRunning(robots) {
+function renderRunning(robots, tasks) {
   const list = $("running");
   list.replaceChildren();
   let count = 0;
+  for (const task of tasks || []) {
+    count += 1;
+    const item = el("li");
+    item.dataset.task = task.id;
+    item.append(el("strong", "task "), el("span", task.tool, "mono"), ` ${task.status}, ${task.seconds} s`);
+    if (task.caller) item.append(` (${task.caller})`);
+    if (task.message) item.append(el("div", task.message, "mono"));
+    list.append(item);
+  }
   for (const robot of robots) {
     for (const stream of robot.streams) {
       count += 1;
@@ -137,7 +146,7 @@ function renderAudit(entries) {
 function renderState(state) {
   renderRobots(state.robots);
   renderPending(state.pending);
-  renderRunning(state.robots);
+  renderRunning(state.robots, state.tasks);
   renderAudit(state.audit);
   const latched = state.estop.latched;
   $("latched").hidden = !latched;
