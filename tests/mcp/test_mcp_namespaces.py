@@ -82,11 +82,11 @@ async def test_navigate_to_without_a_namespace_lists_each_robots_call_and_they_r
     session: Session, fleet: SimulatedRobot
 ) -> None:
     goals = len(fleet.world.goals)
-    text = await session.error("navigate_to", {"goal": GOAL})
+    text = await session.error("navigate_to", {"goal": GOAL, "timeout": 60})
     assert "Nothing was guessed, nothing was sent." in text
     assert len(fleet.world.goals) == goals
     calls = await check_suggestions(session, "navigate_to", text)
-    assert all(call["goal"] == GOAL for call in calls)
+    assert all(call["goal"] == GOAL and call["timeout"] == 60 for call in calls)
     result = await session.ok("navigate_to", calls[1])
     assert (result.structured_content or {})["succeeded"], text_of(result)
     second = fleet.nav2.robots[1]
@@ -106,8 +106,11 @@ async def test_get_transform_reads_the_robots_own_tf(session: Session, fleet: Si
 
 
 async def test_get_transform_without_a_namespace_lists_each_robots_call(session: Session) -> None:
-    text = await session.error("get_transform", {"target_frame": "map", "source_frame": "base_link"})
+    text = await session.error(
+        "get_transform", {"target_frame": "map", "source_frame": "base_link", "timeout": 4}
+    )
     for arguments in await check_suggestions(session, "get_transform", text):
+        assert arguments["timeout"] == 4
         result = await session.ok("get_transform", arguments)
         assert (result.structured_content or {})["namespace"] == arguments["namespace"]
 
@@ -118,8 +121,9 @@ async def test_pictures_take_the_namespace_or_list_each_robots_call(session: Ses
     assert (result.structured_content or {})["topic"] == (
         "/robot1/map" if tool == "view_map" else "/robot1/scan"
     )
-    text = await session.error(tool, {})
+    text = await session.error(tool, {"max_size": 300})
     for arguments in await check_suggestions(session, tool, text):
+        assert arguments["max_size"] == 300  # what was asked is repeated
         await session.ok(tool, arguments)
 
 

@@ -9,7 +9,12 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.namespaces import SeveralNamespacesError
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
-from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, choose_one, given_namespace
+from rosbridge_mcp_server.tools.namespaces import (
+    NamespaceArgument,
+    choose_one,
+    given_namespace,
+    non_defaults,
+)
 
 __all__ = ["SPEC", "TransformAnswer", "run"]
 
@@ -77,9 +82,8 @@ async def run(
             namespace=given_namespace(ctx, namespace),
         )
     except SeveralNamespacesError as exc:
-        raise choose_one(
-            exc, SPEC.name, {"target_frame": target_frame, "source_frame": source_frame}
-        ) from None
+        given = {"target_frame": target_frame, "source_frame": source_frame, "timeout": timeout}
+        raise choose_one(exc, SPEC.name, non_defaults(run, given)) from None
     lookup = found.lookup
     t = lookup.transform.translation
     q = lookup.transform.rotation

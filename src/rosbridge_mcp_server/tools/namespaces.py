@@ -8,6 +8,7 @@ has them (the answer says so), or, when several do, an error listing the exact c
 
 from __future__ import annotations
 
+import inspect
 import json
 from collections.abc import Callable
 from typing import Annotated, Any
@@ -24,7 +25,7 @@ from rosbridge_mcp_server.robot.namespaces import (
 from rosbridge_mcp_server.tools.base import ToolContext, ToolFailure
 from rosbridge_mcp_server.tools.seeing import typed_topic
 
-__all__ = ["NamespaceArgument", "choose_one", "given_namespace", "namespaced_topic"]
+__all__ = ["NamespaceArgument", "choose_one", "given_namespace", "namespaced_topic", "non_defaults"]
 
 #: Omitted: found; ``""``: none (the tools/list budget keeps the description to an example).
 NamespaceArgument = Annotated[str | None, Field(description="e.g. /robot2")]
@@ -39,6 +40,17 @@ def given_namespace(ctx: ToolContext, namespace: str | None) -> str | None:
         return namespace_name(value)
     except ValueError as exc:
         raise ToolFailure(f"{exc}.") from None
+
+
+def non_defaults(run: Callable[..., Any], given: dict[str, Any]) -> dict[str, Any]:
+    """The arguments of a call to the tool *run* that differ from its defaults (a suggested call repeats
+    them)."""
+    parameters = inspect.signature(run).parameters
+    return {
+        key: value
+        for key, value in given.items()
+        if key in parameters and key != "namespace" and value != parameters[key].default
+    }
 
 
 def choose_one(exc: SeveralNamespacesError, tool: str, arguments: dict[str, Any]) -> ToolFailure:

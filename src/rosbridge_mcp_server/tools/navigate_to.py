@@ -33,7 +33,12 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, choose_one, given_namespace
+from rosbridge_mcp_server.tools.namespaces import (
+    NamespaceArgument,
+    choose_one,
+    given_namespace,
+    non_defaults,
+)
 
 __all__ = ["SPEC", "NavigateAnswer", "run"]
 
@@ -258,10 +263,8 @@ async def run(
         default_action, action_type = "/navigate_through_poses", "nav2_msgs/action/NavigateThroughPoses"
     else:
         default_action, action_type = "/navigate_to_pose", "nav2_msgs/action/NavigateToPose"
-    given = {"goal": goal, "frame": frame, "forward": forward, "left": left, "turn": turn}
-    asked = {key: value for key, value in given.items() if value}
-    if timeout != 300.0:
-        asked["timeout"] = timeout
+    given = {"goal": goal, "frame": frame, "forward": forward, "left": left, "turn": turn, "timeout": timeout}
+    asked = non_defaults(run, given)
     prefix, note, hint = await _robot_namespace(ctx, namespace, default_action, asked)
     name = prefix + default_action
     map_name = f"{prefix}/map"

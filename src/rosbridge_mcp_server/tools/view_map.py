@@ -22,7 +22,12 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, given_namespace, namespaced_topic
+from rosbridge_mcp_server.tools.namespaces import (
+    NamespaceArgument,
+    given_namespace,
+    namespaced_topic,
+    non_defaults,
+)
 from rosbridge_mcp_server.tools.seeing import first_message, is_type, planar_pose, typed_topic
 
 __all__ = ["SPEC", "MapAnswer", "run"]
@@ -32,7 +37,6 @@ _PATH = is_type("nav_msgs/Path")
 _SCAN = is_type("sensor_msgs/LaserScan")
 #: The longest the robot's, the path's and the scan's frames are waited for on /tf.
 _TF_WAIT = 2.0
-_DEFAULTS = {"topic": "/map"}
 
 
 class MapAnswer(BaseModel):
@@ -101,14 +105,22 @@ async def run(
     namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Take one grid (and plan and scan), place them with /tf, draw off the event loop."""
-    given = {"topic": topic, "path_topic": path_topic, "scan_topic": scan_topic}
+    given = {
+        "topic": topic,
+        "base_frame": base_frame,
+        "path_topic": path_topic,
+        "scan_topic": scan_topic,
+        "around_robot": around_robot,
+        "max_size": max_size,
+        "timeout": timeout,
+    }
     name, msg_type, ns, found_note = await namespaced_topic(
         ctx,
         topic,
         "topic",
         namespace,
         tool=SPEC.name,
-        arguments={key: value for key, value in given.items() if value and value != _DEFAULTS.get(key)},
+        arguments=non_defaults(run, given),
         accepts=_GRID,
         kind="nav_msgs/OccupancyGrid",
         hint="view_scan shows scans; subscribe_topic reads other topics.",

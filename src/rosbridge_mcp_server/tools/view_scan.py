@@ -29,7 +29,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, namespaced_topic
+from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, namespaced_topic, non_defaults
 from rosbridge_mcp_server.tools.seeing import first_message, is_type
 
 __all__ = ["SPEC", "ScanAnswer", "run"]
@@ -82,7 +82,16 @@ async def run(
         "topic",
         namespace,
         tool=SPEC.name,
-        arguments={} if topic == "/scan" else {"topic": topic},
+        arguments=non_defaults(
+            run,
+            {
+                "topic": topic,
+                "radius": radius,
+                "clearance": clearance,
+                "max_size": max_size,
+                "timeout": timeout,
+            },
+        ),
         accepts=_RANGE_SENSOR,
         kind="sensor_msgs/LaserScan or PointCloud2",
         hint="view_map shows maps; subscribe_topic reads other topics.",
