@@ -53,6 +53,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.robot.seam import Answer, AskPerson
+from rosbridge_mcp_server.robot.text import repaired
 from rosbridge_mcp_server.server.advice import advised
 from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import (
@@ -80,6 +81,7 @@ __all__ = [
     "inline_refs",
     "module_tool",
     "tool_annotations",
+    "writable",
 ]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
@@ -225,7 +227,7 @@ async def _run_on(
 
     async def report_progress(progress: float, total: float | None, message: str | None) -> None:
         try:
-            await session.report_progress(progress, total, message)
+            await session.report_progress(progress, total, None if message is None else repaired(message))
         except Exception:
             # Progress is a courtesy; a client that went away must not fail the goal.
             _log.debug("could not send a progress notification", exc_info=True)
@@ -252,6 +254,24 @@ async def _run_on(
         content=[TextContent(type="text", text=answer.text), *_images(answer.images)],
         structured_content=answer.data.model_dump(mode="json"),
     )
+
+
+def writable(result: CallToolResult | InputRequiredResult) -> CallToolResult | InputRequiredResult:
+    """*result* with no unpaired UTF-16 surrogate left in its texts and structured content: the last line
+    before an answer is written. The SDK's JSON writer refuses such a string, and on stdio that ends the
+    server; robot text is repaired where frames are decoded (``wire/protocol.py``), this catches any other
+    way one could come (a file, a path we missed). The very result when it holds none."""
+    if not isinstance(result, CallToolResult):
+        return result
+    texts = [block.text for block in result.content if isinstance(block, TextContent)]
+    structured = result.structured_content
+    if repaired(texts) is texts and repaired(structured) is structured:
+        return result
+    content = [
+        block.model_copy(update={"text": repaired(block.text)}) if isinstance(block, TextContent) else block
+        for block in result.content
+    ]
+    return result.model_copy(update={"content": content, "structured_content": repaired(structured)})
 
 
 def _images(images: typing.Iterable[ToolImage]) -> list[ImageContent]:
