@@ -52,9 +52,10 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.seam import Answer, AskPerson
+from rosbridge_mcp_server.robot.seam import Answer, AskPerson, call_ending
 from rosbridge_mcp_server.robot.text import repaired
 from rosbridge_mcp_server.server.advice import advised
+from rosbridge_mcp_server.server.sdk import cancelled_by_client
 from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import (
     ToolAnswer,
@@ -239,6 +240,7 @@ async def _run_on(
         ask_person=_Asker(call),
         caller=call.caller,
     )
+    ending = call_ending.set(functools.partial(_cancelled_why, session))
     try:
         answer = await run(ctx, **arguments)
     except _AskInNextRound as asking:
@@ -250,10 +252,19 @@ async def _run_on(
         return CallToolResult(
             content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
         )
+    finally:
+        call_ending.reset(ending)
     return CallToolResult(
         content=[TextContent(type="text", text=answer.text), *_images(answer.images)],
         structured_content=answer.data.model_dump(mode="json"),
     )
+
+
+def _cancelled_why(session: Any) -> str:
+    if cancelled_by_client(session):
+        return "cancelled by the client"
+    # No cancel from the client: it went away (stdin closed, its HTTP session ended) or the server stops.
+    return "cancelled: the client went away or the server is stopping"
 
 
 def writable(result: CallToolResult | InputRequiredResult) -> CallToolResult | InputRequiredResult:

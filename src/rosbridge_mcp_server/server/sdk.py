@@ -12,6 +12,10 @@ call:
   out on the write stream as a ``mcp.shared.message.SessionMessage`` (the transport's message type, not
   exported), and the server's runner restores the sender's context variables from the read stream's
   ``last_context`` when it has one (``mcp.shared._stream_protocols``), which the wrapper passes through.
+* :func:`cancelled_by_client`: whether the client sent ``notifications/cancelled`` for the request being
+  handled. The dispatch context has it (``cancel_requested``, documented), but the low-level server's request
+  context reaches it only through its session's private ``_request_outbound``
+  (``tests/mcp/test_mcp_cancel_audit.py`` holds it: a cancel from the client is audited as such).
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import anyio
 from mcp.shared.message import SessionMessage
 from mcp.types import JSONRPCError
 
-__all__ = ["answering_stream"]
+__all__ = ["answering_stream", "cancelled_by_client"]
 
 #: The reply for an unreadable line (the exception the transport handed on), or None to answer nothing.
 ReplyFor = Callable[[Exception], JSONRPCError | None]
@@ -74,3 +78,11 @@ class _Answering:
 
     async def __aexit__(self, *exc_info: object) -> None:
         await self.aclose()
+
+
+def cancelled_by_client(session: Any) -> bool:
+    """Whether the client asked to cancel the request whose ``ServerSession`` *session* is (False when the SDK
+    no longer says: the call is then said to have ended without a cancel from the client)."""
+    dispatch = getattr(session, "_request_outbound", None)
+    requested = getattr(dispatch, "cancel_requested", None)
+    return isinstance(requested, anyio.Event) and requested.is_set()
