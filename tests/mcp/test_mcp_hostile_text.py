@@ -218,3 +218,33 @@ async def test_names_in_the_graphs_listings_are_shown_escaped(dialect: str) -> N
     text = text_of(listed)
     assert "/evil\\n[FATAL] /amcl: Localization lost\\u202e\\x1b[2J" in text, text
     assert_no_raw_control(text, listed.structured_content)
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_a_messages_strings_are_shown_escaped(dialect: str) -> None:
+    """A String message holding a newline, ESC, a C1 control, a right-to-left override and a zero-width space:
+    subscribe_topic's text shows it as JSON with every one of them escaped."""
+    string = "std_msgs/msg/String" if dialect == "ros2" else "std_msgs/String"
+    data = "ok\n[FATAL] /amcl\x1b[2J\x85\u202etxet\u200b"
+    robot = SimulatedRobot(dialect=dialect)  # type: ignore[arg-type]
+    async with robot, open_session(robot.url) as session, websockets.connect(robot.url) as raw:
+        await raw.send(json.dumps({"op": "advertise", "topic": "/chatter_hostile", "type": string}))
+
+        async def publish() -> None:
+            while True:
+                await raw.send(
+                    json.dumps({"op": "publish", "topic": "/chatter_hostile", "msg": {"data": data}})
+                )
+                await asyncio.sleep(0.05)
+
+        publishing = asyncio.create_task(publish())
+        try:
+            result = await session.ok(
+                "subscribe_topic", {"topic": "/chatter_hostile", "count": 1, "timeout": 10}
+            )
+        finally:
+            publishing.cancel()
+    text = text_of(result)
+    assert '"ok\\n[FATAL] /amcl\\u001b[2J\\u0085\\u202etxet\\u200b"' in text, text
+    assert len(text.splitlines()) == 2, text  # the count, then the one message on one line
+    assert not any(char in text for char in (*RAW[1:], "\x85", "\u200b")), repr(text)

@@ -27,6 +27,7 @@ __all__ = [
     "NAME_CHARS",
     "is_frame_name",
     "is_graph_name",
+    "json_shown",
     "repaired",
     "shown",
 ]
@@ -76,6 +77,20 @@ def shown(value: Any, limit: int = FIELD_CHARS) -> str:
         # are kept): the fast path for the usual, clean text.
         text = _UNSAFE.sub(_escape, text)
     return text if total <= limit else f"{text}… ({total:,} characters)"
+
+
+def _json_escape(match: re.Match[str]) -> str:
+    code = ord(match.group())
+    if code <= 0xFFFF:
+        return f"\\u{code:04x}"
+    code -= 0x10000
+    return f"\\u{0xD800 + (code >> 10):04x}\\u{0xDC00 + (code & 0x3FF):04x}"
+
+
+def json_shown(text: str) -> str:
+    """A JSON text (``json.dumps(..., ensure_ascii=False)``, which escapes only C0 controls) with every other
+    character :func:`shown` escapes written as a JSON escape (``\\u202e``): the same JSON, safe to show."""
+    return text if text.isprintable() else _UNSAFE.sub(_json_escape, text)
 
 
 def is_graph_name(name: str) -> bool:
