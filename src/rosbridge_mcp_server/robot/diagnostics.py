@@ -87,7 +87,7 @@ class StatusBoard:
             values = status.get("values")
             # Every field is robot text: kept escaped and capped (robot/text.py), as it will be shown.
             pairs = tuple(
-                (shown(v.get("key", ""), 100), shown(v.get("value", ""), 200))
+                (shown(v.get("key", ""), 60), shown(v.get("value", ""), 120))
                 for v in (values if isinstance(values, list) else [])[:_MAX_VALUES]
                 if isinstance(v, Mapping)
             )

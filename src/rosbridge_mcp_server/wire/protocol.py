@@ -235,8 +235,10 @@ def _parsed(text: str) -> Any:
     text can hold) replaced by U+FFFD: anyone on the robot's graph can publish one, and written on as it came
     it ends whatever writes it (the MCP SDK's JSON writer refuses it, and the stdio server with it)."""
     item = _decoder.decode(text)
-    if _ESCAPED_SURROGATE.search(text) is None:
-        return item  # the usual frame: no surrogate escape at all, nothing more to look at
+    # The usual frame holds no backslash at all (a memchr: 0.2 ms for a 9 MB image, where the pattern's scan
+    # costs 10 ms), or no surrogate escape: nothing more to look at.
+    if "\\" not in text or _ESCAPED_SURROGATE.search(text) is None:
+        return item
     whole = _encoder.encode(item)
     return _decoder.decode(_SURROGATE.sub("\ufffd", whole)) if _SURROGATE.search(whole) else item
 
