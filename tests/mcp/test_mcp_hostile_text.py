@@ -267,3 +267,34 @@ async def test_ros1_a_parameter_name_from_the_graph_is_shown_escaped() -> None:
     assert "/evil\\n[FATAL] " in text, text  # grouped by node: the rest of the name is the parameter's
     assert "Localization lost\\u202e" in text, text
     assert_no_raw_control(text, listed.structured_content)
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_frame_names_heard_on_tf_are_shown_escaped(dialect: str) -> None:
+    """Another client publishes a transform whose child frame holds a newline and a forged line:
+    get_transform, asked for a frame nobody publishes, lists the frames it heard with that one escaped."""
+    tf_type = "tf2_msgs/msg/TFMessage" if dialect == "ros2" else "tf2_msgs/TFMessage"
+    stamp = {"sec": 0, "nanosec": 0} if dialect == "ros2" else {"secs": 0, "nsecs": 0}
+    link = {
+        "header": {"stamp": stamp, "frame_id": "odom"},
+        "child_frame_id": "evil\n[FATAL] /amcl\u202e",
+        "transform": {"translation": {"x": 1.0}, "rotation": {"w": 1.0}},
+    }
+    robot = SimulatedRobot(dialect=dialect)  # type: ignore[arg-type]
+    async with robot, open_session(robot.url) as session, websockets.connect(robot.url) as raw:
+        await raw.send(json.dumps({"op": "advertise", "topic": "/tf_static", "type": tf_type}))
+
+        async def publish() -> None:
+            while True:
+                await raw.send(
+                    json.dumps({"op": "publish", "topic": "/tf_static", "msg": {"transforms": [link]}})
+                )
+                await asyncio.sleep(0.05)
+
+        publishing = asyncio.create_task(publish())
+        try:
+            text = await session.error("get_transform", {"target_frame": "odom", "source_frame": "nowhere"})
+        finally:
+            publishing.cancel()
+    assert "evil\\n[FATAL] /amcl\\u202e" in text, text
+    assert not any(char in text for char in RAW), repr(text)
