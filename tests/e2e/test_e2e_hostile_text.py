@@ -148,8 +148,11 @@ async def test_lone_surrogates_in_every_field_the_server_reads_never_end_it(
                 _with_lone_surrogate({"op": "call_service", "service": "/rosapi/set_param", "args": args})
             )
             name = "/amcl/base_frame_id"
+        # ROS 2: read as U+FFFD where the frame is decoded; ROS 1: rosapi's JSON text inside the frame is read
+        # later, and the answer shows the lone surrogate as an escape.
+        shown = "base\ufffd" if dialect == "ros2" else "base\\ud800"
         started = time.monotonic()
-        while "base\ufffd" not in _text(parameter := await _ok(session, "get_parameter", {"name": name})):
+        while shown not in _text(parameter := await _ok(session, "get_parameter", {"name": name})):
             assert time.monotonic() - started < WAIT, _text(parameter)
         # The server still answers.
         assert "/hostile_chatter" in _text(
