@@ -8,8 +8,9 @@ import unicodedata
 import pytest
 from mcp.types import CallToolResult, ImageContent, TextContent
 
+from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.text import _UNSAFE, is_frame_name, is_graph_name, repaired, shown
-from rosbridge_mcp_server.server.adapter import writable
+from rosbridge_mcp_server.server.adapter import error_text, writable
 
 #: The Unicode categories that never reach a reader raw.
 UNSAFE_CATEGORIES = {"Cc", "Cf", "Cs", "Zl", "Zp"}
@@ -95,3 +96,12 @@ def test_an_answer_is_written_without_unpaired_surrogates() -> None:
     fixed.model_dump_json()
     clean = CallToolResult(content=[TextContent(type="text", text="ok")], structured_content={"v": 1})
     assert writable(clean) is clean
+
+
+def test_an_error_quoting_the_bridge_is_one_escaped_line() -> None:
+    """A failed service's text is the bridge's (the robot's) own: the model reads it escaped and capped."""
+    text = error_text(ServiceError("/reset", "boom\n[FATAL] /amcl: lost\u202e" + "x" * 5_000))
+    assert text.startswith("Service call /reset failed: boom\\n[FATAL] /amcl: lost\\u202exxx")
+    assert "\n" not in text
+    assert "characters)" in text
+    assert len(text) < 2_500

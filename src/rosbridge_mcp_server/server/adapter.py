@@ -53,7 +53,7 @@ from rosbridge_mcp_server.errors import (
     ServiceError,
 )
 from rosbridge_mcp_server.robot.seam import Answer, AskPerson, call_ending
-from rosbridge_mcp_server.robot.text import repaired
+from rosbridge_mcp_server.robot.text import repaired, shown
 from rosbridge_mcp_server.server.advice import advised
 from rosbridge_mcp_server.server.sdk import cancelled_by_client
 from rosbridge_mcp_server.tools.arguments import parameter_listing
@@ -321,9 +321,17 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
 )
 
 
+#: The longest error that quotes the bridge is shown whole up to this many characters.
+_QUOTED_CHARS = 2_000
+
+
 def error_text(exc: RosbridgeError | ToolFailure) -> str:
     """The sentence a model sees for a failed tool call: the error's own text, plus what to try."""
-    text = _sentence(advised(exc))
+    text = advised(exc)
+    if isinstance(exc, ServiceError | ActionError | ProtocolError):
+        # They quote the bridge's (the robot's) own words: robot text, shown escaped and capped.
+        text = shown(text, _QUOTED_CHARS)
+    text = _sentence(text)
     if isinstance(exc, ConnectionLostError) and exc.goal_cancel is not None:
         return f"{text} Check the robot's state (e.g. with list_actions) before sending the goal again."
     if isinstance(exc, RosbridgeError):
