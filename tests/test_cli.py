@@ -16,6 +16,7 @@ import pytest
 
 from rosbridge_mcp_server.cli import PROG, run
 from rosbridge_mcp_server.cli.check import run_check, unreachable_advice
+from rosbridge_mcp_server.cli.commands import configure_logging
 from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.safety.policy import NameRules, Policy
@@ -348,3 +349,27 @@ def test_the_commands_that_do_not_serve_start_without_the_mcp_sdk() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=30, check=True
     )
     assert done.stdout.strip() == "[]"
+
+
+def test_a_log_message_quoting_robot_text_stays_one_line_of_ours() -> None:
+    """A message quoting what a bridge or a caller wrote (a newline and a forged line, an ANSI sequence) is
+    one escaped line on stderr, and a megabyte of it is cut with the cut said."""
+    stream = io.StringIO()
+    ours = logging.getLogger("rosbridge_mcp_server")
+    root = logging.getLogger()
+    levels = (root.level, ours.level)
+    configure_logging("INFO", stream)
+    try:
+        log = logging.getLogger("rosbridge_mcp_server.client")
+        log.warning("the bridge refused %s: %s", "publish:/x:1", "no\n2026-01-01 ERROR forged\x1b[2J")
+        log.warning("bridge status: %s", "x" * 1_000_000)
+    finally:
+        for handler in [h for h in root.handlers if h.get_name() == PROG]:
+            root.removeHandler(handler)
+        root.setLevel(levels[0])
+        ours.setLevel(levels[1])
+    lines = stream.getvalue().splitlines()
+    assert len(lines) == 2, lines
+    assert lines[0].endswith("the bridge refused publish:/x:1: no\\n2026-01-01 ERROR forged\\x1b[2J")
+    assert lines[1].endswith("… (1,000,015 characters)")
+    assert len(lines[1]) < 10_200

@@ -20,10 +20,11 @@ CASES: list[tuple[tuple[Step, ...], str]] = [
         'get_topic_info {"topic": "/tf"} to see who publishes',
     ),
     (
-        (Step(Look.ACTIVATE, ("/amcl",)), Step(Look.NODE)),
-        'activate it: publish_service {"service": "/amcl/change_state", "request": {"transition": {"id": '
-        "3}}} (or its lifecycle manager's manage_nodes); get_node_info",
+        (Step(Look.NODE_LOG, ("/amcl",), "for why"), Step(Look.ACTIVATE)),
+        'read_logs {"node": "/amcl", "level": "info"} for why; activating it acts on the robot (its '
+        "lifecycle manager's manage_nodes, or its change_state service, transition 3): ask the user first",
     ),
+    ((Step(Look.LOG, (), "for its last words"),), 'read_logs {"level": "info"} for its last words'),
     ((Step(Look.ONE_MESSAGE, ("/diagnostics",)),), 'subscribe_topic {"topic": "/diagnostics", "count": 1}'),
     (
         (Step(Look.WAIT_MESSAGE, ("/scan",)), Step(Look.NODE, ("/lidar",))),

@@ -42,8 +42,9 @@ FAULT_NEXT: dict[str, str] = {
     "tf-stale": 'get_transform {"target_frame": "odom", "source_frame": "base_footprint", "timeout": 5}',
     "driver-error": 'subscribe_topic {"topic": "/diagnostics", "count": 1}',
     "controller-inactive": (
-        'activate it: publish_service {"service": "/controller_server/change_state", "request": '
-        '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes); get_node_info'
+        'read_logs {"node": "/controller_server", "level": "info"} for why; activating it acts on the robot '
+        "(its lifecycle manager's manage_nodes, or its change_state service, transition 3): ask the user "
+        "first"
     ),
     "log-errors": 'read_logs {"node": "/controller_server", "level": "info"}',
     "node-gone": 'read_logs {"node": "/amcl", "level": "info"} for its last words; list_nodes',

@@ -31,6 +31,7 @@ from rosbridge_mcp_server.config.http import HttpSettings, load_http_settings
 from rosbridge_mcp_server.console import ConsoleHub, RobotView
 from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls
 from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.robot.text import shown
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
 
 if TYPE_CHECKING:
@@ -215,6 +216,7 @@ def configure_logging(level: str, stream: TextIO | None = None, secrets: Sequenc
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
     if secrets:
         handler.addFilter(_Redact(secrets))
+    handler.addFilter(_OneLine())
     root = logging.getLogger()
     # Replace only our own handler (run() may be called more than once in one process, e.g. in tests). Having
     # a handler on the root also keeps MCPServer's logging.basicConfig from adding its own.
@@ -238,6 +240,23 @@ class _Redact(logging.Filter):
             for secret in self._secrets:
                 message = message.replace(secret, "***")
             record.msg, record.args = message, None
+        return True
+
+
+#: The longest message one log line carries (a traceback, written after it, is not cut).
+LOG_LINE_CHARS = 10_000
+
+
+class _OneLine(logging.Filter):
+    """Each record's message on one line, escaped as robot text is (``robot/text.py``): a message quotes
+    what the robot, a bridge or a caller wrote (a refusal's text, a JWT's subject), and a newline or an ANSI
+    sequence in it must not write a line of its own on the operator's terminal."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        safe = shown(message, LOG_LINE_CHARS)
+        if safe is not message:
+            record.msg, record.args = safe, None
         return True
 
 

@@ -32,6 +32,7 @@ from typing import Any
 
 from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.errors import InvalidMessageError, NotSentError
+from rosbridge_mcp_server.robot.text import json_shown
 
 __all__ = [
     "TypeDef",
@@ -404,8 +405,9 @@ def require_fit(
 
 
 def compact_json(value: Any, limit: int = 600) -> str:
-    """One-line JSON for an answer's text, cut at ``limit`` characters."""
-    text = json.dumps(_finite(value), separators=(", ", ": "), ensure_ascii=False, default=str)
+    """One-line JSON for an answer's text, cut at ``limit`` characters; a message's strings are robot text, so
+    bidi overrides, zero-width and other unsafe characters are written as JSON escapes (``robot/text.py``)."""
+    text = json_shown(json.dumps(_finite(value), separators=(", ", ": "), ensure_ascii=False, default=str))
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 

@@ -10,7 +10,9 @@ implements the guard; nothing here knows a policy or MCP.
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Awaitable, Callable
+from contextvars import ContextVar
 from dataclasses import dataclass, replace
 from typing import Any, Literal, Protocol
 
@@ -27,9 +29,21 @@ __all__ = [
     "SendToLink",
     "approved",
     "asking",
+    "call_ending",
+    "cancelled_why",
     "carry_out",
     "nobody_to_ask",
 ]
+
+#: Why the call running in this context would have ended had it been cancelled, in words; set by what runs
+#: the call (the MCP edge knows whether its client asked). The audit says it, never the cancel's repr.
+call_ending: ContextVar[Callable[[], str]] = ContextVar("call_ending")
+
+
+def cancelled_why() -> str:
+    """``cancelled by the client``, ``cancelled: …``: why the call running now was cancelled, in words."""
+    why = call_ending.get(None)
+    return why() if why is not None else "cancelled"
 
 
 @dataclass(frozen=True)
@@ -173,6 +187,9 @@ async def carry_out(ctx: Approving, act: Act, send: Callable[[], Awaitable[Any]]
         result = await send()
     except PolicyRefusal:
         raise  # the send gate refused it at the moment of sending, and audited that
+    except asyncio.CancelledError:
+        ctx.guard.record(act, cancelled_why())
+        raise
     except BaseException as exc:
         ctx.guard.record(act, f"failed: {type(exc).__name__}: {exc}")
         raise

@@ -30,7 +30,7 @@ from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
 from rosbridge_mcp_server.safety.fence import fence_refusal, writes_fence
-from rosbridge_mcp_server.safety.navigation import act_motion, goal_text, navigation_refusal
+from rosbridge_mcp_server.safety.navigation import act_motion, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
 from rosbridge_mcp_server.safety.policy import Policy
 from rosbridge_mcp_server.safety.question import question
@@ -295,7 +295,7 @@ class PolicyGuard:
     def _needs_person(self, act: Act) -> bool:
         confirm = self.policy.confirm
         if self.policy.navigation.confirm == "motion" and (act_motion(act) is not None or writes_fence(act)):
-            # Every motion goal, by any carrier (robot/motion_goals.py), and every write to what the fence reads.
+            # Every motion goal by any carrier (robot/motion_goals.py), every write to what the fence reads.
             return True
         if confirm == "always":
             return True
@@ -345,10 +345,10 @@ def moves(act: Act, policy: Policy) -> bool:
     A velocity command (Twist / TwistStamped on any topic), an action goal (``publish_action``, or a goal sent
     through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a motion goal by any
     carrier and in any type spelling (``robot/motion_goals.py``), a known motion command or service
-    (``robot/effects.py``: joint trajectories, joysticks, goal poses, turtlesim's teleports and resets, Gazebo's
-    set-state and reset services, lifecycle transitions, ...), a write to what the fence or localisation reads
-    (``/tf``, ``/initialpose``, the map, masks, the speed limit: the robot then moves differently) and a topic or
-    service the policy's ``[topics]`` / ``[services] motion`` names.
+    (``robot/effects.py``: joint trajectories, joysticks, goal poses, turtlesim's teleports and resets,
+    Gazebo's set-state and reset services, lifecycle transitions, ...), a write to what the fence or
+    localisation reads (``/tf``, ``/initialpose``, the map, masks, the speed limit: the robot then moves
+    differently) and a topic or service the policy's ``[topics]`` / ``[services] motion`` names.
     """
     if act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type)):
         return True

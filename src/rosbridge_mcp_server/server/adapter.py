@@ -52,8 +52,10 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.seam import Answer, AskPerson
+from rosbridge_mcp_server.robot.seam import Answer, AskPerson, call_ending
+from rosbridge_mcp_server.robot.text import repaired, shown
 from rosbridge_mcp_server.server.advice import advised
+from rosbridge_mcp_server.server.sdk import cancelled_by_client
 from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import (
     ToolAnswer,
@@ -80,6 +82,7 @@ __all__ = [
     "inline_refs",
     "module_tool",
     "tool_annotations",
+    "writable",
 ]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
@@ -225,7 +228,7 @@ async def _run_on(
 
     async def report_progress(progress: float, total: float | None, message: str | None) -> None:
         try:
-            await session.report_progress(progress, total, message)
+            await session.report_progress(progress, total, None if message is None else repaired(message))
         except Exception:
             # Progress is a courtesy; a client that went away must not fail the goal.
             _log.debug("could not send a progress notification", exc_info=True)
@@ -237,6 +240,7 @@ async def _run_on(
         ask_person=_Asker(call),
         caller=call.caller,
     )
+    ending = call_ending.set(functools.partial(_cancelled_why, session))
     try:
         answer = await run(ctx, **arguments)
     except _AskInNextRound as asking:
@@ -248,10 +252,37 @@ async def _run_on(
         return CallToolResult(
             content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
         )
+    finally:
+        call_ending.reset(ending)
     return CallToolResult(
         content=[TextContent(type="text", text=answer.text), *_images(answer.images)],
         structured_content=answer.data.model_dump(mode="json"),
     )
+
+
+def _cancelled_why(session: Any) -> str:
+    if cancelled_by_client(session):
+        return "cancelled by the client"
+    # No cancel from the client: it went away (stdin closed, its HTTP session ended) or the server stops.
+    return "cancelled: the client went away or the server is stopping"
+
+
+def writable(result: CallToolResult | InputRequiredResult) -> CallToolResult | InputRequiredResult:
+    """*result* with no unpaired UTF-16 surrogate left in its texts and structured content: the last line
+    before an answer is written. The SDK's JSON writer refuses such a string, and on stdio that ends the
+    server; robot text is repaired where frames are decoded (``wire/protocol.py``), this catches any other
+    way one could come (a file, a path we missed). The very result when it holds none."""
+    if not isinstance(result, CallToolResult):
+        return result
+    texts = [block.text for block in result.content if isinstance(block, TextContent)]
+    structured = result.structured_content
+    if repaired(texts) is texts and repaired(structured) is structured:
+        return result
+    content = [
+        block.model_copy(update={"text": repaired(block.text)}) if isinstance(block, TextContent) else block
+        for block in result.content
+    ]
+    return result.model_copy(update={"content": content, "structured_content": repaired(structured)})
 
 
 def _images(images: typing.Iterable[ToolImage]) -> list[ImageContent]:
@@ -290,9 +321,17 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
 )
 
 
+#: The longest error that quotes the bridge is shown whole up to this many characters.
+_QUOTED_CHARS = 2_000
+
+
 def error_text(exc: RosbridgeError | ToolFailure) -> str:
     """The sentence a model sees for a failed tool call: the error's own text, plus what to try."""
-    text = _sentence(advised(exc))
+    text = advised(exc)
+    if isinstance(exc, ServiceError | ActionError | ProtocolError):
+        # They quote the bridge's (the robot's) own words: robot text, shown escaped and capped.
+        text = shown(text, _QUOTED_CHARS)
+    text = _sentence(text)
     if isinstance(exc, ConnectionLostError) and exc.goal_cancel is not None:
         return f"{text} Check the robot's state (e.g. with list_actions) before sending the goal again."
     if isinstance(exc, RosbridgeError):

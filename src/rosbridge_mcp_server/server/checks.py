@@ -38,7 +38,7 @@ from mcp.types import (
 )
 from pydantic import ValidationError
 
-from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall, arguments_text
+from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall, arguments_text, writable
 from rosbridge_mcp_server.server.fleet import ROBOT_ARGUMENT
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing, read_json_text
 
@@ -142,7 +142,7 @@ class ToolCalls:
             return refusal_result(_arguments_refusal(tool, exc, arguments, read))
         call = ToolCall(ctx, robots, caller, params.input_responses)
         try:
-            return await tool.handler(call, validated)
+            return writable(await tool.handler(call, validated))
         except Exception:
             # A bug: its traceback on stderr, a generic error for the model (the SDK's own words).
             _log.exception("Tool %r raised an unexpected exception", name)

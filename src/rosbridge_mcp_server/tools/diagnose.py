@@ -99,14 +99,17 @@ async def run(
     return ToolAnswer(text=_text(found, focus), data=data)
 
 
-#: Each thing to look at next as the call that does it (robot/diagnosis.py names no tool).
+#: Each thing to look at next as the call that does it (robot/diagnosis.py names no tool). The names come from
+#: the robot, checked in robot/diagnosis.py (graph names it has, plain frame names); no acting call is ever
+#: built from them.
 _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.NODE_LOG: lambda node: f'read_logs {{"node": "{node}", "level": "info"}}',
     Look.NODES: lambda: "list_nodes",
     Look.TOPIC: lambda topic: f'get_topic_info {{"topic": "{topic}"}}',
-    Look.ACTIVATE: lambda node: (
-        f'activate it: publish_service {{"service": "{node}/change_state", "request": '
-        '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes)'
+    Look.LOG: lambda: 'read_logs {"level": "info"}',
+    Look.ACTIVATE: lambda: (
+        "activating it acts on the robot (its lifecycle manager's manage_nodes, or its change_state service, "
+        "transition 3): ask the user first"
     ),
     Look.NODE: lambda node=None: "get_node_info" if node is None else f'get_node_info {{"node": "{node}"}}',
     Look.ONE_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "count": 1}}',

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosInfo
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.messages import TypeDef
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -120,10 +121,12 @@ class Rosapi:
 
 
 def strings(value: Any) -> list[str]:
-    """The strings of a rosapi list field (nothing when it is not a list)."""
+    """The strings of a rosapi list field (nothing when it is not a list): names and types as the graph gives
+    them, shown as robot text (``robot/text.py``: escaped and capped; a real ROS name is unchanged, and one
+    holding a newline or a bidi override never was a name anything could be called by)."""
     if not isinstance(value, list):
         return []
-    return [item for item in value if isinstance(item, str)]
+    return [shown(item, NAME_CHARS) for item in value if isinstance(item, str)]
 
 
 async def bounded_map(
