@@ -90,7 +90,13 @@ def chunk_declaring(folder: Path, declared: int | None = 2 * 10**9) -> Path:
     return _file(folder, "declared.mcap", chunk(records, declared) + record(0x0F, bytes(4)) + footer())
 
 
-def fanout(folder: Path, chunks: int = 601, entries: int = 60_000, index_length: int | None = None) -> Path:
+def fanout(
+    folder: Path,
+    chunks: int = 601,
+    entries: int = 60_000,
+    index_length: int | None = None,
+    name: str = "fanout.mcap",
+) -> Path:
     """One chunk and one large message index, named by ``chunks`` chunk indexes in the summary."""
     head = MAGIC + header() + schema() + channel()
     body = chunk(b"".join(message(log_time=10**9 + i) for i in range(8)))
@@ -112,7 +118,7 @@ def fanout(folder: Path, chunks: int = 601, entries: int = 60_000, index_length:
     )
     stats = record(0x0B, struct.pack("<QHIIIIQQI", entries, 1, 1, 0, 0, chunks, 10**9, 10**9 + entries, 0))
     summary = schema() + channel() + one * chunks + stats
-    path = folder / "fanout.mcap"
+    path = folder / name
     path.write_bytes(data + summary + footer(summary_at))
     return path
 
@@ -137,7 +143,7 @@ def huge_length(folder: Path) -> Path:
 
 def huge_index(folder: Path) -> Path:
     """A summary whose chunk index names a message index of 2**60 bytes."""
-    return fanout(folder, chunks=1, entries=4, index_length=2**60)
+    return fanout(folder, chunks=1, entries=4, index_length=2**60, name="huge-index.mcap")
 
 
 def truncated(folder: Path) -> Path:

@@ -114,7 +114,12 @@ def summarize_recording(path: Path, budget: Budget | None = None) -> RecordingSu
                 return _scan(path, mcap)
             return _indexed(path, mcap, summary)
     except RecordingProblem as exc:
-        raise NotARecording(f"{exc}.") from None
+        raise _refusal(path, exc) from None
+
+
+def _refusal(path: Path, problem: RecordingProblem) -> NotARecording:
+    text = str(problem)
+    return NotARecording(f"{text}." if text.startswith(path.name) else f"{path.name}: {text}.")
 
 
 def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
@@ -249,7 +254,7 @@ def decoded_messages(
                     decoder = decoders[channel.id] = _decoder_for(factories, mcap, channel)
                 yield channel.topic, log_time, _decoded(decoder, data, channel.topic, log_time)
     except RecordingProblem as exc:
-        raise NotARecording(f"{exc}.") from None
+        raise _refusal(path, exc) from None
 
 
 def _decoded(decoder: Any, data: bytes, topic: str, log_time: int) -> Any:
