@@ -148,7 +148,8 @@ def huge_index(folder: Path) -> Path:
 
 def truncated(folder: Path) -> Path:
     """A good file cut off in the middle of its chunk."""
-    full = chunk_declaring(folder, declared=None).read_bytes()
+    records = schema() + channel() + b"".join(message(log_time=10**9 + i) for i in range(2000))
+    full = MAGIC + header() + chunk(records) + record(0x0F, bytes(4)) + footer()
     path = folder / "truncated.mcap"
     path.write_bytes(full[: len(full) // 2])
     return path

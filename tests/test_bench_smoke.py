@@ -51,6 +51,7 @@ TARGET_ROWS = (
     "16c",
     "16f",
     "16g",
+    *(f"17{letter}" for letter in "abcdefghij"),
 )
 
 

@@ -51,6 +51,9 @@ What is measured:
     raw subscriber receives, non-zero commands after the answer) and with a ``navigate_to`` goal running on
     the Nav2 world (to its answer, to ``/odom`` standing still); the bridge killed and restarted on its port
     (to ``list_topics`` succeeding, and no command replayed).
+17. hostile recordings (``--only bombs``; issue 36): each class of MCAP bomb at the size the issue found it
+    (``tests/recording_bombs.py``), ``read_recording`` in every mode: refused with a worded error in ≤ 2 s
+    with ≤ 50 MiB of peak RSS growth (``VmHWM``).
 
 The package: ``harness`` (what every item shares), one module per item, ``run`` (the order, the table, the
 command line), ``internals`` (the only module that imports the product's internals, and why), ``servers/``
