@@ -54,7 +54,7 @@ MAGIC = b"\x89MCAP0\r\n"
 #: A chunk may yield this many records per byte of its compressed data (beyond RECORDS_FLOOR). A recorder's
 #: records differ in time and sequence at least, so real data stays far below it; a bomb does not.
 RECORDS_PER_COMPRESSED_BYTE = 8
-RECORDS_FLOOR = 100_000
+RECORDS_FLOOR = 50_000
 #: The longest schema text, and the longest string of a header, channel or metadata record, read.
 MAX_SCHEMA = 1024 * 1024
 MAX_STRING = 4096
