@@ -1,153 +1,37 @@
-"""An MCAP file read within a budget: whoever wrote it, whatever it declares.
-
-A recording is a file anyone may put in the recordings folder (or a hostile robot may have filled), and MCAP
-records carry their own lengths, counts and sizes: a 61 kB file can declare a 2 GB chunk, one message index
-can be named by 600 chunk indexes, an 8.9 kB chunk can decompress to millions of tiny records. The ``mcap``
-package believes what a file declares; this module does not. It reads the records itself and holds every
-declared size, count and offset to the file's real size and to a :class:`Budget` (the memory one call may
-hold, the same as a picture's, and the seconds it may take) before it reads, allocates or decompresses:
-
-* each record's length fits in what is left of the file (or of its chunk): a cut-off file is named as such;
-* a chunk declares at most the memory budget uncompressed, is decompressed as a stream (never held whole)
-  and may not yield more than it declared, nor more records than :data:`RECORDS_PER_COMPRESSED_BYTE` per
-  byte of compressed data (beyond :data:`RECORDS_FLOOR`): the work a chunk costs stays in proportion to the
-  file;
-* every chunk index points inside the file, and no two at the same message index (the fan-out); the
-  message times kept at once fit in the memory budget;
-* a message's data, a schema's text and a metadata string are capped before they are read;
-* a ``ros2msg``/``ros1msg`` schema names no type that contains itself and nests at most :data:`MAX_NESTING`
-  levels (:func:`schema_problem`), so no decoder recurses without end.
-
-Every refusal is a :class:`RecordingProblem` whose text names what is wrong and where. Pure file reading: it
-imports nothing of ours, so the simulated robot's ``--play`` holds files to the same rules.
-"""
+"""The MCAP reader itself: records read one by one, every declared length, size and offset held to the file
+and to the call's :class:`~rosbridge_mcp_server.mcapfile.model.Budget` before it is read."""
 
 from __future__ import annotations
 
-import io
-import re
 import struct
-import time
 from array import array
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from typing import IO, Any
 
-__all__ = [
-    "INDEX_ENTRY_COST",
-    "MAGIC",
-    "MAX_NESTING",
-    "Budget",
-    "Channel",
-    "ChunkIndex",
-    "CutOff",
-    "McapFile",
-    "RecordingProblem",
-    "Schema",
-    "Statistics",
-    "Summary",
-    "byte_size",
-    "schema_problem",
-]
+from rosbridge_mcp_server.mcapfile.chunks import BLOCK, decompressed
+from rosbridge_mcp_server.mcapfile.model import (
+    INDEX_ENTRY_COST,
+    MAGIC,
+    MAX_SCHEMA,
+    MAX_STRING,
+    RECORDS_FLOOR,
+    RECORDS_PER_COMPRESSED_BYTE,
+    Budget,
+    Channel,
+    ChunkIndex,
+    CutOff,
+    RecordingProblem,
+    Schema,
+    Statistics,
+    Summary,
+    byte_size,
+)
 
-MAGIC = b"\x89MCAP0\r\n"
-#: A chunk may yield this many records per byte of its compressed data (beyond RECORDS_FLOOR). A recorder's
-#: records differ in time and sequence at least, so real data stays far below it; a bomb does not.
-RECORDS_PER_COMPRESSED_BYTE = 8
-RECORDS_FLOOR = 50_000
-#: The longest schema text, and the longest string of a header, channel or metadata record, read.
-MAX_SCHEMA = 1024 * 1024
-MAX_STRING = 4096
-#: How deep a message type may nest (a real ROS type nests a handful of levels).
-MAX_NESTING = 64
-#: Bytes of a message index entry in memory (its log time) while a summary is made.
-INDEX_ENTRY_COST = 64
-_BLOCK = 1024 * 1024
+__all__ = ["McapFile"]
+
 _HEADER, _FOOTER, _SCHEMA, _CHANNEL, _MESSAGE, _CHUNK, _MESSAGE_INDEX, _CHUNK_INDEX = range(1, 9)
 _STATISTICS, _DATA_END = 0x0B, 0x0F
 _FOOTER_SIZE = 1 + 8 + 20
-
-
-class RecordingProblem(ValueError):
-    """The file cannot be read within the budget, or is malformed; ``str()`` says what and where."""
-
-
-class CutOff(RecordingProblem):
-    """The file ends inside a record (a recorder killed while writing, or a file cut short)."""
-
-
-def byte_size(count: int) -> str:
-    """``256 MiB``, ``1.9 GiB``: a byte count for a person."""
-    size = float(count)
-    for unit in ("bytes", "KiB", "MiB", "GiB"):
-        if size < 1024:
-            return f"{count} bytes" if unit == "bytes" else f"{size:.3g} {unit}"
-        size /= 1024
-    return f"{size:.3g} TiB"
-
-
-@dataclass
-class Budget:
-    """What one call may spend reading a recording: bytes held at once and seconds."""
-
-    memory: int
-    seconds: float
-    started: float = field(default_factory=time.monotonic)
-
-    def check_time(self) -> None:
-        if time.monotonic() - self.started > self.seconds:
-            raise RecordingProblem(
-                f"reading it took over {self.seconds:g} s, this server's time budget for one call; it was "
-                "stopped there (ask for fewer topics, a shorter window, or a smaller file)"
-            )
-
-    def check_bytes(self, what: str, needed: int) -> None:
-        if needed > self.memory:
-            raise RecordingProblem(
-                f"{what}: about {byte_size(needed)}, over this server's budget of "
-                f"{byte_size(self.memory)} for one call, so it was not read"
-            )
-
-
-@dataclass(frozen=True)
-class Schema:
-    id: int
-    name: str
-    encoding: str
-    data: bytes
-
-
-@dataclass(frozen=True)
-class Channel:
-    id: int
-    schema_id: int
-    topic: str
-    message_encoding: str
-
-
-@dataclass(frozen=True)
-class ChunkIndex:
-    start: int
-    end: int
-    offset: int
-    length: int
-    index_offsets: dict[int, int]
-    index_length: int
-
-
-@dataclass(frozen=True)
-class Statistics:
-    message_count: int
-    start: int
-    end: int
-
-
-@dataclass
-class Summary:
-    schemas: dict[int, Schema] = field(default_factory=dict)
-    channels: dict[int, Channel] = field(default_factory=dict)
-    chunk_indexes: list[ChunkIndex] = field(default_factory=list)
-    statistics: Statistics | None = None
 
 
 class _Body:
@@ -354,7 +238,7 @@ class McapFile:
         self.handle.seek(begin)
         left = end - begin
         while left > 0:
-            block = self.handle.read(min(_BLOCK, left))
+            block = self.handle.read(min(BLOCK, left))
             if not block:
                 return
             left -= len(block)
@@ -468,7 +352,7 @@ class McapFile:
         times: tuple[int | None, int | None],
     ) -> Iterator[tuple[Channel, int, bytes | None]]:
         limit = max(RECORDS_FLOOR, len(compressed) * RECORDS_PER_COMPRESSED_BYTE)
-        inner = _Source(_decompressed(compressed, compression, size, f"{self.name}: {what}"), size)
+        inner = _Source(decompressed(compressed, compression, size, f"{self.name}: {what}"), size)
         kinds = frozenset({_SCHEMA, _CHANNEL, _MESSAGE})
         for count, (opcode, body, offset) in enumerate(self._records(0, size, what, kinds, inner), 1):
             if count > limit:
@@ -494,60 +378,9 @@ class McapFile:
 def _skip(src: _Source, length: int, where: int) -> None:
     left = length
     while left > 0:
-        step = min(left, _BLOCK)
+        step = min(left, BLOCK)
         src.read(step, f"the record at byte {where}")
         left -= step
-
-
-def _decompressed(data: bytes, compression: str, size: int, what: str) -> Iterator[bytes]:
-    """The chunk's records, a block at a time, never more than ``size`` (what the chunk declares)."""
-    produced = 0
-    if compression == "":
-        blocks: Iterator[bytes] = iter([data[i : i + _BLOCK] for i in range(0, len(data), _BLOCK)])
-    elif compression == "zstd":
-        blocks = _zstd_blocks(data, what)
-    elif compression == "lz4":
-        blocks = _lz4_blocks(data, what)
-    else:
-        raise RecordingProblem(
-            f"{what} is compressed with {compression[:20]!r}, which this reader cannot read"
-        )
-    for block in blocks:
-        produced += len(block)
-        if produced > size:
-            raise RecordingProblem(f"{what} decompresses to more than the {size} bytes it declares")
-        yield block
-
-
-def _zstd_blocks(data: bytes, what: str) -> Iterator[bytes]:
-    import zstandard  # noqa: PLC0415
-
-    reader = zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data), read_across_frames=True)
-    while True:
-        try:
-            block = reader.read(_BLOCK)
-        except zstandard.ZstdError as exc:
-            raise RecordingProblem(f"{what} is not valid zstd data ({exc})") from None
-        if not block:
-            return
-        yield block
-
-
-def _lz4_blocks(data: bytes, what: str) -> Iterator[bytes]:
-    import lz4.frame  # type: ignore[import-untyped]  # noqa: PLC0415
-
-    decompressor = lz4.frame.LZ4FrameDecompressor()
-    pending = data
-    while True:
-        try:
-            block = decompressor.decompress(pending, max_length=_BLOCK)
-        except RuntimeError as exc:
-            raise RecordingProblem(f"{what} is not valid lz4 data ({exc})") from None
-        pending = b""
-        if block:
-            yield block
-        if decompressor.eof or (not block and decompressor.needs_input):
-            return
 
 
 def _not_mcap(head: bytes, name: str) -> str:
@@ -557,66 +390,3 @@ def _not_mcap(head: bytes, name: str) -> str:
     elif head.startswith(b"SQLite format"):
         what = "a SQLite file (a ROS 2 .db3 bag?), not MCAP"
     return f"{name} is not an MCAP recording: it is {what} (MCAP starts with \\x89MCAP0)"
-
-
-# --- schemas ----------------------------------------------------------------------------------------------
-
-_SECTION = re.compile(r"^={10,}\s*$", re.MULTILINE)
-_PRIMITIVES = frozenset(
-    {"bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64"}
-    | {"float32", "float64", "string", "wstring", "time", "duration"}
-)
-
-
-def schema_problem(schema: Schema) -> str | None:
-    """Why a ``ros2msg``/``ros1msg`` schema cannot be decoded safely (a type containing itself, nesting over
-    :data:`MAX_NESTING`), or ``None``."""
-    if schema.encoding not in ("ros2msg", "ros1msg"):
-        return None
-    text = schema.data.decode("utf-8", "replace")
-    sections = _SECTION.split(text)
-    root = schema.name.replace("/msg/", "/")
-    fields: dict[str, list[str]] = {}
-    for index, section in enumerate(sections):
-        lines = [ln.split("#", 1)[0].strip() for ln in section.splitlines()]
-        lines = [ln for ln in lines if ln]
-        name = root
-        if index:
-            if not lines or not lines[0].startswith("MSG:"):
-                continue
-            name = lines.pop(0)[4:].strip().replace("/msg/", "/")
-        fields[name] = [_base(ln.split()[0], name) for ln in lines if len(ln.split()) >= 2 and "=" not in ln]
-    return _nesting(fields, root, schema.name)
-
-
-def _base(spelled: str, owner: str) -> str:
-    base = spelled.split("[", 1)[0].split("<=", 1)[0].replace("/msg/", "/")
-    if base in _PRIMITIVES or "/" in base:
-        return base
-    if base == "Header":
-        return "std_msgs/Header"
-    return f"{owner.split('/', maxsplit=1)[0]}/{base}"
-
-
-def _nesting(fields: dict[str, list[str]], root: str, shown: str) -> str | None:
-    """Depth-first without recursion: a type met again while it is open is a cycle; the open path is the
-    nesting."""
-    state: dict[str, bool] = {root: False}  # False: open, True: done
-    stack = [(root, iter(fields.get(root, [])))]
-    while stack:
-        child = next(stack[-1][1], None)
-        if child is None:
-            state[stack.pop()[0]] = True
-            continue
-        if child not in fields or state.get(child) is True:
-            continue
-        if child in state:
-            return (
-                f"its schema {shown[:100]} has a type that contains itself ({child[:100]}); "
-                "it was not decoded"
-            )
-        if len(stack) >= MAX_NESTING:
-            return f"its schema {shown[:100]} nests types over {MAX_NESTING} levels deep; it was not decoded"
-        state[child] = False
-        stack.append((child, iter(fields[child])))
-    return None
