@@ -115,22 +115,17 @@ async def run(
             reading = functools.partial(_messages, at=at, window=window, topics=topics, budget=budget)
             return await asyncio.to_thread(reading, file, summary)
         if mode == "map":
-            map_topic, path_topic = (
-                [*(topics or []), "/map", "/odom"] if not topics or len(topics) >= 2 else [topics[0], "/odom"]
-            )[:2]
-            return await asyncio.to_thread(
-                functools.partial(
-                    _map, map_topic=map_topic, path_topic=path_topic, max_size=PICTURE_SIZE, budget=budget
-                ),
-                file,
-                summary,
-            )
+            pair = [*(topics or ["/map"]), "/odom"]  # the map, then the path (/odom unless given)
+            drawing = functools.partial(_map, map_topic=pair[0], path_topic=pair[1], budget=budget)
+            return await asyncio.to_thread(drawing, file, summary)
         wanted = _wanted(fields, summary)
         if mode == "stats":
             return await asyncio.to_thread(_stats, file, summary, wanted, BUCKETS, budget)
         return await asyncio.to_thread(_plot, file, summary, wanted, PICTURE_SIZE, budget)
     except NotARecording as exc:
         raise ToolFailure(f"{exc} Nothing more was read.") from None
+    except OSError as exc:
+        raise ToolFailure(f"Cannot read {file!r}: {exc.strerror or exc}.") from None
     except FieldError as exc:
         raise ToolFailure(f"{exc} Fix the field and call again.") from None
 
@@ -387,8 +382,8 @@ def _map(
     *,
     map_topic: str,
     path_topic: str,
-    max_size: int,
     budget: Budget,
+    max_size: int = PICTURE_SIZE,
 ) -> ToolAnswer:
     known = {t.topic for t in summary.topics}
     if map_topic not in known:
@@ -416,11 +411,7 @@ def _map(
     path = [(p.x, p.y) for p in points[::step]]
     overlay = Overlay(robot=points[-1] if points else None, path=path)
     picture = draw_map(grid, max_size=max_size, overlay=overlay)
-    notes = []
-    if path_topic not in known:
-        notes.append(f"{path_topic} is not in the recording: no path drawn.")
-    elif found.note:
-        notes.append(found.note)
+    note = f"{path_topic} is not in the recording: no path drawn." if path_topic not in known else found.note
     travelled = sum(math.dist(a, b) for a, b in itertools.pairwise(path))
     where = (
         f", from ({points[0].x:.2f}, {points[0].y:.2f}) to ({points[-1].x:.2f}, {points[-1].y:.2f}) in "
@@ -431,16 +422,9 @@ def _map(
     text = (
         f"{file}: {map_topic} ({grid.width}x{grid.height} cells of {grid.resolution:g} m) with "
         f"{len(points)} poses of {path_topic} ({travelled:.2f} m driven){where}."
-    )
-    if notes:
-        text += " " + " ".join(notes)
-    details = {
-        "poses": len(points),
-        "metres": round(travelled, 3),
-        "map_frame": grid.frame_id,
-        "path_frame": found.frame,
-        "placed": not found.note,
-    }
+    ) + (f" {note}" if note else "")
+    details = {"poses": len(points), "metres": round(travelled, 3), "map_frame": grid.frame_id}
+    details |= {"path_frame": found.frame, "placed": not found.note}
     return ToolAnswer(
         text=text,
         data=ReadRecordingAnswer(file=file, mode="map", details=details),
