@@ -188,6 +188,18 @@ def good_json(folder: Path) -> Path:
     return _file(folder, "good.mcap", body + footer())
 
 
+def many_schemas(folder: Path, count: int = 200) -> Path:
+    """One chunk of ``count`` distinct 1 MiB schemas of zeros (a few kB compressed, 200 MiB held)."""
+    compressor = zstandard.ZstdCompressor().compressobj()
+    text = bytes(1024 * 1024 - 64)
+    parts = [compressor.compress(schema(sid=index + 1, text=text)) for index in range(count)]
+    parts.append(compressor.flush())
+    data = b"".join(parts)
+    size = len(schema(text=text)) * count
+    body = struct.pack("<QQQI", 0, 2**40, size, 0) + _string("zstd") + struct.pack("<Q", len(data)) + data
+    return _file(folder, "schemas.mcap", record(0x06, body) + footer())
+
+
 #: Every class, by name: the writer and what the refusal names.
 BOMBS: dict[str, tuple[Callable[[Path], Path], str]] = {
     "declared 2 GB chunk": (chunk_declaring, "uncompressed"),
@@ -200,4 +212,5 @@ BOMBS: dict[str, tuple[Callable[[Path], Path], str]] = {
     "self-recursive schema": (recursive_schema, "contains itself"),
     "100,000 nesting levels": (deep_schema, "declares"),
     "100,000 nested JSON arrays": (deep_json, "nest"),
+    "200 schemas of 1 MiB": (many_schemas, "schemas, channels and chunk indexes would take"),
 }

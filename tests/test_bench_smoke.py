@@ -51,7 +51,7 @@ TARGET_ROWS = (
     "16c",
     "16f",
     "16g",
-    *(f"17{letter}" for letter in "abcdefghij"),
+    *(f"17{letter}" for letter in "abcdefghijk"),
 )
 
 

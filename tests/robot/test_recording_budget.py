@@ -36,6 +36,7 @@ SMALL = {
     "huge index length": (bombs.huge_index, "points past the end of the file"),
     "truncated file": (bombs.truncated, "cut off"),
     "100,000 nesting levels": (bombs.deep_schema, "more than any real one"),
+    "200 schemas of 1 MiB": (bombs.many_schemas, "chunk indexes would take over 32 MiB"),
 }
 
 

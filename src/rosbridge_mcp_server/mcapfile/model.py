@@ -13,6 +13,7 @@ __all__ = [
     "MAX_STRING",
     "RECORDS_FLOOR",
     "RECORDS_PER_COMPRESSED_BYTE",
+    "RECORD_COST",
     "Budget",
     "Channel",
     "ChunkIndex",
@@ -36,6 +37,8 @@ MAX_STRING = 4096
 MAX_NESTING = 64
 #: Bytes of a message index entry in memory (its log time) while a summary is made.
 INDEX_ENTRY_COST = 64
+#: Bytes a schema, channel or chunk index costs in memory besides its data (Python objects).
+RECORD_COST = 512
 
 
 class RecordingProblem(ValueError):
@@ -110,6 +113,8 @@ class Statistics:
     message_count: int
     start: int
     end: int
+    #: Messages per channel id, as the file declares them.
+    channel_counts: dict[int, int] = field(default_factory=dict)
 
 
 @dataclass

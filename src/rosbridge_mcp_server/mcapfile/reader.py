@@ -14,6 +14,7 @@ from rosbridge_mcp_server.mcapfile.model import (
     MAGIC,
     MAX_SCHEMA,
     MAX_STRING,
+    RECORD_COST,
     RECORDS_FLOOR,
     RECORDS_PER_COMPRESSED_BYTE,
     Budget,
@@ -107,6 +108,7 @@ class McapFile:
         if head != MAGIC:
             raise RecordingProblem(_not_mcap(head, name))
         self.profile = self.library = ""
+        self._held = 0  # bytes the schemas, channels and chunk indexes kept take (see _hold)
 
     # --- the summary ------------------------------------------------------------------------------------
 
@@ -141,10 +143,12 @@ class McapFile:
             found.channels.update(self.channels)
         elif opcode == _CHUNK_INDEX:
             found.chunk_indexes.append(self._chunk_index(body, where))
+            self._hold(RECORD_COST + 16 * len(found.chunk_indexes[-1].index_offsets))
         elif opcode == _STATISTICS:
             count = body.number("Q")
             body.take(2 + 4 + 4 + 4 + 4)
-            found.statistics = Statistics(count, body.number("Q"), body.number("Q"))
+            start, end = body.number("Q"), body.number("Q")
+            found.statistics = Statistics(count, start, end, body.pairs("H", "Q"))
 
     def _chunk_index(self, body: _Body, where: int) -> ChunkIndex:
         start, end, offset, length = body.number("Q"), body.number("Q"), body.number("Q"), body.number("Q")
@@ -369,10 +373,24 @@ class McapFile:
         if opcode == _SCHEMA:
             sid = body.number("H")
             name, encoding = body.string(), body.string()
-            self.schemas[sid] = Schema(sid, name, encoding, body.take(body.number("I")))
+            schema = Schema(sid, name, encoding, body.take(body.number("I")))
+            old = self.schemas.get(sid)
+            self._hold(len(schema.data) - (len(old.data) if old else -RECORD_COST))
+            self.schemas[sid] = schema
         else:
             cid, sid = body.number("H"), body.number("H")
+            self._hold(0 if cid in self.channels else RECORD_COST)
             self.channels[cid] = Channel(cid, sid, body.string(), body.string())
+
+    def _hold(self, size: int) -> None:
+        """Count what the schemas, channels and chunk indexes kept take, held to an eighth of the budget (a
+        real recording's take a few hundred kilobytes)."""
+        self._held += size
+        if self._held > self.budget.memory // 8:
+            raise RecordingProblem(
+                f"{self.name}: its schemas, channels and chunk indexes would take over "
+                f"{byte_size(self.budget.memory // 8)} (an eighth of this server's budget for one call)"
+            )
 
 
 def _skip(src: _Source, length: int, where: int) -> None:

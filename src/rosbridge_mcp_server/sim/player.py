@@ -144,17 +144,24 @@ class Player:
         self.kit.loops.append(self._play)
 
     def _channels(self) -> tuple[dict[str, int], dict[str, str]]:
-        """Messages and schema name per topic, the whole file read through once within the budget (so a
-        hostile file is refused before anything plays); a channel whose schema cannot be decoded safely is
-        left out, with a warning."""
+        """Messages and schema name per topic: from the summary's statistics, else the whole file read through
+        once within the budget (so a hostile file is refused before anything plays); a channel whose schema
+        cannot be decoded safely is left out, with a warning."""
         counts: dict[str, int] = {}
         try:
             with self.path.open("rb") as handle:
                 mcap = McapFile(
                     handle, self.path.stat().st_size, Budget(PLAY_MEMORY, CHECK_SECONDS), self.path.name
                 )
-                for channel, _, _ in mcap.messages(wanted=set()):
-                    counts[channel.topic] = counts.get(channel.topic, 0) + 1
+                summary = mcap.summary()
+                if summary is not None and summary.statistics and summary.statistics.channel_counts:
+                    mcap.schemas.update(summary.schemas)
+                    mcap.channels.update(summary.channels)
+                    declared = summary.statistics.channel_counts
+                    counts = {ch.topic: declared.get(cid, 0) for cid, ch in summary.channels.items()}
+                else:
+                    for channel, _, _ in mcap.messages(wanted=set()):
+                        counts[channel.topic] = counts.get(channel.topic, 0) + 1
         except RecordingProblem as exc:
             raise PlayError(f"{self.path} cannot be played: {exc}") from None
         except OSError as exc:
