@@ -52,6 +52,8 @@ __all__ = [
 
 #: The seconds one call may spend reading a recording.
 READ_SECONDS = 30.0
+#: Bytes one sample of a field series holds (its time and value as Python floats in two lists).
+SAMPLE_COST = 64
 
 
 class NotARecording(RecordingProblem):
@@ -328,8 +330,16 @@ def field_series(
         (t, p): Series(t, p, unit_of(types.get(t, ""), p)) for t, paths in wanted.items() for p in paths
     }
     counts = dict.fromkeys(wanted, 0)
+    budget = budget or read_budget()
     for topic, log_time, message in decoded_messages(path, list(wanted), budget=budget):
         counts[topic] += 1
+        if counts[topic] % 65536 == 0:
+            samples = sum(len(line.times) for line in series.values())
+            if samples * SAMPLE_COST > budget.memory:
+                raise _refusal(
+                    path,
+                    RecordingProblem(f"its fields hold over {samples} samples, over the budget of one call"),
+                )
         at = (log_time - start_ns) / 1e9
         for field_path in wanted[topic]:
             try:
