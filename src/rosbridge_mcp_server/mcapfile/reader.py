@@ -379,8 +379,10 @@ class McapFile:
             self.schemas[sid] = schema
         else:
             cid, sid = body.number("H"), body.number("H")
-            self._hold(0 if cid in self.channels else RECORD_COST)
-            self.channels[cid] = Channel(cid, sid, body.string(), body.string())
+            channel = Channel(cid, sid, body.string(), body.string())
+            old_channel = self.channels.get(cid)
+            self._hold(_cost(channel) - (_cost(old_channel) if old_channel else 0))
+            self.channels[cid] = channel
 
     def _hold(self, size: int) -> None:
         """Count what the schemas, channels and chunk indexes kept take, held to an eighth of the budget (a
@@ -391,6 +393,10 @@ class McapFile:
                 f"{self.name}: its schemas, channels and chunk indexes would take over "
                 f"{byte_size(self.budget.memory // 8)} (an eighth of this server's budget for one call)"
             )
+
+
+def _cost(channel: Channel) -> int:
+    return RECORD_COST + len(channel.topic) + len(channel.message_encoding)
 
 
 def _skip(src: _Source, length: int, where: int) -> None:

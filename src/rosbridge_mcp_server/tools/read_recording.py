@@ -50,6 +50,8 @@ __all__ = ["SPEC", "ReadRecordingAnswer", "run"]
 BUDGET = 8000
 MAX_SERIES = 8
 MAX_MESSAGES = 50
+#: Topics a summary lists (text and structured content alike).
+MAX_TOPICS = 500
 PICTURE_SIZE = 800
 #: stats: the recording's time span in this many windows.
 BUCKETS = 10
@@ -169,7 +171,7 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
         f"{summary.seconds:.1f} s from {start} (profile {summary.profile or '-'}; {how})."
     ]
     topics = []
-    for t in summary.topics:
+    for t in summary.topics[:MAX_TOPICS]:
         timing = t.timing
         rate = f", {timing.rate_hz:g} Hz" if timing.rate_hz is not None else ""
         span = f", {timing.first:g}-{timing.last:g} s" if timing.first is not None else ""
@@ -192,7 +194,10 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
                 "gaps": [{"at": g.at, "seconds": g.seconds} for g in timing.gaps],
             }
         )
-    text = _fit(lines, "The structured answer lists every topic.")
+    more = len(summary.topics) - MAX_TOPICS
+    text = _fit(lines, f"The structured answer lists up to {MAX_TOPICS} topics.") + (
+        f"\n{more} more topics are not listed." if more > 0 else ""
+    )
     details = {
         "bytes": summary.size,
         "messages": summary.messages,
