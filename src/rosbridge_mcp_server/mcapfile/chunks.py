@@ -11,6 +11,8 @@ __all__ = ["BLOCK", "decompressed"]
 
 #: Bytes read or decompressed at a time.
 BLOCK = 1024 * 1024
+#: The largest zstd window a chunk may ask for (a recorder's chunks need a few MiB).
+MAX_WINDOW = 32 * 1024 * 1024
 
 
 def decompressed(data: bytes, compression: str, size: int, what: str) -> Iterator[bytes]:
@@ -36,7 +38,9 @@ def decompressed(data: bytes, compression: str, size: int, what: str) -> Iterato
 def _zstd_blocks(data: bytes, what: str) -> Iterator[bytes]:
     import zstandard  # noqa: PLC0415
 
-    reader = zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data), read_across_frames=True)
+    # The frame's window is memory the decompressor takes at once: a frame may declare up to 2 GiB of it.
+    decompressor = zstandard.ZstdDecompressor(max_window_size=MAX_WINDOW)
+    reader = decompressor.stream_reader(io.BytesIO(data), read_across_frames=True)
     while True:
         try:
             block = reader.read(BLOCK)

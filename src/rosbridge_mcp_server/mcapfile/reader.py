@@ -61,6 +61,8 @@ class _Body:
     def pairs(self, key: str, value: str) -> dict[int, int]:
         size = self.number("I")
         end = self.pos + size
+        if size > 65536 * struct.calcsize("<" + key + value):  # more entries than a u16 key has values
+            raise RecordingProblem(f"{self.what} is malformed: a map of {size} bytes, more than its keys can")
         if end > len(self.data):
             raise RecordingProblem(f"{self.what} is malformed: a map runs past the record's end")
         out: dict[int, int] = {}
