@@ -139,3 +139,13 @@ def test_the_file_reader_imports_nothing_of_ours() -> None:
             ln for ln in module.read_text().splitlines() if "rosbridge_mcp_server" in ln and "import" in ln
         ]
         assert all("rosbridge_mcp_server.mcapfile" in ln for ln in imports), (module.name, imports)
+
+
+def test_an_abandoned_budget_stops_the_reading_thread_at_its_next_check(tmp_path: Path) -> None:
+    """A cancelled read_recording marks its budget abandoned: the thread reading the file stops there."""
+    path = bombs.tiny_messages(tmp_path, 40_000)
+    budget = read_budget()
+    reading = decoded_messages(path, budget=budget)
+    budget.abandoned = True
+    with pytest.raises(NotARecording, match="the call was cancelled, so reading stopped"):
+        list(reading)

@@ -66,8 +66,12 @@ class Budget:
     memory: int
     seconds: float
     started: float = field(default_factory=time.monotonic)
+    #: Set when the call was cancelled: the reading (on a thread of its own) stops at its next check.
+    abandoned: bool = False
 
     def check_time(self) -> None:
+        if self.abandoned:
+            raise RecordingProblem("the call was cancelled, so reading stopped")
         if time.monotonic() - self.started > self.seconds:
             raise RecordingProblem(
                 f"reading it took over {self.seconds:g} s, this server's time budget for one call; it was "

@@ -106,11 +106,6 @@ async def run(
     budget = read_budget()  # one call's memory and time, shared by the summary and the mode
     try:
         summary = await asyncio.to_thread(summarize_recording, path, budget)
-    except NotARecording as exc:
-        raise ToolFailure(f"{exc} It was not read.") from None
-    except OSError as exc:
-        raise ToolFailure(f"Cannot read {file!r}: {exc.strerror or exc}.") from None
-    try:
         if mode == "summary":
             return _summary(file, summary)
         if mode == "messages":
@@ -125,11 +120,14 @@ async def run(
             return await asyncio.to_thread(_stats, file, summary, wanted, BUCKETS, budget)
         return await asyncio.to_thread(_plot, file, summary, wanted, PICTURE_SIZE, budget)
     except NotARecording as exc:
-        raise ToolFailure(f"{exc} Nothing more was read.") from None
+        raise ToolFailure(f"{exc} It was not read further.") from None
     except OSError as exc:
         raise ToolFailure(f"Cannot read {file!r}: {exc.strerror or exc}.") from None
     except FieldError as exc:
         raise ToolFailure(f"{exc} Fix the field and call again.") from None
+    except asyncio.CancelledError:
+        budget.abandoned = True  # the reading thread stops at its next check instead of reading on
+        raise
 
 
 # --- listing ------------------------------------------------------------------------------------------------
