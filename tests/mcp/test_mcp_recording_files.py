@@ -120,8 +120,22 @@ async def test_the_map_mode_places_odom_in_the_map_with_the_recorded_tf(
         tf = await session.ok("read_recording", {"file": "nav", "mode": "map", "topics": ["/map", "/tf"]})
         assert "to (5.54, 5.54) in map" in text_of(tf)
         assert tf.structured_content["details"]["poses"] > 0
+        plan = await session.ok("read_recording", {"file": "nav", "mode": "map", "topics": ["/map", "/plan"]})
+        assert "/plan has no message in the recording: no path drawn." in text_of(plan)  # no goal, no plan
         scan = await session.ok("read_recording", {"file": "nav", "mode": "map", "topics": ["/map", "/scan"]})
         assert "holds no pose: a path is read from Odometry" in text_of(scan)
+
+
+async def test_the_map_mode_draws_a_recorded_plan(sim_ros2: SimulatedRobot, tmp_path: Path) -> None:
+    """The turtle world's planner publishes /plan (nav_msgs/Path): its last plan is the path drawn."""
+    directory = tmp_path / "recordings"
+    async with open_session(sim_ros2.url, record_dir=str(directory)) as session:
+        await session.ok("record", {"topics": ["/map", "/plan"], "duration": 1.5, "name": "plan"})
+        arguments = {"file": "plan", "mode": "map", "topics": ["/map", "/plan"]}
+        plan = await session.ok("read_recording", arguments)
+    assert plan.structured_content["details"]["poses"] > 1, text_of(plan)
+    assert plan.structured_content["details"]["placed"] is True
+    assert "to (9.50, 3.00) in map" in text_of(plan)
 
 
 async def test_an_odom_path_without_tf_says_plainly_it_could_not_be_placed(

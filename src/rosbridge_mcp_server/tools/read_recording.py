@@ -414,7 +414,9 @@ def _map(
     path = [(p.x, p.y) for p in points[::step]]
     overlay = Overlay(robot=points[-1] if points else None, path=path)
     picture = draw_map(grid, max_size=max_size, overlay=overlay)
-    note = f"{path_topic} is not in the recording: no path drawn." if path_topic not in known else found.note
+    heard = any(t.topic == path_topic and t.timing.count for t in summary.topics)
+    note = found.note if heard else f"{path_topic} has no message in the recording: no path drawn."
+    note = note if path_topic in known else f"{path_topic} is not in the recording: no path drawn."
     travelled = sum(math.dist(a, b) for a, b in itertools.pairwise(path))
     where = (
         f", from ({points[0].x:.2f}, {points[0].y:.2f}) to ({points[-1].x:.2f}, {points[-1].y:.2f}) in "
