@@ -61,8 +61,9 @@ SPEC = ToolSpec(
 )
 
 
-#: A map this small is far under rosbridge's fragment size (10 MB) as CBOR: it was not dropped for its size.
-_CBOR_DROPPED_CELLS = 2_000_000
+#: A map this small fits one CBOR frame of any bridge (rosbridge fragments at 10 MB by default, and setups
+#: that lower it keep it far above 50 kB): it was not dropped for its size.
+_CBOR_DROPPED_CELLS = 50_000
 
 
 async def _map_message(
