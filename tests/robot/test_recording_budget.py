@@ -7,6 +7,7 @@ on them (the benchmark, ``scripts/benchmarks/recording_bombs.py``, writes the is
 
 from __future__ import annotations
 
+import struct
 import sys
 import time
 from pathlib import Path
@@ -149,3 +150,20 @@ def test_an_abandoned_budget_stops_the_reading_thread_at_its_next_check(tmp_path
     budget.abandoned = True
     with pytest.raises(NotARecording, match="the call was cancelled, so reading stopped"):
         list(reading)
+
+
+def test_chunk_indexes_naming_overlapping_message_indexes_are_refused(tmp_path: Path) -> None:
+    """The fan-out shifted: chunk indexes pointing a few bytes apart into one message index (each would read
+    the rest of it again) are refused before any is read."""
+    path = bombs.fanout(tmp_path, chunks=1, entries=200)
+    data = path.read_bytes()
+    at = data.rindex(b"\x08", 0, data.rindex(b"\x0b"))  # the one chunk index record
+    length = struct.unpack_from("<Q", data, at + 1)[0]
+    one = data[at : at + 9 + length]
+    offset_at = 9 + 32 + 4 + 2  # the message index offset in the record
+    (index_at,) = struct.unpack_from("<Q", one, offset_at)
+    shifted = bytearray(one)
+    struct.pack_into("<Q", shifted, offset_at, index_at + 16)
+    path.write_bytes(data[:at] + one + bytes(shifted) + data[at + len(one) :])
+    with pytest.raises(NotARecording, match="name the same message index"):
+        summarize_recording(path)

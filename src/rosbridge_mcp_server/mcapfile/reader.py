@@ -3,6 +3,7 @@ and to the call's :class:`~rosbridge_mcp_server.mcapfile.model.Budget` before it
 
 from __future__ import annotations
 
+import itertools
 import struct
 from array import array
 from collections.abc import Iterator
@@ -165,26 +166,12 @@ class McapFile:
         return index
 
     def message_times(self, summary: Summary) -> dict[int, array[int]]:
-        """Each channel's message log times from the message indexes, read without decompressing a chunk."""
+        """Each channel's message log times from the message indexes, read without decompressing a chunk.
+        Each chunk's indexes are read once: regions that coincide or overlap (one index named by many chunk
+        indexes, the fan-out) are refused before any is read."""
         times: dict[int, array[int]] = {cid: array("q") for cid in summary.channels}
-        seen: dict[int, int] = {}
         entries = 0
-        for chunk in summary.chunk_indexes:
-            if not chunk.index_offsets:
-                continue
-            begin = min(chunk.index_offsets.values())
-            end = begin + chunk.index_length
-            if begin < chunk.offset + chunk.length or end > self.size:
-                raise RecordingProblem(
-                    f"{self.name}: a chunk index puts its message index at bytes {begin}-{end}, not after "
-                    f"its chunk and inside the file ({self.size} bytes); the index is malformed"
-                )
-            if begin in seen:
-                raise RecordingProblem(
-                    f"{self.name}: the chunk indexes at bytes {seen[begin]} and {chunk.offset} name the same "
-                    f"message index (byte {begin}); each chunk has its own, so the index is malformed"
-                )
-            seen[begin] = chunk.offset
+        for begin, end in self._index_regions(summary):
             for opcode, body, _ in self._records(begin, end, "a message index", frozenset({_MESSAGE_INDEX})):
                 if opcode != _MESSAGE_INDEX or body is None:
                     continue
@@ -200,6 +187,29 @@ class McapFile:
                 times.setdefault(channel, array("q")).extend(pairs[0::2])
             self.budget.check_time()
         return times
+
+    def _index_regions(self, summary: Summary) -> list[tuple[int, int]]:
+        regions: list[tuple[int, int, int]] = []
+        for chunk in summary.chunk_indexes:
+            if not chunk.index_offsets:
+                continue
+            begin = min(chunk.index_offsets.values())
+            end = begin + chunk.index_length
+            if begin < chunk.offset + chunk.length or end > self.size:
+                raise RecordingProblem(
+                    f"{self.name}: a chunk index puts its message index at bytes {begin}-{end}, not after "
+                    f"its chunk and inside the file ({self.size} bytes); the index is malformed"
+                )
+            regions.append((begin, end, chunk.offset))
+        regions.sort()
+        for (begin, end, first), (later, _, other) in itertools.pairwise(regions):
+            if later < end or later == begin:
+                raise RecordingProblem(
+                    f"{self.name}: the chunk indexes of the chunks at bytes {first} and {other} name the "
+                    f"same message index (bytes {begin}-{end} and from {later}); each chunk has its own, so "
+                    "the index is malformed"
+                )
+        return [(begin, end) for begin, end, _ in regions]
 
     # --- the data section -------------------------------------------------------------------------------
 
