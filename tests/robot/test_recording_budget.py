@@ -167,3 +167,14 @@ def test_chunk_indexes_naming_overlapping_message_indexes_are_refused(tmp_path: 
     path.write_bytes(data[:at] + one + bytes(shifted) + data[at + len(one) :])
     with pytest.raises(NotARecording, match="name the same message index"):
         summarize_recording(path)
+
+
+def test_a_message_too_large_to_decode_within_the_budget_is_refused_unread(tmp_path: Path) -> None:
+    """A 20 MB JSON message (a few kB compressed) would take ~320 MB as objects: refused before it is read."""
+    body = bombs.schema(name="", text=b"", enc="") + bombs.channel(sid=0, enc="json")
+    big = bombs.message(data=b"[" + b" " * (20 * 1024 * 1024) + b"]")
+    path = tmp_path / "big.mcap"
+    path.write_bytes(bombs.MAGIC + bombs.header() + bombs.chunk(body + big) + bombs.footer())
+    assert summarize_recording(path).messages == 1
+    with pytest.raises(NotARecording, match=r"declares 20971522 bytes; decoding it would take about 320 MiB"):
+        list(decoded_messages(path))

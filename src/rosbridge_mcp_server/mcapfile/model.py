@@ -81,7 +81,7 @@ class Budget:
     def check_bytes(self, what: str, needed: int) -> None:
         if needed > self.memory:
             raise RecordingProblem(
-                f"{what}: about {byte_size(needed)}, over this server's budget of "
+                f"{what} about {byte_size(needed)}, over this server's budget of "
                 f"{byte_size(self.memory)} for one call, so it was not read"
             )
 

@@ -318,11 +318,13 @@ class McapFile:
         if not keep:
             _skip(src, length - 22, where)
             return channel, log_time, None
-        if (length - 22) * 4 > self.budget.memory:
+        # Decoded, a message takes several times its bytes (Python numbers, lists; JSON's objects more).
+        needed = (length - 22) * (16 if channel.message_encoding == "json" else 8)
+        if needed > self.budget.memory:
             self.budget.check_bytes(
                 f"the message on {channel.topic[:100]} at byte {where} declares {length - 22} bytes; "
                 "decoding it would take",
-                (length - 22) * 4,
+                needed,
             )
         return channel, log_time, src.read(length - 22, f"the message at byte {where}")
 
@@ -347,8 +349,9 @@ class McapFile:
                 f"{self.name}: {what} declares {data_length} bytes of records in a {length}-byte record; "
                 "the file is damaged"
             )
-        self.budget.check_bytes(f"{self.name}: {what} declares {size} bytes uncompressed", size)
-        self.budget.check_bytes(f"{self.name}: {what} holds {data_length} compressed bytes", data_length * 2)
+        self.budget.check_bytes(f"{self.name}: {what} declares {size} bytes uncompressed, which is", size)
+        held = f"{self.name}: {what} holds {data_length} compressed bytes; reading them would take"
+        self.budget.check_bytes(held, data_length * 2)
         if (window[0] is not None and last < window[0]) or (window[1] is not None and first >= window[1]):
             _skip(src, data_length - len(left_over), where)
             return
