@@ -12,7 +12,7 @@ from pathlib import Path
 
 from rosbridge_mcp_server.robot.messages import TypeDef
 from rosbridge_mcp_server.robot.recording.encoding import MessageCodec
-from rosbridge_mcp_server.robot.recording.files import create_recording
+from rosbridge_mcp_server.robot.recording.files import MCAP_MAGIC, create_recording
 from rosbridge_mcp_server.robot.recording.reading import summarize_recording
 from rosbridge_mcp_server.robot.recording.writing import DISK_RESERVE, DiskBudget, McapFileWriter
 
@@ -68,8 +68,9 @@ def test_sixteen_recordings_at_once_stop_above_the_floor(tmp_path: Path) -> None
     assert disk.free() >= DISK_RESERVE, f"{(DISK_RESERVE - disk.free()) / MIB:.1f} MiB below the floor"
     assert disk.lowest >= DISK_RESERVE
     assert any(writer.state.stopped == "disk" for _, writer in writers)
-    for path, _ in writers:
-        assert summarize_recording(path).indexed  # finished: summary and index written
+    for path, writer in writers:
+        assert path.read_bytes().endswith(MCAP_MAGIC)  # finished: footer and closing magic written
+        assert summarize_recording(path).messages == writer.state.written["/blob"]
 
 
 def test_the_budget_counts_what_every_running_writer_may_still_write() -> None:
