@@ -51,7 +51,7 @@ TARGET_ROWS = (
     "16c",
     "16f",
     "16g",
-    *(f"17{letter}" for letter in "abcdefghijk"),
+    *(f"18{letter}" for letter in "abcdefghijk"),
 )
 
 

@@ -51,7 +51,7 @@ What is measured:
     raw subscriber receives, non-zero commands after the answer) and with a ``navigate_to`` goal running on
     the Nav2 world (to its answer, to ``/odom`` standing still); the bridge killed and restarted on its port
     (to ``list_topics`` succeeding, and no command replayed).
-17. hostile recordings (``--only bombs``; issue 36): each class of MCAP bomb at the size the issue found it
+18. hostile recordings (``--only bombs``; issue 36): each class of MCAP bomb at the size the issue found it
     (``tests/recording_bombs.py``), ``read_recording`` in every mode: refused with a worded error in ≤ 2 s
     with ≤ 50 MiB of peak RSS growth (``VmHWM``).
 

@@ -1,4 +1,4 @@
-"""Item 17: hostile recordings (issue 36) refused by ``read_recording`` within ≤ 2 s and ≤ 50 MiB of peak RSS.
+"""Item 18: hostile recordings (issue 36) refused by ``read_recording`` within ≤ 2 s and ≤ 50 MiB of peak RSS.
 
 Each class of bomb is written at the size the issue found it (``tests/recording_bombs.py``, the tests' own
 writer) into the recording folder of the console script run as Claude Desktop runs it; ``read_recording``
@@ -47,7 +47,7 @@ GROWTH_TARGET = 50 * MIB
 
 
 async def measure_recording_bombs(ctx: Context) -> list[Row]:
-    """Item 17: each class of hostile MCAP file, every read_recording mode: time and peak RSS growth."""
+    """Item 18: each class of hostile MCAP file, every read_recording mode: time and peak RSS growth."""
     rows: list[Row] = []
     with tempfile.TemporaryDirectory(prefix="bench-bombs-") as folder:
         written = {name: write(Path(folder)) for name, (write, _) in bombs.BOMBS.items()}
@@ -72,12 +72,12 @@ async def measure_recording_bombs(ctx: Context) -> list[Row]:
                     answered = not result.is_error and not arguments
                     worded = result.is_error and "Error executing tool" not in text
                     if not (answered or worded):
-                        log.warning("item 17: %s %s answered %s", name, arguments, text[:300])
+                        log.warning("item 18: %s %s answered %s", name, arguments, text[:300])
                         refused = False
                 met = refused and slowest <= SECONDS_TARGET and growth <= GROWTH_TARGET
                 rows.append(
                     Row(
-                        f"17{chr(ord('a') + index)}",
+                        f"18{chr(ord('a') + index)}",
                         f"`read_recording`, every mode, on {name} ({path.stat().st_size / 1024:.1f} kB)",
                         n=len(MODES),
                         median=ms(slowest),

@@ -73,7 +73,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("nav2", "12", "graph tools on a Nav2 robot", measure_nav2, 300.0),
     ("diagnose", "13", "diagnose and the log ring", measure_diagnose, 300.0),
     ("recording", "14", "recording", measure_recording, 300.0),
-    ("bombs", "17", "hostile recordings", measure_recording_bombs, 240.0),
+    ("bombs", "18", "hostile recordings", measure_recording_bombs, 240.0),
     ("edge", "15", "the server alone over the floor (issue 26 item 8)", measure_edge, 300.0),
     ("stops", "16", "stop_robot and reconnects, as the robot sees them", measure_stops, 240.0),
 ]
