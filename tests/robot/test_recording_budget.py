@@ -178,3 +178,14 @@ def test_a_message_too_large_to_decode_within_the_budget_is_refused_unread(tmp_p
     assert summarize_recording(path).messages == 1
     with pytest.raises(NotARecording, match=r"declares 20971522 bytes; decoding it would take about 320 MiB"):
         list(decoded_messages(path))
+
+
+def test_a_summary_over_the_budget_falls_back_to_the_files_statistics(tmp_path: Path) -> None:
+    """An index too large to time every message (here: a small budget) still gives counts and mean rates,
+    saying what is not known."""
+    path = bombs.fanout(tmp_path, chunks=1, entries=4000)
+    summary = summarize_recording(path, Budget(256 * 1024, 10.0))
+    assert summary.topics[0].timing.count == 0  # the writer's statistics declare no per-channel count
+    assert summary.messages == 4000
+    assert "gaps are not known" in summary.note
+    assert "over this server's budget of 256 KiB" in summary.note

@@ -18,6 +18,7 @@ __all__ = [
     "Channel",
     "ChunkIndex",
     "CutOff",
+    "OverBudget",
     "RecordingProblem",
     "Schema",
     "Statistics",
@@ -36,7 +37,7 @@ MAX_STRING = 4096
 #: How deep a message type may nest (a real ROS type nests a handful of levels).
 MAX_NESTING = 64
 #: Bytes of a message index entry in memory (its log time) while a summary is made.
-INDEX_ENTRY_COST = 64
+INDEX_ENTRY_COST = 96
 #: Bytes a schema, channel or chunk index costs in memory besides its data (Python objects).
 RECORD_COST = 512
 
@@ -47,6 +48,10 @@ class RecordingProblem(ValueError):
 
 class CutOff(RecordingProblem):
     """The file ends inside a record (a recorder killed while writing, or a file cut short)."""
+
+
+class OverBudget(RecordingProblem):
+    """Reading it would hold more memory than one call's budget (the file may be fine, only large)."""
 
 
 def byte_size(count: int) -> str:
@@ -80,7 +85,7 @@ class Budget:
 
     def check_bytes(self, what: str, needed: int) -> None:
         if needed > self.memory:
-            raise RecordingProblem(
+            raise OverBudget(
                 f"{what} about {byte_size(needed)}, over this server's budget of "
                 f"{byte_size(self.memory)} for one call, so it was not read"
             )

@@ -163,10 +163,10 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
     how = "from its summary and index" if summary.indexed else "read through (it has no summary section)"
     if summary.damaged:
         how += f"; it breaks off: {summary.damaged}, so only what came before is counted"
+    how += f"; {summary.note}" if summary.note else ""
     lines = [
-        f"{file}: {summary.size / 1e6:.1f} MB, {summary.messages} messages on {len(summary.topics)} topics "
-        "over "
-        f"{summary.seconds:.1f} s from {start} (profile {summary.profile or '-'}; {how})."
+        f"{file}: {summary.size / 1e6:.1f} MB, {summary.messages} messages on {len(summary.topics)} topics"
+        f" over {summary.seconds:.1f} s from {start} (profile {summary.profile or '-'}; {how})."
     ]
     topics = []
     for t in summary.topics[:MAX_TOPICS]:

@@ -30,6 +30,7 @@ from rosbridge_mcp_server.mcapfile import (
     Budget,
     CutOff,
     McapFile,
+    OverBudget,
     RecordingProblem,
     Summary,
     schema_problem,
@@ -89,6 +90,7 @@ class RecordingSummary:
     topics: tuple[TopicSummary, ...]
     indexed: bool  #: whether it came from the summary and index (False: the file was read through)
     damaged: str = ""  #: where a file read through breaks off, when it does
+    note: str = ""  #: what the summary could not work out within the budget
 
     @property
     def seconds(self) -> float:
@@ -125,15 +127,23 @@ def _refusal(path: Path, problem: RecordingProblem) -> NotARecording:
 
 
 def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
-    times = mcap.message_times(summary)
     assert summary.statistics is not None
     start, end = summary.statistics.start, summary.statistics.end
+    note = ""
+    try:
+        times = mcap.message_times(summary)
+        timings = {cid: timing_of(times.get(cid, array("q")), start) for cid in summary.channels}
+    except OverBudget as exc:
+        # Too many messages to time each one: the counts the file declares, and mean rates over its span.
+        note = f"{exc}; counts and mean rates are the file's statistics, gaps are not known"
+        declared, span = summary.statistics.channel_counts, max(end - start, 0) / 1e9
+        timings = {cid: _counted(declared.get(cid, 0), span) for cid in summary.channels}
     topics = [
         TopicSummary(
             channel.topic,
             schema.name if (schema := summary.schemas.get(channel.schema_id)) else "",
             channel.message_encoding,
-            timing_of(times.get(cid, array("q")), start),
+            timings[cid],
         )
         for cid, channel in sorted(summary.channels.items(), key=lambda kv: kv[1].topic)
     ]
@@ -147,7 +157,13 @@ def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
         summary.statistics.message_count,
         tuple(topics),
         indexed=True,
+        note=note,
     )
+
+
+def _counted(count: int, span: float) -> TopicTiming:
+    rate = round((count - 1) / span, 2) if count > 1 and span > 0 else None
+    return TopicTiming(count, None, None, rate, ())
 
 
 def _scan(path: Path, mcap: McapFile) -> RecordingSummary:
