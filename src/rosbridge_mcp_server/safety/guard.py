@@ -76,7 +76,8 @@ class Audit:
         """Also hand every entry to ``callback`` (e.g. the operator console); it must not block."""
         self._listeners.append(callback)
 
-    def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
+    def write(self, act: Act, outcome: str, detail: str | None = None) -> str | None:
+        """Write the line; why it could not go into the audit file, or ``None`` (written, or no file)."""
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
         level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
@@ -99,7 +100,7 @@ class Audit:
             f" [caller {caller}]" if caller else "",
         )
         if self._stream is None and not self._listeners:
-            return
+            return None
         entry: AuditEntry = {
             "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds"),
             "tool": act.tool,
@@ -135,7 +136,7 @@ class Audit:
             except Exception:
                 _log.exception("an audit listener failed")
         if self._stream is None:
-            return
+            return None
         line = json.dumps(entry, ensure_ascii=False, default=str)
         if len(line) > AUDIT_PAYLOAD_LIMIT:
             # A camera frame in every line would bury the audit; its size and start are enough.
@@ -145,9 +146,13 @@ class Audit:
         try:
             self._stream.write(line + "\n")
             self._stream.flush()
-        except (OSError, ValueError):
-            # A full disk must not stop the robot being driven safely; stderr still has the line.
-            _log.exception("could not write to the audit log")
+        except (OSError, ValueError) as exc:
+            # The guard refuses an act whose line this is (nothing unaudited is sent); stderr has the line.
+            _log.error("could not write to the audit log: %s", exc)
+            return (exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)) or type(
+                exc
+            ).__name__
+        return None
 
 
 class PolicyGuard:
@@ -178,9 +183,18 @@ class PolicyGuard:
                 self._refuse(approved, LATCH_RULE, _LATCHED_TEXT)
             if answer != "accept":
                 self._refuse(approved, f"person: {answer}", _answer_text(approved, answer, self.policy))
-            self.audit.write(approved, "confirmed", clamp)
+            unwritten = self.audit.write(approved, "confirmed", clamp)
         else:
-            self.audit.write(approved, "clamped" if clamp else "allowed", clamp)
+            unwritten = self.audit.write(approved, "clamped" if clamp else "allowed", clamp)
+        if unwritten is not None:
+            # An act the audit file cannot show is not sent (a stop is never asked here: it always goes).
+            self._refuse(
+                approved,
+                "audit: the audit file could not be written",
+                f"Not sent: the audit log could not be written ({unwritten}); nothing is sent that the audit "
+                "cannot record. Free space on its disk or fix the file (--audit-log), then call again. "
+                "Stopping still works.",
+            )
         return approved
 
     def record(self, act: Act, outcome: str) -> None:

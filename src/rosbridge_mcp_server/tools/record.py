@@ -30,7 +30,7 @@ _ENDINGS = {
     "duration": "its time was up",
     "stopped": "it was stopped",
     "size": "it reached the size cap",
-    "disk": "the disk was nearly full (it stops with 32 MB left so the file can be finished)",
+    "disk": "the disk neared its 32 MB floor (all recordings together stop above it: each file is whole)",
 }
 
 
