@@ -445,8 +445,8 @@ async def test_a_denied_parameter_is_not_set(sim: SimulatedRobot) -> None:
 async def test_read_only_withholds_set_parameter_and_stop_robot_even_when_tools_picks_them(
     sim_ros2: SimulatedRobot,
 ) -> None:
-    """--tools watch (which holds set_parameter) under read-only lists neither it nor stop_robot."""
-    config = load_config({"ROSBRIDGE_MCP_READ_ONLY": "1"}, url=sim_ros2.url, tools="watch")
+    """--tools watch,set_parameter under read-only lists neither set_parameter nor stop_robot."""
+    config = load_config({"ROSBRIDGE_MCP_READ_ONLY": "1"}, url=sim_ros2.url, tools="watch,set_parameter")
     async with Client(
         build_server(guarded(RosbridgeClient(sim_ros2.url), config), config), mode="legacy"
     ) as mcp:
