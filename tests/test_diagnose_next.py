@@ -21,10 +21,21 @@ CASES: list[tuple[tuple[Step, ...], str]] = [
     ),
     (
         (Step(Look.ACTIVATE, ("/amcl",)), Step(Look.NODE)),
-        'activate it: publish_service {"service": "/amcl/change_state", "request": {"transition": {"id": '
-        "3}}} (or its lifecycle manager's manage_nodes); get_node_info",
+        'activate it: publish_service {"service": "/amcl/change_state", "service_type": '
+        '"lifecycle_msgs/srv/ChangeState", "request": {"transition": {"id": 3}}} (or its lifecycle '
+        'manager\'s manage_nodes); get_node_info {"node": "/amcl"}',
     ),
     ((Step(Look.ONE_MESSAGE, ("/diagnostics",)),), 'subscribe_topic {"topic": "/diagnostics", "count": 1}'),
+    (
+        (Step(Look.STATUSES, ("/diagnostics", "4")),),
+        'subscribe_topic {"topic": "/diagnostics", "count": 8, "duration": 3, "fields": ["status"]} (its '
+        "publishers take turns: one message is likely another's)",
+    ),
+    (
+        (Step(Look.STATUSES, ("/diagnostics", "300")),),
+        'subscribe_topic {"topic": "/diagnostics", "count": 100, "duration": 3, "fields": ["status"]} (its '
+        "publishers take turns: one message is likely another's)",
+    ),
     (
         (Step(Look.WAIT_MESSAGE, ("/scan",)), Step(Look.NODE, ("/lidar",))),
         'subscribe_topic {"topic": "/scan", "timeout": 5}; get_node_info {"node": "/lidar"}',

@@ -29,6 +29,7 @@ import contextlib
 import enum
 import itertools
 import time
+from collections import Counter
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Final, Literal
@@ -116,6 +117,9 @@ class Look(enum.Enum):
     TRANSFORM = enum.auto()
     #: One transform, waiting a while for it (names: target frame, source frame).
     TRANSFORM_WAIT = enum.auto()
+    #: A diagnostics topic's messages until every status on it has come round (names: the topic, how many
+    #: statuses it carries): publishers take turns on one topic, so one message is most likely another's OK.
+    STATUSES = enum.auto()
 
 
 @dataclass(frozen=True)
@@ -495,6 +499,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
     out = []
     statuses = board.statuses()
     not_ok = [s for s in statuses if s.level != 0]
+    on_topic = Counter(s.topic for s in statuses)
     for status in not_ok[:MAX_STATUS_FINDINGS]:
         severity: Literal["problem", "warning"] = "problem" if status.level == 2 else "warning"
         hardware = f" ({status.hardware_id})" if status.hardware_id else ""
@@ -508,7 +513,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
                 f"{status.level_name} {status.name}{hardware}: {status.message or '(no message)'}"
                 + (f" [{values}]" if values else "")
                 + f" ({ago:.0f} s ago)",
-                (Step(Look.ONE_MESSAGE, (status.topic,)),),
+                (Step(Look.STATUSES, (status.topic, str(on_topic[status.topic]))),),
                 nodes=(_status_node(status.name),),
                 details={
                     "level": status.level_name,

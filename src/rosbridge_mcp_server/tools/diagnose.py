@@ -21,6 +21,7 @@ from rosbridge_mcp_server.robot.diagnosis import (
 )
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
+from rosbridge_mcp_server.tools.subscribe_topic import MAX_COUNT
 
 __all__ = ["SPEC", "DiagnoseAnswer", "run"]
 
@@ -105,10 +106,11 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.NODES: lambda: "list_nodes",
     Look.TOPIC: lambda topic: f'get_topic_info {{"topic": "{topic}"}}',
     Look.ACTIVATE: lambda node: (
-        f'activate it: publish_service {{"service": "{node}/change_state", "request": '
-        '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes)'
+        f'activate it: publish_service {{"service": "{node}/change_state", "service_type": '
+        '"lifecycle_msgs/srv/ChangeState", "request": {"transition": {"id": 3}}} (or its lifecycle '
+        "manager's manage_nodes)"
     ),
-    Look.NODE: lambda node=None: "get_node_info" if node is None else f'get_node_info {{"node": "{node}"}}',
+    Look.NODE: lambda node: f'get_node_info {{"node": "{node}"}}',
     Look.ONE_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "count": 1}}',
     Look.WAIT_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "timeout": 5}}',
     Look.STAMPS: lambda topic: f'plot_topic {{"series": ["{topic} header.stamp.sec"], "duration": 5}}',
@@ -118,12 +120,27 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.TRANSFORM_WAIT: lambda target, source: (
         f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5}}'
     ),
+    # Two rounds of every status in at most 3 s (diagnostics come at about 1 Hz); the topic's publishers
+    # take turns, so one message is most likely another's OK.
+    Look.STATUSES: lambda topic, statuses: (
+        f'subscribe_topic {{"topic": "{topic}", "count": {min(MAX_COUNT, max(2, 2 * int(statuses)))}, '
+        '"duration": 3, "fields": ["status"]} (its publishers take turns: one message is likely another\'s)'
+    ),
 }
 
 
 def next_text(steps: Sequence[Step]) -> str:
-    """What to look at next, as calls: ``read_logs {"node": "/amcl", "level": "info"}; list_nodes``."""
-    return "; ".join(_CALLS[step.look](*step.names) + (f" {step.why}" if step.why else "") for step in steps)
+    """What to look at next, as calls: ``read_logs {"node": "/amcl", "level": "info"}; list_nodes``.
+
+    A step without names after one with them is about the same node (``Look.NODE`` after ``Look.ACTIVATE``).
+    """
+    calls = []
+    before: tuple[str, ...] = ()
+    for step in steps:
+        names = before if step.look is Look.NODE and not step.names else step.names
+        calls.append(_CALLS[step.look](*names) + (f" {step.why}" if step.why else ""))
+        before = step.names
+    return "; ".join(calls)
 
 
 def checked_texts(found: Diagnosis) -> dict[str, str]:

@@ -137,7 +137,9 @@ def _listing(directory: Path) -> ToolAnswer:
             f"- {entry.name}: {entry.size / 1e6:.1f} MB, {when}" + ("" if entry.is_mcap else " (not MCAP)")
         )
     if not entries:
-        lines.append('record {"topics": [...], "duration": 10} makes one; MCAP files put there are read too.')
+        lines.append(
+            'record {"topics": ["/rosout"], "duration": 10} makes one; MCAP files put there are read too.'
+        )
     text = _fit(lines, "Only the newest are shown.")
     return ToolAnswer(
         text=text, data=ReadRecordingAnswer(file=None, mode="list", details={"recordings": rows})
