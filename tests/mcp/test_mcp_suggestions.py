@@ -210,3 +210,25 @@ async def test_every_call_a_refusal_or_did_you_mean_suggests_is_valid_and_runs(
     assert {"list_topics", "list_services", "list_actions", "list_nodes", "record", "read_recording"} <= {
         name for name, _ in ran
     }, sorted(ran)
+
+
+README_TEXTS = {
+    name: (Path(__file__).resolve().parents[2] / name).read_text(encoding="utf-8")
+    for name in ("README.md", "README_ja.md")
+}
+
+
+@pytest.mark.parametrize("readme", list(README_TEXTS))
+async def test_every_call_the_readme_shows_fits_its_tool(readme: str) -> None:
+    """The README's answers (diagnose's next calls, ...) and comments show calls a model would copy: each one
+    names a listed tool and fits its schema."""
+    async with open_session("ws://127.0.0.1:9", wait=False) as session:
+        tools = {tool.name: tool for tool in (await session.mcp.list_tools()).tools}
+    shown = [(name, args) for name, args in suggested_calls(README_TEXTS[readme]) if args != {}]
+    problems = [
+        f"{name} {args}: {schema_problems(tools[name], args) if isinstance(args, dict) else 'no JSON'}"
+        for name, args in shown
+        if not isinstance(args, dict) or schema_problems(tools[name], args)
+    ]
+    assert problems == [], "\n".join(problems)
+    assert any(name == "publish_service" for name, _ in shown), shown
