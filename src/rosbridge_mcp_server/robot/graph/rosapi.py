@@ -63,6 +63,8 @@ class ConnectionKnowledge:
     # The last node list and topic list (name, type) this connection saw, each with when (the graph's clock).
     nodes_seen: tuple[float, tuple[str, ...]] | None = None
     topics_seen: tuple[float, tuple[tuple[str, str], ...]] | None = None
+    # Topics last seen with subscribers: when, and who.
+    subscribers_seen: dict[str, tuple[float, tuple[str, ...]]] = field(default_factory=dict)
 
 
 class Rosapi:
