@@ -364,6 +364,48 @@ async def test_a_2026_session_asks_through_an_input_round_and_sends_once(
         assert CMD_VEL not in sim_ros2.world.published
 
 
+class Garbled(Person):
+    """A client that supports elicitation but answers the form with what it does not ask for."""
+
+    def __init__(self, content: dict[str, Any] | None) -> None:
+        super().__init__()
+        self.content = content
+
+    async def __call__(self, context: ClientRequestContext, params: ElicitRequestParams) -> ElicitResult:
+        self.questions.append(params.message)
+        return ElicitResult(action="accept", content=self.content)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("mode", ["legacy", "auto"])
+@pytest.mark.parametrize(
+    ("content", "wrong"),
+    [({"approve": "perhaps"}, "approve: Input should be a valid boolean"), ({}, "approve: Field required")],
+)
+async def test_an_answer_that_does_not_fit_the_form_is_named_in_the_answer_and_the_audit(
+    sim_ros2: SimulatedRobot, mode: str, content: dict[str, Any], wrong: str
+) -> None:
+    """A client with elicitation that answers off the form: refused, nothing sent, and the answer and the
+    audit say the answer did not match the form and what was wrong, not that the client cannot ask."""
+    stream = io.StringIO()
+    rules = policy(confirm="motion")
+    person = Garbled(content)
+    guard = PolicyGuard(rules, Audit(stream))
+    async with open_session(
+        sim_ros2.url, mode=mode, guard=guard, policy=rules, elicitation_callback=person
+    ) as session:
+        text = await session.error("publish_topic", twist_call(sim_ros2, 0.3))
+    assert len(person.questions) == 1
+    assert "did not match the confirmation form" in text, text
+    assert wrong in text, text
+    assert "does not support elicitation" not in text, text
+    assert "nothing was sent" in text
+    [entry] = [json.loads(line) for line in stream.getvalue().splitlines()]
+    assert entry["outcome"] == "refused"
+    assert entry["detail"].startswith("person: answer not in the form"), entry
+    assert wrong in entry["detail"], entry
+    nothing_reached(sim_ros2)
+
+
 # --- streams and parameters -----------------------------------------------------------------------------
 
 

@@ -28,6 +28,7 @@ from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.navigation import navigation_goal
+from rosbridge_mcp_server.robot.seam import AnswerNotInForm
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
 from rosbridge_mcp_server.safety.navigation import goal_text, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
@@ -313,6 +314,9 @@ class PolicyGuard:
                 return answer
         except TimeoutError:
             return "timeout"
+        except AnswerNotInForm as exc:
+            # The client asked, but its answer is no yes/no: say what was wrong, not that it cannot ask.
+            return f"{_NOT_IN_FORM} ({exc})"
         except Exception as exc:
             # A client that fails the request (or never answers in time) has not said yes.
             _log.warning("asking the person failed: %s", exc)
@@ -370,8 +374,18 @@ def question(act: Act, clamp: str | None = None) -> str:
     return "\n".join(lines)
 
 
+#: An answer off the confirmation form, as the audit's ``person:`` and the refusal say it.
+_NOT_IN_FORM = "answer not in the form"
+
+
 def _answer_text(act: Act, answer: str, policy: Policy) -> str:
     what = f"{act.tool} on {act.name}"
+    if answer.startswith(_NOT_IN_FORM):
+        return (
+            f"The MCP client answered the confirmation for {what}, but the answer did not match the "
+            f"confirmation form {answer.removeprefix(_NOT_IN_FORM).strip()}; nothing was sent. The client "
+            "must answer with approve true or false: tell the user."
+        )
     if answer == "decline":
         return f"The person declined {what}; nothing was sent. Do not retry it unless they ask you to."
     if answer == "cancel":

@@ -52,7 +52,7 @@ from rosbridge_mcp_server.errors import (
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.seam import Answer, AskPerson
+from rosbridge_mcp_server.robot.seam import Answer, AnswerNotInForm, AskPerson
 from rosbridge_mcp_server.server.advice import advised
 from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import (
@@ -464,13 +464,20 @@ class _Asker(AskPerson):
                 raise _AskInNextRound(key, question)
             if response.action != "accept":
                 return response.action
-            return "accept" if (response.content or {}).get("approve") is True else "decline"
+            return "accept" if _confirmed(response.content) else "decline"
         if capabilities.elicitation.form is None and capabilities.elicitation.url is not None:
             return "unsupported"  # a URL-only client answers by link, or not at all
         try:
             result = await elicit_with_validation(
                 request.session, question, _Confirmation, related_request_id=request.request_id
             )
+        except ValueError as exc:
+            # The SDK's words for an accepted answer without content, or (caused by a ValidationError) with
+            # content off the form.
+            cause = exc.__cause__
+            raise AnswerNotInForm(
+                _form_problems(cause) if isinstance(cause, ValidationError) else "it accepted with no answer"
+            ) from None
         except Exception:
             _log.info("asking the person failed", exc_info=True)
             return "unsupported"
@@ -495,6 +502,23 @@ class _Asker(AskPerson):
             _log.info("sending the person to the console failed", exc_info=True)
             return "unsupported"
         return result.action
+
+
+def _confirmed(content: Mapping[str, Any] | None) -> bool:
+    """Whether an accepted answer of a 2026 input round ticks ``approve``; :class:`AnswerNotInForm` when it
+    does not fit the form."""
+    if content is None:
+        raise AnswerNotInForm("it accepted with no answer")
+    try:
+        return _Confirmation.model_validate(content).approve
+    except ValidationError as exc:
+        raise AnswerNotInForm(_form_problems(exc)) from None
+
+
+def _form_problems(exc: ValidationError) -> str:
+    """What was wrong with an answer, by field and pydantic's words, without the client's values."""
+    problems = [f"{'.'.join(map(str, e['loc'])) or 'answer'}: {e['msg']}" for e in exc.errors()[:3]]
+    return "; ".join(problems)[:200]
 
 
 def _question_round(asking: _AskInNextRound) -> InputRequiredResult:
