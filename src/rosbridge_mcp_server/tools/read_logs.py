@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import asyncio
 import time
-from typing import Annotated, Literal
+from typing import Annotated, Final, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, BeforeValidator, Field
 
 from rosbridge_mcp_server.robot.logs import RING_LINES, RING_SECONDS, Fold, fold
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
@@ -43,6 +43,25 @@ class LogsAnswer(BaseModel):
     dropped: int = Field(description="Lines the ring's bounds let go")
 
 
+#: Other names of the levels, as loggers and people write them (Python's WARNING, syslog's err and crit, ...).
+LEVEL_ALIASES: Final[dict[str, str]] = {
+    "warning": "warn",
+    "err": "error",
+    "critical": "fatal",
+    "crit": "fatal",
+    "information": "info",
+    "dbg": "debug",
+}
+
+
+def _level_name(value: object) -> object:
+    """A level in any case, or one of its other names, as the level it is (``WARNING`` → ``warn``)."""
+    if not isinstance(value, str):
+        return value
+    name = value.strip().lower()
+    return LEVEL_ALIASES.get(name, name)
+
+
 SPEC = ToolSpec(
     name="read_logs",
     title="Robot log",
@@ -60,6 +79,7 @@ async def run(
     *,
     level: Annotated[
         Literal["debug", "info", "warn", "error", "fatal"],
+        BeforeValidator(_level_name),
         Field(description="Lowest level, e.g. info"),
     ] = "warn",
     node: Annotated[str | None, Field(description="Node name or glob, e.g. *costmap*")] = None,
