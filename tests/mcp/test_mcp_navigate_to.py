@@ -18,10 +18,14 @@ from typing import Any
 import pytest
 import websockets
 from mcp.types import ImageContent
-from mcp_harness import Session, open_session, text_of
+from mcp_harness import Session, guarded, open_session, text_of
 from PIL import Image
 
+from mcp import Client
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.safety import parse_policy
+from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import TURTLE_HOME
 
@@ -289,6 +293,42 @@ async def test_no_navigator_is_said_and_nothing_is_sent(make_sim: MakeSim) -> No
         text = await opened.error("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
     assert "Nav2 is not ready: no action server /navigate_to_pose" in text
     assert "Nothing was sent" in text
+
+
+async def test_on_the_turtle_demo_the_missing_navigator_points_at_the_nav2_demo(make_sim: MakeSim) -> None:
+    """The plain demo (the turtle) has no Nav2: the answer says how to start the demo that has it."""
+    robot = await make_sim(dialect="ros2")
+    config = Config(url=robot.url, demo_world="turtle")
+    async with Client(
+        build_server(guarded(RosbridgeClient(robot.url), config), config), mode="legacy"
+    ) as mcp:
+        result = await mcp.call_tool("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
+    assert result.is_error
+    assert "restart it with --demo --demo-world nav2" in text_of(result)
+    assert "Nothing was sent" in text_of(result)
+
+
+@pytest.mark.parametrize(
+    ("goal", "said"),
+    [
+        ({"x": 1, "y": 2, "theta": 90}, 'unknown theta. Did you mean "yaw" (degrees) for "theta"?'),
+        ({"x": 1, "y": 2, "yaww": 90}, 'Did you mean "yaw" (degrees) for "yaww"?'),
+        ({"x": 1}, "no y."),
+        ([{"x": 1, "y": 2}, {"x": 1, "heading": 3}], 'goal[1] must be {"x": m, "y": m, "yaw": degrees}'),
+        ({"x": "one", "y": 2}, 'goal.x must be a finite number, not "one"'),
+    ],
+)
+async def test_a_goal_written_wrong_names_the_key_meant_and_sends_nothing(
+    session: Session, nav2: SimulatedRobot, goal: Any, said: str
+) -> None:
+    """A turtlesim-style theta, a misspelt yaw, a missing y, a bad waypoint, a word for a number: each
+    answer says what is wrong in JSON as it was written, what was meant, and that nothing was sent."""
+    text = await session.error("navigate_to", {"goal": goal})
+    assert said in text, text
+    assert text.endswith("Nothing was sent."), text
+    assert "waypoints[" not in text
+    assert "'x'" not in text, text  # JSON as written, not a Python dict
+    assert nav2.world.goals == {}
 
 
 async def test_an_inactive_navigator_is_said_and_nothing_is_sent(make_sim: MakeSim) -> None:

@@ -86,6 +86,9 @@ class Config:
     #: :func:`default_record_dir` of the environment the configuration was read from (of this process's
     #: environment for a :class:`Config` built directly).
     record_dir: Path = field(default_factory=lambda: default_record_dir(os.environ))
+    #: The simulated world ``--demo`` started (``"turtle"``, ``"nav2"``), for answers that can point at the
+    #: other one; ``None`` for a real robot.
+    demo_world: str | None = None
 
     def ssl_context(self) -> ssl.SSLContext | None:
         """The TLS context for wss:// with a private CA or a client certificate; ``None`` for the default.
