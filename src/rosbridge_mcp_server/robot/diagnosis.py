@@ -39,6 +39,7 @@ from rosbridge_mcp_server.robot.diagnostics import StatusBoard
 from rosbridge_mcp_server.robot.log_keeper import DIAGNOSTICS_TOPICS
 from rosbridge_mcp_server.robot.logs import level_rank
 from rosbridge_mcp_server.robot.nodes import node_names
+from rosbridge_mcp_server.robot.wording import counted
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -465,7 +466,7 @@ def _graph(
                     nodes=readers,
                 )
             )
-    checked["graph"] = f"{len(nodes)} nodes, {len(topics)} topics"
+    checked["graph"] = f"{counted(len(nodes), 'node')}, {counted(len(topics), 'topic')}"
     return out
 
 
@@ -526,7 +527,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
     if statuses:
         ok = len(statuses) - len(not_ok)
         more = len(not_ok) - MAX_STATUS_FINDINGS
-        checked["diagnostics"] = f"{len(statuses)} statuses, {ok} OK"
+        checked["diagnostics"] = f"{counted(len(statuses), 'status', 'statuses')}, {ok} OK"
         if more > 0:
             left_out["diagnostics"] = more
     else:
@@ -728,7 +729,9 @@ def _tf(
             )
         )
     roots = sorted({_ancestors(f, edges)[-1] for f in frames})
-    checked["tf"] = f"{len(frames)} frames, root{'s' if len(roots) != 1 else ''} {', '.join(roots) or 'none'}"
+    checked["tf"] = (
+        f"{counted(len(frames), 'frame')}, root{'s' if len(roots) != 1 else ''} {', '.join(roots) or 'none'}"
+    )
     return out, frames
 
 
@@ -756,9 +759,12 @@ def _logs(keeper: LogKeeper, checked: dict[str, str], left_out: dict[str, int]) 
     warnings = sum(f.count for f in folds if f.level == "warn")
     if len(folds) > MAX_LOG_FINDINGS:
         left_out["logs"] = len(folds) - MAX_LOG_FINDINGS
-    checked["logs"] = f"{errors} errors, {warnings} warnings since {since} ({len(keeper.ring)} lines kept)"
+    checked["logs"] = (
+        f"{counted(errors, 'error')}, {counted(warnings, 'warning')} since {since} "
+        f"({counted(len(keeper.ring), 'line')} kept)"
+    )
     return out
 
 
 def _plural(count: int, word: str) -> str:
-    return f"{count} {word}{'' if count == 1 else 's'}"
+    return counted(count, word)

@@ -19,6 +19,7 @@ from rosbridge_mcp_server.robot.diagnosis import (
     UnknownFocusError,
     diagnose,
 )
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
 from rosbridge_mcp_server.tools.subscribe_topic import MAX_COUNT
@@ -171,9 +172,9 @@ def _count(found: Diagnosis) -> str:
         return "No problem found"
     parts = []
     if found.problems:
-        parts.append(f"{found.problems} problem{'s' if found.problems != 1 else ''}")
+        parts.append(counted(found.problems, "problem"))
     if found.warnings:
-        parts.append(f"{found.warnings} warning{'s' if found.warnings != 1 else ''}")
+        parts.append(counted(found.warnings, "warning"))
     return ", ".join(parts)
 
 

@@ -9,6 +9,7 @@ from typing import Annotated, Final, Literal
 from pydantic import BaseModel, BeforeValidator, Field
 
 from rosbridge_mcp_server.robot.logs import RING_LINES, RING_SECONDS, Fold, fold
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 from rosbridge_mcp_server.tools.paging import OffsetArg, limit_arg, page_of
 
@@ -115,7 +116,8 @@ async def run(
     bounds = f"the ring keeps the last {RING_LINES:,} lines and {RING_SECONDS / 60:.0f} min"
     if page.rows:
         head = (
-            f"{len(lines)} lines{wanted} in {len(folds)} groups, read from {keeper.source} since {since_text}"
+            f"{counted(len(lines), 'line')}{wanted} in {counted(len(folds), 'group')}, read from "
+            f"{keeper.source} since {since_text}"
             + (f" ({ring.dropped:,} older lines let go: {bounds})" if ring.dropped else "")
             + ":"
         )
@@ -124,7 +126,7 @@ async def run(
         if page.more:
             text_out += f"\n{page.more} more groups: call again with offset {offset + len(page.rows)}."
     elif folds:
-        text_out = f"No groups on this page ({len(folds)} groups match; offset {offset})."
+        text_out = f"No groups on this page ({counted(len(folds), 'group')} match; offset {offset})."
     else:
         text_out = (
             f"Nothing logged{wanted} since {since_text} ({_ago(now - started)} ago; {bounds}). "
