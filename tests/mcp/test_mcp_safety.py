@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import io
 import json
+import logging
 import math
 from typing import Any
 
@@ -323,6 +324,22 @@ async def test_stop_robot_with_nothing_started_says_so(sim_ros2: SimulatedRobot)
 
 
 # --- the audit --------------------------------------------------------------------------------------------
+
+
+async def test_a_stream_that_ran_its_course_is_audited_at_info_and_a_refusal_at_warning(
+    sim_ros2: SimulatedRobot, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A stream that sent all it planned is no warning; a refusal is."""
+    rules = policy(services={"deny": ["/add_two_ints"]})
+    with caplog.at_level(logging.INFO, logger="rosbridge_mcp_server.audit"):
+        async with open_session(sim_ros2.url, guard=None, policy=rules) as session:
+            await session.ok("publish_topic", stream_call(sim_ros2, 0.1, 20.0, 0.2))
+            await session.error("publish_service", acting_calls(sim_ros2)["publish_service"])
+    audited = [(r.levelno, r.getMessage()) for r in caplog.records if r.getMessage().startswith("audit: ")]
+    finished = [level for level, text in audited if ": sent 4 of 4" in text]
+    refused = [level for level, text in audited if ": refused" in text]
+    assert finished == [logging.INFO], audited
+    assert refused == [logging.WARNING], audited
 
 
 async def test_every_acting_call_is_one_json_line_in_the_audit_file(sim: SimulatedRobot) -> None:

@@ -22,6 +22,7 @@ import dataclasses
 import datetime
 import json
 import logging
+import re
 from collections.abc import Callable
 from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
@@ -90,7 +91,9 @@ class Audit:
     def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
-        level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
+        # A stream that sent what it planned ("sent 30 of 30") is as routine as one message sent.
+        routine = outcome in ("allowed", "confirmed", "sent") or re.fullmatch(r"sent (\d+) of \1", outcome)
+        level = logging.INFO if routine else logging.WARNING
         caller = act.caller
         written = f" (written {act.given!r})" if act.given is not None else ""
         effects = f" [{'; '.join(e.describe() for e in act.effects)}]" if act.effects else ""
