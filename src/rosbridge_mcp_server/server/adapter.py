@@ -47,6 +47,7 @@ from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
     InvalidMessageError,
+    NotConnectedError,
     ProtocolError,
     RequestTimeoutError,
     RosbridgeError,
@@ -246,12 +247,21 @@ async def _run_on(
         # A failure may show why (navigate_to draws a refused goal on the map).
         pictures = _images(getattr(exc, "images", ()))
         return CallToolResult(
-            content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
+            content=[TextContent(type="text", text=_where_set(error_text(exc), robot)), *pictures],
+            is_error=True,
         )
     return CallToolResult(
-        content=[TextContent(type="text", text=answer.text), *_images(answer.images)],
+        content=[TextContent(type="text", text=_where_set(answer.text, robot)), *_images(answer.images)],
         structured_content=answer.data.model_dump(mode="json"),
     )
+
+
+def _where_set(text: str, robot: Robot) -> str:
+    """*text* with a fleet robot's own entry (``[robots.base] in --robots fleet.toml``) named where a robot
+    that cannot be reached points at the server's ROSBRIDGE_HOST/PORT settings, which it does not use."""
+    if robot.config.url_source is None:
+        return text
+    return text.replace(NotConnectedError.SETTINGS, f"{robot.config.url_source} (robot {robot.name})")
 
 
 def _images(images: typing.Iterable[ToolImage]) -> list[ImageContent]:
@@ -355,7 +365,8 @@ def _merged(names: list[str], answers: list[CallToolResult | InputRequiredResult
             continue
         failed = failed or bool(answer.is_error)
         text = "\n".join(block.text for block in answer.content if isinstance(block, TextContent))
-        texts.append(f"{name}: {text}")
+        # Every line under its robot: a robot's answer may take several.
+        texts += [f"{name}: {line}" for line in text.splitlines() or [""]]
         for key, value in (answer.structured_content or {}).items():
             if isinstance(value, list):
                 data.setdefault(key, []).extend(f"{name}: {item}" for item in value)

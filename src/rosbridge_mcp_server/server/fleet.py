@@ -193,10 +193,13 @@ def _row(robot: Robot) -> RobotRow:
 
 
 def _policy_line(config: Config) -> str:
+    """The policy in one line: ``from FILE; confirm = ...; [velocity] ...`` (describe()'s heading, "policy
+    (from FILE):", said without the word the label already says)."""
     lines = [line.strip() for line in config.policy.describe()]
     if len(lines) == 1:
         return lines[0]
-    return "; ".join([lines[0].rstrip(":"), *lines[1:]])
+    heading = lines[0].rstrip(":").removeprefix("policy").strip().removeprefix("(").removesuffix(")")
+    return "; ".join([heading, *lines[1:]] if heading else lines[1:])
 
 
 def _without_credentials(url: str) -> str:
