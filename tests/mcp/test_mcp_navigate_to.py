@@ -12,6 +12,7 @@ import contextlib
 import io
 import json
 import math
+import re
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
@@ -306,6 +307,20 @@ async def test_on_the_turtle_demo_the_missing_navigator_points_at_the_nav2_demo(
     assert result.is_error
     assert "restart it with --demo --demo-world nav2" in text_of(result)
     assert "Nothing was sent" in text_of(result)
+
+
+async def test_reasons_that_end_in_a_stop_are_joined_without_a_double_one(make_sim: MakeSim) -> None:
+    """A robot without /tf: "... nothing publishes transforms. Nothing was sent.", not "transforms.. ..."."""
+    robot = await make_sim(dialect="ros2")
+    for name in list(robot.graph.nodes):
+        for topic in ("/tf", "/tf_static"):
+            if topic in robot.graph.nodes[name].publishes:
+                robot.graph.remove_publisher(name, topic)
+    async with open_session(robot.url, guard=None) as opened:
+        text = await opened.error("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
+    assert "nothing publishes transforms" in text, text
+    assert re.search(r"[^.]\.\.(?!\.)", text) is None, text
+    assert text.endswith(". Nothing was sent."), text
 
 
 @pytest.mark.parametrize(

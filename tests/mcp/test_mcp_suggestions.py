@@ -30,6 +30,7 @@ CALL = re.compile(r"\b([a-z][a-z_]+) (?=\{)")
 #: nodes", "list_topics shows ...", "read_recording without a file ...".
 NAMED = re.compile(r"\bCall ([a-z][a-z_]+)\b|\b([a-z][a-z_]+) (?:shows|lists|without a file)\b")
 TWIST = "geometry_msgs/msg/Twist"
+DOUBLE_STOP = re.compile(r"(?<!\.)\.\.(?!\.)")
 
 #: Calls whose answers refuse, correct or point elsewhere, on the turtle world.
 TURTLE_MISTAKES: list[tuple[str, dict[str, Any]]] = [
@@ -145,7 +146,8 @@ async def check_suggestions(session: Session, texts: list[str]) -> dict[tuple[st
     but never for its arguments or its tool."""
     tools = {tool.name: tool for tool in (await session.mcp.list_tools()).tools}
     calls: dict[tuple[str, str], dict[str, Any]] = {}
-    problems: list[str] = []
+    # Sentences joined without a doubled stop ("transforms.. Nothing was sent."); "..." is an ellipsis.
+    problems = [f"a doubled stop in {text!r}" for text in texts if DOUBLE_STOP.search(text)]
     for text in texts:
         for name, arguments in suggested_calls(text):
             if name not in tools:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rosbridge_mcp_server.robot.wording import counted, size_text
+from rosbridge_mcp_server.robot.wording import counted, full_stop, size_text
 
 
 @pytest.mark.parametrize(
@@ -39,3 +39,16 @@ def test_a_count_agrees_with_its_noun(number: int, noun: str, plural: str | None
 )
 def test_a_size_keeps_its_digits_in_the_unit_that_fits(size: int, said: str) -> None:
     assert size_text(size) == said
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("nothing publishes transforms", "nothing publishes transforms."),
+        ("nothing publishes transforms.", "nothing publishes transforms."),
+        ("is it running? ", "is it running?"),
+        ("cut…", "cut…"),
+    ],
+)
+def test_a_text_joined_before_another_ends_in_one_stop(text: str, said: str) -> None:
+    assert full_stop(text) == said

@@ -3,7 +3,7 @@ answer says "1 topics" or shows a 58 KB file as "0.0 MB"."""
 
 from __future__ import annotations
 
-__all__ = ["counted", "size_text"]
+__all__ = ["counted", "full_stop", "size_text"]
 
 
 def counted(number: int, noun: str, plural: str | None = None) -> str:
@@ -11,6 +11,13 @@ def counted(number: int, noun: str, plural: str | None = None) -> str:
     if number == 1:
         return f"{number} {noun}"
     return f"{number} {plural or noun + 's'}"
+
+
+def full_stop(text: str) -> str:
+    """*text* as a sentence ending in one stop, to join another after it: a text of its own that already
+    ends in ``.``, ``?``, ``!`` or ``…`` keeps it (no "transforms.. Nothing was sent.")."""
+    text = text.rstrip()
+    return text if text.endswith((".", "?", "!", "…")) else text + "."
 
 
 def size_text(size: int | float) -> str:

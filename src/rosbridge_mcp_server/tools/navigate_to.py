@@ -309,7 +309,8 @@ async def run(
         if state is not None:
             not_ready.append(state)
     if not_ready or grid is None or isinstance(start, str):
-        raise ToolFailure(f"Nav2 is not ready: {'; '.join(not_ready)}. Nothing was sent.")
+        missing = "; ".join(reason.rstrip(". ") for reason in not_ready)
+        raise ToolFailure(f"Nav2 is not ready: {missing}. Nothing was sent.")
 
     # The goal's poses, in the frame they were given in.
     if kind == "place":

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosInfo
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.messages import TypeDef
+from rosbridge_mcp_server.robot.wording import full_stop
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -116,7 +117,7 @@ class Rosapi:
             values = await self.client.call_service(service, args or {})
         except ServiceError as exc:
             if is_missing_service(exc):
-                raise ServiceError(service, f"{exc.message}. {ROSAPI_HINT}") from exc
+                raise ServiceError(service, f"{full_stop(exc.message)} {ROSAPI_HINT}") from exc
             raise
         return values if isinstance(values, dict) else {}
 
