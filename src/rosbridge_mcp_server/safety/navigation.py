@@ -131,7 +131,13 @@ def navigation_refusal(act: Act, rules: NavigationRules) -> NavigationRefusal | 
             return _refusal(
                 f"[navigation] {problem}",
                 f"{problem} (safety policy)",
-                "Choose a goal inside the allowed area.",
+                # Only the zones the policy has: with keep-out zones alone there is no allowed area.
+                "Choose a goal "
+                + " and ".join(
+                    (["inside the allowed area"] if allowed else [])
+                    + (["outside the keep-out zones"] if keep_out else [])
+                )
+                + ".",
             )
     if rules.max_goal_distance is not None:
         if scene.robot is None:
