@@ -11,6 +11,7 @@ import asyncio
 import json
 import re
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -19,16 +20,23 @@ from mcp.types import CallToolResult, Tool
 from mcp_harness import Session, open_session, text_of
 from test_mcp_diagnose import FAULT_SIGNS, broken
 
+from mcp import Client
 from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
-from rosbridge_mcp_server.safety import parse_policy
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.safety import PolicyGuard, parse_policy
+from rosbridge_mcp_server.server import Robot, build_fleet_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 30.0
 #: A suggested call: a tool's name, a space, its arguments as a JSON object.
 CALL = re.compile(r"\b([a-z][a-z_]+) (?=\{)")
 #: A tool named as the thing to call without arguments: "Call list_services to ...", "list_nodes lists the
-#: nodes", "list_topics shows ...", "read_recording without a file ...".
-NAMED = re.compile(r"\bCall ([a-z][a-z_]+)\b|\b([a-z][a-z_]+) (?:shows|lists|without a file)\b")
+#: nodes", "list_topics shows ...", "list_robots describes each", "read_recording without a file ...".
+NAMED = re.compile(r"\bCall ([a-z][a-z_]+)\b|\b([a-z][a-z_]+) (?:shows|lists|describes|without a file)\b")
+#: Every tool a server may list: the catalogue's, and the edge's own (a fleet's, the console's).
+KNOWN_TOOLS = {*ALL_TOOL_NAMES, "list_robots", "show_console"}
 TWIST = "geometry_msgs/msg/Twist"
 DOUBLE_STOP = re.compile(r"(?<!\.)\.\.(?!\.)")
 
@@ -72,20 +80,22 @@ POLICY_MISTAKES: list[tuple[str, dict[str, Any]]] = [
 ]
 
 
-def suggested_calls(text: str) -> list[tuple[str, dict[str, Any] | str]]:
+def suggested_calls(text: str, bare: dict[str, Any] | None = None) -> list[tuple[str, dict[str, Any] | str]]:
     """Every ``tool {...}`` in *text*: the tool and its arguments (the text after it when not JSON)."""
     found: list[tuple[str, dict[str, Any] | str]] = []
     decoder = json.JSONDecoder()
     for match in CALL.finditer(text):
         name = match.group(1)
-        if name not in ALL_TOOL_NAMES:
+        if name not in KNOWN_TOOLS:
             continue
         try:
             arguments, _ = decoder.raw_decode(text, match.end())
         except json.JSONDecodeError:
             arguments = text[match.end() : match.end() + 80]
         found.append((name, arguments))
-    found += [(call or named, {}) for call, named in NAMED.findall(text) if call or named in ALL_TOOL_NAMES]
+    named = [call or name for call, name in NAMED.findall(text) if call or name in KNOWN_TOOLS]
+    # A tool named bare takes no argument; on a fleet, its robot (list_robots takes none).
+    found += [(name, dict(bare or {}) if name != "list_robots" else {}) for name in named]
     return found
 
 
@@ -139,17 +149,20 @@ async def answers_of(session: Session, calls: list[tuple[str, dict[str, Any]]]) 
     return [text_of(await asyncio.wait_for(session.call(name, args), WAIT)) for name, args in calls]
 
 
-async def check_suggestions(session: Session, texts: list[str]) -> dict[tuple[str, str], CallToolResult]:
+async def check_suggestions(
+    session: Session, texts: list[str], robot: str | None = None
+) -> dict[tuple[str, str], CallToolResult]:
     """Every suggestion in *texts* checked against its tool's schema and run; the results, by call.
 
     A suggestion may fail on the robot as the thing it looks at would (a topic that stays silent times out),
-    but never for its arguments or its tool."""
+    but never for its arguments or its tool. On a fleet a tool named bare ("Call list_topics") is called on
+    *robot*, the robot the answer came from; a call written out must name it itself."""
     tools = {tool.name: tool for tool in (await session.mcp.list_tools()).tools}
     calls: dict[tuple[str, str], dict[str, Any]] = {}
     # Sentences joined without a doubled stop ("transforms.. Nothing was sent."); "..." is an ellipsis.
     problems = [f"a doubled stop in {text!r}" for text in texts if DOUBLE_STOP.search(text)]
     for text in texts:
-        for name, arguments in suggested_calls(text):
+        for name, arguments in suggested_calls(text, bare={"robot": robot} if robot else {}):
             if name not in tools:
                 problems.append(f"{name}: not a listed tool, in {text!r}")
             elif not isinstance(arguments, dict):
@@ -212,6 +225,35 @@ async def test_every_call_a_refusal_or_did_you_mean_suggests_is_valid_and_runs(
     assert {"list_topics", "list_services", "list_actions", "list_nodes", "record", "read_recording"} <= {
         name for name, _ in ran
     }, sorted(ran)
+
+
+async def test_every_call_a_fleet_refusal_suggests_is_valid_and_runs(
+    sim_ros2: SimulatedRobot, sim_ros1: SimulatedRobot, tmp_path: Path
+) -> None:
+    """Two robots: a call without robot, with an unknown one, a wrong name on one, an empty recording folder:
+    each suggestion names the robot the answer came from, and runs."""
+    base = replace(Config(), record_dir=tmp_path)
+    entries = [
+        Robot(name, replace(base, url=url), RobotSession(RosbridgeClient(url), PolicyGuard(base.policy)))
+        for name, url in (("jazzy", sim_ros2.url), ("noetic", sim_ros1.url))
+    ]
+    async with Client(build_fleet_server(entries, base), mode="legacy") as client:
+        for entry in entries:
+            await entry.session.client.wait_connected(WAIT)
+        session = Session(client, entries[0].session.client)
+        texts = await answers_of(
+            session,
+            [
+                ("list_topics", {}),
+                ("get_node_info", {"robot": "mars", "node": "/turtlesim"}),
+                ("subscribe_topic", {"robot": "noetic", "topic": "/turtle1/pos"}),
+                ("read_recording", {"robot": "noetic"}),
+            ],
+        )
+        ran = await check_suggestions(session, texts, robot="noetic")
+    assert ("list_robots", "{}") in ran, sorted(ran)
+    assert ("list_topics", '{"robot": "noetic"}') in ran, sorted(ran)
+    assert ("record", '{"duration": 10, "robot": "noetic", "topics": ["/rosout"]}') in ran, sorted(ran)
 
 
 README_TEXTS = {

@@ -148,7 +148,11 @@ class ToolCalls:
             return refusal_result(_arguments_refusal(tool, exc, arguments, read))
         call = ToolCall(ctx, robots, caller, params.input_responses)
         try:
-            return await tool.handler(call, validated)
+            result = await tool.handler(call, validated)
+            if tool.on_robot and len(robots) == 1 and isinstance(result, CallToolResult):
+                # The calls an answer suggests go to the robot it came from.
+                return self._fleet.calls_on(result, robots[0].name, self._tools)
+            return result
         except Exception:
             # A bug: its traceback on stderr, a generic error for the model (the SDK's own words).
             _log.exception("Tool %r raised an unexpected exception", name)
