@@ -81,7 +81,10 @@ def test_what_an_area_left_out_is_pointed_at_in_its_checked_text() -> None:
     )
     assert checked_texts(found) == {
         "graph": "36 nodes, 78 topics",
-        "diagnostics": "25 statuses, 0 OK (5 more not OK: subscribe_topic /diagnostics)",
+        "diagnostics": (
+            '25 statuses, 0 OK (5 more not OK: subscribe_topic {"topic": "/diagnostics", "count": 100, '
+            '"duration": 3, "fields": ["status"]})'
+        ),
         "logs": "7 errors, 1 warnings since 03:00:00 (12 lines kept, 2 more groups in read_logs)",
     }
     found.left_out.clear()

@@ -148,7 +148,8 @@ def checked_texts(found: Diagnosis) -> dict[str, str]:
     """What each area checked, with where to read what its findings left out."""
     checked = dict(found.checked)
     if more := found.left_out.get("diagnostics"):
-        checked["diagnostics"] += f" ({more} more not OK: subscribe_topic /diagnostics)"
+        every = f'{{"topic": "/diagnostics", "count": {MAX_COUNT}, "duration": 3, "fields": ["status"]}}'
+        checked["diagnostics"] += f" ({more} more not OK: subscribe_topic {every})"
     if more := found.left_out.get("logs"):
         # "... (N lines kept)" → "... (N lines kept, M more groups in read_logs)"
         checked["logs"] = f"{checked['logs'].removesuffix(')')}, {more} more groups in read_logs)"
