@@ -212,12 +212,12 @@ async def test_a_goal_the_map_or_the_policy_rules_out_is_refused_on_both_paths_a
 
 
 async def test_a_keep_out_refusal_asks_for_a_goal_outside_the_zone(session: Session) -> None:
-    """The policy has only keep-out zones: the refusal says to choose a goal outside them, not "inside the
+    """The policy has only keep-out zones: the refusal says to choose a goal clear of them, not "inside the
     allowed area" (there is none)."""
     text = await session.error("navigate_to", {"goal": {"x": 9.0, "y": 2.0}})
     assert "keep-out zone 'corner'" in text
     assert "allowed area" not in text, text
-    assert "outside the keep-out zones" in text, text
+    assert "Choose a goal clear of the keep-out zones." in text, text
 
 
 async def test_a_refusal_draws_the_goal_on_the_map(session: Session) -> None:

@@ -62,6 +62,9 @@ AUDIT_PAYLOAD_LIMIT = 16_000
 #: The rule a refusal names while the operator's e-stop is latched.
 LATCH_RULE = "e-stop latched by the operator"
 
+#: An answer off the confirmation form, as the audit's ``person:`` and the refusal say it.
+_NOT_IN_FORM = "answer not in the form"
+
 #: One audit line as a dict (the audit file's JSON, before the payload is cut).
 AuditEntry = dict[str, Any]
 
@@ -375,10 +378,6 @@ def question(act: Act, clamp: str | None = None) -> str:
         lines.append(where)
     lines.append("Allow this?")
     return "\n".join(lines)
-
-
-#: An answer off the confirmation form, as the audit's ``person:`` and the refusal say it.
-_NOT_IN_FORM = "answer not in the form"
 
 
 def _answer_text(act: Act, answer: str, policy: Policy) -> str:

@@ -135,7 +135,7 @@ def navigation_refusal(act: Act, rules: NavigationRules) -> NavigationRefusal | 
                 "Choose a goal "
                 + " and ".join(
                     (["inside the allowed area"] if allowed else [])
-                    + (["outside the keep-out zones"] if keep_out else [])
+                    + (["clear of the keep-out zones"] if keep_out else [])
                 )
                 + ".",
             )
