@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import websockets
+from mcp.types import CallToolResult, TextContent
 from mcp_harness import text_of
 
 from mcp import Client
@@ -21,6 +22,7 @@ from rosbridge_mcp_server.config.fleet import load_fleet
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Policy, PolicyGuard, parse_policy
 from rosbridge_mcp_server.server import Robot, build_fleet_server, build_server
+from rosbridge_mcp_server.server.fleet import Fleet
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 10.0
@@ -281,3 +283,25 @@ def _closed_url() -> str:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         return f"ws://127.0.0.1:{probe.getsockname()[1]}"
+
+
+def test_the_calls_an_answer_suggests_name_the_robot_in_its_text_and_structured_content() -> None:
+    """diagnose's next calls on robot b of a fleet: each `tool {...}` gets "robot": "b" first, in the text and
+    in the structured content; a call already naming a robot, a tool that is none and plain text stay."""
+    fleet = Fleet(
+        [
+            Robot(name, Config(), RobotSession(RosbridgeClient("ws://127.0.0.1:9"), PolicyGuard(Policy())))
+            for name in ("a", "b")
+        ]
+    )
+    next_call = 'read_logs {"node": "/amcl", "level": "info"} for its last words; list_nodes'
+    result = CallToolResult(
+        content=[TextContent(type="text", text=f"PROBLEM gone\n  → {next_call}; manage_nodes {{}}")],
+        structured_content={"findings": [{"next": next_call, "nodes": ["/amcl"]}], "count": 1},
+    )
+    named = fleet.calls_on(result, "b", {"read_logs", "list_nodes"})
+    expected = 'read_logs {"robot": "b", "node": "/amcl", "level": "info"} for its last words; list_nodes'
+    assert text_of(named) == f"PROBLEM gone\n  → {expected}; manage_nodes {{}}"
+    assert named.structured_content == {"findings": [{"next": expected, "nodes": ["/amcl"]}], "count": 1}
+    again = fleet.calls_on(named, "b", {"read_logs"})
+    assert text_of(again) == text_of(named)

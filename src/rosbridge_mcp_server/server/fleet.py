@@ -121,7 +121,10 @@ class Fleet:
             else block
             for block in result.content
         ]
-        return result.model_copy(update={"content": content})
+        data = result.structured_content
+        if data is not None:
+            data = _each_text(data, lambda text: _robot_in_calls(text, robot, tools))
+        return result.model_copy(update={"content": content, "structured_content": data})
 
     def schema_with_robot(self, schema: dict[str, Any], tool: str, *, acting: bool = False) -> dict[str, Any]:
         """*schema* with the ``robot`` property (required, except for stop_robot) when there are several; an
@@ -146,6 +149,17 @@ class Fleet:
 
 #: A suggested call in an answer: a tool's name, a space, its arguments as a JSON object.
 _CALL = re.compile(r"\b([a-z][a-z_]+) (?=\{)")
+
+
+def _each_text(value: Any, change: typing.Callable[[str], str]) -> Any:
+    """*value* (structured content) with *change* applied to every string in it, keys left alone."""
+    if isinstance(value, str):
+        return change(value) if " {" in value else value
+    if isinstance(value, dict):
+        return {key: _each_text(item, change) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_each_text(item, change) for item in value]
+    return value
 
 
 def _robot_in_calls(text: str, robot: str, tools: Container[str]) -> str:
