@@ -19,14 +19,10 @@ from typing import Any
 import pytest
 import websockets
 from mcp.types import ImageContent
-from mcp_harness import Session, guarded, open_session, text_of
+from mcp_harness import Session, open_session, text_of
 from PIL import Image
 
-from mcp import Client
-from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.safety import parse_policy
-from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import TURTLE_HOME
 
@@ -306,16 +302,12 @@ async def test_no_navigator_is_said_and_nothing_is_sent(make_sim: MakeSim) -> No
 
 
 async def test_on_the_turtle_demo_the_missing_navigator_points_at_the_nav2_demo(make_sim: MakeSim) -> None:
-    """The plain demo (the turtle) has no Nav2: the answer says how to start the demo that has it."""
+    """The plain demo (turtlesim) has no Nav2: the answer says which demo has it."""
     robot = await make_sim(dialect="ros2")
-    config = Config(url=robot.url, demo_world="turtle")
-    async with Client(
-        build_server(guarded(RosbridgeClient(robot.url), config), config), mode="legacy"
-    ) as mcp:
-        result = await mcp.call_tool("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
-    assert result.is_error
-    assert "restart it with --demo --demo-world nav2" in text_of(result)
-    assert "Nothing was sent" in text_of(result)
+    async with open_session(robot.url, guard=None) as opened:
+        text = await opened.error("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
+    assert "turtlesim has no Nav2; the built-in demo has one: --demo --demo-world nav2" in text, text
+    assert text.endswith("Nothing was sent."), text
 
 
 async def test_reasons_that_end_in_a_stop_are_joined_without_a_double_one(make_sim: MakeSim) -> None:

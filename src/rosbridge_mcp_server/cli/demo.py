@@ -96,4 +96,4 @@ async def demo_robot(config: Config, demo: DemoSettings | None) -> AsyncIterator
         dialect=demo.dialect, port=0, world=demo.world, robots=demo.robots, faults=demo.faults
     ) as robot:
         _log.info("demo mode: simulated ROS %s %s robot at %s", demo.dialect[-1], demo.world, robot.url)
-        yield replace(config, url=robot.url, demo_world=demo.world)
+        yield replace(config, url=robot.url)

@@ -86,9 +86,6 @@ class Config:
     #: :func:`default_record_dir` of the environment the configuration was read from (of this process's
     #: environment for a :class:`Config` built directly).
     record_dir: Path = field(default_factory=lambda: default_record_dir(os.environ))
-    #: The simulated world ``--demo`` started (``"turtle"``, ``"nav2"``), for answers that can point at the
-    #: other one; ``None`` for a real robot.
-    demo_world: str | None = None
     #: Where a fleet robot's URL was set (``[robots.base] in --robots fleet.toml``, ``--robot base=URL``),
     #: named when it cannot be reached; ``None``: the server's own settings (ROSBRIDGE_HOST/PORT/URL).
     url_source: str | None = None

@@ -24,6 +24,7 @@ from rosbridge_mcp_server.robot.navigation import (
     read_map,
     survey,
 )
+from rosbridge_mcp_server.robot.nodes import node_names
 from rosbridge_mcp_server.robot.occupancy import Grid, Pose2D
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -168,6 +169,14 @@ def _waypoint(item: Any, where: str) -> tuple[float, float, float | None]:
     )
 
 
+async def _is_turtlesim(ctx: ToolContext) -> bool:
+    """Whether the robot is turtlesim (as the plain ``--demo`` is), which has no Nav2 to point at."""
+    try:
+        return "/turtlesim" in await node_names(ctx.graph)
+    except RosbridgeError:
+        return False
+
+
 async def _navigator_state(ctx: ToolContext, namespace: str) -> str | None:
     """Why the ROS 2 navigator is not active (its lifecycle state), or ``None`` (active, or not told)."""
     service = f"{namespace}/bt_navigator/get_state"
@@ -235,7 +244,7 @@ async def run(
     goal: Annotated[
         Any,
         Field(
-            description='{"x": 2, "y": 1, "yaw": 90} (m, DEGREES; no yaw keeps heading), "dock" or a list',
+            description='e.g. {"x": 2, "y": 1, "yaw": 90} (m, DEGREES; no yaw: same heading), "dock", a list',
         ),
     ] = None,
     frame: Annotated[str, Field(description='e.g. odom ("" = map)')] = "",
@@ -295,8 +304,8 @@ async def run(
     if hint is not None:
         server = "move_base" if ros1 else "bt_navigator"
         not_ready.append(f"no action server {name} (is {server} running?){hint}")
-        if ctx.config.demo_world == "turtle":
-            not_ready.append("the demo's turtle has none: restart it with --demo --demo-world nav2")
+        if await _is_turtlesim(ctx):
+            not_ready.append("turtlesim has no Nav2; the built-in demo has one: --demo --demo-world nav2")
     grid, problem = await read_map(ctx.client, ctx.graph, map_name, _READY_WAIT)
     if problem is not None:
         not_ready.append(problem)
