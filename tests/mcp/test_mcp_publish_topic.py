@@ -211,7 +211,7 @@ async def test_a_message_nobody_subscribes_to_is_sent_and_said_to_have_reached_n
     arguments = {"topic": "/turtle1/cmd_vell", "message_type": types_for(sim)["twist"], "message": twist}
     result = await session.ok("publish_topic", arguments)
     text = text_of(result)
-    assert "nothing subscribes to /turtle1/cmd_vell" in text, text
+    assert '{"linear": {"x": 0.5}}. But nothing subscribes to /turtle1/cmd_vell' in text, text
     assert "no node received it" in text, text
     assert "Did you mean /turtle1/cmd_vel?" in text, text
     assert result.structured_content is not None

@@ -40,7 +40,7 @@ class Audience:
         return None if self.subscribers is None else len(self.subscribers)
 
     async def nobody_text(self, ctx: ToolContext, topic: str) -> str:
-        """`` But nothing subscribes to /x: no node received it. Did you mean /y?``, when none does."""
+        """``But nothing subscribes to /x: no node received it. Did you mean /y?``, when none does."""
         if self.subscribers != ():
             return ""
         known = ctx.graph.recent_topics(60.0)
@@ -48,7 +48,7 @@ class Audience:
             with contextlib.suppress(RosbridgeError):
                 known = await ctx.graph.topics()
         near = did_you_mean(topic, [entry.name for entry in known or () if entry.name != topic])
-        return f" But nothing subscribes to {topic}: no node received it.{near}"
+        return f"But nothing subscribes to {topic}: no node received it.{near}"
 
 
 @contextlib.asynccontextmanager

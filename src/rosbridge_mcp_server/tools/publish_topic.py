@@ -8,6 +8,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import PING_LIMIT, publish_once, publish_stream
 from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.robot.wording import full_stop
 from rosbridge_mcp_server.tools.audience import audience
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -105,8 +106,10 @@ async def run(
     text = f"Published one {sent.type} message on {sent.topic}: {compact_json(sent.message)}"
     if sent.adjusted:
         text += f" (the safety policy {sent.adjusted})"
+    if nobody := await heard.nobody_text(ctx, sent.topic):
+        text = f"{full_stop(text)} {nobody}"
     return ToolAnswer(
-        text=text + await heard.nobody_text(ctx, sent.topic),
+        text=text,
         data=PublishAnswer(
             topic=sent.topic,
             message_type=sent.type,
@@ -168,4 +171,5 @@ async def _stream(
         adjusted=streamed.adjusted,
         subscribers=heard.count,
     )
-    return ToolAnswer(text=text + "." + await heard.nobody_text(ctx, streamed.topic), data=answer)
+    nobody = await heard.nobody_text(ctx, streamed.topic)
+    return ToolAnswer(text=f"{text}." + (f" {nobody}" if nobody else ""), data=answer)
