@@ -96,7 +96,7 @@ async def run(
 
     async def progress(done: int) -> None:
         if wanted_count > 1:
-            so_far = f"{done} of {wanted_count} messages" if duration is None else f"{done} so far"
+            so_far = f"{done} of {wanted_count} messages" if duration is None else counted(done, "message")
             await ctx.report_progress(done, wanted_count, f"{so_far} from {name}")
 
     name = absolute_name(topic, "topic")
