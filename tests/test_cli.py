@@ -14,6 +14,7 @@ from typing import Any
 
 import pytest
 
+from rosbridge_mcp_server.catalogue import TOOL_GROUPS
 from rosbridge_mcp_server.cli import PROG, run
 from rosbridge_mcp_server.cli.check import run_check, unreachable_advice
 from rosbridge_mcp_server.cli.commands import configure_logging
@@ -254,7 +255,8 @@ async def test_check_leaves_no_service_behind_on_a_busy_bridge() -> None:
 
 
 def test_help_names_both_commands_and_the_tool_groups(capsys: pytest.CaptureFixture[str]) -> None:
-    """--help shows that `check` exists and what each --tools group holds (original comes with stop_robot)."""
+    """--help shows that `check` exists and what each --tools group holds (original comes with stop_robot):
+    every group of the catalogue, navigation and safety too."""
     with pytest.raises(SystemExit) as exited:
         run(["--help"], {})
     assert exited.value.code == 0
@@ -263,6 +265,10 @@ def test_help_names_both_commands_and_the_tool_groups(capsys: pytest.CaptureFixt
     assert "check diagnoses the connection" in shown
     assert "original (the first eight, with stop_robot whenever a tool acts)" in shown
     assert "view (pictures: map, scan, charts)" in shown
+    assert "navigation (navigate_to)" in shown
+    assert "safety (stop_robot)" in shown
+    for group in TOOL_GROUPS:
+        assert f" {group} (" in shown, group
 
 
 async def test_check_warns_about_policy_names_the_robot_does_not_have() -> None:

@@ -18,6 +18,7 @@ import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
+from urllib.parse import urlsplit, urlunsplit
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
 from rosbridge_mcp_server.cli.check import run_check
@@ -164,8 +165,9 @@ def console_url(args: Sequence[str], env: Mapping[str, str]) -> int:
         return 2
     directory = console_runtime_dir(env)
     found = list(console_urls(directory))
-    for pid, url in found:
-        print(f"{url}  (process {pid})" if len(found) > 1 else url)
+    for pid, url, serves in found:
+        # Several consoles: each says which robot it is for, so the person opens the right one.
+        print(f"{url}  (process {pid}{f', {serves}' if serves else ''})" if len(found) > 1 else url)
     if not found:
         print(
             f"{PROG}: no operator console is running for this user (looked in {directory}); start the server "
@@ -409,6 +411,20 @@ async def serve(
             await serve_stdio(server)
 
 
+def _serves(hub: ConsoleHub) -> str:
+    """What a console serves, for ``console-url``: ``the robot at ws://...`` or ``robots a at ..., b at ...``
+    (the bridge URLs without credentials)."""
+    places = [(view.name, _bare_url(view.session.client.url)) for view in hub.robots]
+    if len(places) == 1:
+        return f"the robot at {places[0][1]}"
+    return "robots " + ", ".join(f"{name} at {url}" for name, url in places)
+
+
+def _bare_url(url: str) -> str:
+    parts = urlsplit(url)
+    return urlunsplit(parts._replace(netloc=parts.netloc.rpartition("@")[2], query="", fragment=""))
+
+
 @contextlib.asynccontextmanager
 async def _console(
     settings: ConsoleSettings | None, hub: ConsoleHub | None, directory: Path | None = None
@@ -436,7 +452,7 @@ async def _console(
     where = ""
     if address is not None:
         try:
-            address.write(running.url)
+            address.write(running.url, _serves(hub))
             where = f" (also in {address.path}, which `{PROG} console-url` prints)"
         except OSError as exc:
             address = None

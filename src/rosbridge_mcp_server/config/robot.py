@@ -86,6 +86,9 @@ class Config:
     #: :func:`default_record_dir` of the environment the configuration was read from (of this process's
     #: environment for a :class:`Config` built directly).
     record_dir: Path = field(default_factory=lambda: default_record_dir(os.environ))
+    #: Where a fleet robot's URL was set (``[robots.base] in --robots fleet.toml``, ``--robot base=URL``),
+    #: named when it cannot be reached; ``None``: the server's own settings (ROSBRIDGE_HOST/PORT/URL).
+    url_source: str | None = None
 
     def ssl_context(self) -> ssl.SSLContext | None:
         """The TLS context for wss:// with a private CA or a client certificate; ``None`` for the default.

@@ -29,6 +29,7 @@ import contextlib
 import enum
 import itertools
 import time
+from collections import Counter
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Final, Literal
@@ -39,6 +40,7 @@ from rosbridge_mcp_server.robot.log_keeper import DIAGNOSTICS_TOPICS
 from rosbridge_mcp_server.robot.logs import level_rank
 from rosbridge_mcp_server.robot.nodes import node_names
 from rosbridge_mcp_server.robot.text import NAME_CHARS, is_frame_name, is_graph_name, shown
+from rosbridge_mcp_server.robot.wording import counted
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -119,6 +121,9 @@ class Look(enum.Enum):
     TRANSFORM = enum.auto()
     #: One transform, waiting a while for it (names: target frame, source frame).
     TRANSFORM_WAIT = enum.auto()
+    #: A diagnostics topic's messages until every status on it has come round (names: the topic, how many
+    #: statuses it carries): publishers take turns on one topic, so one message is most likely another's OK.
+    STATUSES = enum.auto()
 
 
 @dataclass(frozen=True)
@@ -427,6 +432,9 @@ def _checked_steps(finding: Finding, known: set[str]) -> Finding:
     def usable(step: Step) -> bool:
         if step.look in _FRAME_LOOKS:
             return all(is_frame_name(name) for name in step.names)
+        if step.look is Look.STATUSES:  # (topic, how many statuses it carries: our count, not robot text)
+            topic, count = step.names
+            return is_graph_name(topic) and topic in known and count.isdigit()
         return all(is_graph_name(name) and name in known for name in step.names)
 
     steps = tuple(
@@ -496,7 +504,7 @@ def _graph(
                     nodes=readers,
                 )
             )
-    checked["graph"] = f"{len(nodes)} nodes, {len(topics)} topics"
+    checked["graph"] = f"{counted(len(nodes), 'node')}, {counted(len(topics), 'topic')}"
     return out
 
 
@@ -530,6 +538,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
     out = []
     statuses = board.statuses()
     not_ok = [s for s in statuses if s.level != 0]
+    on_topic = Counter(s.topic for s in statuses)
     for status in not_ok[:MAX_STATUS_FINDINGS]:
         severity: Literal["problem", "warning"] = "problem" if status.level == 2 else "warning"
         hardware = f" ({status.hardware_id})" if status.hardware_id else ""
@@ -543,7 +552,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
                 f"{status.level_name} {status.name}{hardware}: {status.message or '(no message)'}"
                 + (f" [{values}]" if values else "")
                 + f" ({ago:.0f} s ago)",
-                (Step(Look.ONE_MESSAGE, (status.topic,)),),
+                (Step(Look.STATUSES, (status.topic, str(on_topic[status.topic]))),),
                 nodes=(_status_node(status.name),),
                 details={
                     "level": status.level_name,
@@ -556,7 +565,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
     if statuses:
         ok = len(statuses) - len(not_ok)
         more = len(not_ok) - MAX_STATUS_FINDINGS
-        checked["diagnostics"] = f"{len(statuses)} statuses, {ok} OK"
+        checked["diagnostics"] = f"{counted(len(statuses), 'status', 'statuses')}, {ok} OK"
         if more > 0:
             left_out["diagnostics"] = more
     else:
@@ -758,7 +767,9 @@ def _tf(
             )
         )
     roots = sorted({_ancestors(f, edges)[-1] for f in frames})
-    checked["tf"] = f"{len(frames)} frames, root{'s' if len(roots) != 1 else ''} {', '.join(roots) or 'none'}"
+    checked["tf"] = (
+        f"{counted(len(frames), 'frame')}, root{'s' if len(roots) != 1 else ''} {', '.join(roots) or 'none'}"
+    )
     return out, frames
 
 
@@ -786,9 +797,12 @@ def _logs(keeper: LogKeeper, checked: dict[str, str], left_out: dict[str, int]) 
     warnings = sum(f.count for f in folds if f.level == "warn")
     if len(folds) > MAX_LOG_FINDINGS:
         left_out["logs"] = len(folds) - MAX_LOG_FINDINGS
-    checked["logs"] = f"{errors} errors, {warnings} warnings since {since} ({len(keeper.ring)} lines kept)"
+    checked["logs"] = (
+        f"{counted(errors, 'error')}, {counted(warnings, 'warning')} since {since} "
+        f"({counted(len(keeper.ring), 'line')} kept)"
+    )
     return out
 
 
 def _plural(count: int, word: str) -> str:
-    return f"{count} {word}{'' if count == 1 else 's'}"
+    return counted(count, word)

@@ -33,6 +33,7 @@ from typing import Any
 from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.errors import InvalidMessageError, NotSentError
 from rosbridge_mcp_server.robot.text import json_shown
+from rosbridge_mcp_server.robot.wording import full_stop
 
 __all__ = [
     "TypeDef",
@@ -401,7 +402,7 @@ def require_fit(
         check_message(message, type_name, typedefs, ros_version=ros_version)
     except InvalidMessageError as exc:
         shape = compact_json(example_message(type_name, typedefs, ros_version=ros_version))
-        raise NotSentError(f"{exc}. {nothing_sent}. {looks_like} looks like {shape}.") from exc
+        raise NotSentError(f"{full_stop(str(exc))} {nothing_sent}. {looks_like} looks like {shape}.") from exc
 
 
 def compact_json(value: Any, limit: int = 600) -> str:

@@ -23,6 +23,7 @@ __all__ = [
     "ALLOW_ALL",
     "Act",
     "Answer",
+    "AnswerNotInForm",
     "Approving",
     "AskPerson",
     "Guard",
@@ -80,12 +81,19 @@ Answer = Literal["accept", "decline", "cancel", "unsupported"]
 SendToLink = Callable[[str, str, str], Awaitable[Answer]]
 
 
+class AnswerNotInForm(Exception):
+    """The person's MCP client answered a question, but not in the form it was asked (an ``approve`` that is
+    no yes/no, or none): raised by an :class:`AskPerson`; ``str()`` says what was wrong, never the answer's
+    own values."""
+
+
 class AskPerson:
     """The person at the MCP client, asked a yes/no question (the server's elicitation): ``await ask(text)``.
 
     This one has nobody to ask (no MCP client, or one without elicitation): every question is
-    ``"unsupported"``; the MCP edge gives a call its own. ``by_link`` is set when the client can also open a
-    URL for the person: the guard then sends them to this call's approval on the operator console.
+    ``"unsupported"``; the MCP edge gives a call its own, which raises :class:`AnswerNotInForm` for an answer
+    off the question's form. ``by_link`` is set when the client can also open a URL for the person: the guard
+    then sends them to this call's approval on the operator console.
     """
 
     by_link: SendToLink | None = None

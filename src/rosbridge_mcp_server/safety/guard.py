@@ -22,12 +22,14 @@ import dataclasses
 import datetime
 import json
 import logging
+import re
 from collections.abc import Callable
 from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
+from rosbridge_mcp_server.robot.seam import AnswerNotInForm
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
 from rosbridge_mcp_server.safety.fence import fence_refusal, writes_fence
 from rosbridge_mcp_server.safety.navigation import act_motion, navigation_refusal
@@ -59,6 +61,9 @@ AUDIT_PAYLOAD_LIMIT = 16_000
 #: The rule a refusal names while the operator's e-stop is latched.
 LATCH_RULE = "e-stop latched by the operator"
 
+#: An answer off the confirmation form, as the audit's ``person:`` and the refusal say it.
+_NOT_IN_FORM = "answer not in the form"
+
 #: One audit line as a dict (the audit file's JSON, before the payload is cut).
 AuditEntry = dict[str, Any]
 
@@ -80,7 +85,9 @@ class Audit:
         """Write the line; why it could not go into the audit file, or ``None`` (written, or no file)."""
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
-        level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
+        # A stream that sent what it planned ("sent 30 of 30") is as routine as one message sent.
+        routine = outcome in ("allowed", "confirmed", "sent") or re.fullmatch(r"sent (\d+) of \1", outcome)
+        level = logging.INFO if routine else logging.WARNING
         caller = act.caller
         written = f" (written {act.given!r})" if act.given is not None else ""
         effects = f" [{'; '.join(e.describe() for e in act.effects)}]" if act.effects else ""
@@ -340,6 +347,9 @@ class PolicyGuard:
                 return answer
         except TimeoutError:
             return "timeout"
+        except AnswerNotInForm as exc:
+            # The client asked, but its answer is no yes/no: say what was wrong, not that it cannot ask.
+            return f"{_NOT_IN_FORM} ({exc})"
         except Exception as exc:
             # A client that fails the request (or never answers in time) has not said yes.
             _log.warning("asking the person failed: %s", exc)
@@ -376,6 +386,12 @@ def moves(act: Act, policy: Policy) -> bool:
 
 def _answer_text(act: Act, answer: str, policy: Policy) -> str:
     what = f"{act.tool} on {act.name}"
+    if answer.startswith(_NOT_IN_FORM):
+        return (
+            f"The MCP client answered the confirmation for {what}, but the answer did not match the "
+            f"confirmation form {answer.removeprefix(_NOT_IN_FORM).strip()}; nothing was sent. The client "
+            "must answer with approve true or false: tell the user."
+        )
     if answer == "decline":
         return f"The person declined {what}; nothing was sent. Do not retry it unless they ask you to."
     if answer == "cancel":

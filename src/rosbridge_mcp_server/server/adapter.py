@@ -47,12 +47,13 @@ from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
     InvalidMessageError,
+    NotConnectedError,
     ProtocolError,
     RequestTimeoutError,
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.seam import Answer, AskPerson, call_ending
+from rosbridge_mcp_server.robot.seam import Answer, AnswerNotInForm, AskPerson, call_ending
 from rosbridge_mcp_server.robot.text import repaired, shown
 from rosbridge_mcp_server.server.advice import advised
 from rosbridge_mcp_server.server.sdk import cancelled_by_client
@@ -250,12 +251,13 @@ async def _run_on(
         # A failure may show why (navigate_to draws a refused goal on the map).
         pictures = _images(getattr(exc, "images", ()))
         return CallToolResult(
-            content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
+            content=[TextContent(type="text", text=_where_set(error_text(exc), robot)), *pictures],
+            is_error=True,
         )
     finally:
         call_ending.reset(ending)
     return CallToolResult(
-        content=[TextContent(type="text", text=answer.text), *_images(answer.images)],
+        content=[TextContent(type="text", text=_where_set(answer.text, robot)), *_images(answer.images)],
         structured_content=answer.data.model_dump(mode="json"),
     )
 
@@ -283,6 +285,14 @@ def writable(result: CallToolResult | InputRequiredResult) -> CallToolResult | I
         for block in result.content
     ]
     return result.model_copy(update={"content": content, "structured_content": repaired(structured)})
+
+
+def _where_set(text: str, robot: Robot) -> str:
+    """*text* with a fleet robot's own entry (``[robots.base] in --robots fleet.toml``) named where a robot
+    that cannot be reached points at the server's ROSBRIDGE_HOST/PORT settings, which it does not use."""
+    if robot.config.url_source is None:
+        return text
+    return text.replace(NotConnectedError.SETTINGS, f"{robot.config.url_source} (robot {robot.name})")
 
 
 def _images(images: typing.Iterable[ToolImage]) -> list[ImageContent]:
@@ -394,7 +404,8 @@ def _merged(names: list[str], answers: list[CallToolResult | InputRequiredResult
             continue
         failed = failed or bool(answer.is_error)
         text = "\n".join(block.text for block in answer.content if isinstance(block, TextContent))
-        texts.append(f"{name}: {text}")
+        # Every line under its robot: a robot's answer may take several.
+        texts += [f"{name}: {line}" for line in text.splitlines() or [""]]
         for key, value in (answer.structured_content or {}).items():
             if isinstance(value, list):
                 data.setdefault(key, []).extend(f"{name}: {item}" for item in value)
@@ -503,13 +514,20 @@ class _Asker(AskPerson):
                 raise _AskInNextRound(key, question)
             if response.action != "accept":
                 return response.action
-            return "accept" if (response.content or {}).get("approve") is True else "decline"
+            return "accept" if _confirmed(response.content) else "decline"
         if capabilities.elicitation.form is None and capabilities.elicitation.url is not None:
             return "unsupported"  # a URL-only client answers by link, or not at all
         try:
             result = await elicit_with_validation(
                 request.session, question, _Confirmation, related_request_id=request.request_id
             )
+        except ValueError as exc:
+            # The SDK's words for an accepted answer without content, or (caused by a ValidationError) with
+            # content off the form.
+            cause = exc.__cause__
+            raise AnswerNotInForm(
+                _form_problems(cause) if isinstance(cause, ValidationError) else "it accepted with no answer"
+            ) from None
         except Exception:
             _log.info("asking the person failed", exc_info=True)
             return "unsupported"
@@ -534,6 +552,23 @@ class _Asker(AskPerson):
             _log.info("sending the person to the console failed", exc_info=True)
             return "unsupported"
         return result.action
+
+
+def _confirmed(content: Mapping[str, Any] | None) -> bool:
+    """Whether an accepted answer of a 2026 input round ticks ``approve``; :class:`AnswerNotInForm` when it
+    does not fit the form."""
+    if content is None:
+        raise AnswerNotInForm("it accepted with no answer")
+    try:
+        return _Confirmation.model_validate(content).approve
+    except ValidationError as exc:
+        raise AnswerNotInForm(_form_problems(exc)) from None
+
+
+def _form_problems(exc: ValidationError) -> str:
+    """What was wrong with an answer, by field and pydantic's words, without the client's values."""
+    problems = [f"{'.'.join(map(str, e['loc'])) or 'answer'}: {e['msg']}" for e in exc.errors()[:3]]
+    return "; ".join(problems)[:200]
 
 
 def _question_round(asking: _AskInNextRound) -> InputRequiredResult:

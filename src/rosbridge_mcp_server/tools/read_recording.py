@@ -35,6 +35,7 @@ from rosbridge_mcp_server.robot.recording.reading import (
     summarize_recording,
 )
 from rosbridge_mcp_server.robot.series import FieldError
+from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -136,15 +137,17 @@ async def run(
 def _listing(directory: Path) -> ToolAnswer:
     entries = list_recordings(directory)
     rows: list[dict[str, Any]] = []
-    lines = [f"{len(entries)} recording(s) in {str(directory)!r}" + (":" if entries else ".")]
+    lines = [f"{counted(len(entries), 'recording')} in {str(directory)!r}" + (":" if entries else ".")]
     for entry in entries[:200]:
         when = time.strftime("%Y-%m-%d %H:%M", time.localtime(entry.modified))
         rows.append({"file": entry.name, "bytes": entry.size, "modified": when, "mcap": entry.is_mcap})
         lines.append(
-            f"- {entry.name}: {entry.size / 1e6:.1f} MB, {when}" + ("" if entry.is_mcap else " (not MCAP)")
+            f"- {entry.name}: {size_text(entry.size)}, {when}" + ("" if entry.is_mcap else " (not MCAP)")
         )
     if not entries:
-        lines.append('record {"topics": [...], "duration": 10} makes one; MCAP files put there are read too.')
+        lines.append(
+            'record {"topics": ["/rosout"], "duration": 10} makes one; MCAP files put there are read too.'
+        )
     text = _fit(lines, "Only the newest are shown.")
     return ToolAnswer(
         text=text, data=ReadRecordingAnswer(file=None, mode="list", details={"recordings": rows})
@@ -165,8 +168,10 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
         how += f"; it breaks off: {summary.damaged}, so only what came before is counted"
     how += f"; {summary.note}" if summary.note else ""
     lines = [
-        f"{file}: {summary.size / 1e6:.1f} MB, {summary.messages} messages on {len(summary.topics)} topics"
-        f" over {summary.seconds:.1f} s from {start} (profile {summary.profile or '-'}; {how})."
+        f"{file}: {size_text(summary.size)}, {counted(summary.messages, 'message')} on "
+        f"{counted(len(summary.topics), 'topic')} "
+        "over "
+        f"{summary.seconds:.1f} s from {start} (profile {summary.profile or '-'}; {how})."
     ]
     topics = []
     for t in summary.topics[:MAX_TOPICS]:

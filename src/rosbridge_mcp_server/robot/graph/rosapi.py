@@ -18,6 +18,7 @@ from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosInfo
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.messages import TypeDef
 from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
+from rosbridge_mcp_server.robot.wording import full_stop
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -64,6 +65,8 @@ class ConnectionKnowledge:
     # The last node list and topic list (name, type) this connection saw, each with when (the graph's clock).
     nodes_seen: tuple[float, tuple[str, ...]] | None = None
     topics_seen: tuple[float, tuple[tuple[str, str], ...]] | None = None
+    # Topics last seen with subscribers: when, and who.
+    subscribers_seen: dict[str, tuple[float, tuple[str, ...]]] = field(default_factory=dict)
 
 
 class Rosapi:
@@ -115,7 +118,7 @@ class Rosapi:
             values = await self.client.call_service(service, args or {})
         except ServiceError as exc:
             if is_missing_service(exc):
-                raise ServiceError(service, f"{exc.message}. {ROSAPI_HINT}") from exc
+                raise ServiceError(service, f"{full_stop(exc.message)} {ROSAPI_HINT}") from exc
             raise
         return values if isinstance(values, dict) else {}
 
