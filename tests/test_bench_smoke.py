@@ -52,6 +52,7 @@ TARGET_ROWS = (
     "16f",
     "16g",
     "17",
+    *(f"18{letter}" for letter in "abcdefghijk"),
 )
 
 

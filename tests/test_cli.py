@@ -14,8 +14,10 @@ from typing import Any
 
 import pytest
 
+from rosbridge_mcp_server.catalogue import TOOL_GROUPS
 from rosbridge_mcp_server.cli import PROG, run
 from rosbridge_mcp_server.cli.check import run_check, unreachable_advice
+from rosbridge_mcp_server.cli.commands import configure_logging
 from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.safety.policy import NameRules, Policy
@@ -253,7 +255,8 @@ async def test_check_leaves_no_service_behind_on_a_busy_bridge() -> None:
 
 
 def test_help_names_both_commands_and_the_tool_groups(capsys: pytest.CaptureFixture[str]) -> None:
-    """--help shows that `check` exists and what each --tools group holds (original comes with stop_robot)."""
+    """--help shows that `check` exists and what each --tools group holds (original comes with stop_robot):
+    every group of the catalogue, navigation and safety too."""
     with pytest.raises(SystemExit) as exited:
         run(["--help"], {})
     assert exited.value.code == 0
@@ -262,6 +265,10 @@ def test_help_names_both_commands_and_the_tool_groups(capsys: pytest.CaptureFixt
     assert "check diagnoses the connection" in shown
     assert "original (the first eight, with stop_robot whenever a tool acts)" in shown
     assert "view (pictures: map, scan, charts)" in shown
+    assert "navigation (navigate_to)" in shown
+    assert "safety (stop_robot)" in shown
+    for group in TOOL_GROUPS:
+        assert f" {group} (" in shown, group
 
 
 async def test_check_warns_about_policy_names_the_robot_does_not_have() -> None:
@@ -348,3 +355,27 @@ def test_the_commands_that_do_not_serve_start_without_the_mcp_sdk() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=30, check=True
     )
     assert done.stdout.strip() == "[]"
+
+
+def test_a_log_message_quoting_robot_text_stays_one_line_of_ours() -> None:
+    """A message quoting what a bridge or a caller wrote (a newline and a forged line, an ANSI sequence) is
+    one escaped line on stderr, and a megabyte of it is cut with the cut said."""
+    stream = io.StringIO()
+    ours = logging.getLogger("rosbridge_mcp_server")
+    root = logging.getLogger()
+    levels = (root.level, ours.level)
+    configure_logging("INFO", stream)
+    try:
+        log = logging.getLogger("rosbridge_mcp_server.client")
+        log.warning("the bridge refused %s: %s", "publish:/x:1", "no\n2026-01-01 ERROR forged\x1b[2J")
+        log.warning("bridge status: %s", "x" * 1_000_000)
+    finally:
+        for handler in [h for h in root.handlers if h.get_name() == PROG]:
+            root.removeHandler(handler)
+        root.setLevel(levels[0])
+        ours.setLevel(levels[1])
+    lines = stream.getvalue().splitlines()
+    assert len(lines) == 2, lines
+    assert lines[0].endswith("the bridge refused publish:/x:1: no\\n2026-01-01 ERROR forged\\x1b[2J")
+    assert lines[1].endswith("… (1,000,015 characters)")
+    assert len(lines[1]) < 10_200

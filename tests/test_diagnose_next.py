@@ -20,11 +20,22 @@ CASES: list[tuple[tuple[Step, ...], str]] = [
         'get_topic_info {"topic": "/tf"} to see who publishes',
     ),
     (
-        (Step(Look.ACTIVATE, ("/amcl",)), Step(Look.NODE)),
-        'activate it: publish_service {"service": "/amcl/change_state", "request": {"transition": {"id": '
-        "3}}} (or its lifecycle manager's manage_nodes); get_node_info",
+        (Step(Look.NODE_LOG, ("/amcl",), "for why"), Step(Look.ACTIVATE)),
+        'read_logs {"node": "/amcl", "level": "info"} for why; activating it acts on the robot (its '
+        "lifecycle manager's manage_nodes, or its change_state service, transition 3): ask the user first",
     ),
+    ((Step(Look.LOG, (), "for its last words"),), 'read_logs {"level": "info"} for its last words'),
     ((Step(Look.ONE_MESSAGE, ("/diagnostics",)),), 'subscribe_topic {"topic": "/diagnostics", "count": 1}'),
+    (
+        (Step(Look.STATUSES, ("/diagnostics", "4")),),
+        'subscribe_topic {"topic": "/diagnostics", "count": 8, "duration": 3, "fields": ["status"]} (its '
+        "publishers take turns: one message is likely another's)",
+    ),
+    (
+        (Step(Look.STATUSES, ("/diagnostics", "300")),),
+        'subscribe_topic {"topic": "/diagnostics", "count": 100, "duration": 3, "fields": ["status"]} (its '
+        "publishers take turns: one message is likely another's)",
+    ),
     (
         (Step(Look.WAIT_MESSAGE, ("/scan",)), Step(Look.NODE, ("/lidar",))),
         'subscribe_topic {"topic": "/scan", "timeout": 5}; get_node_info {"node": "/lidar"}',
@@ -70,7 +81,10 @@ def test_what_an_area_left_out_is_pointed_at_in_its_checked_text() -> None:
     )
     assert checked_texts(found) == {
         "graph": "36 nodes, 78 topics",
-        "diagnostics": "25 statuses, 0 OK (5 more not OK: subscribe_topic /diagnostics)",
+        "diagnostics": (
+            '25 statuses, 0 OK (5 more not OK: subscribe_topic {"topic": "/diagnostics", "count": 100, '
+            '"duration": 3, "fields": ["status"]})'
+        ),
         "logs": "7 errors, 1 warnings since 03:00:00 (12 lines kept, 2 more groups in read_logs)",
     }
     found.left_out.clear()

@@ -53,6 +53,9 @@ What is measured:
     (to ``list_topics`` succeeding, and no command replayed).
 17. MCP tasks (``--only tasks``): ``tasks/get`` on a running task (a ``subscribe_topic`` with a duration,
     started by a 2026-07-28 client advertising the tasks extension) against the no-op tool, interleaved.
+18. hostile recordings (``--only bombs``; issue 36): each class of MCAP bomb at the size the issue found it
+    (``tests/recording_bombs.py``), ``read_recording`` in every mode: refused with a worded error in ≤ 2 s
+    with ≤ 50 MiB of peak RSS growth (``VmHWM``).
 
 The package: ``harness`` (what every item shares), one module per item, ``run`` (the order, the table, the
 command line), ``internals`` (the only module that imports the product's internals, and why), ``servers/``

@@ -48,6 +48,7 @@ from benchmarks.latency import measure_latency
 from benchmarks.memory import measure_memory
 from benchmarks.nav2 import measure_nav2
 from benchmarks.recording import measure_recording
+from benchmarks.recording_bombs import measure_recording_bombs
 from benchmarks.startup import measure_startup
 from benchmarks.stops import measure_stops
 from benchmarks.streamable_http import measure_http
@@ -73,6 +74,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("nav2", "12", "graph tools on a Nav2 robot", measure_nav2, 300.0),
     ("diagnose", "13", "diagnose and the log ring", measure_diagnose, 300.0),
     ("recording", "14", "recording", measure_recording, 300.0),
+    ("bombs", "18", "hostile recordings", measure_recording_bombs, 240.0),
     ("edge", "15", "the server alone over the floor (issue 26 item 8)", measure_edge, 300.0),
     ("stops", "16", "stop_robot and reconnects, as the robot sees them", measure_stops, 240.0),
     ("tasks", "17", "tasks/get on a running MCP task", measure_tasks, 120.0),

@@ -1,14 +1,20 @@
-"""The tool catalogue, the one list of the tools: their names by ``--tools`` group, in registration order.
+"""The tool catalogue, the one list of the tools: each tool's name, the family it came with and whether it
+acts, in registration order; the ``--tools`` groups are derived from it.
 
-``tools/__init__.py`` imports the module of each name (failing at import when one has none), and
-``config.py`` resolves a ``--tools`` value with :func:`select_tools`, so neither the configuration nor this
-list needs any tool's code.
+``tools/__init__.py`` imports the module of each name (failing at import when one has none, or when a tool's
+spec and its entry here disagree on whether it acts), and ``config.py`` resolves a ``--tools`` value with
+:func:`select_tools`, so neither the configuration nor this list needs any tool's code. ``--help`` words the
+groups with :func:`groups_help`.
 """
 
 from __future__ import annotations
 
+from typing import Final, NamedTuple
+
 __all__ = [
     "ALL_TOOL_NAMES",
+    "CATALOGUE",
+    "GROUP_HELP",
     "NAVIGATION_TOOL_NAMES",
     "ORIGINAL_TOOL_NAMES",
     "RECORD_TOOL_NAMES",
@@ -16,49 +22,70 @@ __all__ = [
     "TOOL_GROUPS",
     "VIEW_TOOL_NAMES",
     "WATCH_TOOL_NAMES",
+    "Entry",
+    "groups_help",
     "select_tools",
 ]
 
-#: The tools the server started with.
-ORIGINAL_TOOL_NAMES = (
-    "list_topics",
-    "get_topic_info",
-    "publish_topic",
-    "list_services",
-    "publish_service",
-    "list_actions",
-    "publish_action",
-    "cancel_action",
+
+class Entry(NamedTuple):
+    """One tool: its name, the family it came with, and whether it acts (its spec is not read-only: it
+    changes the robot, or with ``record`` the host's disk)."""
+
+    name: str
+    family: str
+    acts: bool
+
+
+#: Every tool, in registration order.
+CATALOGUE: Final[tuple[Entry, ...]] = (
+    # The tools the server started with.
+    Entry("list_topics", "original", acts=False),
+    Entry("get_topic_info", "original", acts=False),
+    Entry("publish_topic", "original", acts=True),
+    Entry("list_services", "original", acts=False),
+    Entry("publish_service", "original", acts=True),
+    Entry("list_actions", "original", acts=False),
+    Entry("publish_action", "original", acts=True),
+    Entry("cancel_action", "original", acts=True),
+    # Reading the robot (and setting a parameter).
+    Entry("subscribe_topic", "robot", acts=False),
+    Entry("get_image", "robot", acts=False),
+    Entry("describe_type", "robot", acts=False),
+    Entry("list_nodes", "robot", acts=False),
+    Entry("get_node_info", "robot", acts=False),
+    Entry("list_parameters", "robot", acts=False),
+    Entry("get_parameter", "robot", acts=False),
+    Entry("set_parameter", "robot", acts=True),
+    Entry("get_transform", "robot", acts=False),
+    Entry("read_logs", "robot", acts=False),
+    Entry("diagnose", "robot", acts=False),
+    # Pictures of the robot's world: its map, its scan, a topic over time.
+    Entry("view_map", "view", acts=False),
+    Entry("view_scan", "view", acts=False),
+    Entry("plot_topic", "view", acts=False),
+    Entry("stop_robot", "safety", acts=True),
+    # Sending the robot somewhere on its map.
+    Entry("navigate_to", "navigation", acts=True),
+    # Recordings: MCAP files written from topics, and read back.
+    Entry("record", "record", acts=True),
+    Entry("read_recording", "record", acts=False),
 )
-WATCH_TOOL_NAMES = (
-    "subscribe_topic",
-    "get_image",
-    "describe_type",
-    "list_nodes",
-    "get_node_info",
-    "list_parameters",
-    "get_parameter",
-    "set_parameter",
-    "get_transform",
-    "read_logs",
-    "diagnose",
-)
-#: Pictures of the robot's world: its map, its scan, a topic over time.
-VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
-SAFETY_TOOL_NAMES = ("stop_robot",)
-#: Sending the robot somewhere on its map.
-NAVIGATION_TOOL_NAMES = ("navigate_to",)
-#: Recordings: MCAP files written from topics, and read back.
-RECORD_TOOL_NAMES = ("record", "read_recording")
-ALL_TOOL_NAMES = (
-    ORIGINAL_TOOL_NAMES
-    + WATCH_TOOL_NAMES
-    + VIEW_TOOL_NAMES
-    + SAFETY_TOOL_NAMES
-    + NAVIGATION_TOOL_NAMES
-    + RECORD_TOOL_NAMES
-)
-TOOL_GROUPS: dict[str, tuple[str, ...]] = {
+
+
+def _names(keep: set[str] | None = None, *, reading: bool = False) -> tuple[str, ...]:
+    return tuple(e.name for e in CATALOGUE if (keep is None or e.family in keep) and not (reading and e.acts))
+
+
+ALL_TOOL_NAMES: Final = _names()
+ORIGINAL_TOOL_NAMES: Final = _names({"original"})
+#: Every tool that reads the robot's graph and state (not the pictures or recordings): nothing that acts.
+WATCH_TOOL_NAMES: Final = _names({"original", "robot"}, reading=True)
+VIEW_TOOL_NAMES: Final = _names({"view"})
+SAFETY_TOOL_NAMES: Final = _names({"safety"})
+NAVIGATION_TOOL_NAMES: Final = _names({"navigation"})
+RECORD_TOOL_NAMES: Final = _names({"record"})
+TOOL_GROUPS: Final[dict[str, tuple[str, ...]]] = {
     "all": ALL_TOOL_NAMES,
     "original": ORIGINAL_TOOL_NAMES,
     "watch": WATCH_TOOL_NAMES,
@@ -67,14 +94,28 @@ TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "navigation": NAVIGATION_TOOL_NAMES,
     "record": RECORD_TOOL_NAMES,
 }
+#: What each group holds, in a few words (``--help``; a group of one or two tools is named by its tools).
+GROUP_HELP: Final[dict[str, str]] = {
+    "all": "every tool",
+    "original": "the first eight, with stop_robot whenever a tool acts",
+    "watch": "reading the robot, nothing that acts: topics, services, actions, cameras, types, nodes, "
+    "parameters, frames, its log, diagnose",
+    "view": "pictures: map, scan, charts",
+}
+
+
+def groups_help() -> str:
+    """Every group and what it holds: ``all (every tool); ...; record (record, read_recording)``."""
+    return "; ".join(
+        f"{group} ({GROUP_HELP.get(group) or ', '.join(names)})" for group, names in TOOL_GROUPS.items()
+    )
 
 
 def select_tools(spec: str) -> tuple[str, ...]:
     """The tool names a ``--tools`` value stands for, in registration order.
 
-    ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``,
-    ``navigation``)
-    and tool names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
+    ``spec`` is a comma-separated list of group names (those of :data:`TOOL_GROUPS`) and tool names, e.g.
+    ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
     """
     chosen: set[str] = set()
     unknown: list[str] = []

@@ -128,6 +128,9 @@ class RosbridgeError(Advised):
 class NotConnectedError(RosbridgeError):
     """There is no open connection to the bridge, so nothing was sent."""
 
+    #: The settings the text says to check; a fleet's robot names its own entry instead (``server/``).
+    SETTINGS = "ROSBRIDGE_HOST/ROSBRIDGE_PORT (or ROSBRIDGE_URL)"
+
     def __init__(self, url: str, reason: str | None = None, *, timed_out: bool = False) -> None:
         self.url = url
         self.reason = reason
@@ -139,7 +142,7 @@ class NotConnectedError(RosbridgeError):
             "Check that the robot is on, that rosbridge_server is running there "
             "(ROS 2: `ros2 launch rosbridge_server rosbridge_websocket_launch.xml`, "
             "ROS 1: `roslaunch rosbridge_server rosbridge_websocket.launch`), and that "
-            "ROSBRIDGE_HOST/ROSBRIDGE_PORT (or ROSBRIDGE_URL) point at it. "
+            f"{self.SETTINGS} point at it. "
             "The server keeps reconnecting in the background; try again in a few seconds."
         )
 

@@ -55,6 +55,8 @@ async def test_an_acting_call_shows_on_the_page_as_it_happens(sim_ros2: Simulate
         await expect(newest).to_contain_text(CMD_VEL, timeout=SHOWS_WITHIN_MS)
         await expect(newest).to_contain_text("publish_topic")
         await expect(newest).to_contain_text("allowed")
+        # Every time on the page is 24-hour local time (the E-STOP's too), never a 12-hour one beside it.
+        await expect(newest.locator(".time")).to_have_text(re.compile(r"^\d\d:\d\d:\d\d$"))
 
 
 async def test_approve_lets_a_waiting_motion_through(sim_ros2: SimulatedRobot) -> None:

@@ -14,6 +14,7 @@ import pytest
 
 from rosbridge_mcp_server.cli import run
 from rosbridge_mcp_server.cli.commands import PROG
+from rosbridge_mcp_server.console.address import ConsoleAddressFile
 
 WAIT = 30.0
 
@@ -150,7 +151,9 @@ async def test_the_console_url_is_kept_in_a_file_only_the_user_can_read(tmp_path
         kept = runtime / f"console-{process.pid}.url"
         assert str(kept) in told
         assert "console-url" in told
-        assert kept.read_text() == url + "\n"
+        kept_url, serves = kept.read_text().splitlines()
+        assert kept_url == url
+        assert serves.startswith("the robot at ws://127.0.0.1:"), serves
         assert stat.S_IMODE(kept.stat().st_mode) == 0o600
         assert stat.S_IMODE(runtime.stat().st_mode) == 0o700
         printed = await asyncio.create_subprocess_exec(
@@ -188,3 +191,26 @@ def test_console_url_without_a_console_says_where_it_looked(
     assert str(runtime) in captured.err
     assert "--console" in captured.err
     assert not dead.exists()
+
+
+def test_console_url_with_two_consoles_says_which_robot_each_is_for(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two servers with consoles running (here this process and its parent, both alive): each URL is printed
+    with its process and the robot it serves, so the person opens the right one."""
+    runtime = tmp_path / "runtime"
+    ConsoleAddressFile(runtime, os.getpid()).write(
+        "http://127.0.0.1:8770/#secret=a", "the robot at ws://10.0.0.5:9090"
+    )
+    ConsoleAddressFile(runtime, os.getppid()).write(
+        "http://127.0.0.1:8771/#secret=b", "robots arm at ws://10.0.0.6:9090, base at ws://10.0.0.7:9090"
+    )
+    assert run(["console-url"], {"ROSBRIDGE_MCP_RUNTIME_DIR": str(runtime)}) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert sorted(lines) == sorted(
+        [
+            f"http://127.0.0.1:8770/#secret=a  (process {os.getpid()}, the robot at ws://10.0.0.5:9090)",
+            f"http://127.0.0.1:8771/#secret=b  (process {os.getppid()}, robots arm at ws://10.0.0.6:9090, "
+            "base at ws://10.0.0.7:9090)",
+        ]
+    )

@@ -143,3 +143,76 @@ async def test_the_audit_names_the_tokens_subject(
     assert not result.is_error
     [line] = [json.loads(line) for line in audit.read_text().splitlines()]
     assert line["caller"] == "operator-alice"
+
+
+#: Validly signed tokens with a claim of the wrong JSON type, each refused with 401 (null scope was HTTP 500).
+WRONG_TYPES: dict[str, dict[str, Any]] = {
+    "scope null": {"scope": None, "scp": None},
+    "scope a number": {"scope": 7},
+    "scope a list of numbers": {"scope": [1, 2]},
+    "scope an object": {"scope": {"robot": True}},
+    "scp null": {"scope": ..., "scp": None},
+    "sub a number": {"sub": 42},
+    "sub a list": {"sub": ["alice"]},
+    "sub null": {"sub": None},
+    "client_id an object": {"client_id": {"name": "x"}},
+    "azp true": {"azp": True},
+    "exp a string": {"exp": "tomorrow"},
+    "exp infinite": {"exp": float("inf")},
+}
+
+
+def _signed(key: Any, claims: dict[str, Any]) -> str:
+    """A token signed by *key* with exactly these claims over the valid ones (``None`` kept as JSON null,
+    ``...`` leaves the claim out)."""
+    now = int(time.time())
+    body = {"iss": ISSUER, "aud": AUDIENCE, "sub": "alice", "exp": now + 600, "iat": now, "scope": "robot"}
+    body.update(claims)
+    body = {name: value for name, value in body.items() if value is not ...}
+    payload = json.dumps(body, allow_nan=True).encode()
+    return jwt.api_jws.encode(payload, key, "RS256", headers={"kid": "k1"})
+
+
+async def test_a_signed_token_whose_claims_have_the_wrong_type_is_401_not_500(
+    sim_ros2: SimulatedRobot, tmp_path: Path, keys: tuple[Any, Any]
+) -> None:
+    """scope, scp, sub, client_id, azp and exp of a JSON type they cannot have: 401, like any bad token."""
+    issuer_key, _ = keys
+    jwks = _jwks(tmp_path / "jwks.json", issuer_key)
+    async with serving("http", *_flags(sim_ros2, jwks), tokens=False) as served:
+        statuses = {
+            name: (await _initialize(served.url, _signed(issuer_key, claims))).status_code
+            for name, claims in WRONG_TYPES.items()
+        }
+        listed = (
+            await _initialize(served.url, _signed(issuer_key, {"scope": ..., "scp": ["robot"]}))
+        ).status_code
+    assert statuses == dict.fromkeys(WRONG_TYPES, 401)
+    assert listed == 200
+
+
+async def test_a_newline_in_the_subject_cannot_forge_an_audit_line(
+    sim_ros2: SimulatedRobot, tmp_path: Path, keys: tuple[Any, Any]
+) -> None:
+    """A subject holding a newline and an audit line of its own: the audit on stderr and in the file names the
+    caller escaped, on one line; no line of stderr is the forged one."""
+    issuer_key, _ = keys
+    jwks = _jwks(tmp_path / "jwks.json", issuer_key)
+    audit = tmp_path / "audit.jsonl"
+    forged = "2026-01-01 00:00:00,000 WARNING rosbridge_mcp_server.audit: audit: stop_robot refused"
+    subject = f"mallory\n{forged}\x1b[2K\u202e"
+    flags = _flags(sim_ros2, jwks, "--audit-log", str(audit))
+    async with (
+        serving("http", *flags, tokens=False) as served,
+        served.connect(token=_signed(issuer_key, {"sub": subject})) as client,
+    ):
+        result = await client.call_tool(
+            "publish_topic",
+            {"topic": "/turtle1/cmd_vel", "message_type": "geometry_msgs/msg/Twist", "message": {}},
+        )
+    assert not result.is_error
+    [line] = [json.loads(line) for line in audit.read_text().splitlines()]
+    assert line["caller"] == f"mallory\\n{forged}\\x1b[2K\\u202e"
+    stderr = "".join(served.stderr)
+    assert not any(row.startswith(forged) for row in stderr.splitlines()), stderr
+    assert "[caller mallory\\n2026-01-01" in stderr

@@ -8,8 +8,8 @@ a placeholder (``"…"``) is filled with the id of a goal started first. ``recor
 30 s, so it and ``read_recording``'s run on a ``--demo`` server of their own. ``list_robots`` is listed only
 with several robots, so its examples run on a two-robot server over the same simulated robot;
 ``navigate_to`` needs a robot with Nav2 and a map, so its examples run on the simulated Nav2 world (the one
-``--demo --demo-world nav2`` starts, driven faster than the demo's real speed) with the README's sample
-place (``dock``) in a policy. The four servers run at once.
+``--demo --demo-world nav2`` starts, driven faster than the demo's real speed) with the sample policy's
+place (``dock``, examples/robot-policy.toml) in a policy. The four servers run at once.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import json
 import os
 import re
 import sys
+import tomllib
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
@@ -42,8 +43,10 @@ RECORDING = {"record", "read_recording"}
 #: The Nav2 world's speeds scaled up (the demo drives at a real robot's 0.4 m/s).
 NAV2_SPEED = 8.0
 READMES = ("README.md", "README_ja.md")
-#: The README's policy sample names the place ``dock``; on the Nav2 demo's map it is free space.
-NAV2_POLICY = "[places]\ndock = [1.0, 2.0, 90]\n"
+#: The places of the sample policy the README shows (its ``dock`` is free space on the Nav2 demo's map); the
+#: rest of it has a person confirm every motion, and this client has no person.
+SAMPLE_PLACES = tomllib.loads((ROOT / "examples" / "robot-policy.toml").read_text("utf-8"))["places"]
+NAV2_POLICY = "[places]\n" + "".join(f"{name} = {json.dumps(at)}\n" for name, at in SAMPLE_PLACES.items())
 
 
 def tools_table(readme: Path) -> dict[str, list[dict[str, Any]]]:

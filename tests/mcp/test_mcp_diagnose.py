@@ -40,10 +40,14 @@ FAULT_NEXT: dict[str, str] = {
         'subscribe_topic {"topic": "/scan", "timeout": 5}; get_node_info {"node": "/rplidar_node"}'
     ),
     "tf-stale": 'get_transform {"target_frame": "odom", "source_frame": "base_footprint", "timeout": 5}',
-    "driver-error": 'subscribe_topic {"topic": "/diagnostics", "count": 1}',
+    "driver-error": (
+        'subscribe_topic {"topic": "/diagnostics", "count": 8, "duration": 3, "fields": ["status"]} (its '
+        "publishers take turns: one message is likely another's)"
+    ),
     "controller-inactive": (
-        'activate it: publish_service {"service": "/controller_server/change_state", "request": '
-        '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes); get_node_info'
+        'read_logs {"node": "/controller_server", "level": "info"} for why; activating it acts on the robot '
+        "(its lifecycle manager's manage_nodes, or its change_state service, transition 3): ask the user "
+        "first"
     ),
     "log-errors": 'read_logs {"node": "/controller_server", "level": "info"}',
     "node-gone": 'read_logs {"node": "/amcl", "level": "info"} for its last words; list_nodes',
@@ -78,12 +82,14 @@ async def until(check: Callable[[], bool], what: str, timeout: float = WAIT) -> 
 
 
 @asynccontextmanager
-async def broken(dialect: str, faults: tuple[str, ...]) -> AsyncIterator[tuple[SimulatedRobot, Session]]:
-    """A Nav2 robot with *faults* and an MCP session on it, once the server has had its first look (its log
-    subscribed, the nodes seen, the faults that show over time shown)."""
+async def broken(
+    dialect: str, faults: tuple[str, ...], tools: tuple[str, ...] | None = TOOLS
+) -> AsyncIterator[tuple[SimulatedRobot, Session]]:
+    """A Nav2 robot with *faults* and an MCP session on it (with *tools*; None: all), once the server has had
+    its first look (its log subscribed, the nodes seen, the faults that show over time shown)."""
     robot = SimulatedRobot(dialect=dialect, world="nav2", faults=faults, action_step=0.05)  # type: ignore[arg-type]
     robot.nav2.health.node_gone_after = 3_600  # taken out below, once the server has looked
-    async with robot, open_session(robot.url, tools=TOOLS) as session:
+    async with robot, open_session(robot.url, tools=tools) as session:
         keeper = keeper_of(session.ros)
         await asyncio.wait_for(keeper.ready.wait(), WAIT)
         await until(lambda: keeper.nodes_seen is not None, "the first look at the nodes")

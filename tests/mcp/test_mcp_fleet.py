@@ -4,20 +4,25 @@ from __future__ import annotations
 
 import asyncio
 import json
+import socket
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import websockets
+from mcp.types import CallToolResult, TextContent
 from mcp_harness import text_of
 
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.config.fleet import load_fleet
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Policy, PolicyGuard, parse_policy
 from rosbridge_mcp_server.server import Robot, build_fleet_server, build_server
+from rosbridge_mcp_server.server.fleet import Fleet
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 10.0
@@ -224,6 +229,82 @@ async def test_each_robots_service_listing_is_its_own_and_follows_its_changes(
     assert "/dyn (std_srvs/srv/Trigger)" in changed
     assert "/dyn" not in first["jazzy"]
     assert again == first["noetic"]
+
+
+async def test_a_robot_that_is_down_is_named_by_its_fleet_entry_and_every_line_by_its_robot(
+    sim_ros2: SimulatedRobot, tmp_path: Path
+) -> None:
+    """A fleet file's robot that is down: its errors point at its entry in the fleet file, not at
+    ROSBRIDGE_HOST/PORT; stop_robot's answer labels every line with its robot; list_robots says the policy
+    once ("policy: from ...", not "policy: policy")."""
+    (tmp_path / "slow.toml").write_text("[velocity]\nmax_linear = 0.3\n", encoding="utf-8")
+    fleet_file = tmp_path / "fleet.toml"
+    down_entry = f'[robots.down]\nurl = "{_closed_url()}"\npolicy = "slow.toml"\n'
+    fleet_file.write_text(f'[robots.up]\nurl = "{sim_ros2.url}"\n{down_entry}', encoding="utf-8")
+    base = Config()
+    entries = [
+        Robot(name, config, RobotSession(RosbridgeClient(config.url), PolicyGuard(config.policy)))
+        for name, config in load_fleet(base, robots_file=str(fleet_file))
+    ]
+    async with Client(build_fleet_server(entries, base), mode="legacy") as client:
+        await entries[0].session.client.wait_connected(WAIT)
+        down = await client.call_tool("list_topics", {"robot": "down"})
+        stopped = await client.call_tool("stop_robot", {})
+        robots = await client.call_tool("list_robots", {})
+    assert down.is_error
+    assert f"[robots.down] in --robots {fleet_file}" in text_of(down), text_of(down)
+    assert "ROSBRIDGE_HOST" not in text_of(down)
+    lines = text_of(stopped).splitlines()
+    assert len(lines) >= 3, lines
+    assert all(line.startswith(("up: ", "down: ")) for line in lines), lines
+    assert "ROSBRIDGE_HOST" not in text_of(stopped)
+    assert "policy: policy" not in text_of(robots), text_of(robots)
+    assert f"policy: from {tmp_path / 'slow.toml'}; confirm = never" in text_of(robots), text_of(robots)
+
+
+async def test_list_robots_on_one_robot_says_it_needs_a_fleet_and_how(sim_ros2: SimulatedRobot) -> None:
+    """list_robots is listed only with several robots; called on one, the answer says so and how to run
+    several, not a bare "Unknown tool"."""
+    base = replace(Config(), url=sim_ros2.url)
+    single = build_server(RobotSession(RosbridgeClient(sim_ros2.url), PolicyGuard(base.policy)), base)
+    async with Client(single, mode="legacy") as client:
+        result = await client.call_tool("list_robots", {})
+        other = await client.call_tool("list_robot", {})
+    assert result.is_error
+    text = text_of(result)
+    assert "list_robots" in text
+    assert "one robot" in text
+    assert "--robot NAME=URL" in text
+    assert "--robots" in text
+    assert text_of(other).startswith("Unknown tool: list_robot")
+
+
+def _closed_url() -> str:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return f"ws://127.0.0.1:{probe.getsockname()[1]}"
+
+
+def test_the_calls_an_answer_suggests_name_the_robot_in_its_text_and_structured_content() -> None:
+    """diagnose's next calls on robot b of a fleet: each `tool {...}` gets "robot": "b" first, in the text and
+    in the structured content; a call already naming a robot, a tool that is none and plain text stay."""
+    fleet = Fleet(
+        [
+            Robot(name, Config(), RobotSession(RosbridgeClient("ws://127.0.0.1:9"), PolicyGuard(Policy())))
+            for name in ("a", "b")
+        ]
+    )
+    next_call = 'read_logs {"node": "/amcl", "level": "info"} for its last words; list_nodes'
+    result = CallToolResult(
+        content=[TextContent(type="text", text=f"PROBLEM gone\n  → {next_call}; manage_nodes {{}}")],
+        structured_content={"findings": [{"next": next_call, "nodes": ["/amcl"]}], "count": 1},
+    )
+    named = fleet.calls_on(result, "b", {"read_logs", "list_nodes"})
+    expected = 'read_logs {"robot": "b", "node": "/amcl", "level": "info"} for its last words; list_nodes'
+    assert text_of(named) == f"PROBLEM gone\n  → {expected}; manage_nodes {{}}"
+    assert named.structured_content == {"findings": [{"next": expected, "nodes": ["/amcl"]}], "count": 1}
+    again = fleet.calls_on(named, "b", {"read_logs"})
+    assert text_of(again) == text_of(named)
 
 
 async def test_robots_of_the_fleet_on_one_bridge_carry_their_namespaces(make_sim: Any) -> None:

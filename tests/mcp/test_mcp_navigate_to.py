@@ -12,6 +12,7 @@ import contextlib
 import io
 import json
 import math
+import re
 from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
@@ -206,6 +207,15 @@ async def test_a_goal_the_map_or_the_policy_rules_out_is_refused_on_both_paths_a
         assert len({status["goal_info"]["goal_id"]["uuid"] for m in sent for status in m["status_list"]}) == 1
 
 
+async def test_a_keep_out_refusal_asks_for_a_goal_outside_the_zone(session: Session) -> None:
+    """The policy has only keep-out zones: the refusal says to choose a goal clear of them, not "inside the
+    allowed area" (there is none)."""
+    text = await session.error("navigate_to", {"goal": {"x": 9.0, "y": 2.0}})
+    assert "keep-out zone 'corner'" in text
+    assert "allowed area" not in text, text
+    assert "Choose a goal clear of the keep-out zones." in text, text
+
+
 async def test_a_refusal_draws_the_goal_on_the_map(session: Session) -> None:
     result = await session.call("navigate_to", {"goal": [9.0, 2.0]})
     assert result.is_error
@@ -289,6 +299,52 @@ async def test_no_navigator_is_said_and_nothing_is_sent(make_sim: MakeSim) -> No
         text = await opened.error("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
     assert "Nav2 is not ready: no action server /navigate_to_pose" in text
     assert "Nothing was sent" in text
+
+
+async def test_on_the_turtle_demo_the_missing_navigator_points_at_the_nav2_demo(make_sim: MakeSim) -> None:
+    """The plain demo (turtlesim) has no Nav2: the answer says which demo has it."""
+    robot = await make_sim(dialect="ros2")
+    async with open_session(robot.url, guard=None) as opened:
+        text = await opened.error("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
+    assert "turtlesim has no Nav2; the built-in demo has one: --demo --demo-world nav2" in text, text
+    assert text.endswith("Nothing was sent."), text
+
+
+async def test_reasons_that_end_in_a_stop_are_joined_without_a_double_one(make_sim: MakeSim) -> None:
+    """A robot without /tf: "... nothing publishes transforms. Nothing was sent.", not "transforms.. ..."."""
+    robot = await make_sim(dialect="ros2")
+    for name in list(robot.graph.nodes):
+        for topic in ("/tf", "/tf_static"):
+            if topic in robot.graph.nodes[name].publishes:
+                robot.graph.remove_publisher(name, topic)
+    async with open_session(robot.url, guard=None) as opened:
+        text = await opened.error("navigate_to", {"goal": {"x": 1.0, "y": 1.0}})
+    assert "nothing publishes transforms" in text, text
+    assert re.search(r"[^.]\.\.(?!\.)", text) is None, text
+    assert text.endswith(". Nothing was sent."), text
+
+
+@pytest.mark.parametrize(
+    ("goal", "said"),
+    [
+        ({"x": 1, "y": 2, "theta": 90}, 'unknown theta. Did you mean "yaw" (degrees) for "theta"?'),
+        ({"x": 1, "y": 2, "yaww": 90}, 'Did you mean "yaw" (degrees) for "yaww"?'),
+        ({"x": 1}, "no y."),
+        ([{"x": 1, "y": 2}, {"x": 1, "heading": 3}], 'goal[1] must be {"x": m, "y": m, "yaw": degrees}'),
+        ({"x": "one", "y": 2}, 'goal.x must be a finite number, not "one"'),
+    ],
+)
+async def test_a_goal_written_wrong_names_the_key_meant_and_sends_nothing(
+    session: Session, nav2: SimulatedRobot, goal: Any, said: str
+) -> None:
+    """A turtlesim-style theta, a misspelt yaw, a missing y, a bad waypoint, a word for a number: each
+    answer says what is wrong in JSON as it was written, what was meant, and that nothing was sent."""
+    text = await session.error("navigate_to", {"goal": goal})
+    assert said in text, text
+    assert text.endswith("Nothing was sent."), text
+    assert "waypoints[" not in text
+    assert "'x'" not in text, text  # JSON as written, not a Python dict
+    assert nav2.world.goals == {}
 
 
 async def test_an_inactive_navigator_is_said_and_nothing_is_sent(make_sim: MakeSim) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from mcp_harness import Session, types_for
+from mcp_harness import Session, text_of, types_for
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
@@ -28,6 +28,7 @@ async def test_a_twist_reaches_the_robot_and_the_turtle_moves(session: Session, 
         "zero_sent": False,
         "stopped_by_stop_robot": False,
         "adjusted": None,
+        "subscribers": 1,
     }
     await sim.world.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1)
     received = sim.world.published[CMD_VEL][0].msg
@@ -199,3 +200,52 @@ async def test_a_ros1_time_written_sec_nanosec_is_checked_and_arrives_as_secs_ns
     assert result.structured_content["message"] == {"data": stamp}, "the answer shows the message as given"
     await sim_ros1.world.wait_for(lambda w: len(w.published.get("/mcp_test/time", ())) == 1)
     assert sim_ros1.world.published["/mcp_test/time"][0].msg == {"data": {"secs": 5, "nsecs": 6}}
+
+
+async def test_a_message_nobody_subscribes_to_is_sent_and_said_to_have_reached_nobody(
+    session: Session, sim: SimulatedRobot
+) -> None:
+    """A misspelt velocity topic: the message is published as asked, but the answer says no node subscribes,
+    so nothing received it, and names the topic meant; not an error, and never "the robot moved"."""
+    twist = {"linear": {"x": 0.5}}
+    arguments = {"topic": "/turtle1/cmd_vell", "message_type": types_for(sim)["twist"], "message": twist}
+    result = await session.ok("publish_topic", arguments)
+    text = text_of(result)
+    assert '{"linear": {"x": 0.5}}. But nothing subscribes to /turtle1/cmd_vell' in text, text
+    assert "no node received it" in text, text
+    assert "Did you mean /turtle1/cmd_vel?" in text, text
+    assert result.structured_content is not None
+    assert result.structured_content["published"] is True
+    assert result.structured_content["subscribers"] == 0
+    await sim.world.wait_for(lambda w: len(w.published.get("/turtle1/cmd_vell", ())) == 1)
+    assert sim.world.turtle.commands == 0
+
+
+async def test_a_stream_nobody_subscribes_to_says_so_too(session: Session, sim: SimulatedRobot) -> None:
+    """A short stream on the misspelt topic: every message sent, and the answer says nobody received them."""
+    result = await session.ok(
+        "publish_topic",
+        {
+            "topic": "/turtle1/cmd_vell",
+            "message_type": types_for(sim)["twist"],
+            "message": {"angular": {"z": 0.2}},
+            "rate_hz": 20,
+            "duration": 0.2,
+        },
+    )
+    text = text_of(result)
+    assert "nothing subscribes to /turtle1/cmd_vell" in text, text
+    assert "Did you mean /turtle1/cmd_vel?" in text, text
+    assert result.structured_content is not None
+    assert result.structured_content["subscribers"] == 0
+
+
+async def test_a_message_a_node_subscribes_to_is_plain_success(session: Session, sim: SimulatedRobot) -> None:
+    """On the topic the turtle reads, the answer counts its subscribers and says nothing of nobody."""
+    result = await session.ok(
+        "publish_topic", {"topic": CMD_VEL, "message_type": types_for(sim)["twist"], "message": {}}
+    )
+    text = text_of(result)
+    assert "subscribes" not in text, text
+    assert result.structured_content is not None
+    assert result.structured_content["subscribers"] >= 1

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import AsyncIterator
+from typing import Any
 
 import pytest
 import pytest_asyncio
@@ -86,6 +87,33 @@ async def test_level_node_text_and_since_filter(logged: tuple[SimulatedRobot, Se
     assert recent.structured_content is not None
     assert recent.structured_content["groups"] == []
     assert text_of(recent).startswith("Nothing logged at any level in the last 0.001 s since ")
+
+
+@pytest.mark.parametrize(
+    ("written", "level"),
+    [("warning", "warn"), ("WARN", "warn"), ("err", "error"), ("critical", "fatal"), ("Information", "info")],
+)
+async def test_a_level_in_another_case_or_its_other_name_is_the_level(
+    logged: tuple[SimulatedRobot, Session], written: str, level: str
+) -> None:
+    """ "warning" (Python's name), "err" and "crit" (syslog's), any case: read as warn, error, fatal."""
+    _robot, session = logged
+    aliased = await session.ok("read_logs", {"level": written})
+    named = await session.ok("read_logs", {"level": level})
+    assert aliased.structured_content is not None
+    assert named.structured_content is not None
+
+    def groups(data: dict[str, Any]) -> list[tuple[str, str, str, int]]:
+        return [(g["level"], g["node"], g["text"], g["count"]) for g in data["groups"]]
+
+    assert groups(aliased.structured_content) == groups(named.structured_content)
+    assert f" at {level} or above" in text_of(aliased)
+
+
+async def test_a_level_that_is_none_names_the_levels(logged: tuple[SimulatedRobot, Session]) -> None:
+    _robot, session = logged
+    error = await session.error("read_logs", {"level": "loud"})
+    assert "'debug', 'info', 'warn', 'error' or 'fatal' (got 'loud')" in error
 
 
 async def test_nothing_logged_says_since_when(logged: tuple[SimulatedRobot, Session]) -> None:

@@ -368,3 +368,15 @@ async def test_a_recording_leaves_other_tools_the_topic_as_json(session_dir: tup
         await session.ok("record", {"stop": True})
         result = await asyncio.wait_for(recording, 10)
     assert result.structured_content["topics"][0]["messages"] >= 1
+
+
+async def test_the_listing_says_a_small_file_s_size_and_counts_one_recording_as_one(
+    session_dir: tuple[Session, Path],
+) -> None:
+    """A 40 KB file is listed as 40 KB, not 0.0 MB, and one file is "1 recording"."""
+    session, directory = session_dir
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "small.mcap").write_bytes(b"\0" * 40_000)
+    text = text_of(await session.ok("read_recording"))
+    assert text.startswith("1 recording in "), text
+    assert "- small.mcap: 40 KB, " in text, text

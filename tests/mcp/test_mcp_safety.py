@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import io
 import json
+import logging
 import math
 from typing import Any
 
@@ -325,6 +326,22 @@ async def test_stop_robot_with_nothing_started_says_so(sim_ros2: SimulatedRobot)
 # --- the audit --------------------------------------------------------------------------------------------
 
 
+async def test_a_stream_that_ran_its_course_is_audited_at_info_and_a_refusal_at_warning(
+    sim_ros2: SimulatedRobot, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A stream that sent all it planned is no warning; a refusal is."""
+    rules = policy(services={"deny": ["/add_two_ints"]})
+    with caplog.at_level(logging.INFO, logger="rosbridge_mcp_server.audit"):
+        async with open_session(sim_ros2.url, guard=None, policy=rules) as session:
+            await session.ok("publish_topic", stream_call(sim_ros2, 0.1, 20.0, 0.2))
+            await session.error("publish_service", acting_calls(sim_ros2)["publish_service"])
+    audited = [(r.levelno, r.getMessage()) for r in caplog.records if r.getMessage().startswith("audit: ")]
+    finished = [level for level, text in audited if ": sent 4 of 4" in text]
+    refused = [level for level, text in audited if ": refused" in text]
+    assert finished == [logging.INFO], audited
+    assert refused == [logging.WARNING], audited
+
+
 async def test_every_acting_call_is_one_json_line_in_the_audit_file(sim: SimulatedRobot) -> None:
     """Allowed, clamped and refused calls each leave one line; reading tools leave none."""
     stream = io.StringIO()
@@ -362,6 +379,48 @@ async def test_a_2026_session_asks_through_an_input_round_and_sends_once(
     else:
         assert "The person declined" in text_of(result)
         assert CMD_VEL not in sim_ros2.world.published
+
+
+class Garbled(Person):
+    """A client that supports elicitation but answers the form with what it does not ask for."""
+
+    def __init__(self, content: dict[str, Any] | None) -> None:
+        super().__init__()
+        self.content = content
+
+    async def __call__(self, context: ClientRequestContext, params: ElicitRequestParams) -> ElicitResult:
+        self.questions.append(params.message)
+        return ElicitResult(action="accept", content=self.content)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("mode", ["legacy", "auto"])
+@pytest.mark.parametrize(
+    ("content", "wrong"),
+    [({"approve": "perhaps"}, "approve: Input should be a valid boolean"), ({}, "approve: Field required")],
+)
+async def test_an_answer_that_does_not_fit_the_form_is_named_in_the_answer_and_the_audit(
+    sim_ros2: SimulatedRobot, mode: str, content: dict[str, Any], wrong: str
+) -> None:
+    """A client with elicitation that answers off the form: refused, nothing sent, and the answer and the
+    audit say the answer did not match the form and what was wrong, not that the client cannot ask."""
+    stream = io.StringIO()
+    rules = policy(confirm="motion")
+    person = Garbled(content)
+    guard = PolicyGuard(rules, Audit(stream))
+    async with open_session(
+        sim_ros2.url, mode=mode, guard=guard, policy=rules, elicitation_callback=person
+    ) as session:
+        text = await session.error("publish_topic", twist_call(sim_ros2, 0.3))
+    assert len(person.questions) == 1
+    assert "did not match the confirmation form" in text, text
+    assert wrong in text, text
+    assert "does not support elicitation" not in text, text
+    assert "nothing was sent" in text
+    [entry] = [json.loads(line) for line in stream.getvalue().splitlines()]
+    assert entry["outcome"] == "refused"
+    assert entry["detail"].startswith("person: answer not in the form"), entry
+    assert wrong in entry["detail"], entry
+    nothing_reached(sim_ros2)
 
 
 # --- streams and parameters -----------------------------------------------------------------------------
@@ -445,8 +504,8 @@ async def test_a_denied_parameter_is_not_set(sim: SimulatedRobot) -> None:
 async def test_read_only_withholds_set_parameter_and_stop_robot_even_when_tools_picks_them(
     sim_ros2: SimulatedRobot,
 ) -> None:
-    """--tools watch (which holds set_parameter) under read-only lists neither it nor stop_robot."""
-    config = load_config({"ROSBRIDGE_MCP_READ_ONLY": "1"}, url=sim_ros2.url, tools="watch")
+    """--tools watch,set_parameter under read-only lists neither set_parameter nor stop_robot."""
+    config = load_config({"ROSBRIDGE_MCP_READ_ONLY": "1"}, url=sim_ros2.url, tools="watch,set_parameter")
     async with Client(
         build_server(guarded(RosbridgeClient(sim_ros2.url), config), config), mode="legacy"
     ) as mcp:

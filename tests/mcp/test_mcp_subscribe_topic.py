@@ -42,6 +42,19 @@ async def test_a_duration_collects_for_that_long(session: Session) -> None:
     assert all(m["received"] <= 1.5 for m in data["messages"])
 
 
+async def test_a_duration_ends_its_progress_at_its_total(session: Session) -> None:
+    """duration 0.5 s collects ~5 of up to 100 messages: the last progress says done (progress == total), so a
+    host's bar ends full, not at 5 %."""
+    result = await session.ok("subscribe_topic", {"topic": "/chatter", "duration": 0.5})
+    data = result.structured_content
+    assert data is not None
+    progress, total, message = session.progress[-1]
+    assert progress == total, session.progress
+    assert message is not None
+    assert f"{len(data['messages'])} messages" in message
+    assert [p for p, _, _ in session.progress] == sorted(p for p, _, _ in session.progress)
+
+
 async def test_fields_keep_only_the_paths_asked_for(session: Session) -> None:
     """fields ["x"] on the turtle's pose returns only x."""
     result = await session.ok("subscribe_topic", {"topic": "/turtle1/pose", "fields": ["x"]})

@@ -234,6 +234,22 @@ async def test_a_comma_list_of_groups_and_names_is_honoured_in_order() -> None:
     assert names == [*ORIGINAL, "get_image", "stop_robot"]
 
 
+async def test_tools_watch_lists_every_reading_tool_of_the_graph_and_nothing_that_acts() -> None:
+    """--tools watch ("reading the robot") lists list_topics and get_topic_info with the other readers, and
+    neither set_parameter nor, since nothing acts, stop_robot."""
+    url = _closed_port_url()
+    config = load_config({}, url=url, tools="watch")
+    async with Client(build_server(guarded(RosbridgeClient(url), config), config), mode="legacy") as mcp:
+        tools = (await mcp.list_tools()).tools
+    names = [tool.name for tool in tools]
+    assert names[:2] == ["list_topics", "get_topic_info"]
+    assert {"list_services", "list_actions", "subscribe_topic", "diagnose", "read_logs"} <= set(names)
+    assert "set_parameter" not in names
+    assert "stop_robot" not in names
+    assert all(tool.annotations is not None and tool.annotations.read_only_hint for tool in tools), names
+    assert set(names) <= READ_ONLY
+
+
 def test_an_unknown_tool_name_is_a_configuration_error_listing_the_names() -> None:
     """--tools with a misspelt name fails at start with the groups and names that exist."""
     with pytest.raises(

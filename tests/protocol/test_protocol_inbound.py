@@ -268,3 +268,27 @@ def test_subscribe_asks_for_cbor_only_when_told() -> None:
     """compression="cbor" adds the key; without it the op stays as before."""
     assert protocol.subscribe("/map", None, id="s", compression="cbor")["compression"] == "cbor"
     assert "compression" not in protocol.subscribe("/map", None, id="s")
+
+
+def test_an_unpaired_surrogate_in_a_frame_becomes_the_replacement_character() -> None:
+    """JSON may carry ``"\\ud800"``, which no text can hold (the MCP SDK's writer refuses it, and the stdio
+    server with it): anywhere in a frame, key or value, it is read as U+FFFD; an escaped pair stays the one
+    character it spells."""
+    text = (
+        '{"op":"publish","topic":"/t","msg":{"data":"a\\ud800b","k\\udfff":["\\uDBFF"],'
+        '"pair":"\\ud83d\\ude00"}}'
+    )
+    event = protocol.InboundDecoder().feed(text)
+    assert event == protocol.PublishEvent("/t", {"data": "a\ufffdb", "k\ufffd": ["\ufffd"], "pair": "😀"})
+
+
+def test_an_unpaired_surrogate_in_reassembled_fragments_becomes_the_replacement_character() -> None:
+    """The same holds for a message the bridge sent in fragments (its text is decoded once whole)."""
+    text = '{"op":"publish","topic":"/t","msg":{"data":"x\\ud800y"}}'
+    decoder = protocol.InboundDecoder()
+    parts = [
+        {"op": "fragment", "id": "f", "data": text[:20], "num": 0, "total": 2},
+        {"op": "fragment", "id": "f", "data": text[20:], "num": 1, "total": 2},
+    ]
+    events = [decoder.feed(json.dumps(part)) for part in parts]
+    assert events[-1] == protocol.PublishEvent("/t", {"data": "x\ufffdy"})

@@ -127,7 +127,10 @@ LAYERS: tuple[frozenset[str], ...] = (
 )
 #: Modules beside the layers that any layer may import (the exception tree, the tool catalogue, the
 #: configuration); what they themselves import is not a layer's business here.
-SHARED = frozenset({"errors", "catalogue", "config"})
+SHARED = frozenset({"errors", "catalogue", "config", "mcapfile"})
+#: What the simulated robot may share with the server: the MCAP file format read within a budget (pure file
+#: reading, importing nothing of ours), so ``--play`` refuses the hostile files ``read_recording`` refuses.
+SIMULATOR_SHARES = frozenset({"mcapfile"})
 #: The simulated robot stands beside the layers; only the command (``--demo``) starts it.
 SIMULATOR = "sim"
 #: What the package holds besides: its own ``__init__`` and ``python -m``.
@@ -173,7 +176,7 @@ def simulator_imports(sources: Iterable[Source]) -> list[str]:
         for src in sources
         if src.top == SIMULATOR
         for line, module in imports(src)
-        if ours(module) not in {None, SIMULATOR}
+        if ours(module) not in {None, SIMULATOR, *SIMULATOR_SHARES}
     ]
 
 
@@ -190,8 +193,18 @@ def test_the_layer_table_knows_every_package_of_ours() -> None:
 
 
 def test_the_simulated_robot_imports_nothing_of_the_server() -> None:
-    """``sim/`` shares nothing with the layers but the wire's protocol: it imports no module of ours."""
+    """``sim/`` shares nothing with the layers: it imports no module of ours but the MCAP file reader, which
+    imports nothing of ours outside itself."""
     assert simulator_imports(package_sources()) == []
+    shared = [src for src in package_sources() if src.top in SIMULATOR_SHARES]
+    assert shared
+    outside = [
+        f"{src.where}:{line} imports {module}"
+        for src in shared
+        for line, module in imports(src)
+        if ours(module) not in {None, src.top}
+    ]
+    assert outside == []
 
 
 # --- the protocol stays in wire/ and client/ ----------------------------------------------------------------

@@ -7,6 +7,7 @@ import argparse
 from typing import NoReturn
 
 from rosbridge_mcp_server import __version__
+from rosbridge_mcp_server.catalogue import groups_help
 from rosbridge_mcp_server.config import LOG_LEVELS
 from rosbridge_mcp_server.config.http import DEFAULT_BIND
 
@@ -123,9 +124,7 @@ def build_parser(command: str) -> _Parser:
     parser.add_argument(
         "--tools",
         help=(
-            "tools the host sees: all; original (the first eight, with stop_robot whenever a tool acts); "
-            "watch (reading topics, types, nodes, parameters, frames); view (pictures: map, scan, charts); "
-            "record (record, read_recording); "
+            f"tools the host sees: {groups_help()}; "
             "or a comma list of groups and tool names (env ROSBRIDGE_MCP_TOOLS, default all)"
         ),
     )

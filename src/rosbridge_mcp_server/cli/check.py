@@ -26,6 +26,7 @@ from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.messages import find_problems, typedefs_from_rosapi
 from rosbridge_mcp_server.robot.names import did_you_mean
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.safety.bridge_globs import bridge_arguments
 from rosbridge_mcp_server.safety.policy import Policy
 
@@ -75,7 +76,7 @@ def unreachable_advice(url: str, reason: str | None) -> list[str]:
 
 
 def _count(number: int, noun: str) -> str:
-    return f"{number} {noun}{'' if number == 1 else 's'}"
+    return counted(number, noun)
 
 
 def _features(info: RosInfo) -> list[tuple[str, str]]:

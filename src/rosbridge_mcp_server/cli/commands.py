@@ -18,6 +18,7 @@ import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
+from urllib.parse import urlsplit, urlunsplit
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
 from rosbridge_mcp_server.cli.check import run_check
@@ -31,6 +32,7 @@ from rosbridge_mcp_server.config.http import HttpSettings, load_http_settings
 from rosbridge_mcp_server.console import ConsoleHub, RobotView
 from rosbridge_mcp_server.console.address import ConsoleAddressFile, console_urls
 from rosbridge_mcp_server.robot.session import RobotSession
+from rosbridge_mcp_server.robot.text import shown
 from rosbridge_mcp_server.safety import Audit, Operator, PolicyGuard
 
 if TYPE_CHECKING:
@@ -163,8 +165,9 @@ def console_url(args: Sequence[str], env: Mapping[str, str]) -> int:
         return 2
     directory = console_runtime_dir(env)
     found = list(console_urls(directory))
-    for pid, url in found:
-        print(f"{url}  (process {pid})" if len(found) > 1 else url)
+    for pid, url, serves in found:
+        # Several consoles: each says which robot it is for, so the person opens the right one.
+        print(f"{url}  (process {pid}{f', {serves}' if serves else ''})" if len(found) > 1 else url)
     if not found:
         print(
             f"{PROG}: no operator console is running for this user (looked in {directory}); start the server "
@@ -215,6 +218,7 @@ def configure_logging(level: str, stream: TextIO | None = None, secrets: Sequenc
     handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
     if secrets:
         handler.addFilter(_Redact(secrets))
+    handler.addFilter(_OneLine())
     root = logging.getLogger()
     # Replace only our own handler (run() may be called more than once in one process, e.g. in tests). Having
     # a handler on the root also keeps MCPServer's logging.basicConfig from adding its own.
@@ -238,6 +242,23 @@ class _Redact(logging.Filter):
             for secret in self._secrets:
                 message = message.replace(secret, "***")
             record.msg, record.args = message, None
+        return True
+
+
+#: The longest message one log line carries (a traceback, written after it, is not cut).
+LOG_LINE_CHARS = 10_000
+
+
+class _OneLine(logging.Filter):
+    """Each record's message on one line, escaped as robot text is (``robot/text.py``): a message quotes
+    what the robot, a bridge or a caller wrote (a refusal's text, a JWT's subject), and a newline or an ANSI
+    sequence in it must not write a line of its own on the operator's terminal."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        safe = shown(message, LOG_LINE_CHARS)
+        if safe is not message:
+            record.msg, record.args = safe, None
         return True
 
 
@@ -390,6 +411,20 @@ async def serve(
             await serve_stdio(server)
 
 
+def _serves(hub: ConsoleHub) -> str:
+    """What a console serves, for ``console-url``: ``the robot at ws://...`` or ``robots a at ..., b at ...``
+    (the bridge URLs without credentials)."""
+    places = [(view.name, _bare_url(view.session.client.url)) for view in hub.robots]
+    if len(places) == 1:
+        return f"the robot at {places[0][1]}"
+    return "robots " + ", ".join(f"{name} at {url}" for name, url in places)
+
+
+def _bare_url(url: str) -> str:
+    parts = urlsplit(url)
+    return urlunsplit(parts._replace(netloc=parts.netloc.rpartition("@")[2], query="", fragment=""))
+
+
 @contextlib.asynccontextmanager
 async def _console(
     settings: ConsoleSettings | None, hub: ConsoleHub | None, directory: Path | None = None
@@ -417,7 +452,7 @@ async def _console(
     where = ""
     if address is not None:
         try:
-            address.write(running.url)
+            address.write(running.url, _serves(hub))
             where = f" (also in {address.path}, which `{PROG} console-url` prints)"
         except OSError as exc:
             address = None

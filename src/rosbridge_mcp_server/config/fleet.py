@@ -66,7 +66,9 @@ def load_fleet(
         _check_name(name, "--robot")
         if name in fleet:
             raise ConfigError(f"--robot: the robot {name!r} is named twice")
-        fleet[name] = replace(base, url=parse_url(url.strip(), source=f"--robot {name}"))
+        fleet[name] = replace(
+            base, url=parse_url(url.strip(), source=f"--robot {name}"), url_source=f"--robot {name}=URL"
+        )
     return tuple(fleet.items())
 
 
@@ -107,7 +109,8 @@ def _from_file(base: Config, path: Path) -> list[tuple[str, Config]]:
         where = f"{source} [robots.{name}]"
         if not isinstance(entry, dict):
             raise ConfigError(f"{where}: must be a table with a url")
-        out.append((name, _robot(base, entry, where, path.parent)))
+        robot = _robot(base, entry, where, path.parent)
+        out.append((name, replace(robot, url_source=f"[robots.{name}] in {source}")))
     return out
 
 

@@ -89,6 +89,9 @@ class Config:
     #: The robot's namespace on a bridge shared by several robots (``/robot2``; ``""`` none), from its
     #: fleet file entry; ``None``: not said (the navigation, transform, picture and diagnose tools find it).
     namespace: str | None = None
+    #: Where a fleet robot's URL was set (``[robots.base] in --robots fleet.toml``, ``--robot base=URL``),
+    #: named when it cannot be reached; ``None``: the server's own settings (ROSBRIDGE_HOST/PORT/URL).
+    url_source: str | None = None
 
     def ssl_context(self) -> ssl.SSLContext | None:
         """The TLS context for wss:// with a private CA or a client certificate; ``None`` for the default.

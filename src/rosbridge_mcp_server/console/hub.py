@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from rosbridge_mcp_server.console.feedback import feedback_text
 from rosbridge_mcp_server.console.mapview import MapPanel, Picture, trying_again
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.pictures.images import ImageError, decode_compressed, decode_raw, encode_picture
@@ -241,7 +242,9 @@ class ConsoleHub:
                             "goal_id": goal.goal_id,
                             "seconds": round(now - goal.started, 1),
                             "feedback_count": goal.feedback_count,
-                            "last_feedback": _short(goal.last_feedback[-1]) if goal.last_feedback else None,
+                            "last_feedback": (
+                                feedback_text(goal.last_feedback[-1]) if goal.last_feedback else None
+                            ),
                             "cancel_requested": goal.cancel_requested,
                         }
                         for goal in robot.session.goals.running()

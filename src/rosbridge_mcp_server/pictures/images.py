@@ -28,6 +28,7 @@ from typing import Any, Literal
 from PIL import Image, UnidentifiedImageError
 
 from rosbridge_mcp_server.robot.budget import budget_problem
+from rosbridge_mcp_server.robot.wording import full_stop
 
 __all__ = [
     "ENCODINGS",
@@ -192,7 +193,8 @@ def decode_compressed(msg: Mapping[str, Any]) -> Picture:
         ) from None
     except OSError as exc:
         raise ImageError(
-            f"The compressed image (format {fmt or 'not given'!r}) could not be decoded: {exc}."
+            f"The compressed image (format {fmt or 'not given'!r}) could not be decoded: "
+            + full_stop(str(exc))
         ) from None
     encoding = fmt or (image.format or "compressed").lower()
     if image.mode in ("I;16", "I;16B", "I"):

@@ -29,7 +29,7 @@ from rosbridge_mcp_server.robot.motion_goals import carried_goal, read_motion
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
 from rosbridge_mcp_server.robot.navigation import Scene, survey
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
-from rosbridge_mcp_server.robot.seam import Act, Approving, approved, carry_out
+from rosbridge_mcp_server.robot.seam import Act, Approving, approved, cancelled_why, carry_out
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, stamped
 
 if TYPE_CHECKING:
@@ -304,11 +304,13 @@ async def publish_stream(
         ctx.guard.record(act, f"failed after {sent} of {planned}: {type(exc).__name__}: {exc}")
         raise
     finally:
+        if cancelled:
+            # Recorded first: inside a cancelled anyio scope (the SDK's) every await raises again, the
+            # shielded one below too, so a line written after it was lost.
+            ctx.guard.record(act, f"{cancelled_why()} after {sent} of {planned}")
         if zero is not None and sent > 0:
             # Shielded: a second cancel must not leave the robot moving.
             await asyncio.shield(_publish_quietly(ctx, act, zero))
-        if cancelled:
-            ctx.guard.record(act, f"cancelled after {sent} of {planned}")
     ctx.guard.record(act, f"{f'stopped by {stopped_by} after' if stopped else 'sent'} {sent} of {planned}")
     adjusted = _adjusted(act.type, body, act.payload)
     return Streamed(

@@ -30,8 +30,9 @@ import contextlib
 import enum
 import itertools
 import time
+from collections import Counter
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Final, Literal
 
 from rosbridge_mcp_server.errors import Advice, Advised, RosbridgeError
@@ -40,6 +41,8 @@ from rosbridge_mcp_server.robot.log_keeper import DIAGNOSTICS_TOPICS
 from rosbridge_mcp_server.robot.logs import level_rank
 from rosbridge_mcp_server.robot.namespaces import namespaces_with
 from rosbridge_mcp_server.robot.nodes import node_names
+from rosbridge_mcp_server.robot.text import NAME_CHARS, is_frame_name, is_graph_name, shown
+from rosbridge_mcp_server.robot.wording import counted
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -100,11 +103,13 @@ class Look(enum.Enum):
 
     #: A node's log, from info up (names: the node).
     NODE_LOG = enum.auto()
+    #: The whole log, from info up (instead of a node's, when the node's name cannot go into a call).
+    LOG = enum.auto()
     #: The nodes of the graph.
     NODES = enum.auto()
     #: Who publishes and reads a topic (names: the topic).
     TOPIC = enum.auto()
-    #: Activate a lifecycle node through its change_state service (names: the node).
+    #: How a lifecycle node is activated, in words: an act on the robot, never a call built from its name.
     ACTIVATE = enum.auto()
     #: One node's topics and services (names: the node; none: the node named before).
     NODE = enum.auto()
@@ -118,6 +123,9 @@ class Look(enum.Enum):
     TRANSFORM = enum.auto()
     #: One transform, waiting a while for it (names: target frame, source frame).
     TRANSFORM_WAIT = enum.auto()
+    #: A diagnostics topic's messages until every status on it has come round (names: the topic, how many
+    #: statuses it carries): publishers take turns on one topic, so one message is most likely another's OK.
+    STATUSES = enum.auto()
 
 
 @dataclass(frozen=True)
@@ -303,8 +311,12 @@ async def diagnose(
     *namespace* (``""``: the root) narrows the streams and tf to one robot of several on the bridge."""
     began = time.monotonic()
     dialect = await graph.dialect()
-    entries, nodes = await asyncio.gather(graph.topics(), node_names(graph))
-    topics = {e.name: e.type for e in entries}
+    entries, listed = await asyncio.gather(graph.topics(), node_names(graph))
+    # Names the robot's graph gives are robot text: shown escaped and capped (a real name is unchanged).
+    topics = {shown(e.name, NAME_CHARS): shown(e.type, NAME_CHARS) for e in entries}
+    nodes = [shown(node, NAME_CHARS) for node in listed]
+    #: The names a suggested call may use: those of the graph, now or at the last look.
+    known = {*nodes, *topics, *(keeper.nodes_seen or () if keeper is not None else ())}
     areas, kinds, focus_node = areas_for(focus, nodes)
     ros2 = dialect.version == 2
     checked: dict[str, str] = {}
@@ -339,7 +351,7 @@ async def diagnose(
         out = {}
         for topic, got in zip(wanted, found, strict=True):
             if not isinstance(got, BaseException):
-                out[topic] = (got.publishers, got.subscribers)
+                out[topic] = (_names(got.publishers), _names(got.subscribers))
         return out
 
     drives = [t for t in topics if t.rsplit("/", 1)[-1] == "cmd_vel" and _short(topics[t]) in _TWISTS]
@@ -348,7 +360,7 @@ async def diagnose(
         if "lifecycle" not in areas or not ros2:
             return None
         services = await graph.service_names()
-        getters = [s for s in services if s.endswith("/get_state")]
+        getters = [s for s in services if s.endswith("/get_state") and is_graph_name(s)]
         if focus_node is not None:
             getters = [s for s in getters if s == f"{focus_node}/get_state"]
 
@@ -356,13 +368,13 @@ async def diagnose(
             try:
                 values = await client.call_service(service, {}, timeout=window + 1.0)
             except RosbridgeError as exc:
-                return f"no answer ({exc})"
+                return f"no answer ({shown(exc, 300)})"
             current = values.get("current_state", {}) if isinstance(values, dict) else {}
             label = current.get("label") if isinstance(current, dict) else None
             ident = current.get("id") if isinstance(current, dict) else None
             if ident == _ACTIVE:
                 return "active"
-            return str(label or ident or "unknown")
+            return shown(label or ident or "unknown", 60)
 
         states = await asyncio.gather(*(state(s) for s in getters))
         return {s.removesuffix("/get_state"): st for s, st in zip(getters, states, strict=True)}
@@ -421,6 +433,7 @@ async def diagnose(
             findings += _logs(keeper, checked, left_out)
     if focus_node is not None:
         findings = [f for f in findings if focus_node in f.nodes or f.subject == focus_node]
+    findings = [_checked_steps(f, known) for f in findings]
     order = {area: i for i, area in enumerate(AREAS)}
     findings.sort(key=lambda f: (f.severity != "problem", order.get(f.area, 99)))
     rates = {t: heard[t].rate if t in heard else None for t in streams}
@@ -429,6 +442,36 @@ async def diagnose(
     )
     diagnosis.frames = sorted(frames)
     return diagnosis
+
+
+def _names(names: Iterable[str]) -> tuple[str, ...]:
+    return tuple(shown(name, NAME_CHARS) for name in names)
+
+
+#: The looks whose names are graph names (nodes, topics); the transforms' are tf frames.
+_FRAME_LOOKS: Final = frozenset({Look.TRANSFORM, Look.TRANSFORM_WAIT})
+
+
+def _checked_steps(finding: Finding, known: set[str]) -> Finding:
+    """*finding* with only the steps whose names may go into a call: a graph name the graph has (*known*)
+    and that passes the strict check, or a plain frame name. Anyone on the graph writes the names a log line
+    or a transform carries; such a name is shown, never made into a call (a node's log then becomes the whole
+    log; a step left with nothing becomes ``list_nodes``)."""
+
+    def usable(step: Step) -> bool:
+        if step.look in _FRAME_LOOKS:
+            return all(is_frame_name(name) for name in step.names)
+        if step.look is Look.STATUSES:  # (topic, how many statuses it carries: our count, not robot text)
+            topic, count = step.names
+            return is_graph_name(topic) and topic in known and count.isdigit()
+        return all(is_graph_name(name) and name in known for name in step.names)
+
+    steps = tuple(
+        step if usable(step) else Step(Look.LOG, (), step.why) if step.look is Look.NODE_LOG else None
+        for step in finding.next
+    )
+    kept = tuple(step for step in steps if step is not None) or (Step(Look.NODES),)
+    return finding if kept == finding.next else replace(finding, next=kept)
 
 
 # --- the areas ---------------------------------------------------------------------------------------------
@@ -490,7 +533,7 @@ def _graph(
                     nodes=readers,
                 )
             )
-    checked["graph"] = f"{len(nodes)} nodes, {len(topics)} topics"
+    checked["graph"] = f"{counted(len(nodes), 'node')}, {counted(len(topics), 'topic')}"
     return out
 
 
@@ -510,7 +553,7 @@ def _lifecycle(states: Mapping[str, str], checked: dict[str, str]) -> list[Findi
                 "lifecycle",
                 node,
                 summary,
-                (Step(Look.ACTIVATE, (node,)), Step(Look.NODE)),
+                (Step(Look.NODE_LOG, (node,), "for why"), Step(Look.ACTIVATE)),
                 nodes=(node,),
                 details={"state": state},
             )
@@ -524,6 +567,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
     out = []
     statuses = board.statuses()
     not_ok = [s for s in statuses if s.level != 0]
+    on_topic = Counter(s.topic for s in statuses)
     for status in not_ok[:MAX_STATUS_FINDINGS]:
         severity: Literal["problem", "warning"] = "problem" if status.level == 2 else "warning"
         hardware = f" ({status.hardware_id})" if status.hardware_id else ""
@@ -537,7 +581,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
                 f"{status.level_name} {status.name}{hardware}: {status.message or '(no message)'}"
                 + (f" [{values}]" if values else "")
                 + f" ({ago:.0f} s ago)",
-                (Step(Look.ONE_MESSAGE, (status.topic,)),),
+                (Step(Look.STATUSES, (status.topic, str(on_topic[status.topic]))),),
                 nodes=(_status_node(status.name),),
                 details={
                     "level": status.level_name,
@@ -550,7 +594,7 @@ def _diagnostics(board: StatusBoard, checked: dict[str, str], left_out: dict[str
     if statuses:
         ok = len(statuses) - len(not_ok)
         more = len(not_ok) - MAX_STATUS_FINDINGS
-        checked["diagnostics"] = f"{len(statuses)} statuses, {ok} OK"
+        checked["diagnostics"] = f"{counted(len(statuses), 'status', 'statuses')}, {ok} OK"
         if more > 0:
             left_out["diagnostics"] = more
     else:
@@ -650,8 +694,8 @@ def _edges(heard: Mapping[str, _Heard], namespace: str = "") -> tuple[dict[str, 
                     continue
                 got = t.get("header")
                 header: Mapping[str, Any] = got if isinstance(got, Mapping) else {}
-                parent = str(header.get("frame_id", "")).lstrip("/")
-                child = str(t.get("child_frame_id", "")).lstrip("/")
+                parent = shown(header.get("frame_id", ""), NAME_CHARS).lstrip("/")
+                child = shown(t.get("child_frame_id", ""), NAME_CHARS).lstrip("/")
                 if not parent or not child:
                     continue
                 parents.setdefault(child, set()).add(parent)
@@ -782,7 +826,9 @@ def _tf(
             )
         )
     roots = sorted({_ancestors(f, edges)[-1] for f in frames})
-    what = f"{len(frames)} frames, root{'s' if len(roots) != 1 else ''} {', '.join(roots) or 'none'}"
+    what = (
+        f"{counted(len(frames), 'frame')}, root{'s' if len(roots) != 1 else ''} {', '.join(roots) or 'none'}"
+    )
     return out, frames, what
 
 
@@ -810,9 +856,12 @@ def _logs(keeper: LogKeeper, checked: dict[str, str], left_out: dict[str, int]) 
     warnings = sum(f.count for f in folds if f.level == "warn")
     if len(folds) > MAX_LOG_FINDINGS:
         left_out["logs"] = len(folds) - MAX_LOG_FINDINGS
-    checked["logs"] = f"{errors} errors, {warnings} warnings since {since} ({len(keeper.ring)} lines kept)"
+    checked["logs"] = (
+        f"{counted(errors, 'error')}, {counted(warnings, 'warning')} since {since} "
+        f"({counted(len(keeper.ring), 'line')} kept)"
+    )
     return out
 
 
 def _plural(count: int, word: str) -> str:
-    return f"{count} {word}{'' if count == 1 else 's'}"
+    return counted(count, word)

@@ -15,6 +15,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Final
 
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
+
 __all__ = ["BOARD_STATUSES", "LEVEL_NAMES", "StatusBoard", "StatusRecord", "status_level"]
 
 #: The most (name, hardware id) pairs the board keeps.
@@ -83,16 +85,20 @@ class StatusBoard:
             if level is None:
                 continue
             values = status.get("values")
+            # Every field is robot text: kept escaped and capped (robot/text.py), as it will be shown.
             pairs = tuple(
-                (str(v.get("key", "")), str(v.get("value", "")))
+                (shown(v.get("key", ""), 60), shown(v.get("value", ""), 120))
                 for v in (values if isinstance(values, list) else [])[:_MAX_VALUES]
                 if isinstance(v, Mapping)
             )
-            key = (str(status.get("name", "")), str(status.get("hardware_id", "")))
+            key = (
+                shown(status.get("name", ""), NAME_CHARS),
+                shown(status.get("hardware_id", ""), NAME_CHARS),
+            )
             if key not in self._statuses and len(self._statuses) >= self.max_statuses:
                 continue
             self._statuses[key] = StatusRecord(
-                level, key[0], str(status.get("message", ""))[:300], key[1], pairs, topic, received
+                level, key[0], shown(status.get("message", ""), 300), key[1], pairs, topic, received
             )
 
     def statuses(self) -> list[StatusRecord]:

@@ -22,6 +22,8 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final
 
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
+
 __all__ = [
     "LEVELS",
     "RING_LINES",
@@ -72,7 +74,7 @@ def _level(value: Any) -> str:
 
 def _node(name: Any) -> str:
     """A node name from a logger name: ``local_costmap.local_costmap`` → ``/local_costmap/local_costmap``."""
-    text = str(name or "?")
+    text = shown(name or "?", NAME_CHARS)
     if not text.startswith("/"):
         text = "/" + text.replace(".", "/")
     return text
@@ -104,12 +106,18 @@ class LogLine:
 
 
 def line_of(msg: Mapping[str, Any], received: float) -> LogLine:
-    """A :class:`LogLine` from a log message of either dialect (lenient: a bad field reads as empty)."""
-    text = str(msg.get("msg", ""))
-    if len(text) > _MAX_TEXT:
-        text = text[:_MAX_TEXT] + f"… ({len(text):,} characters)"
-    file = str(msg.get("file") or "")
-    where = f"{file}:{msg.get('line', '')} ({msg.get('function', '')})" if file else ""
+    """A :class:`LogLine` from a log message of either dialect (lenient: a bad field reads as empty).
+
+    Every field is robot text, kept as it will be shown (:func:`~rosbridge_mcp_server.robot.text.shown`:
+    escaped, and capped with the cut said), so a line cannot start a line of ours nor hold megabytes in the
+    ring.
+    """
+    text = shown(msg.get("msg", ""), _MAX_TEXT)
+    file = msg.get("file") or ""
+    where = ""
+    if file:
+        function = shown(msg.get("function", ""), NAME_CHARS)
+        where = f"{shown(file, NAME_CHARS)}:{shown(msg.get('line', ''), 20)} ({function})"
     return LogLine(received, _stamp(msg), _level(msg.get("level")), _node(msg.get("name")), text, where)
 
 

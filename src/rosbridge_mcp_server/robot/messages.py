@@ -32,6 +32,8 @@ from typing import Any
 
 from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.errors import InvalidMessageError, NotSentError
+from rosbridge_mcp_server.robot.text import json_shown
+from rosbridge_mcp_server.robot.wording import full_stop
 
 __all__ = [
     "TypeDef",
@@ -400,12 +402,13 @@ def require_fit(
         check_message(message, type_name, typedefs, ros_version=ros_version)
     except InvalidMessageError as exc:
         shape = compact_json(example_message(type_name, typedefs, ros_version=ros_version))
-        raise NotSentError(f"{exc}. {nothing_sent}. {looks_like} looks like {shape}.") from exc
+        raise NotSentError(f"{full_stop(str(exc))} {nothing_sent}. {looks_like} looks like {shape}.") from exc
 
 
 def compact_json(value: Any, limit: int = 600) -> str:
-    """One-line JSON for an answer's text, cut at ``limit`` characters."""
-    text = json.dumps(_finite(value), separators=(", ", ": "), ensure_ascii=False, default=str)
+    """One-line JSON for an answer's text, cut at ``limit`` characters; a message's strings are robot text, so
+    bidi overrides, zero-width and other unsafe characters are written as JSON escapes (``robot/text.py``)."""
+    text = json_shown(json.dumps(_finite(value), separators=(", ", ": "), ensure_ascii=False, default=str))
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.errors import Advice, NotOnRobotError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
 from rosbridge_mcp_server.robot.names import did_you_mean
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.graph import RosGraph, TopicEntry
@@ -210,6 +211,7 @@ def _listed(topic: str) -> bool:
 
 
 def _strings(value: Any) -> list[str]:
+    # Names as the graph gives them: robot text, shown escaped and capped (robot/text.py).
     if not isinstance(value, list):
         return []
-    return [item for item in value if isinstance(item, str)]
+    return [shown(item, NAME_CHARS) for item in value if isinstance(item, str)]

@@ -26,6 +26,7 @@ from rosbridge_mcp_server.errors import NotOnRobotError, NotSentError, RequestTi
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.names import did_you_mean, parameter_name
 from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_names
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -124,7 +125,7 @@ async def parameter_groups(
             listed = values.get("names") if isinstance(values, dict) else None
             if isinstance(listed, list):
                 by_node: dict[str, set[str]] = {}
-                for full in listed:
+                for full in _names(listed):
                     if isinstance(full, str):
                         owner, sep, local = full.partition(":")
                         by_node.setdefault(owner if sep else "", set()).add(local if sep else full)
@@ -135,7 +136,7 @@ async def parameter_groups(
 async def _ros1_names(graph: RosGraph, node: str | None) -> list[str]:
     """ROS 1: every parameter's full name (under ``node``'s namespace only, when given), sorted."""
     values = await graph.rosapi("get_param_names")
-    names = sorted({n for n in values.get("names") or () if isinstance(n, str)})
+    names = sorted(set(_names(values.get("names"))))
     if node is None:
         return names
     prefix = node.rstrip("/") + "/"
@@ -355,8 +356,14 @@ async def _node_parameter_names(client: RosbridgeClient, node: str) -> list[str]
     if not isinstance(reply, dict):
         return []
     result = reply.get("result")
-    names = result.get("names") if isinstance(result, dict) else None
-    return [n for n in names or () if isinstance(n, str)]
+    return _names(result.get("names") if isinstance(result, dict) else None)
+
+
+def _names(listed: Any) -> list[str]:
+    """The parameter names a reply lists: robot text, shown escaped and capped (``robot/text.py``)."""
+    if not isinstance(listed, list):
+        return []
+    return [shown(name, NAME_CHARS) for name in listed if isinstance(name, str)]
 
 
 def _no_parameter_service(node: str, *, nodes: list[str]) -> str:

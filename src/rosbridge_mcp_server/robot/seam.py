@@ -10,7 +10,9 @@ implements the guard; nothing here knows a policy or MCP.
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Awaitable, Callable
+from contextvars import ContextVar
 from dataclasses import dataclass, replace
 from typing import Any, Literal, Protocol
 
@@ -21,15 +23,28 @@ __all__ = [
     "ALLOW_ALL",
     "Act",
     "Answer",
+    "AnswerNotInForm",
     "Approving",
     "AskPerson",
     "Guard",
     "SendToLink",
     "approved",
     "asking",
+    "call_ending",
+    "cancelled_why",
     "carry_out",
     "nobody_to_ask",
 ]
+
+#: Why the call running in this context would have ended had it been cancelled, in words; set by what runs
+#: the call (the MCP edge knows whether its client asked). The audit says it, never the cancel's repr.
+call_ending: ContextVar[Callable[[], str]] = ContextVar("call_ending")
+
+
+def cancelled_why() -> str:
+    """``cancelled by the client``, ``cancelled: …``: why the call running now was cancelled, in words."""
+    why = call_ending.get(None)
+    return why() if why is not None else "cancelled"
 
 
 @dataclass(frozen=True)
@@ -66,12 +81,19 @@ Answer = Literal["accept", "decline", "cancel", "unsupported"]
 SendToLink = Callable[[str, str, str], Awaitable[Answer]]
 
 
+class AnswerNotInForm(Exception):
+    """The person's MCP client answered a question, but not in the form it was asked (an ``approve`` that is
+    no yes/no, or none): raised by an :class:`AskPerson`; ``str()`` says what was wrong, never the answer's
+    own values."""
+
+
 class AskPerson:
     """The person at the MCP client, asked a yes/no question (the server's elicitation): ``await ask(text)``.
 
     This one has nobody to ask (no MCP client, or one without elicitation): every question is
-    ``"unsupported"``; the MCP edge gives a call its own. ``by_link`` is set when the client can also open a
-    URL for the person: the guard then sends them to this call's approval on the operator console.
+    ``"unsupported"``; the MCP edge gives a call its own, which raises :class:`AnswerNotInForm` for an answer
+    off the question's form. ``by_link`` is set when the client can also open a URL for the person: the guard
+    then sends them to this call's approval on the operator console.
     """
 
     by_link: SendToLink | None = None
@@ -173,6 +195,9 @@ async def carry_out(ctx: Approving, act: Act, send: Callable[[], Awaitable[Any]]
         result = await send()
     except PolicyRefusal:
         raise  # the send gate refused it at the moment of sending, and audited that
+    except asyncio.CancelledError:
+        ctx.guard.record(act, cancelled_why())
+        raise
     except BaseException as exc:
         ctx.guard.record(act, f"failed: {type(exc).__name__}: {exc}")
         raise

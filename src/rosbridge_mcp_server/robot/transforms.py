@@ -19,6 +19,7 @@ from typing import Any
 
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotOnRobotError
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 
 __all__ = ["FrameTree", "Lookup", "Transform", "TransformError", "frame_name"]
 
@@ -122,7 +123,8 @@ class FrameTree:
         parent = header.get("frame_id")
         if not isinstance(parent, str):
             return False
-        parent, child = frame_name(parent), frame_name(child)
+        # Frame ids are robot text: kept escaped and capped (robot/text.py), as every answer shows them.
+        parent, child = frame_name(shown(parent, NAME_CHARS)), frame_name(shown(child, NAME_CHARS))
         if not parent or not child or parent == child:
             return False
         transform = _transform(body)

@@ -22,15 +22,17 @@ import dataclasses
 import datetime
 import json
 import logging
+import re
 from collections.abc import Callable
 from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
+from rosbridge_mcp_server.robot.seam import AnswerNotInForm
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
 from rosbridge_mcp_server.safety.fence import fence_refusal, writes_fence
-from rosbridge_mcp_server.safety.navigation import act_motion, goal_text, navigation_refusal
+from rosbridge_mcp_server.safety.navigation import act_motion, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
 from rosbridge_mcp_server.safety.policy import Policy
 from rosbridge_mcp_server.safety.question import question
@@ -59,6 +61,9 @@ AUDIT_PAYLOAD_LIMIT = 16_000
 #: The rule a refusal names while the operator's e-stop is latched.
 LATCH_RULE = "e-stop latched by the operator"
 
+#: An answer off the confirmation form, as the audit's ``person:`` and the refusal say it.
+_NOT_IN_FORM = "answer not in the form"
+
 #: One audit line as a dict (the audit file's JSON, before the payload is cut).
 AuditEntry = dict[str, Any]
 
@@ -76,10 +81,13 @@ class Audit:
         """Also hand every entry to ``callback`` (e.g. the operator console); it must not block."""
         self._listeners.append(callback)
 
-    def write(self, act: Act, outcome: str, detail: str | None = None) -> None:
+    def write(self, act: Act, outcome: str, detail: str | None = None) -> str | None:
+        """Write the line; why it could not go into the audit file, or ``None`` (written, or no file)."""
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
-        level = logging.INFO if outcome in ("allowed", "confirmed", "sent") else logging.WARNING
+        # A stream that sent what it planned ("sent 30 of 30") is as routine as one message sent.
+        routine = outcome in ("allowed", "confirmed", "sent") or re.fullmatch(r"sent (\d+) of \1", outcome)
+        level = logging.INFO if routine else logging.WARNING
         caller = act.caller
         written = f" (written {act.given!r})" if act.given is not None else ""
         effects = f" [{'; '.join(e.describe() for e in act.effects)}]" if act.effects else ""
@@ -99,7 +107,7 @@ class Audit:
             f" [caller {caller}]" if caller else "",
         )
         if self._stream is None and not self._listeners:
-            return
+            return None
         entry: AuditEntry = {
             "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds"),
             "tool": act.tool,
@@ -135,7 +143,7 @@ class Audit:
             except Exception:
                 _log.exception("an audit listener failed")
         if self._stream is None:
-            return
+            return None
         line = json.dumps(entry, ensure_ascii=False, default=str)
         if len(line) > AUDIT_PAYLOAD_LIMIT:
             # A camera frame in every line would bury the audit; its size and start are enough.
@@ -145,9 +153,13 @@ class Audit:
         try:
             self._stream.write(line + "\n")
             self._stream.flush()
-        except (OSError, ValueError):
-            # A full disk must not stop the robot being driven safely; stderr still has the line.
-            _log.exception("could not write to the audit log")
+        except (OSError, ValueError) as exc:
+            # The guard refuses an act whose line this is (nothing unaudited is sent); stderr has the line.
+            _log.error("could not write to the audit log: %s", exc)
+            return (exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)) or type(
+                exc
+            ).__name__
+        return None
 
 
 class PolicyGuard:
@@ -178,9 +190,18 @@ class PolicyGuard:
                 self._refuse(approved, LATCH_RULE, _LATCHED_TEXT)
             if answer != "accept":
                 self._refuse(approved, f"person: {answer}", _answer_text(approved, answer, self.policy))
-            self.audit.write(approved, "confirmed", clamp)
+            unwritten = self.audit.write(approved, "confirmed", clamp)
         else:
-            self.audit.write(approved, "clamped" if clamp else "allowed", clamp)
+            unwritten = self.audit.write(approved, "clamped" if clamp else "allowed", clamp)
+        if unwritten is not None:
+            # An act the audit file cannot show is not sent (a stop is never asked here: it always goes).
+            self._refuse(
+                approved,
+                "audit: the audit file could not be written",
+                f"Not sent: the audit log could not be written ({unwritten}); nothing is sent that the audit "
+                "cannot record. Free space on its disk or fix the file (--audit-log), then call again. "
+                "Stopping still works.",
+            )
         return approved
 
     def record(self, act: Act, outcome: str) -> None:
@@ -295,7 +316,7 @@ class PolicyGuard:
     def _needs_person(self, act: Act) -> bool:
         confirm = self.policy.confirm
         if self.policy.navigation.confirm == "motion" and (act_motion(act) is not None or writes_fence(act)):
-            # Every motion goal, by any carrier (robot/motion_goals.py), and every write to what the fence reads.
+            # Every motion goal by any carrier (robot/motion_goals.py), every write to what the fence reads.
             return True
         if confirm == "always":
             return True
@@ -326,6 +347,9 @@ class PolicyGuard:
                 return answer
         except TimeoutError:
             return "timeout"
+        except AnswerNotInForm as exc:
+            # The client asked, but its answer is no yes/no: say what was wrong, not that it cannot ask.
+            return f"{_NOT_IN_FORM} ({exc})"
         except Exception as exc:
             # A client that fails the request (or never answers in time) has not said yes.
             _log.warning("asking the person failed: %s", exc)
@@ -345,10 +369,10 @@ def moves(act: Act, policy: Policy) -> bool:
     A velocity command (Twist / TwistStamped on any topic), an action goal (``publish_action``, or a goal sent
     through an actionlib ``…/goal`` topic or a ROS 2 ``…/_action/send_goal`` service), a motion goal by any
     carrier and in any type spelling (``robot/motion_goals.py``), a known motion command or service
-    (``robot/effects.py``: joint trajectories, joysticks, goal poses, turtlesim's teleports and resets, Gazebo's
-    set-state and reset services, lifecycle transitions, ...), a write to what the fence or localisation reads
-    (``/tf``, ``/initialpose``, the map, masks, the speed limit: the robot then moves differently) and a topic or
-    service the policy's ``[topics]`` / ``[services] motion`` names.
+    (``robot/effects.py``: joint trajectories, joysticks, goal poses, turtlesim's teleports and resets,
+    Gazebo's set-state and reset services, lifecycle transitions, ...), a write to what the fence or
+    localisation reads (``/tf``, ``/initialpose``, the map, masks, the speed limit: the robot then moves
+    differently) and a topic or service the policy's ``[topics]`` / ``[services] motion`` names.
     """
     if act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type)):
         return True
@@ -362,6 +386,12 @@ def moves(act: Act, policy: Policy) -> bool:
 
 def _answer_text(act: Act, answer: str, policy: Policy) -> str:
     what = f"{act.tool} on {act.name}"
+    if answer.startswith(_NOT_IN_FORM):
+        return (
+            f"The MCP client answered the confirmation for {what}, but the answer did not match the "
+            f"confirmation form {answer.removeprefix(_NOT_IN_FORM).strip()}; nothing was sent. The client "
+            "must answer with approve true or false: tell the user."
+        )
     if answer == "decline":
         return f"The person declined {what}; nothing was sent. Do not retry it unless they ask you to."
     if answer == "cancel":

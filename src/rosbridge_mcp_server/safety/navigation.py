@@ -167,7 +167,13 @@ def _zone_refusal(
             return _refusal(
                 f"[navigation] {problem}",
                 f"{problem} (safety policy)",
-                "Choose a goal inside the allowed area, clear of the keep-out zones by the robot's radius.",
+                # Only the zones the policy has: with keep-out zones alone there is no allowed area.
+                "Choose a goal "
+                + " and ".join(
+                    (["inside the allowed area"] if allowed else [])
+                    + (["clear of the keep-out zones"] if keep_out else [])
+                )
+                + ".",
             )
     return None
 

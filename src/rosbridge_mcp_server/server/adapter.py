@@ -47,13 +47,16 @@ from rosbridge_mcp_server.errors import (
     ActionError,
     ConnectionLostError,
     InvalidMessageError,
+    NotConnectedError,
     ProtocolError,
     RequestTimeoutError,
     RosbridgeError,
     ServiceError,
 )
-from rosbridge_mcp_server.robot.seam import Answer, AskPerson
+from rosbridge_mcp_server.robot.seam import Answer, AnswerNotInForm, AskPerson, call_ending
+from rosbridge_mcp_server.robot.text import repaired, shown
 from rosbridge_mcp_server.server.advice import advised
+from rosbridge_mcp_server.server.sdk import cancelled_by_client
 from rosbridge_mcp_server.tools.arguments import parameter_listing
 from rosbridge_mcp_server.tools.base import (
     ToolAnswer,
@@ -80,6 +83,7 @@ __all__ = [
     "inline_refs",
     "module_tool",
     "tool_annotations",
+    "writable",
 ]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
@@ -225,7 +229,7 @@ async def _run_on(
 
     async def report_progress(progress: float, total: float | None, message: str | None) -> None:
         try:
-            await session.report_progress(progress, total, message)
+            await session.report_progress(progress, total, None if message is None else repaired(message))
         except Exception:
             # Progress is a courtesy; a client that went away must not fail the goal.
             _log.debug("could not send a progress notification", exc_info=True)
@@ -237,6 +241,7 @@ async def _run_on(
         ask_person=_Asker(call),
         caller=call.caller,
     )
+    ending = call_ending.set(functools.partial(_cancelled_why, session))
     try:
         answer = await run(ctx, **arguments)
     except _AskInNextRound as asking:
@@ -246,12 +251,48 @@ async def _run_on(
         # A failure may show why (navigate_to draws a refused goal on the map).
         pictures = _images(getattr(exc, "images", ()))
         return CallToolResult(
-            content=[TextContent(type="text", text=error_text(exc)), *pictures], is_error=True
+            content=[TextContent(type="text", text=_where_set(error_text(exc), robot)), *pictures],
+            is_error=True,
         )
+    finally:
+        call_ending.reset(ending)
     return CallToolResult(
-        content=[TextContent(type="text", text=answer.text), *_images(answer.images)],
+        content=[TextContent(type="text", text=_where_set(answer.text, robot)), *_images(answer.images)],
         structured_content=answer.data.model_dump(mode="json"),
     )
+
+
+def _cancelled_why(session: Any) -> str:
+    if cancelled_by_client(session):
+        return "cancelled by the client"
+    # No cancel from the client: it went away (stdin closed, its HTTP session ended) or the server stops.
+    return "cancelled: the client went away or the server is stopping"
+
+
+def writable(result: CallToolResult | InputRequiredResult) -> CallToolResult | InputRequiredResult:
+    """*result* with no unpaired UTF-16 surrogate left in its texts and structured content: the last line
+    before an answer is written. The SDK's JSON writer refuses such a string, and on stdio that ends the
+    server; robot text is repaired where frames are decoded (``wire/protocol.py``), this catches any other
+    way one could come (a file, a path we missed). The very result when it holds none."""
+    if not isinstance(result, CallToolResult):
+        return result
+    texts = [block.text for block in result.content if isinstance(block, TextContent)]
+    structured = result.structured_content
+    if repaired(texts) is texts and repaired(structured) is structured:
+        return result
+    content = [
+        block.model_copy(update={"text": repaired(block.text)}) if isinstance(block, TextContent) else block
+        for block in result.content
+    ]
+    return result.model_copy(update={"content": content, "structured_content": repaired(structured)})
+
+
+def _where_set(text: str, robot: Robot) -> str:
+    """*text* with a fleet robot's own entry (``[robots.base] in --robots fleet.toml``) named where a robot
+    that cannot be reached points at the server's ROSBRIDGE_HOST/PORT settings, which it does not use."""
+    if robot.config.url_source is None:
+        return text
+    return text.replace(NotConnectedError.SETTINGS, f"{robot.config.url_source} (robot {robot.name})")
 
 
 def _images(images: typing.Iterable[ToolImage]) -> list[ImageContent]:
@@ -290,9 +331,17 @@ _HINTS: tuple[tuple[type[RosbridgeError], str], ...] = (
 )
 
 
+#: The longest error that quotes the bridge is shown whole up to this many characters.
+_QUOTED_CHARS = 2_000
+
+
 def error_text(exc: RosbridgeError | ToolFailure) -> str:
     """The sentence a model sees for a failed tool call: the error's own text, plus what to try."""
-    text = _sentence(advised(exc))
+    text = advised(exc)
+    if isinstance(exc, ServiceError | ActionError | ProtocolError):
+        # They quote the bridge's (the robot's) own words: robot text, shown escaped and capped.
+        text = shown(text, _QUOTED_CHARS)
+    text = _sentence(text)
     if isinstance(exc, ConnectionLostError) and exc.goal_cancel is not None:
         return f"{text} Check the robot's state (e.g. with list_actions) before sending the goal again."
     if isinstance(exc, RosbridgeError):
@@ -355,7 +404,8 @@ def _merged(names: list[str], answers: list[CallToolResult | InputRequiredResult
             continue
         failed = failed or bool(answer.is_error)
         text = "\n".join(block.text for block in answer.content if isinstance(block, TextContent))
-        texts.append(f"{name}: {text}")
+        # Every line under its robot: a robot's answer may take several.
+        texts += [f"{name}: {line}" for line in text.splitlines() or [""]]
         for key, value in (answer.structured_content or {}).items():
             if isinstance(value, list):
                 data.setdefault(key, []).extend(f"{name}: {item}" for item in value)
@@ -464,13 +514,20 @@ class _Asker(AskPerson):
                 raise _AskInNextRound(key, question)
             if response.action != "accept":
                 return response.action
-            return "accept" if (response.content or {}).get("approve") is True else "decline"
+            return "accept" if _confirmed(response.content) else "decline"
         if capabilities.elicitation.form is None and capabilities.elicitation.url is not None:
             return "unsupported"  # a URL-only client answers by link, or not at all
         try:
             result = await elicit_with_validation(
                 request.session, question, _Confirmation, related_request_id=request.request_id
             )
+        except ValueError as exc:
+            # The SDK's words for an accepted answer without content, or (caused by a ValidationError) with
+            # content off the form.
+            cause = exc.__cause__
+            raise AnswerNotInForm(
+                _form_problems(cause) if isinstance(cause, ValidationError) else "it accepted with no answer"
+            ) from None
         except Exception:
             _log.info("asking the person failed", exc_info=True)
             return "unsupported"
@@ -495,6 +552,23 @@ class _Asker(AskPerson):
             _log.info("sending the person to the console failed", exc_info=True)
             return "unsupported"
         return result.action
+
+
+def _confirmed(content: Mapping[str, Any] | None) -> bool:
+    """Whether an accepted answer of a 2026 input round ticks ``approve``; :class:`AnswerNotInForm` when it
+    does not fit the form."""
+    if content is None:
+        raise AnswerNotInForm("it accepted with no answer")
+    try:
+        return _Confirmation.model_validate(content).approve
+    except ValidationError as exc:
+        raise AnswerNotInForm(_form_problems(exc)) from None
+
+
+def _form_problems(exc: ValidationError) -> str:
+    """What was wrong with an answer, by field and pydantic's words, without the client's values."""
+    problems = [f"{'.'.join(map(str, e['loc'])) or 'answer'}: {e['msg']}" for e in exc.errors()[:3]]
+    return "; ".join(problems)[:200]
 
 
 def _question_round(asking: _AskInNextRound) -> InputRequiredResult:

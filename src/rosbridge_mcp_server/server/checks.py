@@ -38,8 +38,8 @@ from mcp.types import (
 )
 from pydantic import ValidationError
 
-from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall, arguments_text
-from rosbridge_mcp_server.server.fleet import ROBOT_ARGUMENT
+from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall, arguments_text, writable
+from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing, read_json_text
 
 if TYPE_CHECKING:
@@ -118,6 +118,12 @@ class ToolCalls:
         caller = _caller()
         if tool is None:
             refusal = self._unlisted(name, arguments, caller) if self._unlisted is not None else None
+            if refusal is None and name == LIST_ROBOTS:
+                refusal = (
+                    f"Unknown tool: {LIST_ROBOTS} is listed only when the server drives several robots "
+                    "(start it with --robot NAME=URL once per robot, or --robots FILE); this server drives "
+                    "one robot, and every tool works on it without a robot argument."
+                )
             return refusal_result(refusal or f"Unknown tool: {name}")
         robots: tuple[Robot, ...] = self._fleet.robots[:1]
         if tool.on_robot:
@@ -142,7 +148,11 @@ class ToolCalls:
             return refusal_result(_arguments_refusal(tool, exc, arguments, read))
         call = ToolCall(ctx, robots, caller, params.input_responses)
         try:
-            return await tool.handler(call, validated)
+            result = writable(await tool.handler(call, validated))
+            if tool.on_robot and len(robots) == 1 and isinstance(result, CallToolResult):
+                # The calls an answer suggests go to the robot it came from.
+                return self._fleet.calls_on(result, robots[0].name, self._tools)
+            return result
         except Exception:
             # A bug: its traceback on stderr, a generic error for the model (the SDK's own words).
             _log.exception("Tool %r raised an unexpected exception", name)

@@ -14,8 +14,10 @@ nothing reaches its bridge (which may be another robot's too). ``stop_robot`` st
 
 from __future__ import annotations
 
+import json
+import re
 import typing
-from collections.abc import Sequence
+from collections.abc import Container, Sequence
 from dataclasses import dataclass
 from typing import Any
 from urllib.parse import urlsplit, urlunsplit
@@ -108,6 +110,22 @@ class Fleet:
             )
         return (self._by_name[name],), None
 
+    def calls_on(self, result: CallToolResult, robot: str, tools: Container[str]) -> CallToolResult:
+        """*result* with every call it suggests (``read_logs {"node": "/amcl"}``) made a call on *robot*: a
+        fleet's tools take ``robot``, which the tools that word the suggestions do not know of."""
+        if not self.several:
+            return result
+        content = [
+            block.model_copy(update={"text": _robot_in_calls(block.text, robot, tools)})
+            if isinstance(block, TextContent)
+            else block
+            for block in result.content
+        ]
+        data = result.structured_content
+        if data is not None:
+            data = _each_text(data, lambda text: _robot_in_calls(text, robot, tools))
+        return result.model_copy(update={"content": content, "structured_content": data})
+
     def schema_with_robot(self, schema: dict[str, Any], tool: str, *, acting: bool = False) -> dict[str, Any]:
         """*schema* with the ``robot`` property (required, except for stop_robot) when there are several; an
         *acting* tool's offers only the robots that are not read-only."""
@@ -127,6 +145,40 @@ class Fleet:
         if tool != STOP_ALL:
             required.append(ROBOT_ARGUMENT)
         return {**schema, "properties": properties, "required": required}
+
+
+#: A suggested call in an answer: a tool's name, a space, its arguments as a JSON object.
+_CALL = re.compile(r"\b([a-z][a-z_]+) (?=\{)")
+
+
+def _each_text(value: Any, change: typing.Callable[[str], str]) -> Any:
+    """*value* (structured content) with *change* applied to every string in it, keys left alone."""
+    if isinstance(value, str):
+        return change(value) if " {" in value else value
+    if isinstance(value, dict):
+        return {key: _each_text(item, change) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_each_text(item, change) for item in value]
+    return value
+
+
+def _robot_in_calls(text: str, robot: str, tools: Container[str]) -> str:
+    """*text* with ``"robot": ROBOT`` first in the arguments of each ``tool {...}`` it suggests."""
+    decoder = json.JSONDecoder()
+    out, at = [], 0
+    for match in _CALL.finditer(text):
+        if match.group(1) not in tools or match.start() < at:
+            continue
+        try:
+            arguments, end = decoder.raw_decode(text, match.end())
+        except json.JSONDecodeError:
+            continue
+        if not isinstance(arguments, dict) or ROBOT_ARGUMENT in arguments:
+            continue
+        called = json.dumps({ROBOT_ARGUMENT: robot, **arguments}, ensure_ascii=False)
+        out += [text[at : match.end()], called]
+        at = end
+    return "".join(out) + text[at:]
 
 
 class RobotRow(BaseModel):
@@ -193,10 +245,13 @@ def _row(robot: Robot) -> RobotRow:
 
 
 def _policy_line(config: Config) -> str:
+    """The policy in one line: ``from FILE; confirm = ...; [velocity] ...`` (describe()'s heading, "policy
+    (from FILE):", said without the word the label already says)."""
     lines = [line.strip() for line in config.policy.describe()]
     if len(lines) == 1:
         return lines[0]
-    return "; ".join([lines[0].rstrip(":"), *lines[1:]])
+    heading = lines[0].rstrip(":").removeprefix("policy").strip().removeprefix("(").removesuffix(")")
+    return "; ".join([heading, *lines[1:]] if heading else lines[1:])
 
 
 def _without_credentials(url: str) -> str:

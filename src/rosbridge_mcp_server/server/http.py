@@ -19,6 +19,7 @@ import hashlib
 import hmac
 import json
 import logging
+import math
 import socket
 import time
 from pathlib import Path
@@ -33,6 +34,7 @@ from mcp.server.transport_security import TransportSecuritySettings
 
 from rosbridge_mcp_server.config import ConfigError
 from rosbridge_mcp_server.config.http import MCP_PATH, HttpSettings, OAuthSettings
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 
 __all__ = ["JwtVerifier", "StaticTokens", "auth_options", "listen_http", "serve_http"]
 
@@ -85,21 +87,28 @@ class JwtVerifier:
                 options={"require": ["exp", "iss", "aud"]},
                 leeway=30,
             )
-        except (jwt.PyJWTError, ValueError, KeyError) as exc:
+        except (jwt.PyJWTError, ValueError, KeyError, TypeError, OverflowError) as exc:
+            # (PyJWT reads exp with int(): an infinite one overflows.)
             # The reason, never the token.
             _log.info("refused a JWT access token: %s", type(exc).__name__)
             return None
+        problem = _claim_problem(claims)
+        if problem is not None:
+            _log.info("refused a JWT access token: %s", problem)
+            return None
         scope = claims.get("scope", claims.get("scp", ""))
-        scopes = scope.split() if isinstance(scope, str) else [str(s) for s in scope]
-        client = str(claims.get("client_id") or claims.get("azp") or claims.get("sub") or "unknown")
+        scopes = scope.split() if isinstance(scope, str) else list(scope)
+        client = claims.get("client_id") or claims.get("azp") or claims.get("sub") or "unknown"
         subject = claims.get("sub")
+        # The caller is named in the audit (stderr, the file, the console): shown escaped, so a subject with a
+        # newline cannot write a line of its own.
         return AccessToken(
             token=token,
-            client_id=client,
+            client_id=shown(client, NAME_CHARS),
             scopes=scopes,
             expires_at=int(claims["exp"]),
             resource=self._settings.resource,
-            subject=str(subject) if subject is not None else None,
+            subject=shown(subject, NAME_CHARS) if subject is not None else None,
             claims={"iss": claims.get("iss")},
         )
 
@@ -114,6 +123,31 @@ class JwtVerifier:
             if kid is None or candidate.key_id == kid:
                 return candidate.key
         raise KeyError("no key with the token's kid")
+
+
+#: The claims read besides those PyJWT checks, each with the JSON type it must have when present.
+_STRING_CLAIMS = ("sub", "client_id", "azp")
+
+
+def _claim_problem(claims: dict[str, Any]) -> str | None:
+    """Why a validly signed token's claims cannot be read (a claim of the wrong JSON type), or ``None``.
+
+    A signature says who wrote a token, not that it is well formed: ``"scope": null`` once raised inside the
+    verifier, and the caller got HTTP 500 instead of 401.
+    """
+    for name in _STRING_CLAIMS:
+        if name in claims and not isinstance(claims[name], str):
+            return f"its {name} claim is not a string"
+    for name in ("scope", "scp"):
+        value = claims.get(name, "")
+        if not isinstance(value, str) and not (
+            isinstance(value, list) and all(isinstance(item, str) for item in value)
+        ):
+            return f"its {name} claim is neither a string nor a list of strings"
+    exp = claims.get("exp")
+    if isinstance(exp, bool) or not isinstance(exp, int | float) or not math.isfinite(exp):
+        return "its exp claim is not a number"
+    return None
 
 
 def auth_options(settings: HttpSettings) -> dict[str, Any]:

@@ -19,6 +19,10 @@ call:
   session's own channel (``related_request_id=None``: the call's request was answered with the task). It
   relies on the tool handlers reaching progress and the person only through ``ctx.session`` (ours do:
   ``adapter.py``) and on the runner handing ``ctx.session`` on untouched.
+* :func:`cancelled_by_client`: whether the client sent ``notifications/cancelled`` for the request being
+  handled. The dispatch context has it (``cancel_requested``, documented), but the low-level server's request
+  context reaches it only through its session's private ``_request_outbound``
+  (``tests/mcp/test_mcp_cancel_audit.py`` holds it: a cancel from the client is audited as such).
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ import anyio
 from mcp.shared.message import SessionMessage
 from mcp.types import JSONRPCError
 
-__all__ = ["answering_stream", "task_session"]
+__all__ = ["answering_stream", "cancelled_by_client", "task_session"]
 
 #: The reply for an unreadable line (the exception the transport handed on), or None to answer nothing.
 ReplyFor = Callable[[Exception], JSONRPCError | None]
@@ -127,3 +131,11 @@ def _standalone(kwargs: dict[str, Any]) -> dict[str, Any]:
     """A task's question goes on the session's own channel: the request it came with was answered long ago
     (with the task), so its back-channel is gone (``NoBackChannelError``)."""
     return {**kwargs, "related_request_id": None}
+
+
+def cancelled_by_client(session: Any) -> bool:
+    """Whether the client asked to cancel the request whose ``ServerSession`` *session* is (False when the SDK
+    no longer says: the call is then said to have ended without a cancel from the client)."""
+    dispatch = getattr(session, "_request_outbound", None)
+    requested = getattr(dispatch, "cancel_requested", None)
+    return isinstance(requested, anyio.Event) and requested.is_set()

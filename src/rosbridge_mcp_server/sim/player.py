@@ -4,9 +4,15 @@ Every channel of the MCAP file whose schema the simulator's interface registry k
 by the player's node (``/rosbag2_player`` on ROS 2, ``/player`` on ROS 1, as ``ros2 bag play`` and ``rosbag
 play`` name theirs), with its recorded type, spelled for the dialect: a ``ros2msg`` recording plays on a ROS 1
 robot too when the types exist in both. Messages go out in real time, spaced as their log times were; a topic
-a world node publishes too is taken over by the recording. A topic with a single message (a map,
-``/tf_static``) is latched. Decoding uses the ``mcap`` support packages (``ros2msg``/``cdr``,
-``ros1msg``/``ros1``, ``json``), imported only when a recording is played.
+a world node publishes too is taken over by the recording. A topic with a single message, a map
+(``OccupancyGrid``) and ``/tf_static`` are latched, as map_server and tf2's static broadcaster publish them:
+a late subscriber gets the latest one played. Decoding uses the ``mcap`` support packages
+(``ros2msg``/``cdr``, ``ros1msg``/``ros1``, ``json``), imported only when a recording is played.
+
+The file is read through :mod:`rosbridge_mcp_server.mcapfile`, within the same budget as the server's
+``read_recording`` (:data:`PLAY_MEMORY`, :data:`CHECK_SECONDS` to check it at start): a file declaring more
+than it holds, a compression bomb, a cut-off record or a schema containing itself is refused with what is
+wrong, before playing or (found mid-way in a file with a summary) by ending the pass with an error line.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rosbridge_mcp_server.mcapfile import Budget, McapFile, RecordingProblem, schema_problem
 from rosbridge_mcp_server.sim.interfaces import InterfaceError
 
 if TYPE_CHECKING:
@@ -31,6 +38,11 @@ __all__ = ["PlayError", "Player"]
 log = logging.getLogger("rosbridge_mcp_server.sim")
 
 _MAGIC = b"\x89MCAP0\r\n"
+#: The memory one read of the file may hold (the server's decode budget); the seconds checking it may take.
+PLAY_MEMORY = 256 * 1024 * 1024
+CHECK_SECONDS = 10.0
+#: Types played latched whatever their count (map_server, static transforms).
+_LATCHED_TYPES = ("nav_msgs/msg/OccupancyGrid", "nav_msgs/OccupancyGrid", "tf2_msgs/msg/TFMessage")
 
 
 class PlayError(ValueError):
@@ -117,7 +129,8 @@ class Player:
             for node in self.kit.graph.publishers_of(topic):
                 self.kit.graph.remove_publisher(node, topic)
             self.kit.graph.add_publisher(self.node, topic, msg_type)
-            if counts[topic] == 1:
+            static = topic.endswith("/tf_static") and "TFMessage" in msg_type
+            if counts[topic] == 1 or msg_type in _LATCHED_TYPES[:2] or static:
                 self.kit.graph.latched.setdefault(topic, None)
             self.channels[topic] = _Channel(topic, msg_type, counts[topic])
             self.published[topic] = 0
@@ -131,77 +144,91 @@ class Player:
         self.kit.loops.append(self._play)
 
     def _channels(self) -> tuple[dict[str, int], dict[str, str]]:
-        """Messages and schema name per topic: from the summary section, or by reading the file through."""
-        from mcap.exceptions import McapError  # noqa: PLC0415
-        from mcap.reader import make_reader  # noqa: PLC0415
-
+        """Messages and schema name per topic: from the summary's statistics, else the whole file read through
+        once within the budget (so a hostile file is refused before anything plays); a channel whose schema
+        cannot be decoded safely is left out, with a warning."""
         counts: dict[str, int] = {}
-        types: dict[str, str] = {}
         try:
             with self.path.open("rb") as handle:
-                reader = make_reader(handle)
-                summary = reader.get_summary()
-                if summary is not None and summary.statistics is not None:
-                    for cid, channel in summary.channels.items():
-                        schema = summary.schemas.get(channel.schema_id)
-                        counts[channel.topic] = summary.statistics.channel_message_counts.get(cid, 0)
-                        if schema is not None:
-                            types[channel.topic] = schema.name
-                    return counts, types
-                for schema, channel, _ in reader.iter_messages():
-                    counts[channel.topic] = counts.get(channel.topic, 0) + 1
-                    if schema is not None:
-                        types.setdefault(channel.topic, schema.name)
-        except (McapError, ValueError, EOFError) as exc:
-            if not counts:
-                raise PlayError(f"{self.path} cannot be read as MCAP: {exc}") from None
+                mcap = McapFile(
+                    handle, self.path.stat().st_size, Budget(PLAY_MEMORY, CHECK_SECONDS), self.path.name
+                )
+                summary = mcap.summary()
+                if summary is not None and summary.statistics and summary.statistics.channel_counts:
+                    mcap.schemas.update(summary.schemas)
+                    mcap.channels.update(summary.channels)
+                    declared = summary.statistics.channel_counts
+                    counts = {ch.topic: declared.get(cid, 0) for cid, ch in summary.channels.items()}
+                else:
+                    for channel, _, _ in mcap.messages(wanted=set()):
+                        counts[channel.topic] = counts.get(channel.topic, 0) + 1
+        except RecordingProblem as exc:
+            raise PlayError(f"{self.path} cannot be played: {exc}") from None
+        except OSError as exc:
+            raise PlayError(f"cannot read {self.path}: {exc.strerror or exc}") from None
+        types: dict[str, str] = {}
+        for channel in mcap.channels.values():
+            schema = mcap.schemas.get(channel.schema_id)
+            problem = schema_problem(schema) if schema is not None else None
+            if problem:
+                log.warning("not played: %s: %s", channel.topic, problem)
+                counts.pop(channel.topic, None)
+            elif schema is not None and channel.topic in counts:
+                types[channel.topic] = schema.name
         return counts, types
 
     # --- playing ------------------------------------------------------------------------------------------
 
     async def _play(self) -> None:
-        from mcap.reader import make_reader  # noqa: PLC0415
         from mcap_ros1.decoder import DecoderFactory as Ros1Factory  # noqa: PLC0415
         from mcap_ros2.decoder import DecoderFactory as Ros2Factory  # noqa: PLC0415
 
         factories = [Ros2Factory(), Ros1Factory()]
         while True:
             self.passes += 1
-            first: int | None = None
-            start = time.monotonic()
-            decoders: dict[int, Any] = {}
-            with self.path.open("rb") as handle:
-                for schema, channel, message in make_reader(
-                    handle, decoder_factories=factories
-                ).iter_messages():
-                    entry = self.channels.get(channel.topic)
-                    if entry is None:
-                        continue
-                    if first is None:
-                        first = message.log_time
-                    due = start + (message.log_time - first) / 1e9
-                    wait = due - time.monotonic()
-                    if wait > 0:
-                        await asyncio.sleep(wait)
-                    decoder = decoders.get(channel.id)
-                    if decoder is None:
-                        decoder = decoders[channel.id] = self._decoder(factories, schema, channel)
-                    bridge = self.kit.bridge
-                    if (
-                        not bridge.has_subscribers(channel.topic)
-                        and channel.topic not in self.kit.graph.latched
-                    ):
-                        continue  # nobody listens: nothing goes out, as a real publisher's reaches no one
-                    try:
-                        msg = _plain(decoder(message.data), self.kit.ros2)
-                        bridge.publish_json(channel.topic, entry.type, msg)
-                    except Exception as exc:  # one bad message costs one log line
-                        log.error("playing %s: %s", channel.topic, exc)
-                        continue
-                    self.published[channel.topic] += 1
+            try:
+                await self._one_pass(factories)
+            except (RecordingProblem, PlayError, OSError) as exc:
+                log.error("playing %s stopped: %s", self.path.name, exc)
+                self.done.set()
+                return
             if not self.loop:
                 self.done.set()
                 return
+
+    async def _one_pass(self, factories: list[Any]) -> None:
+        first: int | None = None
+        start = time.monotonic()
+        decoders: dict[int, Any] = {}
+        with self.path.open("rb") as handle:
+            # The time budget is the recording's own length, played in real time: only memory is held to it.
+            mcap = McapFile(
+                handle, self.path.stat().st_size, Budget(PLAY_MEMORY, float("inf")), self.path.name
+            )
+            wanted = None
+            for channel, log_time, data in mcap.messages(wanted):
+                entry = self.channels.get(channel.topic)
+                if entry is None or data is None:
+                    continue
+                if first is None:
+                    first = log_time
+                wait = start + (log_time - first) / 1e9 - time.monotonic()
+                await asyncio.sleep(max(wait, 0))  # also yields to the loop between messages
+                decoder = decoders.get(channel.id)
+                if decoder is None:
+                    decoder = decoders[channel.id] = self._decoder(
+                        factories, mcap.schemas.get(channel.schema_id), channel
+                    )
+                bridge = self.kit.bridge
+                if not bridge.has_subscribers(channel.topic) and channel.topic not in self.kit.graph.latched:
+                    continue  # nobody listens: nothing goes out, as a real publisher's reaches no one
+                try:
+                    msg = _plain(decoder(data), self.kit.ros2)
+                    bridge.publish_json(channel.topic, entry.type, msg)
+                except Exception as exc:  # one bad message costs one log line
+                    log.error("playing %s: %s", channel.topic, exc)
+                    continue
+                self.published[channel.topic] += 1
 
     @staticmethod
     def _decoder(factories: list[Any], schema: Any, channel: Any) -> Any:

@@ -11,19 +11,22 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
+from rosbridge_mcp_server.catalogue import CATALOGUE
 
 __all__ = ["TOOL_MODULES"]
 
 
-def _modules(names: tuple[str, ...]) -> tuple[ModuleType, ...]:
-    """The tool modules for *names*: each tool's module is named after the tool."""
-    modules = tuple(importlib.import_module(f"{__name__}.{name}") for name in names)
-    for name, module in zip(names, modules, strict=True):
-        if module.SPEC.name != name:
-            raise ImportError(f"tools/{name}.py declares the tool {module.SPEC.name!r}")
+def _modules() -> tuple[ModuleType, ...]:
+    """The catalogue's tool modules: each tool's module is named after the tool, and is read-only exactly
+    when the catalogue says it does not act, since the ``--tools`` groups go by it."""
+    modules = tuple(importlib.import_module(f"{__name__}.{entry.name}") for entry in CATALOGUE)
+    for entry, module in zip(CATALOGUE, modules, strict=True):
+        if module.SPEC.name != entry.name:
+            raise ImportError(f"tools/{entry.name}.py declares the tool {module.SPEC.name!r}")
+        if module.SPEC.hints.read_only == entry.acts:
+            raise ImportError(f"catalogue.py says {entry.name} acts={entry.acts}; its spec says otherwise")
     return modules
 
 
 #: Every tool module, in the catalogue's order (``catalogue.ALL_TOOL_NAMES``).
-TOOL_MODULES: tuple[ModuleType, ...] = _modules(ALL_TOOL_NAMES)
+TOOL_MODULES: tuple[ModuleType, ...] = _modules()

@@ -21,6 +21,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from rosbridge_mcp_server.robot.wording import full_stop
 from rosbridge_mcp_server.tools.base import payload_problem
 
 __all__ = ["MAX_TEXT_ARGUMENT", "argument_problem", "parameter_listing", "read_json_text"]
@@ -77,7 +78,7 @@ def read_json_text(
         if isinstance(parsed, dict | list):
             problem = payload_problem(parsed)
             if problem is not None:
-                return read, f"Invalid arguments for {tool}: {key}: {problem}. Nothing was sent."
+                return read, f"Invalid arguments for {tool}: {key}: {full_stop(problem)} Nothing was sent."
     return read, None
 
 

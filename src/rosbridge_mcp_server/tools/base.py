@@ -20,6 +20,7 @@ from rosbridge_mcp_server.errors import Advised
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.seam import AskPerson, Guard, nobody_to_ask
+from rosbridge_mcp_server.robot.wording import full_stop
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -189,5 +190,5 @@ def parse_json_object(value: dict[str, Any] | str | None, what: str, example: st
         raise ToolFailure(f"The {what} must be a JSON object, e.g. {example}; got {compact_json(parsed)}.")
     problem = payload_problem(parsed)
     if problem is not None:
-        raise ToolFailure(f"The {what} {problem}. Nothing was sent.")
+        raise ToolFailure(f"The {what} {full_stop(problem)} Nothing was sent.")
     return parsed

@@ -8,6 +8,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import stop_goals
 from rosbridge_mcp_server.robot.goals import CancelReport
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
 __all__ = ["SPEC", "CancelAnswer", "run"]
@@ -103,7 +104,7 @@ def _answer(report: CancelReport) -> ToolAnswer:
             text += f" Goals started by publish_action: {', '.join(report.canceled_ours)}."
         if report.goals_canceling is not None:
             count = len(report.goals_canceling)
-            goals = f"{count} goal{'s' if count != 1 else ''}"
+            goals = counted(count, "goal")
             if report.canceled_ours:
                 # Our goals' own cancels usually reach the server first, and a goal already being canceled
                 # is not listed again: "0 goals" would read as if ours went on.

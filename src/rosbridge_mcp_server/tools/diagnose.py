@@ -20,9 +20,11 @@ from rosbridge_mcp_server.robot.diagnosis import (
     UnknownFocusError,
     diagnose,
 )
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, given_namespace
 from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
+from rosbridge_mcp_server.tools.subscribe_topic import MAX_COUNT
 
 __all__ = ["SPEC", "DiagnoseAnswer", "run"]
 
@@ -104,16 +106,19 @@ async def run(
     return ToolAnswer(text=_text(found, focus), data=data)
 
 
-#: Each thing to look at next as the call that does it (robot/diagnosis.py names no tool).
+#: Each thing to look at next as the call that does it (robot/diagnosis.py names no tool). The names come from
+#: the robot, checked in robot/diagnosis.py (graph names it has, plain frame names); no acting call is ever
+#: built from them.
 _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.NODE_LOG: lambda node: f'read_logs {{"node": "{node}", "level": "info"}}',
     Look.NODES: lambda: "list_nodes",
     Look.TOPIC: lambda topic: f'get_topic_info {{"topic": "{topic}"}}',
-    Look.ACTIVATE: lambda node: (
-        f'activate it: publish_service {{"service": "{node}/change_state", "request": '
-        '{"transition": {"id": 3}}} (or its lifecycle manager\'s manage_nodes)'
+    Look.LOG: lambda: 'read_logs {"level": "info"}',
+    Look.ACTIVATE: lambda: (
+        "activating it acts on the robot (its lifecycle manager's manage_nodes, or its change_state service, "
+        "transition 3): ask the user first"
     ),
-    Look.NODE: lambda node=None: "get_node_info" if node is None else f'get_node_info {{"node": "{node}"}}',
+    Look.NODE: lambda node: f'get_node_info {{"node": "{node}"}}',
     Look.ONE_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "count": 1}}',
     Look.WAIT_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "timeout": 5}}',
     Look.STAMPS: lambda topic: f'plot_topic {{"series": ["{topic} header.stamp.sec"], "duration": 5}}',
@@ -124,6 +129,12 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
         f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5'
         f"{_in(namespace)}}}"
     ),
+    # Two rounds of every status in at most 3 s (diagnostics come at about 1 Hz); the topic's publishers
+    # take turns, so one message is most likely another's OK.
+    Look.STATUSES: lambda topic, statuses: (
+        f'subscribe_topic {{"topic": "{topic}", "count": {min(MAX_COUNT, max(2, 2 * int(statuses)))}, '
+        '"duration": 3, "fields": ["status"]} (its publishers take turns: one message is likely another\'s)'
+    ),
 }
 
 
@@ -133,8 +144,17 @@ def _in(namespace: str) -> str:
 
 
 def next_text(steps: Sequence[Step]) -> str:
-    """What to look at next, as calls: ``read_logs {"node": "/amcl", "level": "info"}; list_nodes``."""
-    return "; ".join(_CALLS[step.look](*step.names) + (f" {step.why}" if step.why else "") for step in steps)
+    """What to look at next, as calls: ``read_logs {"node": "/amcl", "level": "info"}; list_nodes``.
+
+    A step without names after one with them is about the same node (``Look.NODE`` after ``Look.ACTIVATE``).
+    """
+    calls = []
+    before: tuple[str, ...] = ()
+    for step in steps:
+        names = before if step.look is Look.NODE and not step.names else step.names
+        calls.append(_CALLS[step.look](*names) + (f" {step.why}" if step.why else ""))
+        before = step.names
+    return "; ".join(calls)
 
 
 def checked_texts(found: Diagnosis) -> dict[str, str]:
@@ -143,7 +163,8 @@ def checked_texts(found: Diagnosis) -> dict[str, str]:
     if more := found.left_out.get("streams"):
         checked["streams"] += f" ({more} more not measured: at most {MAX_STREAMS} at once)"
     if more := found.left_out.get("diagnostics"):
-        checked["diagnostics"] += f" ({more} more not OK: subscribe_topic /diagnostics)"
+        every = f'{{"topic": "/diagnostics", "count": {MAX_COUNT}, "duration": 3, "fields": ["status"]}}'
+        checked["diagnostics"] += f" ({more} more not OK: subscribe_topic {every})"
     if more := found.left_out.get("logs"):
         # "... (N lines kept)" → "... (N lines kept, M more groups in read_logs)"
         checked["logs"] = f"{checked['logs'].removesuffix(')')}, {more} more groups in read_logs)"
@@ -169,9 +190,9 @@ def _count(found: Diagnosis) -> str:
         return "No problem found"
     parts = []
     if found.problems:
-        parts.append(f"{found.problems} problem{'s' if found.problems != 1 else ''}")
+        parts.append(counted(found.problems, "problem"))
     if found.warnings:
-        parts.append(f"{found.warnings} warning{'s' if found.warnings != 1 else ''}")
+        parts.append(counted(found.warnings, "warning"))
     return ", ".join(parts)
 
 

@@ -6,6 +6,7 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
 from rosbridge_mcp_server.tools.paging import (
     FilterArg,
@@ -72,7 +73,7 @@ async def run(
     ]
     page = page_of(rows, offset=offset, limit=limit, line=_line)
     if page.rows:
-        text = f"{len(rows)} action servers:\n" + "\n".join(map(_line, page.rows))
+        text = f"{counted(len(rows), 'action server')}:\n" + "\n".join(map(_line, page.rows))
     elif actions:
         text = f"No action servers match {filter!r}." if filter else "No action servers on this page."
     else:

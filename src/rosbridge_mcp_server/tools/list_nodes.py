@@ -7,6 +7,7 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.nodes import node_names
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
 from rosbridge_mcp_server.tools.paging import FilterArg, OffsetArg, limit_arg, matcher, page_note, page_of
 
@@ -45,7 +46,7 @@ async def run(
     matching = [node for node in nodes if wanted(node)]
     page = page_of(matching, offset=offset, limit=limit, line=str)
     if page.rows:
-        text = f"{len(matching)} nodes:\n" + "\n".join(page.rows)
+        text = f"{counted(len(matching), 'node')}:\n" + "\n".join(page.rows)
     elif nodes:
         text = f"No nodes match {filter!r}." if filter else "No nodes on this page."
     else:

@@ -7,6 +7,7 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.parameters import parameter_groups
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -88,7 +89,7 @@ async def run(
     shown, page = page_of_groups(groups, offset=offset, limit=limit, line=_listed, budget=TEXT_BUDGET - 800)
     where = f" of {name}" if name else ""
     if shown:
-        lines = [f"{page.matched} parameters{where}, by node:"]
+        lines = [f"{counted(page.matched, 'parameter')}{where}, by node:"]
         lines += [f"{owner or '(top level)'} ({len(names)}): {', '.join(names)}" for owner, names in shown]
     elif total and filter:
         lines = [f"No parameters{where} match {filter!r}."]

@@ -10,6 +10,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.graph import ServiceEntry
 from rosbridge_mcp_server.robot.known_types import per_node_types, rosapi_types
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
 from rosbridge_mcp_server.tools.paging import (
     FRAME_RESERVE,
@@ -94,7 +95,11 @@ async def run(
         wanted = matcher(filter)
         matching = [(s.name, s.type) for s in services if wanted(s.name) or wanted(s.type)]
         page = page_of(matching, offset=offset, limit=limit, line=_pair_line)
-        head = f"{len(matching)} services:" if page.rows else f"No services on this page match {filter!r}."
+        head = (
+            f"{counted(len(matching), 'service')}:"
+            if page.rows
+            else f"No services on this page match {filter!r}."
+        )
         body = [head, *map(_pair_line, page.rows)]
         groups: list[ServiceGroup] = []
         count = len(matching)

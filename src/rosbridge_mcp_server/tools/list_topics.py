@@ -6,6 +6,7 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
 from rosbridge_mcp_server.tools.paging import (
     FilterArg,
@@ -69,7 +70,7 @@ async def run(
     page = page_of(rows, offset=offset, limit=limit, line=_line)
     note = page_note(page, "topics", filter, len(topics))
     if page.rows:
-        text = f"{len(rows)} topics:\n" + "\n".join(map(_line, page.rows))
+        text = f"{counted(len(rows), 'topic')}:\n" + "\n".join(map(_line, page.rows))
     elif not topics:
         text = "The robot has no topics right now (nothing publishes or subscribes)."
     else:

@@ -4,10 +4,12 @@ ROS 1 ``move_base``), checked against the map and the geofence first, with a pic
 from __future__ import annotations
 
 import asyncio
+import difflib
+import json
 import math
 import time
 from dataclasses import replace
-from typing import Annotated, Any
+from typing import Annotated, Any, Final
 
 from pydantic import BaseModel, Field
 
@@ -24,6 +26,7 @@ from rosbridge_mcp_server.robot.navigation import (
     read_map,
     survey,
 )
+from rosbridge_mcp_server.robot.nodes import node_names
 from rosbridge_mcp_server.robot.occupancy import Grid, Pose2D
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -108,18 +111,53 @@ def _pose_msg(frame: str, pose: Pose2D) -> dict[str, Any]:
     }
 
 
+#: Keys a pose is often written with, and the key meant (``theta`` is turtlesim's, in radians).
+_POSE_KEYS: Final[dict[str, str]] = {
+    "theta": "yaw",
+    "heading": "yaw",
+    "angle": "yaw",
+    "yaw_deg": "yaw",
+    "yaw_degrees": "yaw",
+    "rotation": "yaw",
+    "orientation": "yaw",
+    "direction": "yaw",
+}
+
+
+def _shown(value: Any) -> str:
+    """A value the caller gave, as JSON (as they wrote it), shortened."""
+    text = json.dumps(value, ensure_ascii=False, default=str)
+    return text if len(text) <= 120 else text[:120] + "…"
+
+
 def _number(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise ToolFailure(f"{what} must be a finite number, not {value!r}.")
+        raise ToolFailure(f"{what} must be a finite number, not {_shown(value)}. Nothing was sent.")
     return float(value)
 
 
-def _waypoint(item: Any, index: int) -> tuple[float, float, float | None]:
-    where = f"waypoints[{index}]"
+def _meant(unknown: set[str]) -> str:
+    """`` Did you mean "yaw" (degrees) for "theta"?`` for keys that stand for a pose's own, or ``""``."""
+    pairs = []
+    for key in sorted(unknown):
+        meant = _POSE_KEYS.get(key.lower()) or next(
+            iter(difflib.get_close_matches(key, ["x", "y", "yaw"])), ""
+        )
+        if meant:
+            pairs.append(f'"{meant}"{" (degrees)" if meant == "yaw" else ""} for "{key}"')
+    return f" Did you mean {', '.join(pairs)}?" if pairs else ""
+
+
+def _waypoint(item: Any, where: str) -> tuple[float, float, float | None]:
     if isinstance(item, dict):
         unknown = set(item) - {"x", "y", "yaw"}
         if unknown or "x" not in item or "y" not in item:
-            raise ToolFailure(f'{where} must be {{"x": m, "y": m, "yaw": degrees}}; got {item!r}.')
+            missing = [key for key in ("x", "y") if key not in item]
+            wrong = f"unknown {', '.join(sorted(unknown))}" if unknown else f"no {' or '.join(missing)}"
+            raise ToolFailure(
+                f'{where} must be {{"x": m, "y": m, "yaw": degrees}} (no yaw keeps the heading); got '
+                f"{_shown(item)}: {wrong}.{_meant(unknown)} Nothing was sent."
+            )
         yaw = item.get("yaw")
         return (
             _number(item["x"], f"{where}.x"),
@@ -133,7 +171,18 @@ def _waypoint(item: Any, index: int) -> tuple[float, float, float | None]:
             _number(item[1], f"{where}[1]"),
             None if yaw_value is None else _number(yaw_value, f"{where}[2]"),
         )
-    raise ToolFailure(f'{where} must be {{"x": m, "y": m, "yaw": degrees}} or [x, y, yaw]; got {item!r}.')
+    raise ToolFailure(
+        f'{where} must be {{"x": m, "y": m, "yaw": degrees}} or [x, y, yaw]; got {_shown(item)}. Nothing was '
+        "sent."
+    )
+
+
+async def _is_turtlesim(ctx: ToolContext) -> bool:
+    """Whether the robot is turtlesim (as the plain ``--demo`` is), which has no Nav2 to point at."""
+    try:
+        return "/turtlesim" in await node_names(ctx.graph)
+    except RosbridgeError:
+        return False
 
 
 async def _navigator_state(ctx: ToolContext, namespace: str) -> str | None:
@@ -198,13 +247,16 @@ _GOAL = '{"x": 2, "y": 1.5, "yaw": 90} (metres, DEGREES; no yaw: keep heading)'
 def _parse_goal(goal: Any) -> tuple[str, list[tuple[float, float, float | None]]]:
     """A pose or poses given as ``goal``: ("pose", [one]) or ("waypoints", [...])."""
     if isinstance(goal, dict):
-        return "pose", [_waypoint(goal, 0)]
+        return "pose", [_waypoint(goal, "goal")]
     if isinstance(goal, list) and goal and all(isinstance(v, int | float) for v in goal):
-        return "pose", [_waypoint(goal, 0)]
+        return "pose", [_waypoint(goal, "goal")]
     if isinstance(goal, list) and goal:
-        ways = [_waypoint(item, i) for i, item in enumerate(goal)]
+        ways = [_waypoint(item, f"goal[{i}]") for i, item in enumerate(goal)]
         return ("waypoints" if len(ways) > 1 else "pose"), ways
-    raise ToolFailure(f"goal must be a pose {_GOAL}, a place name, or a list of poses; got {goal!r}.")
+    raise ToolFailure(
+        f"goal must be a pose {_GOAL}, a place name, or a list of poses; got {_shown(goal)}. Nothing was "
+        "sent."
+    )
 
 
 async def run(
@@ -213,7 +265,7 @@ async def run(
     goal: Annotated[
         Any,
         Field(
-            description=('e.g. {"x": 2, "y": 1, "yaw": 90} (m, DEGREES), "dock" ([places]) or a list (ROS 2)')
+            description='e.g. {"x": 2, "y": 1, "yaw": 90} (m, DEGREES; no yaw: same heading), "dock", a list',
         ),
     ] = None,
     frame: Annotated[str, Field(description='e.g. odom ("" = map)')] = "",
@@ -275,6 +327,8 @@ async def run(
     if hint is not None:
         server = "move_base" if ros1 else "bt_navigator"
         not_ready.append(f"no action server {name} (is {server} running?){hint}")
+        if await _is_turtlesim(ctx):
+            not_ready.append("turtlesim has no Nav2; the built-in demo has one: --demo --demo-world nav2")
     grid, problem = await read_map(ctx.client, ctx.graph, map_name, _READY_WAIT)
     if problem is not None:
         not_ready.append(problem)
@@ -287,7 +341,8 @@ async def run(
         if state is not None:
             not_ready.append(state)
     if not_ready or grid is None or isinstance(start, str):
-        raise ToolFailure(f"Nav2 is not ready: {'; '.join(not_ready)}. Nothing was sent.")
+        missing = "; ".join(reason.rstrip(". ") for reason in not_ready)
+        raise ToolFailure(f"Nav2 is not ready: {missing}. Nothing was sent.")
 
     # The goal's poses, in the frame they were given in.
     if kind == "place":

@@ -8,6 +8,8 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import PING_LIMIT, publish_once, publish_stream
 from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.robot.wording import full_stop
+from rosbridge_mcp_server.tools.audience import audience
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
@@ -42,6 +44,10 @@ class PublishAnswer(BaseModel):
     adjusted: str | None = Field(
         default=None, description="How the safety policy changed the message before sending (velocity caps)"
     )
+    subscribers: int | None = Field(
+        default=None,
+        description="Subscribers when sent; 0: nobody received it",
+    )
 
 
 SPEC = ToolSpec(
@@ -49,8 +55,8 @@ SPEC = ToolSpec(
     title="Publish a message",
     description=(
         "Publish on a topic; can move the robot. Example: topic /cmd_vel, message_type "
-        f"geometry_msgs/msg/Twist, message {_EXAMPLE}. A command acts briefly: rate_hz with duration keeps "
-        "publishing, ending a Twist stream with zeros."
+        f"geometry_msgs/msg/Twist, message {_EXAMPLE}. rate_hz with duration streams it, a Twist ending "
+        "with zeros."
     ),
     hints=ACTS_ON_ROBOT,
     acts_on="topic",
@@ -95,10 +101,13 @@ async def run(
             rate_hz=rate_hz or DEFAULT_RATE,
             duration=duration,
         )
-    sent = await publish_once(ctx, tool=SPEC.name, topic=topic, message_type=message_type, message=body)
+    async with audience(ctx, topic) as heard:
+        sent = await publish_once(ctx, tool=SPEC.name, topic=topic, message_type=message_type, message=body)
     text = f"Published one {sent.type} message on {sent.topic}: {compact_json(sent.message)}"
     if sent.adjusted:
         text += f" (the safety policy {sent.adjusted})"
+    if nobody := await heard.nobody_text(ctx, sent.topic):
+        text = f"{full_stop(text)} {nobody}"
     return ToolAnswer(
         text=text,
         data=PublishAnswer(
@@ -107,6 +116,7 @@ async def run(
             message=sent.message,
             published=True,
             adjusted=sent.adjusted,
+            subscribers=heard.count,
         ),
     )
 
@@ -117,16 +127,17 @@ async def _stream(
     async def progress(sent: int, planned: int) -> None:
         await ctx.report_progress(sent, planned, f"{sent} of {planned} messages")
 
-    streamed = await publish_stream(
-        ctx,
-        tool=SPEC.name,
-        topic=topic,
-        message_type=message_type,
-        message=body,
-        rate_hz=rate_hz,
-        duration=duration,
-        on_progress=progress,
-    )
+    async with audience(ctx, topic) as heard:
+        streamed = await publish_stream(
+            ctx,
+            tool=SPEC.name,
+            topic=topic,
+            message_type=message_type,
+            message=body,
+            rate_hz=rate_hz,
+            duration=duration,
+            on_progress=progress,
+        )
     text = (
         f"Published {streamed.sent} {streamed.type} messages on {streamed.topic} at {streamed.rate_hz:g} Hz "
         f"for {streamed.duration:g} s: {compact_json(streamed.message)}"
@@ -158,5 +169,7 @@ async def _stream(
         zero_sent=streamed.zero is not None,
         stopped_by_stop_robot=streamed.stopped,
         adjusted=streamed.adjusted,
+        subscribers=heard.count,
     )
-    return ToolAnswer(text=text + ".", data=answer)
+    nobody = await heard.nobody_text(ctx, streamed.topic)
+    return ToolAnswer(text=f"{text}." + (f" {nobody}" if nobody else ""), data=answer)

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import asyncio
 import time
-from typing import Annotated, Literal
+from typing import Annotated, Final, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, BeforeValidator, Field
 
 from rosbridge_mcp_server.robot.logs import RING_LINES, RING_SECONDS, Fold, fold
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 from rosbridge_mcp_server.tools.paging import OffsetArg, limit_arg, page_of
 
@@ -43,6 +44,25 @@ class LogsAnswer(BaseModel):
     dropped: int = Field(description="Lines the ring's bounds let go")
 
 
+#: Other names of the levels, as loggers and people write them (Python's WARNING, syslog's err and crit, ...).
+LEVEL_ALIASES: Final[dict[str, str]] = {
+    "warning": "warn",
+    "err": "error",
+    "critical": "fatal",
+    "crit": "fatal",
+    "information": "info",
+    "dbg": "debug",
+}
+
+
+def _level_name(value: object) -> object:
+    """A level in any case, or one of its other names, as the level it is (``WARNING`` → ``warn``)."""
+    if not isinstance(value, str):
+        return value
+    name = value.strip().lower()
+    return LEVEL_ALIASES.get(name, name)
+
+
 SPEC = ToolSpec(
     name="read_logs",
     title="Robot log",
@@ -60,6 +80,7 @@ async def run(
     *,
     level: Annotated[
         Literal["debug", "info", "warn", "error", "fatal"],
+        BeforeValidator(_level_name),
         Field(description="Lowest level, e.g. info"),
     ] = "warn",
     node: Annotated[str | None, Field(description="Node name or glob, e.g. *costmap*")] = None,
@@ -95,7 +116,8 @@ async def run(
     bounds = f"the ring keeps the last {RING_LINES:,} lines and {RING_SECONDS / 60:.0f} min"
     if page.rows:
         head = (
-            f"{len(lines)} lines{wanted} in {len(folds)} groups, read from {keeper.source} since {since_text}"
+            f"{counted(len(lines), 'line')}{wanted} in {counted(len(folds), 'group')}, read from "
+            f"{keeper.source} since {since_text}"
             + (f" ({ring.dropped:,} older lines let go: {bounds})" if ring.dropped else "")
             + ":"
         )
@@ -104,7 +126,7 @@ async def run(
         if page.more:
             text_out += f"\n{page.more} more groups: call again with offset {offset + len(page.rows)}."
     elif folds:
-        text_out = f"No groups on this page ({len(folds)} groups match; offset {offset})."
+        text_out = f"No groups on this page ({counted(len(folds), 'group')} match; offset {offset})."
     else:
         text_out = (
             f"Nothing logged{wanted} since {since_text} ({_ago(now - started)} ago; {bounds}). "

@@ -4,6 +4,7 @@ statistics over time, the messages around a moment, a chart of fields, or the ma
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import json
 import math
@@ -13,24 +14,28 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
+from rosbridge_mcp_server.mcapfile import Budget
 from rosbridge_mcp_server.pictures.charts import draw_chart, stats
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
 from rosbridge_mcp_server.pictures.summary import summarize
-from rosbridge_mcp_server.robot.occupancy import MapError, Pose2D, decode_grid, yaw_of
+from rosbridge_mcp_server.robot.occupancy import MapError, decode_grid
 from rosbridge_mcp_server.robot.recording.files import (
     PathRefused,
     list_recordings,
     resolve_recording,
 )
+from rosbridge_mcp_server.robot.recording.paths import PathReader
 from rosbridge_mcp_server.robot.recording.reading import (
     NotARecording,
     RecordingSummary,
     decoded_messages,
     field_series,
+    read_budget,
     summarize_recording,
 )
 from rosbridge_mcp_server.robot.series import FieldError
+from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -46,6 +51,8 @@ __all__ = ["SPEC", "ReadRecordingAnswer", "run"]
 BUDGET = 8000
 MAX_SERIES = 8
 MAX_MESSAGES = 50
+#: Topics a summary lists (text and structured content alike).
+MAX_TOPICS = 500
 PICTURE_SIZE = 800
 #: stats: the recording's time span in this many windows.
 BUCKETS = 10
@@ -97,30 +104,31 @@ async def run(
         path = resolve_recording(directory, file)
     except PathRefused as exc:
         raise ToolFailure.carrying(exc) from None
+    budget = read_budget()  # one call's memory and time, shared by the summary and the mode
     try:
-        summary = await asyncio.to_thread(summarize_recording, path)
-    except NotARecording as exc:
-        raise ToolFailure(f"{exc} It was not read.") from None
-    except OSError as exc:
-        raise ToolFailure(f"Cannot read {file!r}: {exc.strerror or exc}.") from None
-    try:
+        summary = await asyncio.to_thread(summarize_recording, path, budget)
         if mode == "summary":
             return _summary(file, summary)
         if mode == "messages":
-            return await asyncio.to_thread(_messages, file, summary, at, window, topics)
+            reading = functools.partial(_messages, at=at, window=window, topics=topics, budget=budget)
+            return await asyncio.to_thread(reading, file, summary)
         if mode == "map":
-            map_topic, path_topic = (
-                [*(topics or []), "/map", "/odom"] if not topics or len(topics) >= 2 else [topics[0], "/odom"]
-            )[:2]
-            return await asyncio.to_thread(_map, file, summary, map_topic, path_topic, PICTURE_SIZE)
+            pair = [*(topics or ["/map"]), "/odom"]  # the map, then the path (/odom unless given)
+            drawing = functools.partial(_map, map_topic=pair[0], path_topic=pair[1], budget=budget)
+            return await asyncio.to_thread(drawing, file, summary)
         wanted = _wanted(fields, summary)
         if mode == "stats":
-            return await asyncio.to_thread(_stats, file, summary, wanted, BUCKETS)
-        return await asyncio.to_thread(_plot, file, summary, wanted, PICTURE_SIZE)
+            return await asyncio.to_thread(_stats, file, summary, wanted, BUCKETS, budget)
+        return await asyncio.to_thread(_plot, file, summary, wanted, PICTURE_SIZE, budget)
     except NotARecording as exc:
-        raise ToolFailure(str(exc)) from None
+        raise ToolFailure(f"{exc} It was not read further.") from None
+    except OSError as exc:
+        raise ToolFailure(f"Cannot read {file!r}: {exc.strerror or exc}.") from None
     except FieldError as exc:
         raise ToolFailure(f"{exc} Fix the field and call again.") from None
+    except asyncio.CancelledError:
+        budget.abandoned = True  # the reading thread stops at its next check instead of reading on
+        raise
 
 
 # --- listing ------------------------------------------------------------------------------------------------
@@ -129,15 +137,17 @@ async def run(
 def _listing(directory: Path) -> ToolAnswer:
     entries = list_recordings(directory)
     rows: list[dict[str, Any]] = []
-    lines = [f"{len(entries)} recording(s) in {str(directory)!r}" + (":" if entries else ".")]
+    lines = [f"{counted(len(entries), 'recording')} in {str(directory)!r}" + (":" if entries else ".")]
     for entry in entries[:200]:
         when = time.strftime("%Y-%m-%d %H:%M", time.localtime(entry.modified))
         rows.append({"file": entry.name, "bytes": entry.size, "modified": when, "mcap": entry.is_mcap})
         lines.append(
-            f"- {entry.name}: {entry.size / 1e6:.1f} MB, {when}" + ("" if entry.is_mcap else " (not MCAP)")
+            f"- {entry.name}: {size_text(entry.size)}, {when}" + ("" if entry.is_mcap else " (not MCAP)")
         )
     if not entries:
-        lines.append('record {"topics": [...], "duration": 10} makes one; MCAP files put there are read too.')
+        lines.append(
+            'record {"topics": ["/rosout"], "duration": 10} makes one; MCAP files put there are read too.'
+        )
     text = _fit(lines, "Only the newest are shown.")
     return ToolAnswer(
         text=text, data=ReadRecordingAnswer(file=None, mode="list", details={"recordings": rows})
@@ -154,13 +164,17 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
         else "?"
     )
     how = "from its summary and index" if summary.indexed else "read through (it has no summary section)"
+    if summary.damaged:
+        how += f"; it breaks off: {summary.damaged}, so only what came before is counted"
+    how += f"; {summary.note}" if summary.note else ""
     lines = [
-        f"{file}: {summary.size / 1e6:.1f} MB, {summary.messages} messages on {len(summary.topics)} topics "
+        f"{file}: {size_text(summary.size)}, {counted(summary.messages, 'message')} on "
+        f"{counted(len(summary.topics), 'topic')} "
         "over "
         f"{summary.seconds:.1f} s from {start} (profile {summary.profile or '-'}; {how})."
     ]
     topics = []
-    for t in summary.topics:
+    for t in summary.topics[:MAX_TOPICS]:
         timing = t.timing
         rate = f", {timing.rate_hz:g} Hz" if timing.rate_hz is not None else ""
         span = f", {timing.first:g}-{timing.last:g} s" if timing.first is not None else ""
@@ -183,7 +197,10 @@ def _summary(file: str, summary: RecordingSummary) -> ToolAnswer:
                 "gaps": [{"at": g.at, "seconds": g.seconds} for g in timing.gaps],
             }
         )
-    text = _fit(lines, "The structured answer lists every topic.")
+    more = len(summary.topics) - MAX_TOPICS
+    text = _fit(lines, f"The structured answer lists up to {MAX_TOPICS} topics.") + (
+        f"\n{more} more topics are not listed." if more > 0 else ""
+    )
     details = {
         "bytes": summary.size,
         "messages": summary.messages,
@@ -223,8 +240,10 @@ def _types(summary: RecordingSummary) -> dict[str, str]:
     return {t.topic: t.type for t in summary.topics}
 
 
-def _stats(file: str, summary: RecordingSummary, wanted: dict[str, list[str]], buckets: int) -> ToolAnswer:
-    lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary))
+def _stats(
+    file: str, summary: RecordingSummary, wanted: dict[str, list[str]], buckets: int, budget: Budget
+) -> ToolAnswer:
+    lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary), budget)
     span = max(summary.seconds, 1e-9)
     lines = [f"{file}: {summary.seconds:.1f} s in {buckets} windows of {span / buckets:.3g} s."]
     details: list[dict[str, Any]] = []
@@ -280,8 +299,10 @@ def _stats(file: str, summary: RecordingSummary, wanted: dict[str, list[str]], b
     )
 
 
-def _plot(file: str, summary: RecordingSummary, wanted: dict[str, list[str]], width: int) -> ToolAnswer:
-    lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary))
+def _plot(
+    file: str, summary: RecordingSummary, wanted: dict[str, list[str]], width: int, budget: Budget
+) -> ToolAnswer:
+    lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary), budget)
     if all(n == 0 for n in counts.values()):
         raise ToolFailure(f"No message of {', '.join(counts)} in {file}.")
     image = png_bytes(draw_chart(lines_found, max(summary.seconds, 1e-3), width, max(160, width // 2)))
@@ -308,7 +329,13 @@ def _plot(file: str, summary: RecordingSummary, wanted: dict[str, list[str]], wi
 
 
 def _messages(
-    file: str, summary: RecordingSummary, at: float | None, window: float, topics: list[str] | None
+    file: str,
+    summary: RecordingSummary,
+    *,
+    at: float | None,
+    window: float,
+    topics: list[str] | None,
+    budget: Budget,
 ) -> ToolAnswer:
     if at is None:
         raise ToolFailure(
@@ -327,7 +354,7 @@ def _messages(
     total = 0
     lines = [f"{file}: messages from {max(0.0, at - window):g} to {at + window:g} s."]
     used = len(lines[0])
-    for topic, log_time, message in decoded_messages(summary.path, topics, low, high):
+    for topic, log_time, message in decoded_messages(summary.path, topics, low, high, budget):
         total += 1
         if len(shown) >= MAX_MESSAGES:
             continue
@@ -357,77 +384,57 @@ def _messages(
 # --- map ----------------------------------------------------------------------------------------------------
 
 
-def _pose_of(message: dict[str, Any]) -> Pose2D | None:
-    pose: Any = message.get("pose")
-    if isinstance(pose, dict) and isinstance(pose.get("pose"), dict):
-        pose = pose["pose"]  # Odometry, PoseWithCovarianceStamped
-    if not isinstance(pose, dict):
-        return None
-    position = pose.get("position")
-    if not isinstance(position, dict):
-        return None
-    x, y = position.get("x"), position.get("y")
-    if (
-        not isinstance(x, int | float)
-        or not isinstance(y, int | float)
-        or not (math.isfinite(x) and math.isfinite(y))
-    ):
-        return None
-    return Pose2D(float(x), float(y), yaw_of(pose.get("orientation")))
-
-
-def _map(file: str, summary: RecordingSummary, map_topic: str, path_topic: str, max_size: int) -> ToolAnswer:
+def _map(
+    file: str,
+    summary: RecordingSummary,
+    *,
+    map_topic: str,
+    path_topic: str,
+    budget: Budget,
+    max_size: int = PICTURE_SIZE,
+) -> ToolAnswer:
     known = {t.topic for t in summary.topics}
     if map_topic not in known:
         raise ToolFailure(
             f"{map_topic} is not in this recording (map_topic); its topics: {', '.join(sorted(known))}."
         )
     grid_message: dict[str, Any] | None = None
-    points: list[Pose2D] = []
-    path_frame = ""
-    wanted = [map_topic] + ([path_topic] if path_topic in known else [])
-    for topic, _, message in decoded_messages(summary.path, wanted):
+    tf_topics = [t.topic for t in summary.topics if t.type.replace("/msg/", "/") == "tf2_msgs/TFMessage"]
+    wanted = list(dict.fromkeys([map_topic, *([path_topic] if path_topic in known else []), *tf_topics]))
+    reader = PathReader(path_topic)
+    for topic, log_time, message in decoded_messages(summary.path, wanted, budget=budget):
         if topic == map_topic:
             grid_message = message
         else:
-            pose = _pose_of(message)
-            if pose is not None:
-                points.append(pose)
-                header = message.get("header")
-                path_frame = str(header.get("frame_id", "")).lstrip("/") if isinstance(header, dict) else ""
+            reader.feed(topic, log_time, message)
     if grid_message is None:
         raise ToolFailure(f"No message on {map_topic} in {file}.")
     try:
         grid = decode_grid(grid_message)
     except MapError as exc:
         raise ToolFailure(f"{map_topic}: {exc}") from None
+    found = reader.path(grid.frame_id)
+    points = found.poses
     step = max(1, len(points) // 2000)
     path = [(p.x, p.y) for p in points[::step]]
     overlay = Overlay(robot=points[-1] if points else None, path=path)
     picture = draw_map(grid, max_size=max_size, overlay=overlay)
-    notes = []
-    if path_topic not in known:
-        notes.append(f"{path_topic} is not in the recording: no path drawn.")
-    elif path_frame and grid.frame_id and path_frame != grid.frame_id:
-        notes.append(
-            f"The path is in {path_frame!r} and the map in {grid.frame_id!r}; drawn as if they coincided."
-        )
+    heard = any(t.topic == path_topic and t.timing.count for t in summary.topics)
+    note = found.note if heard else f"{path_topic} has no message in the recording: no path drawn."
+    note = note if path_topic in known else f"{path_topic} is not in the recording: no path drawn."
     travelled = sum(math.dist(a, b) for a, b in itertools.pairwise(path))
+    where = (
+        f", from ({points[0].x:.2f}, {points[0].y:.2f}) to ({points[-1].x:.2f}, {points[-1].y:.2f}) in "
+        f"{grid.frame_id or 'the map frame'}"
+        if points
+        else ""
+    )
     text = (
         f"{file}: {map_topic} ({grid.width}x{grid.height} cells of {grid.resolution:g} m) with "
-        f"{len(points)} poses "
-        f"of {path_topic} ({travelled:.2f} m driven)"
-        + (f", last at ({points[-1].x:.2f}, {points[-1].y:.2f})" if points else "")
-        + "."
-    )
-    if notes:
-        text += " " + " ".join(notes)
-    details = {
-        "poses": len(points),
-        "metres": round(travelled, 3),
-        "map_frame": grid.frame_id,
-        "path_frame": path_frame,
-    }
+        f"{len(points)} poses of {path_topic} ({travelled:.2f} m driven){where}."
+    ) + (f" {note}" if note else "")
+    details = {"poses": len(points), "metres": round(travelled, 3), "map_frame": grid.frame_id}
+    details |= {"path_frame": found.frame, "placed": not found.note}
     return ToolAnswer(
         text=text,
         data=ReadRecordingAnswer(file=file, mode="map", details=details),

@@ -17,6 +17,7 @@ from rosbridge_mcp_server.robot.recording.recorder import (
     choose_topics,
     record_topics,
 )
+from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 
 __all__ = ["SPEC", "RecordAnswer", "run"]
@@ -30,7 +31,7 @@ _ENDINGS = {
     "duration": "its time was up",
     "stopped": "it was stopped",
     "size": "it reached the size cap",
-    "disk": "the disk was nearly full (it stops with 32 MB left so the file can be finished)",
+    "disk": "the disk neared its 32 MB floor (all recordings together stop above it: each file is whole)",
 }
 
 
@@ -120,7 +121,7 @@ async def run(
         await ctx.report_progress(
             round(min(seconds, duration), 1),
             duration,
-            f"{seconds:.0f} of {duration:g} s, {messages} messages, {written / 1e6:.1f} MB",
+            f"{seconds:.0f} of {duration:g} s, {counted(messages, 'message')}, {size_text(written)}",
         )
 
     stop_event = ctx.robot.recordings.add(path.name)
@@ -178,8 +179,8 @@ def _text(answer: RecordAnswer, result: RecordingResult) -> str:
     why = _ENDINGS.get(answer.ended, answer.ended)
     total = sum(t["messages"] for t in answer.topics)
     lines = [
-        f"Recorded {answer.file} ({answer.bytes / 1e6:.1f} MB, {answer.seconds:g} s, {total} messages) in "
-        f"{str(result.path.parent)!r}; it ended because {why}."
+        f"Recorded {answer.file} ({size_text(answer.bytes)}, {answer.seconds:g} s, "
+        f"{counted(total, 'message')}) in {str(result.path.parent)!r}; it ended because {why}."
     ]
     if result.finish_error:
         lines.append(

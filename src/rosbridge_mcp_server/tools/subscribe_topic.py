@@ -8,6 +8,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.pictures.summary import FieldPathError, select_fields, summarize
 from rosbridge_mcp_server.robot.listening import read_topic
+from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -95,7 +96,8 @@ async def run(
 
     async def progress(done: int) -> None:
         if wanted_count > 1:
-            await ctx.report_progress(done, wanted_count, f"{done} of {wanted_count} messages from {name}")
+            so_far = f"{done} of {wanted_count} messages" if duration is None else counted(done, "message")
+            await ctx.report_progress(done, wanted_count, f"{so_far} from {name}")
 
     name = absolute_name(topic, "topic")
     readout = await read_topic(
@@ -111,6 +113,13 @@ async def run(
         on_message=progress,
     )
     heard = readout.heard
+    if duration is not None and len(heard.messages) < wanted_count:
+        # The duration ended before the count: the listen is done, so its progress ends at its total.
+        await ctx.report_progress(
+            wanted_count,
+            wanted_count,
+            f"{counted(len(heard.messages), 'message')} from {name} in {duration:g} s",
+        )
     received: list[ReceivedMessage] = []
     for item in heard.messages:
         body: dict[str, Any] = item.message
@@ -153,7 +162,7 @@ def _text(answer: SubscribeAnswer, timeout: float) -> str:
         rate = f", ~{answer.rate_hz:g} Hz" if answer.rate_hz else ""
         span = answer.messages[-1].received - answer.messages[0].received
         lines.append(
-            f"{count} message{'s' if count != 1 else ''} on {answer.topic} ({answer.message_type})"
+            f"{counted(count, 'message')} on {answer.topic} ({answer.message_type})"
             f"{f' over {span:.2f} s' if count > 1 else ''}{rate}:"
         )
         limit = 600 if count <= _SHOWN_IN_FULL else 200

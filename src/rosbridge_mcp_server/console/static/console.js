@@ -22,6 +22,12 @@ const secret = (() => {
 
 const $ = (id) => document.getElementById(id);
 
+// Every time on the page in one form: 24-hour local time, HH:MM:SS (the server's down_since is written so too).
+function clock(date) {
+  const two = (n) => String(n).padStart(2, "0");
+  return `${two(date.getHours())}:${two(date.getMinutes())}:${two(date.getSeconds())}`;
+}
+
 function el(tag, text, className) {
   const node = document.createElement(tag);
   if (text !== undefined && text !== null) node.textContent = String(text);
@@ -131,7 +137,7 @@ function renderAudit(entries) {
     // "e-stop released" is good news: not in the red of refusals and of the e-stop itself.
     const kind = outcome.startsWith("e-stop released") ? "released" : outcome.split(/[: ]/)[0];
     item.append(el("span", outcome, `outcome ${kind}`), " ");
-    item.append(el("span", (entry.time || "").slice(11, 23), "mono"), " ");
+    if (entry.time) item.append(el("span", clock(new Date(entry.time)), "mono time"), " ");
     if (entry.robot) item.append(el("span", `[${entry.robot}] `));
     item.append(el("strong", entry.tool), " ", el("span", entry.name || "", "mono"), " ");
     if (entry.caller) item.append(el("span", `(by ${entry.caller}) `));
@@ -359,7 +365,7 @@ async function estop() {
   } catch (error) {
     failure = `the console server did not answer (${error})`;
   }
-  const time = new Date().toLocaleTimeString();
+  const time = clock(new Date());
   shown.hidden = false;
   if (failure) {
     shown.classList.add("failed");

@@ -65,6 +65,8 @@ class RosGraph:
         self.unknown_topic = topics.unknown_topic
         self.remember_publishing = topics.remember_publishing
         self.topic_details = topics.topic_details
+        self.subscribers = topics.subscribers
+        self.recent_subscribers = topics.recent_subscribers
         self.recent_topics = topics.recent_topics
 
         self.service_names = services.service_names

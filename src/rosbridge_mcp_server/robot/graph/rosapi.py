@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosInfo
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.messages import TypeDef
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
+from rosbridge_mcp_server.robot.wording import full_stop
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -63,6 +65,8 @@ class ConnectionKnowledge:
     # The last node list and topic list (name, type) this connection saw, each with when (the graph's clock).
     nodes_seen: tuple[float, tuple[str, ...]] | None = None
     topics_seen: tuple[float, tuple[tuple[str, str], ...]] | None = None
+    # Topics last seen with subscribers: when, and who.
+    subscribers_seen: dict[str, tuple[float, tuple[str, ...]]] = field(default_factory=dict)
 
 
 class Rosapi:
@@ -114,16 +118,18 @@ class Rosapi:
             values = await self.client.call_service(service, args or {})
         except ServiceError as exc:
             if is_missing_service(exc):
-                raise ServiceError(service, f"{exc.message}. {ROSAPI_HINT}") from exc
+                raise ServiceError(service, f"{full_stop(exc.message)} {ROSAPI_HINT}") from exc
             raise
         return values if isinstance(values, dict) else {}
 
 
 def strings(value: Any) -> list[str]:
-    """The strings of a rosapi list field (nothing when it is not a list)."""
+    """The strings of a rosapi list field (nothing when it is not a list): names and types as the graph gives
+    them, shown as robot text (``robot/text.py``: escaped and capped; a real ROS name is unchanged, and one
+    holding a newline or a bidi override never was a name anything could be called by)."""
     if not isinstance(value, list):
         return []
-    return [item for item in value if isinstance(item, str)]
+    return [shown(item, NAME_CHARS) for item in value if isinstance(item, str)]
 
 
 async def bounded_map(

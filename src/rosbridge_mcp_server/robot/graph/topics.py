@@ -86,6 +86,23 @@ class Topics:
         """Note that this connection now publishes ``topic`` as ``msg_type``."""
         self._known.publishing[topic] = msg_type
 
+    async def subscribers(self, topic: str) -> tuple[str, ...]:
+        """The nodes subscribed to ``topic`` now (none for a topic not in the graph)."""
+        values = await self._rosapi.call("subscribers", {"topic": topic})
+        found = tuple(strings(values.get("subscribers")))
+        if found:
+            self._known.subscribers_seen[topic] = (self._rosapi.clock(), found)
+        else:
+            self._known.subscribers_seen.pop(topic, None)
+        return found
+
+    def recent_subscribers(self, topic: str, max_age: float) -> tuple[str, ...] | None:
+        """The subscribers this connection saw on ``topic`` within *max_age* seconds, if it saw any."""
+        seen = self._known.subscribers_seen.get(topic)
+        if seen is None or self._rosapi.clock() - seen[0] > max_age:
+            return None
+        return seen[1]
+
     async def topic_details(self, topic: str) -> TopicDetails:
         """Type, publishers and subscribers of ``topic`` (all empty when it is not in the graph)."""
         topic_type, publishers, subscribers = await asyncio.gather(

@@ -50,8 +50,12 @@ def _inside(directory: Path, given: str) -> Path:
 
 
 def resolve_recording(directory: Path, given: str) -> Path:
-    """An existing file inside ``directory``; :class:`PathRefused` otherwise."""
+    """An existing file inside ``directory``; :class:`PathRefused` otherwise. A name without its ``.mcap``
+    (``drive1``, as ``record`` was given it) finds ``drive1.mcap``."""
     target = _inside(directory, given.strip())
+    if not target.is_file() and target.suffix != ".mcap":
+        named = _inside(directory, given.strip() + ".mcap")
+        target = named if named.is_file() else target
     if not target.is_file():
         raise PathRefused(f"There is no recording {given!r} in {str(directory.resolve())!r}").advise(
             Advice.NO_RECORDING

@@ -1,11 +1,16 @@
-"""What a recording holds, read with the ``mcap`` package: its summary, a field over time, the messages
-around a moment.
+"""What a recording holds, read within a budget: its summary, a field over time, the messages around a moment.
+
+Every file is read through :mod:`rosbridge_mcp_server.mcapfile`, which holds what a file declares (sizes,
+counts, offsets, nesting) to the file's real size and to one call's ``Budget`` (:func:`read_budget`: the
+decode budget of pictures, ``robot/budget.py``'s ``DECODE_BUDGET``, and :data:`READ_SECONDS`): a file that
+would cost more, or is malformed, is refused with what is wrong.
 
 The summary comes from the file's summary section (schemas, channels, statistics, chunk indexes) and its
 message indexes (each chunk's log times per channel, read without decompressing a chunk), so a 1 GB recording
 is summarised by reading a few kilobytes. A file without a summary section (a recorder that was killed) is
-read through once. Messages are decoded by their schemas: ``ros2msg``/``cdr`` with ``mcap-ros2-support``,
-``ros1msg``/``ros1`` with ``mcap-ros1-support``, ``json`` as JSON; whatever the file, whoever wrote it.
+read through once; when it is cut off, what came before counts. Messages are decoded by their schemas:
+``ros2msg``/``cdr`` with ``mcap-ros2-support``, ``ros1msg``/``ros1`` with ``mcap-ros1-support``, ``json`` as
+JSON; whatever the file, whoever wrote it.
 """
 
 from __future__ import annotations
@@ -13,34 +18,52 @@ from __future__ import annotations
 import base64
 import json
 import math
-import struct
 from array import array
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
-from rosbridge_mcp_server.robot.recording.files import MCAP_MAGIC
+from rosbridge_mcp_server.mcapfile import (
+    INDEX_ENTRY_COST,
+    MAX_NESTING,
+    Budget,
+    CutOff,
+    McapFile,
+    OverBudget,
+    RecordingProblem,
+    Summary,
+    schema_problem,
+)
+from rosbridge_mcp_server.robot.budget import DECODE_BUDGET
 from rosbridge_mcp_server.robot.recording.timing import TopicTiming, timing_of
 from rosbridge_mcp_server.robot.series import FieldError, Series, unit_of, value_at
 
 __all__ = [
+    "READ_SECONDS",
     "NotARecording",
     "RecordingSummary",
     "TopicSummary",
     "decoded_messages",
     "field_series",
     "plain",
+    "read_budget",
     "summarize_recording",
 ]
 
-_MESSAGE_INDEX = 0x07
-#: A file without a summary section is read through at most this far.
-MAX_SCAN_BYTES = 2 * 1024**3
+#: The seconds one call may spend reading a recording.
+READ_SECONDS = 30.0
+#: Bytes one sample of a field series holds (its time and value as Python floats in two lists).
+SAMPLE_COST = 64
 
 
-class NotARecording(ValueError):
-    """The file is not an MCAP file, or is damaged; ``str()`` says what was found."""
+class NotARecording(RecordingProblem):
+    """The file is not an MCAP file, is damaged, or would cost more than the budget; ``str()`` says what."""
+
+
+def read_budget() -> Budget:
+    """One call's budget: the memory a picture may take, and :data:`READ_SECONDS`."""
+    return Budget(DECODE_BUDGET, READ_SECONDS)
 
 
 @dataclass(frozen=True)
@@ -66,134 +89,118 @@ class RecordingSummary:
     messages: int
     topics: tuple[TopicSummary, ...]
     indexed: bool  #: whether it came from the summary and index (False: the file was read through)
+    damaged: str = ""  #: where a file read through breaks off, when it does
+    note: str = ""  #: what the summary could not work out within the budget
 
     @property
     def seconds(self) -> float:
         return max(0, self.end_ns - self.start_ns) / 1e9
 
 
-def _check_magic(handle: IO[bytes], path: Path) -> None:
-    head = handle.read(len(MCAP_MAGIC))
-    if head != MCAP_MAGIC:
-        shown = head[:8]
-        what = "an empty file" if not head else f"a file starting with {shown!r}"
-        if head.startswith(b"#ROSBAG"):
-            what = "a ROS 1 bag (.bag), not MCAP; convert it with `mcap convert`"
-        elif head.startswith(b"SQLite format"):
-            what = "a SQLite file (a ROS 2 .db3 bag?), not MCAP"
-        raise NotARecording(
-            f"{path.name} is not an MCAP recording: it is {what} (MCAP starts with \\x89MCAP0)."
+def _opened(path: Path, budget: Budget | None) -> tuple[Any, McapFile]:
+    handle = path.open("rb")
+    try:
+        return handle, McapFile(handle, path.stat().st_size, budget or read_budget(), path.name)
+    except BaseException:
+        handle.close()
+        raise
+
+
+def summarize_recording(path: Path, budget: Budget | None = None) -> RecordingSummary:
+    """The summary of the MCAP file at ``path``; :class:`NotARecording` with the reason when it is not one or
+    cannot be read within the budget."""
+    try:
+        handle, mcap = _opened(path, budget)
+        with handle:
+            mcap.header()
+            summary = mcap.summary()
+            if summary is None or summary.statistics is None or not summary.chunk_indexes:
+                return _scan(path, mcap)
+            return _indexed(path, mcap, summary)
+    except RecordingProblem as exc:
+        raise _refusal(path, exc) from None
+
+
+def _refusal(path: Path, problem: RecordingProblem) -> NotARecording:
+    text = str(problem)
+    return NotARecording(f"{text}." if text.startswith(path.name) else f"{path.name}: {text}.")
+
+
+def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
+    assert summary.statistics is not None
+    start, end = summary.statistics.start, summary.statistics.end
+    note = ""
+    try:
+        times = mcap.message_times(summary)
+        timings = {cid: timing_of(times.get(cid, array("q")), start) for cid in summary.channels}
+    except OverBudget as exc:
+        # Too many messages to time each one: the counts the file declares, and mean rates over its span.
+        note = f"{exc}; counts and mean rates are the file's statistics, gaps are not known"
+        declared, span = summary.statistics.channel_counts, max(end - start, 0) / 1e9
+        timings = {cid: _counted(declared.get(cid, 0), span) for cid in summary.channels}
+    topics = [
+        TopicSummary(
+            channel.topic,
+            schema.name if (schema := summary.schemas.get(channel.schema_id)) else "",
+            channel.message_encoding,
+            timings[cid],
         )
-
-
-def summarize_recording(path: Path) -> RecordingSummary:
-    """The summary of the MCAP file at ``path``; :class:`NotARecording` with the reason when it is not one."""
-    from mcap.exceptions import McapError  # noqa: PLC0415
-    from mcap.reader import SeekingReader  # noqa: PLC0415
-
-    size = path.stat().st_size
-    with path.open("rb") as handle:
-        _check_magic(handle, path)
-        handle.seek(0)
-        try:
-            reader = SeekingReader(handle)
-            header = reader.get_header()
-            summary = reader.get_summary()
-        except (McapError, struct.error, ValueError, EOFError) as exc:
-            summary = None
-            header = None
-            damaged = str(exc)
-        else:
-            damaged = ""
-        if summary is None or summary.statistics is None or not summary.chunk_indexes:
-            return _scan(path, size, header, damaged)
-        times: dict[int, list[int]] = {cid: [] for cid in summary.channels}
-        for chunk in summary.chunk_indexes:
-            _index_times(handle, chunk, times)
-        start, end = summary.statistics.message_start_time, summary.statistics.message_end_time
-        topics = []
-        for cid, channel in sorted(summary.channels.items(), key=lambda kv: kv[1].topic):
-            schema = summary.schemas.get(channel.schema_id)
-            topics.append(
-                TopicSummary(
-                    channel.topic,
-                    schema.name if schema else "",
-                    channel.message_encoding,
-                    timing_of(times.get(cid, []), start),
-                )
-            )
-        return RecordingSummary(
-            path,
-            size,
-            header.profile if header else "",
-            header.library if header else "",
-            start,
-            end,
-            summary.statistics.message_count,
-            tuple(topics),
-            indexed=True,
-        )
-
-
-def _index_times(handle: IO[bytes], chunk: Any, times: dict[int, list[int]]) -> None:
-    """Every message's log time of one chunk, per channel, from its message index records."""
-    if not chunk.message_index_offsets:
-        return
-    begin = min(chunk.message_index_offsets.values())
-    handle.seek(begin)
-    data = handle.read(chunk.message_index_length)
-    pos = 0
-    while pos + 9 <= len(data):
-        opcode = data[pos]
-        (length,) = struct.unpack_from("<Q", data, pos + 1)
-        body = pos + 9
-        if opcode == _MESSAGE_INDEX and length >= 6:
-            (channel,) = struct.unpack_from("<H", data, body)
-            (records_len,) = struct.unpack_from("<I", data, body + 2)
-            count = records_len // 16
-            values = struct.unpack_from(f"<{count * 2}Q", data, body + 6)
-            times.setdefault(channel, []).extend(values[0::2])
-        pos = body + length
-
-
-def _scan(path: Path, size: int, header: Any, damaged: str) -> RecordingSummary:
-    """A file without a usable summary section, read through (messages up to where it breaks off)."""
-    from mcap.exceptions import McapError  # noqa: PLC0415
-    from mcap.reader import NonSeekingReader  # noqa: PLC0415
-
-    times: dict[str, list[int]] = {}
-    types: dict[str, tuple[str, str]] = {}
-    read = 0
-    with path.open("rb") as handle:
-        try:
-            for schema, channel, message in NonSeekingReader(handle, validate_crcs=False).iter_messages(
-                log_time_order=False
-            ):
-                times.setdefault(channel.topic, []).append(message.log_time)
-                types.setdefault(channel.topic, (schema.name if schema else "", channel.message_encoding))
-                read += len(message.data)
-                if read > MAX_SCAN_BYTES:
-                    break
-        except (McapError, struct.error, ValueError, EOFError):
-            pass  # a file cut off mid-record: what came before counts
-    if not times and damaged:
-        raise NotARecording(f"{path.name} starts like MCAP but cannot be read: {damaged}")
-    every = [t for ts in times.values() for t in ts]
-    start, end = (min(every), max(every)) if every else (0, 0)
-    topics = tuple(
-        TopicSummary(topic, types[topic][0], types[topic][1], timing_of(ts, start))
-        for topic, ts in sorted(times.items())
-    )
+        for cid, channel in sorted(summary.channels.items(), key=lambda kv: kv[1].topic)
+    ]
     return RecordingSummary(
         path,
-        size,
-        getattr(header, "profile", ""),
-        getattr(header, "library", ""),
+        mcap.size,
+        mcap.profile,
+        mcap.library,
         start,
         end,
-        len(every),
-        topics,
-        indexed=False,
+        summary.statistics.message_count,
+        tuple(topics),
+        indexed=True,
+        note=note,
+    )
+
+
+def _counted(count: int, span: float) -> TopicTiming:
+    rate = round((count - 1) / span, 2) if count > 1 and span > 0 else None
+    return TopicTiming(count, None, None, rate, ())
+
+
+def _scan(path: Path, mcap: McapFile) -> RecordingSummary:
+    """A file without a usable summary section, read through (messages up to where it breaks off)."""
+    times: dict[int, array[int]] = {}
+    damaged = ""
+    count = 0
+    try:
+        for channel, log_time, _ in mcap.messages(wanted=set()):
+            times.setdefault(channel.id, array("q")).append(log_time)
+            count += 1
+            if count % 65536 == 0:
+                mcap.budget.check_bytes(
+                    f"{path.name} holds over {count} messages; their times would take",
+                    count * INDEX_ENTRY_COST,
+                )
+    except CutOff as exc:
+        if not count:
+            raise
+        damaged = str(exc)
+    every = [t for ts in times.values() for t in (min(ts), max(ts))]
+    start, end = (min(every), max(every)) if every else (0, 0)
+    topics = []
+    for cid, ts in times.items():
+        known = mcap.channels.get(cid)
+        schema = mcap.schemas.get(known.schema_id) if known else None
+        topics.append(
+            TopicSummary(
+                known.topic if known else f"(channel {cid})",
+                schema.name if schema else "",
+                known.message_encoding if known else "",
+                timing_of(ts, start),
+            )
+        )
+    topics.sort(key=lambda topic: topic.topic)
+    return RecordingSummary(
+        path, mcap.size, mcap.profile, mcap.library, start, end, count, tuple(topics), False, damaged
     )
 
 
@@ -239,41 +246,97 @@ def plain(value: Any) -> Any:
 
 
 def decoded_messages(
-    path: Path, topics: Sequence[str] | None = None, start_ns: int | None = None, end_ns: int | None = None
+    path: Path,
+    topics: Sequence[str] | None = None,
+    start_ns: int | None = None,
+    end_ns: int | None = None,
+    budget: Budget | None = None,
 ) -> Iterator[tuple[str, int, Any]]:
-    """(topic, log time in ns, message as plain data) in log-time order; undecodable messages are skipped
-    with a ``ValueError`` naming the encoding when no message could be decoded."""
-    from mcap.reader import make_reader  # noqa: PLC0415
+    """(topic, log time in ns, message as plain data) in the file's order; :class:`NotARecording` naming the
+    problem when a message cannot be decoded, or the file not read within the budget."""
+    try:
+        handle, mcap = _opened(path, budget)
+        with handle:
+            summary = mcap.summary()
+            factories = _decoder_factories()
+            wanted = None
+            if summary is not None and topics:
+                wanted = {cid for cid, ch in summary.channels.items() if ch.topic in topics}
+            decoders: dict[int, Any] = {}
+            for channel, log_time, data in mcap.messages(wanted, start_ns, end_ns, summary):
+                if data is None or (topics and channel.topic not in topics):
+                    continue
+                mcap.budget.check_time()
+                decoder = decoders.get(channel.id)
+                if decoder is None:
+                    decoder = decoders[channel.id] = _decoder_for(factories, mcap, channel)
+                yield channel.topic, log_time, _decoded(decoder, data, channel.topic, log_time)
+    except RecordingProblem as exc:
+        raise _refusal(path, exc) from None
 
-    factories = _decoder_factories()
-    with path.open("rb") as handle:
-        _check_magic(handle, path)
-        handle.seek(0)
-        reader = make_reader(handle, decoder_factories=factories)
-        decoders: dict[int, Any] = {}
-        for schema, channel, message in reader.iter_messages(
-            topics=list(topics) if topics else None, starting_at=start_ns, ending_before=end_ns
-        ):
-            decoder = decoders.get(channel.id)
-            if decoder is None:
-                decoder = _decoder_for(factories, schema, channel)
-                decoders[channel.id] = decoder
-            yield channel.topic, message.log_time, plain(decoder(message.data))
+
+def _decoded(decoder: Any, data: bytes, topic: str, log_time: int) -> Any:
+    try:
+        message = plain(decoder(data))
+    except RecursionError:
+        message = None
+    except Exception as exc:  # a message its own schema does not describe: the file's fault, worded
+        raise RecordingProblem(
+            f"the message on {topic[:100]} at log time {log_time} ns cannot be decoded: "
+            f"{type(exc).__name__}: {str(exc)[:200]}"
+        ) from None
+    if message is None or _depth(message) > MAX_NESTING:
+        raise RecordingProblem(
+            f"the message on {topic[:100]} at log time {log_time} ns nests over {MAX_NESTING} levels deep; "
+            "it was not decoded"
+        )
+    return message
 
 
-def _decoder_for(factories: list[Any], schema: Any, channel: Any) -> Any:
+def _depth(value: Any) -> int:
+    """How deep lists and dicts nest in ``value``, counted without recursion (stopping past the cap)."""
+    deepest = 0
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict | list):
+            deepest = max(deepest, depth)
+            if deepest > MAX_NESTING:
+                return deepest
+            stack.extend((child, depth + 1) for child in (item.values() if isinstance(item, dict) else item))
+    return deepest
+
+
+def _decoder_for(factories: list[Any], mcap: McapFile, channel: Any) -> Any:
     if channel.message_encoding == "json":
         return json.loads
+    schema = mcap.schemas.get(channel.schema_id)
+    if schema is not None and (problem := schema_problem(schema)):
+        raise RecordingProblem(f"messages on {channel.topic[:100]} cannot be read: {problem}")
     for factory in factories:
-        decoder = factory.decoder_for(channel.message_encoding, schema)
+        try:
+            decoder = factory.decoder_for(channel.message_encoding, schema)
+        except RecursionError:
+            decoder = None
+        except Exception as exc:  # the decoder cannot parse the schema: the file's fault, worded
+            raise RecordingProblem(
+                f"the schema of {channel.topic[:100]} cannot be parsed: "
+                f"{type(exc).__name__}: {str(exc)[:200]}"
+            ) from None
         if decoder is not None:
             return decoder
     encoding = f"{channel.message_encoding} ({schema.encoding if schema else 'no schema'})"
-    raise NotARecording(f"messages on {channel.topic} are {encoding}, which this reader cannot decode")
+    raise RecordingProblem(
+        f"messages on {channel.topic[:100]} are {encoding[:100]}, which this reader cannot decode"
+    )
 
 
 def field_series(
-    path: Path, start_ns: int, wanted: dict[str, list[str]], types: dict[str, str]
+    path: Path,
+    start_ns: int,
+    wanted: dict[str, list[str]],
+    types: dict[str, str],
+    budget: Budget | None = None,
 ) -> tuple[list[Series], dict[str, int]]:
     """Each topic's fields over the whole recording, times in seconds from ``start_ns``.
 
@@ -283,8 +346,16 @@ def field_series(
         (t, p): Series(t, p, unit_of(types.get(t, ""), p)) for t, paths in wanted.items() for p in paths
     }
     counts = dict.fromkeys(wanted, 0)
-    for topic, log_time, message in decoded_messages(path, list(wanted)):
+    budget = budget or read_budget()
+    for topic, log_time, message in decoded_messages(path, list(wanted), budget=budget):
         counts[topic] += 1
+        if counts[topic] % 65536 == 0:
+            samples = sum(len(line.times) for line in series.values())
+            if samples * SAMPLE_COST > budget.memory:
+                raise _refusal(
+                    path,
+                    RecordingProblem(f"its fields hold over {samples} samples, over the budget of one call"),
+                )
         at = (log_time - start_ns) / 1e9
         for field_path in wanted[topic]:
             try:

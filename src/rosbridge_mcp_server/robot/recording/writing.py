@@ -2,8 +2,13 @@
 
 Each message is encoded (:mod:`.encoding`) and added on the writer thread. The file ends cleanly — its summary
 and index written, readable by any MCAP reader — when the recording ends for any reason: its time is up, the
-size cap is reached, the disk is nearly full (checked every half second: recording stops while
-:data:`DISK_RESERVE` bytes are still free, so the summary fits), a write fails, or it is stopped.
+size cap is reached, the disk is nearly full, a write fails, or it is stopped.
+
+The disk is one budget for every recording on it (:class:`DiskBudget`, one per filesystem in this process):
+before each message is written, the free space less what every running recording may still write without
+asking (its chunk not yet on disk, its index and summary: :meth:`DiskBudget.allows`) must stay above
+:data:`DISK_RESERVE`. Sixteen recordings at once stop together above the floor instead of each checking
+the disk on its own, every half second, while the others fill it.
 """
 
 from __future__ import annotations
@@ -13,14 +18,13 @@ import logging
 import os
 import queue
 import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from rosbridge_mcp_server.robot.recording.encoding import MessageCodec
 
-__all__ = ["DISK_RESERVE", "McapFileWriter", "WriterState"]
+__all__ = ["DISK_RESERVE", "DiskBudget", "McapFileWriter", "WriterState", "shared_disk"]
 
 _log = logging.getLogger(__name__)
 
@@ -34,6 +38,61 @@ MAX_PENDING = 2000
 CHUNK_SIZE = 1024 * 1024
 
 FreeBytes = Callable[[], int]
+
+
+class DiskBudget:
+    """The free space of one filesystem, shared by every recording written on it (thread-safe: each writer
+    asks from its own thread)."""
+
+    def __init__(self, free_bytes: FreeBytes, floor: int = DISK_RESERVE) -> None:
+        self.free_bytes, self.floor = free_bytes, floor
+        self._lock = threading.Lock()
+        #: What each running writer may still put on the disk without asking: its open chunk (a chunk and a
+        #: message at least), the chunk's message index, and the summary at the end.
+        self._held: dict[int, int] = {}
+
+    def join(self, writer: int) -> None:
+        with self._lock:
+            self._held[writer] = 2 * CHUNK_SIZE + SUMMARY_RESERVE
+
+    def leave(self, writer: int) -> bool:
+        """The writer has finished its file; whether any writer is left."""
+        with self._lock:
+            self._held.pop(writer, None)
+            return bool(self._held)
+
+    def allows(self, writer: int, size: int) -> bool:
+        """Whether ``writer`` may add a message of ``size`` bytes with every recording's pending writes still
+        above the floor."""
+        with self._lock:
+            held = max(self._held.get(writer, 0), 2 * CHUNK_SIZE + SUMMARY_RESERVE + 2 * size)
+            self._held[writer] = held
+            try:
+                free = self.free_bytes()
+            except OSError:
+                return True  # the disk cannot be asked: the write itself will say
+            return free - sum(self._held.values()) - size >= self.floor
+
+
+_DISKS: dict[int, DiskBudget] = {}
+_DISKS_LOCK = threading.Lock()
+
+
+def shared_disk(fd: int, free_bytes: FreeBytes) -> DiskBudget:
+    """The budget of the filesystem ``fd`` is on, shared by every recording on it in this process (the disk
+    is the process's, whichever robot or session records)."""
+    device = os.fstat(fd).st_dev
+    with _DISKS_LOCK:
+        budget = _DISKS.get(device)
+        if budget is None:
+            budget = _DISKS[device] = DiskBudget(free_bytes)
+        return budget
+
+
+def _leave_disk(fd_device: int, budget: DiskBudget, writer: int) -> None:
+    with _DISKS_LOCK:
+        if not budget.leave(writer) and _DISKS.get(fd_device) is budget:
+            del _DISKS[fd_device]  # no recording on it: the next one asks afresh
 
 
 @dataclass
@@ -65,6 +124,9 @@ class McapFileWriter:
     ) -> None:
         from mcap.writer import CompressionType, Writer  # lazy: only recording needs mcap  # noqa: PLC0415
 
+        self._device = os.fstat(fd).st_dev
+        self._disk = shared_disk(fd, free_bytes)
+        self._disk.join(id(self))
         self._file = os.fdopen(fd, "wb")
         kind = CompressionType.ZSTD if compression == "zstd" else CompressionType.NONE
         self._writer = Writer(self._file, chunk_size=CHUNK_SIZE, compression=kind)
@@ -81,7 +143,6 @@ class McapFileWriter:
             )
         self.state = WriterState(written=dict.fromkeys(codecs, 0), times={t: [] for t in codecs})
         self._max_bytes = max_bytes
-        self._free = free_bytes
         self._on_stop = on_stop
         self._queue: queue.Queue[tuple[str, int, Any] | None] = queue.Queue()
         self._thread = threading.Thread(target=self._run, name="mcap-writer", daemon=True)
@@ -114,6 +175,8 @@ class McapFileWriter:
             with contextlib.suppress(OSError):
                 self._file.close()
             return exc.strerror or str(exc)
+        finally:
+            _leave_disk(self._device, self._disk, id(self))
         return None
 
     # --- the writer thread --------------------------------------------------------------------------------
@@ -125,7 +188,6 @@ class McapFileWriter:
                 self._on_stop()
 
     def _run(self) -> None:
-        checked = 0.0
         while True:
             item = self._queue.get()
             if item is None:
@@ -142,15 +204,9 @@ class McapFileWriter:
             if self.state.bytes_in + len(data) + SUMMARY_RESERVE > self._max_bytes:
                 self._stop("size")
                 continue
-            now = time.monotonic()
-            if now - checked >= 0.5:
-                checked = now
-                try:
-                    if self._free() < DISK_RESERVE + len(data):
-                        self._stop("disk")
-                        continue
-                except OSError:
-                    pass
+            if not self._disk.allows(id(self), len(data)):
+                self._stop("disk")
+                continue
             self._sequence += 1
             try:
                 self._writer.add_message(
