@@ -55,6 +55,8 @@ def test_a_fleet_file_gives_each_robot_its_url_headers_and_policy(tmp_path: Path
         ('[robots.a]\nurl = "ws://x:1"\npolicy = "missing.toml"\n', "does not exist"),
         ("robots = 3\n", "no robots"),
         ('[robot.a]\nurl = "ws://x:1"\n', "unknown key 'robot'"),
+        ('[robots.a]\nurl = "ws://x:1"\nnamespace = "robot 2"\n', "not a ROS namespace"),
+        ('[robots.a]\nurl = "ws://x:1"\nnamespace = 2\n', "namespace must be a string"),
     ],
 )
 def test_fleet_file_mistakes_are_named(tmp_path: Path, text: str, problem: str) -> None:
@@ -74,3 +76,21 @@ def test_a_robot_named_twice_or_without_url_is_refused(tmp_path: Path) -> None:
     fleet = load_fleet(BASE, robots=["a=ws://x:1"])
     with pytest.raises(ConfigError, match="--demo runs one simulated robot"):
         demo_settings(True, fleet=fleet)
+
+
+def test_a_robot_of_the_fleet_may_carry_its_namespace_on_a_shared_bridge(tmp_path: Path) -> None:
+    """Two robots on one bridge: each entry's namespace (made absolute); an entry without one finds it."""
+    path = tmp_path / "fleet.toml"
+    path.write_text(
+        '[robots.one]\nurl = "ws://10.0.0.5:9090"\nnamespace = "robot1"\n\n'
+        '[robots.two]\nurl = "ws://10.0.0.5:9090"\nnamespace = "/robot2/"\n\n'
+        '[robots.root]\nurl = "ws://10.0.0.5:9090"\nnamespace = ""\n\n'
+        '[robots.any]\nurl = "ws://10.0.0.6:9090"\n'
+    )
+    fleet = dict(load_fleet(BASE, robots_file=str(path)))
+    assert [fleet[name].namespace for name in ("one", "two", "root", "any")] == [
+        "/robot1",
+        "/robot2",
+        "",
+        None,
+    ]

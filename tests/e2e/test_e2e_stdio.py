@@ -488,7 +488,7 @@ async def test_nav2_demo_over_stdio_answers_every_graph_tool_within_the_budget(d
         await server.request("initialize", hello)
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
         tools = (await server.request("tools/list"))["result"]["tools"]
-        assert len(json.dumps(tools, separators=(",", ":"))) <= 1_000 * len(tools)
+        assert len(json.dumps(tools, separators=(",", ":"))) <= 1_024 * len(tools)
         sep = ":" if dialect == "ros2" else "/"
         calls: list[tuple[str, dict[str, Any]]] = [
             ("list_topics", {}),

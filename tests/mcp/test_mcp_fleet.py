@@ -305,3 +305,37 @@ def test_the_calls_an_answer_suggests_name_the_robot_in_its_text_and_structured_
     assert named.structured_content == {"findings": [{"next": expected, "nodes": ["/amcl"]}], "count": 1}
     again = fleet.calls_on(named, "b", {"read_logs"})
     assert text_of(again) == text_of(named)
+
+
+async def test_robots_of_the_fleet_on_one_bridge_carry_their_namespaces(make_sim: Any) -> None:
+    """Two fleet entries on one bridge, namespace /robot1 and /robot2 (as the fleet file sets them): the
+    transform tool reads each robot's own tf without a namespace argument; a third entry on that bridge
+    without a namespace is answered each robot's call, naming the entry."""
+    shared = await make_sim(dialect="ros2", world="nav2", robots=2)
+    shared.nav2.robots[1].x += 1.0
+    base = Config()
+    entries = []
+    for name, namespace in (("one", "/robot1"), ("two", "/robot2"), ("any", None)):
+        config = replace(base, url=shared.url, namespace=namespace)
+        ros = RosbridgeClient(shared.url, request_timeout=5.0)
+        entries.append(Robot(name, config, RobotSession(ros, PolicyGuard(config.policy))))
+    server = build_fleet_server(entries, base)
+    async with Client(server, mode="legacy") as client:
+        for entry in entries:
+            await entry.session.client.wait_connected(WAIT)
+        found = {}
+        for name in ("one", "two"):
+            arguments = {"robot": name, "target_frame": "map", "source_frame": "base_link", "timeout": 5}
+            result = await client.call_tool("get_transform", arguments)
+            assert not result.is_error, text_of(result)
+            found[name] = result.structured_content or {}
+        arguments = {"robot": "any", "target_frame": "map", "source_frame": "base_link"}
+        several = await client.call_tool("get_transform", arguments)
+    assert several.is_error
+    calls = [line for line in text_of(several).splitlines() if line.startswith("→ ")]
+    assert [json.loads(line.split(" ", 2)[2]) for line in calls] == [
+        {**arguments, "namespace": namespace} for namespace in ("/robot1", "/robot2")
+    ], text_of(several)
+    assert found["one"]["namespace"] == "/robot1"
+    assert found["two"]["namespace"] == "/robot2"
+    assert abs(found["two"]["translation"]["x"] - found["one"]["translation"]["x"] - 1.0) < 0.05

@@ -244,3 +244,19 @@ async def test_every_nodes_parameters_follow_the_service_list_from_one_listing_t
     assert calls["/rosapi/services"] == 1
     assert calls["/dock_camera/list_parameters"] == 1
     assert calls["/controller_server/list_parameters"] == 1
+
+
+@pytest.mark.parametrize(
+    ("tool", "arguments", "expected"),
+    [
+        ("get_transform", {"target_frame": "map", "source_frame": "base_link"}, {"/rosapi/topic_type": 2}),
+        ("view_scan", {}, {"/rosapi/topic_type": 1}),
+        ("view_map", {"path_topic": "/plan", "scan_topic": "/scan"}, {"/rosapi/topic_type": 7}),
+    ],
+)
+async def test_a_robot_without_a_namespace_is_asked_nothing_more_about_namespaces(
+    session: Session, nav2: SimulatedRobot, tool: str, arguments: dict[str, Any], expected: dict[str, int]
+) -> None:
+    """The namespace is looked for only when the plain names are missing: the tf topics' types (and the
+    map's, plan's and scan's), nothing else."""
+    assert await asked(nav2, session, tool, arguments) == expected

@@ -276,3 +276,29 @@ async def test_every_call_the_readme_shows_fits_its_tool(readme: str) -> None:
     ]
     assert problems == [], "\n".join(problems)
     assert any(name == "read_logs" for name, _ in shown), shown
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_every_call_offered_for_robots_under_namespaces_is_valid_and_runs(
+    make_sim: Any, dialect: str
+) -> None:
+    """Two robots on one bridge (/robot1, /robot2): the tools that need one robot's names answer each robot's
+    call, and diagnose's next call for robot2's broken tf names its namespace; each fits and runs."""
+    fleet = await make_sim(dialect=dialect, world="nav2", robots=2)
+    fleet.nav2.navigator.speed = 8.0
+    async with open_session(fleet.url) as session:
+        texts = await answers_of(
+            session,
+            [
+                ("navigate_to", {"forward": 0.3}),
+                ("get_transform", {"target_frame": "map", "source_frame": "base_link"}),
+                ("view_map", {"around_robot": 3}),
+                ("view_scan", {}),
+            ],
+        )
+        fleet.nav2.robots[1].quiet.add("odom->base_footprint")
+        texts.append(text_of(await session.ok("diagnose", {"focus": "tf"})))
+        ran = await check_suggestions(session, texts)
+    assert {name for name, _ in ran} == {"navigate_to", "get_transform", "view_map", "view_scan"}, sorted(ran)
+    assert ("navigate_to", '{"forward": 0.3, "namespace": "/robot2"}') in ran, sorted(ran)

@@ -15,6 +15,10 @@ the URL from it). The fleet file::
     ca_file = "ca.pem"
     read_only = true
 
+    [robots.robot2]                       # one of several robots on one bridge
+    url = "ws://10.0.0.7:9090"
+    namespace = "/robot2"                 # its topics, actions and tf: /robot2/map, /robot2/tf, ...
+
 Robot names are what a model passes as ``robot``: letters, digits, ``_`` and ``-``.
 """
 
@@ -34,7 +38,8 @@ from rosbridge_mcp_server.safety.policy import PolicyError, load_policy
 __all__ = ["NAME_PATTERN", "load_fleet"]
 
 NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,31}$")
-_KEYS = {"url", "headers", "ca_file", "client_cert", "client_key", "policy", "read_only"}
+_NAMESPACE = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
+_KEYS = {"url", "headers", "ca_file", "client_cert", "client_key", "policy", "read_only", "namespace"}
 # A robot's settings in its table of the fleet file (its file source).
 _URL = Setting("--robot", key="url")
 _HEADERS = Setting("--header", key="headers")
@@ -73,6 +78,15 @@ def _check_name(name: str, source: str) -> None:
             f"{source}: robot name {name!r} must start with a letter and use letters, digits, _ and - "
             "(at most 32)"
         )
+
+
+def _namespace(text: str, where: str) -> str:
+    value = text.strip().rstrip("/")
+    if value and not _NAMESPACE.match(value if value.startswith("/") else f"/{value}"):
+        raise ConfigError(
+            f'{where}: namespace {text!r} is not a ROS namespace: give e.g. "/robot2" ("" for none)'
+        )
+    return value if not value or value.startswith("/") else f"/{value}"
 
 
 def _from_file(base: Config, path: Path) -> list[tuple[str, Config]]:
@@ -139,6 +153,11 @@ def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> 
     # shared policy file: base.policy) makes it read-only; none can make a read-only one writable.
     if own.switch(_READ_ONLY) or base.policy.read_only:
         policy = policy.with_read_only()
+    namespace = entry.get("namespace")
+    if namespace is not None:
+        if not isinstance(namespace, str):
+            raise ConfigError(f'{where}: namespace must be a string, e.g. "/robot2"')
+        namespace = _namespace(namespace, where)
     headers = base.headers
     given_headers = own.pick(_HEADERS)
     if given_headers is not None:
@@ -153,6 +172,7 @@ def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> 
         ca_file=file(_CA_FILE),
         client_cert=file(_CLIENT_CERT),
         client_key=file(_CLIENT_KEY),
+        namespace=namespace,
     )
     config.ssl_context()
     return config

@@ -86,6 +86,9 @@ class Config:
     #: :func:`default_record_dir` of the environment the configuration was read from (of this process's
     #: environment for a :class:`Config` built directly).
     record_dir: Path = field(default_factory=lambda: default_record_dir(os.environ))
+    #: The robot's namespace on a bridge shared by several robots (``/robot2``; ``""`` none), from its
+    #: fleet file entry; ``None``: not said (the navigation, transform, picture and diagnose tools find it).
+    namespace: str | None = None
     #: Where a fleet robot's URL was set (``[robots.base] in --robots fleet.toml``, ``--robot base=URL``),
     #: named when it cannot be reached; ``None``: the server's own settings (ROSBRIDGE_HOST/PORT/URL).
     url_source: str | None = None

@@ -533,6 +533,7 @@ async def motion_scene(ctx: Acting, kind: str, name: str, type_name: str, payloa
         ctx.graph,
         map_topic=f"{carried.namespace}/map",
         base_frame="base_link",
+        namespace=carried.namespace,
         poses=motion.poses,
         along=motion.along,
         timeout=min(SCENE_TIMEOUT, ctx.config.request_timeout),

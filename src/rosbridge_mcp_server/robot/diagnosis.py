@@ -16,7 +16,8 @@ The areas:
   image, compressed when offered) and ``/tf``: a topic a node publishes that sends nothing in the window is a
   problem; a rate under half the one this session measured before a warning;
 * ``tf``: dynamic transforms stamped over a second before the newest one, a frame with two parents, no path
-  along map → odom → base (``base_footprint`` or ``base_link``);
+  along map → odom → base (``base_footprint`` or ``base_link``), for the root's ``/tf`` and for each robot's
+  namespace with its own (``/robot2/tf``, ``robot/namespaces.py``), each tree on its own;
 * ``lifecycle`` (ROS 2): every node offering ``get_state`` that is not active is a problem;
 * ``graph``: nodes gone since the last look (the first look is when the server connected), a ``cmd_vel``
   nobody reads (nothing drives), a key stream a node reads that nobody publishes.
@@ -38,6 +39,7 @@ from rosbridge_mcp_server.errors import Advice, Advised, RosbridgeError
 from rosbridge_mcp_server.robot.diagnostics import StatusBoard
 from rosbridge_mcp_server.robot.log_keeper import DIAGNOSTICS_TOPICS
 from rosbridge_mcp_server.robot.logs import level_rank
+from rosbridge_mcp_server.robot.namespaces import namespaces_with
 from rosbridge_mcp_server.robot.nodes import node_names
 from rosbridge_mcp_server.robot.text import NAME_CHARS, is_frame_name, is_graph_name, shown
 from rosbridge_mcp_server.robot.wording import counted
@@ -260,8 +262,18 @@ def _parent(name: str) -> str:
     return name.rsplit("/", 1)[0] or "/"
 
 
-def _key_streams(topics: Mapping[str, str], kinds: frozenset[str] | None) -> dict[str, str]:
-    """topic → kind of the streams worth measuring."""
+def _tf_namespaces(topics: Mapping[str, str]) -> list[str]:
+    """The namespaces with a tf of their own (``""``: the root's ``/tf``), root first."""
+    names = list(topics)
+    found = set(namespaces_with(names, "/tf")) | set(namespaces_with(names, "/tf_static"))
+    root = [""] if "/tf" in topics or "/tf_static" in topics else []
+    return root + sorted(found)
+
+
+def _key_streams(
+    topics: Mapping[str, str], kinds: frozenset[str] | None, left_out: dict[str, int] | None = None
+) -> dict[str, str]:
+    """topic → kind of the streams worth measuring (how many more there were: *left_out* ``streams``)."""
     chosen: dict[str, str] = {}
     infos = {_parent(t) for t, ty in topics.items() if _short(ty) == "CameraInfo"}
     for topic, type_name in topics.items():
@@ -274,11 +286,14 @@ def _key_streams(topics: Mapping[str, str], kinds: frozenset[str] | None) -> dic
             if _short(type_name) == "Image" and f"{topic}/compressed" in topics:
                 continue
         chosen[topic] = kind
-    if "/tf" in topics:
-        chosen["/tf"] = "tf"
+    for namespace in _tf_namespaces(topics):
+        if f"{namespace}/tf" in topics:
+            chosen[f"{namespace}/tf"] = "tf"
     if kinds is not None:
         chosen = {t: k for t, k in chosen.items() if k in kinds}
     ordered = sorted(chosen, key=lambda t: (_KIND_ORDER.index(chosen[t]), t))
+    if left_out is not None and len(ordered) > MAX_STREAMS:
+        left_out["streams"] = len(ordered) - MAX_STREAMS
     return {t: chosen[t] for t in ordered[:MAX_STREAMS]}
 
 
@@ -289,8 +304,11 @@ async def diagnose(
     *,
     focus: str | None = None,
     window: float = WINDOW,
+    namespace: str | None = None,
 ) -> Diagnosis:
-    """Look at the robot once (see the module docstring); :class:`UnknownFocusError` for a bad *focus*."""
+    """Look at the robot once (see the module docstring); :class:`UnknownFocusError` for a bad *focus*.
+
+    *namespace* (``""``: the root) narrows the streams and tf to one robot of several on the bridge."""
     began = time.monotonic()
     dialect = await graph.dialect()
     entries, listed = await asyncio.gather(graph.topics(), node_names(graph))
@@ -307,14 +325,22 @@ async def diagnose(
     findings: list[Finding] = []
     frames: set[str] = set()
 
-    streams = _key_streams(topics, kinds) if "streams" in areas or "tf" in areas else {}
+    tf_spaces = _tf_namespaces(topics)
+    streams_of = topics
+    if namespace is not None:
+        tf_spaces = [space for space in tf_spaces if space == namespace]
+        if namespace:
+            streams_of = {t: ty for t, ty in topics.items() if t.startswith(f"{namespace}/")}
+    streams = _key_streams(streams_of, kinds, left_out) if "streams" in areas or "tf" in areas else {}
     if "streams" not in areas:
         streams = {t: k for t, k in streams.items() if k == "tf"}
-    listen: dict[str, tuple[str, bool]] = {t: (topics[t], t == "/tf") for t in streams}
+        left_out.pop("streams", None)
+    listen: dict[str, tuple[str, bool]] = {t: (topics[t], k == "tf") for t, k in streams.items()}
     if "tf" in areas:
-        for topic in ("/tf", "/tf_static"):
-            if topic in topics:
-                listen[topic] = (topics[topic], True)
+        for space in tf_spaces:
+            for topic in (f"{space}/tf", f"{space}/tf_static"):
+                if topic in topics:
+                    listen[topic] = (topics[topic], True)
     if "diagnostics" in areas:
         for topic in DIAGNOSTICS_TOPICS:
             if topic in topics:
@@ -388,11 +414,14 @@ async def diagnose(
             keeper, streams=streams, heard=heard, pubsub=pubsub, window=window, checked=checked
         )
     if "tf" in areas:
-        if "/tf" not in topics and "/tf_static" not in topics:
-            unavailable["tf"] = "the robot has no /tf or /tf_static topic"
+        if not tf_spaces and namespace:
+            unavailable["tf"] = f"the robot has no {namespace}/tf or {namespace}/tf_static topic"
+        elif not tf_spaces:
+            unavailable["tf"] = "the robot has no /tf or /tf_static topic, at the root or under a namespace"
         else:
-            tf_findings, frames = _tf(heard, topics, window, checked)
-            findings += tf_findings
+            frames = _tf_trees(
+                heard, topics=topics, namespaces=tf_spaces, window=window, checked=checked, findings=findings
+            )
     if "logs" in areas:
         if keeper is None or keeper.absent:
             unavailable["logs"] = "the robot has no /rosout topic"
@@ -651,11 +680,11 @@ def _seconds(stamp: Any) -> float | None:
     return None
 
 
-def _edges(heard: Mapping[str, _Heard]) -> tuple[dict[str, _Edge], dict[str, set[str]]]:
-    """child → its latest edge, and child → every parent seen."""
+def _edges(heard: Mapping[str, _Heard], namespace: str = "") -> tuple[dict[str, _Edge], dict[str, set[str]]]:
+    """child → its latest edge, and child → every parent seen, on *namespace*'s tf."""
     edges: dict[str, _Edge] = {}
     parents: dict[str, set[str]] = {}
-    for topic in ("/tf_static", "/tf"):
+    for topic in (f"{namespace}/tf_static", f"{namespace}/tf"):
         record = heard.get(topic)
         if record is None:
             continue
@@ -673,7 +702,7 @@ def _edges(heard: Mapping[str, _Heard]) -> tuple[dict[str, _Edge], dict[str, set
                 stamp = _seconds(header.get("stamp"))
                 old = edges.get(child)
                 if old is None or old.stamp is None or (stamp is not None and stamp >= old.stamp):
-                    edges[child] = _Edge(parent, topic == "/tf_static", stamp)
+                    edges[child] = _Edge(parent, topic.endswith("/tf_static"), stamp)
     return edges, parents
 
 
@@ -687,11 +716,37 @@ def _ancestors(frame: str, edges: Mapping[str, _Edge]) -> list[str]:
     return chain
 
 
+def _tf_trees(
+    heard: Mapping[str, _Heard],
+    *,
+    topics: Mapping[str, str],
+    namespaces: list[str],
+    window: float,
+    checked: dict[str, str],
+    findings: list[Finding],
+) -> set[str]:
+    """Each namespace's tf tree looked at on its own (its findings say whose tf), the frames seen."""
+    frames: set[str] = set()
+    said: list[str] = []
+    for namespace in namespaces:
+        own = {t: ty for t, ty in topics.items() if namespace and t.startswith(f"{namespace}/")}
+        found, seen, what = _tf(heard, own if namespace else topics, window, namespace)
+        findings += found
+        frames |= {f"{namespace}:{frame}" if namespace else frame for frame in seen}
+        said.append(f"{namespace}/tf: {what}" if namespace or len(namespaces) > 1 else what)
+    checked["tf"] = "; ".join(said)
+    return frames
+
+
 def _tf(
-    heard: Mapping[str, _Heard], topics: Mapping[str, str], window: float, checked: dict[str, str]
-) -> tuple[list[Finding], set[str]]:
+    heard: Mapping[str, _Heard], topics: Mapping[str, str], window: float, namespace: str = ""
+) -> tuple[list[Finding], set[str], str]:
+    """One tf tree (the root's, or a namespace's): findings, frames, and what was checked."""
     out: list[Finding] = []
-    edges, parents = _edges(heard)
+    edges, parents = _edges(heard, namespace)
+    tf_topic = f"{namespace}/tf"
+    whose = f" (tf of {namespace})" if namespace else ""
+    ns = (namespace,) if namespace else ()
     frames = set(edges) | {e.parent for e in edges.values()}
     for child, found in sorted(parents.items()):
         if len(found) > 1:
@@ -701,8 +756,8 @@ def _tf(
                     "tf",
                     child,
                     f"Frame {child} has {len(found)} parents ({', '.join(sorted(found))}): two nodes publish "
-                    "it, and tf keeps jumping between them.",
-                    (Step(Look.TOPIC, ("/tf",), "to see who publishes"),),
+                    f"it, and tf keeps jumping between them{whose}.",
+                    (Step(Look.TOPIC, (tf_topic,), "to see who publishes"),),
                 )
             )
     stamps = [e.stamp for e in edges.values() if not e.static and e.stamp is not None]
@@ -715,10 +770,10 @@ def _tf(
                 Finding(
                     "problem",
                     "tf",
-                    f"{edge.parent} -> {child}",
+                    f"{namespace}{' ' if namespace else ''}{edge.parent} -> {child}",
                     f"Transform {edge.parent} → {child} is stale: stamped {newest - edge.stamp:.1f} s before "
-                    "the newest transform.",
-                    (Step(Look.TRANSFORM, (edge.parent, child)),),
+                    f"the newest transform{whose}.",
+                    (Step(Look.TRANSFORM, (edge.parent, child, *ns)),),
                 )
             )
     base = next((f for f in ("base_footprint", "base_link") if f in frames), None)
@@ -730,9 +785,10 @@ def _tf(
             Finding(
                 "problem",
                 "tf",
-                "odom -> base",
-                "No base frame (base_footprint or base_link) in tf: the robot's own frame is missing.",
-                (Step(Look.TRANSFORM_WAIT, ("odom", "base_link")),),
+                f"{namespace}{' ' if namespace else ''}odom -> base",
+                f"No base frame (base_footprint or base_link) in tf{whose}: the robot's own frame is "
+                "missing.",
+                (Step(Look.TRANSFORM_WAIT, ("odom", "base_link", *ns)),),
             )
         )
     if base is not None:
@@ -740,7 +796,8 @@ def _tf(
     for upper, lower in itertools.pairwise(chain):
         if upper in _ancestors(lower, edges):
             continue
-        if any(f.subject == f"{upper} -> {lower}" for f in out):
+        subject = f"{namespace}{' ' if namespace else ''}{upper} -> {lower}"
+        if any(f.subject == subject for f in out):
             continue  # already said: stale
         if upper not in frames:
             who = (
@@ -748,29 +805,31 @@ def _tf(
                 if upper == "map"
                 else "is odometry, e.g. the EKF or the base driver, running?"
             )
-            summary = f"No {upper} frame in tf: nothing published {upper} → {lower} in {window:g} s ({who})."
+            summary = (
+                f"No {upper} frame in tf{whose}: nothing published {upper} → {lower} in {window:g} s ({who})."
+            )
         else:
             parent = edges[lower].parent if lower in edges else None
             root = _ancestors(lower, edges)[-1]
             summary = (
                 f"No transform path {upper} → {lower} in {window:g} s: {lower} "
                 + (f"hangs under {parent} (tree root {root})" if parent else "has no parent")
-                + f", cut off from {upper}. Whatever publishes {upper} → {lower} stopped."
+                + f", cut off from {upper}{whose}. Whatever publishes {upper} → {lower} stopped."
             )
         out.append(
             Finding(
                 "problem",
                 "tf",
-                f"{upper} -> {lower}",
+                subject,
                 summary,
-                (Step(Look.TRANSFORM_WAIT, (upper, lower)),),
+                (Step(Look.TRANSFORM_WAIT, (upper, lower, *ns)),),
             )
         )
     roots = sorted({_ancestors(f, edges)[-1] for f in frames})
-    checked["tf"] = (
+    what = (
         f"{counted(len(frames), 'frame')}, root{'s' if len(roots) != 1 else ''} {', '.join(roots) or 'none'}"
     )
-    return out, frames
+    return out, frames, what
 
 
 def _logs(keeper: LogKeeper, checked: dict[str, str], left_out: dict[str, int]) -> list[Finding]:

@@ -272,13 +272,20 @@ async def read_map(
 
 
 async def frame_pose(
-    client: RosbridgeClient, graph: RosGraph, target: str, source: str, timeout: float
+    client: RosbridgeClient,
+    graph: RosGraph,
+    target: str,
+    source: str,
+    timeout: float,
+    *,
+    namespace: str = "",
 ) -> Pose2D | str:
-    """Where *source* is in *target* (x, y, yaw) from ``/tf``, or why it is not known."""
+    """Where *source* is in *target* (x, y, yaw) from ``/tf`` (the robot's *namespace*'s), or why it is not
+    known."""
     if source == target:
         return Pose2D(0.0, 0.0, 0.0)
     try:
-        found = await look_up_transform(client, graph, target, source, timeout=timeout)
+        found = await look_up_transform(client, graph, target, source, timeout=timeout, namespace=namespace)
     except TransformError as exc:
         return str(exc)
     t = found.lookup.transform
@@ -304,10 +311,12 @@ async def survey(
     timeout: float,
     grid: Grid | None = None,
     along: float | None = None,
+    namespace: str = "",
 ) -> Scene:
     """The map (unless given), the robot's pose on it and the goal's poses placed in its frame, learnt
     together; what could not be learnt is a problem of the scene, never an exception. With *along* (a drive
-    of that many metres along the robot's heading; 0: in place) the goal is where that drive ends."""
+    of that many metres along the robot's heading; 0: in place) the goal is where that drive ends. The
+    robot's *namespace* (``robot/namespaces.py``) says whose tf places them."""
     problems: list[str] = []
     if grid is None:
         try:
@@ -319,7 +328,10 @@ async def survey(
     map_frame = (grid.frame_id if grid is not None else "") or "map"
     frames = sorted({pose.frame or map_frame for pose in poses} | {base_frame})
     found = await asyncio.gather(
-        *(frame_pose(client, graph, map_frame, frame, min(timeout, 3.0)) for frame in frames)
+        *(
+            frame_pose(client, graph, map_frame, frame, min(timeout, 3.0), namespace=namespace)
+            for frame in frames
+        )
     )
     where = dict(zip(frames, found, strict=True))
     robot = where[base_frame]

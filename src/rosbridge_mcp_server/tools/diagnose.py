@@ -12,6 +12,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.diagnosis import (
     FOCUSES,
+    MAX_STREAMS,
     Diagnosis,
     Finding,
     Look,
@@ -21,6 +22,7 @@ from rosbridge_mcp_server.robot.diagnosis import (
 )
 from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, given_namespace
 from rosbridge_mcp_server.tools.paging import FRAME_RESERVE, TEXT_BUDGET
 from rosbridge_mcp_server.tools.subscribe_topic import MAX_COUNT
 
@@ -76,6 +78,7 @@ async def run(
         str | None,
         Field(description=f"An area ({', '.join(list(FOCUSES)[:3])}, ...) or a node, e.g. /amcl"),
     ] = None,
+    namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Look at the robot once."""
     keeper = ctx.robot.keep_logs()
@@ -84,7 +87,9 @@ async def run(
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(keeper.ready.wait(), READY_WAIT)
     try:
-        found = await diagnose(ctx.client, ctx.graph, keeper, focus=focus)
+        found = await diagnose(
+            ctx.client, ctx.graph, keeper, focus=focus, namespace=given_namespace(ctx, namespace)
+        )
     except UnknownFocusError as exc:
         raise ToolFailure(f"Unknown {exc}").advise(exc.hint) from None
     data = DiagnoseAnswer(
@@ -117,11 +122,12 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.ONE_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "count": 1}}',
     Look.WAIT_MESSAGE: lambda topic: f'subscribe_topic {{"topic": "{topic}", "timeout": 5}}',
     Look.STAMPS: lambda topic: f'plot_topic {{"series": ["{topic} header.stamp.sec"], "duration": 5}}',
-    Look.TRANSFORM: lambda target, source: (
-        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}"}}'
+    Look.TRANSFORM: lambda target, source, namespace="": (
+        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}"{_in(namespace)}}}'
     ),
-    Look.TRANSFORM_WAIT: lambda target, source: (
-        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5}}'
+    Look.TRANSFORM_WAIT: lambda target, source, namespace="": (
+        f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5'
+        f"{_in(namespace)}}}"
     ),
     # Two rounds of every status in at most 3 s (diagnostics come at about 1 Hz); the topic's publishers
     # take turns, so one message is most likely another's OK.
@@ -130,6 +136,11 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
         '"duration": 3, "fields": ["status"]} (its publishers take turns: one message is likely another\'s)'
     ),
 }
+
+
+def _in(namespace: str) -> str:
+    """The ``namespace`` argument of a suggested call, when the finding is a namespaced robot's."""
+    return f', "namespace": "{namespace}"' if namespace else ""
 
 
 def next_text(steps: Sequence[Step]) -> str:
@@ -149,6 +160,8 @@ def next_text(steps: Sequence[Step]) -> str:
 def checked_texts(found: Diagnosis) -> dict[str, str]:
     """What each area checked, with where to read what its findings left out."""
     checked = dict(found.checked)
+    if more := found.left_out.get("streams"):
+        checked["streams"] += f" ({more} more not measured: at most {MAX_STREAMS} at once)"
     if more := found.left_out.get("diagnostics"):
         every = f'{{"topic": "/diagnostics", "count": {MAX_COUNT}, "duration": 3, "fields": ["status"]}}'
         checked["diagnostics"] += f" ({more} more not OK: subscribe_topic {every})"
@@ -171,6 +184,8 @@ def _model(finding: Finding) -> FindingModel:
 
 
 def _count(found: Diagnosis) -> str:
+    if not found.findings and found.unavailable:
+        return f"No problem found in the areas checked (not checked: {', '.join(found.unavailable)})"
     if not found.findings:
         return "No problem found"
     parts = []
@@ -197,7 +212,7 @@ def _text(found: Diagnosis, focus: str | None) -> str:
     if shown < len(found.findings):
         lines.append(f"{len(found.findings) - shown} more findings in the structured content.")
     checked = "; ".join(f"{area}: {what}" for area, what in checked_texts(found).items())
-    lines.append(f"Checked in {found.seconds:.1f} s — {checked}.")
+    lines.append(f"Checked in {found.seconds:.1f} s — {checked or 'nothing'}.")
     if found.unavailable:
         lines.append("Not checked: " + "; ".join(f"{a}: {why}" for a, why in found.unavailable.items()) + ".")
     return "\n".join(lines)

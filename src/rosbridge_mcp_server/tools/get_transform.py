@@ -7,7 +7,14 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.frames import look_up_transform
+from rosbridge_mcp_server.robot.namespaces import SeveralNamespacesError
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolSpec
+from rosbridge_mcp_server.tools.namespaces import (
+    NamespaceArgument,
+    choose_one,
+    given_namespace,
+    non_defaults,
+)
 
 __all__ = ["SPEC", "TransformAnswer", "run"]
 
@@ -42,14 +49,15 @@ class TransformAnswer(BaseModel):
     chain: list[str] = Field(description="Frames walked, target first")
     age: float | None = Field(description="Seconds since the newest moving link arrived; None if all static")
     static: bool = Field(description="True when every link used came from /tf_static")
+    namespace: str = Field(default="", description='The robot\'s namespace whose tf answered ("" = none)')
 
 
 SPEC = ToolSpec(
     name="get_transform",
     title="Frame transform",
     description=(
-        "Where source_frame is in target_frame, from /tf and /tf_static. Read-only. Example: "
-        '{"target_frame": "odom", "source_frame": "base_link"}: translation (m), rotation.'
+        "Where source_frame is in target_frame (/tf, /tf_static). Read-only. Example: "
+        '{"target_frame": "odom", "source_frame": "base_link"}'
     ),
     hints=READS_ROBOT,
     output=TransformAnswer,
@@ -58,12 +66,24 @@ SPEC = ToolSpec(
 
 async def run(
     ctx: ToolContext,
-    target_frame: Annotated[str, Field(description="Frame to express the answer in, e.g. odom or map")],
+    target_frame: Annotated[str, Field(description="Answer in this frame, e.g. map")],
     source_frame: Annotated[str, Field(description="Frame to locate, e.g. base_link")],
     timeout: Annotated[float, Field(gt=0, le=60, description="Seconds to listen, e.g. 3")] = 3.0,
+    namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Listen to /tf and /tf_static until the frames connect, then compose the links."""
-    found = await look_up_transform(ctx.client, ctx.graph, target_frame, source_frame, timeout=timeout)
+    try:
+        found = await look_up_transform(
+            ctx.client,
+            ctx.graph,
+            target_frame,
+            source_frame,
+            timeout=timeout,
+            namespace=given_namespace(ctx, namespace),
+        )
+    except SeveralNamespacesError as exc:
+        given = {"target_frame": target_frame, "source_frame": source_frame, "timeout": timeout}
+        raise choose_one(exc, SPEC.name, non_defaults(run, given)) from None
     lookup = found.lookup
     t = lookup.transform.translation
     q = lookup.transform.rotation
@@ -78,6 +98,7 @@ async def run(
         chain=list(lookup.chain),
         age=round(found.age, 3) if found.age is not None else None,
         static=lookup.static_only,
+        namespace=found.namespace,
     )
     freshness = "static links only" if answer.static else f"newest link {answer.age:.3f} s old"
     text = (
@@ -87,6 +108,10 @@ async def run(
         f"y={answer.rotation.y:g} z={answer.rotation.z:g} w={answer.rotation.w:g}); chain "
         f"{' → '.join(answer.chain)}; {freshness}."
     )
+    if found.note is not None:
+        text = f"{found.note}\n{text}"
+    elif found.namespace:
+        text = f"{text.removesuffix('.')} (tf of {found.namespace})."
     return ToolAnswer(text=text, data=answer)
 
 

@@ -8,6 +8,7 @@ import difflib
 import json
 import math
 import time
+from dataclasses import replace
 from typing import Annotated, Any, Final
 
 from pydantic import BaseModel, Field
@@ -17,6 +18,7 @@ from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.pictures.navigation import draw_scene
 from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
+from rosbridge_mcp_server.robot.namespaces import SeveralNamespacesError, find_namespace
 from rosbridge_mcp_server.robot.navigation import (
     GoalPose,
     Scene,
@@ -33,6 +35,12 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolImage,
     ToolSpec,
+)
+from rosbridge_mcp_server.tools.namespaces import (
+    NamespaceArgument,
+    choose_one,
+    given_namespace,
+    non_defaults,
 )
 
 __all__ = ["SPEC", "NavigateAnswer", "run"]
@@ -265,6 +273,7 @@ async def run(
     left: Annotated[float, Field(description="Metres, e.g. -0.5")] = 0.0,
     turn: Annotated[float, Field(description="Degrees left, e.g. 90")] = 0.0,
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 120")] = 300.0,
+    namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Resolve the goal, check readiness and the map, send it, report progress, draw the outcome."""
     relative = bool(forward or left or turn)
@@ -306,14 +315,15 @@ async def run(
         default_action, action_type = "/navigate_through_poses", "nav2_msgs/action/NavigateThroughPoses"
     else:
         default_action, action_type = "/navigate_to_pose", "nav2_msgs/action/NavigateToPose"
-    prefix = ""
-    name = default_action
-    map_name = "/map"
+    given = {"goal": goal, "frame": frame, "forward": forward, "left": left, "turn": turn, "timeout": timeout}
+    asked = non_defaults(run, given)
+    prefix, note, hint = await _robot_namespace(ctx, namespace, default_action, asked)
+    name = prefix + default_action
+    map_name = f"{prefix}/map"
     base = BASE_FRAME
 
     # Is Nav2 ready? Each missing piece is said, and nothing is sent.
     not_ready: list[str] = []
-    hint = await ctx.graph.missing_action(name)
     if hint is not None:
         server = "move_base" if ros1 else "bt_navigator"
         not_ready.append(f"no action server {name} (is {server} running?){hint}")
@@ -323,9 +333,9 @@ async def run(
     if problem is not None:
         not_ready.append(problem)
     map_frame = (grid.frame_id if grid is not None else "") or "map"
-    start = await frame_pose(ctx.client, ctx.graph, map_frame, base, _READY_WAIT)
+    start = await frame_pose(ctx.client, ctx.graph, map_frame, base, _READY_WAIT, namespace=prefix)
     if isinstance(start, str):
-        not_ready.append(f"no transform from {map_frame} to {base} on /tf: {start}")
+        not_ready.append(f"no transform from {map_frame} to {base} on {prefix}/tf: {start}")
     if not ros1 and hint is None:
         state = await _navigator_state(ctx, prefix)
         if state is not None:
@@ -356,18 +366,20 @@ async def run(
     else:
         assert x is not None
         assert y is not None
-        given = frame.strip().lstrip("/") or map_frame
+        goal_frame = frame.strip().lstrip("/") or map_frame
         heading = math.radians(yaw) if yaw is not None else None
         if heading is None:
             # Keep the robot's heading: its yaw in the map, seen from the goal's frame.
-            origin = await frame_pose(ctx.client, ctx.graph, map_frame, given, _READY_WAIT)
+            origin = await frame_pose(
+                ctx.client, ctx.graph, map_frame, goal_frame, _READY_WAIT, namespace=prefix
+            )
             if isinstance(origin, str):
                 raise ToolFailure(
-                    f"The goal's frame {given} cannot be placed in {map_frame}: {origin}. Give the goal in "
-                    f"{map_frame}, or check /tf (get_transform). Nothing was sent."
+                    f"The goal's frame {goal_frame} cannot be placed in {map_frame}: {origin}. Give the goal "
+                    f"in {map_frame}, or check /tf (get_transform). Nothing was sent."
                 )
             heading = start.yaw - origin.yaw
-        poses = [GoalPose(given, _number(x, "x"), _number(y, "y"), heading)]
+        poses = [GoalPose(goal_frame, _number(x, "x"), _number(y, "y"), heading)]
     scene = await survey(
         ctx.client,
         ctx.graph,
@@ -376,6 +388,7 @@ async def run(
         poses=poses,
         timeout=_READY_WAIT,
         grid=grid,
+        namespace=prefix,
     )
     if len(scene.goals) != len(poses):
         raise ToolFailure(
@@ -446,14 +459,14 @@ async def run(
         image = await asyncio.to_thread(_draw, grid, robot=start, goals=goals, start=None, driven=[], ctx=ctx)
         raise _Refused(f"{exc} The picture shows the robot (blue) and the goal (magenta).", image) from None
 
-    final = await frame_pose(ctx.client, ctx.graph, map_frame, base, _READY_WAIT)
+    final = await frame_pose(ctx.client, ctx.graph, map_frame, base, _READY_WAIT, namespace=prefix)
     final_pose = final if isinstance(final, Pose2D) else None
     if final_pose is not None:
         track.append((final_pose.x, final_pose.y))
     image = await asyncio.to_thread(
         _draw, grid, robot=final_pose, goals=goals, start=start, driven=track, ctx=ctx
     )
-    return _answer(
+    answer = _answer(
         outcome,
         frame=map_frame,
         goals=goals,
@@ -464,6 +477,29 @@ async def run(
         began=began,
         image=image,
     )
+    if note is not None:
+        answer = replace(answer, text=f"{note}\n{answer.text}")
+    return answer
+
+
+async def _robot_namespace(
+    ctx: ToolContext, namespace: str | None, action: str, asked: dict[str, Any]
+) -> tuple[str, str | None, str | None]:
+    """(namespace, the note saying it was found, the missing action's hint or ``None`` when it is served):
+    the one given, else the root's navigator, else the one namespace that has one (several: each call)."""
+    chosen = given_namespace(ctx, namespace)
+    if chosen is not None:
+        return chosen, None, await ctx.graph.missing_action(chosen + action)
+    hint = await ctx.graph.missing_action(action)
+    if hint is None:
+        return "", None, None
+    try:
+        found = await find_namespace(ctx.graph, None, action, kind="action", present=False)
+    except SeveralNamespacesError as exc:
+        raise choose_one(exc, SPEC.name, asked) from None
+    if not found.namespace:
+        return "", None, hint
+    return found.namespace, found.note, await ctx.graph.missing_action(found.namespace + action)
 
 
 def _answer(

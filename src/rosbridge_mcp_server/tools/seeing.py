@@ -10,6 +10,7 @@ from typing import Any, Literal
 from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.listening import listen
 from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.namespaces import SeveralNamespacesError
 from rosbridge_mcp_server.robot.occupancy import Pose2D
 from rosbridge_mcp_server.robot.transforms import TransformError
 from rosbridge_mcp_server.tools.base import ToolContext, ToolFailure, absolute_name
@@ -63,10 +64,28 @@ async def first_message(
     return heard.messages[0].message
 
 
-async def planar_pose(ctx: ToolContext, target: str, source: str, timeout: float) -> Pose2D | str:
-    """Where ``source`` is in ``target`` (x, y, yaw) from /tf and /tf_static, or why it is not known."""
+async def planar_pose(
+    ctx: ToolContext,
+    target: str,
+    source: str,
+    timeout: float,
+    *,
+    namespace: str | None = "",
+    topic: str = "",
+) -> Pose2D | str:
+    """Where ``source`` is in ``target`` (x, y, yaw) from /tf and /tf_static, or why it is not known.
+
+    The robot's *namespace*'s tf; with none (``None``) and no tf at the root, the robot's whose namespace
+    holds *topic* (``/robot2/map``: ``/robot2/tf``), or the one robot's with a tf."""
     try:
-        found = await look_up_transform(ctx.client, ctx.graph, target, source, timeout=timeout)
+        found = await look_up_transform(
+            ctx.client, ctx.graph, target, source, timeout=timeout, namespace=namespace
+        )
+    except SeveralNamespacesError as exc:
+        owners = [ns for ns in exc.namespaces if topic.startswith(f"{ns}/")]
+        if not owners:
+            return str(exc)
+        return await planar_pose(ctx, target, source, timeout, namespace=max(owners, key=len))
     except TransformError as exc:
         return str(exc)
     t = found.lookup.transform

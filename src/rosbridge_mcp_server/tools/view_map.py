@@ -11,6 +11,8 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay, draw_map
 from rosbridge_mcp_server.pictures.scans import ScanError, decode_scan, to_frame
+from rosbridge_mcp_server.robot.names import absolute_name
+from rosbridge_mcp_server.robot.namespaces import under
 from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_grid, decode_path
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
@@ -19,6 +21,12 @@ from rosbridge_mcp_server.tools.base import (
     ToolFailure,
     ToolImage,
     ToolSpec,
+)
+from rosbridge_mcp_server.tools.namespaces import (
+    NamespaceArgument,
+    given_namespace,
+    namespaced_topic,
+    non_defaults,
 )
 from rosbridge_mcp_server.tools.seeing import first_message, is_type, planar_pose, typed_topic
 
@@ -52,8 +60,8 @@ SPEC = ToolSpec(
     name="view_map",
     title="Map picture",
     description=(
-        "An OccupancyGrid (map or costmap) as a picture with the robot (blue, from /tf), optionally a plan "
-        '(green) and a scan (red). Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
+        "A map or costmap as a picture: the robot (blue, from /tf), a plan (green), a scan (red). "
+        'Read-only. Example: {"path_topic": "/plan", "scan_topic": "/scan", '
         '"around_robot": 4}'
     ),
     hints=READS_ROBOT,
@@ -107,12 +115,25 @@ async def run(
     around_robot: Annotated[float, Field(ge=0, le=1000, description="Metres around the robot, e.g. 3")] = 0.0,
     max_size: Annotated[int, Field(ge=64, le=2048, description="Pixels, e.g. 800")] = 800,
     timeout: Annotated[float, Field(gt=0, le=60, description="Seconds per message, e.g. 5")] = 5.0,
+    namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Take one grid (and plan and scan), place them with /tf, draw off the event loop."""
-    name, msg_type = await typed_topic(
+    given = {
+        "topic": topic,
+        "base_frame": base_frame,
+        "path_topic": path_topic,
+        "scan_topic": scan_topic,
+        "around_robot": around_robot,
+        "max_size": max_size,
+        "timeout": timeout,
+    }
+    name, msg_type, ns, found_note = await namespaced_topic(
         ctx,
         topic,
         "topic",
+        namespace,
+        tool=SPEC.name,
+        arguments=non_defaults(run, given),
         accepts=_GRID,
         kind="nav_msgs/OccupancyGrid",
         hint="view_scan shows scans; subscribe_topic reads other topics.",
@@ -121,13 +142,15 @@ async def run(
     path_type = scan_type = ""
     if path_topic:
         path_name, path_type = await typed_topic(
-            ctx, path_topic, "path_topic", accepts=_PATH, kind="nav_msgs/Path"
-        )
+            ctx, under(ns, absolute_name(path_topic, "path_topic")), "path_topic", accepts=_PATH,
+            kind="nav_msgs/Path"
+        )  # fmt: skip
     if scan_topic:
         scan_name, scan_type = await typed_topic(
-            ctx, scan_topic, "scan_topic", accepts=_SCAN, kind="sensor_msgs/LaserScan"
-        )
-    notes: list[str] = []
+            ctx, under(ns, absolute_name(scan_topic, "scan_topic")), "scan_topic", accepts=_SCAN,
+            kind="sensor_msgs/LaserScan"
+        )  # fmt: skip
+    notes: list[str] = [found_note] if found_note is not None else []
 
     async def optional(topic_name: str | None, topic_type: str, what: str) -> dict[str, Any] | None:
         if topic_name is None:
@@ -166,6 +189,8 @@ async def run(
         scan_message=scan_message,
         notes=notes,
         tf_wait=min(_TF_WAIT, timeout),
+        namespace=ns if ns or given_namespace(ctx, namespace) is not None else None,
+        topic=name,
     )
     off_map = _off_map(grid, robot, base_frame.strip())
     if off_map is not None:
@@ -204,6 +229,8 @@ async def _overlay(
     scan_message: dict[str, Any] | None,
     notes: list[str],
     tf_wait: float,
+    namespace: str | None = "",
+    topic: str = "",
 ) -> tuple[Overlay, Pose2D | None]:
     """The robot's pose, the path and the scan hits in the map's frame (each placed through /tf)."""
     path_frame, path = decode_path(path_message) if path_message is not None else ("", [])
@@ -217,7 +244,7 @@ async def _overlay(
     async def pose(source: str, what: str) -> Pose2D | None:
         if source == frame:
             return Pose2D(0.0, 0.0, 0.0)
-        found = await planar_pose(ctx, frame, source, tf_wait)
+        found = await planar_pose(ctx, frame, source, tf_wait, namespace=namespace, topic=topic)
         if isinstance(found, str):
             notes.append(f"{what} not drawn: {found}")
             return None

@@ -29,7 +29,8 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.seeing import first_message, is_type, typed_topic
+from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, namespaced_topic, non_defaults
+from rosbridge_mcp_server.tools.seeing import first_message, is_type
 
 __all__ = ["SPEC", "ScanAnswer", "run"]
 
@@ -56,7 +57,7 @@ SPEC = ToolSpec(
     name="view_scan",
     title="Scan from above",
     description=(
-        "A LaserScan or PointCloud2 from above (forward up) with range rings and the footprint; the "
+        "A LaserScan or PointCloud2 from above (forward up), with the "
         'nearest obstacle and free directions. Read-only. Example: {"topic": "/scan", "clearance": 1.0}'
     ),
     hints=READS_ROBOT,
@@ -72,12 +73,25 @@ async def run(
     clearance: Annotated[float, Field(gt=0, le=100, description="Metres free, e.g. 1")] = 1.0,
     max_size: Annotated[int, Field(ge=64, le=2048, description="Pixels, e.g. 600")] = 600,
     timeout: Annotated[float, Field(gt=0, le=60, description="Seconds, e.g. 5")] = 5.0,
+    namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Take one scan or cloud, find the nearest hit and free sectors, draw it off the event loop."""
-    name, msg_type = await typed_topic(
+    name, msg_type, _, note = await namespaced_topic(
         ctx,
         topic,
         "topic",
+        namespace,
+        tool=SPEC.name,
+        arguments=non_defaults(
+            run,
+            {
+                "topic": topic,
+                "radius": radius,
+                "clearance": clearance,
+                "max_size": max_size,
+                "timeout": timeout,
+            },
+        ),
         accepts=_RANGE_SENSOR,
         kind="sensor_msgs/LaserScan or PointCloud2",
         hint="view_map shows maps; subscribe_topic reads other topics.",
@@ -103,7 +117,8 @@ async def run(
         radius=round(shown, 3),
         ring_spacing=ring,
     )
-    return ToolAnswer(text=_text(answer), data=answer, images=(ToolImage(image, "image/png"),))
+    text = _text(answer) if note is None else f"{note}\n{_text(answer)}"
+    return ToolAnswer(text=text, data=answer, images=(ToolImage(image, "image/png"),))
 
 
 def _work(
