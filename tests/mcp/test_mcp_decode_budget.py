@@ -36,7 +36,7 @@ async def published(
         # The bridge handles a connection's ops in order: once this call is answered, the frame is latched.
         barrier = {"op": "call_service", "id": "barrier", "service": "/rosapi/get_time"}
         await attacker.send(json.dumps(barrier))
-        async with asyncio.timeout(10):
+        async with asyncio.timeout(60):  # a bound, not a pause: a million-beam frame on a busy machine
             while json.loads(await attacker.recv()).get("id") != "barrier":
                 pass
         yield
