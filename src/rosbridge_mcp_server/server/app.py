@@ -33,6 +33,7 @@ from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
 from rosbridge_mcp_server.server.checks import ToolCalls
 from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, console_app
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
+from rosbridge_mcp_server.server.shutdown import stop_robots
 from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
 from rosbridge_mcp_server.tools.base import ToolSpec
 
@@ -152,6 +153,8 @@ def build_fleet_server(
                     where,
                     client.url,
                 )
+            # Left first, before any client closes: what the server set going on the robots is stopped.
+            started.push_async_callback(stop_robots, [robot.session for robot in fleet.robots])
             yield None
 
     # Every tool is made the same way (adapter.edge_tool), in the order it is listed.
