@@ -35,6 +35,8 @@ __all__ = ["SPEC", "ScanAnswer", "run"]
 
 _RANGE_SENSOR = is_type("sensor_msgs/LaserScan", "sensor_msgs/PointCloud2")
 _SECTORS_LISTED = 4
+#: The smallest radius drawn (metres): a laser's own minimum range is about this.
+MIN_RADIUS = 0.1
 
 
 class ScanAnswer(BaseModel):
@@ -74,6 +76,11 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=60, description="Seconds, e.g. 5")] = 5.0,
 ) -> ToolAnswer:
     """Take one scan or cloud, find the nearest hit and free sectors, draw it off the event loop."""
+    if 0 < radius < MIN_RADIUS:
+        raise ToolFailure(
+            f"radius {radius:g} m is below the {MIN_RADIUS:g} m the picture shows at least; give 0 to fit "
+            f"the scan, or {MIN_RADIUS:g} to 1000 m."
+        )
     name, msg_type = await typed_topic(
         ctx,
         topic,
