@@ -156,7 +156,13 @@ async def _start_stdio(
     return process
 
 
-@pytest.mark.parametrize("stop", [*STOPS, "stdin-closed"])
+def _stops(*extra: str) -> list[Any]:
+    """Every way of stopping: the impatient Ctrl-C (and stdin closing) in every run, the rest with -m slow."""
+    quick = {"sigint-twice", *extra}
+    return [pytest.param(stop, marks=() if stop in quick else pytest.mark.slow) for stop in [*STOPS, *extra]]
+
+
+@pytest.mark.parametrize("stop", _stops("stdin-closed"))
 async def test_stopping_the_stdio_server_cancels_the_goal_first(nav2: SimulatedRobot, stop: str) -> None:
     """stdio: each way of stopping cancels the running navigate_to goal on the robot before the exit."""
     process = await _start_stdio(nav2, "navigate_to", {"goal": GOAL})
@@ -210,7 +216,7 @@ async def test_a_stream_ends_with_its_zero_when_the_stdio_server_is_signalled_tw
     assert seen[0] != STILL
 
 
-@pytest.mark.parametrize("stop", list(STOPS))
+@pytest.mark.parametrize("stop", _stops())
 async def test_stopping_the_http_server_cancels_the_goal_first(nav2: SimulatedRobot, stop: str) -> None:
     """Streamable HTTP: each signal to the group cancels the running navigate_to goal before the exit."""
     env = {**_env(None), "ROSBRIDGE_MCP_AUTH_TOKENS": TOKENS}
