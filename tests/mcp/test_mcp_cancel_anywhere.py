@@ -10,19 +10,26 @@ tool's cleanup runs to its end after a cancel, and a tool that raises, or ends c
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import re
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any, Literal
 
 import anyio
 import pytest
+from hypothesis import HealthCheck, Phase, example, given, settings
+from hypothesis import strategies as st
 from mcap.reader import make_reader
 from mcp.types import CallToolResult
-from mcp_harness import Session, text_of
+from mcp_harness import Session, open_session, text_of
+from test_mcp_property_arguments import SessionThread
 
 from rosbridge_mcp_server.server.cancelling import run_call
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 10.0
+STILL = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 
 
 def finished_recording(path: Path) -> dict[str, int] | None:
@@ -125,3 +132,93 @@ async def test_an_exception_or_a_stray_cancel_is_an_answer_in_our_words(raised: 
     assert "the server goes on" in text
     assert "Error executing tool" not in text
     assert "ignore previous instructions" not in text
+
+
+class Nav2SessionThread(SessionThread):
+    """The property tests' session thread on the simulated Nav2 world, recording into a folder of its own."""
+
+    def __init__(self, directory: Path) -> None:
+        self.directory = directory
+        super().__init__("ros2")
+
+    async def _open(self, dialect: Literal["ros1", "ros2"], in_order: bool) -> Session:
+        self.robot = await self.stack.enter_async_context(SimulatedRobot(dialect, world="nav2"))
+        return await self.stack.enter_async_context(
+            open_session(self.robot.url, record_dir=str(self.directory), guard=None)
+        )
+
+
+#: A call of each tool that runs for a while on the Nav2 world, so that a cancel finds it at work.
+NAV2_CALLS: dict[str, dict[str, Any]] = {
+    "publish_topic": {
+        "topic": "/cmd_vel",
+        "message_type": "geometry_msgs/msg/TwistStamped",
+        "message": {"header": {"frame_id": "base_link"}, "twist": {"linear": {"x": 0.3}}},
+        "rate_hz": 10,
+        "duration": 30,
+    },
+    "navigate_to": {"goal": {"x": 1.5, "y": 2.0}, "timeout": 60},
+    "publish_action": {
+        "action_name": "/navigate_to_pose",
+        "action_type": "nav2_msgs/action/NavigateToPose",
+        "goal": {"pose": {"header": {"frame_id": "map"}, "pose": {"position": {"x": 1.5, "y": 2.0}}}},
+        "timeout": 60,
+    },
+    "record": {"topics": ["/odom", "/scan"], "duration": 30, "name": "cut"},
+    "subscribe_topic": {"topic": "/odom", "count": 100, "duration": 10},
+    "plot_topic": {"series": ["/odom twist.twist.linear.x"], "duration": 10},
+    "view_map": {"scan_topic": "/scan"},
+    "get_transform": {"target_frame": "map", "source_frame": "base_link"},
+}
+
+
+@pytest.fixture(scope="module")
+def nav2_hosted(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Nav2SessionThread]:
+    hosted = Nav2SessionThread(tmp_path_factory.mktemp("recordings"))
+    try:
+        yield hosted
+    finally:
+        hosted.close()
+
+
+@pytest.mark.slow
+def test_any_tool_cancelled_at_any_moment_keeps_the_session_and_its_promise(
+    nav2_hosted: Nav2SessionThread,
+) -> None:
+    """Hypothesis picks a tool and a moment (0-1.5 s) to cancel it: the session answers the next call, a
+    stream's last command is a zero, a goal is cancelled (the robot stands), a recording is finished."""
+    hosted = nav2_hosted
+    robot = hosted.robot
+    driven = robot.nav2.robots[0]
+
+    async def cancelled(name: str, delay: float) -> None:
+        call = asyncio.create_task(hosted.session.mcp.call_tool(name, NAV2_CALLS.get(name, {})))
+        await asyncio.wait(
+            {call}, timeout=delay
+        )  # the attack's timing: the cancel lands wherever the call is
+        call.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await call
+        await hosted.session.ok("list_topics")
+        if name == "publish_topic":
+            await robot.world.wait_for(lambda w: w.published["/cmd_vel"][-1].msg["twist"] == STILL, WAIT)
+        await robot.wait_for(lambda _w: driven.linear == 0.0 and driven.angular == 0.0, WAIT)
+        if name == "record" and (hosted.directory / "cut.mcap").exists():
+            await wait_finished(hosted.directory / "cut.mcap")
+            (hosted.directory / "cut.mcap").unlink()
+
+    def one(example: tuple[str, float]) -> None:
+        hosted.run(cancelled(*example), 60.0)
+
+    names = sorted(hosted.schemas)
+    test = given(st.tuples(st.sampled_from(names), st.floats(0.0, 1.5)))(one)
+    for name in NAV2_CALLS:
+        test = example((name, 0.3))(test)
+    settings(
+        max_examples=40,
+        derandomize=True,
+        database=None,
+        deadline=None,
+        phases=[Phase.explicit, Phase.generate],
+        suppress_health_check=list(HealthCheck),
+    )(test)()
