@@ -320,8 +320,8 @@ async def test_cancelling_the_task_running_a_goal_cancels_the_goal_on_the_robot(
     [
         # rosbridge 2.x refuses the goal after about a second.
         pytest.param("ros2", 5.0, "No action server available", id="ros2"),
-        # actionlib has no refusal: no status messages on <ns>/status within the wait (rounded) tells. The wait
-        # is what is left of the timeout when it starts: on a busy machine less than 0.3 s.
+        # actionlib has no refusal: no status messages on <ns>/status within the wait (rounded) tells. The
+        # wait is what is left of the timeout when it starts: on a busy machine less than 0.3 s.
         pytest.param(
             "ros1",
             0.3,

@@ -96,8 +96,9 @@ async def serving(
         await stop(served)
 
 
-async def start_http(*flags: str, env: dict[str, str]) -> Served:
-    """``--transport http --bind 127.0.0.1:0`` plus *flags*; returns once the server said where it listens."""
+async def start_http(*flags: str, env: dict[str, str], new_group: bool = False) -> Served:
+    """``--transport http --bind 127.0.0.1:0`` plus *flags*; returns once the server said where it listens.
+    ``new_group``: in a process group of its own (a test may then signal the group, as a terminal does)."""
     process = await asyncio.create_subprocess_exec(
         sys.executable,
         "-m",
@@ -111,6 +112,7 @@ async def start_http(*flags: str, env: dict[str, str]) -> Served:
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
         env=env,
+        start_new_session=new_group,
     )
     served = Served("http", flags, env, process=process)
     assert process.stderr is not None

@@ -198,6 +198,7 @@ async def test_without_a_connection_the_stop_still_ends_the_streams_and_says_wha
 PRESSED_BY: dict[str, tuple[str, str]] = {
     "stop_robot": ("stop_robot", "stop_robot"),
     "console": ("E-STOP on the operator console", "estop"),
+    "shutdown": ("the server shutting down", "request_cancelled"),
 }
 
 

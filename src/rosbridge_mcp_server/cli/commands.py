@@ -17,7 +17,7 @@ import signal
 import sys
 from collections.abc import AsyncIterator, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 from urllib.parse import urlsplit, urlunsplit
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
@@ -262,14 +262,15 @@ class _OneLine(logging.Filter):
         return True
 
 
-def _stop_on_signals(clients: Sequence[RosbridgeClient]) -> None:
-    """Make SIGTERM (how MCP clients stop a server that ignores EOF) and Ctrl-C clean up, then exit.
+def _stop_on_signals(robots: Sequence[RobotSession]) -> None:
+    """Make SIGTERM (how MCP clients stop a server that ignores EOF) and Ctrl-C stop the robots, then exit.
 
-    Cancelling the server cancels every tool call in flight, and each running goal is cancelled on the robot
-    as its call unwinds (rosbridge does not do that by itself when a client goes away). When stdin is a
-    terminal or a file, the SDK's transport reads it in a thread that cancellation cannot interrupt, so the
-    server may never finish unwinding on its own: after a short grace the client is closed (its goals
-    cancelled, advertisements withdrawn) and the process exits.
+    The first signal stops what the server set going on every robot (streams ended, a zero on each velocity
+    topic, goals cancelled: ``server/shutdown.py``), then cancels the server, so every tool call in flight
+    unwinds; any later signal (an impatient second Ctrl-C) is only logged, so it cannot cut the stop short.
+    When stdin is a terminal or a file, the SDK's transport reads it in a thread that cancellation cannot
+    interrupt, so the server may never finish unwinding on its own: after a short grace the clients are
+    closed and the process exits. All of it is bounded (docs/deployment.md says how long).
     """
     main = asyncio.current_task()
     if main is None:
@@ -279,10 +280,10 @@ def _stop_on_signals(clients: Sequence[RosbridgeClient]) -> None:
 
     def stop(name: str, exit_code: int) -> None:
         if pending:
+            _log.info("%s: already stopping the robot and exiting", name)
             return
-        _log.info("%s: cancelling tool calls and goals, then exiting", name)
-        main.cancel()
-        pending.add(loop.create_task(_exit_after_cleanup(clients, exit_code)))
+        _log.info("%s: stopping the robot, cancelling tool calls, then exiting", name)
+        pending.add(loop.create_task(_stop_then_exit(main, robots, exit_code)))
 
     # Windows event loops have no add_signal_handler; there the default handling applies.
     with contextlib.suppress(NotImplementedError, RuntimeError):
@@ -290,10 +291,14 @@ def _stop_on_signals(clients: Sequence[RosbridgeClient]) -> None:
         loop.add_signal_handler(signal.SIGINT, stop, "SIGINT", 130)
 
 
-async def _exit_after_cleanup(clients: Sequence[RosbridgeClient], exit_code: int) -> None:
+async def _stop_then_exit(main: asyncio.Task[Any], robots: Sequence[RobotSession], exit_code: int) -> None:
+    from rosbridge_mcp_server.server.shutdown import stop_robots  # noqa: PLC0415 - serving only
+
+    await stop_robots(robots)
+    main.cancel()
     await asyncio.sleep(SIGNAL_GRACE)
     with contextlib.suppress(Exception):
-        await asyncio.wait_for(asyncio.gather(*(client.close() for client in clients)), SIGNAL_GRACE)
+        await asyncio.wait_for(asyncio.gather(*(robot.client.close() for robot in robots)), SIGNAL_GRACE)
     logging.shutdown()
     os._exit(exit_code)
 
@@ -391,13 +396,13 @@ async def serve(
             previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
             try:
                 async with _console(console, hub, console_dir):
-                    await serve_http(server, http, sock=sock)
+                    await serve_http(server, http, sock=sock, robots=[robot.session for robot in entries])
             finally:
                 signal.signal(signal.SIGTERM, previous)
                 sock.close()
             return
         server = build_fleet_server(entries, effective, console_view=console_view, tasks=board or False)
-        _stop_on_signals([robot.session.client for robot in entries])
+        _stop_on_signals([robot.session for robot in entries])
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
             _log.warning(

@@ -299,22 +299,24 @@ def draw_scan(
         )
     ring = nice_step(radius, 5)
     small = font(11)
-    r = ring
-    while r <= radius + 1e-9:
+    # Counted, not summed: a ring added to itself until it passes a radius far below 1e-9 never got there.
+    for count in range(1, min(int(radius / ring * (1 + 1e-9)), 10) + 1):
+        r = count * ring
         px = r * scale
         draw.ellipse((centre - px, centre - px, centre + px, centre + px), outline=(190, 190, 190))
         draw.text((centre + 3, centre - px + 1), label(r, "m"), fill=(110, 110, 110), font=small)
-        r += ring
     draw.line((centre, 0, centre, size), fill=(225, 225, 225))
     draw.line((0, centre, size, centre), fill=(225, 225, 225))
     for x, y in scan.points:
         px, py = pixel(x, y)
         if -2 <= px <= size + 2 and -2 <= py <= size + 2:
             draw.rectangle((px - 1, py - 1, px + 1, py + 1), fill=OBSTACLE_COLOUR)
-    foot = max(FOOTPRINT_RADIUS * scale, 4.0)
+    # At most the picture's size: Pillow traces an outline over its whole extent, so the footprint of a
+    # picture a micrometre across (millions of pixels round) took a minute of CPU.
+    foot = min(max(FOOTPRINT_RADIUS * scale, 4.0), float(size))
     draw.ellipse((centre - foot, centre - foot, centre + foot, centre + foot), outline=ROBOT_COLOUR, width=2)
     draw.line((centre, centre, centre, centre - foot * 1.6), fill=ROBOT_COLOUR, width=2)
-    if nearest_hit is not None:
+    if nearest_hit is not None and nearest_hit.range <= radius * 1.5:
         px, py = pixel(nearest_hit.x, nearest_hit.y)
         draw.line((centre, centre, px, py), fill=(255, 150, 0), width=1)
         draw.ellipse((px - 5, py - 5, px + 5, py + 5), outline=(255, 150, 0), width=2)

@@ -31,16 +31,22 @@ STREAM_STOP_SECONDS = 0.5
 #: How long the stop waits for the bridge to show it handled everything sent before (one call's round trip).
 HANDLED_SECONDS = 2.0
 
-#: Who pressed the stop: the stop_robot tool, or the E-STOP button of the operator console. (The audit's
-#: tool column of each stop is the presser's key.)
-Presser = Literal["stop_robot", "console"]
+#: Who pressed the stop: the stop_robot tool, the E-STOP button of the operator console, or the server
+#: shutting down (a signal, stdin closed, the HTTP server stopping). (The audit's tool column of each stop is
+#: the presser's key.)
+Presser = Literal["stop_robot", "console", "shutdown"]
 #: How each presser is named in the answers of what its stop ended: voided calls' refusals, ended streams.
 PRESSER_NAMES: Final[dict[Presser, str]] = {
     "stop_robot": "stop_robot",
     "console": "E-STOP on the operator console",
+    "shutdown": "the server shutting down",
 }
-#: What each presser's cancelled goals say in ``canceled_by``.
-_CANCELED_BY: Final[dict[Presser, CanceledBy]] = {"stop_robot": "stop_robot", "console": "estop"}
+#: What each presser's cancelled goals say in ``canceled_by`` (a shutdown ends the calls that sent them).
+_CANCELED_BY: Final[dict[Presser, CanceledBy]] = {
+    "stop_robot": "stop_robot",
+    "console": "estop",
+    "shutdown": "request_cancelled",
+}
 _PRESSERS: Final[tuple[Presser, ...]] = get_args(Presser)
 
 

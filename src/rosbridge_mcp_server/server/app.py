@@ -33,6 +33,7 @@ from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
 from rosbridge_mcp_server.server.checks import ToolCalls
 from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, console_app
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
+from rosbridge_mcp_server.server.shutdown import stop_robots
 from rosbridge_mcp_server.server.tasks import TaskBoard
 from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
 from rosbridge_mcp_server.tools.base import ToolSpec
@@ -158,12 +159,18 @@ def build_fleet_server(
                     where,
                     client.url,
                 )
+            sessions = [robot.session for robot in fleet.robots]
+            # Left first, before any client closes: what the server set going on the robots is stopped.
+            started.push_async_callback(stop_robots, sessions)
             if board is None:
                 yield None
                 return
             # Tasks end before the connections close: their cancels and zero commands still reach the robot.
             async with board.running():
-                yield None
+                try:
+                    yield None
+                finally:
+                    await stop_robots(sessions)  # the robots first, then each task's own end
 
     # Every tool is made the same way (adapter.edge_tool), in the order it is listed.
     tools: list[EdgeTool] = [module_tool(module) for module in modules]

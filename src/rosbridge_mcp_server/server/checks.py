@@ -13,14 +13,15 @@ Whatever the transport (stdio, Streamable HTTP, in-memory) and protocol era, a `
    numbers, sizes), JSON text is read, and the tool's own model validates them, once: what does not fit is
    one sentence naming each wrong argument;
 5. the tool's handler runs with a :class:`~rosbridge_mcp_server.server.adapter.ToolCall` naming the robots,
-   the caller the transport authenticated (a token's name, a JWT's subject) and the person's answers.
+   the caller the transport authenticated (a token's name, a JWT's subject) and the person's answers, in a
+   task of its own (``cancelling.py``: a cancel lets it clean up and cannot end the session; an exception it
+   did not answer is an answer in our words).
 
 A refusal is the ``isError`` result the tool itself would give; nothing reaches the tool.
 """
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -39,6 +40,7 @@ from mcp.types import (
 from pydantic import ValidationError
 
 from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall, arguments_text, writable
+from rosbridge_mcp_server.server.cancelling import run_call
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing, read_json_text
 
@@ -46,8 +48,6 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.server.fleet import Fleet, Robot
 
 __all__ = ["RobotCheck", "ToolCalls", "UnlistedAnswer", "refusal_result"]
-
-_log = logging.getLogger("rosbridge_mcp_server.server")
 
 #: Answers a call of a tool the server does not list: (name, arguments, caller) -> a refusal, or None.
 UnlistedAnswer = Callable[[str, dict[str, Any], "str | None"], "str | None"]
@@ -147,16 +147,12 @@ class ToolCalls:
         except ValidationError as exc:
             return refusal_result(_arguments_refusal(tool, exc, arguments, read))
         call = ToolCall(ctx, robots, caller, params.input_responses)
-        try:
-            result = writable(await tool.handler(call, validated))
-            if tool.on_robot and len(robots) == 1 and isinstance(result, CallToolResult):
-                # The calls an answer suggests go to the robot it came from.
-                return self._fleet.calls_on(result, robots[0].name, self._tools)
-            return result
-        except Exception:
-            # A bug: its traceback on stderr, a generic error for the model (the SDK's own words).
-            _log.exception("Tool %r raised an unexpected exception", name)
-            return refusal_result(f"Error executing tool {name}")
+        # Its own task: a cancel lets it clean up and cannot end the session; a bug is an answer in our words.
+        result = writable(await run_call(name, tool.handler(call, validated)))
+        if tool.on_robot and len(robots) == 1 and isinstance(result, CallToolResult):
+            # The calls an answer suggests go to the robot it came from.
+            return self._fleet.calls_on(result, robots[0].name, self._tools)
+        return result
 
 
 def _arguments_refusal(

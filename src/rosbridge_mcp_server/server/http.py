@@ -22,8 +22,10 @@ import logging
 import math
 import socket
 import time
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from types import FrameType
+from typing import TYPE_CHECKING, Any
 
 import jwt
 import uvicorn
@@ -35,6 +37,10 @@ from mcp.server.transport_security import TransportSecuritySettings
 from rosbridge_mcp_server.config import ConfigError
 from rosbridge_mcp_server.config.http import MCP_PATH, HttpSettings, OAuthSettings
 from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
+from rosbridge_mcp_server.server.shutdown import stop_robots
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.session import RobotSession
 
 __all__ = ["JwtVerifier", "StaticTokens", "auth_options", "listen_http", "serve_http"]
 
@@ -193,12 +199,17 @@ def http_app(server: Server[Any], settings: HttpSettings) -> Any:
 
 
 async def serve_http(
-    server: Server[Any], settings: HttpSettings, *, sock: socket.socket | None = None
+    server: Server[Any],
+    settings: HttpSettings,
+    *,
+    sock: socket.socket | None = None,
+    robots: Sequence[RobotSession] = (),
 ) -> None:
     """Serve *server* over Streamable HTTP until SIGTERM / Ctrl-C (or cancellation).
 
     ``sock``: an already listening socket to serve on instead of binding ``settings.host:port`` (tests bind
     port 0 themselves, so the port is known and connections wait in its backlog until the server accepts).
+    On the first signal, what the server set going on *robots* is stopped before uvicorn shuts down.
     """
     config = uvicorn.Config(
         http_app(server, settings),
@@ -214,7 +225,7 @@ async def serve_http(
         server_header=False,
         timeout_graceful_shutdown=2,
     )
-    http = uvicorn.Server(config)
+    http = _StoppingFirst(config, robots)
     if sock is None:
         sock = listen_http(settings)
     auth = "bearer tokens" if settings.tokens else "OAuth JWTs" if settings.oauth else "no authentication"
@@ -230,6 +241,42 @@ async def serve_http(
         await serving
         raise
     _log.info("HTTP server stopped after %.0f s", time.monotonic() - started)
+
+
+class _StoppingFirst(uvicorn.Server):
+    """uvicorn's server, stopping the robots before it shuts down, and only once.
+
+    uvicorn takes a second Ctrl-C as "force quit": it skips the wait for the sessions (whose tool calls
+    cancel their goals as they unwind) and the lifespan (which stops the robots and closes the clients), and
+    a goal went on driving after the process had gone. Here the first signal stops the robots
+    (``shutdown.py``) and then hands the signal to uvicorn's graceful shutdown; later ones are only logged.
+    """
+
+    def __init__(self, config: uvicorn.Config, robots: Sequence[RobotSession]) -> None:
+        super().__init__(config)
+        self._robots = robots
+        self._signalled = False
+        self._stopping: set[asyncio.Task[None]] = set()
+
+    def handle_exit(self, sig: int, frame: FrameType | None) -> None:
+        # A signal handler (signal.signal): only hand the work to the event loop.
+        if self._signalled:
+            _log.info("signal %d: already stopping the robot and shutting down", sig)
+            return
+        self._signalled = True
+        _log.info("signal %d: stopping the robot, then shutting down", sig)
+        asyncio.get_running_loop().call_soon_threadsafe(self._stop_first, sig)
+
+    def _stop_first(self, sig: int) -> None:
+        task = asyncio.get_running_loop().create_task(self._stop_then_exit(sig))
+        self._stopping.add(task)
+        task.add_done_callback(self._stopping.discard)
+
+    async def _stop_then_exit(self, sig: int) -> None:
+        try:
+            await stop_robots(self._robots)
+        finally:
+            super().handle_exit(sig, None)
 
 
 def listen_http(settings: HttpSettings, backlog: int = 2048) -> socket.socket:

@@ -50,6 +50,8 @@ BASE_FRAME = "base_link"
 #: How long the map and /tf are waited for before "not ready".
 _READY_WAIT = 3.0
 _MAX_TIMEOUT = 3600.0
+#: The farthest a goal's coordinate (metres; degrees for a yaw) may be: beyond any map, and drawable.
+MAX_COORDINATE = 100_000.0
 #: Most driven-path points kept for the picture.
 _MAX_TRACK = 2000
 
@@ -133,6 +135,10 @@ def _shown(value: Any) -> str:
 def _number(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise ToolFailure(f"{what} must be a finite number, not {_shown(value)}. Nothing was sent.")
+    if abs(value) > MAX_COORDINATE:
+        raise ToolFailure(
+            f"{what} {value:g} is beyond ±{MAX_COORDINATE:g} (metres, or degrees for yaw). Nothing was sent."
+        )
     return float(value)
 
 

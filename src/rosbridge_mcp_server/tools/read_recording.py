@@ -341,6 +341,12 @@ def _messages(
         raise ToolFailure(
             f"Give at (seconds from the start, 0-{summary.seconds:.1f}) for the messages around it."
         )
+    if at - window > summary.seconds:
+        # The meaningful bound is the file's own length (and a far later one overflowed the nanoseconds).
+        raise ToolFailure(
+            f"at {at:g} s is after the end of {file}, which is {summary.seconds:.1f} s long; give 0-"
+            f"{summary.seconds:.1f}."
+        )
     known = {t.topic for t in summary.topics}
     if topics:
         missing = [t for t in topics if t not in known]

@@ -36,6 +36,8 @@ __all__ = ["SPEC", "ScanAnswer", "run"]
 
 _RANGE_SENSOR = is_type("sensor_msgs/LaserScan", "sensor_msgs/PointCloud2")
 _SECTORS_LISTED = 4
+#: The smallest radius drawn (metres): a laser's own minimum range is about this.
+MIN_RADIUS = 0.1
 
 
 class ScanAnswer(BaseModel):
@@ -76,6 +78,11 @@ async def run(
     namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Take one scan or cloud, find the nearest hit and free sectors, draw it off the event loop."""
+    if 0 < radius < MIN_RADIUS:
+        raise ToolFailure(
+            f"radius {radius:g} m is below the {MIN_RADIUS:g} m the picture shows at least; give 0 to fit "
+            f"the scan, or {MIN_RADIUS:g} to 1000 m."
+        )
     name, msg_type, _, note = await namespaced_topic(
         ctx,
         topic,

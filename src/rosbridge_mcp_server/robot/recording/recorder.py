@@ -178,7 +178,6 @@ async def record_topics(
 
     tasks = [asyncio.create_task(pump(topic)) for topic in codecs]
     reporter = asyncio.create_task(progress())
-    cancelled = False
     try:
         if tasks:
             await asyncio.wait(tasks, timeout=duration + 5.0)
@@ -187,17 +186,12 @@ async def record_topics(
     except TimeoutError:
         pass
     except asyncio.CancelledError:
-        cancelled = True
         stopped.set()
+        raise
     finally:
-        for task in [*tasks, reporter]:
-            task.cancel()
-        await asyncio.gather(*tasks, reporter, return_exceptions=True)
         seconds = time.monotonic() - start
         # Finished also when the call was cancelled: the file must be readable whatever ended it.
-        finish_error = await asyncio.to_thread(writer.close)
-    if cancelled:
-        raise asyncio.CancelledError
+        finish_error = await _finished([*tasks, reporter], writer)
     state = writer.state
     errors = [t.exception() for t in tasks if t.done() and not t.cancelled() and t.exception() is not None]
     if state.stopped is not None:
@@ -221,6 +215,28 @@ async def record_topics(
     )
     size = _size(path)
     return RecordingResult(path, size, round(seconds, 2), ended, recorded, tuple(skipped), finish_error)
+
+
+async def _finished(tasks: list[asyncio.Task[None]], writer: McapFileWriter) -> str | None:
+    """Stop the pumps and finish the file (its last chunk, summary and index), to the end even when the call
+    is cancelled again meanwhile; the first such cancel is raised once the file is finished."""
+    for task in tasks:
+        task.cancel()
+
+    async def wind_down() -> str | None:
+        await asyncio.gather(*tasks, return_exceptions=True)
+        return await asyncio.to_thread(writer.close)
+
+    closing = asyncio.ensure_future(wind_down())
+    cancel: asyncio.CancelledError | None = None
+    while not closing.done():
+        try:
+            await asyncio.shield(closing)
+        except asyncio.CancelledError as exc:
+            cancel = cancel or exc
+    if cancel is not None:
+        raise cancel
+    return closing.result()
 
 
 def _size(path: Path) -> int:
