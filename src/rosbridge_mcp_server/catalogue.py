@@ -9,6 +9,7 @@ from __future__ import annotations
 
 __all__ = [
     "ALL_TOOL_NAMES",
+    "ARM_TOOL_NAMES",
     "NAVIGATION_TOOL_NAMES",
     "ORIGINAL_TOOL_NAMES",
     "RECORD_TOOL_NAMES",
@@ -50,6 +51,8 @@ SAFETY_TOOL_NAMES = ("stop_robot",)
 NAVIGATION_TOOL_NAMES = ("navigate_to",)
 #: Recordings: MCAP files written from topics, and read back.
 RECORD_TOOL_NAMES = ("record", "read_recording")
+#: A robot arm: seeing it.
+ARM_TOOL_NAMES = ("view_arm",)
 ALL_TOOL_NAMES = (
     ORIGINAL_TOOL_NAMES
     + WATCH_TOOL_NAMES
@@ -57,6 +60,7 @@ ALL_TOOL_NAMES = (
     + SAFETY_TOOL_NAMES
     + NAVIGATION_TOOL_NAMES
     + RECORD_TOOL_NAMES
+    + ARM_TOOL_NAMES
 )
 TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "all": ALL_TOOL_NAMES,
@@ -66,6 +70,7 @@ TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "safety": SAFETY_TOOL_NAMES,
     "navigation": NAVIGATION_TOOL_NAMES,
     "record": RECORD_TOOL_NAMES,
+    "arm": ARM_TOOL_NAMES,
 }
 
 
@@ -73,7 +78,7 @@ def select_tools(spec: str) -> tuple[str, ...]:
     """The tool names a ``--tools`` value stands for, in registration order.
 
     ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``,
-    ``navigation``)
+    ``navigation``, ``record``, ``arm``)
     and tool names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
     """
     chosen: set[str] = set()
