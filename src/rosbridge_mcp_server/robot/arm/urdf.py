@@ -168,6 +168,12 @@ class Robot:
         tips = dict.fromkeys(self._above_fingers(leaf) for leaf in leaves)
         return tuple(tip for tip in tips if self._moved(tip))
 
+    def moves_a_finger(self, joint: Joint) -> bool:
+        """Whether *joint* moves a gripper's finger (a leaf link moved by a prismatic joint, or a
+        ``*finger*``/``*jaw*`` leaf): open and closed are its limits, so being at one is normal."""
+        leaf = not self._children.get(joint.child)
+        return leaf and (joint.linear or _finger_like(joint.child))
+
     def _moved(self, link: str) -> bool:
         """Whether two or more joints with positions of their own lie above *link*."""
         return sum(1 for joint in self._above(link) if joint.movable and joint.mimic is None) >= 2
