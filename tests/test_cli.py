@@ -83,7 +83,7 @@ def _free_port() -> int:
         (
             ["--demo", "--demo-world", "arm", "--demo-fault", "scan-stopped"],
             {},
-            "--demo-fault: unknown arm fault scan-stopped; choose from arm-controller-inactive, joint-states-stale",
+            "--demo-fault: unknown arm fault scan-stopped; choose from arm-controller-inactive",
         ),
         (["check", "--port", "abc"], {}, "--port must be a port number"),
     ],
