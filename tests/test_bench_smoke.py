@@ -53,6 +53,8 @@ TARGET_ROWS = (
     "16g",
     "17",
     *(f"18{letter}" for letter in "abcdefghijk"),
+    "19a",
+    "19c",
 )
 
 

@@ -53,6 +53,11 @@ CASES: list[tuple[tuple[Step, ...], str]] = [
         'get_transform {"target_frame": "map", "source_frame": "odom", "timeout": 5}',
     ),
     ((Step(Look.NODE_LOG, ("/planner",)),), 'read_logs {"node": "/planner", "level": "info"}'),
+    (
+        (Step(Look.ACTIVATE_CONTROLLER, ("/controller_manager", "arm_controller")), Step(Look.ARM)),
+        "activating arm_controller acts on the robot (/controller_manager/switch_controller, "
+        "activate_controllers, if the hardware allows): ask the user first; view_arm",
+    ),
 ]
 
 

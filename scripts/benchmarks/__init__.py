@@ -56,6 +56,9 @@ What is measured:
 18. hostile recordings (``--only bombs``; issue 36): each class of MCAP bomb at the size the issue found it
     (``tests/recording_bombs.py``), ``read_recording`` in every mode: refused with a worded error in ≤ 2 s
     with ≤ 50 MiB of peak RSS growth (``VmHWM``).
+19. the arm (``--only arm``): joint limits and forward kinematics at 101 points of a 7-joint goal's path
+    (p50 ≤ 5 ms), ``view_arm`` on the simulated arm (``--world arm``) and its text for a 7-joint arm with a
+    gripper (≤ 8,000 characters).
 
 The package: ``harness`` (what every item shares), one module per item, ``run`` (the order, the table, the
 command line), ``internals`` (the only module that imports the product's internals, and why), ``servers/``

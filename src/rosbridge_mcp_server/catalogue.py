@@ -13,6 +13,7 @@ from typing import Final, NamedTuple
 
 __all__ = [
     "ALL_TOOL_NAMES",
+    "ARM_TOOL_NAMES",
     "CATALOGUE",
     "GROUP_HELP",
     "NAVIGATION_TOOL_NAMES",
@@ -70,6 +71,8 @@ CATALOGUE: Final[tuple[Entry, ...]] = (
     # Recordings: MCAP files written from topics, and read back.
     Entry("record", "record", acts=True),
     Entry("read_recording", "record", acts=False),
+    # A robot arm: seeing it.
+    Entry("view_arm", "arm", acts=False),
 )
 
 
@@ -85,6 +88,7 @@ VIEW_TOOL_NAMES: Final = _names({"view"})
 SAFETY_TOOL_NAMES: Final = _names({"safety"})
 NAVIGATION_TOOL_NAMES: Final = _names({"navigation"})
 RECORD_TOOL_NAMES: Final = _names({"record"})
+ARM_TOOL_NAMES: Final = _names({"arm"})
 TOOL_GROUPS: Final[dict[str, tuple[str, ...]]] = {
     "all": ALL_TOOL_NAMES,
     "original": ORIGINAL_TOOL_NAMES,
@@ -93,6 +97,7 @@ TOOL_GROUPS: Final[dict[str, tuple[str, ...]]] = {
     "safety": SAFETY_TOOL_NAMES,
     "navigation": NAVIGATION_TOOL_NAMES,
     "record": RECORD_TOOL_NAMES,
+    "arm": ARM_TOOL_NAMES,
 }
 #: What each group holds, in a few words (``--help``; a group of one or two tools is named by its tools).
 GROUP_HELP: Final[dict[str, str]] = {

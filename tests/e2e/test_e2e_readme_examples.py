@@ -9,7 +9,8 @@ a placeholder (``"…"``) is filled with the id of a goal started first. ``recor
 with several robots, so its examples run on a two-robot server over the same simulated robot;
 ``navigate_to`` needs a robot with Nav2 and a map, so its examples run on the simulated Nav2 world (the one
 ``--demo --demo-world nav2`` starts, driven faster than the demo's real speed) with the sample policy's
-place (``dock``, examples/robot-policy.toml) in a policy. The four servers run at once.
+place (``dock``, examples/robot-policy.toml) in a policy; the arm's tools run on ``--demo --demo-world arm``.
+The five servers run at once.
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ PLACEHOLDER = "…"
 #: Tools that are listed only when the server drives several robots.
 FLEET_ONLY = {"list_robots"}
 NAV2_ONLY = {"navigate_to"}
+#: The arm's tools run on the demo's arm world (``--demo --demo-world arm``).
+ARM_ONLY = {"view_arm"}
 #: record's example waits out its 30 s: it and read_recording's (which read its file) run on a demo server of
 #: their own, beside the others.
 RECORDING = {"record", "read_recording"}
@@ -154,11 +157,14 @@ async def test_every_tools_table_example_runs_on_the_demo_robot(
         assert len(table) >= 21, (readme, sorted(table))
     examples = distinct_examples(list(tables.values()))
     single = {
-        name: calls for name, calls in examples.items() if name not in FLEET_ONLY | NAV2_ONLY | RECORDING
+        name: calls
+        for name, calls in examples.items()
+        if name not in FLEET_ONLY | NAV2_ONLY | RECORDING | ARM_ONLY
     }
     recording = {name: calls for name, calls in examples.items() if name in RECORDING}
     fleet = {name: calls for name, calls in examples.items() if name in FLEET_ONLY}
     nav2 = {name: calls for name, calls in examples.items() if name in NAV2_ONLY}
+    arm = {name: calls for name, calls in examples.items() if name in ARM_ONLY}
     for readme, table in tables.items():
         assert all(table.values()), (readme, [name for name, calls in table.items() if not calls])
     nav2_robot = await make_sim(dialect="ros2", world="nav2")
@@ -171,6 +177,7 @@ async def test_every_tools_table_example_runs_on_the_demo_robot(
         run_examples(["--demo"], recording),
         run_examples(robots, fleet),
         run_examples(["--url", nav2_robot.url, "--policy", str(policy)], nav2),
+        run_examples(["--demo", "--demo-world", "arm"], arm),
     )
     problems = [failure for failures, _ in runs for failure in failures]
     assert problems == [], "\n".join(problems)

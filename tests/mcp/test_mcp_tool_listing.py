@@ -50,6 +50,7 @@ EXPECTED_PARAMETERS = {
     "navigate_to": ["goal", "frame", "forward", "left", "turn", "timeout", "namespace"],
     "record": ["topics", "duration", "max_megabytes", "name", "stop"],
     "read_recording": ["file", "mode", "fields", "at", "window", "topics"],
+    "view_arm": ["frame", "timeout"],
 }
 READ_ONLY = {
     "list_topics",
@@ -70,6 +71,7 @@ READ_ONLY = {
     "view_scan",
     "plot_topic",
     "read_recording",
+    "view_arm",
 }
 #: Acting tools that leave the robot as they found it when called twice with the same arguments.
 IDEMPOTENT_ACTS = {"set_parameter"}

@@ -36,7 +36,7 @@ class FindingModel(BaseModel):
     """One thing wrong."""
 
     severity: str = Field(description="problem or warning")
-    area: str = Field(description="graph, lifecycle, diagnostics, streams, tf or logs")
+    area: str = Field(description="graph, lifecycle, diagnostics, streams, tf, logs or arm")
     subject: str = Field(description="The topic, frame pair, node or status it is about")
     summary: str
     next: str = Field(description="What to call next")
@@ -64,8 +64,8 @@ SPEC = ToolSpec(
     name="diagnose",
     title="Diagnose the robot",
     description=(
-        "What is wrong, in one ~1.5 s look (diagnostics, logs, rates, tf, lifecycle, graph): each problem "
-        'and what to call next. Read-only. Example: {"focus": "navigation"}'
+        "What is wrong, in one ~1.5 s look (diagnostics, logs, rates, tf, lifecycle, graph, arm): each "
+        'problem and what to call next. Read-only. Example: {"focus": "navigation"}'
     ),
     hints=READS_ROBOT,
     output=DiagnoseAnswer,
@@ -134,6 +134,11 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.STATUSES: lambda topic, statuses: (
         f'subscribe_topic {{"topic": "{topic}", "count": {min(MAX_COUNT, max(2, 2 * int(statuses)))}, '
         '"duration": 3, "fields": ["status"]} (its publishers take turns: one message is likely another\'s)'
+    ),
+    Look.ARM: lambda: "view_arm",
+    Look.ACTIVATE_CONTROLLER: lambda manager, controller: (
+        f"activating {controller} acts on the robot ({manager}/switch_controller, activate_controllers, if "
+        "the hardware allows): ask the user first"
     ),
 }
 
