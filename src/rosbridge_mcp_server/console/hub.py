@@ -280,7 +280,7 @@ class ConsoleHub:
                     "streams_stopped": report.streams_stopped,
                     "zeroed_topics": report.zeroed_topics,
                     "goals_cancelled": report.goals_cancelled,
-                    "cancels": [cancel.describe() for cancel in report.cancels if not cancel.failed],
+                    "cancels": report.cancel_lines(),
                     "failures": report.failures,
                 }
             )

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, Final, Literal, get_args
 
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.goals import CanceledBy
-from rosbridge_mcp_server.robot.goals.stopping import Cancelled, cancel_caused, cancel_motion_servers
+from rosbridge_mcp_server.robot.goals.stopping import Cancelled, cancel_caused, cancel_motion_servers, summary
 from rosbridge_mcp_server.robot.velocity import zero_command
 
 if TYPE_CHECKING:
@@ -79,6 +79,10 @@ class StopReport:
             or self.goals_cancelled
             or self.cancels
         )
+
+    def cancel_lines(self) -> list[str]:
+        """Each cancel sent, a line each (servers reached by name grouped by what they answered)."""
+        return summary(self.cancels)
 
     def add(self, cancels: list[Cancelled]) -> None:
         """Take in cancels: each sent one for the audit, each failed one among the failures."""

@@ -37,6 +37,7 @@ __all__ = [
     "cancel_caused",
     "cancel_motion_servers",
     "motion_action_type",
+    "summary",
 ]
 
 #: Action types whose goals move the robot or a part of it, ``pkg/Name`` (either dialect's spelling is
@@ -125,6 +126,28 @@ class Cancelled:
         return f"{which} on {self.action} ({self.why}): {self.outcome}"
 
 
+#: Why a server reached by its name was cancelled (such cancels are grouped in a summary).
+BY_NAME: Final = "a motion server, by its name"
+
+
+def summary(cancels: Iterable[Cancelled]) -> list[str]:
+    """One line per cancel sent, those of servers reached by name grouped by what they answered (an idle
+    Nav2 robot has ten motion servers)."""
+    lines: list[str] = []
+    grouped: dict[str, list[str]] = {}
+    for cancel in cancels:
+        if cancel.failed:
+            continue
+        if cancel.goal_id is None and cancel.why == BY_NAME:
+            grouped.setdefault(cancel.outcome, []).append(cancel.action)
+        else:
+            lines.append(cancel.describe())
+    lines += [
+        f"every goal on {', '.join(names)} ({BY_NAME}): {outcome}" for outcome, names in grouped.items()
+    ]
+    return lines
+
+
 def motion_action_type(action_type: str) -> bool:
     """Whether *action_type* (any spelling) is one whose goals move the robot."""
     try:
@@ -173,7 +196,7 @@ async def cancel_motion_servers(
     by_name = [name for name in names if name.rsplit("/", 1)[-1] in MOTION_ACTION_LEAVES]
     types = await _types(graph, [name for name in names if name not in by_name])
     out: list[Cancelled] = []
-    chosen = [(name, "a motion server, by its name") for name in by_name]
+    chosen = [(name, BY_NAME) for name in by_name]
     for name in names:
         if name in by_name:
             continue
