@@ -8,16 +8,7 @@ from rosbridge_mcp_server.robot.seam import Act
 from rosbridge_mcp_server.safety.estop import emergency_stop
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolHints, ToolSpec
 
-__all__ = ["SPEC", "GoalCancel", "StopAnswer", "run"]
-
-
-class GoalCancel(BaseModel):
-    """One cancel: a goal, or every goal of an action."""
-
-    action: str
-    goal_id: str | None = Field(description="The goal's id; null: every goal of the action")
-    why: str = Field(description='Why it was cancelled, e.g. "sent on /goal_pose by this server"')
-    outcome: str = Field(description='What the robot answered, e.g. "cancelling", "already ended"')
+__all__ = ["SPEC", "StopAnswer", "run"]
 
 
 class StopAnswer(BaseModel):
@@ -26,8 +17,9 @@ class StopAnswer(BaseModel):
     streams_stopped: list[str] = Field(description="Topics whose streams ended")
     streams_still_running: list[str] = Field(description="Topics whose streams did not end in time")
     zeroed_topics: list[str] = Field(description="Topics that got one zero velocity command")
-    goals_cancelled: list[str] = Field(description="Goal ids a cancel was sent for")
-    cancels: list[GoalCancel] = Field(description="Every cancel sent, with what the robot answered")
+    goals_cancelled: list[str] = Field(
+        description="Each goal (or every goal of an action) cancelled, and what the robot answered"
+    )
     failures: list[str]
 
 
@@ -35,9 +27,8 @@ SPEC = ToolSpec(
     name="stop_robot",
     title="Stop what this server started",
     description=(
-        "Emergency stop for what this server started: ends streams, sends zero velocity, cancels goals "
-        "(also those sent as goal topics, goal poses or send_goal calls). Never asks; call it with {} "
-        "whenever the robot must stop."
+        "Emergency stop for what this server started: ends streams, sends zero velocity, cancels goals. "
+        "Never asks; call it with {} whenever the robot must stop."
     ),
     # It acts on the robot, but only ever takes motion away; repeating it is harmless.
     hints=ToolHints(read_only=False, destructive=False, idempotent=True),
@@ -62,12 +53,7 @@ async def run(ctx: ToolContext) -> ToolAnswer:
         streams_stopped=report.streams_stopped,
         streams_still_running=report.streams_still_running,
         zeroed_topics=report.zeroed_topics,
-        goals_cancelled=report.goals_cancelled,
-        cancels=[
-            GoalCancel(action=c.action, goal_id=c.goal_id, why=c.why, outcome=c.outcome)
-            for c in report.cancels
-            if not c.failed
-        ],
+        goals_cancelled=report.cancel_lines(),
         failures=report.failures,
     )
     return ToolAnswer(text=_text(data), data=data)
@@ -86,9 +72,7 @@ def _text(data: StopAnswer) -> str:
         )
     if data.zeroed_topics:
         lines.append(f"Published a zero velocity command on {', '.join(data.zeroed_topics)}.")
-    for cancel in data.cancels:
-        which = f"goal {cancel.goal_id}" if cancel.goal_id is not None else "every goal"
-        lines.append(f"Cancelled {which} on {cancel.action} ({cancel.why}): {cancel.outcome}.")
+    lines.extend(f"Cancelled {cancel}." for cancel in data.goals_cancelled)
     if not lines:
         lines.append(
             "Nothing to stop: this server has no running stream, has started no goal it has not cancelled "
