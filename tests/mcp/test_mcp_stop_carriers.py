@@ -159,9 +159,12 @@ async def test_a_stop_stops_a_drive_whatever_carried_its_goal(
         await stands_still(robot, state)
         result = await asyncio.wait_for(call, 10.0)
         hub.release()
+        # What a stop cancelled is done with: the next stop_robot has nothing left of it.
+        again = text_of(await session.ok("stop_robot"))
     assert not result.is_error, text_of(result)
     assert math.dist((state.x, state.y), FAR) > 1.0  # it never got there
     assert "Nothing to stop" not in answer
+    assert "Nothing to stop" in again, again
     assert NAVIGATOR[dialect] in answer, answer
     if carrier == "goal topic":
         assert "goal g on /move_base (sent on /move_base/goal by this server)" in answer

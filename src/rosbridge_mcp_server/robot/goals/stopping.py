@@ -114,7 +114,7 @@ class Cancelled:
     goal_id: str | None
     #: Why it was cancelled: "sent by this server", "sent on /goal_pose by this server", "a motion server".
     why: str
-    #: What the robot answered ("cancelling", "already ended", "2 goals cancelling", "cancel sent"), or the
+    #: What the robot answered ("cancelling", "not running", "2 goal(s) cancelling", "cancel sent"), or the
     #: failure.
     outcome: str
     failed: bool = False
@@ -256,16 +256,18 @@ def _outcome(report: CancelReport) -> tuple[str, bool]:
     """What the robot answered a cancel, and whether it failed."""
     if report.dialect == 1:
         return ("cancel sent" if report.goal_id is not None else "cancel of every goal sent"), False
-    note = report.note or ""
-    if "failed" in note:
-        return note, True
-    if "return_code 2" in note or "return_code 3" in note:
-        return "already ended", False
-    if note:
-        return note, True
+    if report.failed:
+        return report.note or "the cancel failed", True
+    if report.return_code in (2, 3):  # unknown goal id (never started, or gone), goal already ended
+        return "not running", False
+    if report.return_code == 1:
+        # rcl answers a cancel of every goal that matches none with "rejected" too.
+        if report.goal_id is None and not report.goals_canceling:
+            return "no goal was running", False
+        return "the action server rejected the cancel", True
     if report.goals_canceling is not None:
         count = len(report.goals_canceling)
         if report.goal_id is None:
             return (f"{count} goal(s) cancelling" if count else "no goal was running"), False
-        return ("cancelling" if count else "already ended"), False
+        return ("cancelling" if count else "not running"), False
     return "cancel sent", False
