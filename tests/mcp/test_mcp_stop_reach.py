@@ -233,3 +233,23 @@ async def test_a_cancel_that_cannot_be_sent_is_said(make_sim: MakeSim) -> None:
     ), report.failures
     # Not forgotten: the next stop tries it again.
     assert [goal.goal_id for goal in session.goals.caused_goals()] == ["g"]
+
+
+async def test_a_goal_pose_with_no_navigator_on_the_graph_is_said_once_and_forgotten(
+    make_sim: MakeSim,
+) -> None:
+    """The turtle world has no /navigate_to_pose: the stop says no goal of it runs, and forgets it."""
+    robot = await make_sim(dialect="ros2")
+    pose = {
+        "topic": "/goal_pose",
+        "message_type": "geometry_msgs/msg/PoseStamped",
+        "message": stamped_pose(1, 1),
+    }
+    async with open_session(robot.url) as session:
+        await session.ok("publish_topic", pose)
+        first = text_of(await session.ok("stop_robot"))
+        again = text_of(await session.ok("stop_robot"))
+    assert (
+        "every goal on /navigate_to_pose (sent on /goal_pose by this server): no such action server" in first
+    )
+    assert "Nothing to stop" in again

@@ -155,7 +155,8 @@ async def _cancel_service(client: RosbridgeClient, ns: str, uuid: list[int], rep
     except ServiceError as exc:
         whose = "goals of other clients" if report.goal_id is None else f"goal {report.goal_id}"
         report.note = f"cancelling {whose} through {ns}/_action/cancel_goal failed: {exc.message}"
-        report.failed = True
+        report.no_server = exc.not_in_graph
+        report.failed = not report.no_server
         return
     canceling = values.get("goals_canceling") if isinstance(values, dict) else None
     if isinstance(canceling, list):

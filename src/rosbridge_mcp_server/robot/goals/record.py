@@ -109,6 +109,8 @@ class CancelReport:
     rejected, 2 unknown goal id, 3 goal already ended)."""
     failed: bool = False
     """That service call failed (``note`` says how): the cancel did not reach the action server."""
+    no_server: bool = False
+    """That service is not on the graph: no action server runs there, so no goal of it runs."""
 
 
 #: Told of each feedback message of a goal, after the goal counted it (``goal.feedback_count`` is its number).

@@ -258,6 +258,8 @@ def _outcome(report: CancelReport) -> tuple[str, bool]:
         return ("cancel sent" if report.goal_id is not None else "cancel of every goal sent"), False
     if report.failed:
         return report.note or "the cancel failed", True
+    if report.no_server:
+        return "no such action server on the graph, so no goal of it runs", False
     if report.return_code in (2, 3):  # unknown goal id (never started, or gone), goal already ended
         return "not running", False
     if report.return_code == 1:
