@@ -253,3 +253,19 @@ async def test_a_goal_pose_with_no_navigator_on_the_graph_is_said_once_and_forgo
         "every goal on /navigate_to_pose (sent on /goal_pose by this server): no such action server" in first
     )
     assert "Nothing to stop" in again
+
+
+async def test_estop_says_which_servers_it_could_not_place_in_time(make_sim: MakeSim) -> None:
+    """rosapi at 1.2 s a call: E-STOP still cancels the servers it knows by name, and names those whose type
+    it could not learn within its 3 s, instead of skipping them silently."""
+    robot = await make_sim(dialect="ros1", world="nav2", rosapi_latency=1.2)
+    client = RosbridgeClient(robot.url, request_timeout=10.0)
+    session = RobotSession(client, ALLOW_ALL)
+    async with client:
+        await client.wait_connected(5.0)
+        report = await emergency_stop(session, by="console")
+    late = [failure for failure in report.failures if "its type was not learnt" in failure]
+    assert late, report.failures
+    assert all(failure.startswith("every goal on /") for failure in late)
+    assert ("/move_base", "") in report.goals
+    assert ("/navigate_to_pose", "") in report.goals

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Final
 
 from rosbridge_mcp_server.client import Dialect
-from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.errors import RosbridgeError, ServiceError
 from rosbridge_mcp_server.robot.goals import CanceledBy, CancelReport, cancel_goals
 from rosbridge_mcp_server.robot.goals.actionlib import publish_cancel
 from rosbridge_mcp_server.robot.goals.registry import ROS1_CANCEL_REPEAT_SECONDS, GoalRegistry
@@ -204,7 +204,7 @@ async def cancel_motion_servers(
         if found is None:
             continue  # the bridge cannot tell its type: not one we know
         if not found:
-            late = f"its type was not learnt within {SURVEY_SECONDS:g} s, so it was not cancelled"
+            late = f"its type was not learnt (within {SURVEY_SECONDS:g} s), so it was not cancelled"
             out.append(Cancelled(name, None, "an action server of unknown type", late, failed=True))
         elif motion_action_type(found):
             chosen.append((name, f"a motion server, {found}"))
@@ -213,15 +213,18 @@ async def cancel_motion_servers(
 
 
 async def _types(graph: RosGraph, names: list[str]) -> dict[str, str | None]:
-    """The type of each action (None: the bridge cannot tell); those not learnt in time are left out."""
+    """The type of each action (None: the bridge cannot tell); those not learnt (in time, or at all: the
+    connection went) are left out, and said by the caller."""
     found: dict[str, str | None] = {}
 
     async def one(name: str) -> None:
         known = graph.known_action_type(name)
         try:
             found[name] = known or await graph.action_type(name)
+        except ServiceError:
+            found[name] = None  # rosapi cannot tell it
         except RosbridgeError:
-            found[name] = None
+            pass
 
     with contextlib.suppress(TimeoutError):
         async with asyncio.timeout(SURVEY_SECONDS):
