@@ -269,3 +269,16 @@ async def test_estop_says_which_servers_it_could_not_place_in_time(make_sim: Mak
     assert all(failure.startswith("every goal on /") for failure in late)
     assert ("/move_base", "") in report.goals
     assert ("/navigate_to_pose", "") in report.goals
+
+
+async def test_ros1_a_goal_topic_publish_advertises_its_cancel_topic_at_once(make_sim: MakeSim) -> None:
+    """A new ROS 1 publisher's first message is often lost: the cancel topic is advertised with the goal, so a
+    later stop's cancel goes out on a publisher the action server already hears."""
+    robot = await make_sim(dialect="ros1", world="nav2")
+    goal = {"header": {}, "goal_id": {"id": "g"}, "goal": {"target_pose": stamped_pose(5.8, 5.5)}}
+    call = {"topic": "/move_base/goal", "message_type": "move_base_msgs/MoveBaseActionGoal", "message": goal}
+    bridge = robot.graph.nodes["/rosbridge_websocket"]
+    async with open_session(robot.url) as session:
+        assert "/move_base/cancel" not in bridge.publishes
+        await session.ok("publish_topic", call)
+        await robot.wait_for(lambda world: "/move_base/cancel" in bridge.publishes, timeout=5.0)
