@@ -276,7 +276,8 @@ class ConsoleHub:
             for topic, type_name, message in report.zero_messages:
                 robot.audit.write(Act(ESTOP_PRESSER, "topic", topic, type_name, message), "e-stop")
             for action, goal_id in report.goals:
-                robot.audit.write(Act(ESTOP_PRESSER, "action", action, "", {"cancel": goal_id}), "e-stop")
+                cancel = {"cancel": goal_id or "all"}
+                robot.audit.write(Act(ESTOP_PRESSER, "action", action, "", cancel), "e-stop")
             if not report.did_anything:
                 robot.audit.write(Act(ESTOP_PRESSER, "topic", "", "", None), "e-stop: nothing to stop")
             reports.append(
@@ -285,6 +286,7 @@ class ConsoleHub:
                     "streams_stopped": report.streams_stopped,
                     "zeroed_topics": report.zeroed_topics,
                     "goals_cancelled": report.goals_cancelled,
+                    "cancels": report.cancel_lines(),
                     "failures": report.failures,
                 }
             )

@@ -23,6 +23,7 @@ from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import Advice, NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.effects import parameter_write, service_effects, topic_effects
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
+from rosbridge_mcp_server.robot.goals.caused import caused_by_call, caused_by_publish
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.motion_goals import carried_goal, read_motion
@@ -128,6 +129,8 @@ async def publish_once(
             scene=await motion_scene(ctx, "topic", name, bridge_type, body),
         ),
     )
+    # A goal it starts (a goal topic, a goal pose) is remembered for the stops once it is sent.
+    caused = caused_by_publish(act.name, act.payload, act.effects, (await ctx.graph.dialect()).version)
 
     async def send() -> None:
         await _bridge_is_reading(ctx)
@@ -135,6 +138,7 @@ async def publish_once(
         await ctx.client.advertise(act.name, act.type)
         await ctx.gate.pace(ticket, act)
         await ctx.client.publish(act.name, act.type, act.payload)
+        ctx.goals.caused(caused)
         ctx.graph.remember_publishing(act.name, act.type)
         # stop_robot zeroes every velocity topic this session has driven.
         ctx.activity.published(act.name, act.type, act.payload)
@@ -255,6 +259,7 @@ async def publish_stream(
             scene=await motion_scene(ctx, "topic", name, bridge_type, body),
         ),
     )
+    caused = caused_by_publish(act.name, act.payload, act.effects, (await ctx.graph.dialect()).version)
     rate = act.rate_hz or rate_hz
     length = act.duration if act.duration is not None else duration
     planned = max(1, round(length * rate))
@@ -292,6 +297,7 @@ async def publish_stream(
                 if sent == 0:
                     ctx.graph.remember_publishing(act.name, act.type)
                     ctx.activity.published(act.name, act.type, act.payload)
+                    ctx.goals.caused(caused)
                 sent += 1
                 if on_progress is not None and (sent % every == 0 or sent == planned):
                     await on_progress(sent, planned)
@@ -432,15 +438,22 @@ async def call_service(
             scene=scene,
         ),
     )
+    caused = caused_by_call(act.name, act.payload, act.effects, dialect.version)
+
+    def check() -> None:
+        ctx.gate.check(ticket, act)
+        # The goal a send_goal call starts is remembered for the stops before the call goes out: its answer
+        # may never come while the goal runs.
+        ctx.goals.caused(caused)
+
     try:
         response = await carry_out(
             ctx,
             act,
-            lambda: ctx.client.call_service(
-                act.name, act.payload, timeout=timeout, check=lambda: ctx.gate.check(ticket, act)
-            ),
+            lambda: ctx.client.call_service(act.name, act.payload, timeout=timeout, check=check),
         )
     except ServiceError as exc:
+        ctx.goals.forget_caused(caused)  # the bridge refused the call: no goal started
         # rosapi does not list hidden services (ROS 2 `_action/...`), so an unlisted name is still tried;
         # the bridge answers at once when nothing offers it.
         if not is_missing_service(exc):

@@ -2,7 +2,8 @@
 
 Two things are remembered here: the topics on which a velocity command (Twist / TwistStamped) was published,
 with their type, and the publish streams still running. Goals are remembered by the goal registry, which
-already knows which goals this session started and which still run.
+knows which goals this session started and which still run, whatever carried them (a goal topic, a goal pose,
+a ``send_goal`` call: ``robot/goals/caused.py``).
 """
 
 from __future__ import annotations

@@ -1,4 +1,8 @@
-"""The e-stop for what this session started: streams ended, velocity topics zeroed, goals cancelled.
+"""The e-stop: streams ended, velocity topics zeroed, goals cancelled.
+
+Both stops cancel every goal this server caused, by any carrier (``robot/goals/stopping.py``); the operator's
+E-STOP (the console) also cancels every goal of the robot's known motion action servers, whoever sent it.
+``stop_robot``, the model's stop, reaches only what this server caused: see docs/safety.md for why.
 
 It asks no one and consults no policy: stopping must always be possible, and each step only takes motion away.
 Every step is tried even when an earlier one failed (a dropped connection must not keep the streams running).
@@ -11,7 +15,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Final, Literal, get_args
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.goals import CanceledBy, cancel_goals
+from rosbridge_mcp_server.robot.goals import CanceledBy
+from rosbridge_mcp_server.robot.goals.stopping import Cancelled, cancel_caused, cancel_motion_servers, summary
 from rosbridge_mcp_server.robot.velocity import zero_command
 
 if TYPE_CHECKING:
@@ -21,6 +26,8 @@ __all__ = [
     "HANDLED_SECONDS",
     "PRESSER_NAMES",
     "STREAM_STOP_SECONDS",
+    "SWEEPS_MOTION_SERVERS",
+    "Cancelled",
     "Presser",
     "StopReport",
     "emergency_stop",
@@ -48,6 +55,8 @@ _CANCELED_BY: Final[dict[Presser, CanceledBy]] = {
     "shutdown": "request_cancelled",
 }
 _PRESSERS: Final[tuple[Presser, ...]] = get_args(Presser)
+#: Whose stop also cancels every goal of the robot's known motion servers, whoever sent it.
+SWEEPS_MOTION_SERVERS: Final[frozenset[Presser]] = frozenset({"console"})
 
 
 @dataclass
@@ -57,23 +66,45 @@ class StopReport:
     streams_stopped: list[str] = field(default_factory=list)
     streams_still_running: list[str] = field(default_factory=list)
     zeroed_topics: list[str] = field(default_factory=list)
+    #: Ids of the goals a cancel was sent for (every goal of an action: ``cancels``).
     goals_cancelled: list[str] = field(default_factory=list)
     failures: list[str] = field(default_factory=list)
     #: Every zero command sent: (topic, type, message), for the audit.
     zero_messages: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)
-    #: Every goal a cancel was sent for: (action, goal id).
+    #: Every goal a cancel was sent for: (action, goal id, or "" for every goal of the action).
     goals: list[tuple[str, str]] = field(default_factory=list)
+    #: Every cancel, one goal or every goal of an action, with what the robot answered.
+    cancels: list[Cancelled] = field(default_factory=list)
 
     @property
     def did_anything(self) -> bool:
         return bool(
-            self.streams_stopped or self.streams_still_running or self.zeroed_topics or self.goals_cancelled
+            self.streams_stopped
+            or self.streams_still_running
+            or self.zeroed_topics
+            or self.goals_cancelled
+            or self.cancels
         )
+
+    def cancel_lines(self) -> list[str]:
+        """Each cancel sent, a line each (servers reached by name grouped by what they answered)."""
+        return summary(self.cancels)
+
+    def add(self, cancels: list[Cancelled]) -> None:
+        """Take in cancels: each sent one for the audit, each failed one among the failures."""
+        for cancel in cancels:
+            self.cancels.append(cancel)
+            if cancel.failed:
+                self.failures.append(cancel.describe())
+                continue
+            self.goals.append((cancel.action, cancel.goal_id or ""))
+            if cancel.goal_id is not None:
+                self.goals_cancelled.append(cancel.goal_id)
 
 
 async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
-    """On *robot*: end every stream, publish one zero command on every velocity topic used, cancel every
-    running goal.
+    """On *robot*: end every stream, publish one zero command on every velocity topic used, cancel every goal
+    this server caused (and, for the console's E-STOP, every goal of the robot's known motion servers).
 
     ``by`` is who pressed the stop (there is no default: every caller says it). Its name
     (:data:`PRESSER_NAMES`) is what each voided call's refusal and each ended stream's answer say; each
@@ -114,17 +145,18 @@ async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
                 report.zeroed_topics.append(target.topic)
                 report.zero_messages.append((target.topic, target.type, message))
 
-    for goal in robot.goals.running():
-        try:
-            await cancel_goals(robot.goals, goal.action, goal.goal_id, by=source)
-        except RosbridgeError as exc:
-            report.failures.append(f"cancelling goal {goal.goal_id} on {goal.action} failed: {exc}")
-        else:
-            report.goals_cancelled.append(goal.goal_id)
-            report.goals.append((goal.action, goal.goal_id))
+    await _cancel_goals(robot, by, source, report)
     if connected and not await client.handled(HANDLED_SECONDS):
         report.failures.append(
             f"the bridge did not confirm within {HANDLED_SECONDS:g} s that it handled what was sent before "
             "the stop; check the robot"
         )
     return report
+
+
+async def _cancel_goals(robot: RobotSession, by: Presser, source: CanceledBy, report: StopReport) -> None:
+    """Every goal this server caused; then, when *by* sweeps them, every known motion server's goals."""
+    report.add(await cancel_caused(robot.goals, source))
+    if by in SWEEPS_MOTION_SERVERS:
+        done = {cancel.action for cancel in report.cancels if cancel.goal_id is None and not cancel.failed}
+        report.add(await cancel_motion_servers(robot.goals, robot.graph, source, done=done))

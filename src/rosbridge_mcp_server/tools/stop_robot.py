@@ -1,4 +1,4 @@
-"""``stop_robot``: the e-stop for what this server started (streams, velocity commands, goals)."""
+"""``stop_robot``: the e-stop for what this server started (streams, velocity commands, its goals)."""
 
 from __future__ import annotations
 
@@ -17,7 +17,9 @@ class StopAnswer(BaseModel):
     streams_stopped: list[str] = Field(description="Topics whose streams ended")
     streams_still_running: list[str] = Field(description="Topics whose streams did not end in time")
     zeroed_topics: list[str] = Field(description="Topics that got one zero velocity command")
-    goals_cancelled: list[str] = Field(description="Goal ids a cancel was sent for")
+    goals_cancelled: list[str] = Field(
+        description="Each goal (or every goal of an action) cancelled, and what the robot answered"
+    )
     failures: list[str]
 
 
@@ -43,7 +45,7 @@ async def run(ctx: ToolContext) -> ToolAnswer:
         ctx.guard.record(Act(SPEC.name, "topic", topic, type_name, message, caller=ctx.caller), "e-stop")
     for action, goal_id in report.goals:
         ctx.guard.record(
-            Act(SPEC.name, "action", action, "", {"cancel": goal_id}, caller=ctx.caller), "e-stop"
+            Act(SPEC.name, "action", action, "", {"cancel": goal_id or "all"}, caller=ctx.caller), "e-stop"
         )
     if not report.did_anything:
         ctx.guard.record(Act(SPEC.name, "topic", "", "", None, caller=ctx.caller), "e-stop: nothing to stop")
@@ -51,7 +53,7 @@ async def run(ctx: ToolContext) -> ToolAnswer:
         streams_stopped=report.streams_stopped,
         streams_still_running=report.streams_still_running,
         zeroed_topics=report.zeroed_topics,
-        goals_cancelled=report.goals_cancelled,
+        goals_cancelled=report.cancel_lines(),
         failures=report.failures,
     )
     return ToolAnswer(text=_text(data), data=data)
@@ -70,12 +72,11 @@ def _text(data: StopAnswer) -> str:
         )
     if data.zeroed_topics:
         lines.append(f"Published a zero velocity command on {', '.join(data.zeroed_topics)}.")
-    if data.goals_cancelled:
-        lines.append(f"Sent a cancel for goal(s) {', '.join(data.goals_cancelled)}.")
+    lines.extend(f"Cancelled {cancel}." for cancel in data.goals_cancelled)
     if not lines:
         lines.append(
-            "Nothing to stop: this server has no running stream or goal and has sent no velocity command in "
-            "this session."
+            "Nothing to stop: this server has no running stream, has started no goal it has not cancelled "
+            "since, and has sent no velocity command in this session."
         )
     lines.extend(data.failures)
     return "\n".join(lines)

@@ -377,7 +377,7 @@ async function estop() {
     const did = [];
     if (robot.streams_stopped.length) did.push(`ended streams on ${robot.streams_stopped.join(", ")}`);
     if (robot.zeroed_topics.length) did.push(`zero sent on ${robot.zeroed_topics.join(", ")}`);
-    if (robot.goals_cancelled.length) did.push(`cancelled goals ${robot.goals_cancelled.join(", ")}`);
+    if (robot.cancels.length) did.push(`cancelled ${robot.cancels.join("; ")}`);
     if (robot.failures.length) did.push(`FAILED: ${robot.failures.join("; ")}`);
     parts.push(`${robot.robot}: ${did.length ? did.join("; ") : "nothing was running"}`);
   }

@@ -155,11 +155,14 @@ async def _cancel_service(client: RosbridgeClient, ns: str, uuid: list[int], rep
     except ServiceError as exc:
         whose = "goals of other clients" if report.goal_id is None else f"goal {report.goal_id}"
         report.note = f"cancelling {whose} through {ns}/_action/cancel_goal failed: {exc.message}"
+        report.no_server = exc.not_in_graph
+        report.failed = not report.no_server
         return
     canceling = values.get("goals_canceling") if isinstance(values, dict) else None
     if isinstance(canceling, list):
         report.goals_canceling = [h for h in (_uuid_hex(info_) for info_ in canceling) if h is not None]
     return_code = values.get("return_code") if isinstance(values, dict) else None
+    report.return_code = return_code if isinstance(return_code, int) else None
     if return_code not in (None, 0):
         # action_msgs/srv/CancelGoal: 1 rejected, 2 unknown goal id, 3 goal terminated.
         meaning = {1: "rejected", 2: "unknown goal id", 3: "goal already ended"}.get(return_code, "")

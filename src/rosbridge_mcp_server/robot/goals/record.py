@@ -104,6 +104,13 @@ class CancelReport:
     refused: str | None = None
     """The bridge's refusal of the cancel (rosbridge-server-rs: "unknown active goal"), if it sent one."""
     note: str | None = None
+    return_code: int | None = None
+    """ROS 2, a cancel through ``<action>/_action/cancel_goal``: the server's ``return_code`` (0 accepted, 1
+    rejected, 2 unknown goal id, 3 goal already ended)."""
+    failed: bool = False
+    """That service call failed (``note`` says how): the cancel did not reach the action server."""
+    no_server: bool = False
+    """That service is not on the graph: no action server runs there, so no goal of it runs."""
 
 
 #: Told of each feedback message of a goal, after the goal counted it (``goal.feedback_count`` is its number).

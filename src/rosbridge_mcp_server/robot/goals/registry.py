@@ -15,7 +15,8 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, Final
 
 from rosbridge_mcp_server.errors import ActionError
-from rosbridge_mcp_server.robot.goals.actionlib import publish_cancel
+from rosbridge_mcp_server.robot.goals.actionlib import CANCEL_TYPE, publish_cancel
+from rosbridge_mcp_server.robot.goals.caused import CausedGoal
 from rosbridge_mcp_server.robot.goals.record import Goal
 
 if TYPE_CHECKING:
@@ -23,6 +24,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CANCEL_CONFIRM_SECONDS",
+    "CAUSED_LIMIT",
     "ORPHAN_LIMIT",
     "ORPHAN_MAX_AGE_SECONDS",
     "ROS1_CANCEL_REPEAT_SECONDS",
@@ -39,6 +41,9 @@ ORPHAN_MAX_AGE_SECONDS = 300.0
 #: ROS 1: the cancels are published again this long after the first time. A message published right
 #: after a rospy publisher is (re)created is often lost before the action server's subscriber connects to it.
 ROS1_CANCEL_REPEAT_SECONDS: Final = 1.0
+#: At most this many goals started by a publish or a service call are remembered for the stops (the oldest
+#: are forgotten).
+CAUSED_LIMIT: Final = 100
 #: How long a cancel sent after a drop waits for the connection to prove it is read.
 CANCEL_CONFIRM_SECONDS: Final = 1.0
 
@@ -55,14 +60,16 @@ class _CutOff:
 
 
 class GoalRegistry:
-    """The goals sent through one client: running ones, and those a drop cut off (to be cancelled once it is
-    back). Made once per client, by its :class:`~rosbridge_mcp_server.robot.session.RobotSession`: it watches
-    the client's sessions, so a second registry on the same client would cancel the same goals again."""
+    """The goals sent through one client: running ones, those a publish or a service call started (see
+    :mod:`.caused`), and those a drop cut off (to be cancelled once it is back). Made once per client, by its
+    :class:`~rosbridge_mcp_server.robot.session.RobotSession`: it watches the client's sessions, so a second
+    registry on the same client would cancel the same goals again."""
 
     def __init__(self, client: RosbridgeClient) -> None:
         self.client = client
         self._running: dict[str, Goal] = {}
         self._cut_off: dict[str, _CutOff] = {}
+        self._caused: dict[tuple[str, str | None], CausedGoal] = {}
         client.watch(self)
 
     # --- running goals ----------------------------------------------------------------------------------
@@ -82,6 +89,42 @@ class GoalRegistry:
     def running(self, action: str | None = None) -> list[Goal]:
         """Goals running now (all, or those of *action*)."""
         return [g for g in self._running.values() if action is None or g.action == action]
+
+    # --- goals a publish or a service call started ------------------------------------------------------
+
+    def caused(self, goal: CausedGoal | None) -> None:
+        """Remember *goal*, started by a publish or a service call, until a stop cancels it (``None``: the act
+        started no goal). At most :data:`CAUSED_LIMIT` are kept, the newest."""
+        if goal is None:
+            return
+        self._caused.pop(goal.key, None)
+        self._caused[goal.key] = goal
+        while len(self._caused) > CAUSED_LIMIT:
+            oldest = self._caused.pop(next(iter(self._caused)))
+            logger.warning(
+                "More than %d goals sent by publish or service call; forgetting %s for the stops",
+                CAUSED_LIMIT,
+                oldest.describe(),
+            )
+        if goal.dialect == 1:
+            # A message published right after a rospy publisher is created is often lost: the cancel topic is
+            # advertised now, so that a stop's cancel goes out on a publisher the action server already hears.
+            self.client.run_in_background(
+                self._advertise_cancel(goal.action), f"advertise {goal.action}/cancel"
+            )
+
+    def caused_goals(self) -> list[CausedGoal]:
+        """The goals publishes and service calls started that no stop has cancelled yet, oldest first."""
+        return list(self._caused.values())
+
+    def forget_caused(self, goal: CausedGoal | None) -> None:
+        """A stop cancelled *goal*, or it never started (the bridge refused the call)."""
+        if goal is not None and self._caused.get(goal.key) is goal:
+            del self._caused[goal.key]
+
+    async def _advertise_cancel(self, action: str) -> None:
+        with contextlib.suppress(Exception):
+            await self.client.advertise(f"{action}/cancel", CANCEL_TYPE)
 
     # --- the ledger of goals cut off by a drop -----------------------------------------------------------
 

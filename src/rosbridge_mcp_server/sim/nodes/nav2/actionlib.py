@@ -14,7 +14,7 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from rosbridge_mcp_server.sim.actions.common import ROS1_STATUS, time_msg
+from rosbridge_mcp_server.sim.actions.common import ROS1_STATUS, stamp_seconds, time_msg
 from rosbridge_mcp_server.sim.nodes.kit import NodeKit
 
 __all__ = ["ActionlibServer", "Runner"]
@@ -77,6 +77,10 @@ class ActionlibServer:
         code, goal_id_msg, _, _ = self._goals[goal_id]
         return {"goal_id": goal_id_msg, "status": code, "text": ""}
 
+    def take_goal(self, msg: dict[str, Any], source: int) -> None:
+        """A ``…ActionGoal`` as if it came on ``<name>/goal`` (move_base's own goal pose topic sends one)."""
+        self._on_goal(msg, source)
+
     def _on_goal(self, msg: dict[str, Any], _source: int) -> None:
         goal_id_msg = dict(msg.get("goal_id") or {})
         goal_id = str(goal_id_msg.get("id") or f"{self.name}-{next(self._ids)}-{time.time():.6f}")
@@ -90,9 +94,17 @@ class ActionlibServer:
         self.publish_status()
 
     def _on_cancel(self, msg: dict[str, Any], _source: int) -> None:
+        """actionlib's cancel: an empty id with a zero stamp cancels every goal, an id that goal, a stamp
+        every goal stamped at or before it."""
         wanted = msg.get("id") or ""
-        for goal_id, (code, _, finished, cancel) in self._goals.items():
-            if not finished and wanted in ("", goal_id) and code == ROS1_STATUS["ACTIVE"]:
+        stamp = stamp_seconds(msg.get("stamp"))
+        for goal_id, (code, goal_id_msg, finished, cancel) in self._goals.items():
+            hit = (
+                (not wanted and stamp == 0)
+                or wanted == goal_id
+                or (stamp != 0 and stamp_seconds(goal_id_msg.get("stamp")) <= stamp)
+            )
+            if not finished and hit and code == ROS1_STATUS["ACTIVE"]:
                 self._goals[goal_id] = (ROS1_STATUS["PREEMPTING"], self._goals[goal_id][1], 0.0, cancel)
                 cancel.set()
         self.publish_status()

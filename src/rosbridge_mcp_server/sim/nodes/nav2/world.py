@@ -152,6 +152,8 @@ class Nav2World:
         #: /diagnostics, /rosout, the drivers' topics and the faults set on purpose (health.py).
         self.health = Health(kit, self.robots, faults)
         self.actions: list[Nav2ActionServer] = []
+        #: ROS 1: the actionlib servers by action name (``/move_base``, ``/navigate_to_pose``, ...).
+        self.actionlib: dict[str, ActionlibServer] = {}
         #: Every node of the world (absolute names), for the plumbing every node gets.
         self.node_names: list[str] = []
 
@@ -202,6 +204,7 @@ class Nav2World:
             self._actions(robot)
         else:
             self._actionlib_topics(robot)
+        self._goal_pose(robot)
         self._parameters(robot)
 
     def _topics(self, robot: Nav2Robot) -> None:
@@ -385,7 +388,7 @@ class Nav2World:
         ns = robot.namespace
         if self._type("move_base_msgs/msg/MoveBaseActionGoal") is not None:
             self.kit.graph.node(f"{ns}/move_base")
-            ActionlibServer(
+            self.actionlib[f"{ns}/move_base"] = ActionlibServer(
                 self.kit,
                 name=f"{ns}/move_base",
                 node=f"{ns}/move_base",
@@ -399,7 +402,7 @@ class Nav2World:
             if self._type(f"nav2_msgs/msg/{leaf}ActionGoal") is None:
                 continue
             if name in DRIVING_ACTIONS:
-                ActionlibServer(
+                self.actionlib[f"{ns}/{name}"] = ActionlibServer(
                     self.kit,
                     name=f"{ns}/{name}",
                     node=f"{ns}/{node}",
@@ -414,7 +417,7 @@ class Nav2World:
             on_success: Callable[[dict[str, Any]], None] | None = None
             if behaviour is not None:
                 on_success = functools.partial(self._succeed, behaviour, robot)
-            ActionlibServer(
+            self.actionlib[f"{ns}/{name}"] = ActionlibServer(
                 self.kit,
                 name=f"{ns}/{name}",
                 node=f"{ns}/{node}",
@@ -424,6 +427,33 @@ class Nav2World:
                 step=self.action_step,
                 on_success=on_success,
             )
+
+    def _goal_pose(self, robot: Nav2Robot) -> None:
+        """A goal pose topic, as RViz's "2D Goal Pose" sends it: ROS 2 Nav2's bt_navigator makes it a
+        NavigateToPose goal of its own (``/goal_pose``); ROS 1 move_base a goal of ``/move_base`` with no id,
+        which the action server names (``/move_base_simple/goal``)."""
+        ns = robot.namespace
+        if self.ros2:
+            navigator = next((a for a in self.actions if a.name == f"{ns}/navigate_to_pose"), None)
+            if navigator is None:
+                return
+
+            def to_navigator(msg: dict[str, Any], _source: int) -> None:
+                navigator.submit({"pose": msg, "behavior_tree": ""}, key=None, on_feedback=None)
+
+            # bt_navigator already subscribes /goal_pose in the graph (layout.py): only its callback is added.
+            self.kit.graph.local_subscribers.setdefault(f"{ns}/goal_pose", []).append(to_navigator)
+            return
+        move_base = self.actionlib.get(f"{ns}/move_base")
+        pose_type = self._type("geometry_msgs/msg/PoseStamped")
+        if move_base is None or pose_type is None:
+            return
+
+        def to_move_base(msg: dict[str, Any], source: int) -> None:
+            move_base.take_goal({"goal_id": {}, "goal": {"target_pose": msg}}, source)
+
+        topic = f"{ns}/move_base_simple/goal"
+        self.kit.graph.add_subscriber(f"{ns}/move_base", topic, pose_type, to_move_base)
 
     async def _drive_ros1(
         self,
