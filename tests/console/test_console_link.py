@@ -56,7 +56,7 @@ async def test_a_url_elicitation_sends_the_person_to_the_consoles_approval(sim_r
                 page = await browser.new_page()
                 await page.goto(params.url)
                 await expect(page.locator("#link-question")).to_contain_text(CMD_VEL, timeout=WAIT_MS)
-                await expect(page.locator("#link-question")).to_contain_text('"x": 0.4')
+                await expect(page.locator("#link-question")).to_contain_text("linear.x: 0.4")
                 # The link is not the console: the robot's panels stay hidden without the secret.
                 await expect(page.locator("#main")).to_be_hidden()
                 assert moving(sim_ros2) == []
