@@ -159,6 +159,14 @@ def test_describe_lists_what_the_policy_restricts() -> None:
     assert "read_only" in "\n".join(Policy(read_only=True).describe())
 
 
+def test_confirm_never_says_the_navigation_goals_are_still_asked() -> None:
+    """Only ``[navigation] confirm = "motion"``: the top line does not say nobody is asked (seen on the ROS 1
+    lab: the start-up log read "nobody is asked", then "[navigation] the person confirms each goal")."""
+    text = "\n".join(parse_policy({"navigation": {"confirm": "motion"}}, where="p.toml").describe())
+    assert "confirm = never: nobody is asked, except for the motion goals [navigation] confirms" in text
+    assert "[navigation] the person confirms each goal" in text
+
+
 def test_approvals_and_motion_services_are_read_and_described(tmp_path: Path) -> None:
     """approvals = "console" and [services] motion load, and check / the start-up log name them."""
     text = 'confirm = "motion"\napprovals = "console"\n[services]\nmotion = ["/arm/move_to"]\n'

@@ -226,7 +226,10 @@ class Policy:
             lines.append("  read_only: only reading tools are listed or callable")
             return lines
         asked = f" (no answer within {self.confirm_timeout:g} s is a no)" if self.confirm != "never" else ""
-        lines.append(f"  confirm = {self.confirm}: {_CONFIRM_TEXT[self.confirm]}{asked}")
+        said = _CONFIRM_TEXT[self.confirm]
+        if self.confirm == "never" and self.navigation.confirm != "never":
+            said = "nobody is asked, except for the motion goals [navigation] confirms (below)"
+        lines.append(f"  confirm = {self.confirm}: {said}{asked}")
         if self.approvals == "console":
             lines.append("  approvals = console: only the person at the operator console confirms")
         if self.motion_topics:
