@@ -1,0 +1,235 @@
+"""``move_arm``: move a manipulator's joints to a goal (by joint, absolute or relative, or a named SRDF pose),
+sent as a ``FollowJointTrajectory`` goal to the controller that moves those joints, timed from the URDF speeds
+and the policy's ``[arm] speed_scale`` (never by the model), and judged by the guard like every arm motion."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+from pydantic import BaseModel, Field
+
+from rosbridge_mcp_server.robot.acting import send_goal
+from rosbridge_mcp_server.robot.arm_plan import ArmPlan, PlanError, plan_motion, shown, to_si
+from rosbridge_mcp_server.robot.arm_scene import ArmScene, joint_positions, learn_arm, read_semantic
+from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
+from rosbridge_mcp_server.robot.listening import listen
+from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+
+__all__ = ["SPEC", "ArmAnswer", "run"]
+
+_READY_WAIT = 3.0
+_MAX_TIMEOUT = 600.0
+#: How long after the motion's own duration the goal may take before it is cancelled.
+_SLACK = 10.0
+_EXAMPLE = '{"joints": {"elbow_joint": 45}}'
+
+_CANCELLED_BY = {
+    "timeout": "cancelled: it did not finish within the timeout",
+    "request_cancelled": "cancelled because the tool call was cancelled",
+    "cancel_action": "cancelled by cancel_action",
+    "stop_robot": "cancelled by stop_robot",
+    "estop": "cancelled by E-STOP on the operator console",
+}
+
+
+class ArmAnswer(BaseModel):
+    """How the arm motion ended; positions in degrees (revolute) or metres (prismatic)."""
+
+    goal_id: str = Field(description="The goal's id (cancel_action takes it)")
+    action: str
+    status: str = Field(description="succeeded, canceled, aborted, ... in the bridge's words")
+    succeeded: bool
+    duration: float = Field(description="Seconds the motion was timed to take")
+    target: dict[str, float]
+    final: dict[str, float] | None = Field(
+        description="Where the joints are after the goal, from /joint_states"
+    )
+    largest_error: float | None = Field(description="Largest |final - target| over the joints (deg or m)")
+    error_code: int | None = Field(description="FollowJointTrajectory's error_code (0: success)")
+    canceled_by: str | None
+
+
+SPEC = ToolSpec(
+    name="move_arm",
+    title="Move the arm",
+    description=(
+        "Move arm joints (DEGREES, prismatic in metres; relative or absolute) or to a named SRDF pose, timed "
+        f'within the URDF limits and the safety policy. Example: {_EXAMPLE} or {{"pose": "home"}}'
+    ),
+    hints=ACTS_ON_ROBOT,
+    acts_on="action",
+    output=ArmAnswer,
+)
+
+
+def _targets(scene: ArmScene, joints: dict[str, Any], relative: bool) -> dict[str, float]:
+    robot = scene.robot
+    assert robot is not None
+    out: dict[str, float] = {}
+    for name, value in joints.items():
+        joint = robot.joint(name)
+        if joint is None or not joint.movable or joint.mimic is not None:
+            movable = ", ".join(j.name for j in robot.movable_joints)
+            raise ToolFailure(
+                f"{name!r} is not a movable joint of the arm. Its joints: {movable}. Nothing was sent."
+            )
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+            raise ToolFailure(f"joints.{name} must be a finite number (degrees or metres), not {value!r}.")
+        target = to_si(joint, float(value))
+        if relative:
+            now = scene.positions.get(name)
+            if now is None:
+                raise ToolFailure(
+                    f"where {name} is now was not read from /joint_states, so a relative move "
+                    "cannot be placed. Nothing was sent."
+                )
+            target += now
+        out[name] = target
+    return out
+
+
+async def _named_pose(ctx: ToolContext, pose: str) -> dict[str, float]:
+    semantic = await read_semantic(ctx.client, ctx.graph, _READY_WAIT)
+    if isinstance(semantic, str):
+        raise ToolFailure(f"No named pose {pose!r}: {semantic}. Give joints instead. Nothing was sent.")
+    found = semantic.pose(pose)
+    if found is None:
+        known = ", ".join(sorted({p.name for p in semantic.poses})) or "none"
+        raise ToolFailure(f"No named pose {pose!r} in the SRDF. Known poses: {known}. Nothing was sent.")
+    return dict(found.positions)
+
+
+async def run(
+    ctx: ToolContext,
+    *,
+    joints: Annotated[
+        dict[str, float] | None,
+        Field(
+            description='Joint → DEGREES (prismatic: metres), e.g. {"elbow_joint": 45, "wrist_1_joint": -30}'
+        ),
+    ] = None,
+    pose: Annotated[str, Field(description='A named pose from the SRDF, e.g. "home"')] = "",
+    relative: Annotated[
+        bool, Field(description="true: joints are added to where the joints are now")
+    ] = False,
+    controller: Annotated[
+        str, Field(description='e.g. arm_controller ("" = the controller that moves those joints)')
+    ] = "",
+    timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 60")] = 60.0,
+) -> ToolAnswer:
+    """Resolve the goal, plan its timing, send it, report progress, say where the arm ended."""
+    if bool(joints) == bool(pose.strip()):
+        raise ToolFailure(
+            f"Give joints or a named pose, not both or neither, e.g. {_EXAMPLE}. Nothing was sent."
+        )
+    if pose.strip() and relative:
+        raise ToolFailure("relative applies to joints, not to a named pose. Nothing was sent.")
+    scene = await learn_arm(ctx.client, ctx.graph, timeout=_READY_WAIT)
+    if scene.robot is None:
+        raise ToolFailure(f"The arm cannot be moved: {'; '.join(scene.problems)}. Nothing was sent.")
+    targets = (
+        await _named_pose(ctx, pose.strip()) if pose.strip() else _targets(scene, joints or {}, relative)
+    )
+    dialect = await ctx.client.dialect()
+    try:
+        plan = plan_motion(
+            scene.robot,
+            scene.positions,
+            targets,
+            controllers=scene.controllers,
+            controller=controller.strip() or None,
+            speed_scale=ctx.config.policy.arm.speed_scale,
+            ros_version=dialect.version,
+        )
+    except PlanError as exc:
+        raise ToolFailure(f"The arm cannot be moved: {exc}. Nothing was sent.") from None
+    if plan.duration + 1.0 > timeout:
+        raise ToolFailure(
+            f"The motion takes {plan.duration:.1f} s at the allowed speed, longer than the timeout "
+            f"{timeout:g} s. Give a longer timeout. Nothing was sent."
+        )
+    action_type = (
+        "control_msgs/FollowJointTrajectoryAction"
+        if dialect.version == 1
+        else ("control_msgs/action/FollowJointTrajectory")
+    )
+
+    async def on_feedback(running: Goal, feedback: dict[str, Any]) -> None:
+        actual = feedback.get("actual") if isinstance(feedback, dict) else None
+        where = actual.get("positions") if isinstance(actual, dict) else None
+        text = f"goal {running.goal_id}: moving ({plan.duration:.1f} s planned)"
+        if isinstance(where, list) and len(where) == len(plan.joints):
+            text += ": " + ", ".join(
+                f"{name} {value:.3g}"
+                for name, value in zip(plan.joints, _in_units(scene, plan, where), strict=True)
+            )
+        await ctx.report_progress(float(running.feedback_count), None, text)
+
+    outcome = await send_goal(
+        ctx,
+        tool=SPEC.name,
+        action=plan.action,
+        action_type=action_type,
+        goal=plan.goal,
+        timeout=min(timeout, plan.duration + _SLACK),
+        on_feedback=on_feedback,
+        scene=scene,
+    )
+    return await _answer(ctx, scene, plan, outcome)
+
+
+def _in_units(scene: ArmScene, plan: ArmPlan, values: list[Any]) -> list[float]:
+    robot = scene.robot
+    assert robot is not None
+    out = []
+    for name, value in zip(plan.joints, values, strict=True):
+        joint = robot.joint(name)
+        number = float(value) if isinstance(value, int | float) else math.nan
+        out.append(shown(joint, number) if joint is not None else number)
+    return out
+
+
+async def _answer(ctx: ToolContext, scene: ArmScene, plan: ArmPlan, outcome: Goal) -> ToolAnswer:
+    heard = await listen(ctx.client, "/joint_states", None, count=1, duration=None, first_timeout=_READY_WAIT)
+    now = joint_positions(heard.messages[0].message) if heard.messages else {}
+    target = dict(zip(plan.joints, _in_units(scene, plan, list(plan.target)), strict=True))
+    final = None
+    error = None
+    if all(name in now for name in plan.joints):
+        final = dict(zip(plan.joints, _in_units(scene, plan, [now[n] for n in plan.joints]), strict=True))
+        error = round(max(abs(final[n] - target[n]) for n in plan.joints), 4)
+    result = outcome.result if isinstance(outcome.result, dict) else {}
+    code = result.get("error_code")
+    data = ArmAnswer(
+        goal_id=outcome.goal_id,
+        action=outcome.action,
+        status=outcome.status,
+        succeeded=outcome.succeeded,
+        duration=plan.duration,
+        target=target,
+        final=final,
+        largest_error=error,
+        error_code=code if isinstance(code, int) else None,
+        canceled_by=outcome.canceled_by,
+    )
+    lines = [f"Goal {outcome.goal_id} on {outcome.action}: {outcome.status} (timed {plan.duration:.1f} s)."]
+    if outcome.status == UNCONFIRMED_STATUS:
+        lines[0] = (
+            lines[0][:-1] + "; the robot has not confirmed that it ended: call stop_robot, or check it."
+        )
+    elif outcome.canceled_by is not None:
+        lines[0] = lines[0][:-1] + f"; {_CANCELLED_BY.get(outcome.canceled_by, outcome.canceled_by)}."
+    if not outcome.succeeded and result:
+        lines.append(f"Result: {compact_json(result, 300)}")
+    lines.append(f"Target: {_listed(target)}")
+    if final is not None:
+        lines.append(f"Now: {_listed(final)} (largest error {error:g})")
+    else:
+        lines.append("Now: /joint_states did not say.")
+    return ToolAnswer(text="\n".join(lines), data=data)
+
+
+def _listed(values: dict[str, float]) -> str:
+    return ", ".join(f"{name} {value:g}" for name, value in values.items())
