@@ -9,6 +9,7 @@ from __future__ import annotations
 
 __all__ = [
     "ALL_TOOL_NAMES",
+    "ARM_TOOL_NAMES",
     "NAVIGATION_TOOL_NAMES",
     "ORIGINAL_TOOL_NAMES",
     "RECORD_TOOL_NAMES",
@@ -48,6 +49,8 @@ VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
 SAFETY_TOOL_NAMES = ("stop_robot",)
 #: Sending the robot somewhere on its map.
 NAVIGATION_TOOL_NAMES = ("navigate_to",)
+#: Moving a manipulator's joints and its gripper, within the URDF's limits and the policy's [arm].
+ARM_TOOL_NAMES = ("move_arm", "move_gripper")
 #: Recordings: MCAP files written from topics, and read back.
 RECORD_TOOL_NAMES = ("record", "read_recording")
 ALL_TOOL_NAMES = (
@@ -57,6 +60,7 @@ ALL_TOOL_NAMES = (
     + SAFETY_TOOL_NAMES
     + NAVIGATION_TOOL_NAMES
     + RECORD_TOOL_NAMES
+    + ARM_TOOL_NAMES
 )
 TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "all": ALL_TOOL_NAMES,
@@ -66,6 +70,7 @@ TOOL_GROUPS: dict[str, tuple[str, ...]] = {
     "safety": SAFETY_TOOL_NAMES,
     "navigation": NAVIGATION_TOOL_NAMES,
     "record": RECORD_TOOL_NAMES,
+    "arm": ARM_TOOL_NAMES,
 }
 
 

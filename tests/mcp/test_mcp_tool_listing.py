@@ -41,6 +41,8 @@ EXPECTED_PARAMETERS = {
     "navigate_to": ["goal", "frame", "forward", "left", "turn", "timeout"],
     "record": ["topics", "duration", "max_megabytes", "name", "stop"],
     "read_recording": ["file", "mode", "fields", "at", "window", "topics"],
+    "move_arm": ["joints", "pose", "relative", "controller", "timeout"],
+    "move_gripper": ["command", "position", "max_effort", "action", "timeout"],
 }
 READ_ONLY = {
     "list_topics",

@@ -35,19 +35,14 @@ _CANCELLED_BY = {
 
 
 class ArmAnswer(BaseModel):
-    """How the arm motion ended; positions in degrees (revolute) or metres (prismatic)."""
+    """How the motion ended (degrees; m)."""
 
-    goal_id: str = Field(description="The goal's id (cancel_action takes it)")
-    action: str
-    status: str = Field(description="succeeded, canceled, aborted, ... in the bridge's words")
+    goal_id: str
+    status: str
     succeeded: bool
-    duration: float = Field(description="Seconds the motion was timed to take")
     target: dict[str, float]
-    final: dict[str, float] | None = Field(
-        description="Where the joints are after the goal, from /joint_states"
-    )
-    largest_error: float | None = Field(description="Largest |final - target| over the joints (deg or m)")
-    error_code: int | None = Field(description="FollowJointTrajectory's error_code (0: success)")
+    final: dict[str, float] | None
+    largest_error: float | None
     canceled_by: str | None
 
 
@@ -55,8 +50,7 @@ SPEC = ToolSpec(
     name="move_arm",
     title="Move the arm",
     description=(
-        "Move arm joints (DEGREES, prismatic in metres; relative or absolute) or to a named SRDF pose, timed "
-        f'within the URDF limits and the safety policy. Example: {_EXAMPLE} or {{"pose": "home"}}'
+        f"Move arm joints (DEGREES; prismatic m) or to an SRDF pose, within URDF limits. Example: {_EXAMPLE}"
     ),
     hints=ACTS_ON_ROBOT,
     acts_on="action",
@@ -106,17 +100,11 @@ async def run(
     *,
     joints: Annotated[
         dict[str, float] | None,
-        Field(
-            description='Joint → DEGREES (prismatic: metres), e.g. {"elbow_joint": 45, "wrist_1_joint": -30}'
-        ),
+        Field(description='e.g. {"elbow_joint": 45}'),
     ] = None,
-    pose: Annotated[str, Field(description='A named pose from the SRDF, e.g. "home"')] = "",
-    relative: Annotated[
-        bool, Field(description="true: joints are added to where the joints are now")
-    ] = False,
-    controller: Annotated[
-        str, Field(description='e.g. arm_controller ("" = the controller that moves those joints)')
-    ] = "",
+    pose: Annotated[str, Field(description='SRDF pose, e.g. "home"')] = "",
+    relative: Annotated[bool, Field(description="e.g. true: add to now")] = False,
+    controller: Annotated[str, Field(description="e.g. arm_controller")] = "",
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 60")] = 60.0,
 ) -> ToolAnswer:
     """Resolve the goal, plan its timing, send it, report progress, say where the arm ended."""
@@ -201,17 +189,13 @@ async def _answer(ctx: ToolContext, scene: ArmScene, plan: ArmPlan, outcome: Goa
         final = dict(zip(plan.joints, _in_units(scene, plan, [now[n] for n in plan.joints]), strict=True))
         error = round(max(abs(final[n] - target[n]) for n in plan.joints), 4)
     result = outcome.result if isinstance(outcome.result, dict) else {}
-    code = result.get("error_code")
     data = ArmAnswer(
         goal_id=outcome.goal_id,
-        action=outcome.action,
         status=outcome.status,
         succeeded=outcome.succeeded,
-        duration=plan.duration,
         target=target,
         final=final,
         largest_error=error,
-        error_code=code if isinstance(code, int) else None,
         canceled_by=outcome.canceled_by,
     )
     lines = [f"Goal {outcome.goal_id} on {outcome.action}: {outcome.status} (timed {plan.duration:.1f} s)."]

@@ -23,27 +23,20 @@ DEFAULT_ACTION = "/gripper_controller/gripper_cmd"
 
 
 class GripperAnswer(BaseModel):
-    """How the gripper goal ended; positions in metres (prismatic) or degrees (revolute)."""
+    """How the gripper goal ended (m)."""
 
     goal_id: str
-    action: str
     status: str
     succeeded: bool
-    joint: str | None = Field(description="The joint the gripper controller moves, when known")
-    target: float = Field(description="The position asked for (m or rad, as the controller takes it)")
-    position: float | None = Field(description="The position the result reports")
+    position: float | None
     reached_goal: bool | None
-    stalled: bool | None
     canceled_by: str | None
 
 
 SPEC = ToolSpec(
     name="move_gripper",
-    title="Open or close the gripper",
-    description=(
-        "Open or close the gripper, or move it to a position (metres), with a most effort (N). Example: "
-        '{"command": "close", "max_effort": 10} or {"position": 0.02}'
-    ),
+    title="Move the gripper",
+    description=('Open, close or set the gripper (m) within URDF limits. Example: {"command": "close"}'),
     hints=ACTS_ON_ROBOT,
     acts_on="action",
     output=GripperAnswer,
@@ -76,17 +69,11 @@ async def _action_type(ctx: ToolContext, action: str) -> str:
 async def run(
     ctx: ToolContext,
     *,
-    command: Annotated[
-        Literal["open", "close", ""], Field(description='"open" or "close" ("" with position)')
-    ] = "",
-    position: Annotated[
-        float | None, Field(description="Gripper joint position in metres, e.g. 0.02 (instead of command)")
-    ] = None,
-    max_effort: Annotated[
-        float | None, Field(ge=0, description="Newtons, e.g. 10 (default: the policy's or the URDF's limit)")
-    ] = None,
-    action: Annotated[str, Field(description=f'e.g. {DEFAULT_ACTION} ("" = that)')] = "",
-    timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 20")] = 20.0,
+    command: Annotated[Literal["open", "close", ""], Field(description='e.g. "open"')] = "",
+    position: Annotated[float | None, Field(description="Metres, e.g. 0.02")] = None,
+    max_effort: Annotated[float | None, Field(ge=0, description="Newtons, e.g. 10")] = None,
+    action: Annotated[str, Field(description=f"e.g. {DEFAULT_ACTION}")] = "",
+    timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="s, e.g. 20")] = 20.0,
 ) -> ToolAnswer:
     """Resolve the target from the URDF, send the goal, report how it ended."""
     if bool(command) == (position is not None):
@@ -138,17 +125,12 @@ def _answer(outcome: Goal, joint: Joint | None, target: float) -> ToolAnswer:
     result = outcome.result if isinstance(outcome.result, dict) else {}
     position = result.get("position")
     reached = result.get("reached_goal")
-    stalled = result.get("stalled")
     data = GripperAnswer(
         goal_id=outcome.goal_id,
-        action=outcome.action,
         status=outcome.status,
         succeeded=outcome.succeeded,
-        joint=joint.name if joint is not None else None,
-        target=target,
         position=float(position) if isinstance(position, int | float) else None,
         reached_goal=reached if isinstance(reached, bool) else None,
-        stalled=stalled if isinstance(stalled, bool) else None,
         canceled_by=outcome.canceled_by,
     )
     lines = [f"Gripper goal {outcome.goal_id} on {outcome.action}: {outcome.status} (target {target:g})."]
