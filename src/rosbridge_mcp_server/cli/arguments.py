@@ -156,9 +156,10 @@ def build_parser(command: str) -> _Parser:
     )
     demo.add_argument(
         "--demo-world",
-        choices=("turtle", "nav2"),
+        choices=("turtle", "nav2", "arm"),
         default="turtle",
-        help="the simulated robot: turtle (default) or nav2 (a Nav2 mobile robot's graph, ~36 nodes)",
+        help="the simulated robot: turtle (default), nav2 (a Nav2 mobile robot's graph, ~36 nodes) or arm "
+        "(ROS 2: the turtle with a 6-joint arm and a gripper)",
     )
     demo.add_argument(
         "--demo-robots",
@@ -172,7 +173,7 @@ def build_parser(command: str) -> _Parser:
         default=None,
         metavar="NAME[,NAME...]",
         help="with --demo-world nav2: break the robot on purpose (scan-stopped, tf-stale, driver-error, "
-        "controller-inactive, log-errors, node-gone)",
+        "controller-inactive, log-errors, node-gone); with arm: arm-controller-inactive, joint-states-stale",
     )
     return parser
 

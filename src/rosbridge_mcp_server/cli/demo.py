@@ -15,7 +15,7 @@ from rosbridge_mcp_server.config import Config, ConfigError
 __all__ = ["DemoDialect", "DemoSettings", "DemoWorld", "demo_robot", "demo_settings"]
 
 DemoDialect = Literal["ros1", "ros2"]
-DemoWorld = Literal["turtle", "nav2"]
+DemoWorld = Literal["turtle", "nav2", "arm"]
 _log = logging.getLogger(__name__)
 
 
@@ -24,10 +24,10 @@ class DemoSettings:
     """The simulated robot ``--demo`` starts."""
 
     dialect: DemoDialect = "ros2"
-    #: The turtle (default) or a Nav2-scale mobile robot, ``robots`` of them.
+    #: The turtle (default), a Nav2-scale mobile robot (``robots`` of them), or the turtle with an arm.
     world: DemoWorld = "turtle"
     robots: int = 1
-    #: Faults the Nav2 robot is broken with (``--demo-fault``), checked by the simulated robot.
+    #: Faults the Nav2 robot or the arm is broken with (``--demo-fault``), checked by the simulated robot.
     faults: tuple[str, ...] = ()
 
 
@@ -43,15 +43,19 @@ def demo_settings(
     """The demo's settings, checked; ``None`` without ``--demo``. :class:`ConfigError` names a bad one."""
     if dialect not in ("ros1", "ros2"):
         raise ConfigError(f"--demo-dialect must be ros1 or ros2, not {dialect!r}")
-    if world not in ("turtle", "nav2"):
-        raise ConfigError(f"--demo-world must be turtle or nav2, not {world!r}")
+    if world not in ("turtle", "nav2", "arm"):
+        raise ConfigError(f"--demo-world must be turtle, nav2 or arm, not {world!r}")
+    if world == "arm" and dialect != "ros2":
+        raise ConfigError(
+            "--demo-world arm needs --demo-dialect ros2 (ROS 1's control_msgs are not simulated)"
+        )
     if not 1 <= robots <= 100 or (robots > 1 and world != "nav2"):
         raise ConfigError(
             f"--demo-robots must be 1-100 and more than 1 needs --demo-world nav2, not {robots}"
         )
     names = tuple(f.strip() for f in (faults or "").split(",") if f.strip())
-    if names and world != "nav2":
-        raise ConfigError("--demo-fault needs --demo-world nav2")
+    if names and world not in ("nav2", "arm"):
+        raise ConfigError("--demo-fault needs --demo-world nav2 or arm")
     if not demo:
         return None
     if fleet:
@@ -64,19 +68,31 @@ def demo_settings(
         )
     settings = DemoSettings(
         dialect="ros1" if dialect == "ros1" else "ros2",
-        world="nav2" if world == "nav2" else "turtle",
+        world="nav2" if world == "nav2" else "arm" if world == "arm" else "turtle",
         robots=robots,
         faults=names,
     )
     if settings.faults:
-        # Imported here: the simulated robot is only needed with --demo.
-        from rosbridge_mcp_server.sim.nodes.nav2.health import check_faults  # noqa: PLC0415
-
-        try:
-            check_faults(settings.faults, ros2=settings.dialect == "ros2")
-        except ValueError as exc:
-            raise ConfigError(f"--demo-fault: {exc}") from None
+        _check_faults(settings)
     return settings
+
+
+def _check_faults(settings: DemoSettings) -> None:
+    # Imported here: the simulated robot is only needed with --demo.
+    from rosbridge_mcp_server.sim.nodes.arm import ARM_FAULTS  # noqa: PLC0415
+    from rosbridge_mcp_server.sim.nodes.nav2.health import check_faults  # noqa: PLC0415
+
+    if settings.world == "arm":
+        unknown = [f for f in settings.faults if f not in ARM_FAULTS]
+        if unknown:
+            raise ConfigError(
+                f"--demo-fault: unknown arm fault {', '.join(unknown)}; choose from {', '.join(ARM_FAULTS)}"
+            )
+        return
+    try:
+        check_faults(settings.faults, ros2=settings.dialect == "ros2")
+    except ValueError as exc:
+        raise ConfigError(f"--demo-fault: {exc}") from None
 
 
 @contextlib.asynccontextmanager

@@ -9,6 +9,7 @@ import signal
 import sys
 from typing import NoReturn
 
+from rosbridge_mcp_server.sim.nodes.arm import ARM_FAULTS
 from rosbridge_mcp_server.sim.nodes.nav2.health import FAULTS, check_faults
 from rosbridge_mcp_server.sim.player import PlayError
 from rosbridge_mcp_server.sim.robot import ROS2_DISTROS, WORLDS, SimulatedRobot
@@ -86,7 +87,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--world",
         choices=WORLDS,
         default="turtle",
-        help="turtle (the small demo, default) or nav2 (a Nav2-scale mobile robot: ~36 nodes, 14 actions)",
+        help="turtle (the small demo, default), nav2 (a Nav2-scale mobile robot: ~36 nodes, 14 actions) "
+        "or arm (ROS 2: the turtle with a 6-joint arm and a gripper under ros2_control)",
     )
     parser.add_argument(
         "--robots",
@@ -99,7 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--fault",
         default="",
         metavar="NAME[,NAME...]",
-        help=f"nav2 only: break the robot on purpose ({', '.join(FAULTS)})",
+        help=f"nav2 or arm: break the robot on purpose (nav2: {', '.join(FAULTS)}; "
+        f"arm: {', '.join(ARM_FAULTS)})",
     )
     parser.add_argument(
         "--in-order",
@@ -185,11 +188,17 @@ def run(argv: list[str] | None = None) -> int:
         parser.error("--server rs runs calls side by side with its newer rosapi: no --in-order, no --rosapi")
     if args.robots > 1 and args.world != "nav2":
         parser.error("--robots needs --world nav2")
-    faults = tuple(f for f in args.fault.split(",") if f.strip())
-    if faults and args.world != "nav2":
-        parser.error("--fault needs --world nav2")
+    faults = tuple(f.strip() for f in args.fault.split(",") if f.strip())
+    if faults and args.world not in ("nav2", "arm"):
+        parser.error("--fault needs --world nav2 or --world arm")
+    if args.world == "arm" and args.dialect != "ros2":
+        parser.error("--world arm needs --dialect ros2 (ROS 1's control_msgs are not simulated)")
+    unknown = [f for f in faults if f not in ARM_FAULTS]
+    if args.world == "arm" and unknown:
+        parser.error(f"--fault: unknown arm fault {', '.join(unknown)}; choose from {', '.join(ARM_FAULTS)}")
     try:
-        faults = check_faults(faults, ros2=args.dialect == "ros2")
+        if args.world == "nav2":
+            faults = check_faults(faults, ros2=args.dialect == "ros2")
     except ValueError as exc:
         parser.error(f"--fault: {exc}")
     try:

@@ -16,6 +16,7 @@ from rosbridge_mcp_server.sim.bridge import Bridge, BridgeConfig
 from rosbridge_mcp_server.sim.graph import Graph
 from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
 from rosbridge_mcp_server.sim.nodes import CameraSettings, WorldNodes
+from rosbridge_mcp_server.sim.nodes.arm import ArmWorld
 from rosbridge_mcp_server.sim.nodes.nav2 import Nav2World
 from rosbridge_mcp_server.sim.nodes.room import ROOM_MAP_CELLS
 from rosbridge_mcp_server.sim.player import Player
@@ -32,8 +33,9 @@ DEFAULT_MAX_MESSAGE_SIZE = 10_000_000
 MAX_INCOMING_FRAME = 10 * 1024 * 1024
 #: ROS 2 distros the simulated robot can say it runs (``get_ros_version``; Humble has no type descriptions).
 ROS2_DISTROS = ("humble", "jazzy", "kilted", "rolling")
-#: The worlds the simulated robot can run: the turtle demo (default) and a Nav2-scale mobile robot.
-WORLDS = ("turtle", "nav2")
+#: The worlds the simulated robot can run: the turtle demo (default), a Nav2-scale mobile robot, and the
+#: turtle with an arm (ROS 2).
+WORLDS = ("turtle", "nav2", "arm")
 
 
 class SimulatedRobot:
@@ -58,6 +60,8 @@ class SimulatedRobot:
     ``play`` plays an MCAP recording (``sim/player.py``), once or with ``play_loop`` over and over.
 
     ``world="nav2"`` runs a Nav2-scale mobile robot instead of the turtle (see :mod:`.nodes.nav2`);
+    ``world="arm"`` (ROS 2) the turtle with a 6-joint arm and a gripper driven by ros2_control, and its
+    faults ``arm-controller-inactive``, ``joint-states-stale`` (see :mod:`.nodes.arm`);
     ``robots=N`` runs N of them under ``/robot1``, ``/robot2``, ... ``faults`` (Nav2 only) breaks it on
     purpose: ``scan-stopped``, ``tf-stale``, ``driver-error``, ``controller-inactive`` (ROS 2),
     ``log-errors``, ``node-gone`` (see :mod:`.nodes.nav2.health`).
@@ -89,7 +93,7 @@ class SimulatedRobot:
         map_cells: int = ROOM_MAP_CELLS,
         max_message_size: int | None = None,
         ssl: _ssl.SSLContext | None = None,
-        world: Literal["turtle", "nav2"] = "turtle",
+        world: Literal["turtle", "nav2", "arm"] = "turtle",
         robots: int = 1,
         cbor: bool = True,
         faults: Sequence[str] = (),
@@ -104,6 +108,8 @@ class SimulatedRobot:
             raise ValueError("map_cells must be at least 8")
         if world not in WORLDS:
             raise ValueError(f"world must be one of {', '.join(WORLDS)}, not {world!r}")
+        if world == "arm" and dialect != "ros2":
+            raise ValueError("world='arm' needs dialect='ros2' (ROS 1's control_msgs are not simulated)")
         if robots < 1 or (robots > 1 and world != "nav2"):
             raise ValueError(f"robots must be >= 1, and more than one needs world='nav2' (not {robots!r})")
         if action_step <= 0 or slow_service_seconds < 0:
@@ -190,6 +196,14 @@ class SimulatedRobot:
         if self._nodes.nav2 is None:
             raise AttributeError("this robot runs the turtle world (world='nav2' has a Nav2 world)")
         return self._nodes.nav2
+
+    @property
+    def arm(self) -> ArmWorld:
+        """The arm (its joint positions, controllers, faults, the goals that reached it); only with
+        ``world="arm"``."""
+        if self._nodes.arm is None:
+            raise AttributeError("this robot has no arm (world='arm' has one)")
+        return self._nodes.arm
 
     @property
     def rosapi_node(self) -> Rosapi:

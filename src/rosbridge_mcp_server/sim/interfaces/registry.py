@@ -33,6 +33,7 @@ from .base import (
 )
 from .cbor_form import cbor_form
 from .definitions import COMMON, ROS1_ONLY, ROS2_ONLY, ROSAPI_2_1, to_ros1_text
+from .definitions_arm import ARM
 from .definitions_nav2 import KILTED, NAV2
 from .ros1 import Ros1Conversion
 from .ros2 import Ros2Conversion
@@ -50,7 +51,7 @@ def _table_for(dialect: Dialect, rosapi: str, distro: str = "") -> ParsedTable:
     # Parsed once per process: the specs are never mutated after linking, so robots share them. (Two threads
     # missing at once may both parse; either table is right.)
     if dialect == "ros2":
-        texts = {**COMMON, **NAV2, **ROS2_ONLY}
+        texts = {**COMMON, **NAV2, **ARM, **ROS2_ONLY}
         if distro in KILTED_ON:
             texts.update(KILTED)
         if rosapi == "2.1.0":

@@ -15,6 +15,8 @@ from typing import Any
 from rosbridge_mcp_server.sim.actions import FIBONACCI_NODE, ActionlibFibonacciServer, FibonacciServer
 from rosbridge_mcp_server.sim.bridge import Bridge
 from rosbridge_mcp_server.sim.graph import ROSBRIDGE_NODE, ServiceEntry
+from rosbridge_mcp_server.sim.nodes.arm import ARM_NODES, ArmWorld
+from rosbridge_mcp_server.sim.nodes.arm.model import arm_urdf
 from rosbridge_mcp_server.sim.nodes.camera import CAMERA, Camera, CameraSettings
 from rosbridge_mcp_server.sim.nodes.kit import Loop, NodeKit
 from rosbridge_mcp_server.sim.nodes.nav2 import Nav2World
@@ -92,7 +94,13 @@ class WorldNodes:
         self.fibonacci1: ActionlibFibonacciServer | None = None
         #: The Nav2 world when the robot runs it (``world="nav2"``), else ``None``.
         self.nav2: Nav2World | None = None
-        if world == "nav2":
+        #: The arm when the robot has one (``world="arm"``: the turtle world with an arm), else ``None``.
+        self.arm: ArmWorld | None = None
+        if world == "arm":
+            if not self.ros2:
+                raise ValueError("world='arm' needs dialect='ros2' (ROS 1's control_msgs are not simulated)")
+            self.arm = ArmWorld(self.kit, faults)
+        elif world == "nav2":
             self.nav2 = Nav2World(
                 self.kit,
                 robots=robots,
@@ -101,9 +109,11 @@ class WorldNodes:
                 faults=faults,
             )
         elif faults:
-            raise ValueError("faults need world='nav2'")
-        elif world != "turtle" or robots != 1:
-            raise ValueError(f"world must be 'turtle' or 'nav2' (robots only with nav2), not {world!r}")
+            raise ValueError("faults need world='nav2' or world='arm'")
+        if (robots != 1 and world != "nav2") or world not in ("turtle", "nav2", "arm"):
+            raise ValueError(
+                f"world must be 'turtle', 'nav2' or 'arm' (robots only with nav2), not {world!r}"
+            )
 
     # --- building -------------------------------------------------------------------------------------------
 
@@ -126,6 +136,10 @@ class WorldNodes:
         self.lidar.build()
         self.map_server.build()
         self.planner.build()
+        if self.arm is not None:
+            self.arm.build()
+            self.robot_state.extra_description = arm_urdf()
+            self.robot_state.extra_static = self.arm.static_transforms()
         if self.fast_topic:
             self._fast()
         self._fibonacci()
@@ -152,6 +166,8 @@ class WorldNodes:
         ]
         if self.fast_topic:
             nodes.append(FAST)
+        if self.arm is not None:
+            nodes.extend(ARM_NODES)
         return nodes
 
     def _plumbing(self) -> None:
@@ -308,7 +324,9 @@ class WorldNodes:
                     {
                         "/robot_controller:slow_service_seconds": self.slow_service_seconds,
                         "/fibonacci_server:step_seconds": self.action_step,
-                        "/robot_state_publisher:robot_description": robot_description(),
+                        "/robot_state_publisher:robot_description": robot_description(
+                            arm_urdf() if self.arm is not None else ""
+                        ),
                         "/robot_state_publisher:publish_frequency": 20.0,
                         "/odometry:odom_frame": "odom",
                         "/odometry:base_frame": "base_link",

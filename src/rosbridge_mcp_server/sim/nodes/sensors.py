@@ -51,8 +51,9 @@ STATIC_TRANSFORMS: tuple[tuple[str, str, float, float, float, float], ...] = (
 )
 
 
-def robot_description() -> str:
-    """A small URDF of the robot whose fixed joints match :data:`STATIC_TRANSFORMS`."""
+def robot_description(extra: str = "") -> str:
+    """A small URDF of the robot whose fixed joints match :data:`STATIC_TRANSFORMS` (*extra*: more links and
+    joints, e.g. the arm's)."""
     joints = "".join(
         f'  <joint name="{child}_joint" type="fixed">\n'
         f'    <parent link="{parent}"/>\n    <child link="{child}"/>\n'
@@ -64,7 +65,7 @@ def robot_description() -> str:
         '<?xml version="1.0"?>\n<robot name="sim_turtle">\n'
         '  <link name="base_link">\n    <visual>\n      <geometry><cylinder radius="0.15" length="0.1"/>'
         "</geometry>\n    </visual>\n  </link>\n"
-        '  <link name="base_scan"/>\n  <link name="camera"/>\n' + joints + "</robot>\n"
+        '  <link name="base_scan"/>\n  <link name="camera"/>\n' + joints + extra + "</robot>\n"
     )
 
 
@@ -74,6 +75,9 @@ class RobotState:
 
     def __init__(self, kit: NodeKit) -> None:
         self.kit = kit
+        #: More of the robot (the arm world's): URDF text inside ``<robot>``, and fixed transforms.
+        self.extra_description = ""
+        self.extra_static: list[tuple[str, str, float, float, float, float]] = []
 
     def build(self) -> None:
         kit = self.kit
@@ -98,10 +102,10 @@ class RobotState:
         """Once at start: a latched topic hands it to every later subscriber."""
         transforms = [
             self._transform((parent, child), x, y, z, yaw)
-            for parent, child, x, y, z, yaw in STATIC_TRANSFORMS
+            for parent, child, x, y, z, yaw in (*STATIC_TRANSFORMS, *self.extra_static)
         ]
         self.kit.publish("/tf_static", {"transforms": transforms})
-        self.kit.publish("/robot_description", {"data": robot_description()})
+        self.kit.publish("/robot_description", {"data": robot_description(self.extra_description)})
 
     async def _loop(self) -> None:
         self.publish_static()
