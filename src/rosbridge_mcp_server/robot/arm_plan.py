@@ -92,6 +92,12 @@ def plan_motion(
         if not set(targets) <= set(names):
             other = ", ".join(sorted(set(targets) - set(names)))
             raise PlanError(f"controller {chosen.name} does not move {other}; it moves {', '.join(names)}")
+    elif controllers and not controller:
+        moved = ", ".join(sorted(targets))
+        raise PlanError(
+            f"no trajectory controller of the controller manager moves {moved} (a gripper's joints "
+            "move by the gripper's own action)"
+        )
     elif controller:
         action = controller if controller.startswith("/") else f"/{controller}"
         if not action.endswith("/follow_joint_trajectory"):
