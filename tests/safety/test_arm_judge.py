@@ -144,6 +144,20 @@ def test_velocities_given_by_the_model_are_judged_too() -> None:
     assert "point 0's velocity moves elbow_joint" in refusal.text
 
 
+def test_a_cubic_segment_swinging_past_a_limit_is_refused_though_every_point_is_within() -> None:
+    """Elbow 2.7 rad at 0.7 rad/s → 2.75 rad at rest in 1 s swings to ~2.81, past the limit 2.7925."""
+    traj = trajectory({"elbow_joint": 2.7}, 20.0)
+    traj["points"].append({"positions": list(traj["points"][0]["positions"]), "time_from_start": {"sec": 21}})
+    traj["points"][1]["positions"][2] = 2.75
+    traj["points"][0]["velocities"] = [0.0, 0.0, 0.7, 0.0, 0.0, 0.0]
+    traj["points"][1]["velocities"] = [0.0] * 6
+    refusal = arm_refusal(acts(traj)[0], NONE)
+    assert refusal is not None
+    assert "the cubic segment to point 1 swings elbow_joint to" in refusal.text
+    traj["points"][0]["velocities"] = [0.0] * 6  # at rest at both ends: no swing past 2.75
+    assert arm_refusal(acts(traj)[0], NONE) is None
+
+
 def test_an_unknown_or_mimic_joint_is_refused() -> None:
     traj = trajectory({}, 5.0, joints=("shoulder_pan_joint", "gripper_right_finger_joint"))
     traj["points"][0]["positions"] = [0.0, 0.01]

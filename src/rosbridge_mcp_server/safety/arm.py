@@ -153,9 +153,39 @@ def _trajectory_refusal(trajectory: Trajectory, scene: ArmScene, rules: ArmRules
             "Make sure /joint_states is published.",
         )
     begin = tuple(float(v) for v in start if v is not None)
-    return _speed_refusal(trajectory, joints, begin, rules) or _box_refusal(
-        trajectory, joints, begin, (scene, rules)
+    return (
+        _overshoot_refusal(trajectory, joints, begin)
+        or _speed_refusal(trajectory, joints, begin, rules)
+        or _box_refusal(trajectory, joints, begin, (scene, rules))
     )
+
+
+def _overshoot_refusal(
+    trajectory: Trajectory, joints: list[Joint], begin: tuple[float, ...]
+) -> ArmRefusal | None:
+    """A cubic segment (velocities at both ends) can swing past its ends: sampled against the URDF limits."""
+    previous, previous_time = begin, 0.0
+    previous_speeds: tuple[float, ...] | None = tuple(0.0 for _ in joints)  # the arm starts at rest
+    for index, point in enumerate(trajectory.points):
+        span = point.time - previous_time
+        if point.velocities is not None and previous_speeds is not None and span > 0:
+            for j, joint in enumerate(joints):
+                low, high = joint.limits.lower, joint.limits.upper
+                if not joint.bounded or low is None or high is None:
+                    continue
+                ends = (previous[j], point.positions[j], previous_speeds[j], point.velocities[j])
+                for k in range(1, _CUBIC_SAMPLES):
+                    value = _hermite(ends, span, k / _CUBIC_SAMPLES)[0]
+                    if not low <= value <= high:
+                        return _refusal(
+                            f"URDF limit of {joint.name}",
+                            f"the cubic segment to point {index} swings {joint.name} to "
+                            f"{_shown(joint, value)}, outside its URDF limits {_shown(joint, low)} … "
+                            f"{_shown(joint, high)}",
+                            "Give smaller velocities at the points, or none.",
+                        )
+        previous, previous_time, previous_speeds = point.positions, point.time, point.velocities
+    return None
 
 
 def _speed_refusal(
