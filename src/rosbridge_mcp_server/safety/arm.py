@@ -28,34 +28,32 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.robot.arm.kinematics import Chain, inverse, transform_point, translation
 from rosbridge_mcp_server.robot.arm.urdf import Joint, Robot, UrdfError
-from rosbridge_mcp_server.robot.arm_goals import ArmAct, GripperGoal, Trajectory, TrajectoryPoint, carried_arm
+from rosbridge_mcp_server.robot.arm_goals import ArmAct, GripperGoal, Trajectory, carried_arm
+from rosbridge_mcp_server.robot.arm_path import (
+    CUBIC_SAMPLES,
+    MAX_SAMPLES,
+    STEP_RADIANS,
+    Point,
+    hermite,
+    inside_box,
+    path_samples,
+    peak_speeds,
+    segment_hits,
+)
 from rosbridge_mcp_server.robot.arm_scene import ArmScene, gripper_joint
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.seam import Act
-    from rosbridge_mcp_server.safety.arm_rules import ArmRules, Box
+    from rosbridge_mcp_server.safety.arm_rules import ArmRules
 
-__all__ = [
-    "MAX_SAMPLES",
-    "STEP_RADIANS",
-    "ArmRefusal",
-    "act_arm",
-    "arm_goal_text",
-    "arm_refusal",
-    "path_samples",
-]
+__all__ = ["ArmRefusal", "act_arm", "arm_goal_text", "arm_refusal"]
 
-#: Joint travel between two samples of a path: radians (revolute), metres (prismatic).
-STEP_RADIANS = math.radians(2.0)
-STEP_METRES = 0.01
-#: Most samples of one path checked against the boxes; a longer path is refused as too long to check.
-MAX_SAMPLES = 2000
 #: A first point at 0 s farther than this from where the joint is, is a jump.
 JUMP_TOLERANCE = 1e-3
 #: Slack on a speed (relative), for the rounding of times to nanoseconds.
@@ -174,8 +172,8 @@ def _overshoot_refusal(
                 if not joint.bounded or low is None or high is None:
                     continue
                 ends = (previous[j], point.positions[j], previous_speeds[j], point.velocities[j])
-                for k in range(1, _CUBIC_SAMPLES):
-                    value = _hermite(ends, span, k / _CUBIC_SAMPLES)[0]
+                for k in range(1, CUBIC_SAMPLES):
+                    value = hermite(ends, span, k / CUBIC_SAMPLES)[0]
                     if not low <= value <= high:
                         return _refusal(
                             f"URDF limit of {joint.name}",
@@ -211,7 +209,7 @@ def _speed_refusal(
     for index, point in enumerate(trajectory.points):
         span = point.time - previous_time
         if span > 0:
-            peaks = _peak_speeds(previous, point.positions, previous_speeds, point.velocities, span)
+            peaks = peak_speeds(previous, point.positions, previous_speeds, point.velocities, span)
             for joint, cap, peak in zip(joints, caps, peaks, strict=True):
                 if cap is not None and peak > cap * (1 + SPEED_SLACK) + 1e-9:
                     return _over(joint, cap, peak, f"the segment to point {index}", rules)
@@ -232,78 +230,6 @@ def _over(joint: Joint, cap: float, speed: float, where: str, rules: ArmRules) -
         "policy)",
         "Give the points more time (move_arm times a goal itself).",
     )
-
-
-def _hermite(ends: tuple[float, float, float, float], span: float, s: float) -> tuple[float, float]:
-    """Position and speed at fraction *s* of a cubic Hermite segment of *span* seconds between positions
-    ``ends[0]`` and ``ends[1]`` with speeds ``ends[2]`` and ``ends[3]``."""
-    p0, p1, v0, v1 = ends
-    s2, s3 = s * s, s * s * s
-    h00, h10, h01, h11 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2
-    position = h00 * p0 + h10 * span * v0 + h01 * p1 + h11 * span * v1
-    d00, d10, d01, d11 = 6 * s2 - 6 * s, 3 * s2 - 4 * s + 1, -6 * s2 + 6 * s, 3 * s2 - 2 * s
-    speed = (d00 * p0 + d10 * span * v0 + d01 * p1 + d11 * span * v1) / span
-    return position, speed
-
-
-_CUBIC_SAMPLES = 32
-
-
-def _peak_speeds(
-    start: tuple[float, ...],
-    end: tuple[float, ...],
-    v_start: tuple[float, ...] | None,
-    v_end: tuple[float, ...] | None,
-    span: float,
-) -> list[float]:
-    if v_start is None or v_end is None:
-        return [abs(b - a) / span for a, b in zip(start, end, strict=True)]
-    return [
-        max(abs(_hermite((a, b, va, vb), span, k / _CUBIC_SAMPLES)[1]) for k in range(_CUBIC_SAMPLES + 1))
-        for a, b, va, vb in zip(start, end, v_start, v_end, strict=True)
-    ]
-
-
-def path_samples(
-    trajectory: Trajectory, joints: list[Joint], begin: tuple[float, ...]
-) -> Iterator[tuple[float, ...]] | None:
-    """The joint positions along the path the controller interpolates, at most :data:`STEP_RADIANS` (or
-    :data:`STEP_METRES`) of travel apart; ``None`` when that takes more than :data:`MAX_SAMPLES`."""
-    total = 1
-    # The arm starts at rest: a first point with velocities makes the first segment a cubic too.
-    previous: tuple[float, ...] = begin
-    previous_speeds: tuple[float, ...] | None = tuple(0.0 for _ in begin)
-    previous_time = 0.0
-    segments: list[tuple[tuple[float, ...], TrajectoryPoint, tuple[float, ...] | None, int, float]] = []
-    for point in trajectory.points:
-        travel = max(
-            (abs(b - a) / (STEP_METRES if j.linear else STEP_RADIANS))
-            for j, a, b in zip(joints, previous, point.positions, strict=True)
-        )
-        cubic = previous_speeds is not None and point.velocities is not None
-        count = max(1, math.ceil(travel * (2 if cubic else 1)))
-        total += count
-        segments.append((previous, point, previous_speeds, count, point.time - previous_time))
-        previous, previous_speeds, previous_time = point.positions, point.velocities, point.time
-    if total > MAX_SAMPLES:
-        return None
-
-    def walk() -> Iterator[tuple[float, ...]]:
-        yield begin
-        for start, point, v_start, count, span in segments:
-            for k in range(1, count + 1):
-                s = k / count
-                if v_start is not None and point.velocities is not None and span > 0:
-                    yield tuple(
-                        _hermite((a, b, va, vb), span, s)[0]
-                        for a, b, va, vb in zip(
-                            start, point.positions, v_start, point.velocities, strict=True
-                        )
-                    )
-                else:
-                    yield tuple(a + (b - a) * s for a, b in zip(start, point.positions, strict=True))
-
-    return walk()
 
 
 def _box_refusal(
@@ -379,46 +305,19 @@ def _moving_joints(robot: Robot, joints: list[Joint]) -> list[Joint]:
     return [joint for joint in robot.joints if joint.child in moved]
 
 
-Point = tuple[float, float, float]
-
-
-def _inside(point: Point, box: Box, margin: float) -> bool:
-    _, low, high = box
-    return all(lo + margin <= p <= hi - margin for p, lo, hi in zip(point, low, high, strict=True))
-
-
 def _workspace_problem(tool: str, point: Point, rules: ArmRules) -> str | None:
-    if not rules.workspace or any(_inside(point, box, rules.margin) for box in rules.workspace):
+    if not rules.workspace or any(inside_box(point, box[1], box[2], rules.margin) for box in rules.workspace):
         return None
     x, y, z = point
     names = ", ".join(name for name, _, _ in rules.workspace)
     return f"the path takes {tool} to ({x:.3f}, {y:.3f}, {z:.3f}) m, outside the workspace ({names})"
 
 
-def _segment_hits(a: Point, b: Point, box: Box, margin: float) -> bool:
-    """Whether the segment a–b meets *box* grown by *margin* (slab test)."""
-    _, low, high = box
-    t0, t1 = 0.0, 1.0
-    for p, q, least, most in zip(a, b, low, high, strict=True):
-        lo, hi, d = least - margin, most + margin, q - p
-        if abs(d) < 1e-12:
-            if p < lo or p > hi:
-                return False
-            continue
-        u0, u1 = (lo - p) / d, (hi - p) / d
-        if u0 > u1:
-            u0, u1 = u1, u0
-        t0, t1 = max(t0, u0), min(t1, u1)
-        if t0 > t1:
-            return False
-    return True
-
-
 def _keep_out_problem(points: list[tuple[str, Point]], moving: set[str], rules: ArmRules) -> str | None:
     """Each moving link's segment from the link before it on the chain, against every keep-out box."""
     for box in rules.keep_out:
         for (_, a), (link, b) in itertools.pairwise(points):
-            if link in moving and _segment_hits(a, b, box, rules.margin):
+            if link in moving and segment_hits(a, b, box[1], box[2], rules.margin):
                 return f"the path takes {link} into the keep-out box {box[0]}"
     return None
 
