@@ -11,12 +11,37 @@ a part on its own, so they need the part itself:
   server asks about on a connection's first ``list_services``: which ones it can tell from their names is the
   server's own knowledge.
 
+* the arm judge (:func:`arm_refusal`, the :class:`Act` and :class:`ArmScene` it reads, the policy it reads
+  ``[arm]`` from, and the simulated arm's robot description): row 18, one joint goal's check along its path,
+  which no tool shows on its own (a refusal or a send buries it in the bridge's round trips).
+
 When one of these moves, this is the one file to change.
 """
 
 from __future__ import annotations
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.arm.urdf import parse_urdf
+from rosbridge_mcp_server.robot.arm_scene import ArmScene
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
+from rosbridge_mcp_server.robot.seam import Act
+from rosbridge_mcp_server.safety import parse_policy
+from rosbridge_mcp_server.safety.arm import arm_refusal
+from rosbridge_mcp_server.sim.nodes.arm.model import HOME, arm_urdf
 
-__all__ = ["RosbridgeClient", "infrastructure_types"]
+__all__ = [
+    "Act",
+    "ArmScene",
+    "RosbridgeClient",
+    "arm_refusal",
+    "arm_urdf",
+    "infrastructure_types",
+    "parse_policy",
+    "parse_urdf",
+    "sim_arm_home",
+]
+
+
+def sim_arm_home() -> dict[str, float]:
+    """The simulated arm's joints at home (radians, metres)."""
+    return dict(HOME)
