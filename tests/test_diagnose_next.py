@@ -42,6 +42,12 @@ CASES: list[tuple[tuple[Step, ...], str]] = [
         'get_transform {"target_frame": "map", "source_frame": "odom", "timeout": 5}',
     ),
     ((Step(Look.NODE_LOG, ("/planner",)),), 'read_logs {"node": "/planner", "level": "info"}'),
+    (
+        (Step(Look.ACTIVATE_CONTROLLER, ("/controller_manager", "arm_controller")), Step(Look.ARM)),
+        'activate it: publish_service {"service": "/controller_manager/switch_controller", "service_type": '
+        '"controller_manager_msgs/srv/SwitchController", "request": '
+        '{"activate_controllers": ["arm_controller"], "strictness": 2}} (if the hardware allows); view_arm',
+    ),
 ]
 
 

@@ -49,10 +49,10 @@ VIEW_TOOL_NAMES = ("view_map", "view_scan", "plot_topic")
 SAFETY_TOOL_NAMES = ("stop_robot",)
 #: Sending the robot somewhere on its map.
 NAVIGATION_TOOL_NAMES = ("navigate_to",)
-#: Moving a manipulator's joints and its gripper, within the URDF's limits and the policy's [arm].
-ARM_TOOL_NAMES = ("move_arm", "move_gripper")
 #: Recordings: MCAP files written from topics, and read back.
 RECORD_TOOL_NAMES = ("record", "read_recording")
+#: A robot arm: seeing it, and moving its joints and gripper within the URDF's limits and the policy's [arm].
+ARM_TOOL_NAMES = ("view_arm", "move_arm", "move_gripper")
 ALL_TOOL_NAMES = (
     ORIGINAL_TOOL_NAMES
     + WATCH_TOOL_NAMES
@@ -78,7 +78,7 @@ def select_tools(spec: str) -> tuple[str, ...]:
     """The tool names a ``--tools`` value stands for, in registration order.
 
     ``spec`` is a comma-separated list of group names (``all``, ``original``, ``watch``, ``view``, ``safety``,
-    ``navigation``)
+    ``navigation``, ``record``, ``arm``)
     and tool names, e.g. ``original,subscribe_topic,get_image``. :class:`ValueError` names anything unknown.
     """
     chosen: set[str] = set()

@@ -9,8 +9,8 @@ a placeholder (``"…"``) is filled with the id of a goal started first. ``recor
 with several robots, so its examples run on a two-robot server over the same simulated robot;
 ``navigate_to`` needs a robot with Nav2 and a map, so its examples run on the simulated Nav2 world (the one
 ``--demo --demo-world nav2`` starts, driven faster than the demo's real speed) with the README's sample
-place (``dock``) in a policy; ``move_arm`` and ``move_gripper`` need an arm, so theirs run on the simulated
-arm (``--demo --demo-world arm``'s). The five servers run at once.
+place (``dock``) in a policy; the arm's tools run on ``--demo --demo-world arm``. The five servers run at
+once.
 """
 
 from __future__ import annotations
@@ -37,8 +37,8 @@ PLACEHOLDER = "…"
 #: Tools that are listed only when the server drives several robots.
 FLEET_ONLY = {"list_robots"}
 NAV2_ONLY = {"navigate_to"}
-#: Tools that need an arm: run on the simulated arm (the one ``--demo --demo-world arm`` starts).
-ARM_ONLY = {"move_arm", "move_gripper"}
+#: The arm's tools run on the demo's arm world (``--demo --demo-world arm``).
+ARM_ONLY = {"view_arm", "move_arm", "move_gripper"}
 #: record's example waits out its 30 s: it and read_recording's (which read its file) run on a demo server of
 #: their own, beside the others.
 RECORDING = {"record", "read_recording"}
@@ -168,14 +168,13 @@ async def test_every_tools_table_example_runs_on_the_demo_robot(
     nav2_robot.nav2.navigator.speed = NAV2_SPEED
     policy = tmp_path / "policy.toml"
     policy.write_text(NAV2_POLICY, encoding="utf-8")
-    arm_robot = await make_sim(dialect="ros2", world="arm")
     robots = ["--robot", f"a={sim_ros2.url}", "--robot", f"b={sim_ros2.url}"]
     runs = await asyncio.gather(
         run_examples(["--demo", "--console", "0"], single),
         run_examples(["--demo"], recording),
         run_examples(robots, fleet),
         run_examples(["--url", nav2_robot.url, "--policy", str(policy)], nav2),
-        run_examples(["--url", arm_robot.url], arm),
+        run_examples(["--demo", "--demo-world", "arm"], arm),
     )
     problems = [failure for failures, _ in runs for failure in failures]
     assert problems == [], "\n".join(problems)

@@ -41,6 +41,7 @@ EXPECTED_PARAMETERS = {
     "navigate_to": ["goal", "frame", "forward", "left", "turn", "timeout"],
     "record": ["topics", "duration", "max_megabytes", "name", "stop"],
     "read_recording": ["file", "mode", "fields", "at", "window", "topics"],
+    "view_arm": ["frame", "timeout"],
     "move_arm": ["joints", "pose", "relative", "controller", "timeout"],
     "move_gripper": ["command", "position", "max_effort", "action", "timeout"],
 }
@@ -63,6 +64,7 @@ READ_ONLY = {
     "view_scan",
     "plot_topic",
     "read_recording",
+    "view_arm",
 }
 #: Acting tools that leave the robot as they found it when called twice with the same arguments.
 IDEMPOTENT_ACTS = {"set_parameter"}

@@ -19,7 +19,10 @@ The areas:
   along map → odom → base (``base_footprint`` or ``base_link``);
 * ``lifecycle`` (ROS 2): every node offering ``get_state`` that is not active is a problem;
 * ``graph``: nodes gone since the last look (the first look is when the server connected), a ``cmd_vel``
-  nobody reads (nothing drives), a key stream a node reads that nobody publishes.
+  nobody reads (nothing drives), a key stream a node reads that nobody publishes;
+* ``arm`` (where ros2_control's ``…/list_controllers`` is served): a controller not active is a problem, a
+  joint at a limit of the URDF (``/robot_description``, fingers left out) a warning (``robot/arm/health.py``);
+  a silent ``/joint_states`` is the streams area's.
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Final, Literal
 
 from rosbridge_mcp_server.errors import Advice, Advised, RosbridgeError
+from rosbridge_mcp_server.robot.arm.controllers import Controller, list_controllers
+from rosbridge_mcp_server.robot.arm.health import controller_faults, limit_faults
 from rosbridge_mcp_server.robot.diagnostics import StatusBoard
 from rosbridge_mcp_server.robot.log_keeper import DIAGNOSTICS_TOPICS
 from rosbridge_mcp_server.robot.logs import level_rank
@@ -62,12 +67,13 @@ __all__ = [
 WINDOW: Final = 1.0
 #: A dynamic transform stamped this long before the newest one is stale.
 STALE_TRANSFORM: Final = 1.0
-AREAS: Final = ("graph", "lifecycle", "diagnostics", "streams", "tf", "logs")
+AREAS: Final = ("graph", "lifecycle", "diagnostics", "streams", "tf", "logs", "arm")
 #: What a ``focus`` narrows to: areas, and for ``navigation`` and ``sensors`` the kinds of streams.
 FOCUSES: Final[dict[str, tuple[tuple[str, ...], frozenset[str] | None]]] = {
     "navigation": (("graph", "lifecycle", "streams", "tf", "logs"), frozenset({"scan", "odom", "tf"})),
     "sensors": (("diagnostics", "streams"), None),
     **{area: ((area,), None) for area in AREAS},
+    "arm": (("arm", "streams"), frozenset({"joints"})),
 }
 #: At most this many key topics are measured (the most important kinds first).
 MAX_STREAMS: Final = 16
@@ -116,6 +122,10 @@ class Look(enum.Enum):
     TRANSFORM = enum.auto()
     #: One transform, waiting a while for it (names: target frame, source frame).
     TRANSFORM_WAIT = enum.auto()
+    #: The arm: its joints, limits, state and controllers.
+    ARM = enum.auto()
+    #: Activate a controller through its controller manager (names: the manager, the controller).
+    ACTIVATE_CONTROLLER = enum.auto()
 
 
 @dataclass(frozen=True)
@@ -307,6 +317,10 @@ async def diagnose(
         for topic in DIAGNOSTICS_TOPICS:
             if topic in topics:
                 listen[topic] = (topics[topic], True)
+    if "arm" in areas:
+        for topic in _ARM_TOPICS:
+            if topic in topics:
+                listen[topic] = (topics[topic], True)
 
     async def details(wanted: list[str]) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
         found = await asyncio.gather(*(graph.topic_details(t) for t in wanted), return_exceptions=True)
@@ -343,8 +357,11 @@ async def diagnose(
 
     # Who publishes and reads a stream is asked only of the silent ones, after the look (a healthy robot's
     # look costs no more rosapi calls than the cmd_vel topics'; ROS 1 would open a lane for each).
-    heard, pubsub, states = await asyncio.gather(
-        _listen(client, listen, window), details(drives if "graph" in areas else []), lifecycle()
+    heard, pubsub, states, arm = await asyncio.gather(
+        _listen(client, listen, window),
+        details(drives if "graph" in areas else []),
+        lifecycle(),
+        _controllers(client, graph, window) if "arm" in areas else _nothing(),
     )
     silent = [t for t in streams if t in heard and not heard[t].times]
     if silent and ("graph" in areas or "streams" in areas):
@@ -390,6 +407,8 @@ async def diagnose(
             )
         else:
             findings += _logs(keeper, checked, left_out)
+    if "arm" in areas:
+        findings += _arm(arm, heard, checked, unavailable, asked=focus is not None)
     if focus_node is not None:
         findings = [f for f in findings if focus_node in f.nodes or f.subject == focus_node]
     order = {area: i for i, area in enumerate(AREAS)}
@@ -403,6 +422,63 @@ async def diagnose(
 
 
 # --- the areas ---------------------------------------------------------------------------------------------
+
+#: What the arm area listens to: the URDF (latched) and the joint state.
+_ARM_TOPICS: Final = ("/robot_description", "/joint_states")
+_Controllers = tuple[str, tuple[Controller, ...] | str] | None
+
+
+async def _nothing() -> None:
+    return None
+
+
+async def _controllers(client: RosbridgeClient, graph: RosGraph, window: float) -> _Controllers:
+    """(the manager, its controllers or why they could not be read); ``None`` without a controller manager."""
+    services = [s for s in await graph.service_names() if s.endswith("/list_controllers")]
+    if not services:
+        return None
+    manager = min(services, key=lambda s: (s != "/controller_manager/list_controllers", s))
+    manager = manager.removesuffix("/list_controllers")
+    try:
+        return manager, await list_controllers(client, manager, timeout=window + 1.0)
+    except RosbridgeError as exc:
+        return manager, f"list_controllers failed ({str(exc)[:120]})"
+
+
+def _arm(
+    arm: _Controllers,
+    heard: Mapping[str, _Heard],
+    checked: dict[str, str],
+    unavailable: dict[str, str],
+    *,
+    asked: bool,
+) -> list[Finding]:
+    description, states = (
+        heard[t].messages[-1] if t in heard and heard[t].messages else None for t in _ARM_TOPICS
+    )
+    if arm is None and states is None:
+        if asked:
+            unavailable["arm"] = "no controller manager (…/list_controllers) and no /joint_states"
+        return []
+    out: list[Finding] = []
+    parts = []
+    if arm is not None:
+        manager, controllers = arm
+        if isinstance(controllers, str):
+            parts.append(controllers)
+        else:
+            active = sum(1 for c in controllers if c.active)
+            parts.append(f"{active} of {len(controllers)} controllers active")
+            for fault in controller_faults(manager, controllers):
+                steps = (Step(Look.ACTIVATE_CONTROLLER, (manager, fault.subject)), Step(Look.ARM))
+                out.append(
+                    Finding("problem", "arm", fault.subject, fault.summary, steps, (manager,), fault.details)
+                )
+    limits, what = limit_faults(description.get("data") if isinstance(description, dict) else None, states)
+    parts.append(what)
+    out += [Finding("warning", "arm", f.subject, f.summary, (Step(Look.ARM),), (), f.details) for f in limits]
+    checked["arm"] = "; ".join(parts)
+    return out
 
 
 def _others(names: Iterable[str]) -> tuple[str, ...]:

@@ -32,7 +32,7 @@ class FindingModel(BaseModel):
     """One thing wrong."""
 
     severity: str = Field(description="problem or warning")
-    area: str = Field(description="graph, lifecycle, diagnostics, streams, tf or logs")
+    area: str = Field(description="graph, lifecycle, diagnostics, streams, tf, logs or arm")
     subject: str = Field(description="The topic, frame pair, node or status it is about")
     summary: str
     next: str = Field(description="What to call next")
@@ -60,8 +60,8 @@ SPEC = ToolSpec(
     name="diagnose",
     title="Diagnose the robot",
     description=(
-        "What is wrong, in one ~1.5 s look (diagnostics, logs, rates, tf, lifecycle, graph): each problem "
-        'and what to call next. Read-only. Example: {"focus": "navigation"}'
+        "What is wrong, in one ~1.5 s look (diagnostics, logs, rates, tf, lifecycle, graph, arm): each "
+        'problem and what to call next. Read-only. Example: {"focus": "navigation"}'
     ),
     hints=READS_ROBOT,
     output=DiagnoseAnswer,
@@ -117,6 +117,12 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     ),
     Look.TRANSFORM_WAIT: lambda target, source: (
         f'get_transform {{"target_frame": "{target}", "source_frame": "{source}", "timeout": 5}}'
+    ),
+    Look.ARM: lambda: "view_arm",
+    Look.ACTIVATE_CONTROLLER: lambda manager, controller: (
+        f'activate it: publish_service {{"service": "{manager}/switch_controller", "service_type": '
+        '"controller_manager_msgs/srv/SwitchController", "request": '
+        f'{{"activate_controllers": ["{controller}"], "strictness": 2}}}} (if the hardware allows)'
     ),
 }
 

@@ -23,6 +23,7 @@ __all__ = [
     "Transform",
     "compose",
     "from_origin",
+    "from_quaternion",
     "inverse",
     "joint_values",
     "link_poses",
@@ -89,6 +90,18 @@ def from_origin(origin: Origin) -> Transform:
         cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr, x,
         sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr, y,
         -sp, cp * sr, cp * cr, z,
+    )  # fmt: skip
+
+
+def from_quaternion(xyz: Vector, q: tuple[float, float, float, float]) -> Transform:
+    """A transform from a translation and a unit quaternion ``(x, y, z, w)`` (normalised here)."""
+    x, y, z, w = q
+    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
+    x, y, z, w = x / n, y / n, z / n, w / n
+    return (
+        1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w), xyz[0],
+        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w), xyz[1],
+        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y), xyz[2],
     )  # fmt: skip
 
 

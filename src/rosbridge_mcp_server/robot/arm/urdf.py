@@ -158,17 +158,25 @@ class Robot:
         return tuple(reversed(joints))
 
     def end_effectors(self) -> tuple[str, ...]:
-        """The links at the end of an arm: ``tool0`` (or a ``*_tcp``/``*_ee_link``… link) below a movable
-        joint, else the leaf links below a movable joint, a finger (a ``*finger*``/``*jaw*`` link, or one
-        moved by a prismatic joint) counted as its parent link."""
+        """The links at the end of an arm, below two or more movable joints (a wheel, below one, is not):
+        ``tool0`` (or a ``*_tcp``/``*_ee_link``… link) where there is one, else the leaf links, a finger (a
+        ``*finger*``/``*jaw*`` link, or one moved by a prismatic joint) counted as its parent link."""
         named = [link for link in self.links if _tool_like(link) and self._moved(link)]
         if named:
             return tuple(named)
-        leaves = [link for link in self.links if not self._children.get(link) and self._moved(link)]
-        return tuple(dict.fromkeys(self._above_fingers(leaf) for leaf in leaves))
+        leaves = [link for link in self.links if not self._children.get(link)]
+        tips = dict.fromkeys(self._above_fingers(leaf) for leaf in leaves)
+        return tuple(tip for tip in tips if self._moved(tip))
+
+    def moves_a_finger(self, joint: Joint) -> bool:
+        """Whether *joint* moves a gripper's finger (a leaf link moved by a prismatic joint, or a
+        ``*finger*``/``*jaw*`` leaf): open and closed are its limits, so being at one is normal."""
+        leaf = not self._children.get(joint.child)
+        return leaf and (joint.linear or _finger_like(joint.child))
 
     def _moved(self, link: str) -> bool:
-        return any(joint.movable for joint in self._above(link))
+        """Whether two or more joints with positions of their own lie above *link*."""
+        return sum(1 for joint in self._above(link) if joint.movable and joint.mimic is None) >= 2
 
     def _above(self, link: str) -> Iterator[Joint]:
         joint = self._parent_joint.get(link)
