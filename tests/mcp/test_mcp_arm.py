@@ -258,3 +258,52 @@ async def test_a_controller_switch_needs_a_person_while_arm_boxes_are_set(arm: S
         text = await session.error("publish_service", arguments)
     assert "requires a person to confirm" in text
     assert arm.arm.controllers.is_active("arm_controller")
+
+
+async def test_what_the_judge_reads_cannot_be_written_to_widen_the_limits(arm: SimulatedRobot) -> None:
+    """A forged URDF with the elbow free to ±3.14 rad on /robot_description (or its parameter), forged joint
+    states: each refused, so the out-of-limit goal after them is still refused and nothing reaches the arm."""
+    urdf = '<robot name="forged"><link name="base_link"/></robot>'
+    async with (
+        open_session(arm.url, guard=None, policy=parse_policy({}, where="t")) as session,
+        watching(arm) as watcher,
+    ):
+        attempts = [
+            (
+                "publish_topic",
+                {
+                    "topic": "/robot_description",
+                    "message_type": "std_msgs/msg/String",
+                    "message": {"data": urdf},
+                },
+            ),
+            (
+                "publish_topic",
+                {
+                    "topic": "/joint_states",
+                    "message_type": "sensor_msgs/msg/JointState",
+                    "message": {"name": ["elbow_joint"], "position": [2.7]},
+                },
+            ),
+            ("set_parameter", {"name": "/robot_state_publisher:robot_description", "value": urdf}),
+            (
+                "publish_service",
+                {
+                    "service": "/robot_state_publisher/set_parameters",
+                    "service_type": "rcl_interfaces/srv/SetParameters",
+                    "request": {
+                        "parameters": [
+                            {"name": "robot_description", "value": {"type": 4, "string_value": urdf}}
+                        ]
+                    },
+                },
+            ),
+        ]
+        for tool, arguments in attempts:
+            text = await session.error(tool, arguments)
+            assert "the URDF's limits always hold" in text, text
+            assert "nothing was sent" in text
+        still = await session.error("move_arm", {"joints": {"elbow_joint": 170}})
+        assert "outside its URDF limits -160.0° … 160.0°" in still
+        assert nothing_reached(arm)
+    assert TOPIC not in watcher.seen

@@ -52,7 +52,7 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.seam import Act
     from rosbridge_mcp_server.safety.arm_rules import ArmRules
 
-__all__ = ["ArmRefusal", "act_arm", "arm_goal_text", "arm_refusal"]
+__all__ = ["ARM_SOURCES", "ArmRefusal", "act_arm", "arm_goal_text", "arm_refusal", "source_refusal"]
 
 #: A first point at 0 s farther than this from where the joint is, is a jump.
 JUMP_TOLERANCE = 1e-3
@@ -358,6 +358,34 @@ def _gripper_refusal(arm: ArmAct, goal: GripperGoal, scene: ArmScene, rules: Arm
                 f"the gripper goal asks max_effort {goal.max_effort:g}, beyond {cap:g} (the URDF's effort "
                 "limit and the safety policy's max_gripper_effort; 0 would mean no limit)",
                 f"Give max_effort between 0 and {cap:g}.",
+            )
+    return None
+
+
+#: What the arm judge reads, by the name's last part: writing it would move the limits under the judge.
+ARM_SOURCES = {
+    "robot_description": "the robot description, whose joint limits the arm's judge reads",
+    "robot_description_semantic": "the SRDF, whose named poses move_arm reads",
+    "joint_states": "the joint states, from which the arm's judge times the first segment",
+}
+
+
+def source_refusal(act: Act) -> ArmRefusal | None:
+    """A write to what the arm judge reads (the URDF on ``…/robot_description``, the parameter of that name,
+    ``…/joint_states``), by any tool: refused always, since the URDF's limits always hold."""
+    written: list[str] = []
+    if act.kind in ("topic", "parameter"):
+        written.append(act.name)
+    written += [effect.name for effect in act.effects if effect.kind == "parameter" and effect.what == "set"]
+    for name in written:
+        leaf = name.replace(":", "/").rsplit("/", 1)[-1]
+        why = ARM_SOURCES.get(leaf)
+        if why is not None:
+            return _refusal(
+                f"arm source write: {name}",
+                f"{act.tool} on {act.name} writes {why}; the URDF's limits always hold, so it may not be "
+                "written from here",
+                "Tell the user; do not try to reach the same effect another way.",
             )
     return None
 

@@ -29,7 +29,7 @@ from typing import IO, TYPE_CHECKING, Any, NoReturn
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
-from rosbridge_mcp_server.safety.arm import act_arm, arm_refusal
+from rosbridge_mcp_server.safety.arm import act_arm, arm_refusal, source_refusal
 from rosbridge_mcp_server.safety.fence import fence_refusal, writes_fence
 from rosbridge_mcp_server.safety.navigation import act_motion, goal_text, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
@@ -171,7 +171,7 @@ class PolicyGuard:
         place = navigation_refusal(act, self.policy.navigation) or fence_refusal(act, self.policy.navigation)
         if place is not None:
             self._refuse(act, place.rule, place.text)
-        arm = arm_refusal(act, self.policy.arm)
+        arm = arm_refusal(act, self.policy.arm) or source_refusal(act)
         if arm is not None:
             self._refuse(act, arm.rule, arm.text)
         approved, clamp = self._capped(act)
