@@ -307,3 +307,12 @@ async def test_what_the_judge_reads_cannot_be_written_to_widen_the_limits(arm: S
         assert "outside its URDF limits -160.0° … 160.0°" in still
         assert nothing_reached(arm)
     assert TOPIC not in watcher.seen
+
+
+async def test_view_arm_says_when_moveit_runs_and_what_move_arm_does_with_it(arm: SimulatedRobot) -> None:
+    async with open_session(arm.url) as session:
+        without = text_of(await session.ok("view_arm"))
+        arm.graph.node("/move_group")
+        with_moveit = text_of(await session.ok("view_arm"))
+    assert "MoveIt" not in without
+    assert "MoveIt: /move_group runs. move_arm sends joint goals and named poses" in with_moveit
