@@ -14,6 +14,8 @@ from typing import Any
 
 import pytest
 import websockets
+from mcp.client.session import ClientRequestContext
+from mcp.types import ElicitRequestParams, ElicitResult
 from mcp_harness import open_session, text_of
 
 from rosbridge_mcp_server.safety import emergency_stop, parse_policy
@@ -316,3 +318,33 @@ async def test_view_arm_says_when_moveit_runs_and_what_move_arm_does_with_it(arm
         with_moveit = text_of(await session.ok("view_arm"))
     assert "MoveIt" not in without
     assert "MoveIt: /move_group runs. move_arm sends joint goals and named poses" in with_moveit
+
+
+async def test_arm_confirm_motion_shows_the_joint_goal_and_a_no_sends_nothing(arm: SimulatedRobot) -> None:
+    """[arm] confirm = "motion": move_arm and a raw JointTrajectory both ask, the question names the goal's
+    joints in degrees and its time; declined, nothing reaches the arm; accepted, it moves."""
+    questions: list[str] = []
+    answer = {"action": "decline"}
+
+    async def person(context: ClientRequestContext, params: ElicitRequestParams) -> ElicitResult:
+        questions.append(params.message)
+        if answer["action"] == "accept":
+            return ElicitResult(action="accept", content={"approve": True})
+        return ElicitResult(action="decline")
+
+    policy = parse_policy({"arm": {"confirm": "motion"}}, where="t")
+    async with open_session(arm.url, guard=None, policy=policy, elicitation_callback=person) as session:
+        declined = await session.error("move_arm", {"joints": {"elbow_joint": 45}})
+        raw = carriers(trajectory({"elbow_joint": 1.0}, 2.0))[2]
+        await session.error(*raw)
+        assert nothing_reached(arm)
+        answer["action"] = "accept"
+        moved = await session.ok("move_arm", {"joints": {"elbow_joint": 45}})
+    assert "The person declined move_arm" in declined
+    assert (
+        "Moves the arm to shoulder_pan_joint 0.0°, shoulder_lift_joint -17.2°, elbow_joint 45.0°"
+        in questions[0]
+    )
+    assert "in 0.6 s" in questions[0]
+    assert "elbow_joint 57.3°" in questions[1]
+    assert (moved.structured_content or {})["succeeded"]
