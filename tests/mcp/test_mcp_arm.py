@@ -6,17 +6,20 @@ stop_robot and the E-STOP stop the arm where it is; the gripper opens and closes
 from __future__ import annotations
 
 import asyncio
+import base64
 import contextlib
 import json
 import math
 from collections.abc import AsyncIterator, Awaitable, Callable
+from io import BytesIO
 from typing import Any
 
 import pytest
 import websockets
 from mcp.client.session import ClientRequestContext
-from mcp.types import ElicitRequestParams, ElicitResult
+from mcp.types import ElicitRequestParams, ElicitResult, ImageContent
 from mcp_harness import open_session, text_of
+from PIL import Image
 
 from rosbridge_mcp_server.safety import emergency_stop, parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
@@ -348,3 +351,26 @@ async def test_arm_confirm_motion_shows_the_joint_goal_and_a_no_sends_nothing(ar
     assert "in 0.6 s" in questions[0]
     assert "elbow_joint 57.3°" in questions[1]
     assert (moved.structured_content or {})["succeeded"]
+
+
+async def test_move_arm_shows_the_arm_at_start_and_goal_from_the_side(arm: SimulatedRobot) -> None:
+    """A refusal and a motion both come with the side view: a small PNG with the goal drawn in magenta."""
+
+    def colours(result: Any) -> set[tuple[int, int, int]]:
+        images = [block for block in result.content if isinstance(block, ImageContent)]
+        assert len(images) == 1, result.content
+        data = base64.b64decode(images[0].data)
+        assert data.startswith(b"\x89PNG")
+        assert len(data) < 30_000
+        image = Image.open(BytesIO(data)).convert("RGB")
+        return {colour for _, colour in image.getcolors(maxcolors=1 << 16) or []}
+
+    async with open_session(arm.url, guard=None, policy=parse_policy(BOXES, where="t")) as session:
+        refused = await session.call("move_arm", {"joints": {"shoulder_lift_joint": 100, "elbow_joint": 10}})
+        assert refused.is_error
+        assert "outside the workspace (table)" in text_of(refused)
+        drawn = colours(refused)
+        moved = await session.ok("move_arm", {"joints": {"wrist_1_joint": 20}})
+    assert (220, 40, 160) in drawn  # the goal
+    assert (30, 150, 60) in drawn  # the workspace box
+    assert (220, 40, 160) in colours(moved)

@@ -4,18 +4,29 @@ and the policy's ``[arm] speed_scale`` (never by the model), and judged by the g
 
 from __future__ import annotations
 
+import asyncio
 import math
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
+from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.pictures.arm import draw_arm
+from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.arm_plan import ArmPlan, PlanError, plan_motion, shown, to_si
 from rosbridge_mcp_server.robot.arm_scene import ArmScene, joint_positions, learn_arm, read_semantic
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.listening import listen
 from rosbridge_mcp_server.robot.messages import compact_json
-from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+from rosbridge_mcp_server.tools.base import (
+    ACTS_ON_ROBOT,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolImage,
+    ToolSpec,
+)
 
 __all__ = ["SPEC", "ArmAnswer", "run"]
 
@@ -155,17 +166,58 @@ async def run(
             )
         await ctx.report_progress(float(running.feedback_count), None, text)
 
-    outcome = await send_goal(
-        ctx,
-        tool=SPEC.name,
-        action=plan.action,
-        action_type=action_type,
-        goal=plan.goal,
-        timeout=min(timeout, plan.duration + _SLACK),
-        on_feedback=on_feedback,
-        scene=scene,
-    )
-    return await _answer(ctx, scene, plan, outcome)
+    try:
+        outcome = await send_goal(
+            ctx,
+            tool=SPEC.name,
+            action=plan.action,
+            action_type=action_type,
+            goal=plan.goal,
+            timeout=min(timeout, plan.duration + _SLACK),
+            on_feedback=on_feedback,
+            scene=scene,
+        )
+    except PolicyRefusal as exc:
+        picture = await _picture(ctx, scene, plan)
+        raise _Refused(
+            f"{exc} The picture shows the arm now (grey) and at the goal (magenta).", picture
+        ) from None
+    answer = await _answer(ctx, scene, plan, outcome)
+    return ToolAnswer(text=answer.text, data=answer.data, images=_images(await _picture(ctx, scene, plan)))
+
+
+class _Refused(ToolFailure):
+    """A refused motion, with the side view that shows why."""
+
+    def __init__(self, text: str, image: bytes | None) -> None:
+        super().__init__(text)
+        self.images = _images(image)
+
+
+def _images(image: bytes | None) -> tuple[ToolImage, ...]:
+    return (ToolImage(image, "image/png"),) if image is not None else ()
+
+
+async def _picture(ctx: ToolContext, scene: ArmScene, plan: ArmPlan) -> bytes | None:
+    """The arm at the start and at the goal, from the side, with the policy's boxes."""
+    robot = scene.robot
+    if robot is None:
+        return None
+    rules = ctx.config.policy.arm
+    goal = {**scene.positions, **dict(zip(plan.joints, plan.target, strict=True))}
+
+    def draw() -> bytes:
+        image = draw_arm(
+            robot,
+            scene.positions,
+            goal,
+            frame=rules.frame,
+            workspace=rules.workspace,
+            keep_out=rules.keep_out,
+        )
+        return png_bytes(image)
+
+    return await asyncio.to_thread(draw)
 
 
 def _in_units(scene: ArmScene, plan: ArmPlan, values: list[Any]) -> list[float]:
