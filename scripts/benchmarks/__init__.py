@@ -53,6 +53,9 @@ What is measured:
     (to ``list_topics`` succeeding, and no command replayed).
 17. MCP tasks (``--only tasks``): ``tasks/get`` on a running task (a ``subscribe_topic`` with a duration,
     started by a 2026-07-28 client advertising the tasks extension) against the no-op tool, interleaved.
+18. the arm (``--only arm``): joint limits and forward kinematics at 101 points of a 7-joint goal's path
+    (p50 ≤ 5 ms), ``view_arm`` on the simulated arm (``--world arm``) and its text for a 7-joint arm with a
+    gripper (≤ 8,000 characters).
 
 The package: ``harness`` (what every item shares), one module per item, ``run`` (the order, the table, the
 command line), ``internals`` (the only module that imports the product's internals, and why), ``servers/``

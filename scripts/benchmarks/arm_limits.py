@@ -1,4 +1,4 @@
-"""Item 18: the arm judge's check of one joint goal along its path (URDF limits, the speed scale, the
+"""Item 18d: the arm judge's check of one joint goal along its path (URDF limits, the speed scale, the
 workspace and keep-out boxes by forward kinematics), on the simulated arm's own description: p50 ≤ 5 ms."""
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ async def measure_arm_limits(ctx: Context) -> list[Row]:
         raise RuntimeError(f"the benchmark's goal was refused: {refusal.text}")
     stats = Stats.of(samples)
     row = timing_row(
-        "18",
+        "18d",
         "the arm judge: a 90° pan of the simulated arm's 6-joint chain checked along its path (limits, speed "
         "scale, a workspace and a keep-out box; ~50 forward kinematics)",
         stats,

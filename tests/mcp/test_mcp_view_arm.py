@@ -192,3 +192,48 @@ def test_a_seven_joint_arm_with_a_gripper_fits_in_8000_characters() -> None:
     text = render(build_answer(reading, None, None))
     assert "panda_hand_tcp in panda_link0" in text
     assert len(text) <= 8_000, len(text)
+
+
+BOMB = (
+    '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa">'
+    + "".join(f'<!ENTITY a{i} "{"&a;" * 10 if i == 0 else f"&a{i - 1};" * 10}">' for i in range(9))
+    + ']><robot name="&a8;"><link name="l"/></robot>'
+)
+CYCLE = (
+    '<robot name="r"><link name="a"/><link name="b"/>'
+    '<joint name="j1" type="fixed"><parent link="a"/><child link="b"/></joint>'
+    '<joint name="j2" type="fixed"><parent link="b"/><child link="a"/></joint></robot>'
+)
+NAN_LIMIT = (
+    '<robot name="r"><link name="a"/><link name="b"/><joint name="j" type="revolute"><parent link="a"/>'
+    '<child link="b"/><limit lower="nan" upper="1" velocity="1"/></joint></robot>'
+)
+
+
+@pytest.mark.parametrize(
+    ("description", "words"),
+    [
+        (BOMB, "has a DTD (<!DOCTYPE>); a URDF needs none, and it is not read"),
+        ("<robot>" + "x" * 2_100_000 + "</robot>", "at most 2,000,000 are read"),
+        ("<robot name='r'>" + "<a>" * 3000 + "</a>" * 3000 + "</robot>", "nests elements deeper than 24"),
+        (CYCLE, "joints form a cycle"),
+        (NAN_LIMIT, "not a finite number"),
+    ],
+    ids=["entity-bomb", "huge", "deep", "cycle", "nan-limit"],
+)
+async def test_a_hostile_description_is_refused_in_words(
+    make_sim: MakeSim, description: str, words: str
+) -> None:
+    """The description (here robot_state_publisher's parameter) is robot text: an entity bomb, 2 MB+, deep
+    nesting, a cycle, a NaN limit are each a tool error saying what is wrong, and the server goes on."""
+    robot = await make_sim(dialect="ros2")
+    robot.graph.remove_publisher("/robot_state_publisher", "/robot_description")
+    robot.world.params["/robot_state_publisher:robot_description"] = description
+    async with open_session(robot.url, request_timeout=15.0) as session:
+        message = await session.error("view_arm", {"timeout": 0.3})
+        assert (
+            "The robot description (parameter /robot_state_publisher:robot_description) cannot be read"
+            in message
+        )
+        assert words in message
+        assert not (await session.call("list_topics")).is_error

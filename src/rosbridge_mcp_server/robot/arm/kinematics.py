@@ -5,7 +5,8 @@ and translation; the last row of the 4×4, ``0 0 0 1``, is implied). :class:`Cha
 link down to another, with each joint's fixed origin turned into a transform once; :meth:`Chain.poses` then
 costs one compose and one joint motion per joint (a motion about a coordinate axis mixes two columns only).
 
-Why no library: docs/architecture.md ("Forward kinematics") has the measurements and the reasons.
+Why no library (pin, ikpy, kinpy, yourdfpy were measured): docs/architecture.md, "The arm"; in short,
+~14 µs a 7-joint pose here, 100 poses in ~1.4 ms, and no 190-440 MB of numpy/scipy/C++ wheels to install.
 """
 
 from __future__ import annotations

@@ -111,9 +111,9 @@ async def read_arm(client: RosbridgeClient, graph: RosGraph, *, timeout: float) 
 
 
 async def _one_message(client: RosbridgeClient, topic: str, msg_type: str, timeout: float) -> Any:
-    dialect = await client.dialect()  # the bridge's QoS rules (ROS 1 takes none)
-    qos, _ = dialect.subscription_qos({"durability": "transient_local"} if topic != JOINT_STATES else None)
-    heard = await listen(client, topic, msg_type, count=1, duration=None, first_timeout=timeout, qos=qos)
+    # No qos sent: a ROS 2 rosbridge subscribes transient-local by itself when every publisher is (as
+    # robot_state_publisher's /robot_description is), and older bridges take no qos at all.
+    heard = await listen(client, topic, msg_type, count=1, duration=None, first_timeout=timeout)
     return heard.messages[0].message if heard.messages else None
 
 

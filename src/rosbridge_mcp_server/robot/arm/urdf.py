@@ -1,12 +1,12 @@
 """A robot description (URDF) read safely: the joints, the links and the tree they make.
 
-The URDF comes from the robot, so it is hostile text: it is bounded in size (``MAX_URDF_BYTES``), read by
-expat with every DTD refused (so no entity can expand: no "billion laughs", no external file), its elements
-counted and nested no deeper than ``MAX_DEPTH``, its joints and links counted, every number finite, and its
-joints held to make one tree (one root, one parent per link, no cycle). Whatever is wrong is said in one
-sentence (:class:`UrdfError`). Only what kinematics and limits need is kept: links by name, and each
-joint's type, parent and child, origin, axis, limits and mimic. Geometry, inertia and ``<transmission>``
-are skipped.
+The URDF comes from the robot, so it is hostile text: it is bounded in size (``MAX_URDF_BYTES``), read
+by expat (``bounded_xml.py``) with every DTD refused (so no entity can expand: no "billion laughs", no
+external file), its elements counted and nested no deeper than ``MAX_DEPTH``, its joints and links counted,
+every number finite, and its joints held to make one tree (one root, one parent per link, no cycle).
+Whatever is wrong is said in one sentence (:class:`UrdfError`). Only what kinematics and limits need is
+kept: links by name, and each joint's type, parent and child, origin, axis, limits and mimic. Geometry,
+inertia and ``<transmission>`` are skipped.
 """
 
 from __future__ import annotations
@@ -15,7 +15,15 @@ import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Literal
-from xml.parsers import expat
+
+from rosbridge_mcp_server.robot.arm.bounded_xml import (
+    MAX_DEPTH,
+    MAX_ELEMENTS,
+    MAX_URDF_BYTES,
+    UrdfError,
+    XmlElement,
+    read_xml,
+)
 
 __all__ = [
     "JOINT_TYPES",
@@ -35,14 +43,8 @@ __all__ = [
     "read_xml",
 ]
 
-#: The largest description read (a real arm's URDF with a gripper is 20–200 kB; meshes are files, not text).
-MAX_URDF_BYTES = 2_000_000
 #: The most joints (and links, less one) a description may have.
 MAX_JOINTS = 256
-#: The deepest element nesting read (a URDF nests ~5 deep).
-MAX_DEPTH = 24
-#: The most elements read, of any kind.
-MAX_ELEMENTS = 50_000
 #: The longest name kept (a link or joint name).
 MAX_NAME = 200
 
@@ -50,10 +52,6 @@ JointType = Literal["revolute", "continuous", "prismatic", "fixed", "floating", 
 JOINT_TYPES: tuple[JointType, ...] = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
 Vector = tuple[float, float, float]
-
-
-class UrdfError(ValueError):
-    """A robot description that cannot be read; ``str()`` says what is wrong and where."""
 
 
 @dataclass(frozen=True)
@@ -203,92 +201,7 @@ def _finger_like(link: str) -> bool:
     return "finger" in lowered or "jaw" in lowered
 
 
-# --- reading the XML, bounded -----------------------------------------------------------------------------
-
-
-@dataclass
-class XmlElement:
-    """An element kept by :func:`read_xml`: its tag, attributes and kept children."""
-
-    tag: str
-    attrs: dict[str, str]
-    children: list[XmlElement] = field(default_factory=list)
-
-    def first(self, tag: str) -> XmlElement | None:
-        return next((child for child in self.children if child.tag == tag), None)
-
-
 _URDF_TAGS = frozenset({"link", "joint", "parent", "child", "origin", "axis", "limit", "mimic"})
-
-
-def read_xml(data: bytes, what: str, keep: frozenset[str]) -> XmlElement:
-    """The ``<robot>`` element of *data* (a URDF or SRDF, named *what* in errors) with its children and
-    grandchildren whose tags are in *keep*; bounded, DTDs refused (:class:`UrdfError`)."""
-    if len(data) > MAX_URDF_BYTES:
-        raise UrdfError(f"the {what} is {len(data):,} bytes; at most {MAX_URDF_BYTES:,} are read")
-    return _Reader(what, keep).read(data)
-
-
-class _Reader:
-    """expat with DTDs refused and the tree bounded; keeps the elements under ``<robot>`` that we read."""
-
-    def __init__(self, what: str, keep: frozenset[str]) -> None:
-        self.what = what
-        self.keep = keep
-        self.stack: list[XmlElement] = []
-        self.root: XmlElement | None = None
-        self.count = 0
-        self.skipping = 0  # depth inside an element we do not keep
-
-    def read(self, data: bytes) -> XmlElement:
-        parser = expat.ParserCreate()
-        parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
-        parser.StartDoctypeDeclHandler = self._doctype
-        parser.EntityDeclHandler = self._entity
-        parser.ExternalEntityRefHandler = self._external
-        parser.StartElementHandler = self._start
-        parser.EndElementHandler = self._end
-        try:
-            parser.Parse(data, True)
-        except expat.ExpatError as exc:
-            raise UrdfError(
-                f"the {self.what} is not well-formed XML ({expat.ErrorString(exc.code)}, line {exc.lineno})"
-            ) from None
-        if self.root is None or self.root.tag != "robot":
-            raise UrdfError(f"the {self.what} has no <robot> element at its root")
-        return self.root
-
-    def _doctype(self, *_: object) -> None:
-        raise UrdfError(f"the {self.what} has a DTD (<!DOCTYPE>); a URDF needs none, and it is not read")
-
-    def _entity(self, *_: object) -> None:
-        raise UrdfError(f"the {self.what} declares an entity; it is not read")
-
-    def _external(self, *_: object) -> int:
-        raise UrdfError(f"the {self.what} refers to an external entity; it is not read")
-
-    def _start(self, tag: str, attrs: dict[str, str]) -> None:
-        self.count += 1
-        if self.count > MAX_ELEMENTS:
-            raise UrdfError(f"the {self.what} has more than {MAX_ELEMENTS} elements")
-        depth = len(self.stack) + self.skipping
-        if depth >= MAX_DEPTH:
-            raise UrdfError(f"the {self.what} nests elements deeper than {MAX_DEPTH}")
-        if self.skipping or (self.stack and tag not in self.keep) or len(self.stack) > 2:
-            self.skipping += 1
-            return
-        element = XmlElement(tag, attrs)
-        if self.stack:
-            self.stack[-1].children.append(element)
-        else:
-            self.root = element
-        self.stack.append(element)
-
-    def _end(self, _tag: str) -> None:
-        if self.skipping:
-            self.skipping -= 1
-        else:
-            self.stack.pop()
 
 
 # --- from elements to joints --------------------------------------------------------------------------------
