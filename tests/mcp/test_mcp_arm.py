@@ -374,3 +374,17 @@ async def test_move_arm_shows_the_arm_at_start_and_goal_from_the_side(arm: Simul
     assert (220, 40, 160) in drawn  # the goal
     assert (30, 150, 60) in drawn  # the workspace box
     assert (220, 40, 160) in colours(moved)
+
+
+async def test_on_a_robot_without_an_arm_move_arm_says_so_and_raw_trajectories_are_refused(
+    make_sim: MakeSim,
+) -> None:
+    """The turtle world's description has no arm: move_arm says so; a raw trajectory is refused naming the
+    joint the description lacks, with or without boxes."""
+    turtle = await make_sim(dialect="ros2")
+    async with open_session(turtle.url, guard=None, policy=parse_policy(BOXES, where="t")) as session:
+        text = await session.error("move_arm", {"joints": {"elbow_joint": 10}})
+        raw = await session.error(*carriers(trajectory({"elbow_joint": 1.0}, 5.0))[2])
+    assert "has no movable joint: this robot has no arm. Nothing was sent." in text
+    assert "'shoulder_pan_joint' is not a movable joint of the robot description" in raw
+    assert TOPIC not in turtle.world.published

@@ -15,9 +15,8 @@ from rosbridge_mcp_server.pictures.arm import draw_arm
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.arm_plan import ArmPlan, PlanError, plan_motion, shown, to_si
-from rosbridge_mcp_server.robot.arm_scene import ArmScene, joint_positions, learn_arm, read_semantic
+from rosbridge_mcp_server.robot.arm_scene import ArmScene, learn_arm, positions_now
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
-from rosbridge_mcp_server.robot.listening import listen
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -95,13 +94,15 @@ def _targets(scene: ArmScene, joints: dict[str, Any], relative: bool) -> dict[st
     return out
 
 
-async def _named_pose(ctx: ToolContext, pose: str) -> dict[str, float]:
-    semantic = await read_semantic(ctx.client, ctx.graph, _READY_WAIT)
-    if isinstance(semantic, str):
-        raise ToolFailure(f"No named pose {pose!r}: {semantic}. Give joints instead. Nothing was sent.")
-    found = semantic.pose(pose)
+def _named_pose(scene: ArmScene, pose: str) -> dict[str, float]:
+    if scene.semantic is None:
+        raise ToolFailure(
+            f"No named pose {pose!r}: the robot has no SRDF (no /robot_description_semantic, no move_group). "
+            "Give joints instead. Nothing was sent."
+        )
+    found = scene.semantic.pose(pose)
     if found is None:
-        known = ", ".join(sorted({p.name for p in semantic.poses})) or "none"
+        known = ", ".join(sorted({p.name for p in scene.semantic.poses})) or "none"
         raise ToolFailure(f"No named pose {pose!r} in the SRDF. Known poses: {known}. Nothing was sent.")
     return dict(found.positions)
 
@@ -128,9 +129,12 @@ async def run(
     scene = await learn_arm(ctx.client, ctx.graph, timeout=_READY_WAIT)
     if scene.robot is None:
         raise ToolFailure(f"The arm cannot be moved: {'; '.join(scene.problems)}. Nothing was sent.")
-    targets = (
-        await _named_pose(ctx, pose.strip()) if pose.strip() else _targets(scene, joints or {}, relative)
-    )
+    if not scene.robot.movable_joints:
+        raise ToolFailure(
+            f"The robot description ({scene.robot.name}) has no movable joint: this robot has no arm. "
+            "Nothing was sent."
+        )
+    targets = _named_pose(scene, pose.strip()) if pose.strip() else _targets(scene, joints or {}, relative)
     dialect = await ctx.client.dialect()
     try:
         plan = plan_motion(
@@ -232,8 +236,7 @@ def _in_units(scene: ArmScene, plan: ArmPlan, values: list[Any]) -> list[float]:
 
 
 async def _answer(ctx: ToolContext, scene: ArmScene, plan: ArmPlan, outcome: Goal) -> ToolAnswer:
-    heard = await listen(ctx.client, "/joint_states", None, count=1, duration=None, first_timeout=_READY_WAIT)
-    now = joint_positions(heard.messages[0].message) if heard.messages else {}
+    now = await positions_now(ctx.client, ctx.graph, _READY_WAIT)
     target = dict(zip(plan.joints, _in_units(scene, plan, list(plan.target)), strict=True))
     final = None
     error = None
