@@ -120,6 +120,14 @@ def test_a_cycle_among_links_below_the_root_is_named() -> None:
     assert "sit on a cycle" in _refusal(robot(["x", "y", "z", "w"], joints))
 
 
+def test_a_name_with_a_direction_override_or_a_control_character_is_refused() -> None:
+    """A right-to-left override or a newline in a link name would show a model something else: refused."""
+    assert "direction characters" in _refusal(robot(["base\u202eknil"], []))
+    assert "direction characters" in _refusal(robot(["a&#10;b"], []))
+    hidden = parse_controllers({"controller": [{"name": "arm\u200b_controller", "state": "active"}]})
+    assert hidden == ()
+
+
 def test_what_is_not_xml_is_refused_in_words() -> None:
     """Text that is not XML, and XML whose root is not <robot>, are named as such."""
     assert "not well-formed XML" in _refusal("<robot><link name='a'>")

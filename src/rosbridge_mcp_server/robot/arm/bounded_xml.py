@@ -6,10 +6,11 @@ through it (``urdf.py``, ``controllers.py``); what is wrong is one sentence (:cl
 
 from __future__ import annotations
 
+import unicodedata
 from dataclasses import dataclass, field
 from xml.parsers import expat
 
-__all__ = ["MAX_DEPTH", "MAX_ELEMENTS", "MAX_URDF_BYTES", "UrdfError", "XmlElement", "read_xml"]
+__all__ = ["MAX_DEPTH", "MAX_ELEMENTS", "MAX_URDF_BYTES", "UrdfError", "XmlElement", "plain", "read_xml"]
 
 #: The largest description read (a real arm's URDF with a gripper is 20–200 kB; meshes are files, not text).
 MAX_URDF_BYTES = 2_000_000
@@ -17,6 +18,17 @@ MAX_URDF_BYTES = 2_000_000
 MAX_DEPTH = 24
 #: The most elements read, of any kind.
 MAX_ELEMENTS = 50_000
+
+
+#: Unicode categories a name from the robot may not hold: controls, format characters (bidi overrides,
+#: zero-width), surrogates, private use, unassigned, line and paragraph separators.
+_HIDDEN = frozenset({"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"})
+
+
+def plain(name: str) -> bool:
+    """Whether *name* (a link, joint or controller name from the robot) shows as what it is: nothing hidden,
+    nothing that turns the text around."""
+    return all(unicodedata.category(ch) not in _HIDDEN for ch in name)
 
 
 class UrdfError(ValueError):

@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from rosbridge_mcp_server.robot.arm.bounded_xml import plain
 from rosbridge_mcp_server.robot.arm.urdf import MAX_NAME, UrdfError, read_xml
 
 if TYPE_CHECKING:
@@ -65,7 +66,8 @@ class Controller:
 
 
 def _text(value: Any, limit: int = MAX_NAME) -> str | None:
-    return value if isinstance(value, str) and value and len(value) <= limit else None
+    """*value* when it is a short name that shows as what it is (no control or direction characters)."""
+    return value if isinstance(value, str) and value and len(value) <= limit and plain(value) else None
 
 
 def _texts(value: Any) -> tuple[str, ...]:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import NotOnRobotError, RosbridgeError
+from rosbridge_mcp_server.robot.arm.bounded_xml import plain
 from rosbridge_mcp_server.robot.arm.controllers import Controller, Semantic, list_controllers, parse_srdf
 from rosbridge_mcp_server.robot.arm.urdf import Robot, UrdfError, parse_urdf
 from rosbridge_mcp_server.robot.listening import listen
@@ -149,7 +150,9 @@ async def read_joint_states(
     message = await _one_message(client, JOINT_STATES, topics[JOINT_STATES], timeout)
     if not isinstance(message, dict):
         return None
-    names = [n for n in message.get("name") or [] if isinstance(n, str)][:MAX_STATE_JOINTS]
+    names = [n if isinstance(n, str) and plain(n) else "" for n in message.get("name") or []][
+        :MAX_STATE_JOINTS
+    ]
     return JointStateNow(
         _by_name(names, message.get("position")),
         _by_name(names, message.get("velocity")),
@@ -164,7 +167,7 @@ def _by_name(names: list[str], values: Any) -> dict[str, float]:
     return {
         name: float(value)
         for name, value in zip(names, values, strict=False)
-        if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+        if name and isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
     }
 
 

@@ -22,6 +22,7 @@ from rosbridge_mcp_server.robot.arm.bounded_xml import (
     MAX_URDF_BYTES,
     UrdfError,
     XmlElement,
+    plain,
     read_xml,
 )
 
@@ -230,8 +231,10 @@ def _name(element: XmlElement, what: str, *, required: bool = True) -> str:
     name = element.attrs.get("name", "")
     if not name and required:
         raise UrdfError(f"a <{what}> has no name")
-    if len(name) > MAX_NAME or any(ord(ch) < 0x20 or ord(ch) == 0x7F for ch in name):
-        raise UrdfError(f"a <{what}> name is longer than {MAX_NAME} characters or holds control characters")
+    if len(name) > MAX_NAME or not plain(name):
+        raise UrdfError(
+            f"a <{what}> name is longer than {MAX_NAME} characters or holds control or direction characters"
+        )
     return name
 
 

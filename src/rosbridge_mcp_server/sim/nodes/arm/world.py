@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import math
 import time
 from typing import Any
 
@@ -139,19 +140,19 @@ class ArmWorld:
                 run.finish("succeeded", 0, "goal reached")
             self.kit.world.notify()
         if self.gripper_target is not None:
-            here = self.positions[FINGER]
-            travel = GRIPPER_SPEED * UPDATE_PERIOD
-            ahead = self.gripper_target - here
-            self.positions[FINGER] = (
-                self.gripper_target if abs(ahead) <= travel else here + travel * (ahead > 0 or -1)
-            )
-            self.velocities[FINGER] = (
-                0.0 if abs(ahead) <= travel else GRIPPER_SPEED * (1 if ahead > 0 else -1)
-            )
-            if self.positions[FINGER] == self.gripper_target:
-                self.gripper_target = None
-                self.velocities[FINGER] = 0.0
+            self._move_fingers(self.gripper_target)
             self.kit.world.notify()
+
+    def _move_fingers(self, target: float) -> None:
+        """One update's travel of the finger towards *target* at the gripper's speed (the last one lands)."""
+        here = self.positions[FINGER]
+        travel = GRIPPER_SPEED * UPDATE_PERIOD
+        if abs(target - here) <= travel:
+            self.positions[FINGER], self.velocities[FINGER] = target, 0.0
+            self.gripper_target = None
+        else:
+            self.positions[FINGER] = here + math.copysign(travel, target - here)
+            self.velocities[FINGER] = math.copysign(GRIPPER_SPEED, target - here)
 
     def _publish_state(self) -> None:
         kit = self.kit
