@@ -195,6 +195,10 @@ def _seconds(value: Any, where: str) -> float | str:
         return 0.0
     if not isinstance(value, Mapping):
         return f"{where} must be {{sec, nanosec}}"
+    if not (set(value) <= {"sec", "nanosec"} or set(value) <= {"secs", "nsecs"}):
+        # Mixed spellings ({"sec": 9, "secs": 0}) are read differently by the two lines of rosbridge (ROS 1
+        # reads only secs/nsecs): what is judged must be what the controller gets.
+        return f"{where} must be {{sec, nanosec}} (or ROS 1's {{secs, nsecs}}), one spelling only"
     sec = _finite(value.get("sec", value.get("secs", 0)))
     nano = _finite(value.get("nanosec", value.get("nsecs", 0)))
     if sec is None or nano is None:
