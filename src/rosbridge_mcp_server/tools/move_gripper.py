@@ -10,7 +10,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.arm.urdf import Joint
-from rosbridge_mcp_server.robot.arm_scene import ArmScene, gripper_joint, learn_arm
+from rosbridge_mcp_server.robot.arm_scene import gripper_joint, learn_arm
 from rosbridge_mcp_server.robot.goals import Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
@@ -116,7 +116,7 @@ async def run(
         goal=goal,
         timeout=timeout,
         on_feedback=on_feedback,
-        scene=scene if isinstance(scene, ArmScene) else None,
+        scene=scene,
     )
     return _answer(outcome, joint, target)
 
