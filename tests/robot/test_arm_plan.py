@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from arm_fixture import ARM_JOINTS, HOME, ROBOT
 
+from arm_fixture import ARM_JOINTS, HOME, ROBOT
 from rosbridge_mcp_server.robot.arm.controllers import parse_controllers
 from rosbridge_mcp_server.robot.arm_plan import PlanError, plan_motion
 
