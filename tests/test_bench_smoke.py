@@ -55,6 +55,7 @@ TARGET_ROWS = (
     *(f"18{letter}" for letter in "abcdefghijk"),
     "19a",
     "19c",
+    "19d",
 )
 
 

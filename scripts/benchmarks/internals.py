@@ -15,6 +15,9 @@ a part on its own, so they need the part itself:
   kinematics and joint limits along a 100-point path, the kinematics part of a joint goal's check, p50 ≤ 5 ms)
   and 19c (``view_arm``'s text for a 7-joint arm with a gripper, which the simulated arm (6 joints) cannot
   show through the public way in).
+* the arm judge (:func:`arm_refusal`, the :class:`Act` and :class:`ArmScene` it reads, the policy it reads
+  ``[arm]`` from, and the simulated arm's robot description): row 19d, one joint goal's check along its path,
+  which no tool shows on its own (a refusal or a send buries it in the bridge's round trips).
 
 When one of these moves, this is the one file to change.
 """
@@ -26,10 +29,32 @@ from rosbridge_mcp_server.robot.arm.controllers import parse_controllers
 from rosbridge_mcp_server.robot.arm.kinematics import Chain
 from rosbridge_mcp_server.robot.arm.reading import ArmReading, JointStateNow
 from rosbridge_mcp_server.robot.arm.urdf import parse_urdf
+from rosbridge_mcp_server.robot.arm_scene import ArmScene
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
+from rosbridge_mcp_server.robot.seam import Act
+from rosbridge_mcp_server.safety import parse_policy
+from rosbridge_mcp_server.safety.arm import arm_refusal
+from rosbridge_mcp_server.sim.nodes.arm.model import HOME, arm_urdf
 from rosbridge_mcp_server.tools.view_arm import build_answer, render
 
-__all__ = ["Chain", "RosbridgeClient", "arm_answer_text", "infrastructure_types", "parse_urdf"]
+__all__ = [
+    "Act",
+    "ArmScene",
+    "Chain",
+    "RosbridgeClient",
+    "arm_answer_text",
+    "arm_refusal",
+    "arm_urdf",
+    "infrastructure_types",
+    "parse_policy",
+    "parse_urdf",
+    "sim_arm_home",
+]
+
+
+def sim_arm_home() -> dict[str, float]:
+    """The simulated arm's joints at home (radians, metres)."""
+    return dict(HOME)
 
 
 def arm_answer_text(urdf: str, controllers: dict[str, object]) -> str:

@@ -22,6 +22,7 @@ from websockets.asyncio.client import connect
 
 from benchmarks import __doc__ as PACKAGE_DOC
 from benchmarks.arm import measure_arm
+from benchmarks.arm_limits import measure_arm_limits
 from benchmarks.concurrency import measure_concurrency
 from benchmarks.diagnose import measure_diagnose
 from benchmarks.edge import measure_edge
@@ -80,6 +81,7 @@ ITEMS: list[tuple[str, str, str, Item, float]] = [
     ("stops", "16", "stop_robot and reconnects, as the robot sees them", measure_stops, 240.0),
     ("tasks", "17", "tasks/get on a running MCP task", measure_tasks, 120.0),
     ("arm", "19", "the arm: the path check's kinematics, view_arm", measure_arm, 120.0),
+    ("arm_limits", "19d", "the arm judge along a goal's path", measure_arm_limits, 60.0),
 ]
 
 

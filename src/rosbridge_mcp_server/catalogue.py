@@ -71,8 +71,10 @@ CATALOGUE: Final[tuple[Entry, ...]] = (
     # Recordings: MCAP files written from topics, and read back.
     Entry("record", "record", acts=True),
     Entry("read_recording", "record", acts=False),
-    # A robot arm: seeing it.
+    # A robot arm: seeing it, and moving its joints and gripper within the URDF's limits and [arm].
     Entry("view_arm", "arm", acts=False),
+    Entry("move_arm", "arm", acts=True),
+    Entry("move_gripper", "arm", acts=True),
 )
 
 

@@ -39,7 +39,7 @@ PLACEHOLDER = "…"
 FLEET_ONLY = {"list_robots"}
 NAV2_ONLY = {"navigate_to"}
 #: The arm's tools run on the demo's arm world (``--demo --demo-world arm``).
-ARM_ONLY = {"view_arm"}
+ARM_ONLY = {"view_arm", "move_arm", "move_gripper"}
 #: record's example waits out its 30 s: it and read_recording's (which read its file) run on a demo server of
 #: their own, beside the others.
 RECORDING = {"record", "read_recording"}

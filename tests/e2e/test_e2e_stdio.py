@@ -118,9 +118,8 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
 
         tools = await server.request("tools/list")
-        assert (
-            len(tools["result"]["tools"]) == 27
-        )  # the 21, read_logs, diagnose, navigate_to, record, read_recording, view_arm
+        # the 21, read_logs, diagnose, navigate_to, record, read_recording, view_arm, move_arm, move_gripper
+        assert len(tools["result"]["tools"]) == 29
 
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
         assert topics["result"]["isError"] is False

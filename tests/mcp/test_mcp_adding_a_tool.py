@@ -47,6 +47,8 @@ def test_every_acting_tool_says_what_it_acts_on() -> None:
         "stop_robot": "topic",
         "navigate_to": "action",
         "record": "topic",
+        "move_arm": "action",
+        "move_gripper": "action",
     }
 
 

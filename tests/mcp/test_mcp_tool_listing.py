@@ -51,6 +51,8 @@ EXPECTED_PARAMETERS = {
     "record": ["topics", "duration", "max_megabytes", "name", "stop"],
     "read_recording": ["file", "mode", "fields", "at", "window", "topics"],
     "view_arm": ["frame", "timeout"],
+    "move_arm": ["joints", "pose", "relative", "controller", "timeout"],
+    "move_gripper": ["command", "position", "max_effort", "action", "timeout"],
 }
 READ_ONLY = {
     "list_topics",

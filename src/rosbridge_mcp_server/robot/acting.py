@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import Advice, NotSentError, PolicyRefusal, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.robot.arm_goals import carried_arm
+from rosbridge_mcp_server.robot.arm_scene import ArmScene, learn_arm
 from rosbridge_mcp_server.robot.effects import parameter_write, service_effects, topic_effects
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.goals.caused import caused_by_call, caused_by_publish
@@ -478,7 +480,7 @@ async def send_goal(
     goal: dict[str, Any],
     timeout: float,
     on_feedback: GoalFeedback | None = None,
-    scene: Scene | None = None,
+    scene: Scene | ArmScene | None = None,
 ) -> Goal:
     """Check the goal against the action server's type, run it until it ends, and return how it ended.
 
@@ -531,10 +533,18 @@ async def send_goal(
 SCENE_TIMEOUT = 3.0
 
 
-async def motion_scene(ctx: Acting, kind: str, name: str, type_name: str, payload: Any) -> Scene | None:
+async def motion_scene(
+    ctx: Acting, kind: str, name: str, type_name: str, payload: Any
+) -> Scene | ArmScene | None:
     """The map (``<namespace>/map``) and the robot (``base_link``) a motion goal the act carries is judged
-    against, whichever carrier (``robot/motion_goals.py``); ``None`` when it carries none, or one the fence
-    cannot read or place (the guard says why)."""
+    against, whichever carrier (``robot/motion_goals.py``); for an arm's trajectory or gripper goal
+    (``robot/arm_goals.py``) the arm's description and joint positions; ``None`` when it carries none, or one
+    the fence cannot read or place (the guard says why)."""
+    arm = carried_arm(kind, name, type_name, payload)
+    if arm is not None:
+        if arm.kind == "switch" or isinstance(arm.body, str):
+            return None
+        return await learn_arm(ctx.client, ctx.graph, timeout=min(SCENE_TIMEOUT, ctx.config.request_timeout))
     carried = carried_goal(kind, name, type_name, payload)
     if carried is None:
         return None

@@ -31,6 +31,7 @@ from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
 from rosbridge_mcp_server.robot.seam import AnswerNotInForm
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
+from rosbridge_mcp_server.safety.arm import act_arm, arm_refusal, source_refusal
 from rosbridge_mcp_server.safety.fence import fence_refusal, writes_fence
 from rosbridge_mcp_server.safety.navigation import act_motion, navigation_refusal
 from rosbridge_mcp_server.safety.operator import Operator
@@ -182,6 +183,9 @@ class PolicyGuard:
         place = navigation_refusal(act, self.policy.navigation) or fence_refusal(act, self.policy.navigation)
         if place is not None:
             self._refuse(act, place.rule, place.text)
+        arm = arm_refusal(act, self.policy.arm) or source_refusal(act)
+        if arm is not None:
+            self._refuse(act, arm.rule, arm.text)
         approved, clamp = self._capped(act)
         if self._needs_person(approved):
             answer = await self._ask(approved, ask, clamp)
@@ -318,6 +322,13 @@ class PolicyGuard:
         if self.policy.navigation.confirm == "motion" and (act_motion(act) is not None or writes_fence(act)):
             # Every motion goal by any carrier (robot/motion_goals.py), every write to what the fence reads.
             return True
+        arm = act_arm(act)
+        if arm is not None and (
+            self.policy.arm.confirm == "motion" or (arm.kind == "switch" and self.policy.arm.configured)
+        ):
+            # Every arm motion by any carrier (robot/arm_goals.py); a controller switch always while [arm] has
+            # boxes (it can hand the joints to a controller this server does not judge).
+            return True
         if confirm == "always":
             return True
         if confirm == "motion":
@@ -376,7 +387,7 @@ def moves(act: Act, policy: Policy) -> bool:
     """
     if act.kind == "action" or (act.kind == "topic" and is_velocity_type(act.type)):
         return True
-    if act_motion(act) is not None:
+    if act_motion(act) is not None or act_arm(act) is not None:
         return True
     if any(e.kind in ("motion", "fence") or (e.kind == "action" and e.what == "goal") for e in act.effects):
         return True

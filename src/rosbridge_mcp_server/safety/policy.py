@@ -35,6 +35,8 @@ robot uncapped). The file::
     stairs = [[8, 8], [9, 8], [9, 9], [8, 9]]
     [places]                     # named places for navigate_to: [x, y, yaw in degrees] in the map frame
     dock = [1.0, 1.0, 90]
+    [arm]                        # every arm motion by any carrier: safety/arm_rules.py has the keys
+    speed_scale = 0.25           # share of the URDF joint speeds (default 0.25)
 """
 
 from __future__ import annotations
@@ -47,6 +49,8 @@ from dataclasses import dataclass, field, replace
 from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Any, Literal
+
+from rosbridge_mcp_server.safety.arm_rules import ArmRules, describe_arm, parse_arm
 
 __all__ = [
     "ACT_KINDS",
@@ -200,6 +204,8 @@ class Policy:
     navigation: NavigationRules = field(default_factory=NavigationRules)
     #: Named places for navigate_to: name → (x m, y m, yaw degrees) in the map frame.
     places: tuple[tuple[str, tuple[float, float, float]], ...] = ()
+    #: ``[arm]``: speeds, workspace and keep-out boxes for every arm motion (``safety/arm.py``).
+    arm: ArmRules = field(default_factory=ArmRules)
     source: str | None = None
 
     def rules_for(self, kind: str) -> tuple[str, NameRules]:
@@ -289,6 +295,8 @@ class Policy:
             lines.append(f"  [navigation] {'; '.join(parts)}")
         if self.places:
             lines.append(f"  [places] {', '.join(name for name, _ in self.places)}")
+        if self.arm != ArmRules():
+            lines.append(describe_arm(self.arm))
         return lines
 
 
@@ -312,6 +320,7 @@ _TOP_KEYS = (
     "recording",
     "navigation",
     "places",
+    "arm",
 )
 _RULE_KEYS = ("allow", "deny")
 _MOTION_KEYS = ("allow", "deny", "motion")
@@ -384,6 +393,7 @@ def parse_policy(data: Mapping[str, Any], *, where: str = "policy") -> Policy:
         recording=_recording(data, where),
         navigation=_navigation(data, where),
         places=_places(data, where),
+        arm=_arm(data, where),
         source=where,
     )
 
@@ -490,6 +500,13 @@ def _navigation(data: Mapping[str, Any], where: str) -> NavigationRules:
             _globs(table, "allow_fence_writes", "navigation", where) if "allow_fence_writes" in table else ()
         ),
     )
+
+
+def _arm(data: Mapping[str, Any], where: str) -> ArmRules:
+    try:
+        return parse_arm(data, where)
+    except ValueError as exc:
+        raise PolicyError(str(exc)) from None
 
 
 def _number(value: Any) -> float | None:

@@ -23,6 +23,7 @@ import unicodedata
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from rosbridge_mcp_server.safety.arm import arm_goal_text
 from rosbridge_mcp_server.safety.navigation import goal_text
 
 if TYPE_CHECKING:
@@ -190,7 +191,7 @@ def question(act: Act, clamp: str | None = None) -> str:
         lines.append(f"Repeated at {act.rate_hz:g} Hz{lasting}.")
     if clamp:
         lines.append(f"Note: {clamp}.")
-    where = goal_text(act)
+    where = goal_text(act) or arm_goal_text(act)
     if where:
         lines.append(where)
     lines = [_header(line) for line in lines]

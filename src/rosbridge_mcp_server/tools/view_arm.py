@@ -21,6 +21,7 @@ from rosbridge_mcp_server.robot.arm.kinematics import (
 from rosbridge_mcp_server.robot.arm.reading import ArmReading, at_limit, read_arm
 from rosbridge_mcp_server.robot.arm.urdf import Joint, Robot
 from rosbridge_mcp_server.robot.frames import look_up_transform
+from rosbridge_mcp_server.robot.nodes import node_names
 from rosbridge_mcp_server.robot.transforms import frame_name
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 
@@ -112,7 +113,18 @@ async def run(
     if frame is not None and frame_name(frame) not in reading.robot.links:
         outside = await _frame_to_root(ctx, frame, reading.robot.root, timeout)
     answer = build_answer(reading, frame_name(frame) if frame is not None else None, outside)
-    return ToolAnswer(text=render(answer), data=answer)
+    text = render(answer)
+    if MOVE_GROUP in await node_names(ctx.graph):
+        text += f"\n{MOVEIT_LINE}"
+    return ToolAnswer(text=text, data=answer)
+
+
+MOVE_GROUP = "/move_group"
+#: Said when MoveIt's move_group runs: what move_arm does with it (docs/safety.md, "Arm motion").
+MOVEIT_LINE = (
+    "MoveIt: /move_group runs. move_arm sends joint goals and named poses, judged here against the URDF "
+    "limits and the policy; Cartesian targets are not planned through this server yet."
+)
 
 
 async def _frame_to_root(ctx: ToolContext, frame: str, root: str, timeout: float) -> Transform:
