@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from rosbridge_mcp_server.robot.arm.controllers import parse_controllers, parse_srdf
@@ -57,13 +55,12 @@ def _refusal(text: str | bytes) -> str:
 
 
 def test_an_entity_bomb_is_refused_before_any_entity_expands() -> None:
-    """A billion-laughs DTD is refused for having a DTD, in well under a second."""
+    """A billion-laughs DTD is refused for having a DTD, before any entity expands (the test's own timeout
+    bounds it: expanded, the name would be 10^9 characters)."""
     bomb = '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa">'
     bomb += "".join(f'<!ENTITY a{i} "{"&a;" * 10 if i == 0 else f"&a{i - 1};" * 10}">' for i in range(9))
     bomb += ']><robot name="&a8;"><link name="l"/></robot>'
-    start = time.monotonic()
     assert "DTD" in _refusal(bomb)
-    assert time.monotonic() - start < 1.0
 
 
 def test_an_external_entity_is_refused() -> None:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import struct
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -41,12 +40,14 @@ SMALL = {
 }
 
 
+# A guard, not a measurement (the benchmark's rows 18a-k hold each class to 2 s): unbounded, these files cost
+# 30-86 s of CPU each.
+@pytest.mark.timeout(30)
 @pytest.mark.parametrize("kind", list(SMALL))
 def test_each_hostile_file_is_refused_quickly_with_what_is_wrong(kind: str, tmp_path: Path) -> None:
-    """The summary and the messages of each bomb: a NotARecording naming the problem, in well under 2 s."""
+    """The summary and the messages of each bomb: a NotARecording naming the problem, reading bounded work."""
     write, words = SMALL[kind]
     path = write(tmp_path)
-    began = time.perf_counter()
     with pytest.raises(NotARecording) as summarised:
         summarize_recording(path)
     assert words in str(summarised.value)
@@ -55,7 +56,6 @@ def test_each_hostile_file_is_refused_quickly_with_what_is_wrong(kind: str, tmp_
         with pytest.raises(NotARecording) as decoded:
             list(decoded_messages(path))
         assert str(decoded.value).startswith(path.name)
-    assert time.perf_counter() - began < 5.0  # generous on a loaded machine; the benchmark holds 2 s
 
 
 def test_a_schema_containing_itself_or_nesting_too_deep_is_refused_before_decoding(tmp_path: Path) -> None:
