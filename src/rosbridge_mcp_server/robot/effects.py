@@ -46,6 +46,7 @@ from typing import Any, Literal
 
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import Advice, NotSentError
+from rosbridge_mcp_server.robot.motion_goals import GOAL_POSE_TOPICS
 from rosbridge_mcp_server.robot.names import parameter_name
 
 __all__ = [
@@ -105,7 +106,7 @@ MOTION_TOPIC_TYPES = frozenset(
 #: Why a motion command type moves the robot, where that is not plain.
 _MOTION_WHY = {"sensor_msgs/Joy": "a joystick: teleop turns it into velocity"}
 #: Topics a navigation stack takes a goal pose on (the robot then drives there).
-MOTION_GOAL_TOPICS = ("/move_base_simple/goal", "/goal_pose")
+MOTION_GOAL_TOPICS = GOAL_POSE_TOPICS  # one tuple: robot/motion_goals.py reads the goals they carry
 
 #: Service types that move the robot (or a simulated body), in the short ``pkg/Type`` form both lines share.
 MOTION_SERVICE_TYPES = frozenset(

@@ -11,14 +11,12 @@ which connections a cancel goes on (what the bridge can do is the client's to kn
 
 from __future__ import annotations
 
-import base64
-import binascii
-import contextlib
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Final
 
 from rosbridge_mcp_server.errors import GoalTimeoutError, NotConnectedError, ServiceError
 from rosbridge_mcp_server.robot.goals import ros1, ros2
+from rosbridge_mcp_server.robot.goals.caused import uuid_hex
 from rosbridge_mcp_server.robot.goals.record import (
     CANCEL_GRACE_SECONDS,
     UNCONFIRMED_STATUS,
@@ -160,7 +158,7 @@ async def _cancel_service(client: RosbridgeClient, ns: str, uuid: list[int], rep
         return
     canceling = values.get("goals_canceling") if isinstance(values, dict) else None
     if isinstance(canceling, list):
-        report.goals_canceling = [h for h in (_uuid_hex(info_) for info_ in canceling) if h is not None]
+        report.goals_canceling = [h for h in (uuid_hex(info_) for info_ in canceling) if h is not None]
     return_code = values.get("return_code") if isinstance(values, dict) else None
     report.return_code = return_code if isinstance(return_code, int) else None
     if return_code not in (None, 0):
@@ -180,18 +178,3 @@ def _uuid_bytes(goal_id: str) -> list[int] | None:
         return list(bytes.fromhex(digits))
     except ValueError:
         return None
-
-
-def _uuid_hex(goal_info: Any) -> str | None:
-    if not isinstance(goal_info, dict):
-        return None
-    goal_id = goal_info.get("goal_id")
-    uuid = goal_id.get("uuid") if isinstance(goal_id, dict) else None
-    # uint8[16] arrives base64-encoded from rosbridge's JSON mode; accept a list of ints too.
-    if isinstance(uuid, str):
-        with contextlib.suppress(binascii.Error, ValueError):
-            return base64.b64decode(uuid, validate=True).hex()
-        return uuid
-    if isinstance(uuid, list) and all(isinstance(b, int) and 0 <= b < 256 for b in uuid):
-        return bytes(uuid).hex()
-    return None
