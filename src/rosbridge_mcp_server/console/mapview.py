@@ -21,8 +21,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
 from rosbridge_mcp_server.robot.frames import TF_TOPICS
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
@@ -353,6 +351,9 @@ def _pose_event(frame: str, base: str, pose: Pose2D) -> dict[str, Any]:
 
 
 def _draw(grid: Grid, robot: Pose2D | None, plan: list[tuple[float, float]]) -> tuple[str, int, int]:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.maps import Overlay, draw_map  # noqa: PLC0415 - on first use
+
     picture = draw_map(grid, max_size=MAP_MAX_SIZE, overlay=Overlay(robot=robot, path=plan))
     data = png_bytes(picture.image)
     return base64.b64encode(data).decode("ascii"), picture.image.width, picture.image.height

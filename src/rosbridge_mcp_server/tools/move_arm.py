@@ -6,16 +6,12 @@ from __future__ import annotations
 
 import asyncio
 import math
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.pictures.arm import draw_arm
-from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.robot.acting import send_goal
-from rosbridge_mcp_server.robot.arm_plan import ArmPlan, PlanError, plan_motion, shown, to_si
-from rosbridge_mcp_server.robot.arm_scene import ArmScene, learn_arm, positions_now
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import (
@@ -26,6 +22,10 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.arm_plan import ArmPlan
+    from rosbridge_mcp_server.robot.arm_scene import ArmScene
 
 __all__ = ["SPEC", "ArmAnswer", "run"]
 
@@ -69,6 +69,8 @@ SPEC = ToolSpec(
 
 
 def _targets(scene: ArmScene, joints: dict[str, Any], relative: bool) -> dict[str, float]:
+    from rosbridge_mcp_server.robot.arm_plan import to_si  # noqa: PLC0415 - on first use
+
     robot = scene.robot
     assert robot is not None
     out: dict[str, float] = {}
@@ -120,6 +122,9 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 60")] = 60.0,
 ) -> ToolAnswer:
     """Resolve the goal, plan its timing, send it, report progress, say where the arm ended."""
+    from rosbridge_mcp_server.robot.arm_plan import PlanError, plan_motion  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.arm_scene import learn_arm  # noqa: PLC0415 - on first use
+
     if bool(joints) == bool(pose.strip()):
         raise ToolFailure(
             f"Give joints or a named pose, not both or neither, e.g. {_EXAMPLE}. Nothing was sent."
@@ -204,6 +209,9 @@ def _images(image: bytes | None) -> tuple[ToolImage, ...]:
 
 async def _picture(ctx: ToolContext, scene: ArmScene, plan: ArmPlan) -> bytes | None:
     """The arm at the start and at the goal, from the side, with the policy's boxes."""
+    from rosbridge_mcp_server.pictures.arm import draw_arm  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+
     robot = scene.robot
     if robot is None:
         return None
@@ -225,6 +233,8 @@ async def _picture(ctx: ToolContext, scene: ArmScene, plan: ArmPlan) -> bytes | 
 
 
 def _in_units(scene: ArmScene, plan: ArmPlan, values: list[Any]) -> list[float]:
+    from rosbridge_mcp_server.robot.arm_plan import shown  # noqa: PLC0415 - on first use
+
     robot = scene.robot
     assert robot is not None
     out = []
@@ -236,6 +246,8 @@ def _in_units(scene: ArmScene, plan: ArmPlan, values: list[Any]) -> list[float]:
 
 
 async def _answer(ctx: ToolContext, scene: ArmScene, plan: ArmPlan, outcome: Goal) -> ToolAnswer:
+    from rosbridge_mcp_server.robot.arm_scene import positions_now  # noqa: PLC0415 - on first use
+
     now = await positions_now(ctx.client, ctx.graph, _READY_WAIT)
     target = dict(zip(plan.joints, _in_units(scene, plan, list(plan.target)), strict=True))
     final = None

@@ -10,30 +10,11 @@ import json
 import math
 import time
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.mcapfile import Budget
-from rosbridge_mcp_server.pictures.charts import draw_chart, stats
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
-from rosbridge_mcp_server.pictures.summary import summarize
 from rosbridge_mcp_server.robot.occupancy import MapError, decode_grid
-from rosbridge_mcp_server.robot.recording.files import (
-    PathRefused,
-    list_recordings,
-    resolve_recording,
-)
-from rosbridge_mcp_server.robot.recording.paths import PathReader
-from rosbridge_mcp_server.robot.recording.reading import (
-    NotARecording,
-    RecordingSummary,
-    decoded_messages,
-    field_series,
-    read_budget,
-    summarize_recording,
-)
 from rosbridge_mcp_server.robot.series import FieldError
 from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.base import (
@@ -44,6 +25,10 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.mcapfile import Budget
+    from rosbridge_mcp_server.robot.recording.reading import RecordingSummary
 
 __all__ = ["SPEC", "ReadRecordingAnswer", "run"]
 
@@ -97,6 +82,9 @@ async def run(
         list[str] | None, Field(max_length=50, description='map: map, path; e.g. ["/map", "/odom"]')
     ] = None,
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.robot.recording.files import PathRefused, resolve_recording  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import NotARecording, read_budget, summarize_recording  # noqa: PLC0415 - on first use
+
     directory = ctx.config.record_dir
     if file is None:
         return await asyncio.to_thread(_listing, directory)
@@ -135,6 +123,8 @@ async def run(
 
 
 def _listing(directory: Path) -> ToolAnswer:
+    from rosbridge_mcp_server.robot.recording.files import list_recordings  # noqa: PLC0415 - on first use
+
     entries = list_recordings(directory)
     rows: list[dict[str, Any]] = []
     lines = [f"{counted(len(entries), 'recording')} in {str(directory)!r}" + (":" if entries else ".")]
@@ -243,6 +233,9 @@ def _types(summary: RecordingSummary) -> dict[str, str]:
 def _stats(
     file: str, summary: RecordingSummary, wanted: dict[str, list[str]], buckets: int, budget: Budget
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.charts import stats  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import field_series  # noqa: PLC0415 - on first use
+
     lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary), budget)
     span = max(summary.seconds, 1e-9)
     lines = [f"{file}: {summary.seconds:.1f} s in {buckets} windows of {span / buckets:.3g} s."]
@@ -302,6 +295,10 @@ def _stats(
 def _plot(
     file: str, summary: RecordingSummary, wanted: dict[str, list[str]], width: int, budget: Budget
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.charts import draw_chart, stats  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import field_series  # noqa: PLC0415 - on first use
+
     lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary), budget)
     if all(n == 0 for n in counts.values()):
         raise ToolFailure(f"No message of {', '.join(counts)} in {file}.")
@@ -337,6 +334,9 @@ def _messages(
     topics: list[str] | None,
     budget: Budget,
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.summary import summarize  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415 - on first use
+
     if at is None:
         raise ToolFailure(
             f"Give at (seconds from the start, 0-{summary.seconds:.1f}) for the messages around it."
@@ -399,6 +399,11 @@ def _map(
     budget: Budget,
     max_size: int = PICTURE_SIZE,
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.maps import Overlay, draw_map  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.paths import PathReader  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415 - on first use
+
     known = {t.topic for t in summary.topics}
     if map_topic not in known:
         raise ToolFailure(

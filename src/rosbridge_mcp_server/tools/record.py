@@ -6,19 +6,15 @@ from __future__ import annotations
 import os
 import shutil
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording
-from rosbridge_mcp_server.robot.recording.recorder import (
-    NoTopicMatched,
-    RecordingResult,
-    choose_topics,
-    record_topics,
-)
 from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.recording.recorder import RecordingResult
 
 __all__ = ["SPEC", "RecordAnswer", "run"]
 
@@ -77,6 +73,9 @@ async def run(
     stop: Annotated[bool, Field(description="End running ones, e.g. true")] = False,
 ) -> ToolAnswer:
     """Choose the topics, make the file, record, and say what was written."""
+    from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.recorder import NoTopicMatched, choose_topics, record_topics  # noqa: PLC0415 - on first use
+
     if stop:
         stopped = ctx.robot.recordings.stop(name)
         text = (

@@ -4,13 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import math
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay, draw_map
-from rosbridge_mcp_server.pictures.scans import ScanError, decode_scan, to_frame
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.namespaces import under
 from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_grid, decode_path
@@ -29,6 +26,9 @@ from rosbridge_mcp_server.tools.namespaces import (
     non_defaults,
 )
 from rosbridge_mcp_server.tools.seeing import first_message, is_type, planar_pose, typed_topic
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay
 
 __all__ = ["SPEC", "MapAnswer", "run"]
 
@@ -233,6 +233,9 @@ async def _overlay(
     topic: str = "",
 ) -> tuple[Overlay, Pose2D | None]:
     """The robot's pose, the path and the scan hits in the map's frame (each placed through /tf)."""
+    from rosbridge_mcp_server.pictures.maps import Overlay  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.scans import ScanError, decode_scan, to_frame  # noqa: PLC0415 - on first use
+
     path_frame, path = decode_path(path_message) if path_message is not None else ("", [])
     scan = None
     if scan_message is not None:
@@ -269,6 +272,9 @@ async def _overlay(
 def _draw(
     grid: Grid, max_size: int, overlay: Overlay, window: tuple[float, float, float, float] | None
 ) -> tuple[MapPicture, bytes]:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.maps import draw_map  # noqa: PLC0415 - on first use
+
     picture = draw_map(grid, max_size=max_size, overlay=overlay, window=window)
     return picture, png_bytes(picture.image)
 

@@ -4,22 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import math
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.scans import (
-    Nearest,
-    ScanError,
-    ScanPoints,
-    Sector,
-    decode_cloud,
-    decode_scan,
-    draw_scan,
-    free_sectors,
-    nearest,
-)
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
@@ -31,6 +19,9 @@ from rosbridge_mcp_server.tools.base import (
 )
 from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, namespaced_topic, non_defaults
 from rosbridge_mcp_server.tools.seeing import first_message, is_type
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.pictures.scans import Nearest, ScanPoints, Sector
 
 __all__ = ["SPEC", "ScanAnswer", "run"]
 
@@ -78,6 +69,8 @@ async def run(
     namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Take one scan or cloud, find the nearest hit and free sectors, draw it off the event loop."""
+    from rosbridge_mcp_server.pictures.scans import ScanError  # noqa: PLC0415 - on first use
+
     if 0 < radius < MIN_RADIUS:
         raise ToolFailure(
             f"radius {radius:g} m is below the {MIN_RADIUS:g} m the picture shows at least; give 0 to fit "
@@ -131,6 +124,15 @@ async def run(
 def _work(
     message: dict[str, Any], cloud: bool, radius: float | None, clearance: float, max_size: int
 ) -> tuple[ScanPoints, Nearest | None, list[Sector], bytes, float, float]:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.scans import (  # noqa: PLC0415 - on first use
+        decode_cloud,
+        decode_scan,
+        draw_scan,
+        free_sectors,
+        nearest,
+    )
+
     scan = decode_cloud(message) if cloud else decode_scan(message)
     found = nearest(scan)
     sectors = free_sectors(scan, clearance)
