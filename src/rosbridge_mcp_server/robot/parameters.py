@@ -367,7 +367,12 @@ def _names(listed: Any) -> list[str]:
     """The parameter names a reply lists: robot text, shown escaped and capped (``robot/text.py``)."""
     if not isinstance(listed, list):
         return []
-    return [shown(name, NAME_CHARS) for name in listed if isinstance(name, str)]
+    names = [name for name in listed if isinstance(name, str)]
+    # The usual reply (printable names within the cap) is checked in one pass: shown() would return each as
+    # it is. A node lists dozens of names, a Nav2 graph over a thousand.
+    if "".join(names).isprintable() and all(len(name) <= NAME_CHARS for name in names):
+        return names
+    return [shown(name, NAME_CHARS) for name in names]
 
 
 def _no_parameter_service(node: str, *, nodes: list[str]) -> str:
