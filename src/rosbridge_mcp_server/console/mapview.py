@@ -330,10 +330,7 @@ def pose_of(tree: FrameTree, base_frame: str, map_frame: str = "map") -> tuple[s
         except TransformError as exc:
             problem = str(exc)
             continue
-        t = found.transform
-        x, y, z, w = t.rotation
-        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-        return frame, Pose2D(t.translation[0], t.translation[1], yaw)
+        return frame, found.transform.planar()
     if not tree.frames():
         return "no pose yet: no transform heard on /tf or /tf_static"
     return (

@@ -10,10 +10,12 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay, draw_map
-from rosbridge_mcp_server.pictures.scans import ScanError, decode_scan, to_frame
+from rosbridge_mcp_server.robot.frames import planar_pose
+from rosbridge_mcp_server.robot.map_reader import receive_map
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.namespaces import under
-from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_grid, decode_path
+from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_path, to_frame
+from rosbridge_mcp_server.robot.scans import ScanError, decode_scan
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -28,7 +30,7 @@ from rosbridge_mcp_server.tools.namespaces import (
     namespaced_topic,
     non_defaults,
 )
-from rosbridge_mcp_server.tools.seeing import first_message, is_type, planar_pose, typed_topic
+from rosbridge_mcp_server.tools.typed_topics import first_message, is_type, typed_topic
 
 __all__ = ["SPEC", "MapAnswer", "run"]
 
@@ -69,40 +71,21 @@ SPEC = ToolSpec(
 )
 
 
-#: A map this small fits one CBOR frame of any bridge (rosbridge fragments at 10 MB by default, and setups
-#: that lower it keep it far above 50 kB): it was not dropped for its size.
-_CBOR_DROPPED_CELLS = 50_000
-
-
-async def _map_message(
-    ctx: ToolContext, name: str, msg_type: str, timeout: float, notes: list[str]
-) -> dict[str, Any]:
-    """The grid as CBOR when the bridge can send it so; when none came and the bridge drops large CBOR
-    frames (ROS 2: a map above the connection's fragment size, 10 MB by default, ~10 M cells), once more as
-    JSON, which arrives in fragments (a bounded second wait).
-    """
-    dialect = await ctx.client.dialect()
-    # An OccupancyGrid has no fixed-size array.
-    compression = dialect.compression_for(fixed_size_arrays=False)
+async def _map(ctx: ToolContext, name: str, msg_type: str, timeout: float, notes: list[str]) -> Grid:
+    """The grid (``robot/map_reader.py``: CBOR, once more as JSON where large CBOR is dropped), or a
+    :class:`ToolFailure` saying none came or what is wrong with it."""
     try:
-        return await first_message(ctx, name, msg_type, timeout, "map", compression=compression)
-    except ToolFailure:
-        if compression is None or not dialect.drops_large_cbor:
-            raise
-    message = await first_message(ctx, name, msg_type, timeout, "map")
-    cells = len(message.get("data") or ()) if isinstance(message, dict) else 0
-    if cells < _CBOR_DROPPED_CELLS:
-        # Far under the fragment size: CBOR was not dropped; the map came later than the first wait.
-        notes.append(
-            f"The map ({cells} cells) did not arrive within {timeout:g} s and came on a second wait: its "
-            "publisher does not latch it (map_server does), so a new subscriber waits for its next one."
+        reading = await receive_map(ctx.client, name, msg_type, timeout)
+    except MapError as exc:
+        raise ToolFailure(f"{exc} (topic {name}).") from None
+    if reading.grid is None:
+        raise ToolFailure(
+            f"No map arrived on {name} within {timeout:g} s. Is its publisher running? get_topic_info "
+            "shows the topic's publishers; a larger timeout waits longer."
         )
-    else:
-        notes.append(
-            f"The map did not arrive as CBOR within {timeout:g} s (rosbridge drops CBOR frames above its "
-            "fragment size, 10 MB by default); it was read as JSON, which is slower."
-        )
-    return message
+    if reading.note is not None:
+        notes.append(reading.note)
+    return reading.grid
 
 
 async def run(
@@ -167,19 +150,12 @@ async def run(
         asyncio.create_task(optional(scan_name, scan_type, "scan")),
     ]
     try:
-        # CBOR: the cells arrive as one binary frame of bytes (2.25 M cells: 44 ms against 1.7 s as JSON on
-        # rosbridge 2.1.0); a bridge that ignores the request sends JSON, decoded the same.
-        message = await _map_message(ctx, name, msg_type, timeout, notes)
+        grid = await _map(ctx, name, msg_type, timeout, notes)
         path_message, scan_message = await asyncio.gather(*extras)
     finally:
         for task in extras:
             task.cancel()
         await asyncio.gather(*extras, return_exceptions=True)
-    try:
-        grid = await asyncio.to_thread(decode_grid, message)
-    except MapError as exc:
-        raise ToolFailure(f"{exc} (topic {name}).") from None
-    del message  # the decoded cells are the one copy kept
     frame = grid.frame_id or "map"
     overlay, robot = await _overlay(
         ctx,
@@ -242,9 +218,9 @@ async def _overlay(
             notes.append(f"scan not drawn: {exc}")
 
     async def pose(source: str, what: str) -> Pose2D | None:
-        if source == frame:
-            return Pose2D(0.0, 0.0, 0.0)
-        found = await planar_pose(ctx, frame, source, tf_wait, namespace=namespace, topic=topic)
+        found = await planar_pose(
+            ctx.client, ctx.graph, frame, source, tf_wait, namespace=namespace, topic=topic
+        )
         if isinstance(found, str):
             notes.append(f"{what} not drawn: {found}")
             return None

@@ -1,21 +1,17 @@
-"""What the picture tools (``view_map``, ``view_scan``, ``plot_topic``) share: checking a topic's type,
-taking one message from it, and a frame's planar pose from /tf."""
+"""A topic a tool reads, checked for its type (the topics of the right kind listed when it is missing or
+carries another), and one message taken from it within a timeout: what the picture tools (``view_map``,
+``view_scan``, ``plot_topic``) and the namespaced topics (``tools/namespaces.py``) share."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any, Literal
 
-from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.listening import listen
 from rosbridge_mcp_server.robot.messages import short_type_name
-from rosbridge_mcp_server.robot.namespaces import SeveralNamespacesError
-from rosbridge_mcp_server.robot.occupancy import Pose2D
-from rosbridge_mcp_server.robot.transforms import TransformError
 from rosbridge_mcp_server.tools.base import ToolContext, ToolFailure, absolute_name
 
-__all__ = ["first_message", "is_type", "planar_pose", "typed_topic"]
+__all__ = ["first_message", "is_type", "typed_topic"]
 
 
 def is_type(*names: str) -> Callable[[str], bool]:
@@ -62,33 +58,3 @@ async def first_message(
             "shows the topic's publishers; a larger timeout waits longer."
         )
     return heard.messages[0].message
-
-
-async def planar_pose(
-    ctx: ToolContext,
-    target: str,
-    source: str,
-    timeout: float,
-    *,
-    namespace: str | None = "",
-    topic: str = "",
-) -> Pose2D | str:
-    """Where ``source`` is in ``target`` (x, y, yaw) from /tf and /tf_static, or why it is not known.
-
-    The robot's *namespace*'s tf; with none (``None``) and no tf at the root, the robot's whose namespace
-    holds *topic* (``/robot2/map``: ``/robot2/tf``), or the one robot's with a tf."""
-    try:
-        found = await look_up_transform(
-            ctx.client, ctx.graph, target, source, timeout=timeout, namespace=namespace
-        )
-    except SeveralNamespacesError as exc:
-        owners = [ns for ns in exc.namespaces if topic.startswith(f"{ns}/")]
-        if not owners:
-            return str(exc)
-        return await planar_pose(ctx, target, source, timeout, namespace=max(owners, key=len))
-    except TransformError as exc:
-        return str(exc)
-    t = found.lookup.transform
-    x, y, z, w = t.rotation
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return Pose2D(t.translation[0], t.translation[1], yaw)
