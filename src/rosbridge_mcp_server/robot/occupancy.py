@@ -53,6 +53,10 @@ class Pose2D:
     y: float
     yaw: float
 
+    def rounded(self) -> list[float]:
+        """``[x m, y m, yaw degrees]`` as an answer gives it: millimetres and tenths of a degree."""
+        return [round(self.x, 3), round(self.y, 3), round(math.degrees(self.yaw), 1)]
+
 
 @dataclass(frozen=True)
 class Grid:

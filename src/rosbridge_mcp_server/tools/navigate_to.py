@@ -94,12 +94,6 @@ class _Refused(ToolFailure):
         self.images = (ToolImage(image, "image/png"),) if image is not None else ()
 
 
-def _planar(pose: Pose2D | None) -> list[float] | None:
-    if pose is None:
-        return None
-    return [round(pose.x, 3), round(pose.y, 3), round(math.degrees(pose.yaw), 1)]
-
-
 async def _is_turtlesim(ctx: ToolContext) -> bool:
     """Whether the robot is turtlesim (as the plain ``--demo`` is), which has no Nav2 to point at."""
     try:
@@ -332,7 +326,7 @@ def _answer(
         goal_id=outcome.goal_id,
         status=outcome.status,
         succeeded=outcome.succeeded,
-        final=_planar(final),
+        final=None if final is None else final.rounded(),
         distance_to_goal=distance,
         canceled_by=outcome.canceled_by,
     )

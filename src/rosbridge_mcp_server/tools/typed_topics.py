@@ -5,7 +5,7 @@ carries another), and one message taken from it within a timeout: what the pictu
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Literal
+from typing import Any
 
 from rosbridge_mcp_server.robot.listening import listen
 from rosbridge_mcp_server.robot.messages import short_type_name
@@ -38,20 +38,10 @@ async def typed_topic(
 
 
 async def first_message(
-    ctx: ToolContext,
-    name: str,
-    msg_type: str,
-    timeout: float,
-    what: str,
-    *,
-    compression: Literal["cbor"] | None = None,
+    ctx: ToolContext, name: str, msg_type: str, timeout: float, what: str
 ) -> dict[str, Any]:
-    """One message from the topic within ``timeout`` seconds, else a :class:`ToolFailure`.
-
-    ``compression="cbor"`` for large messages: numeric arrays arrive as ``array.array``, not lists."""
-    heard = await listen(
-        ctx.client, name, msg_type, count=1, duration=None, first_timeout=timeout, compression=compression
-    )
+    """One message from the topic within ``timeout`` seconds, else a :class:`ToolFailure`."""
+    heard = await listen(ctx.client, name, msg_type, count=1, duration=None, first_timeout=timeout)
     if not heard.messages:
         raise ToolFailure(
             f"No {what} arrived on {name} within {timeout:g} s. Is its publisher running? get_topic_info "

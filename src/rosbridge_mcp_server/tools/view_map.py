@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+from collections.abc import Callable
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
@@ -11,7 +12,7 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay, draw_map
 from rosbridge_mcp_server.robot.frames import planar_pose
-from rosbridge_mcp_server.robot.map_reader import receive_map
+from rosbridge_mcp_server.robot.map_reader import GRID_TYPE, receive_map
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.namespaces import under
 from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_path, to_frame
@@ -34,7 +35,7 @@ from rosbridge_mcp_server.tools.typed_topics import first_message, is_type, type
 
 __all__ = ["SPEC", "MapAnswer", "run"]
 
-_GRID = is_type("nav_msgs/OccupancyGrid")
+_GRID = is_type(GRID_TYPE)
 _PATH = is_type("nav_msgs/Path")
 _SCAN = is_type("sensor_msgs/LaserScan")
 #: The longest the robot's, the path's and the scan's frames are waited for on /tf.
@@ -118,48 +119,20 @@ async def run(
         tool=SPEC.name,
         arguments=non_defaults(run, given),
         accepts=_GRID,
-        kind="nav_msgs/OccupancyGrid",
+        kind=GRID_TYPE,
         hint="view_scan shows scans; subscribe_topic reads other topics.",
     )
-    path_name = scan_name = None
-    path_type = scan_type = ""
-    if path_topic:
-        path_name, path_type = await typed_topic(
-            ctx, under(ns, absolute_name(path_topic, "path_topic")), "path_topic", accepts=_PATH,
-            kind="nav_msgs/Path"
-        )  # fmt: skip
-    if scan_topic:
-        scan_name, scan_type = await typed_topic(
-            ctx, under(ns, absolute_name(scan_topic, "scan_topic")), "scan_topic", accepts=_SCAN,
-            kind="sensor_msgs/LaserScan"
-        )  # fmt: skip
     notes: list[str] = [found_note] if found_note is not None else []
-
-    async def optional(topic_name: str | None, topic_type: str, what: str) -> dict[str, Any] | None:
-        if topic_name is None:
-            return None
-        try:
-            return await first_message(ctx, topic_name, topic_type, timeout, what)
-        except ToolFailure:
-            notes.append(f"{what} not drawn: nothing arrived on {topic_name} within {timeout:g} s.")
-            return None
-
-    # The plan and the scan are awaited alongside the map, and given up with it when it fails.
-    extras = [
-        asyncio.create_task(optional(path_name, path_type, "path")),
-        asyncio.create_task(optional(scan_name, scan_type, "scan")),
-    ]
-    try:
-        grid = await _map(ctx, name, msg_type, timeout, notes)
-        path_message, scan_message = await asyncio.gather(*extras)
-    finally:
-        for task in extras:
-            task.cancel()
-        await asyncio.gather(*extras, return_exceptions=True)
-    frame = grid.frame_id or "map"
+    extras = (
+        await _extra(ctx, ns, path_topic, "path_topic", accepts=_PATH, kind="nav_msgs/Path"),
+        await _extra(ctx, ns, scan_topic, "scan_topic", accepts=_SCAN, kind="sensor_msgs/LaserScan"),
+    )
+    grid, path_message, scan_message = await _messages(
+        ctx, name, msg_type, extras, timeout=timeout, notes=notes
+    )
     overlay, robot = await _overlay(
         ctx,
-        frame,
+        grid.frame_id or "map",
         base_frame=base_frame.strip(),
         path_message=path_message,
         scan_message=scan_message,
@@ -171,29 +144,72 @@ async def run(
     off_map = _off_map(grid, robot, base_frame.strip())
     if off_map is not None:
         notes.insert(0, off_map)  # first: the model must not take the robot for missing
-    window = None
-    if around_robot:
-        if robot is None:
-            notes.append("around_robot needs the robot's pose: the whole map is shown.")
-        else:
-            window = (
-                robot.x - around_robot,
-                robot.y - around_robot,
-                robot.x + around_robot,
-                robot.y + around_robot,
-            )
+    window = _window(robot, around_robot, notes)
     picture, data = await asyncio.to_thread(_draw, grid, max_size, overlay, window)
     answer = _answer(
-        name,
-        grid,
-        picture,
-        robot=robot,
-        overlay=overlay,
-        notes=notes,
-        path_heard=path_message is not None,
+        name, grid, picture, robot=robot, overlay=overlay, notes=notes, path_heard=path_message is not None
     )
     text = _text(answer, base_frame, picture.image.size, drawn=off_map is None)
     return ToolAnswer(text=text, data=answer, images=(ToolImage(data, "image/png"),))
+
+
+async def _extra(
+    ctx: ToolContext, ns: str, topic: str, argument: str, *, accepts: Callable[[str], bool], kind: str
+) -> tuple[str, str] | None:
+    """The plan's or the scan's topic (under the map's namespace) and its type, checked; ``None``: not
+    asked."""
+    if not topic:
+        return None
+    return await typed_topic(
+        ctx, under(ns, absolute_name(topic, argument)), argument, accepts=accepts, kind=kind
+    )
+
+
+async def _messages(
+    ctx: ToolContext,
+    name: str,
+    msg_type: str,
+    extras: tuple[tuple[str, str] | None, tuple[str, str] | None],
+    *,
+    timeout: float,
+    notes: list[str],
+) -> tuple[Grid, dict[str, Any] | None, dict[str, Any] | None]:
+    """The grid, and the plan and the scan awaited alongside it (each a note when it did not come), given up
+    with it when it fails."""
+
+    async def optional(topic: tuple[str, str] | None, what: str) -> dict[str, Any] | None:
+        if topic is None:
+            return None
+        try:
+            return await first_message(ctx, topic[0], topic[1], timeout, what)
+        except ToolFailure:
+            notes.append(f"{what} not drawn: nothing arrived on {topic[0]} within {timeout:g} s.")
+            return None
+
+    tasks = [
+        asyncio.create_task(optional(extras[0], "path")),
+        asyncio.create_task(optional(extras[1], "scan")),
+    ]
+    try:
+        grid = await _map(ctx, name, msg_type, timeout, notes)
+        path_message, scan_message = await asyncio.gather(*tasks)
+    finally:
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+    return grid, path_message, scan_message
+
+
+def _window(
+    robot: Pose2D | None, around_robot: float, notes: list[str]
+) -> tuple[float, float, float, float] | None:
+    """The map-frame box *around_robot* metres about the robot (``None``: the whole map)."""
+    if not around_robot:
+        return None
+    if robot is None:
+        notes.append("around_robot needs the robot's pose: the whole map is shown.")
+        return None
+    return (robot.x - around_robot, robot.y - around_robot, robot.x + around_robot, robot.y + around_robot)
 
 
 async def _overlay(
@@ -265,14 +281,14 @@ def _answer(
         frame_id=grid.frame_id,
         cells=[grid.width, grid.height],
         resolution=round(grid.resolution, 6),
-        origin=_planar(grid.origin),
+        origin=grid.origin.rounded(),
         shares={
             "known": round(shares.known, 4),
             "free": round(shares.free, 4),
             "occupied": round(shares.occupied, 4),
             "cost": round(shares.cost, 4),
         },
-        robot=None if robot is None else _planar(robot),
+        robot=None if robot is None else robot.rounded(),
         path_poses=len(overlay.path) if path_heard else None,
         scan_hits=len(overlay.hits) if overlay.hits or any(n.startswith("scan") for n in notes) else None,
         window=[round(v, 3) for v in picture.window],
@@ -297,10 +313,6 @@ def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
         f"{math.ceil(outside * 100) / 100:g} m outside its extent (x {x_min:g}..{x_max:g}, "
         f"y {y_min:g}..{y_max:g} m), so the picture cannot show it."
     )
-
-
-def _planar(pose: Pose2D) -> list[float]:
-    return [round(pose.x, 3), round(pose.y, 3), round(math.degrees(pose.yaw), 1)]
 
 
 def _text(answer: MapAnswer, base_frame: str, size: tuple[int, int], *, drawn: bool) -> str:
