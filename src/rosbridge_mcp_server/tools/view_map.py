@@ -123,12 +123,8 @@ async def run(
         hint="view_scan shows scans; subscribe_topic reads other topics.",
     )
     notes: list[str] = [found_note] if found_note is not None else []
-    extras = (
-        await _extra(ctx, ns, path_topic, "path_topic", accepts=_PATH, kind="nav_msgs/Path"),
-        await _extra(ctx, ns, scan_topic, "scan_topic", accepts=_SCAN, kind="sensor_msgs/LaserScan"),
-    )
     grid, path_message, scan_message = await _messages(
-        ctx, name, msg_type, extras, timeout=timeout, notes=notes
+        ctx, (name, msg_type), ns, (path_topic, scan_topic), timeout=timeout, notes=notes
     )
     overlay, robot = await _overlay(
         ctx,
@@ -167,15 +163,20 @@ async def _extra(
 
 async def _messages(
     ctx: ToolContext,
-    name: str,
-    msg_type: str,
-    extras: tuple[tuple[str, str] | None, tuple[str, str] | None],
+    grid_topic: tuple[str, str],
+    ns: str,
+    asked: tuple[str, str],
     *,
     timeout: float,
     notes: list[str],
 ) -> tuple[Grid, dict[str, Any] | None, dict[str, Any] | None]:
-    """The grid, and the plan and the scan awaited alongside it (each a note when it did not come), given up
-    with it when it fails."""
+    """The grid, and the plan and the scan (*asked*: their topics, ``""`` for none) checked and awaited
+    alongside it (each a note when it did not come), given up with it when it fails."""
+    path_topic, scan_topic = asked
+    extras = (
+        await _extra(ctx, ns, path_topic, "path_topic", accepts=_PATH, kind="nav_msgs/Path"),
+        await _extra(ctx, ns, scan_topic, "scan_topic", accepts=_SCAN, kind="sensor_msgs/LaserScan"),
+    )
 
     async def optional(topic: tuple[str, str] | None, what: str) -> dict[str, Any] | None:
         if topic is None:
@@ -191,7 +192,7 @@ async def _messages(
         asyncio.create_task(optional(extras[1], "scan")),
     ]
     try:
-        grid = await _map(ctx, name, msg_type, timeout, notes)
+        grid = await _map(ctx, *grid_topic, timeout, notes)
         path_message, scan_message = await asyncio.gather(*tasks)
     finally:
         for task in tasks:
