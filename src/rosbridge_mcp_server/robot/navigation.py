@@ -49,6 +49,7 @@ __all__ = [
     "map_problem",
     "navigation_action",
     "path_map_problem",
+    "place",
     "point_in_polygon",
     "pose_message",
     "survey",

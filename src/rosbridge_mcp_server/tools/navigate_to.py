@@ -26,6 +26,7 @@ from rosbridge_mcp_server.robot.navigation import (
     Scene,
     goal_request,
     navigation_action,
+    place,
     survey,
 )
 from rosbridge_mcp_server.robot.nodes import node_names
@@ -206,9 +207,8 @@ async def _goal_poses(ctx: ToolContext, request: GoalArgument, ready: _Ready) ->
         return [GoalPose(map_frame, px, py, math.radians(pyaw))]
     if request.kind == "relative":
         forward, left, turn = request.move
-        c, s = math.cos(start.yaw), math.sin(start.yaw)
-        x, y = start.x + c * forward - s * left, start.y + s * forward + c * left
-        return [GoalPose(map_frame, x, y, start.yaw + math.radians(turn))]
+        moved = place(GoalPose(map_frame, forward, left, math.radians(turn)), start)
+        return [GoalPose(map_frame, moved.x, moved.y, moved.yaw)]
     if request.kind == "waypoints":
         return [
             GoalPose(map_frame, x, y, start.yaw if yaw is None else math.radians(yaw))
