@@ -4,11 +4,21 @@ from __future__ import annotations
 
 import asyncio
 import math
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.scans import (
+    Nearest,
+    ScanError,
+    ScanPoints,
+    Sector,
+    decode_cloud,
+    decode_scan,
+    free_sectors,
+    nearest,
+)
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -18,10 +28,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolSpec,
 )
 from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, namespaced_topic, non_defaults
-from rosbridge_mcp_server.tools.seeing import first_message, is_type
-
-if TYPE_CHECKING:
-    from rosbridge_mcp_server.pictures.scans import Nearest, ScanPoints, Sector
+from rosbridge_mcp_server.tools.typed_topics import first_message, is_type
 
 __all__ = ["SPEC", "ScanAnswer", "run"]
 
@@ -69,8 +76,6 @@ async def run(
     namespace: NamespaceArgument = None,
 ) -> ToolAnswer:
     """Take one scan or cloud, find the nearest hit and free sectors, draw it off the event loop."""
-    from rosbridge_mcp_server.pictures.scans import ScanError  # noqa: PLC0415 - on first use
-
     if 0 < radius < MIN_RADIUS:
         raise ToolFailure(
             f"radius {radius:g} m is below the {MIN_RADIUS:g} m the picture shows at least; give 0 to fit "
@@ -125,13 +130,7 @@ def _work(
     message: dict[str, Any], cloud: bool, radius: float | None, clearance: float, max_size: int
 ) -> tuple[ScanPoints, Nearest | None, list[Sector], bytes, float, float]:
     from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
-    from rosbridge_mcp_server.pictures.scans import (  # noqa: PLC0415 - on first use
-        decode_cloud,
-        decode_scan,
-        draw_scan,
-        free_sectors,
-        nearest,
-    )
+    from rosbridge_mcp_server.pictures.scans import draw_scan  # noqa: PLC0415 - on first use
 
     scan = decode_cloud(message) if cloud else decode_scan(message)
     found = nearest(scan)
