@@ -36,11 +36,9 @@ import time
 from collections import Counter
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Final, Literal
+from typing import TYPE_CHECKING, Any, Final, Literal, TypeAlias
 
 from rosbridge_mcp_server.errors import Advice, Advised, RosbridgeError
-from rosbridge_mcp_server.robot.arm.controllers import Controller, list_controllers
-from rosbridge_mcp_server.robot.arm.health import controller_faults, limit_faults
 from rosbridge_mcp_server.robot.diagnostics import StatusBoard
 from rosbridge_mcp_server.robot.log_keeper import DIAGNOSTICS_TOPICS
 from rosbridge_mcp_server.robot.logs import level_rank
@@ -52,6 +50,7 @@ from rosbridge_mcp_server.robot.wording import counted
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.client.subscription import Subscription
+    from rosbridge_mcp_server.robot.arm.controllers import Controller
     from rosbridge_mcp_server.robot.graph import RosGraph
     from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 
@@ -500,7 +499,8 @@ def _checked_steps(finding: Finding, known: set[str]) -> Finding:
 
 #: What the arm area listens to: the URDF (latched) and the joint state.
 _ARM_TOPICS: Final = ("/robot_description", "/joint_states")
-_Controllers = tuple[str, tuple[Controller, ...] | str] | None
+# A string: the arm's modules are imported only where a robot has an arm area to look at.
+_Controllers: TypeAlias = "tuple[str, tuple[Controller, ...] | str] | None"
 
 
 async def _nothing() -> None:
@@ -514,6 +514,8 @@ async def _controllers(client: RosbridgeClient, graph: RosGraph, window: float) 
         return None
     manager = min(services, key=lambda s: (s != "/controller_manager/list_controllers", s))
     manager = manager.removesuffix("/list_controllers")
+    from rosbridge_mcp_server.robot.arm.controllers import list_controllers  # noqa: PLC0415 - arm robots only
+
     try:
         return manager, await list_controllers(client, manager, timeout=window + 1.0)
     except RosbridgeError as exc:
@@ -535,6 +537,8 @@ def _arm(
         if asked:
             unavailable["arm"] = "no controller manager (…/list_controllers) and no /joint_states"
         return []
+    from rosbridge_mcp_server.robot.arm.health import controller_faults, limit_faults  # noqa: PLC0415 - arm robots only
+
     out: list[Finding] = []
     parts = []
     if arm is not None:
