@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import importlib
 import math
 import time
 from collections.abc import Callable
@@ -44,6 +45,13 @@ __all__ = [
     "pose_of",
     "trying_again",
 ]
+
+#: What the console draws with (its map here, its camera in hub.py), loaded when a console is served.
+_PICTURE_MODULES = (
+    "rosbridge_mcp_server.pictures.drawing",
+    "rosbridge_mcp_server.pictures.maps",
+    "rosbridge_mcp_server.pictures.images",
+)
 
 DEFAULT_MAP_TOPIC = "/map"
 DEFAULT_BASE_FRAME = "base_link"
@@ -91,6 +99,11 @@ class MapPanel:
         changed: Callable[[], None],
         pushed: Callable[[], None],
     ) -> None:
+        # Pillow and the drawing load with a served console, not at its first picture: E-STOP shares this
+        # event loop, which an import would hold for tens of milliseconds mid-session. A server without
+        # --console never loads them for the console.
+        for module in _PICTURE_MODULES:
+            importlib.import_module(module)
         self._client = client
         self._graph = graph
         self._changed = changed
