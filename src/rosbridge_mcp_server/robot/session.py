@@ -1,7 +1,7 @@
 """One robot as this server drives it: the one owner of everything that lasts as long as the server does.
 
 A :class:`RobotSession` is made once per robot, beside its client, and lives across reconnects (unlike the
-client's :class:`~rosbridge_mcp_server.client.session.Session`, which is one connection). It holds:
+client's ``BridgeSession``, which is one connection). It holds:
 
 * ``client``: the rosbridge client (started and closed by whoever serves, not here);
 * ``graph``: what was learnt about the robot's graph (:class:`RosGraph`, per connection inside);
