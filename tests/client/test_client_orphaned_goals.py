@@ -9,6 +9,7 @@ from collections.abc import Callable, Iterator
 import pytest
 from client_harness import MakeClient, MakeSim
 
+from rosbridge_mcp_server.client import cut_off
 from rosbridge_mcp_server.client import goals as client_goals
 from rosbridge_mcp_server.errors import ConnectionLostError, GoalTimeoutError
 from rosbridge_mcp_server.robot import goals
@@ -213,7 +214,7 @@ async def test_a_goal_orphaned_too_long_ago_is_forgotten_without_a_cancel(
     sim_ros2: SimulatedRobot, make_client: MakeClient, cancel_log: _CancelLog, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Past the age limit a surprise cancel would stop whatever the robot does now: it is logged, not sent."""
-    monkeypatch.setattr(client_goals, "ORPHAN_MAX_AGE_SECONDS", 0.0)
+    monkeypatch.setattr(cut_off, "ORPHAN_MAX_AGE_SECONDS", 0.0)
     client = await make_client(sim_ros2)
     registry = GoalRegistry(client)
     goal_id = client.new_goal_id("/fibonacci")
@@ -234,7 +235,7 @@ async def test_at_most_a_bounded_number_of_orphaned_goals_are_remembered(
     registry = GoalRegistry(client)
     await sim_ros2.stop()
     await client.wait_disconnected(WAIT)
-    ids = [f"goal-{n}" for n in range(client_goals.ORPHAN_LIMIT + 1)]
+    ids = [f"goal-{n}" for n in range(cut_off.ORPHAN_LIMIT + 1)]
     for goal_id in ids:
         client.goals.remember("/fibonacci", goal_id, 2)
     assert cut_off_ids(registry) == ids[1:]

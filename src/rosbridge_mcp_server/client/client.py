@@ -252,26 +252,8 @@ class RosbridgeClient(BridgeCalls):
                 failures += 1
                 logger.warning("Setting up the connection to %s failed: %s", self.url, reason)
             else:
-                self._session = session
-                self._attempts.succeeded()
-                self.connections_made += 1
-                self._disconnected_event.clear()
-                self._connected_event.set()
-                attempt_done.set()
-                logger.info(
-                    "%s rosbridge at %s: %s",
-                    "Reconnected to" if session.number > 1 else "Connected to",
-                    self.url,
-                    session.info.describe(),
-                )
+                self._started(session, attempt_done)
                 failures = 0
-                if not session.ordering_known.is_set():
-                    self._measuring = self.run_in_background(
-                        self._measure_ordering(session), "measure call ordering"
-                    )
-                self.goals.session_started(session)
-                for watcher in self._watchers:
-                    watcher.session_started(session)
                 served = True
                 conn = session.connection
                 await conn.closed.wait()
@@ -284,6 +266,26 @@ class RosbridgeClient(BridgeCalls):
             finally:
                 self._attempts.ended(attempt_done, served=served)
             await self._attempts.pause()
+
+    def _started(self, session: BridgeSession, attempt_done: asyncio.Event) -> None:
+        """*session* is up: it is the client's now; the goals and the watchers are told."""
+        self._session = session
+        self._attempts.succeeded()
+        self.connections_made += 1
+        self._disconnected_event.clear()
+        self._connected_event.set()
+        attempt_done.set()
+        logger.info(
+            "%s rosbridge at %s: %s",
+            "Reconnected to" if session.number > 1 else "Connected to",
+            self.url,
+            session.info.describe(),
+        )
+        if not session.ordering_known.is_set():
+            self._measuring = self.run_in_background(self._measure_ordering(session), "measure call ordering")
+        self.goals.session_started(session)
+        for watcher in self._watchers:
+            watcher.session_started(session)
 
     def _set_disconnected(self, conn: Connection | None, reason: str) -> None:
         if conn is not None and self._session is not None and self._session.connection is conn:
