@@ -3,6 +3,7 @@ a ROS 2 bridge (its own lane) and a ROS 1 bridge (actionlib's topics), against t
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Callable
 
 import pytest
@@ -14,7 +15,7 @@ from rosbridge_mcp_server.client import (
     GoalHandle,
     RosbridgeClient,
 )
-from rosbridge_mcp_server.errors import NotSentError
+from rosbridge_mcp_server.errors import ConnectionLostError, NotSentError
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 TYPES = {"ros2": "example_interfaces/action/Fibonacci", "ros1": "actionlib_tutorials/FibonacciAction"}
@@ -48,6 +49,12 @@ async def start(
     return await client.start_goal(
         "/fibonacci", action_type, {"order": order}, goal_id=goal_id, timeout=WAIT, check=check
     )
+
+
+async def read_all(handle: GoalHandle) -> None:
+    """Read the goal's events until ``next()`` raises."""
+    while True:
+        await handle.next()
 
 
 async def test_a_goal_handle_streams_typed_feedback_then_the_goals_end(
@@ -120,3 +127,24 @@ async def test_closing_the_client_cancels_the_goals_it_still_runs(
     await client.close()
     await robot.wait_for(lambda world: world.goals[handle.goal_id].finished, WAIT)
     assert robot.world.goals[handle.goal_id].status == CANCELED[robot.dialect]
+
+
+async def test_a_goal_cut_off_by_a_drop_is_cancelled_by_the_client_once_the_connection_is_back(
+    robot: SimulatedRobot, make_client: MakeClient
+) -> None:
+    """After a drop ``next()`` raises ConnectionLostError; the handle's cancel, whether it could be sent or
+    not, ends the goal cancelled on the robot, and the client's ledger is empty after."""
+    client = await make_client(robot)
+    handle = await start(client, robot, 200)
+    try:
+        assert isinstance(await handle.next(), GoalFeedbackEvent)
+        await robot.drop_connections()
+        with pytest.raises(ConnectionLostError):
+            await asyncio.wait_for(read_all(handle), WAIT)
+        outcome = await handle.cancel()
+        assert outcome.reaches or handle.goal_id in client.goals.cut_off
+    finally:
+        await handle.aclose()
+    await robot.wait_for(lambda world: world.goals[handle.goal_id].finished, WAIT)
+    assert robot.world.goals[handle.goal_id].status == CANCELED[robot.dialect]
+    assert client.goals.cut_off == []

@@ -151,7 +151,9 @@ class GoalHandle:
             )
             outcome = GoalCancel(on_main, on_lane, reaches)
         if not outcome.reaches:
-            goals.remember(self.action, self.goal_id, self.version, stale=session if self.dropped else None)
+            # After a drop (ROS 2) the session the cancel went on may be the dying one: not swept on it.
+            stale = session if self.dropped and self.version == 2 else None
+            goals.remember(self.action, self.goal_id, self.version, stale=stale)
         return outcome
 
     async def aclose(self) -> None:
