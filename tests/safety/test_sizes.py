@@ -27,13 +27,9 @@ PENDING: frozenset[str] = frozenset(
         "robot/goals/registry.py:GoalRegistry._sweep",
         "robot/goals/ros1.py:run",
         "robot/goals/ros2.py:run",
-        # the MCP edge split by concern (item 5)
-        "server/adapter.py",
+        # the MCP edge (item 5): the fleet server's one builder
         "server/app.py:build_fleet_server",
-        # domain in the domain: navigate_to, the map reader (item 3)
-        "tools/navigate_to.py",
-        "tools/navigate_to.py:run",
-        "tools/view_map.py:run",
+        # parameters read through the client's face (item 1)
         "robot/parameters.py",
     }
 )

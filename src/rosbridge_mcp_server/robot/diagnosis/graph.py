@@ -7,11 +7,12 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Final
+from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.diagnosis.findings import Finding, Look, Step, shown_names
 from rosbridge_mcp_server.robot.diagnosis.streams import TWISTS, PubSub, others, short_type
+from rosbridge_mcp_server.robot.lifecycle import get_state_service, node_state
 from rosbridge_mcp_server.robot.text import is_graph_name, shown
 from rosbridge_mcp_server.robot.wording import counted
 
@@ -21,9 +22,6 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 
 __all__ = ["graph_findings", "lifecycle_findings", "lifecycle_states", "topic_details"]
-
-#: A lifecycle node's state id when it is active.
-_ACTIVE: Final = 3
 
 
 async def topic_details(
@@ -46,22 +44,22 @@ async def lifecycle_states(
     services = await graph.service_names()
     getters = [s for s in services if s.endswith("/get_state") and is_graph_name(s)]
     if focus_node is not None:
-        getters = [s for s in getters if s == f"{focus_node}/get_state"]
+        getters = [s for s in getters if s == get_state_service(focus_node)]
+    nodes = [s.removesuffix("/get_state") for s in getters]
 
-    async def state(service: str) -> str:
+    async def state(node: str) -> str:
         try:
-            values = await client.call_service(service, {}, timeout=window + 1.0)
+            found = await node_state(client, node, timeout=window + 1.0)
         except RosbridgeError as exc:
             return f"no answer ({shown(exc, 300)})"
-        current = values.get("current_state", {}) if isinstance(values, dict) else {}
-        label = current.get("label") if isinstance(current, dict) else None
-        ident = current.get("id") if isinstance(current, dict) else None
-        if ident == _ACTIVE:
+        if found is None:
+            return "unknown"
+        if found.active:
             return "active"
-        return shown(label or ident or "unknown", 60)
+        return shown(found.label or found.id or "unknown", 60)
 
-    states = await asyncio.gather(*(state(s) for s in getters))
-    return {s.removesuffix("/get_state"): st for s, st in zip(getters, states, strict=True)}
+    states = await asyncio.gather(*(state(node) for node in nodes))
+    return dict(zip(nodes, states, strict=True))
 
 
 def graph_findings(
