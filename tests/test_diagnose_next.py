@@ -1,4 +1,4 @@
-"""diagnose's next calls: robot/diagnosis.py gives typed steps, tools/diagnose.py words them as the calls the
+"""diagnose's next calls: robot/diagnosis/ gives typed steps, tools/diagnose.py words them as the calls the
 model makes, word for word what robot/ used to write."""
 
 from __future__ import annotations

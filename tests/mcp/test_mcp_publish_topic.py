@@ -26,7 +26,7 @@ async def test_a_twist_reaches_the_robot_and_the_turtle_moves(session: Session, 
         "rate_hz": None,
         "duration": None,
         "zero_sent": False,
-        "stopped_by_stop_robot": False,
+        "ended_by_stop": False,
         "adjusted": None,
         "subscribers": 1,
     }

@@ -106,8 +106,8 @@ async def run(
     return ToolAnswer(text=_text(found, focus), data=data)
 
 
-#: Each thing to look at next as the call that does it (robot/diagnosis.py names no tool). The names come from
-#: the robot, checked in robot/diagnosis.py (graph names it has, plain frame names); no acting call is ever
+#: Each thing to look at next as the call that does it (robot/diagnosis/ names no tool). The names come from
+#: the robot, checked in robot/diagnosis/ (graph names it has, plain frame names); no acting call is ever
 #: built from them.
 _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.NODE_LOG: lambda node: f'read_logs {{"node": "{node}", "level": "info"}}',

@@ -40,7 +40,9 @@ class PublishAnswer(BaseModel):
     rate_hz: float | None = Field(default=None, description="Stream rate, when one was asked for")
     duration: float | None = Field(default=None, description="Stream length in seconds, when asked for")
     zero_sent: bool = Field(default=False, description="A stream of velocity commands ended with all zeros")
-    stopped_by_stop_robot: bool = Field(default=False, description="The stream was ended early by stop_robot")
+    ended_by_stop: bool = Field(
+        default=False, description="The stream was ended early by a stop: stop_robot or the console's E-STOP"
+    )
     adjusted: str | None = Field(
         default=None, description="How the safety policy changed the message before sending (velocity caps)"
     )
@@ -167,7 +169,7 @@ async def _stream(
         rate_hz=streamed.rate_hz,
         duration=streamed.duration,
         zero_sent=streamed.zero is not None,
-        stopped_by_stop_robot=streamed.stopped,
+        ended_by_stop=streamed.stopped,
         adjusted=streamed.adjusted,
         subscribers=heard.count,
     )

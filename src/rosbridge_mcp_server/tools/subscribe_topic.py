@@ -115,39 +115,37 @@ async def run(
     heard = readout.heard
     if duration is not None and len(heard.messages) < wanted_count:
         # The duration ended before the count: the listen is done, so its progress ends at its total.
-        await ctx.report_progress(
-            wanted_count,
-            wanted_count,
-            f"{counted(len(heard.messages), 'message')} from {name} in {duration:g} s",
-        )
-    received: list[ReceivedMessage] = []
-    for item in heard.messages:
-        body: dict[str, Any] = item.message
-        if fields:
-            try:
-                body = select_fields(body, fields)
-            except FieldPathError as exc:
-                raise ToolFailure(
-                    f"{exc} Call subscribe_topic without fields to see the whole message."
-                ) from None
-        summary = summarize(body, byte_fields=readout.byte_fields)
-        received.append(
-            ReceivedMessage(
-                received=round(item.at, 3),
-                message=summary.message,
-                cut=sorted({cut.describe() for cut in summary.cuts}),
-            )
-        )
-    rate = heard.rate_hz
+        done = f"{counted(len(heard.messages), 'message')} from {name} in {duration:g} s"
+        await ctx.report_progress(wanted_count, wanted_count, done)
     answer = SubscribeAnswer(
         topic=readout.topic,
         message_type=readout.message_type,
-        messages=received,
-        rate_hz=round(rate, 2) if rate is not None else None,
+        messages=[_received(item.message, item.at, fields, readout.byte_fields) for item in heard.messages],
+        rate_hz=round(heard.rate_hz, 2) if heard.rate_hz is not None else None,
         timed_out=heard.first_timed_out,
         qos_note=readout.qos_note,
     )
     return ToolAnswer(text=_text(answer, timeout), data=answer)
+
+
+def _received(
+    message: dict[str, Any], at: float, fields: list[str] | None, byte_fields: list[str]
+) -> ReceivedMessage:
+    """One message as the answer shows it: the *fields* kept, long parts shortened."""
+    body = message
+    if fields:
+        try:
+            body = select_fields(body, fields)
+        except FieldPathError as exc:
+            raise ToolFailure(
+                f"{exc} Call subscribe_topic without fields to see the whole message."
+            ) from None
+    summary = summarize(body, byte_fields=byte_fields)
+    return ReceivedMessage(
+        received=round(at, 3),
+        message=summary.message,
+        cut=sorted({cut.describe() for cut in summary.cuts}),
+    )
 
 
 def _text(answer: SubscribeAnswer, timeout: float) -> str:
