@@ -22,6 +22,7 @@ from rosbridge_mcp_server.robot.effects import Effect
 __all__ = [
     "ALLOW_ALL",
     "Act",
+    "ActKind",
     "Answer",
     "AnswerNotInForm",
     "Approving",
@@ -47,6 +48,11 @@ def cancelled_why() -> str:
     return why() if why is not None else "cancelled"
 
 
+#: What an act on the robot goes through: the one spelling of the kinds (a tool's ``ToolSpec.acts_on``, the
+#: audit's ``kind``, the policy's rules).
+ActKind = Literal["topic", "service", "action", "parameter"]
+
+
 @dataclass(frozen=True)
 class Act:
     """One act on the robot, as it will be sent: checked, normalised, with an absolute name.
@@ -59,7 +65,7 @@ class Act:
     """
 
     tool: str  #: the tool that asks, e.g. "publish_topic"
-    kind: Literal["topic", "service", "action", "parameter"]
+    kind: ActKind
     name: str  #: absolute ROS name (topic/service/action/parameter)
     type: str  #: ROS type as sent to the bridge ("" when none, e.g. a parameter)
     payload: Any  #: message / request / goal / value that will be sent
