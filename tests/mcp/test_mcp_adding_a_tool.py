@@ -62,12 +62,15 @@ def test_every_acting_tool_says_what_it_acts_on() -> None:
 
 async def test_a_withheld_tool_is_audited_with_what_it_acts_on(sim_ros2: SimulatedRobot) -> None:
     """A read-only server refusing navigate_to and set_parameter audits each as what it acts on (an action,
-    a parameter), not as a topic by default."""
+    a parameter), not as a topic by default; record, refused too, sends nothing to the robot: no act to
+    audit."""
     stream = io.StringIO()
     guard = PolicyGuard(Policy(read_only=True), Audit(stream))
     async with open_session(sim_ros2.url, guard=guard, policy=Policy(read_only=True)) as session:
         await session.error("navigate_to", {"forward": 1.0})
         await session.error("set_parameter", {"name": "/turtlesim:background_r", "value": 1})
+        recorded = await session.error("record", {"topics": ["/chatter"], "duration": 1})
+    assert "record is not available: this server is read-only" in recorded
     audited = [json.loads(line) for line in stream.getvalue().splitlines()]
     assert [(e["tool"], e["kind"], e["outcome"]) for e in audited] == [
         ("navigate_to", "action", "withheld: read-only"),
