@@ -9,12 +9,15 @@ import json
 from pathlib import Path
 
 import pytest
-from mcp_harness import open_session
+from mcp_harness import guarded, open_session
 from pydantic import BaseModel
 
 import rosbridge_mcp_server.server
 from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
+from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.config import load_config
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard
+from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.tools import TOOL_MODULES
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, READS_ROBOT, ToolSpec
@@ -142,3 +145,22 @@ def test_the_server_decides_by_what_a_spec_declares_never_by_a_tool_name() -> No
     assert named == []
     # The check sees a name where one is used (it would have caught app.py's and fleet.py's).
     assert _tool_names_in(server / "tasks.py")
+
+
+@pytest.mark.parametrize(
+    ("tools", "learns_types", "keeps_log"),
+    [
+        ("list_topics", False, False),
+        ("list_services", True, False),
+        ("diagnose", False, True),
+        ("all", True, True),
+    ],
+)
+def test_what_a_session_keeps_in_the_background_is_what_the_served_specs_need(
+    tools: str, learns_types: bool, keeps_log: bool
+) -> None:
+    """The service-type warm-up and the log keeper start exactly when a served tool's spec needs them."""
+    config = load_config({}, url="ws://127.0.0.1:9", tools=tools)
+    robot = guarded(RosbridgeClient(config.url), config)
+    build_server(robot, config)
+    assert (robot.warm_up is not None, robot.logs is not None) == (learns_types, keeps_log)
