@@ -5,7 +5,7 @@ carrier sends it and however its type is spelt (``robot/arm_goals.py``: ``move_a
 ``JointTrajectory`` on ``…/joint_trajectory`` through ``publish_topic``).
 
 The act carries the arm it is judged against (``Act.scene``: an :class:`~rosbridge_mcp_server.robot.arm_scene.
-ArmScene`, the URDF and the joint positions now, learnt by ``robot/acting.py`` just before). In order:
+ArmScene`, the URDF and the joint positions now, learnt by ``robot/acting/`` just before). In order:
 
 1. the act must be readable (joint names, finite positions, times that increase); a multi-DOF trajectory is
    refused;

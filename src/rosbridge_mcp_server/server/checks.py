@@ -43,7 +43,7 @@ from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall
 from rosbridge_mcp_server.server.answers import writable
 from rosbridge_mcp_server.server.cancelling import run_call
 from rosbridge_mcp_server.server.failures import arguments_text
-from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT
+from rosbridge_mcp_server.server.fleet import ROBOT_ARGUMENT
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing, read_json_text
 
 if TYPE_CHECKING:
@@ -83,7 +83,7 @@ class ToolCalls:
     def _listed_as(self, tool: EdgeTool) -> Tool:
         if not tool.on_robot or not self._fleet.several:
             return tool.definition
-        schema = self._fleet.schema_with_robot(tool.input_schema, tool.name, acting=tool.acts_on is not None)
+        schema = self._fleet.schema_with_robot(tool)
         return tool.definition.model_copy(update={"input_schema": schema})
 
     def input_schema(self, name: str) -> dict[str, Any] | None:
@@ -120,18 +120,16 @@ class ToolCalls:
         caller = _caller()
         if tool is None:
             refusal = self._unlisted(name, arguments, caller) if self._unlisted is not None else None
-            if refusal is None and name == LIST_ROBOTS:
-                refusal = (
-                    f"Unknown tool: {LIST_ROBOTS} is listed only when the server drives several robots "
-                    "(start it with --robot NAME=URL once per robot, or --robots FILE); this server drives "
-                    "one robot, and every tool works on it without a robot argument."
-                )
+            refusal = refusal or self._fleet.not_listed(name)
             return refusal_result(refusal or f"Unknown tool: {name}")
         robots: tuple[Robot, ...] = self._fleet.robots[:1]
         if tool.on_robot:
             if self._fleet.several:
                 arguments = dict(arguments)
-                robots, refusal = self._fleet.choose(name, arguments.pop(ROBOT_ARGUMENT, None))
+                every_robot = tool.spec is not None and tool.spec.every_robot
+                robots, refusal = self._fleet.choose(
+                    name, arguments.pop(ROBOT_ARGUMENT, None), every_robot=every_robot
+                )
                 if refusal is not None:
                     return refusal_result(refusal)
             if self._robot_check is not None:

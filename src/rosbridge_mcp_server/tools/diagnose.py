@@ -68,6 +68,7 @@ SPEC = ToolSpec(
         'problem and what to call next. Read-only. Example: {"focus": "navigation"}'
     ),
     hints=READS_ROBOT,
+    needs=frozenset({"robot_log"}),
     output=DiagnoseAnswer,
 )
 

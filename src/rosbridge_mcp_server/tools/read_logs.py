@@ -74,6 +74,7 @@ SPEC = ToolSpec(
         'min), repeats folded. Read-only. Example: {"node": "*controller*", "since": 60}'
     ),
     hints=READS_ROBOT,
+    needs=frozenset({"robot_log"}),
     output=LogsAnswer,
 )
 

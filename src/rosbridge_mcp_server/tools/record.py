@@ -59,7 +59,8 @@ SPEC = ToolSpec(
         '{"topics": ["/odom", "/tf*"], "duration": 30}'
     ),
     hints=ToolHints(read_only=False, destructive=False, idempotent=False),
-    acts_on="topic",
+    # It subscribes and writes a file: nothing is sent to the robot, so there is no act for the guard.
+    changes="files on the server's host",
     output=RecordAnswer,
 )
 

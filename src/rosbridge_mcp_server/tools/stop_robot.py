@@ -33,6 +33,8 @@ SPEC = ToolSpec(
     # It acts on the robot, but only ever takes motion away; repeating it is harmless.
     hints=ToolHints(read_only=False, destructive=False, idempotent=True),
     acts_on="topic",
+    stops=True,
+    every_robot=True,
     output=StopAnswer,
 )
 
