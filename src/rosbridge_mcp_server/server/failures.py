@@ -85,13 +85,36 @@ def arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) ->
     one), then each wrong argument in our words, then what the tool takes (*schema*, as listed)."""
     items = error.errors(include_url=False)
     known = list(schema.get("properties", {}))
-    unknown = [str(item["loc"][0]) for item in items if item["type"] == "extra_forbidden" and item["loc"]]
+    unknown = [str(item["loc"][0]) for item in items if _unknown_argument(item)]
     problems = [_unknown(unknown, known)] if unknown else []
-    problems += [_problem(item) for item in items if item["type"] != "extra_forbidden"]
+    for item in items:
+        if item["type"] == "extra_forbidden" and not _unknown_argument(item):
+            # A key an object argument does not take (qos.depht), with the likely meant one.
+            where = ".".join(str(part) for part in item["loc"][:-1])
+            problems.append(f"{where}: unknown key {_key(str(item['loc'][-1]), _keys_at(schema, item))}")
+        elif not _unknown_argument(item):
+            problems.append(_problem(item))
     return (
         f"Invalid arguments for {tool}: {'; '.join(problems)}. Nothing was sent. "
         f"It takes: {parameter_listing(schema)}."
     )
+
+
+def _unknown_argument(item: ErrorDetails) -> bool:
+    return item["type"] == "extra_forbidden" and len(item["loc"]) == 1
+
+
+def _keys_at(schema: dict[str, Any], item: ErrorDetails) -> list[str]:
+    """The keys the object holding the unknown one takes, as the listed schema says."""
+    node: Any = schema
+    for part in item["loc"][:-1]:
+        node = node.get("properties", {}).get(str(part), {}) if isinstance(node, dict) else {}
+    return list(node.get("properties", {})) if isinstance(node, dict) else []
+
+
+def _meant(key: str, known: list[str]) -> str:
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.7) if len(key) <= 100 else []
+    return f" (did you mean {close[0]}?)" if close else ""
 
 
 def _unknown(keys: list[str], known: list[str]) -> str:
@@ -101,9 +124,7 @@ def _unknown(keys: list[str], known: list[str]) -> str:
 
 
 def _key(key: str, known: list[str]) -> str:
-    shown = repr(key) if len(key) <= 40 else repr(key[:37]) + "..."
-    close = difflib.get_close_matches(key, known, n=1, cutoff=0.7) if len(key) <= 100 else []
-    return f"{shown} (did you mean {close[0]}?)" if close else shown
+    return (repr(key) if len(key) <= 40 else repr(key[:37]) + "...") + _meant(key, known)
 
 
 def _problem(item: ErrorDetails) -> str:
