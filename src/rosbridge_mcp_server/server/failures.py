@@ -93,11 +93,21 @@ def arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) ->
             where = ".".join(str(part) for part in item["loc"][:-1])
             problems.append(f"{where}: unknown key {_key(str(item['loc'][-1]), _keys_at(schema, item))}")
         elif not _unknown_argument(item):
-            problems.append(_problem(item))
+            problems.append(_problem(item) + _example(item, schema))
     return (
         f"Invalid arguments for {tool}: {'; '.join(problems)}. Nothing was sent. "
         f"It takes: {parameter_listing(schema)}."
     )
+
+
+def _example(item: ErrorDetails, schema: dict[str, Any]) -> str:
+    """What an object argument given in the wrong form takes, as its listed description says (with an
+    example); nothing for any other problem."""
+    if item["type"] not in _FORM_KINDS or len(item["loc"]) != 1:
+        return ""
+    described = schema.get("properties", {}).get(str(item["loc"][0]), {})
+    description = described.get("description") if isinstance(described, dict) else None
+    return f" (expected: {description})" if isinstance(description, str) else ""
 
 
 def _unknown_argument(item: ErrorDetails) -> bool:
@@ -149,6 +159,8 @@ def _problem(item: ErrorDetails) -> str:
 
 #: pydantic's error types for a value that should have been a number.
 _NUMBER_KINDS = frozenset({"float_type", "int_type", "int_from_float", "float_parsing", "int_parsing"})
+#: A JSON object given in the wrong form: the refusal says what the argument takes, with its example.
+_FORM_KINDS = frozenset({"json_text", "json_object", "dict_type"})
 #: Refusals worded by tools/arguments.py.
 _OURS = frozenset({"json_text", "json_nesting", "json_object", "payload"})
 #: pydantic's words for a wrong kind of value, in ours.
