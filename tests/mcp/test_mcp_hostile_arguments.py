@@ -175,7 +175,8 @@ async def test_two_wrong_arguments_one_of_them_json_text_are_both_named(
         },
     )
     assert text.startswith(
-        "Invalid arguments for publish_service: request: expected a JSON object; the text 'null' holds null;"
+        "Invalid arguments for publish_service: request: expected a JSON object; the text 'null' holds null "
+        '(it takes: Request fields as a JSON object, e.g. {"a": 2, "b": 3}; {} for std_srvs/srv/Trigger);'
     )
     assert "timeout: input should be greater than 0 (got -1)" in text
     assert "validation error" not in text

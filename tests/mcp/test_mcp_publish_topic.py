@@ -119,7 +119,7 @@ async def test_a_message_that_is_not_json_is_an_error_with_an_example(
     )
     broken = "message: is not valid JSON (Expecting property name enclosed in double quotes at character 1)"
     assert broken in text
-    assert '(expected: JSON object, e.g. {"linear": {"x": 0.5}' in text
+    assert '(it takes: JSON object, e.g. {"linear": {"x": 0.5}' in text
 
 
 async def test_a_ros2_style_type_name_works_on_a_ros1_bridge(

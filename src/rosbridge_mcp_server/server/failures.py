@@ -107,7 +107,7 @@ def _example(item: ErrorDetails, schema: dict[str, Any]) -> str:
         return ""
     described = schema.get("properties", {}).get(str(item["loc"][0]), {})
     description = described.get("description") if isinstance(described, dict) else None
-    return f" (expected: {description})" if isinstance(description, str) else ""
+    return f" (it takes: {description})" if isinstance(description, str) else ""
 
 
 def _unknown_argument(item: ErrorDetails) -> bool:
