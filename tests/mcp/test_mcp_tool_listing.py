@@ -191,12 +191,14 @@ async def test_arguments_that_do_not_fit_are_one_readable_line_per_argument() ->
 
 
 async def test_a_message_of_the_wrong_json_kind_is_one_line_naming_what_is_expected() -> None:
-    """A list where a message object belongs says an object (or JSON text) is expected, once."""
+    """A list where a message object belongs says an object is expected, once."""
     async with open_session(_closed_port_url(), wait=False) as session:
         text = await session.error(
             "publish_topic", {"topic": "/x", "message_type": "std_msgs/msg/Empty", "message": [1, 2]}
         )
-    assert text.startswith("Invalid arguments for publish_topic: message: expected a JSON object or a string")
+    assert text.startswith(
+        "Invalid arguments for publish_topic: message: expected a JSON object (got [1, 2])"
+    )
     assert text.count("message:") == 1
 
 

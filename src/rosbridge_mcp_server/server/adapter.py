@@ -29,7 +29,7 @@ from typing import Any
 
 from mcp.server import ServerRequestContext
 from mcp.types import CallToolResult, InputRequiredResult, TextContent, Tool, ToolAnnotations
-from pydantic import BaseModel, ConfigDict, create_model
+from pydantic import BaseModel, create_model
 
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.seam import call_ending
@@ -38,6 +38,7 @@ from rosbridge_mcp_server.server.answers import images, merged, where_set
 from rosbridge_mcp_server.server.asking import Asker, AskInNextRound, question_round
 from rosbridge_mcp_server.server.failures import error_text
 from rosbridge_mcp_server.server.sdk import cancelled_by_client
+from rosbridge_mcp_server.tools.arguments import ARGUMENTS_CONFIG
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema, inline_refs
 
@@ -117,13 +118,12 @@ class EdgeTool:
 
 
 def arguments_model(name: str, parameters: list[inspect.Parameter]) -> type[BaseModel]:
-    """The strict model of a tool's arguments: *parameters* (annotations resolved) as fields, nothing else."""
+    """The strict model of a tool's arguments: *parameters* (annotations resolved) as fields, nothing else
+    (``tools/arguments.py``: every check an argument gets is this model's one validation)."""
     fields: dict[str, Any] = {
         p.name: (p.annotation, ... if p.default is inspect.Parameter.empty else p.default) for p in parameters
     }
-    model: type[BaseModel] = create_model(
-        f"{name}Arguments", __config__=ConfigDict(extra="forbid", arbitrary_types_allowed=True), **fields
-    )
+    model: type[BaseModel] = create_model(f"{name}Arguments", __config__=ARGUMENTS_CONFIG, **fields)
     return model
 
 

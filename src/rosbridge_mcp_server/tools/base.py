@@ -1,26 +1,24 @@
 """What every tool module shares: its spec, its answer, and the context it runs in.
 
 A tool module never imports ``mcp`` and never touches a socket: it gets a :class:`ToolContext` (the robot's
-session, the configuration, a way to ask the person, a progress callback), parses its arguments, calls one
-function of the domain layer (``robot/``) and renders a :class:`ToolAnswer`.
-``server/adapter.py`` turns these into MCP tools.
+session, the configuration, a way to ask the person, a progress callback) and its arguments as its strict
+model validated them (``tools/arguments.py``), calls one function of the domain layer (``robot/``) and renders
+a :class:`ToolAnswer`. ``server/adapter.py`` turns these into MCP tools.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Literal
 
 from pydantic import BaseModel
 
-from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, nesting_text, payload_problem
+from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, payload_problem
 from rosbridge_mcp_server.errors import Advised
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.seam import ActKind, AskPerson, Guard, nobody_to_ask
-from rosbridge_mcp_server.robot.wording import full_stop
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -46,7 +44,6 @@ __all__ = [
     "ToolSpec",
     "absolute_name",
     "compact_json",
-    "parse_json_object",
     "payload_problem",
 ]
 
@@ -192,30 +189,3 @@ class ToolFailure(Advised):
     ``str()`` is a sentence saying what happened and what to try. The server turns it into an ``isError``
     result, like a :class:`~rosbridge_mcp_server.errors.RosbridgeError`.
     """
-
-
-def parse_json_object(value: dict[str, Any] | str | None, what: str, example: str) -> dict[str, Any]:
-    """A JSON object given as a dict or as JSON text (models sometimes send strings); ``None`` is ``{}``."""
-    if value is None:
-        return {}
-    if isinstance(value, dict):
-        # Checked by the MCP edge, as given or as read from JSON text (tools/arguments.py).
-        return value
-    text = value.strip()
-    if not text:
-        return {}
-    try:
-        parsed = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ToolFailure(
-            f"The {what} is not valid JSON ({exc.msg} at character {exc.pos}). Send a JSON object, e.g. "
-            f"{example}."
-        ) from None
-    except RecursionError:
-        raise ToolFailure(f"The {what} {nesting_text()}. Nothing was sent.") from None
-    if not isinstance(parsed, dict):
-        raise ToolFailure(f"The {what} must be a JSON object, e.g. {example}; got {compact_json(parsed)}.")
-    problem = payload_problem(parsed)
-    if problem is not None:
-        raise ToolFailure(f"The {what} {full_stop(problem)} Nothing was sent.")
-    return parsed

@@ -18,6 +18,7 @@ from rosbridge_mcp_server.robot.arm_plan import ArmPlan, PlanError, plan_motion,
 from rosbridge_mcp_server.robot.arm_scene import ArmScene, learn_arm, positions_now
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
@@ -113,6 +114,7 @@ async def run(
     joints: Annotated[
         dict[str, float] | None,
         Field(description='e.g. {"elbow_joint": 45}'),
+        FROM_JSON_TEXT,
     ] = None,
     pose: Annotated[str, Field(description='SRDF pose, e.g. "home"')] = "",
     relative: Annotated[bool, Field(description="e.g. true: add to now")] = False,

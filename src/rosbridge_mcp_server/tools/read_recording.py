@@ -25,6 +25,7 @@ from rosbridge_mcp_server.robot.recording.reading import (
 )
 from rosbridge_mcp_server.robot.series import FieldError
 from rosbridge_mcp_server.robot.wording import counted, size_text
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -75,11 +76,14 @@ async def run(
     fields: Annotated[
         list[str] | None,
         Field(max_length=MAX_SERIES, description=f"e.g. {_FIELDS}"),
+        FROM_JSON_TEXT,
     ] = None,
     at: Annotated[float | None, Field(ge=0, description="s, e.g. 12.5")] = None,
     window: Annotated[float, Field(gt=0, le=3600, description="e.g. 0.5")] = 0.5,
     topics: Annotated[
-        list[str] | None, Field(max_length=50, description='map: map, path; e.g. ["/map", "/odom"]')
+        list[str] | None,
+        Field(max_length=50, description='map: map, path; e.g. ["/map", "/odom"]'),
+        FROM_JSON_TEXT,
     ] = None,
 ) -> ToolAnswer:
     directory = ctx.config.record_dir

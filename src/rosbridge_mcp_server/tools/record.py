@@ -18,6 +18,7 @@ from rosbridge_mcp_server.robot.recording.recorder import (
     record_topics,
 )
 from rosbridge_mcp_server.robot.wording import counted, size_text
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 
 if TYPE_CHECKING:
@@ -71,6 +72,7 @@ async def run(
     topics: Annotated[
         list[str] | None,
         Field(max_length=MAX_TOPICS, description='e.g. ["/odom", "/tf*"]'),
+        FROM_JSON_TEXT,
     ] = None,
     duration: Annotated[float, Field(gt=0, le=MAX_SECONDS, description="Seconds, e.g. 30")] = 10.0,
     max_megabytes: Annotated[float, Field(gt=0, le=100_000, description="MB, e.g. 500")] = DEFAULT_MEGABYTES,

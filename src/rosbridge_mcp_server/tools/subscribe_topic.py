@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from rosbridge_mcp_server.pictures.summary import FieldPathError, select_fields, summarize
 from rosbridge_mcp_server.robot.listening import read_topic
 from rosbridge_mcp_server.robot.wording import counted
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -28,6 +29,8 @@ _SHOWN_IN_FULL = 10
 
 class QosRequest(BaseModel):
     """ROS 2 quality of service for the subscription."""
+
+    model_config = ConfigDict(extra="forbid")
 
     reliability: Literal["reliable", "best_effort"] | None = None
     durability: Literal["transient_local", "volatile"] | None = None
@@ -84,11 +87,14 @@ async def run(
         float, Field(gt=0, le=MAX_DURATION, description="Seconds to wait for a message, e.g. 5")
     ] = 5.0,
     fields: Annotated[
-        list[str] | None, Field(description='Dotted paths to keep, e.g. ["pose.position", "header.stamp"]')
+        list[str] | None,
+        Field(description='Dotted paths to keep, e.g. ["pose.position", "header.stamp"]'),
+        FROM_JSON_TEXT,
     ] = None,
     qos: Annotated[
         QosRequest | None,
         Field(description='ROS 2 QoS, e.g. {"durability": "transient_local"}'),
+        FROM_JSON_TEXT,
     ] = None,
 ) -> ToolAnswer:
     """Subscribe, collect, unsubscribe (robot/'s read_topic); shorten each message."""
