@@ -22,11 +22,6 @@ ALLOWED: dict[str, str] = {}
 #: Files and functions other branches are splitting now (issue 38); the lead empties this after merging them.
 PENDING: frozenset[str] = frozenset(
     {
-        # the client's goals and transport seam (issue 38, items 1 and 2)
-        "client/client.py",
-        "robot/goals/registry.py:GoalRegistry._sweep",
-        "robot/goals/ros1.py:run",
-        "robot/goals/ros2.py:run",
         # the MCP edge (item 5): the fleet server's one builder
         "server/app.py:build_fleet_server",
         # parameters read through the client's face (item 1)

@@ -7,7 +7,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from rosbridge_mcp_server.pictures.summary import FieldPathError, select_fields, summarize
-from rosbridge_mcp_server.robot.listening import read_topic
+from rosbridge_mcp_server.robot.listening import Readout, read_topic
 from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
@@ -123,7 +123,13 @@ async def run(
         # The duration ended before the count: the listen is done, so its progress ends at its total.
         done = f"{counted(len(heard.messages), 'message')} from {name} in {duration:g} s"
         await ctx.report_progress(wanted_count, wanted_count, done)
-    answer = SubscribeAnswer(
+    answer = _answer(readout, fields)
+    return ToolAnswer(text=_text(answer, timeout), data=answer)
+
+
+def _answer(readout: Readout, fields: list[str] | None) -> SubscribeAnswer:
+    heard = readout.heard
+    return SubscribeAnswer(
         topic=readout.topic,
         message_type=readout.message_type,
         messages=[_received(item.message, item.at, fields, readout.byte_fields) for item in heard.messages],
@@ -131,7 +137,6 @@ async def run(
         timed_out=heard.first_timed_out,
         qos_note=readout.qos_note,
     )
-    return ToolAnswer(text=_text(answer, timeout), data=answer)
 
 
 def _received(
