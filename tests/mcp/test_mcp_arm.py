@@ -21,6 +21,8 @@ from mcp.types import ElicitRequestParams, ElicitResult, ImageContent
 from mcp_harness import open_session, text_of
 from PIL import Image
 
+from arm_fixture import ROBOT as FIXTURE_ROBOT
+from rosbridge_mcp_server.robot.arm.kinematics import Chain, translation
 from rosbridge_mcp_server.safety import emergency_stop, parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.nodes.arm import ARM_JOINTS, FINGER, HOME, NAMED_POSES
@@ -162,6 +164,28 @@ REFUSED: list[tuple[dict[str, Any], dict[str, Any], dict[str, Any], str]] = [
         "into the keep-out box person",
     ),
 ]
+
+
+def _ceiling_above_the_raised_forearm() -> dict[str, Any]:
+    """A keep-out box 1 cm above the highest centre-line point of raising the elbow to 0.2 rad: the links'
+    bodies (the sim's URDF gives them 3–6 cm cylinders) enter it, their centre lines do not."""
+    chain = Chain(FIXTURE_ROBOT, FIXTURE_ROBOT.root, "tool0")
+    top = 0.0
+    for k in range(1001):
+        held = {name: value + (0.2 - value) * k / 1000 if name == "elbow_joint" else value
+                for name, value in HOME.items()}  # fmt: skip
+        top = max([top] + [translation(pose)[2] for _, pose in chain.poses(held)])
+    return {"arm": {"keep_out": {"ceiling": [[-2.0, -2.0, top + 0.01], [2.0, 2.0, 3.0]]}}}
+
+
+REFUSED.append(
+    (
+        {"joints": {"elbow_joint": math.degrees(0.2)}},
+        trajectory({"elbow_joint": 0.2}, 20.0),
+        _ceiling_above_the_raised_forearm(),
+        "into the keep-out box ceiling",
+    )
+)
 
 
 @pytest.mark.parametrize(("by_tool", "raw", "policy", "why"), REFUSED)
