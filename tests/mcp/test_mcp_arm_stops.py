@@ -23,6 +23,8 @@ from rosbridge_mcp_server.sim.nodes.arm import ARM_JOINTS, HOME
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 TOPIC = "/arm_controller/joint_trajectory"
+#: The controller's topic on each dialect (ros2_control's, ros_control's).
+TOPICS = {"ros2": TOPIC, "ros1": "/arm_controller/command"}
 TYPES = {"ros2": "trajectory_msgs/msg/JointTrajectory", "ros1": "trajectory_msgs/JointTrajectory"}
 
 
@@ -55,13 +57,14 @@ class Seen:
 async def topic_watcher(robot: SimulatedRobot, dialect: str) -> AsyncIterator[Seen]:
     """Every message on the trajectory topic, as a raw rosbridge client hears it."""
     seen = Seen()
+    topic = TOPICS[dialect]
     async with websockets.connect(robot.url) as ws:
-        await ws.send(json.dumps({"op": "subscribe", "topic": TOPIC, "type": TYPES[dialect]}))
+        await ws.send(json.dumps({"op": "subscribe", "topic": topic, "type": TYPES[dialect]}))
 
         async def read() -> None:
             async for raw in ws:
                 frame = json.loads(raw)
-                if frame.get("op") == "publish" and frame.get("topic") == TOPIC:
+                if frame.get("op") == "publish" and frame.get("topic") == topic:
                     seen.add(frame["msg"])
 
         reader = asyncio.create_task(read())
@@ -74,30 +77,30 @@ async def topic_watcher(robot: SimulatedRobot, dialect: str) -> AsyncIterator[Se
 
 
 @pytest.mark.parametrize("how", ["stop_robot", "estop"])
-@pytest.mark.parametrize("dialect", ["ros2"])
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
 async def test_a_trajectory_published_on_the_topic_is_held_by_both_stops(
     make_sim: MakeSim, dialect: str, how: str
 ) -> None:
     robot = await make_sim(dialect=dialect, world="arm")
-    arm = robot.arm
+    arm, topic = robot.arm, TOPICS[dialect]
     async with (
         open_session(robot.url, guard=None, policy=parse_policy({}, where="t")) as session,
         topic_watcher(robot, dialect) as seen,
     ):
         # 90° at a quarter of 2 rad/s needs 3.1 s: 4 s is allowed.
         sent = await session.call(
-            "publish_topic", {"topic": TOPIC, "message_type": TYPES[dialect], "message": pan(dialect, 1.5, 4)}
+            "publish_topic", {"topic": topic, "message_type": TYPES[dialect], "message": pan(dialect, 1.5, 4)}
         )
         assert not sent.is_error, text_of(sent)
         await robot.wait_for(lambda _: arm.run is not None and arm.velocities["shoulder_pan_joint"] > 0, 5.0)
         await seen.count(1, 5.0)
         if how == "stop_robot":
             answer = text_of(await session.ok("stop_robot"))
-            assert f"Stopped the trajectory on {TOPIC}" in answer, answer
+            assert f"Stopped the trajectory on {topic}" in answer, answer
         else:
             assert session.robot is not None
             report = await emergency_stop(session.robot, by="console")
-            assert report.held_topics == [TOPIC], report
+            assert report.held_topics == [topic], report
         await robot.wait_for(lambda _: arm.run is None and not any(arm.velocities.values()), 0.5)
         stopped_at = arm.positions["shoulder_pan_joint"]
         await seen.count(2, 2.0)

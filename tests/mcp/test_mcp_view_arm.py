@@ -237,3 +237,20 @@ async def test_a_hostile_description_is_refused_in_words(
         )
         assert words in message
         assert not (await session.call("list_topics")).is_error
+
+
+async def test_view_arm_on_ros1_reads_ros_controls_controllers_and_the_srdf_parameter(
+    make_sim: MakeSim,
+) -> None:
+    """ROS 1: list_controllers' running/stopped and claimed_resources read as ros2_control's words; the SRDF
+    from the /robot_description_semantic parameter (MoveIt's ROS 1 layout)."""
+    robot = await make_sim(dialect="ros1", world="arm")
+    robot.arm.controllers.controllers["gripper_controller"].active = False
+    async with open_session(robot.url) as session:
+        result = await session.ok("view_arm")
+    data: dict[str, Any] = result.structured_content or {}
+    controllers = {c["name"]: c for c in data["controllers"]}
+    assert controllers["arm_controller"]["state"] == "active"
+    assert controllers["arm_controller"]["joints"] == list(ARM_JOINTS)
+    assert controllers["gripper_controller"]["state"] == "inactive"
+    assert "ready" in {pose["name"] for pose in data["named_poses"]}
