@@ -254,3 +254,15 @@ async def test_view_arm_on_ros1_reads_ros_controls_controllers_and_the_srdf_para
     assert controllers["arm_controller"]["joints"] == list(ARM_JOINTS)
     assert controllers["gripper_controller"]["state"] == "inactive"
     assert "ready" in {pose["name"] for pose in data["named_poses"]}
+
+
+async def test_on_the_plain_demo_view_arm_says_there_is_no_arm_and_where_one_is(make_sim: MakeSim) -> None:
+    """The turtle's description has no movable joint: one sentence, not "0 movable joints" and empty lists."""
+    turtle = await make_sim(dialect="ros2")
+    async with open_session(turtle.url) as session:
+        text = text_of(await session.ok("view_arm", {"timeout": 1.0}))
+    assert text.startswith("No arm on robot sim_turtle (")
+    assert "its robot description has no movable joint, so this robot publishes no arm" in text
+    assert "--demo --demo-world arm" in text
+    assert "0 movable joints" not in text
+    assert "Joints (" not in text
