@@ -39,8 +39,10 @@ from mcp.types import (
 )
 from pydantic import ValidationError
 
-from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall, arguments_text, writable
+from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall
+from rosbridge_mcp_server.server.answers import writable
 from rosbridge_mcp_server.server.cancelling import run_call
+from rosbridge_mcp_server.server.failures import arguments_text
 from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT
 from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing, read_json_text
 

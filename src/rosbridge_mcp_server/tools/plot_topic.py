@@ -18,7 +18,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.seeing import typed_topic
+from rosbridge_mcp_server.tools.typed_topics import typed_topic
 
 __all__ = ["SPEC", "PlotAnswer", "run"]
 
