@@ -142,6 +142,11 @@ async def test_a_trajectory_that_has_run_out_is_not_held(make_sim: MakeSim) -> N
         running = replace(entry, until=time.monotonic() + 5)
         held, failures = await stop_trajectories(client, graph, [running])
         await seen.count(2, 2.0)
+        # One whose first message has run out but whose stream this stop ended is held too (the stream's
+        # last message may have come long after the first).
+        streamed, _ = await stop_trajectories(client, graph, [over], streamed={TOPIC})
+        await seen.count(3, 2.0)
     assert not failures
     assert [topic for topic, _, _ in held] == [TOPIC]
+    assert [topic for topic, _, _ in streamed] == [TOPIC]
     assert seen.messages[1]["points"][0]["positions"][0] == pytest.approx(0.02, abs=0.005)

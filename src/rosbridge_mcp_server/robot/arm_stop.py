@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -103,10 +103,12 @@ def hold_message(sent: TrajectorySent, ros_version: int, positions: Mapping[str,
 
 
 async def stop_trajectories(
-    client: RosbridgeClient, graph: RosGraph, sent: list[TrajectorySent]
+    client: RosbridgeClient, graph: RosGraph, sent: list[TrajectorySent], streamed: Collection[str] = ()
 ) -> tuple[list[tuple[str, str, dict[str, Any]]], list[str]]:
-    """Hold each controller *sent* still drives: the (topic, type, message) published, and what failed."""
-    running = [entry for entry in sent if entry.until > time.monotonic()]
+    """Hold each controller *sent* still drives (or whose topic had a stream, *streamed*, that this stop
+    ended: its last message may have come long after the first): the (topic, type, message) published, and
+    what failed."""
+    running = [entry for entry in sent if entry.until > time.monotonic() or entry.topic in streamed]
     if not running:
         return [], []
     try:

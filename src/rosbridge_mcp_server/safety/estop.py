@@ -161,7 +161,8 @@ async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
 
 async def _hold_trajectories(robot: RobotSession, report: StopReport) -> None:
     """Hold every controller a trajectory this server published on its topic may still drive."""
-    held, failed = await stop_trajectories(robot.client, robot.graph, robot.activity.trajectories)
+    streamed = {*report.streams_stopped, *report.streams_still_running}
+    held, failed = await stop_trajectories(robot.client, robot.graph, robot.activity.trajectories, streamed)
     for topic, type_name, message in held:
         robot.activity.forget_trajectory(topic)
         report.held_topics.append(topic)
