@@ -50,8 +50,7 @@ from rosbridge_mcp_server.robot.text import NAME_CHARS, is_frame_name, is_graph_
 from rosbridge_mcp_server.robot.wording import counted
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.client.subscription import Subscription
+    from rosbridge_mcp_server.client import RosbridgeClient, Subscription
     from rosbridge_mcp_server.robot.graph import RosGraph
     from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 
