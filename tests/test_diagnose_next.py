@@ -56,7 +56,8 @@ CASES: list[tuple[tuple[Step, ...], str]] = [
     (
         (Step(Look.ACTIVATE_CONTROLLER, ("/controller_manager", "arm_controller")), Step(Look.ARM)),
         "activating arm_controller acts on the robot (/controller_manager/switch_controller, "
-        "activate_controllers, if the hardware allows): ask the user first; view_arm",
+        "activate_controllers (ROS 1: start_controllers), if the hardware allows): ask the user first; "
+        "view_arm",
     ),
 ]
 

@@ -184,7 +184,7 @@ def _demo_flags(parser: _Parser) -> None:
         choices=("turtle", "nav2", "arm"),
         default="turtle",
         help="the simulated robot: turtle (default), nav2 (a Nav2 mobile robot's graph, ~36 nodes) or arm "
-        "(ROS 2: the turtle with a 6-joint arm and a gripper)",
+        "(the turtle with a 6-joint arm and a gripper; ROS 1 too)",
     )
     demo.add_argument(
         "--demo-robots",

@@ -138,8 +138,8 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     ),
     Look.ARM: lambda: "view_arm",
     Look.ACTIVATE_CONTROLLER: lambda manager, controller: (
-        f"activating {controller} acts on the robot ({manager}/switch_controller, activate_controllers, if "
-        "the hardware allows): ask the user first"
+        f"activating {controller} acts on the robot ({manager}/switch_controller, activate_controllers "
+        "(ROS 1: start_controllers), if the hardware allows): ask the user first"
     ),
 }
 
