@@ -168,4 +168,4 @@ async def test_a_recording_cut_off_without_its_summary_is_still_read(
     cut.write_bytes(data[:summary_start])
     summary = await asyncio.to_thread(summarize_recording, cut)
     assert not summary.indexed
-    assert summary.topics[0].timing.count == result.topics[0].timing.count >= 10
+    assert summary.topics[0].timing.count == result.topics[0].timing.count > 0

@@ -39,6 +39,9 @@ _log = logging.getLogger(__name__)
 LOG_QUEUE = 20_000
 #: The diagnostics topics followed when the graph has them.
 DIAGNOSTICS_TOPICS = ("/diagnostics", "/diagnostics_agg")
+#: Seconds before the topics are asked again after a failure, doubling up to RETRY_MOST.
+RETRY_FIRST = 1.0
+RETRY_MOST = 30.0
 
 
 class LogKeeper:
@@ -87,11 +90,8 @@ class LogKeeper:
     # --- reading ---------------------------------------------------------------------------------------
 
     async def _follow(self, session: SessionFacts) -> None:
-        try:
-            topics = {entry.name: entry.type for entry in await self._graph.topics()}
-        except RosbridgeError as exc:
-            _log.debug("could not list the topics to find the log on connection %d: %s", session.number, exc)
-            self.looked.set()
+        topics = await self._topics(session)
+        if topics is None:
             return
         await self._look(session)
         self.looked.set()
@@ -111,6 +111,28 @@ class LogKeeper:
             self.ready.set()
             return
         await asyncio.gather(*readers)
+
+    async def _topics(self, session: SessionFacts) -> dict[str, str] | None:
+        """The graph's topics and types, asked again after a failure (a busy bridge may not answer rosapi in
+        time) until the connection ends: then None, and the next connection starts a new follow."""
+        delay = RETRY_FIRST
+        while True:
+            try:
+                return {entry.name: entry.type for entry in await self._graph.topics()}
+            except NotConnectedError as exc:
+                _log.debug("no log kept on connection %d: %s", session.number, exc)
+                self.looked.set()
+                return None
+            except RosbridgeError as exc:
+                _log.debug(
+                    "could not list the topics to find the log on connection %d (%s); again in %g s",
+                    session.number,
+                    exc,
+                    delay,
+                )
+                self.looked.set()
+                await asyncio.sleep(delay)
+                delay = min(delay * 2, RETRY_MOST)
 
     def _log_line(self, topic: str, msg: dict[str, Any], now: float) -> None:
         self.ring.add(line_of(msg, now))
