@@ -37,6 +37,17 @@ def pytest_cmdline_main(config: pytest.Config) -> None:
     """Against a real bridge the tests run one at a time (no xdist workers): they share its one graph."""
     if os.environ.get("ROSBRIDGE_TEST_URL") and getattr(config.option, "numprocesses", None):
         config.option.numprocesses = 0
+    _keep_bytecode_outside_the_tree(config.rootpath)
+
+
+def _keep_bytecode_outside_the_tree(rootpath: Path) -> None:
+    """Where PYTHONDONTWRITEBYTECODE is set (some CI images set it), no process keeps compiled bytecode, so
+    every one the suite starts (eight workers, a server for each end-to-end test) compiles mcp, pydantic and
+    this package from source again: about 1 s of CPU each, a quarter of the suite's CPU. The suite's processes
+    keep theirs in ``.pytest_cache/pycache`` instead (git-ignored), never beside the sources. Run before the
+    workers start, so they and every process they start inherit it."""
+    if os.environ.pop("PYTHONDONTWRITEBYTECODE", None) is not None:
+        os.environ.setdefault("PYTHONPYCACHEPREFIX", str(rootpath / ".pytest_cache" / "pycache"))
 
 
 @pytest.fixture

@@ -79,15 +79,15 @@ async def test_a_missing_service_fails_with_the_bridge_text(client: RosbridgeCli
         ),
         # On ROS 2 the call's timeout field makes the bridge answer "Timeout exceeded" before our deadline.
         pytest.param(
-            {"dialect": "ros2", "slow_service_seconds": 3.0},
-            0.6,
+            {"dialect": "ros2", "slow_service_seconds": 10.0},
+            5.0,
             ServiceError,
             "Timeout exceeded while waiting for service response",
             id="jazzy",
         ),
         pytest.param(
-            {"dialect": "ros2", "in_order": True, "slow_service_seconds": 3.0},
-            0.6,
+            {"dialect": "ros2", "in_order": True, "slow_service_seconds": 10.0},
+            5.0,
             ServiceError,
             "Timeout exceeded while waiting for service response",
             id="humble",

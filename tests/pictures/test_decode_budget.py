@@ -13,9 +13,9 @@ import pytest
 from PIL import Image
 
 from rosbridge_mcp_server.pictures.images import ImageError, decode_compressed, decode_raw
-from rosbridge_mcp_server.pictures.scans import ScanError, decode_cloud, decode_scan
 from rosbridge_mcp_server.robot.budget import DECODE_BUDGET, byte_size
 from rosbridge_mcp_server.robot.occupancy import MapError, decode_grid
+from rosbridge_mcp_server.robot.scans import ScanError, decode_cloud, decode_scan
 from rosbridge_mcp_server.sim.png import png_bomb
 
 LIMIT = f"budget of {byte_size(DECODE_BUDGET)}"

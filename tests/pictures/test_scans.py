@@ -10,14 +10,8 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.pictures.drawing import OBSTACLE_COLOUR, ROBOT_COLOUR
-from rosbridge_mcp_server.pictures.scans import (
-    ScanError,
-    decode_cloud,
-    decode_scan,
-    draw_scan,
-    free_sectors,
-    nearest,
-)
+from rosbridge_mcp_server.pictures.scans import draw_scan
+from rosbridge_mcp_server.robot.scans import ScanError, decode_cloud, decode_scan, free_sectors, nearest
 
 
 def laser(ranges: list[Any], *, angle_min: float = -math.pi, range_max: float = 10.0) -> dict[str, Any]:

@@ -10,7 +10,8 @@ from mcp.types import CallToolResult, ImageContent, TextContent
 
 from rosbridge_mcp_server.errors import ServiceError
 from rosbridge_mcp_server.robot.text import _UNSAFE, is_frame_name, is_graph_name, repaired, shown
-from rosbridge_mcp_server.server.adapter import error_text, writable
+from rosbridge_mcp_server.server.answers import writable
+from rosbridge_mcp_server.server.failures import error_text
 
 #: The Unicode categories that never reach a reader raw.
 UNSAFE_CATEGORIES = {"Cc", "Cf", "Cs", "Zl", "Zp"}

@@ -24,6 +24,7 @@ from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
 from rosbridge_mcp_server.robot.frames import TF_TOPICS
+from rosbridge_mcp_server.robot.map_reader import GRID_TYPE
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_grid, decode_path
@@ -55,7 +56,6 @@ MAP_FPS = 1.0
 MAP_MAX_SIZE = 420
 #: How soon a missing map topic, or a robot that was down, is looked for again (seconds).
 RETRY_EVERY = 2.0
-_GRID_TYPE = "nav_msgs/OccupancyGrid"
 _PATH_TYPE = "nav_msgs/Path"
 #: A plan older than this (seconds) is no longer drawn: Nav2 republishes its plan while a goal runs.
 PLAN_KEEP = 3.0
@@ -212,8 +212,8 @@ class MapPanel:
                 msg_type = await self._graph.topic_type(topic)
                 if not msg_type:
                     self._say(map_status=f"no map: {topic} is not in the robot's graph")
-                elif short_type_name(msg_type) != _GRID_TYPE:
-                    self._say(map_status=f"no map: {topic} carries {msg_type}, not a {_GRID_TYPE}")
+                elif short_type_name(msg_type) != GRID_TYPE:
+                    self._say(map_status=f"no map: {topic} carries {msg_type}, not a {GRID_TYPE}")
                 else:
                     await self._maps_of(topic, msg_type)
             except RosbridgeError as exc:
@@ -330,10 +330,7 @@ def pose_of(tree: FrameTree, base_frame: str, map_frame: str = "map") -> tuple[s
         except TransformError as exc:
             problem = str(exc)
             continue
-        t = found.transform
-        x, y, z, w = t.rotation
-        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-        return frame, Pose2D(t.translation[0], t.translation[1], yaw)
+        return frame, found.transform.planar()
     if not tree.frames():
         return "no pose yet: no transform heard on /tf or /tf_static"
     return (

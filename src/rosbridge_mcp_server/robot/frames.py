@@ -19,7 +19,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.errors import RequestTimeoutError
-from rosbridge_mcp_server.robot.namespaces import find_namespace, namespace_name
+from rosbridge_mcp_server.robot.namespaces import SeveralNamespacesError, find_namespace, namespace_name
+from rosbridge_mcp_server.robot.occupancy import Pose2D
 from rosbridge_mcp_server.robot.transforms import FrameTree, Lookup, TransformError
 
 if TYPE_CHECKING:
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
     from rosbridge_mcp_server.robot.graph import RosGraph
 
-__all__ = ["TF_TOPICS", "FoundTransform", "look_up_transform", "tf_topics"]
+__all__ = ["TF_TOPICS", "FoundTransform", "look_up_transform", "planar_pose", "tf_topics"]
 
 TF_TOPICS = ("/tf", "/tf_static")
 #: On a tf shared by several robots, how long a look-up waits for the robot's prefixed frames before it
@@ -133,6 +134,34 @@ async def look_up_transform(
     now = time.monotonic()
     age = None if found.newest_received is None else now - found.newest_received
     return FoundTransform(found, age, now - start, namespace, note)
+
+
+async def planar_pose(
+    client: RosbridgeClient,
+    graph: RosGraph,
+    target: str,
+    source: str,
+    timeout: float,
+    *,
+    namespace: str | None = "",
+    topic: str = "",
+) -> Pose2D | str:
+    """Where *source* is in *target* (x, y, yaw) from ``/tf`` and ``/tf_static``, or why it is not known.
+
+    The robot's *namespace*'s tf; with none (``None``) and no tf at the root, the robot's whose namespace
+    holds *topic* (``/robot2/map``: ``/robot2/tf``), or the one robot's with a tf."""
+    if source == target:
+        return Pose2D(0.0, 0.0, 0.0)
+    try:
+        found = await look_up_transform(client, graph, target, source, timeout=timeout, namespace=namespace)
+    except SeveralNamespacesError as exc:
+        owners = [ns for ns in exc.namespaces if topic.startswith(f"{ns}/")]
+        if not owners:
+            return str(exc)
+        return await planar_pose(client, graph, target, source, timeout, namespace=max(owners, key=len))
+    except TransformError as exc:
+        return str(exc)
+    return found.lookup.transform.planar()
 
 
 async def _wait_for(

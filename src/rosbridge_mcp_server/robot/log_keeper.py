@@ -29,9 +29,7 @@ from rosbridge_mcp_server.robot.logs import LogRing, line_of
 from rosbridge_mcp_server.robot.nodes import node_names
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.client.session import Session
-    from rosbridge_mcp_server.client.subscription import Subscription
+    from rosbridge_mcp_server.client import RosbridgeClient, SessionFacts, Subscription
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["DIAGNOSTICS_TOPICS", "LOG_QUEUE", "LogKeeper"]
@@ -75,20 +73,20 @@ class LogKeeper:
 
     # --- the session watcher ------------------------------------------------------------------------------
 
-    def session_started(self, session: Session) -> None:
+    def session_started(self, session: SessionFacts) -> None:
         """Open the log subscription if it is not open yet (a reconnect restores an open one)."""
         if self.connected_at is None:
             self.connected_at = time.time()
         if self._task is None or self._task.done():
             self._task = self._client.run_in_background(self._follow(session), "keep the robot's log")
 
-    async def client_closing(self, session: Session | None) -> None:
+    async def client_closing(self, session: SessionFacts | None) -> None:
         if self._task is not None:
             self._task.cancel()
 
     # --- reading ---------------------------------------------------------------------------------------
 
-    async def _follow(self, session: Session) -> None:
+    async def _follow(self, session: SessionFacts) -> None:
         try:
             topics = {entry.name: entry.type for entry in await self._graph.topics()}
         except RosbridgeError as exc:
@@ -154,7 +152,7 @@ class LogKeeper:
             with contextlib.suppress(RosbridgeError):
                 await asyncio.shield(sub.close())
 
-    async def _look(self, session: Session) -> None:
+    async def _look(self, session: SessionFacts) -> None:
         if self.nodes_seen is not None:
             return
         try:

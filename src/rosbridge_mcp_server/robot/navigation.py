@@ -10,26 +10,28 @@
   straight drive), the robot's footprint (a disc) outside the keep-out zones and inside an allowed zone, at
   the goal and along a straight drive, not too far. The guard (``safety/``) applies them with the policy's
   values, so one rule holds for every path a goal can take;
+* :func:`navigation_action` and :func:`goal_request` are the goal a navigator takes (Nav2's
+  ``NavigateToPose`` and ``NavigateThroughPoses``, ROS 1 ``move_base``), :class:`Progress` what its feedback
+  says while it runs (the path driven, the distance left, the recoveries);
 * ``pictures/navigation.py`` draws it all (the map, the zones, the robot, the goal, the path driven).
 
-Pure but for :func:`survey`; no MCP.
+Pure but for :func:`survey` and :func:`goal_request`; no MCP.
 """
 
 from __future__ import annotations
 
 import asyncio
 import math
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.frames import look_up_transform
-from rosbridge_mcp_server.robot.listening import listen
-from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.frames import planar_pose
+from rosbridge_mcp_server.robot.map_reader import read_map
 from rosbridge_mcp_server.robot.motion_goals import GoalPose
-from rosbridge_mcp_server.robot.occupancy import OCCUPIED_FROM, Grid, MapError, Pose2D, decode_grid
-from rosbridge_mcp_server.robot.transforms import TransformError
+from rosbridge_mcp_server.robot.occupancy import OCCUPIED_FROM, Grid, Pose2D
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -38,12 +40,18 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_ROBOT_RADIUS",
     "GoalPose",
+    "NavigationAction",
     "Polygon",
+    "Progress",
     "Scene",
     "distance_problem",
+    "goal_request",
     "map_problem",
+    "navigation_action",
     "path_map_problem",
+    "place",
     "point_in_polygon",
+    "pose_message",
     "survey",
     "zone_problem",
 ]
@@ -247,54 +255,6 @@ def distance_problem(pose: Pose2D, robot: Pose2D, max_distance: float) -> str | 
 # --- learning the scene ---------------------------------------------------------------------------------
 
 
-async def read_map(
-    client: RosbridgeClient, graph: RosGraph, topic: str, timeout: float
-) -> tuple[Grid | None, str | None]:
-    """The latest map on *topic* (CBOR when the bridge can), or why there is none."""
-    msg_type = await graph.topic_type(topic)
-    if not msg_type:
-        return None, f"no map: {topic} is not in the robot's graph (is the map server running?)"
-    if short_type_name(msg_type) != "nav_msgs/OccupancyGrid":
-        return None, f"no map: {topic} carries {msg_type}, not nav_msgs/OccupancyGrid"
-    dialect = await client.dialect()
-    compression = dialect.compression_for(fixed_size_arrays=False)
-    heard = await listen(
-        client, topic, msg_type, count=1, duration=None, first_timeout=timeout, compression=compression
-    )
-    if not heard.messages and compression is not None and dialect.drops_large_cbor:
-        heard = await listen(client, topic, msg_type, count=1, duration=None, first_timeout=timeout)
-    if not heard.messages:
-        return None, f"no map: nothing arrived on {topic} within {timeout:g} s"
-    try:
-        return await asyncio.to_thread(decode_grid, heard.messages[0].message), None
-    except MapError as exc:
-        return None, f"no usable map on {topic}: {exc}"
-
-
-async def frame_pose(
-    client: RosbridgeClient,
-    graph: RosGraph,
-    target: str,
-    source: str,
-    timeout: float,
-    *,
-    namespace: str = "",
-) -> Pose2D | str:
-    """Where *source* is in *target* (x, y, yaw) from ``/tf`` (the robot's *namespace*'s), or why it is not
-    known."""
-    if source == target:
-        return Pose2D(0.0, 0.0, 0.0)
-    try:
-        found = await look_up_transform(client, graph, target, source, timeout=timeout, namespace=namespace)
-    except TransformError as exc:
-        return str(exc)
-    t = found.lookup.transform
-    x, y, z, w = t.rotation
-    return Pose2D(
-        t.translation[0], t.translation[1], math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    )
-
-
 def place(pose: GoalPose, frame: Pose2D) -> Pose2D:
     """*pose* (given in a frame whose origin is at *frame* in the map) in the map frame."""
     c, s = math.cos(frame.yaw), math.sin(frame.yaw)
@@ -329,7 +289,7 @@ async def survey(
     frames = sorted({pose.frame or map_frame for pose in poses} | {base_frame})
     found = await asyncio.gather(
         *(
-            frame_pose(client, graph, map_frame, frame, min(timeout, 3.0), namespace=namespace)
+            planar_pose(client, graph, map_frame, frame, min(timeout, 3.0), namespace=namespace)
             for frame in frames
         )
     )
@@ -357,3 +317,122 @@ async def survey(
         goals=tuple(placed),
         problems=tuple(problems),
     )
+
+
+# --- the navigator's goal and its progress -----------------------------------------------------------------
+
+#: Most driven-path points kept for the picture.
+_MAX_TRACK = 2000
+_MOVE_BASE = "move_base_msgs/MoveBaseAction"
+_THROUGH_POSES = "nav2_msgs/action/NavigateThroughPoses"
+
+
+@dataclass(frozen=True)
+class NavigationAction:
+    """The action a navigation goal is sent to: its name at the root (a robot's namespace goes before it)
+    and its type."""
+
+    name: str
+    type: str
+
+
+def navigation_action(*, ros1: bool, waypoints: bool) -> NavigationAction:
+    """``move_base`` on ROS 1; Nav2's ``NavigateThroughPoses`` for poses in a row, else ``NavigateToPose``."""
+    if ros1:
+        return NavigationAction("/move_base", _MOVE_BASE)
+    if waypoints:
+        return NavigationAction("/navigate_through_poses", _THROUGH_POSES)
+    return NavigationAction("/navigate_to_pose", "nav2_msgs/action/NavigateToPose")
+
+
+def pose_message(frame: str, pose: Pose2D) -> dict[str, Any]:
+    """*pose* as a ``geometry_msgs/PoseStamped`` in *frame* (on the floor, turned by its yaw)."""
+    half = pose.yaw / 2
+    return {
+        "header": {"frame_id": frame},
+        "pose": {
+            "position": {"x": pose.x, "y": pose.y, "z": 0.0},
+            "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(half), "w": math.cos(half)},
+        },
+    }
+
+
+async def goal_request(
+    graph: RosGraph, action_type: str, frame: str, goals: Sequence[Pose2D]
+) -> dict[str, Any]:
+    """The goal *action_type* takes for *goals* (in *frame*): ``move_base``'s ``target_pose``, Nav2's
+    ``pose``, or its ``poses`` (as one ``nav_msgs/Goals`` where the action takes that: Kilted on)."""
+    stamped = [pose_message(frame, goal) for goal in goals]
+    if action_type == _MOVE_BASE:
+        return {"target_pose": stamped[0]}
+    if action_type != _THROUGH_POSES:
+        return {"pose": stamped[0]}
+    if await _takes_goals(graph, action_type):
+        return {"poses": {"header": {"frame_id": frame}, "goals": stamped}}
+    return {"poses": stamped}
+
+
+async def _takes_goals(graph: RosGraph, action_type: str) -> bool:
+    """Whether the action's goal takes its poses as one ``nav_msgs/Goals`` (Kilted on), not as a list."""
+    try:
+        typedefs = await graph.action_goal_typedefs(action_type)
+    except RosbridgeError:
+        return False
+    return any(
+        name.lstrip("_") == "poses" and length == -1 and base.endswith("/Goals")
+        for typedef in (typedefs or {}).values()
+        for name, base, length in typedef.fields()
+    )
+
+
+class Progress:
+    """A navigation goal's progress as its feedback tells it (Nav2's ``current_pose``, ``distance_remaining``,
+    ``estimated_time_remaining``, ``number_of_recoveries``; ``move_base``'s ``base_position``)."""
+
+    def __init__(self, start: Pose2D, last_goal: Pose2D) -> None:
+        #: The path driven in the map frame, from the start (at most :data:`_MAX_TRACK` points).
+        self.track: list[tuple[float, float]] = [(start.x, start.y)]
+        #: The recoveries the navigator counted last (0 until it says).
+        self.recoveries = 0
+        self.began = time.monotonic()
+        self._goal = last_goal
+
+    def feed(self, goal_id: str, feedback: Mapping[str, Any]) -> str:
+        """Take one feedback message; the progress in words."""
+        current = feedback.get("current_pose") or feedback.get("base_position")
+        pose = current.get("pose") if isinstance(current, dict) else None
+        here = pose.get("position") if isinstance(pose, dict) else None
+        if isinstance(here, dict) and len(self.track) < _MAX_TRACK:
+            px, py = here.get("x"), here.get("y")
+            if isinstance(px, int | float) and isinstance(py, int | float):
+                self.track.append((float(px), float(py)))
+        remaining = feedback.get("distance_remaining")
+        if remaining is None and self.track:
+            remaining = math.hypot(self.track[-1][0] - self._goal.x, self.track[-1][1] - self._goal.y)
+        count = feedback.get("number_of_recoveries")
+        parts = [f"goal {goal_id}"]
+        if isinstance(remaining, int | float):
+            parts.append(f"{remaining:.2f} m to go")
+        parts.append(f"{self.seconds:.0f} s")
+        left = feedback.get("estimated_time_remaining")
+        if isinstance(left, dict):
+            seconds = float(left.get("sec", 0) or 0) + float(left.get("nanosec", 0) or 0) / 1e9
+            parts.append(f"~{seconds:.0f} s left")
+        if isinstance(count, int):
+            self.recoveries = count
+            parts.append(f"{count} recoveries")
+        return ", ".join(parts)
+
+    def ended_at(self, final: Pose2D | None) -> None:
+        """The robot's pose once the goal ended (``None``: not known) closes the path driven."""
+        if final is not None:
+            self.track.append((final.x, final.y))
+
+    @property
+    def seconds(self) -> float:
+        return time.monotonic() - self.began
+
+    @property
+    def driven(self) -> float:
+        """Metres driven along the track."""
+        return sum(math.dist(self.track[i], self.track[i + 1]) for i in range(len(self.track) - 1))

@@ -6,7 +6,9 @@ one the JSON decoder made). A map whose declared width × height would take more
 (``budget.py``; the cells and the few copies drawing it makes, :data:`_CELL_COST` bytes a cell) is refused
 before its data is touched.
 
-What navigation judges a goal against (``navigation.py``) and what ``pictures/maps.py`` draws. Pure: no I/O.
+What navigation judges a goal against (``navigation.py``) and what ``pictures/maps.py`` draws; a
+quaternion's yaw (:func:`yaw_of`, the one copy) and points moved in the plane. Pure: no I/O
+(``map_reader.py`` reads a map from the robot).
 Coordinates are metres in the map's frame; the grid may be rotated in it (``info.origin``).
 """
 
@@ -15,7 +17,7 @@ from __future__ import annotations
 import base64
 import math
 from array import array
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,6 +30,7 @@ __all__ = [
     "Pose2D",
     "decode_grid",
     "decode_path",
+    "to_frame",
     "yaw_of",
 ]
 
@@ -49,6 +52,10 @@ class Pose2D:
     x: float
     y: float
     yaw: float
+
+    def rounded(self) -> list[float]:
+        """``[x m, y m, yaw degrees]`` as an answer gives it: millimetres and tenths of a degree."""
+        return [round(self.x, 3), round(self.y, 3), round(math.degrees(self.yaw), 1)]
 
 
 @dataclass(frozen=True)
@@ -140,11 +147,25 @@ def decode_grid(message: Mapping[str, Any]) -> Grid:
 
 
 def yaw_of(quaternion: object) -> float:
-    """The rotation about z of a ``geometry_msgs/Quaternion`` (identity when missing or malformed)."""
-    if not isinstance(quaternion, Mapping):
+    """The rotation about z (radians) of a quaternion: a ``geometry_msgs/Quaternion`` or an (x, y, z, w)
+    tuple (a tf ``Transform``'s rotation); identity when missing or malformed. The one place it is worked out.
+    """
+    if isinstance(quaternion, Mapping):
+        parts = [quaternion.get(key) for key in ("x", "y", "z", "w")]
+    elif isinstance(quaternion, tuple) and len(quaternion) == 4:
+        parts = list(quaternion)
+    else:
         return 0.0
-    x, y, z, w = (_number(quaternion.get(k), 1.0 if k == "w" else 0.0) for k in ("x", "y", "z", "w"))
+    x, y, z, w = (_number(value, 1.0 if i == 3 else 0.0) for i, value in enumerate(parts))
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def to_frame(
+    points: Sequence[tuple[float, float]], x: float, y: float, yaw: float
+) -> list[tuple[float, float]]:
+    """Points moved by a planar transform (rotate by ``yaw``, then shift by (x, y))."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return [(x + c * px - s * py, y + s * px + c * py) for px, py in points]
 
 
 def _number(value: object, default: float = 0.0) -> float:

@@ -19,6 +19,7 @@ from typing import Any
 
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotOnRobotError
+from rosbridge_mcp_server.robot.occupancy import Pose2D, yaw_of
 from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 
 __all__ = ["FrameTree", "Lookup", "Transform", "TransformError", "frame_name"]
@@ -65,8 +66,11 @@ class Transform:
         roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
         sin_pitch = max(-1.0, min(1.0, 2 * (w * y - z * x)))
         pitch = math.asin(sin_pitch)
-        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-        return (math.degrees(roll), math.degrees(pitch), math.degrees(yaw))
+        return (math.degrees(roll), math.degrees(pitch), math.degrees(yaw_of(self.rotation)))
+
+    def planar(self) -> Pose2D:
+        """Where this transform puts the source frame's origin in the plane: x, y and the yaw (radians)."""
+        return Pose2D(self.translation[0], self.translation[1], yaw_of(self.rotation))
 
 
 @dataclass(frozen=True)

@@ -109,8 +109,6 @@ class SimulatedRobot:
             raise ValueError("map_cells must be at least 8")
         if world not in WORLDS:
             raise ValueError(f"world must be one of {', '.join(WORLDS)}, not {world!r}")
-        if world == "arm" and dialect != "ros2":
-            raise ValueError("world='arm' needs dialect='ros2' (ROS 1's control_msgs are not simulated)")
         if robots < 1 or (robots > 1 and world != "nav2"):
             raise ValueError(f"robots must be >= 1, and more than one needs world='nav2' (not {robots!r})")
         if action_step <= 0 or slow_service_seconds < 0:

@@ -18,6 +18,7 @@ from rosbridge_mcp_server.robot.arm_plan import ArmPlan, PlanError, plan_motion,
 from rosbridge_mcp_server.robot.arm_scene import ArmScene, learn_arm, positions_now
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
@@ -113,6 +114,7 @@ async def run(
     joints: Annotated[
         dict[str, float] | None,
         Field(description='e.g. {"elbow_joint": 45}'),
+        FROM_JSON_TEXT,
     ] = None,
     pose: Annotated[str, Field(description='SRDF pose, e.g. "home"')] = "",
     relative: Annotated[bool, Field(description="e.g. true: add to now")] = False,
@@ -126,33 +128,10 @@ async def run(
         )
     if pose.strip() and relative:
         raise ToolFailure("relative applies to joints, not to a named pose. Nothing was sent.")
-    scene = await learn_arm(ctx.client, ctx.graph, timeout=_READY_WAIT)
-    if scene.robot is None:
-        raise ToolFailure(f"The arm cannot be moved: {'; '.join(scene.problems)}. Nothing was sent.")
-    if not scene.robot.movable_joints:
-        raise ToolFailure(
-            f"The robot description ({scene.robot.name}) has no movable joint: this robot has no arm. "
-            "Nothing was sent."
-        )
+    scene = await _learnt_arm(ctx)
     targets = _named_pose(scene, pose.strip()) if pose.strip() else _targets(scene, joints or {}, relative)
     dialect = await ctx.client.dialect()
-    try:
-        plan = plan_motion(
-            scene.robot,
-            scene.positions,
-            targets,
-            controllers=scene.controllers,
-            controller=controller.strip() or None,
-            speed_scale=ctx.config.policy.arm.speed_scale,
-            ros_version=dialect.version,
-        )
-    except PlanError as exc:
-        raise ToolFailure(f"The arm cannot be moved: {exc}. Nothing was sent.") from None
-    if plan.duration + 1.0 > timeout:
-        raise ToolFailure(
-            f"The motion takes {plan.duration:.1f} s at the allowed speed, longer than the timeout "
-            f"{timeout:g} s. Give a longer timeout. Nothing was sent."
-        )
+    plan = _planned(ctx, scene, targets, controller=controller, timeout=timeout, ros_version=dialect.version)
     action_type = (
         "control_msgs/FollowJointTrajectoryAction"
         if dialect.version == 1
@@ -188,6 +167,50 @@ async def run(
         ) from None
     answer = await _answer(ctx, scene, plan, outcome)
     return ToolAnswer(text=answer.text, data=answer.data, images=_images(await _picture(ctx, scene, plan)))
+
+
+async def _learnt_arm(ctx: ToolContext) -> ArmScene:
+    """The arm as the robot describes it now, or a worded failure when it has none that moves."""
+    scene = await learn_arm(ctx.client, ctx.graph, timeout=_READY_WAIT)
+    if scene.robot is None:
+        raise ToolFailure(f"The arm cannot be moved: {'; '.join(scene.problems)}. Nothing was sent.")
+    if not scene.robot.movable_joints:
+        raise ToolFailure(
+            f"The robot description ({scene.robot.name}) has no movable joint: this robot has no arm. "
+            "Nothing was sent."
+        )
+    return scene
+
+
+def _planned(
+    ctx: ToolContext,
+    scene: ArmScene,
+    targets: dict[str, float],
+    *,
+    controller: str,
+    timeout: float,
+    ros_version: int,
+) -> ArmPlan:
+    """The motion to *targets* planned at the policy's speed scale, refused when it cannot finish in time."""
+    assert scene.robot is not None  # _learnt_arm's
+    try:
+        plan = plan_motion(
+            scene.robot,
+            scene.positions,
+            targets,
+            controllers=scene.controllers,
+            controller=controller.strip() or None,
+            speed_scale=ctx.config.policy.arm.speed_scale,
+            ros_version=ros_version,
+        )
+    except PlanError as exc:
+        raise ToolFailure(f"The arm cannot be moved: {exc}. Nothing was sent.") from None
+    if plan.duration + 1.0 > timeout:
+        raise ToolFailure(
+            f"The motion takes {plan.duration:.1f} s at the allowed speed, longer than the timeout "
+            f"{timeout:g} s. Give a longer timeout. Nothing was sent."
+        )
+    return plan
 
 
 class _Refused(ToolFailure):

@@ -23,7 +23,7 @@ from rosbridge_mcp_server.robot.namespaces import (
     under,
 )
 from rosbridge_mcp_server.tools.base import ToolContext, ToolFailure
-from rosbridge_mcp_server.tools.seeing import typed_topic
+from rosbridge_mcp_server.tools.typed_topics import typed_topic
 
 __all__ = ["NamespaceArgument", "choose_one", "given_namespace", "namespaced_topic", "non_defaults"]
 

@@ -10,6 +10,7 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.pictures.charts import draw_chart, stats
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.robot.series import FieldError, Series, TopicFields, collect
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -18,7 +19,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
-from rosbridge_mcp_server.tools.seeing import typed_topic
+from rosbridge_mcp_server.tools.typed_topics import typed_topic
 
 __all__ = ["SPEC", "PlotAnswer", "run"]
 
@@ -71,6 +72,7 @@ async def run(
             max_length=MAX_SERIES,
             description=f'"TOPIC FIELD [FIELD...]", e.g. {_EXAMPLE}',
         ),
+        FROM_JSON_TEXT,
     ],
     duration: Annotated[float, Field(gt=0, le=60, description="Seconds, e.g. 5")] = 5.0,
     max_size: Annotated[int, Field(ge=200, le=2048, description="Width in pixels, e.g. 800")] = 800,

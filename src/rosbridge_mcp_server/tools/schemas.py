@@ -2,17 +2,22 @@
 
 The input schema keeps what a model needs to call a tool right the first time (each parameter's type,
 bounds, description with an example, which are required) and drops what restates it: pydantic's titles
-(``goal_id`` → "Goal Id"), ``default: null``, and ``anyOf [X, null]`` written out (``type: [X, "null"]``
-says the same). The output schema is for the client that checks structured content: its structure and types
-stay one level deep; descriptions, titles and defaults go (the answer's text explains itself).
+(``goal_id`` → "Goal Id"), ``default: null``, the 1,000 characters every string argument may have (said
+when one is longer), and ``anyOf [X, null]`` written out (``type: [X, "null"]`` says the same). The output
+schema is for the client that checks structured content: its structure and types stay one level deep;
+descriptions, titles and defaults go (the answer's text explains itself).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["compact_input_schema", "compact_output_schema"]
+from rosbridge_mcp_server.tools.arguments import MAX_TEXT_ARGUMENT
 
+__all__ = ["compact_input_schema", "compact_output_schema", "inline_refs"]
+
+# Every plain string argument's limit (tools/arguments.py): said when one is longer, not on every string.
+_EVERY_STRING = ("maxLength", MAX_TEXT_ARGUMENT)
 # Structured content always holds every field (it is a model's dump), so "required" tells a client nothing.
 _OUTPUT_DROPPED = frozenset({"title", "description", "default", "examples", "required"})
 
@@ -71,7 +76,7 @@ def _compact(node: Any, dropped: frozenset[str]) -> Any:
         return node
     out: dict[str, Any] = {}
     for key, value in node.items():
-        if key in dropped or (key == "default" and value is None):
+        if key in dropped or (key == "default" and value is None) or (key, value) == _EVERY_STRING:
             continue
         if key == "additionalProperties" and value is True:
             continue  # what JSON Schema assumes anyway
@@ -104,3 +109,27 @@ def _without_null_arm(node: dict[str, Any]) -> dict[str, Any]:
     merged.update(other)
     merged["type"] = [kind, "null"]
     return merged
+
+
+def inline_refs(schema: dict[str, Any]) -> dict[str, Any]:
+    """``schema`` with every ``$ref`` into ``$defs`` replaced by the definition itself, and no ``$defs``.
+
+    MCP clients validate structured content against the output schema on every call; the Python SDK's
+    ``jsonschema`` spends ~35 % more on a schema that resolves references (measured, docs/performance.md).
+    Our answer models nest but never recurse, so inlining always ends.
+    """
+    definitions: dict[str, Any] = schema.get("$defs", {})
+
+    def resolve(node: Any) -> Any:
+        if isinstance(node, dict):
+            ref = node.get("$ref")
+            if isinstance(ref, str) and ref.startswith("#/$defs/"):
+                siblings = {k: resolve(v) for k, v in node.items() if k != "$ref"}
+                return {**resolve(definitions[ref.removeprefix("#/$defs/")]), **siblings}
+            return {k: resolve(v) for k, v in node.items() if k != "$defs"}
+        if isinstance(node, list):
+            return [resolve(item) for item in node]
+        return node
+
+    resolved: dict[str, Any] = resolve(schema)
+    return resolved

@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import asyncio
 import math
+from collections.abc import Callable
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay, draw_map
-from rosbridge_mcp_server.pictures.scans import ScanError, decode_scan, to_frame
+from rosbridge_mcp_server.robot.frames import planar_pose
+from rosbridge_mcp_server.robot.map_reader import GRID_TYPE, receive_map
 from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.namespaces import under
-from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_grid, decode_path
+from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_path, to_frame
+from rosbridge_mcp_server.robot.scans import ScanError, decode_scan
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -28,11 +31,11 @@ from rosbridge_mcp_server.tools.namespaces import (
     namespaced_topic,
     non_defaults,
 )
-from rosbridge_mcp_server.tools.seeing import first_message, is_type, planar_pose, typed_topic
+from rosbridge_mcp_server.tools.typed_topics import first_message, is_type, typed_topic
 
 __all__ = ["SPEC", "MapAnswer", "run"]
 
-_GRID = is_type("nav_msgs/OccupancyGrid")
+_GRID = is_type(GRID_TYPE)
 _PATH = is_type("nav_msgs/Path")
 _SCAN = is_type("sensor_msgs/LaserScan")
 #: The longest the robot's, the path's and the scan's frames are waited for on /tf.
@@ -69,40 +72,21 @@ SPEC = ToolSpec(
 )
 
 
-#: A map this small fits one CBOR frame of any bridge (rosbridge fragments at 10 MB by default, and setups
-#: that lower it keep it far above 50 kB): it was not dropped for its size.
-_CBOR_DROPPED_CELLS = 50_000
-
-
-async def _map_message(
-    ctx: ToolContext, name: str, msg_type: str, timeout: float, notes: list[str]
-) -> dict[str, Any]:
-    """The grid as CBOR when the bridge can send it so; when none came and the bridge drops large CBOR
-    frames (ROS 2: a map above the connection's fragment size, 10 MB by default, ~10 M cells), once more as
-    JSON, which arrives in fragments (a bounded second wait).
-    """
-    dialect = await ctx.client.dialect()
-    # An OccupancyGrid has no fixed-size array.
-    compression = dialect.compression_for(fixed_size_arrays=False)
+async def _map(ctx: ToolContext, name: str, msg_type: str, timeout: float, notes: list[str]) -> Grid:
+    """The grid (``robot/map_reader.py``: CBOR, once more as JSON where large CBOR is dropped), or a
+    :class:`ToolFailure` saying none came or what is wrong with it."""
     try:
-        return await first_message(ctx, name, msg_type, timeout, "map", compression=compression)
-    except ToolFailure:
-        if compression is None or not dialect.drops_large_cbor:
-            raise
-    message = await first_message(ctx, name, msg_type, timeout, "map")
-    cells = len(message.get("data") or ()) if isinstance(message, dict) else 0
-    if cells < _CBOR_DROPPED_CELLS:
-        # Far under the fragment size: CBOR was not dropped; the map came later than the first wait.
-        notes.append(
-            f"The map ({cells} cells) did not arrive within {timeout:g} s and came on a second wait: its "
-            "publisher does not latch it (map_server does), so a new subscriber waits for its next one."
+        reading = await receive_map(ctx.client, name, msg_type, timeout)
+    except MapError as exc:
+        raise ToolFailure(f"{exc} (topic {name}).") from None
+    if reading.grid is None:
+        raise ToolFailure(
+            f"No map arrived on {name} within {timeout:g} s. Is its publisher running? get_topic_info "
+            "shows the topic's publishers; a larger timeout waits longer."
         )
-    else:
-        notes.append(
-            f"The map did not arrive as CBOR within {timeout:g} s (rosbridge drops CBOR frames above its "
-            "fragment size, 10 MB by default); it was read as JSON, which is slower."
-        )
-    return message
+    if reading.note is not None:
+        notes.append(reading.note)
+    return reading.grid
 
 
 async def run(
@@ -135,55 +119,16 @@ async def run(
         tool=SPEC.name,
         arguments=non_defaults(run, given),
         accepts=_GRID,
-        kind="nav_msgs/OccupancyGrid",
+        kind=GRID_TYPE,
         hint="view_scan shows scans; subscribe_topic reads other topics.",
     )
-    path_name = scan_name = None
-    path_type = scan_type = ""
-    if path_topic:
-        path_name, path_type = await typed_topic(
-            ctx, under(ns, absolute_name(path_topic, "path_topic")), "path_topic", accepts=_PATH,
-            kind="nav_msgs/Path"
-        )  # fmt: skip
-    if scan_topic:
-        scan_name, scan_type = await typed_topic(
-            ctx, under(ns, absolute_name(scan_topic, "scan_topic")), "scan_topic", accepts=_SCAN,
-            kind="sensor_msgs/LaserScan"
-        )  # fmt: skip
     notes: list[str] = [found_note] if found_note is not None else []
-
-    async def optional(topic_name: str | None, topic_type: str, what: str) -> dict[str, Any] | None:
-        if topic_name is None:
-            return None
-        try:
-            return await first_message(ctx, topic_name, topic_type, timeout, what)
-        except ToolFailure:
-            notes.append(f"{what} not drawn: nothing arrived on {topic_name} within {timeout:g} s.")
-            return None
-
-    # The plan and the scan are awaited alongside the map, and given up with it when it fails.
-    extras = [
-        asyncio.create_task(optional(path_name, path_type, "path")),
-        asyncio.create_task(optional(scan_name, scan_type, "scan")),
-    ]
-    try:
-        # CBOR: the cells arrive as one binary frame of bytes (2.25 M cells: 44 ms against 1.7 s as JSON on
-        # rosbridge 2.1.0); a bridge that ignores the request sends JSON, decoded the same.
-        message = await _map_message(ctx, name, msg_type, timeout, notes)
-        path_message, scan_message = await asyncio.gather(*extras)
-    finally:
-        for task in extras:
-            task.cancel()
-        await asyncio.gather(*extras, return_exceptions=True)
-    try:
-        grid = await asyncio.to_thread(decode_grid, message)
-    except MapError as exc:
-        raise ToolFailure(f"{exc} (topic {name}).") from None
-    del message  # the decoded cells are the one copy kept
-    frame = grid.frame_id or "map"
+    grid, path_message, scan_message = await _messages(
+        ctx, (name, msg_type), ns, (path_topic, scan_topic), timeout=timeout, notes=notes
+    )
     overlay, robot = await _overlay(
         ctx,
-        frame,
+        grid.frame_id or "map",
         base_frame=base_frame.strip(),
         path_message=path_message,
         scan_message=scan_message,
@@ -195,29 +140,77 @@ async def run(
     off_map = _off_map(grid, robot, base_frame.strip())
     if off_map is not None:
         notes.insert(0, off_map)  # first: the model must not take the robot for missing
-    window = None
-    if around_robot:
-        if robot is None:
-            notes.append("around_robot needs the robot's pose: the whole map is shown.")
-        else:
-            window = (
-                robot.x - around_robot,
-                robot.y - around_robot,
-                robot.x + around_robot,
-                robot.y + around_robot,
-            )
+    window = _window(robot, around_robot, notes)
     picture, data = await asyncio.to_thread(_draw, grid, max_size, overlay, window)
     answer = _answer(
-        name,
-        grid,
-        picture,
-        robot=robot,
-        overlay=overlay,
-        notes=notes,
-        path_heard=path_message is not None,
+        name, grid, picture, robot=robot, overlay=overlay, notes=notes, path_heard=path_message is not None
     )
     text = _text(answer, base_frame, picture.image.size, drawn=off_map is None)
     return ToolAnswer(text=text, data=answer, images=(ToolImage(data, "image/png"),))
+
+
+async def _extra(
+    ctx: ToolContext, ns: str, topic: str, argument: str, *, accepts: Callable[[str], bool], kind: str
+) -> tuple[str, str] | None:
+    """The plan's or the scan's topic (under the map's namespace) and its type, checked; ``None``: not
+    asked."""
+    if not topic:
+        return None
+    return await typed_topic(
+        ctx, under(ns, absolute_name(topic, argument)), argument, accepts=accepts, kind=kind
+    )
+
+
+async def _messages(
+    ctx: ToolContext,
+    grid_topic: tuple[str, str],
+    ns: str,
+    asked: tuple[str, str],
+    *,
+    timeout: float,
+    notes: list[str],
+) -> tuple[Grid, dict[str, Any] | None, dict[str, Any] | None]:
+    """The grid, and the plan and the scan (*asked*: their topics, ``""`` for none) checked and awaited
+    alongside it (each a note when it did not come), given up with it when it fails."""
+    path_topic, scan_topic = asked
+    extras = (
+        await _extra(ctx, ns, path_topic, "path_topic", accepts=_PATH, kind="nav_msgs/Path"),
+        await _extra(ctx, ns, scan_topic, "scan_topic", accepts=_SCAN, kind="sensor_msgs/LaserScan"),
+    )
+
+    async def optional(topic: tuple[str, str] | None, what: str) -> dict[str, Any] | None:
+        if topic is None:
+            return None
+        try:
+            return await first_message(ctx, topic[0], topic[1], timeout, what)
+        except ToolFailure:
+            notes.append(f"{what} not drawn: nothing arrived on {topic[0]} within {timeout:g} s.")
+            return None
+
+    tasks = [
+        asyncio.create_task(optional(extras[0], "path")),
+        asyncio.create_task(optional(extras[1], "scan")),
+    ]
+    try:
+        grid = await _map(ctx, *grid_topic, timeout, notes)
+        path_message, scan_message = await asyncio.gather(*tasks)
+    finally:
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+    return grid, path_message, scan_message
+
+
+def _window(
+    robot: Pose2D | None, around_robot: float, notes: list[str]
+) -> tuple[float, float, float, float] | None:
+    """The map-frame box *around_robot* metres about the robot (``None``: the whole map)."""
+    if not around_robot:
+        return None
+    if robot is None:
+        notes.append("around_robot needs the robot's pose: the whole map is shown.")
+        return None
+    return (robot.x - around_robot, robot.y - around_robot, robot.x + around_robot, robot.y + around_robot)
 
 
 async def _overlay(
@@ -242,9 +235,9 @@ async def _overlay(
             notes.append(f"scan not drawn: {exc}")
 
     async def pose(source: str, what: str) -> Pose2D | None:
-        if source == frame:
-            return Pose2D(0.0, 0.0, 0.0)
-        found = await planar_pose(ctx, frame, source, tf_wait, namespace=namespace, topic=topic)
+        found = await planar_pose(
+            ctx.client, ctx.graph, frame, source, tf_wait, namespace=namespace, topic=topic
+        )
         if isinstance(found, str):
             notes.append(f"{what} not drawn: {found}")
             return None
@@ -289,14 +282,14 @@ def _answer(
         frame_id=grid.frame_id,
         cells=[grid.width, grid.height],
         resolution=round(grid.resolution, 6),
-        origin=_planar(grid.origin),
+        origin=grid.origin.rounded(),
         shares={
             "known": round(shares.known, 4),
             "free": round(shares.free, 4),
             "occupied": round(shares.occupied, 4),
             "cost": round(shares.cost, 4),
         },
-        robot=None if robot is None else _planar(robot),
+        robot=None if robot is None else robot.rounded(),
         path_poses=len(overlay.path) if path_heard else None,
         scan_hits=len(overlay.hits) if overlay.hits or any(n.startswith("scan") for n in notes) else None,
         window=[round(v, 3) for v in picture.window],
@@ -321,10 +314,6 @@ def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
         f"{math.ceil(outside * 100) / 100:g} m outside its extent (x {x_min:g}..{x_max:g}, "
         f"y {y_min:g}..{y_max:g} m), so the picture cannot show it."
     )
-
-
-def _planar(pose: Pose2D) -> list[float]:
-    return [round(pose.x, 3), round(pose.y, 3), round(math.degrees(pose.yaw), 1)]
 
 
 def _text(answer: MapAnswer, base_frame: str, size: tuple[int, int], *, drawn: bool) -> str:

@@ -9,18 +9,18 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.scans import (
+from rosbridge_mcp_server.pictures.scans import draw_scan
+from rosbridge_mcp_server.robot.messages import short_type_name
+from rosbridge_mcp_server.robot.scans import (
     Nearest,
     ScanError,
     ScanPoints,
     Sector,
     decode_cloud,
     decode_scan,
-    draw_scan,
     free_sectors,
     nearest,
 )
-from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -30,7 +30,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolSpec,
 )
 from rosbridge_mcp_server.tools.namespaces import NamespaceArgument, namespaced_topic, non_defaults
-from rosbridge_mcp_server.tools.seeing import first_message, is_type
+from rosbridge_mcp_server.tools.typed_topics import first_message, is_type
 
 __all__ = ["SPEC", "ScanAnswer", "run"]
 
