@@ -11,6 +11,12 @@ from rosbridge_mcp_server.client import GoalEnded, GoalFeedbackEvent
 from rosbridge_mcp_server.client.actionlib import Progress, next_event
 
 
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 def status(goal_id: str, code: int) -> dict[str, Any]:
     """An actionlib_msgs/GoalStatus for *goal_id*."""
     return {"goal_id": {"stamp": {"secs": 0, "nsecs": 0}, "id": goal_id}, "status": code, "text": ""}

@@ -14,6 +14,13 @@ from rosbridge_mcp_server.robot import goals
 from rosbridge_mcp_server.robot.goals import GoalRegistry, running
 from rosbridge_mcp_server.sim import SimulatedRobot
 
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 ROS2_TYPE = "example_interfaces/action/Fibonacci"
 ROS1_TYPE = "actionlib_tutorials/FibonacciAction"
 #: Long enough to still be running when a test cancels it (40 steps of 50 ms), short of int32 overflow.

@@ -9,6 +9,13 @@ from client_harness import MakeClient, MakeSim
 
 from rosbridge_mcp_server.client import BridgeCapabilities
 
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 #: Per bridge: the simulated robot's options, and what the client must decide of it.
 BRIDGES: dict[str, tuple[dict[str, Any], dict[str, bool]]] = {
     "ros1 0.11": (

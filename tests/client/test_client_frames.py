@@ -27,7 +27,7 @@ async def test_fragmented_replies_and_messages_are_reassembled(
     async with client.subscribe("/chatter", "std_msgs/String", max_queue=1) as sub:
         assert (await sub.get(3.0))["data"].startswith("Hello")
     assert client.session is not None
-    assembler = client.session.connection._decoder.assembler
+    assembler = client.session.connection.conversation.decoder.assembler
     assert assembler.completed >= 2
     assert assembler.pending == 0
 

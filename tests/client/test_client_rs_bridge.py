@@ -13,6 +13,12 @@ from rosbridge_mcp_server.robot.goals import GoalRegistry, running
 from rosbridge_mcp_server.server.advice import advised
 
 
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 async def test_a_refused_subscribe_is_logged_with_the_bridges_words(
     make_sim: MakeSim, make_client: MakeClient, caplog: pytest.LogCaptureFixture
 ) -> None:

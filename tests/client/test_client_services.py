@@ -13,6 +13,12 @@ from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 async def test_a_hundred_concurrent_calls_each_get_their_own_reply(client: RosbridgeClient) -> None:
     """100 /add_two_ints calls at once on one connection: every caller gets its own sum."""
     results = await asyncio.gather(

@@ -356,6 +356,32 @@ def test_no_module_outside_the_client_asks_which_bridge_it_is() -> None:
     assert brand_questions(package_sources()) == []
 
 
+# --- the wire is sans-I/O; one module moves bytes ----------------------------------------------------------
+
+#: What a sans-I/O module never imports: a loop, a socket, a thread.
+IO_MODULES = frozenset({"asyncio", "websockets", "socket", "ssl", "selectors", "threading", "trio", "anyio"})
+#: The one module of the server that wires in ``websockets`` (the client's transport seam).
+WEBSOCKET_MODULE = "client/transport.py"
+
+
+def io_imports(sources: Iterable[Source]) -> list[str]:
+    """Imports of I/O in ``wire/``, and of ``websockets`` in the server outside its transport module."""
+    return [
+        f"{src.where}:{line} imports {module}"
+        for src in sources
+        if src.top != SIMULATOR
+        for line, module in imports(src)
+        if (src.top == "wire" and module.split(".")[0] in IO_MODULES)
+        or (module.split(".")[0] == "websockets" and src.where != WEBSOCKET_MODULE)
+    ]
+
+
+def test_the_wire_does_no_io_and_one_module_wires_in_websockets() -> None:
+    """wire/ (the conversation included) imports no loop, socket or thread; only ``client/transport.py``
+    imports ``websockets``."""
+    assert io_imports(package_sources()) == []
+
+
 # --- settings: one owner ---------------------------------------------------------------------------------
 
 #: The packages that own settings: ``config/`` reads them (flag > environment > file > default), ``cli/``
@@ -603,6 +629,17 @@ def test_the_wire_check_catches_an_import_above_the_client() -> None:
     assert wire_imports([source("robot/example.py", text), source("client/example.py", text)]) == [
         "robot/example.py:1 imports rosbridge_mcp_server.wire",
         "robot/example.py:2 imports rosbridge_mcp_server.wire.goals",
+    ]
+
+
+def test_the_io_check_catches_a_loop_in_the_wire_and_a_second_websockets_user() -> None:
+    wire = source("wire/example.py", "import asyncio\nfrom websockets.asyncio.client import connect\n")
+    client = source("client/example.py", "from websockets.exceptions import ConnectionClosed\n")
+    transport = source(WEBSOCKET_MODULE, "from websockets.asyncio.client import connect\n")
+    assert io_imports([wire, client, transport]) == [
+        "wire/example.py:1 imports asyncio",
+        "wire/example.py:2 imports websockets.asyncio.client",
+        "client/example.py:1 imports websockets.exceptions",
     ]
 
 

@@ -15,8 +15,6 @@ from fnmatch import fnmatchcase
 from typing import TextIO
 from urllib.parse import urlsplit
 
-from websockets.exceptions import WebSocketException
-
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.demo import DemoSettings
 from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosbridgeClient, RosInfo
@@ -136,7 +134,7 @@ async def _ordering_check(
             ssl_context=config.ssl_context(),
             headers=config.headers,
         )
-    except (RosbridgeError, TimeoutError, OSError, LookupError, ValueError, WebSocketException) as exc:
+    except (RosbridgeError, TimeoutError, OSError, LookupError, ValueError) as exc:
         return _NOTE, f"could not measure whether calls queue behind a slow one ({type(exc).__name__}: {exc})"
     session = client.session
     if session is not None:

@@ -10,7 +10,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import ssl
 from collections.abc import Callable
 from typing import Any, Final, Literal
 
@@ -20,6 +19,7 @@ from rosbridge_mcp_server.client.services import bridge_timeout, call_on, call_o
 from rosbridge_mcp_server.client.session import BridgeSession
 from rosbridge_mcp_server.client.subscription import Subscription
 from rosbridge_mcp_server.client.topics import Topics
+from rosbridge_mcp_server.client.transport import Dial
 from rosbridge_mcp_server.wire import protocol
 
 __all__ = ["BridgeCalls"]
@@ -38,8 +38,7 @@ class BridgeCalls:
     url: str
     request_timeout: float
     unhandled_acts: bool
-    _ssl: ssl.SSLContext | None
-    _headers: tuple[tuple[str, str], ...]
+    _transport: Dial
     topics: Topics
     _session: BridgeSession | None
     _lanes: LanePool
@@ -83,8 +82,7 @@ class BridgeCalls:
                 session.info.version,
                 min(max(self.request_timeout, 2.0), _ORDERING_LIMIT_SECONDS),
                 hold=_ORDERING_HOLD_SECONDS,
-                ssl_context=self._ssl,
-                headers=self._headers,
+                dial=self._transport,
             )
         except asyncio.CancelledError:
             raise

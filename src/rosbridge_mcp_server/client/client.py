@@ -21,6 +21,7 @@ from rosbridge_mcp_server.client.lanes import LanePool
 from rosbridge_mcp_server.client.reconnect import Attempts, reconnect_cap
 from rosbridge_mcp_server.client.session import BridgeSession, open_session
 from rosbridge_mcp_server.client.topics import Topics
+from rosbridge_mcp_server.client.transport import Dial, websocket_dial
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
@@ -83,12 +84,13 @@ class RosbridgeClient(BridgeCalls):
         lane_idle_seconds: float = 30.0,
         ssl_context: ssl.SSLContext | None = None,
         headers: Sequence[tuple[str, str]] = (),
+        transport: Dial | None = None,
     ) -> None:
         self.url = url
         # For wss:// with a private CA or a client certificate, and for a bridge behind an authenticating
-        # proxy; every connection (main and lanes) opens with them.
-        self._ssl = ssl_context
-        self._headers = tuple(headers)
+        # proxy; every connection (main, lanes, the ordering probe's) opens with them. *transport* opens them
+        # another way (the simulated robot's in memory): then the URL only names the bridge.
+        self._transport = transport or websocket_dial(url, ssl_context=ssl_context, headers=headers)
         self.connect_timeout = connect_timeout
         self.request_timeout = request_timeout
         self.reconnect_min = reconnect_min
@@ -386,11 +388,5 @@ class RosbridgeClient(BridgeCalls):
         self, name: str, timeout: float, on_publish: Callable[[protocol.PublishEvent], None] | None = None
     ) -> Connection:
         return await open_connection(
-            self.url,
-            name,
-            timeout,
-            on_publish,
-            self.request_timeout,
-            ssl_context=self._ssl,
-            headers=self._headers,
+            self._transport, self.url, name, timeout, on_publish=on_publish, send_timeout=self.request_timeout
         )
