@@ -1,4 +1,4 @@
-"""Shared fixtures: simulated robots on port 0 (127.0.0.1), started on the test's own event loop.
+"""Shared fixtures: simulated robots on port 0 (127.0.0.1) or in memory, started on the test's own loop.
 
 ``sim_ros2`` (Jazzy-like), ``sim_ros1`` (Noetic-like), ``sim_humble`` (ROS 2 with Humble's in-order
 connections), ``sim`` (parametrized over both dialects) and ``make_sim(**kwargs)`` for anything else
@@ -37,16 +37,38 @@ def pytest_cmdline_main(config: pytest.Config) -> None:
     """Against a real bridge the tests run one at a time (no xdist workers): they share its one graph."""
     if os.environ.get("ROSBRIDGE_TEST_URL") and getattr(config.option, "numprocesses", None):
         config.option.numprocesses = 0
+    _keep_bytecode_outside_the_tree(config.rootpath)
+
+
+def _keep_bytecode_outside_the_tree(rootpath: Path) -> None:
+    """Where PYTHONDONTWRITEBYTECODE is set (some CI images set it), no process keeps compiled bytecode, so
+    every one the suite starts (eight workers, a server for each end-to-end test) compiles mcp, pydantic and
+    this package from source again: about 1 s of CPU each, a quarter of the suite's CPU. The suite's processes
+    keep theirs in ``.pytest_cache/pycache`` instead (git-ignored), never beside the sources. Run before the
+    workers start, so they and every process they start inherit it."""
+    if os.environ.pop("PYTHONDONTWRITEBYTECODE", None) is not None:
+        os.environ.setdefault("PYTHONPYCACHEPREFIX", str(rootpath / ".pytest_cache" / "pycache"))
 
 
 @pytest.fixture
-async def make_sim() -> AsyncIterator[MakeSim]:
-    """Factory: ``await make_sim(dialect="ros1", in_order=False, action_step=0.2, ...)`` → a started robot."""
+def sim_in_memory() -> bool:
+    """Whether ``make_sim`` starts robots without a port, reached in memory (a module overrides it to say so;
+    see ``tests/sim_transport.py`` for which to pick)."""
+    return False
+
+
+@pytest.fixture
+async def make_sim(sim_in_memory: bool) -> AsyncIterator[MakeSim]:
+    """Factory: ``await make_sim(dialect="ros1", in_order=False, action_step=0.2, ...)`` → a started robot.
+
+    ``in_memory=True`` starts it without a port (reach it with ``sim_transport.client_for``); by default the
+    module's ``sim_in_memory`` decides.
+    """
     robots: list[SimulatedRobot] = []
 
-    async def make(**kwargs: Any) -> SimulatedRobot:
+    async def make(*, in_memory: bool | None = None, **kwargs: Any) -> SimulatedRobot:
         robot = SimulatedRobot(**{**TEST_ROBOT_DEFAULTS, **kwargs})
-        await robot.start()
+        await robot.start(listen=not (sim_in_memory if in_memory is None else in_memory))
         robots.append(robot)
         return robot
 

@@ -78,11 +78,6 @@ def _free_port() -> int:
             "--demo-fault: controller-inactive needs ROS 2",
         ),
         (
-            ["--demo", "--demo-world", "arm", "--demo-dialect", "ros1"],
-            {},
-            "--demo-world arm needs --demo-dialect ros2",
-        ),
-        (
             ["--demo", "--demo-world", "arm", "--demo-fault", "scan-stopped"],
             {},
             "--demo-fault: unknown arm fault scan-stopped; choose from arm-controller-inactive",

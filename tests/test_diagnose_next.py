@@ -1,4 +1,4 @@
-"""diagnose's next calls: robot/diagnosis.py gives typed steps, tools/diagnose.py words them as the calls the
+"""diagnose's next calls: robot/diagnosis/ gives typed steps, tools/diagnose.py words them as the calls the
 model makes, word for word what robot/ used to write."""
 
 from __future__ import annotations
@@ -56,7 +56,8 @@ CASES: list[tuple[tuple[Step, ...], str]] = [
     (
         (Step(Look.ACTIVATE_CONTROLLER, ("/controller_manager", "arm_controller")), Step(Look.ARM)),
         "activating arm_controller acts on the robot (/controller_manager/switch_controller, "
-        "activate_controllers, if the hardware allows): ask the user first; view_arm",
+        "activate_controllers (ROS 1: start_controllers), if the hardware allows): ask the user first; "
+        "view_arm",
     ),
 ]
 

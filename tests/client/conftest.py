@@ -11,6 +11,7 @@ from client_harness import FAST_RECONNECT, MakeClient
 
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
+from sim_transport import client_for
 
 
 @pytest.fixture
@@ -21,8 +22,10 @@ async def make_client() -> AsyncIterator[MakeClient]:
     async def make(
         target: SimulatedRobot | str, *, connected: bool = True, **options: Any
     ) -> RosbridgeClient:
-        url = target if isinstance(target, str) else target.url
-        client = RosbridgeClient(url, **{**FAST_RECONNECT, **options})
+        if isinstance(target, str):
+            client = RosbridgeClient(target, **{**FAST_RECONNECT, **options})
+        else:
+            client = client_for(target, **{**FAST_RECONNECT, **options})
         clients.append(client)
         await client.start()
         if connected:

@@ -9,6 +9,13 @@ from client_harness import MakeClient, MakeSim
 
 from rosbridge_mcp_server.client import BridgeCapabilities
 
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 #: Per bridge: the simulated robot's options, and what the client must decide of it.
 BRIDGES: dict[str, tuple[dict[str, Any], dict[str, bool]]] = {
     "ros1 0.11": (
@@ -80,7 +87,7 @@ async def test_a_cancel_of_another_clients_goal_by_its_id_tells_the_bridges_refu
     """rosbridge-server-rs refuses it (only the starting connection may cancel), rosbridge_suite says nothing;
     what the capabilities say of cancelling stays as the bridge showed it."""
     client = await make_client(await make_sim(dialect="ros2", server=server))
-    heard = await client.cancel_goal_heard("/fibonacci", "goal:/fibonacci:someone-1", 3.0)
+    heard = (await client.goals.cancel("/fibonacci", "goal:/fibonacci:someone-1", timeout=3.0)).refused
     if refusal is None:
         assert heard is None
     else:

@@ -12,6 +12,13 @@ from client_harness import MakeClient, MakeSim
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 ARRAYS = [
     ("/test/int8", "std_msgs/Int8MultiArray", [-128, -1, 0, 100, 127]),
     ("/test/uint16", "std_msgs/UInt16MultiArray", [0, 1, 65535]),

@@ -16,6 +16,13 @@ import rosbridge_mcp_server
 from rosbridge_mcp_server.client import Dialect, RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 STAMPED = {"stamp": {"sec": 12, "nanosec": 34}, "label": "x"}
 
 

@@ -13,7 +13,7 @@ from client_harness import MakeClient, MakeSim
 from websockets.asyncio.server import ServerConnection, serve
 
 from rosbridge_mcp_server.errors import GoalTimeoutError, RequestTimeoutError, ServiceError
-from rosbridge_mcp_server.robot.goals import GoalRegistry, ros2
+from rosbridge_mcp_server.robot.goals import GoalRegistry, running
 
 
 async def test_fragmented_replies_and_messages_are_reassembled(
@@ -27,7 +27,7 @@ async def test_fragmented_replies_and_messages_are_reassembled(
     async with client.subscribe("/chatter", "std_msgs/String", max_queue=1) as sub:
         assert (await sub.get(3.0))["data"].startswith("Hello")
     assert client.session is not None
-    assembler = client.session.connection._decoder.assembler
+    assembler = client.session.connection.conversation.decoder.assembler
     assert assembler.completed >= 2
     assert assembler.pending == 0
 
@@ -190,7 +190,7 @@ async def test_a_silent_goal_is_cancelled_on_the_main_connection_at_its_deadline
     client = await make_client(url)
     registry = GoalRegistry(client)
     with pytest.raises(GoalTimeoutError) as caught:
-        await ros2.send_action_goal(
+        await running.send_action_goal(
             registry, "/fibonacci", "example_interfaces/Fibonacci", {"order": 3}, timeout=0.2
         )
     assert caught.value.status is None

@@ -9,10 +9,11 @@ from collections.abc import Callable, Iterator
 import pytest
 from client_harness import MakeClient, MakeSim
 
+from rosbridge_mcp_server.client import cut_off
+from rosbridge_mcp_server.client import goals as client_goals
 from rosbridge_mcp_server.errors import ConnectionLostError, GoalTimeoutError
 from rosbridge_mcp_server.robot import goals
-from rosbridge_mcp_server.robot.goals import GoalRegistry, ros2
-from rosbridge_mcp_server.robot.goals import registry as registry_module
+from rosbridge_mcp_server.robot.goals import GoalRegistry, running
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.world import PublishedMessage, World
 
@@ -102,8 +103,9 @@ def running_with_feedback(goal_id: str) -> Callable[[World], bool]:
 
 
 def cut_off_ids(registry: GoalRegistry) -> list[str]:
-    """The ids of the goals a drop cut off that *registry* still means to cancel, oldest first."""
-    return list(registry._cut_off)
+    """The ids of the goals a drop cut off that the client of *registry* still means to cancel, oldest
+    first."""
+    return registry.client.goals.cut_off
 
 
 async def start_long_goal(registry: GoalRegistry, robot: SimulatedRobot) -> tuple[str, asyncio.Task[object]]:
@@ -162,7 +164,7 @@ async def test_a_ros1_cancel_after_a_reconnect_is_published_again_a_moment_later
     await robot.wait_for(lambda world: len(cancels(world)) >= 2, WAIT)
     first, second = cancels(robot.world)[:2]
     assert first.connection_id == second.connection_id
-    assert second.received_at - first.received_at >= registry_module.ROS1_CANCEL_REPEAT_SECONDS * 0.9
+    assert second.received_at - first.received_at >= client_goals.ROS1_CANCEL_REPEAT_SECONDS * 0.9
 
 
 async def test_a_goal_that_finished_before_the_drop_is_not_cancelled(
@@ -212,12 +214,12 @@ async def test_a_goal_orphaned_too_long_ago_is_forgotten_without_a_cancel(
     sim_ros2: SimulatedRobot, make_client: MakeClient, cancel_log: _CancelLog, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Past the age limit a surprise cancel would stop whatever the robot does now: it is logged, not sent."""
-    monkeypatch.setattr(registry_module, "ORPHAN_MAX_AGE_SECONDS", 0.0)
+    monkeypatch.setattr(cut_off, "ORPHAN_MAX_AGE_SECONDS", 0.0)
     client = await make_client(sim_ros2)
     registry = GoalRegistry(client)
     goal_id = client.new_goal_id("/fibonacci")
     await sim_ros2.stop()
-    registry.remember_cut_off("/fibonacci", goal_id, 2)
+    client.goals.remember("/fibonacci", goal_id, 2)
     await sim_ros2.start()
     await client.wait_connected(WAIT)
     await cancel_log.wait_for(f"Not cancelling goal {goal_id}")
@@ -233,9 +235,9 @@ async def test_at_most_a_bounded_number_of_orphaned_goals_are_remembered(
     registry = GoalRegistry(client)
     await sim_ros2.stop()
     await client.wait_disconnected(WAIT)
-    ids = [f"goal-{n}" for n in range(registry_module.ORPHAN_LIMIT + 1)]
+    ids = [f"goal-{n}" for n in range(cut_off.ORPHAN_LIMIT + 1)]
     for goal_id in ids:
-        registry.remember_cut_off("/fibonacci", goal_id, 2)
+        client.goals.remember("/fibonacci", goal_id, 2)
     assert cut_off_ids(registry) == ids[1:]
 
 
@@ -274,7 +276,7 @@ async def test_a_goal_timing_out_while_only_its_lane_is_up_is_remembered_only_on
     registry = GoalRegistry(client)
     goal_id = client.new_goal_id("/fibonacci")
     task = asyncio.create_task(
-        ros2.send_action_goal(
+        running.send_action_goal(
             registry, "/fibonacci", ROS2_TYPE, {"order": LONG_ORDER}, timeout=1.0, goal_id=goal_id
         )
     )

@@ -18,6 +18,13 @@ from websockets.asyncio.server import ServerConnection, serve
 from rosbridge_mcp_server.client.ordering import PROBE_SERVICE_PREFIX
 from rosbridge_mcp_server.robot.graph import RosGraph
 
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 Answer = tuple[bool, Any]
 
 

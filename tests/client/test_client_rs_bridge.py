@@ -9,8 +9,14 @@ import pytest
 from client_harness import MakeClient, MakeSim
 
 from rosbridge_mcp_server.errors import Advice, GoalTimeoutError, Hint, ServiceError
-from rosbridge_mcp_server.robot.goals import GoalRegistry, ros2
+from rosbridge_mcp_server.robot.goals import GoalRegistry, running
 from rosbridge_mcp_server.server.advice import advised
+
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
 
 
 async def test_a_refused_subscribe_is_logged_with_the_bridges_words(
@@ -56,7 +62,7 @@ async def test_a_goal_timing_out_is_cancelled_on_its_own_connection_without_a_wa
     registry = GoalRegistry(client)
     with caplog.at_level(logging.WARNING, logger="rosbridge_mcp_server"):
         with pytest.raises(GoalTimeoutError) as caught:
-            await ros2.send_action_goal(
+            await running.send_action_goal(
                 registry, "/fibonacci", "example_interfaces/Fibonacci", {"order": 40}, timeout=0.5
             )
         await client.call_service("/rosapi/get_time")  # a barrier: the refusal came before its answer
@@ -73,24 +79,25 @@ async def test_a_cancel_on_the_main_connection_alone_does_not_reach_its_goal_and
     robot = await make_sim(dialect="ros2", server="rs", action_step=0.05)
     client = await make_client(robot)
     registry = GoalRegistry(client)
-    running = asyncio.create_task(
-        ros2.send_action_goal(
+    goal_task = asyncio.create_task(
+        running.send_action_goal(
             registry, "/fibonacci", "example_interfaces/Fibonacci", {"order": 400}, timeout=30
         )
     )
     try:
         await robot.wait_for(lambda world: any(g.feedback_count >= 1 for g in world.goals.values()))
         [goal] = registry.running("/fibonacci")
-        alone = await client.cancel_goal(goal.action, goal.goal_id)
-        assert (alone.on_main, alone.on_lane, alone.reaches) == (True, False, False)
-        await client.call_service("/rosapi/get_time")  # a barrier: the refusal came before its answer
+        alone = await client.goals.cancel(goal.action, goal.goal_id, timeout=3.0)
+        assert alone.refused is not None
         [sim_goal] = robot.world.goals.values()
         assert not sim_goal.cancel_requested
         assert not sim_goal.finished
-        both = await client.cancel_goal(goal.action, goal.goal_id, goal.lane)
+        handle = client.goals.handle(goal.goal_id)
+        assert handle is not None
+        both = await handle.cancel()
         assert (both.on_main, both.on_lane, both.reaches) == (True, True, True)
-        ended = await asyncio.wait_for(running, 5.0)
+        ended = await asyncio.wait_for(goal_task, 5.0)
         assert ended.status_code == 5
     finally:
-        running.cancel()
-        await asyncio.gather(running, return_exceptions=True)
+        goal_task.cancel()
+        await asyncio.gather(goal_task, return_exceptions=True)

@@ -10,6 +10,13 @@ from client_harness import MakeClient, MakeSim, unused_port
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, RequestTimeoutError
 from rosbridge_mcp_server.sim import SimulatedRobot
+from sim_transport import client_for
+
+
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
 
 
 async def test_a_subscription_receives_messages_of_its_topic(client: RosbridgeClient) -> None:
@@ -215,7 +222,7 @@ async def test_a_latched_publish_says_latch_so_the_bridge_keeps_it_latched_witho
     """Both rosbridge lines register the publisher again with each publish's latch flag; ours says true."""
     robot = await make_sim(dialect=dialect)
     msg_type = "std_msgs/msg/String" if dialect == "ros2" else "std_msgs/String"
-    async with RosbridgeClient(robot.url) as client:
+    async with client_for(robot) as client:
         await client.wait_connected(5.0)
         for text in ("first", "second"):
             await client.publish("/latched_note", msg_type, {"data": text}, latch=True)

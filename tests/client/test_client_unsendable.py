@@ -10,6 +10,12 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.wire.protocol import BRIDGE_MAX_FRAME_BYTES
 
 
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is done with the answers is tested."""
+    return True
+
+
 async def _round_trip(client: RosbridgeClient) -> None:
     """A service call answered on the same connection: nothing was dropped."""
     await client.call_service("/rosapi/topics", timeout=5.0)

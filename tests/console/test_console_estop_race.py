@@ -39,7 +39,9 @@ async def test_a_stream_and_a_goal_approved_at_the_press_send_nothing_after_esto
     assert result.estop["streams_stopped"] == [CMD_VEL], result
     assert "E-STOP" in result.stream_text, result.stream_text
     assert "E-STOP" in result.goal_text, result.goal_text
-    assert result.goal_error, result.goal_text
+    # Refused before it was sent, or (a busy machine can send it between the approval and the press) ended by
+    # E-STOP on the robot: either way nothing of it ran after E-STOP answered (nothing_after above).
+    assert result.goal_error or result.goal_ran_before, result.goal_text
 
 
 async def test_a_goal_running_when_estop_is_pressed_makes_no_progress_after_it_answers(

@@ -25,6 +25,7 @@ from rosbridge_mcp_server.safety import parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"
+WAIT = 30.0  # a bound on an event, not a pause: a busy machine (load 20 on 2 cores) still passes
 TWIST_CALL = {"topic": CMD_VEL, "message_type": "geometry_msgs/msg/Twist", "message": {"linear": {"x": 0.4}}}
 
 
@@ -65,7 +66,7 @@ class Http:
         head = f"{method} {path} HTTP/1.1\r\n" + "".join(f"{k}: {v}\r\n" for k, v in lines.items()) + "\r\n"
         writer.write(head.encode() + data)
         await writer.drain()
-        async with asyncio.timeout(10):
+        async with asyncio.timeout(WAIT):
             status = int((await reader.readline()).split()[1])
             received: dict[str, str] = {}
             while (line := (await reader.readline()).decode().rstrip("\r\n")) != "":
@@ -78,7 +79,7 @@ class Http:
     ) -> Answer:
         reader, writer, status, received = await self._open(method, path, headers, json)
         try:
-            async with asyncio.timeout(10):
+            async with asyncio.timeout(WAIT):
                 body = await reader.read()
         finally:
             writer.close()
@@ -112,7 +113,7 @@ def secret(console: Console) -> dict[str, str]:
 async def first_pending(console: Console) -> str:
     changed = asyncio.Event()
     console.operator.listen(changed.set)
-    async with asyncio.timeout(10):
+    async with asyncio.timeout(WAIT):
         while not console.operator.pending:
             await changed.wait()
             changed.clear()
@@ -252,7 +253,7 @@ async def test_the_event_stream_pushes_the_state_to_the_secret_holder(sim_ros2: 
         web.stream("/api/events", headers=secret(console)) as (events, body),
     ):
         assert events.headers["content-type"].startswith("text/event-stream")
-        async with asyncio.timeout(10):
+        async with asyncio.timeout(WAIT):
             text = ""
             while "\n\n" not in text:
                 text += (await body.readline()).decode()

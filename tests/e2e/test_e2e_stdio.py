@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 from e2e_transports import INITIALIZE
 
+from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 90.0  # a bound on an event, not a pause: a busy machine (load 10 on 2 cores) still passes
@@ -118,8 +119,7 @@ async def test_demo_server_over_stdio_speaks_only_json_rpc_on_stdout() -> None:
         await server.send({"jsonrpc": "2.0", "method": "notifications/initialized"})
 
         tools = await server.request("tools/list")
-        # the 21, read_logs, diagnose, navigate_to, record, read_recording, view_arm, move_arm, move_gripper
-        assert len(tools["result"]["tools"]) == 29
+        assert [tool["name"] for tool in tools["result"]["tools"]] == list(ALL_TOOL_NAMES)
 
         topics = await server.request("tools/call", {"name": "list_topics", "arguments": {}})
         assert topics["result"]["isError"] is False

@@ -18,6 +18,7 @@ from mcp.types import CallToolResult, TextContent
 
 from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.client.transport import Dial
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 from rosbridge_mcp_server.robot.seam import ALLOW_ALL, Guard
@@ -88,6 +89,7 @@ async def open_session(
     record_dir: str | None = None,
     extensions: tuple[Any, ...] = (),
     tasks: bool | Callable[[Fleet], TaskBoard] = True,
+    transport: Dial | None = None,
 ) -> AsyncIterator[Session]:
     """An MCP session on a server built for ``url``; waits for the bridge connection unless ``wait`` is false.
 
@@ -95,7 +97,8 @@ async def open_session(
     With ``policy`` the server runs under that safety policy (``guard=None``: the server's own PolicyGuard);
     ``tools`` picks the tools as ``--tools`` does; ``record_dir`` is ``--record-dir``; ``extensions`` are the
     client's (e.g. the tasks extension's ad); ``tasks=False`` is ``--no-tasks``, a function makes the server's
-    task board (to watch it).
+    task board (to watch it). ``transport`` is the client's (a simulated robot's ``dial_in_memory``: no
+    socket between the server and the robot; see ``tests/sim_transport.py``).
 
     The SDK client lives in a task of its own: its anyio scopes must be entered and left by one task, and
     pytest-asyncio sets a fixture up and tears it down in different tasks.
@@ -117,6 +120,7 @@ async def open_session(
         request_timeout=request_timeout,
         reconnect_min=0.05,
         reconnect_max=0.2,
+        transport=transport,
     )
     ready: asyncio.Future[Session] = asyncio.get_running_loop().create_future()
     stop = asyncio.Event()

@@ -21,6 +21,8 @@ from mcp.types import ElicitRequestParams, ElicitResult, ImageContent
 from mcp_harness import open_session, text_of
 from PIL import Image
 
+from arm_fixture import ROBOT as FIXTURE_ROBOT
+from rosbridge_mcp_server.robot.arm.kinematics import Chain, translation
 from rosbridge_mcp_server.safety import emergency_stop, parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.nodes.arm import ARM_JOINTS, FINGER, HOME, NAMED_POSES
@@ -28,6 +30,8 @@ from rosbridge_mcp_server.sim.nodes.arm import ARM_JOINTS, FINGER, HOME, NAMED_P
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
 FOLLOW = "/arm_controller/follow_joint_trajectory"
 TOPIC = "/arm_controller/joint_trajectory"
+#: ros_control's (ROS 1) trajectory topic.
+TOPIC1 = "/arm_controller/command"
 #: The tool starts at (0.28, 0.02, 0.86) in base_link. A table it must stay above, and a person to its left.
 BOXES = {
     "arm": {
@@ -51,8 +55,55 @@ def trajectory(target: dict[str, float], seconds: float) -> dict[str, Any]:
     }
 
 
-def carriers(traj: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
-    """Every raw tool call that sends *traj* to the arm controller."""
+def is_ros1(robot: SimulatedRobot) -> bool:
+    return not robot.arm.kit.ros2
+
+
+def respelt(traj: dict[str, Any]) -> dict[str, Any]:
+    """*traj* with ROS 1's ``{secs, nsecs}`` times."""
+    points = [
+        {
+            **point,
+            "time_from_start": {
+                "secs": point["time_from_start"]["sec"],
+                "nsecs": point["time_from_start"]["nanosec"],
+            },
+        }
+        for point in traj["points"]
+    ]
+    return {**traj, "points": points}
+
+
+def carriers(traj: dict[str, Any], ros1: bool = False) -> list[tuple[str, dict[str, Any]]]:
+    """Every raw tool call that sends *traj* to the arm controller (ROS 1: actionlib's and ros_control's)."""
+    if ros1:
+        goal1 = {"trajectory": respelt(traj)}
+        return [
+            (
+                "publish_action",
+                {
+                    "action_name": FOLLOW,
+                    "action_type": "control_msgs/FollowJointTrajectoryAction",
+                    "goal": goal1,
+                },
+            ),
+            (
+                "publish_topic",
+                {
+                    "topic": f"{FOLLOW}/goal",
+                    "message_type": "control_msgs/FollowJointTrajectoryActionGoal",
+                    "message": {"goal_id": {"id": "raw-1"}, "goal": goal1},
+                },
+            ),
+            (
+                "publish_topic",
+                {
+                    "topic": TOPIC1,
+                    "message_type": "trajectory_msgs/JointTrajectory",
+                    "message": respelt(traj),
+                },
+            ),
+        ]
     goal = {"trajectory": traj}
     return [
         (
@@ -88,13 +139,25 @@ class Watcher:
                 self.seen.append(frame["topic"])
 
 
+def status_topic(robot: SimulatedRobot) -> str:
+    return f"{FOLLOW}/status" if is_ros1(robot) else f"{FOLLOW}/_action/status"
+
+
 @contextlib.asynccontextmanager
 async def watching(robot: SimulatedRobot) -> AsyncIterator[Watcher]:
     async with websockets.connect(robot.url) as ws:
-        for topic, msg_type in (
-            (f"{FOLLOW}/_action/status", "action_msgs/msg/GoalStatusArray"),
-            (TOPIC, "trajectory_msgs/msg/JointTrajectory"),
-        ):
+        watched = (
+            (
+                (status_topic(robot), "actionlib_msgs/GoalStatusArray"),
+                (TOPIC1, "trajectory_msgs/JointTrajectory"),
+            )
+            if is_ros1(robot)
+            else (
+                (status_topic(robot), "action_msgs/msg/GoalStatusArray"),
+                (TOPIC, "trajectory_msgs/msg/JointTrajectory"),
+            )
+        )
+        for topic, msg_type in watched:
             await ws.send(json.dumps({"op": "subscribe", "topic": topic, "type": msg_type}))
         watcher = Watcher(ws)
         reader = asyncio.create_task(watcher.read())
@@ -111,11 +174,18 @@ async def arm(make_sim: MakeSim) -> SimulatedRobot:
     return await make_sim(dialect="ros2", world="arm")
 
 
+@pytest.fixture(params=["ros2", "ros1"])
+async def any_arm(make_sim: MakeSim, request: pytest.FixtureRequest) -> SimulatedRobot:
+    """The simulated arm on each dialect (ROS 1: actionlib and ros_control's names)."""
+    return await make_sim(dialect=request.param, world="arm")
+
+
 def nothing_reached(robot: SimulatedRobot) -> bool:
     return not robot.arm.received_goals and not robot.arm.received_trajectories
 
 
-async def test_a_joint_goal_is_reached_within_tolerance_at_the_allowed_speed(arm: SimulatedRobot) -> None:
+async def test_a_joint_goal_is_reached_within_tolerance_at_the_allowed_speed(any_arm: SimulatedRobot) -> None:
+    arm = any_arm
     async with open_session(arm.url, guard=None, policy=parse_policy({}, where="t")) as session:
         result = await session.ok("move_arm", {"joints": {"elbow_joint": 45, "wrist_1_joint": -30}})
         data = result.structured_content or {}
@@ -125,13 +195,15 @@ async def test_a_joint_goal_is_reached_within_tolerance_at_the_allowed_speed(arm
         assert arm.arm.positions["wrist_1_joint"] == pytest.approx(math.radians(-30), abs=0.01)
         # Timed by the tool at a quarter of the URDF speeds: 3 rad/s × 0.25 moves elbow 0.41 rad in ≥ 0.55 s.
         sent = arm.arm.received_goals[-1]["trajectory"]["points"][-1]["time_from_start"]
-        assert sent["sec"] + sent["nanosec"] / 1e9 >= (1.2 - math.radians(45)) / 0.75
+        seconds = sent["secs"] + sent["nsecs"] / 1e9 if is_ros1(arm) else sent["sec"] + sent["nanosec"] / 1e9
+        assert seconds >= (1.2 - math.radians(45)) / 0.75
         relative = await session.ok("move_arm", {"joints": {"elbow_joint": 10}, "relative": True})
         assert (relative.structured_content or {})["succeeded"]
         assert arm.arm.positions["elbow_joint"] == pytest.approx(math.radians(55), abs=0.01)
 
 
-async def test_a_named_pose_is_reached(arm: SimulatedRobot) -> None:
+async def test_a_named_pose_is_reached(any_arm: SimulatedRobot) -> None:
+    arm = any_arm
     async with open_session(arm.url, guard=None, policy=parse_policy({}, where="t")) as session:
         result = await session.ok("move_arm", {"pose": "ready"})
         assert (result.structured_content or {})["succeeded"], text_of(result)
@@ -164,16 +236,39 @@ REFUSED: list[tuple[dict[str, Any], dict[str, Any], dict[str, Any], str]] = [
 ]
 
 
+def _ceiling_above_the_raised_forearm() -> dict[str, Any]:
+    """A keep-out box 1 cm above the highest centre-line point of raising the elbow to 0.2 rad: the links'
+    bodies (the sim's URDF gives them 3–6 cm cylinders) enter it, their centre lines do not."""
+    chain = Chain(FIXTURE_ROBOT, FIXTURE_ROBOT.root, "tool0")
+    top = 0.0
+    for k in range(1001):
+        held = {name: value + (0.2 - value) * k / 1000 if name == "elbow_joint" else value
+                for name, value in HOME.items()}  # fmt: skip
+        top = max([top] + [translation(pose)[2] for _, pose in chain.poses(held)])
+    return {"arm": {"keep_out": {"ceiling": [[-2.0, -2.0, top + 0.01], [2.0, 2.0, 3.0]]}}}
+
+
+REFUSED.append(
+    (
+        {"joints": {"elbow_joint": math.degrees(0.2)}},
+        trajectory({"elbow_joint": 0.2}, 20.0),
+        _ceiling_above_the_raised_forearm(),
+        "into the keep-out box ceiling",
+    )
+)
+
+
 @pytest.mark.parametrize(("by_tool", "raw", "policy", "why"), REFUSED)
 async def test_a_goal_beyond_a_limit_is_refused_by_every_carrier_with_nothing_sent(
-    arm: SimulatedRobot, by_tool: dict[str, Any], raw: dict[str, Any], policy: dict[str, Any], why: str
+    any_arm: SimulatedRobot, by_tool: dict[str, Any], raw: dict[str, Any], policy: dict[str, Any], why: str
 ) -> None:
+    arm, ros1 = any_arm, is_ros1(any_arm)
     wrong: list[str] = []
     async with (
         open_session(arm.url, guard=None, policy=parse_policy(policy, where="arm.toml")) as session,
         watching(arm) as watcher,
     ):
-        calls = carriers(raw) + ([("move_arm", by_tool)] if by_tool else [])
+        calls = carriers(raw, ros1) + ([("move_arm", by_tool)] if by_tool else [])
         for tool, arguments in calls:
             result = await session.call(tool, arguments)
             text = text_of(result)
@@ -181,11 +276,12 @@ async def test_a_goal_beyond_a_limit_is_refused_by_every_carrier_with_nothing_se
                 wrong.append(f"{tool}: {text[:300]}")
         assert nothing_reached(arm), (arm.arm.received_goals, arm.arm.received_trajectories)
         # The control: a slow small goal by the same carriers reaches the arm (the watcher sees it).
-        control = await session.call(*carriers(trajectory({"wrist_3_joint": 0.05}, 2.0))[0])
+        control = await session.call(*carriers(trajectory({"wrist_3_joint": 0.05}, 2.0), ros1)[0])
         assert not control.is_error, text_of(control)
         assert arm.arm.received_goals
-    assert f"{FOLLOW}/_action/status" in watcher.seen
+    assert status_topic(arm) in watcher.seen
     assert TOPIC not in watcher.seen
+    assert TOPIC1 not in watcher.seen
     assert not wrong, "\n".join(wrong)
 
 
@@ -201,9 +297,10 @@ async def stopped_within(robot: SimulatedRobot, seconds: float) -> None:
 
 @pytest.mark.parametrize("how", ["stop_robot", "estop", "mcp_cancel"])
 async def test_stop_robot_the_estop_and_a_cancel_stop_the_arm_where_it_is(
-    arm: SimulatedRobot, how: str
+    any_arm: SimulatedRobot, how: str
 ) -> None:
     """A 90° pan at a quarter of 2 rad/s takes 3.1 s; each stop ends it within 0.5 s, short of the goal."""
+    arm = any_arm
     async with open_session(arm.url, guard=None, policy=parse_policy({}, where="t")) as session:
         call = asyncio.create_task(session.call("move_arm", {"joints": {"shoulder_pan_joint": 90}}))
         await moving(arm)
@@ -225,8 +322,12 @@ async def test_stop_robot_the_estop_and_a_cancel_stop_the_arm_where_it_is(
 
 
 async def test_the_gripper_closes_and_opens_and_a_position_beyond_its_travel_is_refused(
-    arm: SimulatedRobot,
+    any_arm: SimulatedRobot,
 ) -> None:
+    arm = any_arm
+    gripper_type = (
+        "control_msgs/GripperCommandAction" if is_ros1(arm) else "control_msgs/action/GripperCommand"
+    )
     policy = parse_policy({"arm": {"max_gripper_effort": 20}}, where="t")
     async with open_session(arm.url, guard=None, policy=policy) as session:
         closed = await session.ok("move_gripper", {"command": "close"})
@@ -242,7 +343,7 @@ async def test_the_gripper_closes_and_opens_and_a_position_beyond_its_travel_is_
             "publish_action",
             {
                 "action_name": "/gripper_controller/gripper_cmd",
-                "action_type": "control_msgs/action/GripperCommand",
+                "action_type": gripper_type,
                 "goal": {"command": {"position": 0.02, "max_effort": 0}},
             },
         )

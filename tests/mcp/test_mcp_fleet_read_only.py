@@ -135,3 +135,18 @@ async def test_a_fleet_of_read_only_robots_lists_no_acting_tool(bridge: Simulate
     assert {"list_topics", "get_image", "list_robots"} <= names
     assert refused.is_error
     assert "this server is read-only" in text_of(refused)
+
+
+async def test_the_fleet_is_told_what_the_stop_does_and_record_stays_off_a_read_only_robot(
+    bridge: SimulatedRobot,
+) -> None:
+    """The instructions say stop_robot without a robot stops every robot and works on cam (from its spec);
+    record, which sends nothing to a robot but writes the host's disk, is refused on cam as acting tools
+    are."""
+    async with fleet(bridge.url) as client:
+        instructions = client.instructions or ""
+        recorded = await client.call_tool("record", {"robot": "cam", "topics": ["/chatter"], "duration": 1})
+    assert "(stop_robot without it stops every robot)" in instructions
+    assert "Read-only robots (cam): only reading tools and stop_robot work on them" in instructions
+    assert recorded.is_error
+    assert f"record {READ_ONLY}" in text_of(recorded)

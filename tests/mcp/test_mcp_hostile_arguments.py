@@ -175,10 +175,10 @@ async def test_two_wrong_arguments_one_of_them_json_text_are_both_named(
         },
     )
     assert text.startswith(
-        "Invalid arguments for publish_service: request: expected a JSON object or a string"
+        "Invalid arguments for publish_service: request: expected a JSON object; the text 'null' holds null "
+        '(it takes: Request fields as a JSON object, e.g. {"a": 2, "b": 3}; {} for std_srvs/srv/Trigger);'
     )
     assert "timeout: input should be greater than 0 (got -1)" in text
-    assert "request was given as the text 'null', which is read as JSON." in text
     assert "validation error" not in text
     assert "/add_two_ints" not in sim.world.service_calls
     await _still_works(session)
@@ -207,3 +207,28 @@ async def test_json_text_for_any_parameter_that_is_not_text_is_worded(
                 assert "Error executing tool" not in said, f"{tool.name}.{key}: {said[:200]}"
     assert tried > 20
     await _still_works(session_ros2)
+
+
+async def test_a_misspelt_setting_inside_an_object_argument_is_named(session_ros2: Session) -> None:
+    """``qos: {"depht": 5}`` is refused naming the key and the likely meant one, not silently dropped (the
+    subscription would have had the default depth); ``depth: "5"`` is no number."""
+    misspelt = await session_ros2.error(
+        "subscribe_topic", {"topic": CHATTER, "timeout": 1, "qos": {"depht": 5}}
+    )
+    assert "qos: unknown key 'depht' (did you mean depth?)" in misspelt
+    as_text = await session_ros2.error(
+        "subscribe_topic", {"topic": CHATTER, "timeout": 1, "qos": {"depth": "5"}}
+    )
+    assert "qos.depth: expected an integer (got '5')" in as_text
+    await _still_works(session_ros2)
+
+
+async def test_a_number_given_as_text_is_refused_naming_it(session: Session, sim: SimulatedRobot) -> None:
+    """``"timeout": "30"`` is refused (strict types: a JSON client sends numbers as numbers), not taken as
+    30 s."""
+    text = await session.error(
+        "publish_service",
+        {"service": "/add_two_ints", "service_type": types_for(sim)["add_two_ints"], "timeout": "30"},
+    )
+    assert "timeout: expected a number (got '30')" in text
+    assert "/add_two_ints" not in sim.world.service_calls

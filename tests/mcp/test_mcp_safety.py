@@ -445,7 +445,7 @@ async def test_stop_robot_ends_a_running_stream_and_the_last_message_is_zero(
     assert len(sim.world.published[CMD_VEL]) < 200
     assert not streamed.is_error, text_of(streamed)
     assert streamed.structured_content is not None
-    assert streamed.structured_content["stopped_by_stop_robot"] is True
+    assert streamed.structured_content["ended_by_stop"] is True
     assert "stop_robot ended the stream" in text_of(streamed)
     assert stopped.structured_content is not None
     assert stopped.structured_content["streams_stopped"] == [CMD_VEL]

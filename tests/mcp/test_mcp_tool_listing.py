@@ -3,17 +3,24 @@
 from __future__ import annotations
 
 import json
+import re
 import socket
+from pathlib import Path
 from typing import Any
 
 import pytest
 from mcp_harness import guarded, open_session, text_of
 
 from mcp import Client
+from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES, CATALOGUE, ORIGINAL_TOOL_NAMES
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, load_config
-from rosbridge_mcp_server.server import build_server
+from rosbridge_mcp_server.server import INSTRUCTIONS, build_server
+from rosbridge_mcp_server.tools import TOOL_MODULES
 
+REPO = Path(__file__).resolve().parents[2]
+#: The parameters each tool has had since it came: a contract with hosts and models (a new tool's own test
+#: says its parameters; every tool listed is the catalogue's, in its order).
 EXPECTED_PARAMETERS = {
     "list_topics": ["filter", "limit", "offset"],
     "get_topic_info": ["topic"],
@@ -54,36 +61,19 @@ EXPECTED_PARAMETERS = {
     "move_arm": ["joints", "pose", "relative", "controller", "timeout"],
     "move_gripper": ["command", "position", "max_effort", "action", "timeout"],
 }
-READ_ONLY = {
-    "list_topics",
-    "get_topic_info",
-    "list_services",
-    "list_actions",
-    "subscribe_topic",
-    "get_image",
-    "describe_type",
-    "list_nodes",
-    "get_node_info",
-    "list_parameters",
-    "get_parameter",
-    "get_transform",
-    "read_logs",
-    "diagnose",
-    "view_map",
-    "view_scan",
-    "plot_topic",
-    "read_recording",
-    "view_arm",
-}
+#: The tools that only read, as the catalogue says.
+READ_ONLY = {entry.name for entry in CATALOGUE if not entry.acts}
 #: Acting tools that leave the robot as they found it when called twice with the same arguments.
 IDEMPOTENT_ACTS = {"set_parameter"}
-ORIGINAL = list(EXPECTED_PARAMETERS)[:8]
+ORIGINAL = list(ORIGINAL_TOOL_NAMES)
+#: The stop, served whenever a tool that acts is (its spec says ``stops``).
+STOPS = [module.SPEC.name for module in TOOL_MODULES if module.SPEC.stops]
 #: Budgets for the tools/list answer (compact JSON): what a host pays in context for every session, at most
 #: 1 KB per tool on average (it was 29 KB for the 18 tools before issue 16; since issue 37's namespace
 #: argument, the 1,024-byte KB of the original eight's budget).
-ALL_TOOLS_BUDGET = len(EXPECTED_PARAMETERS) * 1_024
+ALL_TOOLS_BUDGET = len(ALL_TOOL_NAMES) * 1_024
 #: The original eight come with the e-stop (stop_robot), which is listed wherever acting tools are.
-ORIGINAL_TOOLS_BUDGET = 9 * 1_024
+ORIGINAL_TOOLS_BUDGET = (len(ORIGINAL) + len(STOPS)) * 1_024
 
 
 def _closed_port_url() -> str:
@@ -97,9 +87,11 @@ async def test_every_tool_is_listed_with_annotations_and_described_parameters() 
     """Each tool keeps its original name and parameters, and has hints, an example and an output schema."""
     async with open_session(_closed_port_url(), wait=False) as session:
         listed = (await session.mcp.list_tools()).tools
-    assert [tool.name for tool in listed] == list(EXPECTED_PARAMETERS)
+    assert [tool.name for tool in listed] == list(ALL_TOOL_NAMES)
+    assert set(EXPECTED_PARAMETERS) <= set(ALL_TOOL_NAMES)
     for tool in listed:
-        assert list(tool.input_schema.get("properties", {})) == EXPECTED_PARAMETERS[tool.name], tool.name
+        if tool.name in EXPECTED_PARAMETERS:
+            assert list(tool.input_schema.get("properties", {})) == EXPECTED_PARAMETERS[tool.name], tool.name
         for name, schema in tool.input_schema.get("properties", {}).items():
             assert "e.g." in schema.get("description", ""), f"{tool.name}.{name} has no example"
         assert "Example" in tool.description or "call it with {}" in tool.description
@@ -168,7 +160,7 @@ async def test_with_no_bridge_the_server_starts_lists_tools_and_tools_fail_namin
     async with Client(build_server(guarded(ros, config), config), mode="legacy") as mcp:
         assert mcp.instructions is not None
         assert "list_topics" in mcp.instructions
-        assert len((await mcp.list_tools()).tools) == len(EXPECTED_PARAMETERS)
+        assert len((await mcp.list_tools()).tools) == len(ALL_TOOL_NAMES)
         result = await mcp.call_tool("list_topics", {})
         publish = await mcp.call_tool(
             "publish_topic",
@@ -199,12 +191,14 @@ async def test_arguments_that_do_not_fit_are_one_readable_line_per_argument() ->
 
 
 async def test_a_message_of_the_wrong_json_kind_is_one_line_naming_what_is_expected() -> None:
-    """A list where a message object belongs says an object (or JSON text) is expected, once."""
+    """A list where a message object belongs says an object is expected, once."""
     async with open_session(_closed_port_url(), wait=False) as session:
         text = await session.error(
             "publish_topic", {"topic": "/x", "message_type": "std_msgs/msg/Empty", "message": [1, 2]}
         )
-    assert text.startswith("Invalid arguments for publish_topic: message: expected a JSON object or a string")
+    assert text.startswith(
+        "Invalid arguments for publish_topic: message: expected a JSON object (got [1, 2])"
+    )
     assert text.count("message:") == 1
 
 
@@ -223,7 +217,7 @@ async def test_tools_original_lists_only_the_first_eight_within_budget() -> None
         async with Client(build_server(guarded(RosbridgeClient(url), config), config), mode="legacy") as mcp:
             tools = (await mcp.list_tools()).tools
         sizes[spec] = _listing_size(tools)
-        expected = [*ORIGINAL, "stop_robot"] if spec == "original" else list(EXPECTED_PARAMETERS)
+        expected = [*ORIGINAL, *STOPS] if spec == "original" else list(ALL_TOOL_NAMES)
         assert [tool.name for tool in tools] == expected
     assert sizes["original"] <= ORIGINAL_TOOLS_BUDGET
     assert sizes["all"] <= ALL_TOOLS_BUDGET
@@ -235,7 +229,7 @@ async def test_a_comma_list_of_groups_and_names_is_honoured_in_order() -> None:
     config = load_config({"ROSBRIDGE_MCP_TOOLS": "get_image, original"}, url=url)
     async with Client(build_server(guarded(RosbridgeClient(url), config), config), mode="legacy") as mcp:
         names = [tool.name for tool in (await mcp.list_tools()).tools]
-    assert names == [*ORIGINAL, "get_image", "stop_robot"]
+    assert names == [*ORIGINAL, "get_image", *STOPS]
 
 
 async def test_tools_watch_lists_every_reading_tool_of_the_graph_and_nothing_that_acts() -> None:
@@ -293,3 +287,30 @@ async def test_no_schema_property_has_a_title_that_restates_its_name() -> None:
     # Output schemas keep structure and types only (issue 16: tools/list is paid on every conversation).
     assert all(tool.output_schema and "title" not in json.dumps(tool.output_schema) for tool in listed)
     assert all(tool.output_schema and tool.output_schema.get("properties") for tool in listed)
+
+
+#: A row of a README's tools table: ``| `name` | ...``.
+_README_ROW = re.compile(r"^\| `([a-z_]+)` \|", re.MULTILINE)
+
+
+@pytest.mark.parametrize("readme", ["README.md", "README_ja.md"])
+def test_each_readme_has_a_row_for_every_tool_and_none_for_a_tool_that_is_gone(readme: str) -> None:
+    """Both READMEs' tools tables have one row per tool of the catalogue, in its order (and the edge's own
+    list_robots before show_console), so a tool added to the catalogue without its documentation fails."""
+    text = (REPO / readme).read_text()
+    table = text[: text.index("`show_console` |")]
+    rows = _README_ROW.findall(table)
+    assert [row for row in rows if row in ALL_TOOL_NAMES] == list(ALL_TOOL_NAMES)
+    assert set(rows) - set(ALL_TOOL_NAMES) == {"list_robots"}
+
+
+def test_the_instructions_name_every_tool_that_acts_the_stop_and_what_else_changes() -> None:
+    """The instructions are derived from the specs: every tool that acts on the robot is named as acting, the
+    stop as the stop, and record as changing the host's files rather than the robot."""
+    acting_sentence = INSTRUCTIONS.split(" act on the robot")[0]
+    acting = [m.SPEC.name for m in TOOL_MODULES if m.SPEC.acts_on is not None]
+    assert len(acting) >= 9
+    assert [name for name in acting if not re.search(rf"\b{name}\b", acting_sentence)] == []
+    assert "read_recording" not in acting_sentence
+    assert "(record changes files on the server's host)" in INSTRUCTIONS
+    assert f"5. {' and '.join(STOPS)} stops everything this server started" in INSTRUCTIONS

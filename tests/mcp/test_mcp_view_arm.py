@@ -237,3 +237,32 @@ async def test_a_hostile_description_is_refused_in_words(
         )
         assert words in message
         assert not (await session.call("list_topics")).is_error
+
+
+async def test_view_arm_on_ros1_reads_ros_controls_controllers_and_the_srdf_parameter(
+    make_sim: MakeSim,
+) -> None:
+    """ROS 1: list_controllers' running/stopped and claimed_resources read as ros2_control's words; the SRDF
+    from the /robot_description_semantic parameter (MoveIt's ROS 1 layout)."""
+    robot = await make_sim(dialect="ros1", world="arm")
+    robot.arm.controllers.controllers["gripper_controller"].active = False
+    async with open_session(robot.url) as session:
+        result = await session.ok("view_arm")
+    data: dict[str, Any] = result.structured_content or {}
+    controllers = {c["name"]: c for c in data["controllers"]}
+    assert controllers["arm_controller"]["state"] == "active"
+    assert controllers["arm_controller"]["joints"] == list(ARM_JOINTS)
+    assert controllers["gripper_controller"]["state"] == "inactive"
+    assert "ready" in {pose["name"] for pose in data["named_poses"]}
+
+
+async def test_on_the_plain_demo_view_arm_says_there_is_no_arm_and_where_one_is(make_sim: MakeSim) -> None:
+    """The turtle's description has no movable joint: one sentence, not "0 movable joints" and empty lists."""
+    turtle = await make_sim(dialect="ros2")
+    async with open_session(turtle.url) as session:
+        text = text_of(await session.ok("view_arm", {"timeout": 1.0}))
+    assert text.startswith("No arm on robot sim_turtle (")
+    assert "its robot description has no movable joint, so this robot publishes no arm" in text
+    assert "--demo --demo-world arm" in text
+    assert "0 movable joints" not in text
+    assert "Joints (" not in text

@@ -10,6 +10,8 @@ import ast
 import contextlib
 import contextvars
 import dataclasses
+import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +25,7 @@ from mcp.types import INVALID_REQUEST, CallToolResult, JSONRPCError, ListToolsRe
 
 import rosbridge_mcp_server
 from mcp import Client
-from rosbridge_mcp_server.server.sdk import answering_stream, task_session
+from rosbridge_mcp_server.server.sdk import answering_stream, stdio_streams, task_session
 from rosbridge_mcp_server.server.stdio import reply_for_unreadable
 
 SRC = Path(rosbridge_mcp_server.__file__).parent
@@ -116,6 +118,88 @@ async def test_the_sdk_stdio_transport_hands_on_unreadable_lines_as_exceptions_w
                 await read_stream.receive()  # stdin's end, after its two lines
         await write_stream.aclose()
         await read_stream.aclose()
+
+
+class _OnlyLines:
+    """stdin as ``sdk.LineSource`` lists it: ``async for`` and nothing else (no read, readline or fileno)."""
+
+    __slots__ = ("_lines",)
+
+    def __init__(self, lines: list[str]) -> None:
+        self._lines = iter(lines)
+
+    def __aiter__(self) -> _OnlyLines:
+        return self
+
+    async def __anext__(self) -> str:
+        await anyio.lowlevel.checkpoint()
+        try:
+            return next(self._lines)
+        except StopIteration:
+            raise StopAsyncIteration from None
+
+
+class _OnlyWrites:
+    """stdout as ``sdk.LineSink`` lists it: ``write`` and ``flush``, each call recorded in order."""
+
+    __slots__ = ("calls", "flushed")
+
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+        self.flushed = anyio.Event()
+
+    async def write(self, text: str, /) -> None:
+        self.calls.append(text)
+
+    async def flush(self) -> None:
+        self.calls.append("<flush>")
+        self.flushed.set()
+
+
+def _descriptor(fd: int) -> tuple[int, int]:
+    status = os.fstat(fd)
+    return status.st_dev, status.st_ino
+
+
+async def test_the_sdk_stdio_transport_keeps_to_the_listed_stream_contract() -> None:
+    """What ``sdk.stdio_streams`` lists: given streams that only iterate lines and only write and flush, the
+    SDK's transport reads a request from a line, writes each message as one ``write`` of its JSON and a
+    newline followed by one ``flush``, and leaves fd 0 and fd 1 where they were (``stdio.py`` diverts
+    them)."""
+    request = '{"jsonrpc": "2.0", "id": 1, "method": "ping"}\n'
+    out = _OnlyWrites()
+    before = (_descriptor(0), _descriptor(1))
+    async with stdio_streams(_OnlyLines([request]), out) as (read_stream, write_stream):
+        assert (_descriptor(0), _descriptor(1)) == before
+        with anyio.fail_after(5):
+            item = await read_stream.receive()
+            assert not isinstance(item, Exception)
+            assert item.message.id == 1
+            await write_stream.send(item)  # any message: the request itself, echoed
+            await out.flushed.wait()
+        await write_stream.aclose()
+        await read_stream.aclose()
+    assert (_descriptor(0), _descriptor(1)) == before
+    assert len(out.calls) == 2
+    written, flush = out.calls
+    assert flush == "<flush>"
+    assert written.endswith("\n")
+    assert written.count("\n") == 1
+    assert json.loads(written) == {"jsonrpc": "2.0", "id": 1, "method": "ping"}
+
+
+def test_no_module_but_sdk_py_reaches_the_stdio_transport() -> None:
+    """The one place our streams meet the SDK's stdio transport is ``sdk.stdio_streams``."""
+    users: list[str] = []
+    for path in sorted(SRC.rglob("*.py")):
+        if path == SRC / "server" / "sdk.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            imported = [node.module] if isinstance(node, ast.ImportFrom) else []
+            if isinstance(node, ast.Import):
+                imported = [alias.name for alias in node.names]
+            users += [str(path.relative_to(SRC)) for name in imported if name == "mcp.server.stdio"]
+    assert users == []
 
 
 def test_no_module_but_sdk_py_uses_an_sdk_private_name() -> None:

@@ -169,3 +169,38 @@ def test_named_poses_come_from_the_srdf_and_a_dtd_there_is_refused() -> None:
         parse_srdf(
             '<robot><group_state name="h" group="a"><joint name="j" value="nan"/></group_state></robot>'
         )
+
+
+def shaped(link: str, inner: str) -> str:
+    return f'<robot name="r"><link name="{link}">{inner}</link></robot>'
+
+
+@pytest.mark.parametrize(
+    ("inner", "radius"),
+    [
+        ('<collision><geometry><cylinder radius="0.04" length="0.3"/></geometry></collision>', 0.04),
+        ('<collision><geometry><sphere radius="0.07"/></geometry></collision>', 0.07),
+        # A box: its longest side along the link, half the diagonal of the other two.
+        ('<collision><geometry><box size="0.06 0.08 0.5"/></geometry></collision>', 0.05),
+        # Collision wins over visual; the larger of several shapes.
+        (
+            '<visual><geometry><sphere radius="0.5"/></geometry></visual>'
+            '<collision><geometry><sphere radius="0.02"/></geometry></collision>'
+            '<collision><geometry><cylinder radius="0.03" length="1"/></geometry></collision>',
+            0.03,
+        ),
+        ('<visual><geometry><cylinder radius="0.045" length="0.3"/></geometry></visual>', 0.045),
+        # Unknown sizes: a mesh, a bad number, a huge radius, nothing.
+        ('<collision><geometry><mesh filename="package://a/b.stl"/></geometry></collision>', None),
+        ('<collision><geometry><cylinder radius="nan" length="1"/></geometry></collision>', None),
+        ('<collision><geometry><sphere radius="-1"/></geometry></collision>', None),
+        ('<collision><geometry><sphere radius="9"/></geometry></collision>', None),
+        ('<collision><geometry><box size="0.1 0.1"/></geometry></collision>', None),
+        ("", None),
+    ],
+)
+def test_a_links_radius_comes_from_its_collision_else_visual_geometry(
+    inner: str, radius: float | None
+) -> None:
+    radii = parse_urdf(shaped("body", inner)).radii
+    assert radii.get("body") == (pytest.approx(radius) if radius is not None else None)

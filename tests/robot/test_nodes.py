@@ -15,6 +15,7 @@ from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.nodes import RECENT_SECONDS, UnknownNodeError, node_details, node_names
 from rosbridge_mcp_server.sim import SimulatedRobot
+from sim_transport import client_for
 
 DETAILS = "/rosapi/node_details"
 NODES = "/rosapi/nodes"
@@ -35,7 +36,7 @@ class Clock:
 async def jazzy() -> AsyncIterator[SimulatedRobot]:
     """A robot behind a bridge like rosbridge 2.1.0 on Jazzy (its calls in order, its rosapi 2.1.0)."""
     robot = SimulatedRobot(dialect="ros2", in_order=True, rosapi="2.1.0", action_step=0.05)
-    await robot.start()
+    await robot.start(listen=False)  # what rosapi is asked is counted by the robot: no port needed
     try:
         yield robot
     finally:
@@ -44,7 +45,7 @@ async def jazzy() -> AsyncIterator[SimulatedRobot]:
 
 @pytest.fixture
 async def client(jazzy: SimulatedRobot) -> AsyncIterator[RosbridgeClient]:
-    async with RosbridgeClient(jazzy.url) as client:
+    async with client_for(jazzy) as client:
         await client.wait_connected(5.0)
         assert not (await client.capabilities()).node_details_of_unknown_safe
         yield client

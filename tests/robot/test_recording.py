@@ -20,10 +20,17 @@ from rosbridge_mcp_server.robot.recording.writing import DISK_RESERVE
 from rosbridge_mcp_server.robot.seam import ALLOW_ALL
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.sim import SimulatedRobot
+from sim_transport import client_for
 
 
-async def _robot(url: str) -> tuple[RosbridgeClient, RobotSession]:
-    client = RosbridgeClient(url, connect_timeout=2.0, request_timeout=5.0)
+@pytest.fixture
+def sim_in_memory() -> bool:
+    """This module's robots are reached in memory (no port): what is recorded is what is tested."""
+    return True
+
+
+async def _robot(sim: SimulatedRobot) -> tuple[RosbridgeClient, RobotSession]:
+    client = client_for(sim, connect_timeout=2.0, request_timeout=5.0)
     await client.start()
     await client.wait_connected(5.0)
     return client, RobotSession(client, ALLOW_ALL)
@@ -34,7 +41,7 @@ async def test_a_nearly_full_disk_ends_the_recording_with_a_readable_file(
 ) -> None:
     """The free space falls under the reserve after a few messages: recording stops, the file is finished
     (summary and index written) and holds what was written."""
-    client, robot = await _robot(sim.url)
+    client, robot = await _robot(sim)
     try:
         free = [DISK_RESERVE * 4]
 
@@ -61,7 +68,7 @@ async def test_a_nearly_full_disk_ends_the_recording_with_a_readable_file(
 async def test_encoded_messages_decode_with_rosbags_in_both_dialects(
     sim: SimulatedRobot, tmp_path: Path
 ) -> None:
-    client, robot = await _robot(sim.url)
+    client, robot = await _robot(sim)
     try:
         topics = await choose_topics(robot.graph, ["/odom", "/camera/depth/image_raw", "/plan", "/map"])
         path, fd = create_recording(tmp_path, "all")
@@ -100,7 +107,7 @@ async def test_encoded_messages_decode_with_rosbags_in_both_dialects(
 
 
 async def test_a_glob_that_matches_nothing_names_the_topics(sim: SimulatedRobot) -> None:
-    client, robot = await _robot(sim.url)
+    client, robot = await _robot(sim)
     try:
         with pytest.raises(ValueError, match=r"matches no topic.*/turtle1/pose"):
             await choose_topics(robot.graph, ["/lidar*"])
@@ -144,7 +151,7 @@ async def test_a_recording_cut_off_without_its_summary_is_still_read(
     sim: SimulatedRobot, tmp_path: Path
 ) -> None:
     """A recorder killed mid-way leaves no summary section: the file is read through instead."""
-    client, robot = await _robot(sim.url)
+    client, robot = await _robot(sim)
     try:
         path, fd = create_recording(tmp_path, "whole")
         topics = await choose_topics(robot.graph, ["/turtle1/pose"])
@@ -168,4 +175,4 @@ async def test_a_recording_cut_off_without_its_summary_is_still_read(
     cut.write_bytes(data[:summary_start])
     summary = await asyncio.to_thread(summarize_recording, cut)
     assert not summary.indexed
-    assert summary.topics[0].timing.count == result.topics[0].timing.count >= 10
+    assert summary.topics[0].timing.count == result.topics[0].timing.count > 0

@@ -49,3 +49,19 @@ async def test_the_goals_of_a_session_are_its_client_s_and_no_one_else_s(sim_ros
         running.cancel()
         await asyncio.gather(running, return_exceptions=True)
         assert first.goals.running() == []
+
+
+async def test_the_log_is_kept_after_the_graph_first_fails_to_answer(sim_ros2: SimulatedRobot) -> None:
+    """A bridge that cannot list its topics at connect (rosapi busy or not up yet): the log keeper asks again
+    and then follows /rosout, instead of keeping no log until the next reconnect."""
+    topics = sim_ros2.graph.remove_service("/rosapi/topics")
+    assert topics is not None
+    robot = RobotSession(RosbridgeClient(sim_ros2.url, request_timeout=WAIT), ALLOW_ALL)
+    keeper = robot.keep_logs()
+    async with robot.client:
+        await robot.client.wait_connected(WAIT)
+        await asyncio.wait_for(keeper.looked.wait(), WAIT)
+        assert not keeper.ready.is_set()
+        sim_ros2.graph.add_service(topics)
+        await asyncio.wait_for(keeper.ready.wait(), WAIT)
+    assert keeper.source == "/rosout"

@@ -5,12 +5,15 @@ The attacks through an MCP session on the simulated arm are in ``tests/mcp/test_
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import pytest
 
-from arm_fixture import ARM_JOINTS, HOME, ROBOT, scene
+from arm_fixture import ARM_JOINTS, HOME, ROBOT, arm_urdf, scene
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.arm.kinematics import Chain, translation
+from rosbridge_mcp_server.robot.arm.urdf import parse_urdf
 from rosbridge_mcp_server.robot.arm_goals import carried_arm
 from rosbridge_mcp_server.robot.arm_scene import ArmScene
 from rosbridge_mcp_server.robot.seam import Act, nobody_to_ask
@@ -184,6 +187,43 @@ def test_a_path_into_a_keep_out_box_is_refused() -> None:
         refusal = arm_refusal(act, BOXES)
         assert refusal is not None, act
         assert "into the keep-out box person" in refusal.text
+
+
+def _highest_point(start: dict[str, float], end: dict[str, float]) -> float:
+    """The highest any link origin of the arm gets on the straight joint path from *start* to *end*, sampled
+    finer (0.1 % of the travel) than the judge samples it."""
+    chain = Chain(ROBOT, ROBOT.root, "tool0")
+    top = 0.0
+    for k in range(1001):
+        held = {name: a + (end[name] - a) * k / 1000 for name, a in start.items()}
+        top = max([top] + [translation(pose)[2] for _, pose in chain.poses(held)])
+    return top
+
+
+def test_a_link_whose_centre_line_misses_a_keep_out_box_by_1_cm_but_whose_body_enters_it_is_refused() -> None:
+    """Raising the forearm lifts the tool to its highest point; a ceiling 1 cm above that point's centre line
+    is entered by the link's body (the default link radius, 5 cm: this URDF gives no size)."""
+    target = {"elbow_joint": 0.2}
+    top = _highest_point(HOME, HOME | target)
+    ceiling = {"keep_out": {"ceiling": [[-2.0, -2.0, top + 0.01], [2.0, 2.0, 3.0]]}}
+    raise_forearm = trajectory(target, 20.0)
+    for act in acts(raise_forearm):
+        refusal = arm_refusal(act, parse_policy({"arm": ceiling}, where="t").arm)
+        assert refusal is not None, act
+        assert "into the keep-out box ceiling" in refusal.text
+    # Links as thin as their centre lines (link_radius 0): the same goal passes 1 cm under the ceiling.
+    thin = parse_policy({"arm": {**ceiling, "link_radius": 0.0}}, where="t").arm
+    assert arm_refusal(acts(raise_forearm)[0], thin) is None
+    # Sizes the URDF gives are used: a 5 mm-thin arm passes too, whatever link_radius says.
+    thin_links = parse_urdf(_with_radius(arm_urdf(), 0.005))
+    act = acts(raise_forearm, ArmScene(thin_links, dict(HOME)))[0]
+    assert arm_refusal(act, parse_policy({"arm": ceiling}, where="t").arm) is None
+
+
+def _with_radius(urdf: str, radius: float) -> str:
+    """*urdf* with every bare link given a sphere of *radius*."""
+    shape = f'<collision><geometry><sphere radius="{radius}"/></geometry></collision>'
+    return re.sub(r'<link name="([^"]+)"/>', lambda m: f'<link name="{m.group(1)}">{shape}</link>', urdf)
 
 
 def test_without_a_description_nothing_is_judged_unless_boxes_are_set() -> None:

@@ -250,6 +250,38 @@ def wire_imports(sources: Iterable[Source]) -> list[str]:
     ]
 
 
+#: The client's public face: what ``rosbridge_mcp_server.client`` exports. ``robot/`` imports these names and
+#: nothing else of the client, so the connections (``BridgeSession``, the lanes) never reach the domain.
+CLIENT_FACE = "rosbridge_mcp_server.client"
+#: Names that are connections, never part of that face.
+CONNECTIONS = frozenset({"Session", "BridgeSession", "GoalLane", "GoalLanes", "Connection", "LanePool"})
+
+
+def client_reaches(sources: Iterable[Source], face: Iterable[str]) -> list[str]:
+    """Imports by ``robot/`` of a client submodule, or of a name the client's face does not export."""
+    exported = frozenset(face)
+    found = []
+    for src in sources:
+        if src.top != "robot":
+            continue
+        for node in ast.walk(src.tree):
+            if not isinstance(node, ast.ImportFrom | ast.Import):
+                continue
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names if ours(alias.name) == "client"]
+                found += [f"{src.where}:{node.lineno} imports {name}" for name in names]
+            elif node.module is not None and ours(node.module) == "client":
+                if node.module != CLIENT_FACE:
+                    found.append(f"{src.where}:{node.lineno} imports {node.module}")
+                    continue
+                found += [
+                    f"{src.where}:{node.lineno} imports {CLIENT_FACE}.{alias.name}"
+                    for alias in node.names
+                    if alias.name not in exported
+                ]
+    return found
+
+
 def _frame_reads(tree: ast.Module) -> Iterator[tuple[int, str]]:
     for node in ast.walk(tree):
         words: list[ast.expr] = []
@@ -309,10 +341,45 @@ def test_the_domain_never_reads_a_rosbridge_frame() -> None:
     assert frame_reads(package_sources()) == []
 
 
+def test_the_domain_imports_only_the_clients_public_face() -> None:
+    """robot/ imports names ``rosbridge_mcp_server.client`` exports, no client submodule; the face exports no
+    connection (``BridgeSession``, the goal lanes): goals are asked of the client through ``GoalHandle``."""
+    from rosbridge_mcp_server import client
+
+    assert CONNECTIONS.isdisjoint(client.__all__)
+    assert client_reaches(package_sources(), client.__all__) == []
+
+
 def test_no_module_outside_the_client_asks_which_bridge_it_is() -> None:
     """Outside client/ (and wire/, sim/) what a bridge does is asked of ``BridgeCapabilities``, never read off
     what detection saw."""
     assert brand_questions(package_sources()) == []
+
+
+# --- the wire is sans-I/O; one module moves bytes ----------------------------------------------------------
+
+#: What a sans-I/O module never imports: a loop, a socket, a thread.
+IO_MODULES = frozenset({"asyncio", "websockets", "socket", "ssl", "selectors", "threading", "trio", "anyio"})
+#: The one module of the server that wires in ``websockets`` (the client's transport seam).
+WEBSOCKET_MODULE = "client/transport.py"
+
+
+def io_imports(sources: Iterable[Source]) -> list[str]:
+    """Imports of I/O in ``wire/``, and of ``websockets`` in the server outside its transport module."""
+    return [
+        f"{src.where}:{line} imports {module}"
+        for src in sources
+        if src.top != SIMULATOR
+        for line, module in imports(src)
+        if (src.top == "wire" and module.split(".")[0] in IO_MODULES)
+        or (module.split(".")[0] == "websockets" and src.where != WEBSOCKET_MODULE)
+    ]
+
+
+def test_the_wire_does_no_io_and_one_module_wires_in_websockets() -> None:
+    """wire/ (the conversation included) imports no loop, socket or thread; only ``client/transport.py``
+    imports ``websockets``."""
+    assert io_imports(package_sources()) == []
 
 
 # --- settings: one owner ---------------------------------------------------------------------------------
@@ -565,8 +632,33 @@ def test_the_wire_check_catches_an_import_above_the_client() -> None:
     ]
 
 
+def test_the_io_check_catches_a_loop_in_the_wire_and_a_second_websockets_user() -> None:
+    wire = source("wire/example.py", "import asyncio\nfrom websockets.asyncio.client import connect\n")
+    client = source("client/example.py", "from websockets.exceptions import ConnectionClosed\n")
+    transport = source(WEBSOCKET_MODULE, "from websockets.asyncio.client import connect\n")
+    assert io_imports([wire, client, transport]) == [
+        "wire/example.py:1 imports asyncio",
+        "wire/example.py:2 imports websockets.asyncio.client",
+        "client/example.py:1 imports websockets.exceptions",
+    ]
+
+
+def test_the_client_face_check_catches_a_submodule_and_an_unexported_name() -> None:
+    text = (
+        "from rosbridge_mcp_server.client.session import BridgeSession\n"
+        "from rosbridge_mcp_server.client import Dialect, GoalLane\n"
+        "import rosbridge_mcp_server.client.goals\n"
+    )
+    found = client_reaches([source("robot/example.py", text), source("tools/example.py", text)], ["Dialect"])
+    assert found == [
+        "robot/example.py:1 imports rosbridge_mcp_server.client.session",
+        "robot/example.py:2 imports rosbridge_mcp_server.client.GoalLane",
+        "robot/example.py:3 imports rosbridge_mcp_server.client.goals",
+    ]
+
+
 def test_the_frame_check_catches_a_frame_read() -> None:
-    """The check sees the reads robot/goals/ros2.py did before the typed events."""
+    """The check sees the reads robot/goals/ros2.py (now running.py) did before the typed events."""
     tree = ast.parse(
         'if op == "action_result":\n    x = frame.get("values")\nelif frame["op"] == "status": pass'
     )

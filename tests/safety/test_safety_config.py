@@ -130,7 +130,7 @@ def test_serving_plain_ws_to_another_machine_logs_one_warning(capsys: pytest.Cap
         input="",
         capture_output=True,
         text=True,
-        timeout=30,
+        timeout=90,
         check=False,
     )
     assert done.returncode == 0, done.stderr
@@ -145,7 +145,7 @@ def test_a_misspelt_policy_key_is_exit_2_with_one_line_naming_it(tmp_path: Path)
         [sys.executable, "-m", "rosbridge_mcp_server", "--policy", path],
         capture_output=True,
         text=True,
-        timeout=30,
+        timeout=90,
         check=False,
     )
     assert done.returncode == 2

@@ -1,5 +1,6 @@
-"""The arm world (ROS 2): its description, joint states, trajectory and gripper actions, controller manager
-and faults, as a ros2_control arm answers them (the ROS 2 lab's NOTES.md, "The arm"), seen on a raw socket."""
+"""The arm world (ROS 2; ROS 1 in ``test_arm_world_ros1.py``): its description, joint states, trajectory and
+gripper actions, controller manager and faults, as a ros2_control arm answers them (the ROS 2 lab's
+NOTES.md, "The arm"), seen on a raw socket."""
 
 from __future__ import annotations
 
@@ -166,6 +167,31 @@ async def test_the_trajectory_topic_moves_the_arm_too() -> None:
         )
 
 
+async def test_an_empty_trajectory_on_the_topic_is_ignored_as_ros2_control_ignores_it() -> None:
+    """ros2_controllers refuse an empty trajectory ("Empty trajectory received.") and keep going; a hold (one
+    point where the arm is, at 0 s, stamp 0) stops it where it is."""
+    async with SimulatedRobot(world="arm") as robot, await RawClient.open(robot.url) as client:
+        topic = "/arm_controller/joint_trajectory"
+        await client.send(
+            {"op": "publish", "topic": topic, "msg": goal([1.0, -0.3, 1.2, 0.0, 0.8, 0.0], 2)["trajectory"]}
+        )
+        await robot.wait_for(lambda _: robot.arm.positions["shoulder_pan_joint"] > 0.05, timeout=WAIT)
+        await client.send(
+            {"op": "publish", "topic": topic, "msg": {"joint_names": list(ARM_JOINTS), "points": []}}
+        )
+        await robot.wait_for(lambda _: len(robot.arm.received_trajectories) == 2, timeout=WAIT)
+        assert robot.arm.run is not None  # still going
+        here = [robot.arm.positions[name] for name in ARM_JOINTS]
+        hold = {
+            "header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
+            "joint_names": list(ARM_JOINTS),
+            "points": [{"positions": here, "time_from_start": {"sec": 0, "nanosec": 0}}],
+        }
+        await client.send({"op": "publish", "topic": topic, "msg": hold})
+        await robot.wait_for(lambda _: robot.arm.run is None, timeout=WAIT)
+    assert robot.arm.positions["shoulder_pan_joint"] == pytest.approx(here[0])
+
+
 async def test_the_gripper_closes_and_a_goal_beyond_its_travel_stalls() -> None:
     """Close to 0.01 m: SUCCEEDED, reached_goal; 0.1 m (beyond 0.04): stops at the limit, ABORTED, stalled."""
     async with SimulatedRobot(world="arm") as robot, await RawClient.open(robot.url) as client:
@@ -235,9 +261,3 @@ async def test_joint_states_stale_stops_joint_states() -> None:
         assert not [f for f in client.backlog if f.get("topic") == "/joint_states"]
         assert robot.arm.joint_state_count == 0
         assert "/joint_state_broadcaster" in robot.graph.publishers_of("/joint_states")
-
-
-def test_the_arm_world_is_ros2_only() -> None:
-    """ROS 1 has no simulated control_msgs: asking for it is refused in words."""
-    with pytest.raises(ValueError, match="needs dialect='ros2'"):
-        SimulatedRobot(dialect="ros1", world="arm")

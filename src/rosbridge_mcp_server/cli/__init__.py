@@ -1,5 +1,6 @@
 """The command line: argument parsing (:mod:`.arguments`), the subcommands (serve, ``check``) and their exit
-codes (:mod:`.commands`), the ``check`` diagnostic (:mod:`.check`), the demo's settings and its simulated
+codes (:mod:`.commands`), serving with the console beside it and the signals (:mod:`.serving`), logging to
+stderr (:mod:`.log_setup`), the ``check`` diagnostic (:mod:`.check`), the demo's settings and its simulated
 robot (:mod:`.demo`)."""
 
 from __future__ import annotations

@@ -44,6 +44,25 @@ def _console_flags(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser(command: str) -> _Parser:
+    """The parser of *command* (``serve``, ``check`` or ``console-url``); ``check`` takes every flag ``serve``
+    takes."""
+    parser = _command_parser(command)
+    if command == "console-url":
+        return parser
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    _connection_flags(parser)
+    _safety_flags(parser)
+    _server_flags(parser)
+    # `check` takes every flag the server takes, so a server's command line can be checked as it is: it
+    # checks each robot of a fleet, and refuses a transport or console setting the server would refuse.
+    _fleet_flags(parser)
+    _transport_flags(parser)
+    _console_flags(parser)
+    _demo_flags(parser)
+    return parser
+
+
+def _command_parser(command: str) -> _Parser:
     if command == "console-url":
         return _Parser(
             prog=f"{PROG} console-url",
@@ -75,7 +94,10 @@ def build_parser(command: str) -> _Parser:
                 "operator console running now."
             ),
         )
-    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    return parser
+
+
+def _connection_flags(parser: _Parser) -> None:
     connection = parser.add_argument_group("connection (flags win over the environment)")
     connection.add_argument("--host", help="rosbridge host (env ROSBRIDGE_HOST, default localhost)")
     connection.add_argument("--port", help="rosbridge port (env ROSBRIDGE_PORT, default 9090)")
@@ -101,6 +123,9 @@ def build_parser(command: str) -> _Parser:
             "(env ROSBRIDGE_HEADERS, one per line; prefer the environment for secrets)"
         ),
     )
+
+
+def _safety_flags(parser: _Parser) -> None:
     safety = parser.add_argument_group("safety")
     safety.add_argument(
         "--policy", help="safety policy TOML file (env ROSBRIDGE_MCP_POLICY); see docs/safety.md"
@@ -114,6 +139,9 @@ def build_parser(command: str) -> _Parser:
         "--audit-log",
         help="append one JSON line per acting call to this file (env ROSBRIDGE_MCP_AUDIT_LOG)",
     )
+
+
+def _server_flags(parser: _Parser) -> None:
     parser.add_argument(
         "--record-dir",
         help=(
@@ -138,11 +166,9 @@ def build_parser(command: str) -> _Parser:
         "--log-level",
         help=f"stderr log level: {', '.join(LOG_LEVELS)} (env ROSBRIDGE_MCP_LOG_LEVEL, default INFO)",
     )
-    # `check` takes every flag the server takes, so a server's command line can be checked as it is: it
-    # checks each robot of a fleet, and refuses a transport or console setting the server would refuse.
-    _fleet_flags(parser)
-    _transport_flags(parser)
-    _console_flags(parser)
+
+
+def _demo_flags(parser: _Parser) -> None:
     demo = parser.add_argument_group("demo")
     demo.add_argument(
         "--demo", action="store_true", help="start the built-in simulated robot and connect to it"
@@ -158,7 +184,7 @@ def build_parser(command: str) -> _Parser:
         choices=("turtle", "nav2", "arm"),
         default="turtle",
         help="the simulated robot: turtle (default), nav2 (a Nav2 mobile robot's graph, ~36 nodes) or arm "
-        "(ROS 2: the turtle with a 6-joint arm and a gripper)",
+        "(the turtle with a 6-joint arm and a gripper; ROS 1 too)",
     )
     demo.add_argument(
         "--demo-robots",
@@ -174,7 +200,6 @@ def build_parser(command: str) -> _Parser:
         help="with --demo-world nav2: break the robot on purpose (scan-stopped, tf-stale, driver-error, "
         "controller-inactive, log-errors, node-gone); with arm: arm-controller-inactive, joint-states-stale",
     )
-    return parser
 
 
 def _fleet_flags(parser: _Parser) -> None:

@@ -15,8 +15,6 @@ from fnmatch import fnmatchcase
 from typing import TextIO
 from urllib.parse import urlsplit
 
-from websockets.exceptions import WebSocketException
-
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.cli.demo import DemoSettings
 from rosbridge_mcp_server.client import BridgeCapabilities, Dialect, RosbridgeClient, RosInfo
@@ -136,7 +134,7 @@ async def _ordering_check(
             ssl_context=config.ssl_context(),
             headers=config.headers,
         )
-    except (RosbridgeError, TimeoutError, OSError, LookupError, ValueError, WebSocketException) as exc:
+    except (RosbridgeError, TimeoutError, OSError, LookupError, ValueError) as exc:
         return _NOTE, f"could not measure whether calls queue behind a slow one ({type(exc).__name__}: {exc})"
     session = client.session
     if session is not None:
@@ -259,18 +257,14 @@ def bridge_glob_lines(policy: Policy, ros_version: int) -> list[str]:
 async def run_check(config: Config, out: TextIO, *, demo: DemoSettings | None = None) -> int:
     """Run the diagnosis against ``config.url`` (the *demo* robot's, with ``--demo``), writing to ``out``; 0
     when healthy, 1 when not."""
-
-    def say(mark: str, text: str) -> None:
-        out.write(f"[{mark}] {text}\n")
-
     out.write(f"rosbridge-mcp-server {__version__}: checking {config.url}\n")
     if demo is not None:
-        say(_NOTE, f"demo mode: this is the built-in simulated ROS {demo.dialect[-1]} robot")
+        _say(out, _NOTE, f"demo mode: this is the built-in simulated ROS {demo.dialect[-1]} robot")
     for line in config.policy.describe():
-        say(_NOTE, f"safety {line.strip()}" if not line.startswith(" ") else f"  {line.strip()}")
+        _say(out, _NOTE, f"safety {line.strip()}" if not line.startswith(" ") else f"  {line.strip()}")
     warning = plain_text_warning(config.url)
     if warning:
-        say(_NOTE, warning)
+        _say(out, _NOTE, warning)
 
     async with RosbridgeClient(
         config.url,
@@ -283,50 +277,57 @@ async def run_check(config: Config, out: TextIO, *, demo: DemoSettings | None = 
             # ros_info() waits for the first connection attempt only, so a refused connection shows at once.
             info = await client.ros_info()
         except NotConnectedError as exc:
-            say(_BAD, f"cannot reach rosbridge at {config.url}: {exc.reason or 'no connection'}")
+            _say(out, _BAD, f"cannot reach rosbridge at {config.url}: {exc.reason or 'no connection'}")
             out.write("What to try:\n")
             for line in unreachable_advice(config.url, exc.reason):
                 out.write(f"  - {line}\n")
             return 1
-        say(_OK, f"rosbridge reachable at {config.url}")
+        _say(out, _OK, f"rosbridge reachable at {config.url}")
         distro = info.distro or ("unknown distro" if info.version == 2 else "Melodic/Noetic line")
-        say(_OK, f"ROS {info.version} ({distro})")
+        _say(out, _OK, f"ROS {info.version} ({distro})")
         out.writelines(bridge_glob_lines(config.policy, info.version))
+        return await _check_graph(config, client, info, out)
 
-        graph = RosGraph(client)
-        try:
-            topics, services, actions = await asyncio.gather(
-                graph.topics(), graph.service_names(), graph.action_names()
-            )
-        except RosbridgeError as exc:
-            say(_BAD, f"rosapi does not answer: {exc}")
-            return 1
-        say(_OK, "rosapi answers")
-        results = _features(info)
-        results.append(await _message_check(graph, info))
-        caps = await client.capabilities()
-        results += _bridge_lines(info, caps)
-        results.append(await _ordering_check(config, client, info, caps))
-        results.append(await _action_check(graph, info, actions))
-        for mark, text in results:
-            say(mark, text)
-        counts = [
-            _count(len(topics), "topic"),
-            _count(len(services), "service"),
-            _count(len(actions), "action server"),
-        ]
-        say(_OK, ", ".join(counts))
-        present = {"topics": [t.name for t in topics], "services": list(services), "actions": list(actions)}
-        warnings = policy_names_check(config.policy, present)
-        for mark, text in warnings:
-            say(mark, text)
-        if any(mark == _BAD for mark, _ in results):
-            out.write("Not healthy: see the FAIL lines above.\n")
-            return 1
-        if warnings:
-            out.write(
-                "Healthy: the MCP server can use this bridge, but see the warn lines about the policy.\n"
-            )
-        else:
-            out.write("Healthy: the MCP server can use this bridge.\n")
-        return 0
+
+def _say(out: TextIO, mark: str, text: str) -> None:
+    out.write(f"[{mark}] {text}\n")
+
+
+async def _check_graph(config: Config, client: RosbridgeClient, info: RosInfo, out: TextIO) -> int:
+    """What rosapi, the messages, the bridge, call ordering and actions say, the graph counted, and the
+    policy's names checked against it; the verdict last."""
+    graph = RosGraph(client)
+    try:
+        topics, services, actions = await asyncio.gather(
+            graph.topics(), graph.service_names(), graph.action_names()
+        )
+    except RosbridgeError as exc:
+        _say(out, _BAD, f"rosapi does not answer: {exc}")
+        return 1
+    _say(out, _OK, "rosapi answers")
+    results = _features(info)
+    results.append(await _message_check(graph, info))
+    caps = await client.capabilities()
+    results += _bridge_lines(info, caps)
+    results.append(await _ordering_check(config, client, info, caps))
+    results.append(await _action_check(graph, info, actions))
+    for mark, text in results:
+        _say(out, mark, text)
+    counts = [
+        _count(len(topics), "topic"),
+        _count(len(services), "service"),
+        _count(len(actions), "action server"),
+    ]
+    _say(out, _OK, ", ".join(counts))
+    present = {"topics": [t.name for t in topics], "services": list(services), "actions": list(actions)}
+    warnings = policy_names_check(config.policy, present)
+    for mark, text in warnings:
+        _say(out, mark, text)
+    if any(mark == _BAD for mark, _ in results):
+        out.write("Not healthy: see the FAIL lines above.\n")
+        return 1
+    if warnings:
+        out.write("Healthy: the MCP server can use this bridge, but see the warn lines about the policy.\n")
+    else:
+        out.write("Healthy: the MCP server can use this bridge.\n")
+    return 0

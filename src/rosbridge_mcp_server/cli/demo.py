@@ -45,10 +45,6 @@ def demo_settings(
         raise ConfigError(f"--demo-dialect must be ros1 or ros2, not {dialect!r}")
     if world not in ("turtle", "nav2", "arm"):
         raise ConfigError(f"--demo-world must be turtle, nav2 or arm, not {world!r}")
-    if world == "arm" and dialect != "ros2":
-        raise ConfigError(
-            "--demo-world arm needs --demo-dialect ros2 (ROS 1's control_msgs are not simulated)"
-        )
     if not 1 <= robots <= 100 or (robots > 1 and world != "nav2"):
         raise ConfigError(
             f"--demo-robots must be 1-100 and more than 1 needs --demo-world nav2, not {robots}"

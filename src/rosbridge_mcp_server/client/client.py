@@ -8,48 +8,59 @@ import itertools
 import logging
 import ssl
 from collections.abc import Callable, Coroutine, Sequence
-from dataclasses import dataclass
 from types import TracebackType
-from typing import Any, Final, Literal, Protocol, Self
+from typing import Any, Final, Protocol, Self
 
+from rosbridge_mcp_server.client.calls import BridgeCalls
 from rosbridge_mcp_server.client.capabilities import BridgeCapabilities
 from rosbridge_mcp_server.client.connection import Connection, open_connection
 from rosbridge_mcp_server.client.dialect import Dialect
-from rosbridge_mcp_server.client.goal_lane import GoalLane, GoalLanes
+from rosbridge_mcp_server.client.goal_lane import GoalLanes
+from rosbridge_mcp_server.client.goals import ClientGoals, GoalHandle
 from rosbridge_mcp_server.client.lanes import LanePool
-from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.client.reconnect import Attempts, reconnect_cap
-from rosbridge_mcp_server.client.services import bridge_timeout, call_on, call_on_lane
-from rosbridge_mcp_server.client.session import Session, open_session
-from rosbridge_mcp_server.client.subscription import Subscription
+from rosbridge_mcp_server.client.session import BridgeSession, open_session
 from rosbridge_mcp_server.client.topics import Topics
+from rosbridge_mcp_server.client.transport import Dial, websocket_dial
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
 
-__all__ = ["GoalCancel", "RosbridgeClient", "SessionWatcher"]
+__all__ = ["RosbridgeClient", "SessionFacts", "SessionWatcher"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
 #: How long :meth:`RosbridgeClient.close` waits for the bridge to handle what acted last.
 _CLOSE_HANDLED_SECONDS: Final = 1.0
-#: How long the ordering probe's service holds its caller: above a slow rosapi call on 2.1.0 (85-100 ms).
-_ORDERING_HOLD_SECONDS: Final = 0.5
-#: The ordering probe gives up after this long (then every call keeps a connection of its own).
-_ORDERING_LIMIT_SECONDS: Final = 5.0
+
+
+class SessionFacts(Protocol):
+    """What a session watcher reads of a new connection (the connection itself stays inside ``client/``)."""
+
+    @property
+    def number(self) -> int:
+        """1 for the first connection of a client, 2 after the first reconnect, ..."""
+        ...
+
+    @property
+    def info(self) -> RosInfo: ...
+    @property
+    def dialect(self) -> Dialect: ...
+    @property
+    def capabilities(self) -> BridgeCapabilities: ...
 
 
 class SessionWatcher(Protocol):
-    """Told when a session starts and before the client closes (``robot/goals`` cancels goals then)."""
+    """Told when a session starts and before the client closes (the log keeper, the service-type warm-up)."""
 
-    def session_started(self, session: Session) -> None:
+    def session_started(self, session: SessionFacts) -> None:
         """A new main connection is up (called in the connect loop: start tasks, do not wait)."""
 
-    async def client_closing(self, session: Session | None) -> None:
+    async def client_closing(self, session: SessionFacts | None) -> None:
         """``close()`` is about to close every socket; *session* is the open one, if any."""
 
 
-class RosbridgeClient:
+class RosbridgeClient(BridgeCalls):
     """An asyncio client for a rosbridge v2 server (ROS 1 0.11.x, ROS 2 Humble…Rolling).
 
     One main WebSocket is shared by every caller; a reader task routes frames and replies are
@@ -73,12 +84,13 @@ class RosbridgeClient:
         lane_idle_seconds: float = 30.0,
         ssl_context: ssl.SSLContext | None = None,
         headers: Sequence[tuple[str, str]] = (),
+        transport: Dial | None = None,
     ) -> None:
         self.url = url
         # For wss:// with a private CA or a client certificate, and for a bridge behind an authenticating
-        # proxy; every connection (main and lanes) opens with them.
-        self._ssl = ssl_context
-        self._headers = tuple(headers)
+        # proxy; every connection (main, lanes, the ordering probe's) opens with them. *transport* opens them
+        # another way (the simulated robot's in memory): then the URL only names the bridge.
+        self._transport = transport or websocket_dial(url, ssl_context=ssl_context, headers=headers)
         self.connect_timeout = connect_timeout
         self.request_timeout = request_timeout
         self.reconnect_min = reconnect_min
@@ -86,7 +98,7 @@ class RosbridgeClient:
         #: The backoff's ceiling for this bridge (short on this machine and the local network).
         self.reconnect_cap = max(reconnect_cap(url, self.reconnect_max), reconnect_min)
         self._ids = protocol.IdMinter()
-        self._session: Session | None = None
+        self._session: BridgeSession | None = None
         self._attempts = Attempts(reconnect_min, self.reconnect_cap)
         self._runner: asyncio.Task[None] | None = None
         self._closing = False
@@ -103,7 +115,8 @@ class RosbridgeClient:
         self._lanes = LanePool(
             self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
         )
-        self._goal_lanes = GoalLanes(url, self._open_lane, self._close_in_background)
+        #: The goals sent through this client: open ones, and those a drop cut off (:mod:`.goals`).
+        self.goals = ClientGoals(self, GoalLanes(url, self._open_lane, self._close_in_background))
         self.topics = Topics(url, self._ids, lambda: self.session, self._wait_session)
         self.connections_made = 0
         self._lane_numbers = itertools.count(1)
@@ -116,7 +129,7 @@ class RosbridgeClient:
         return self._session is not None and self._session.is_open
 
     @property
-    def session(self) -> Session | None:
+    def session(self) -> BridgeSession | None:
         """The current session (main connection and what is known of its bridge), or None while down."""
         session = self._session
         return session if session is not None and session.is_open else None
@@ -168,6 +181,7 @@ class RosbridgeClient:
         if self._measuring is not None:
             self._measuring.cancel()
         session = self.session
+        await self.goals.closing()
         for watcher in self._watchers:
             await watcher.client_closing(session)
         if session is not None and self.unhandled_acts:
@@ -180,7 +194,7 @@ class RosbridgeClient:
             self._runner.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._runner
-        lanes = self._lanes.close_all() + self._goal_lanes.take_all()
+        lanes = self._lanes.close_all() + self.goals.lanes.take_all()
         await asyncio.gather(*(lane.aclose() for lane in lanes), return_exceptions=True)
         main = self._session.connection if self._session is not None else None
         if main is not None:
@@ -240,25 +254,8 @@ class RosbridgeClient:
                 failures += 1
                 logger.warning("Setting up the connection to %s failed: %s", self.url, reason)
             else:
-                self._session = session
-                self._attempts.succeeded()
-                self.connections_made += 1
-                self._disconnected_event.clear()
-                self._connected_event.set()
-                attempt_done.set()
-                logger.info(
-                    "%s rosbridge at %s: %s",
-                    "Reconnected to" if session.number > 1 else "Connected to",
-                    self.url,
-                    session.info.describe(),
-                )
+                self._started(session, attempt_done)
                 failures = 0
-                if not session.ordering_known.is_set():
-                    self._measuring = self.run_in_background(
-                        self._measure_ordering(session), "measure call ordering"
-                    )
-                for watcher in self._watchers:
-                    watcher.session_started(session)
                 served = True
                 conn = session.connection
                 await conn.closed.wait()
@@ -272,6 +269,26 @@ class RosbridgeClient:
                 self._attempts.ended(attempt_done, served=served)
             await self._attempts.pause()
 
+    def _started(self, session: BridgeSession, attempt_done: asyncio.Event) -> None:
+        """*session* is up: it is the client's now; the goals and the watchers are told."""
+        self._session = session
+        self._attempts.succeeded()
+        self.connections_made += 1
+        self._disconnected_event.clear()
+        self._connected_event.set()
+        attempt_done.set()
+        logger.info(
+            "%s rosbridge at %s: %s",
+            "Reconnected to" if session.number > 1 else "Connected to",
+            self.url,
+            session.info.describe(),
+        )
+        if not session.ordering_known.is_set():
+            self._measuring = self.run_in_background(self._measure_ordering(session), "measure call ordering")
+        self.goals.session_started(session)
+        for watcher in self._watchers:
+            watcher.session_started(session)
+
     def _set_disconnected(self, conn: Connection | None, reason: str) -> None:
         if conn is not None and self._session is not None and self._session.connection is conn:
             self._session = None
@@ -282,7 +299,7 @@ class RosbridgeClient:
         self._lanes.drop_idle()
         self.topics.fail_all(ConnectionLostError(self.url, "messages"))
 
-    async def _wait_session(self, deadline: float | None = None) -> Session:
+    async def _wait_session(self, deadline: float | None = None) -> BridgeSession:
         """The open session, waiting only for a connection attempt under way (or prompted now).
 
         Between attempts, a call prompts one at once rather than failing until the backoff runs out; it waits
@@ -305,7 +322,7 @@ class RosbridgeClient:
             return session
         raise NotConnectedError(self.url, self._attempts.last_reason)
 
-    def require_session(self) -> Session:
+    def require_session(self) -> BridgeSession:
         """The open session, or :class:`NotConnectedError` at once (for sends that must never wait)."""
         session = self.session
         if session is None:
@@ -324,6 +341,34 @@ class RosbridgeClient:
         """What the bridge can do (decided once per connection, :mod:`.capabilities`)."""
         return (await self._wait_session()).capabilities
 
+    # --- goals -------------------------------------------------------------------------------------------
+
+    def new_goal_id(self, action: str) -> str:
+        """A goal id unique across every client of the bridge (rosbridge's goal table is process-wide)."""
+        return self._ids.goal_id(action)
+
+    async def start_goal(
+        self,
+        action: str,
+        action_type: str,
+        goal: dict[str, Any],
+        *,
+        goal_id: str | None = None,
+        timeout: float,
+        check: Callable[[], None] | None = None,
+    ) -> GoalHandle:
+        """Send *goal* to action *action* and return its :class:`GoalHandle` (``aclose()`` it after).
+
+        ROS 2: on a connection of its own, opened within *timeout*. ROS 1: over actionlib's topics, once the
+        action server's status came (within *timeout* and 3 s; else :class:`ActionError`). *action_type* as
+        the bridge spells it (``Dialect.action_type``). *check* (the send gate) is called right before the
+        goal goes out; what it raises ends the start unsent. :class:`NotConnectedError` at once when there is
+        no connection: a goal is never queued.
+        """
+        return await self.goals.start(
+            action, action_type, goal, goal_id=goal_id, timeout=timeout, check=check
+        )
+
     # --- background helpers -------------------------------------------------------------------------
 
     def run_in_background(self, coro: Coroutine[Any, Any, Any], name: str) -> asyncio.Task[Any]:
@@ -332,43 +377,6 @@ class RosbridgeClient:
         self._background.add(task)
         task.add_done_callback(self._background.discard)
         return task
-
-    async def _measure_ordering(self, session: Session) -> None:
-        """Measure whether the bridge holds a connection's calls up behind each other; lanes stay until then.
-
-        Only where the bridge's answers did not tell (see :mod:`.ordering`); a failed measurement keeps the
-        safe assumption, in order.
-        """
-        try:
-            queued = await call_ordering(
-                self.url,
-                session.info.version,
-                min(max(self.request_timeout, 2.0), _ORDERING_LIMIT_SECONDS),
-                hold=_ORDERING_HOLD_SECONDS,
-                ssl_context=self._ssl,
-                headers=self._headers,
-            )
-        except asyncio.CancelledError:
-            raise
-        except Exception as exc:
-            logger.info(
-                "Could not measure whether %s holds calls up behind each other (%s: %s); every call gets a "
-                "connection of its own",
-                self.url,
-                type(exc).__name__,
-                exc,
-            )
-        else:
-            session.lanes_by_default = queued
-            logger.info(
-                "rosbridge at %s %s",
-                self.url,
-                "holds a connection's calls up behind a slow one: every call gets a connection of its own"
-                if queued
-                else "runs a connection's calls side by side (measured)",
-            )
-        finally:
-            session.ordering_known.set()
 
     def _close_in_background(self, conn: Connection) -> None:
         self.run_in_background(conn.aclose(), f"close {conn.name}")
@@ -380,223 +388,5 @@ class RosbridgeClient:
         self, name: str, timeout: float, on_publish: Callable[[protocol.PublishEvent], None] | None = None
     ) -> Connection:
         return await open_connection(
-            self.url,
-            name,
-            timeout,
-            on_publish,
-            self.request_timeout,
-            ssl_context=self._ssl,
-            headers=self._headers,
+            self._transport, self.url, name, timeout, on_publish=on_publish, send_timeout=self.request_timeout
         )
-
-    # --- services -----------------------------------------------------------------------------------
-
-    async def call_service(
-        self,
-        service: str,
-        args: dict[str, Any] | list[Any] | None = None,
-        *,
-        timeout: float | None = None,
-        isolated: bool | None = None,
-        check: Callable[[], None] | None = None,
-    ) -> Any:
-        """Call a ROS service and return its response fields (``values``).
-
-        Time fields in *args* are respelled for ROS 1, which ignores ``sec``/``nanosec``. Runs on the shared
-        connection, or on a lane of its own when the bridge may handle one
-        connection in order, when another call is in flight on a ROS 1 connection (see
-        :attr:`RosInfo.one_call_per_connection`), or when *isolated* is true. Raises :class:`ServiceError`
-        with the bridge's text, :class:`RequestTimeoutError`, :class:`ConnectionLostError`,
-        :class:`NotConnectedError`. *check* (the send gate) is called right before the call's frame is
-        written, after a lane is opened for it; what it raises ends the call unsent.
-        """
-        t = self.request_timeout if timeout is None else timeout
-        session = self._session
-        if session is None or not session.is_open:
-            session = await self._wait_session(asyncio.get_running_loop().time() + t)
-        args = session.dialect.outgoing(args)
-        if isolated or (
-            isolated is None
-            and (session.lanes_by_default or (session.spread_calls and session.connection.pending))
-        ):
-            return await call_on_lane(
-                self._lanes,
-                self._ids,
-                service,
-                args,
-                t,
-                send_timeout=session.send_service_timeout,
-                check=check,
-            )
-        if check is not None:
-            check()
-        return await call_on(
-            session.connection,
-            self._ids,
-            service,
-            args,
-            t,
-            bridge_timeout=bridge_timeout(t) if session.send_service_timeout else None,
-        )
-
-    # --- topics -------------------------------------------------------------------------------------
-
-    async def advertise(
-        self, topic: str, msg_type: str, *, latch: bool = False, queue_size: int = 10
-    ) -> None:
-        """Advertise *topic* now (``publish`` does this on first use); restored after reconnects."""
-        await self.topics.advertise(
-            self.require_session(), topic, msg_type, latch=latch, queue_size=queue_size
-        )
-
-    async def publish(
-        self,
-        topic: str,
-        msg_type: str,
-        msg: dict[str, Any],
-        *,
-        latch: bool = False,
-        queue_size: int = 10,
-        session: Session | None = None,
-    ) -> None:
-        """Publish one message now, or raise :class:`NotConnectedError`. Never queued, never replayed.
-
-        The topic is advertised once (per topic and type) and the advertisement reused; time
-        fields are respelled for ROS 1, which ignores ``sec``/``nanosec``. With *session*, only on that
-        session (:class:`NotConnectedError` if it is gone).
-        """
-        await self.topics.publish(
-            session or self.require_session(), topic, msg_type, msg, latch=latch, queue_size=queue_size
-        )
-        self.unhandled_acts = True
-
-    async def unadvertise(self, topic: str) -> None:
-        """Stop advertising *topic* (our advertisement only)."""
-        await self.topics.unadvertise(topic)
-
-    def subscribe(
-        self,
-        topic: str,
-        msg_type: str | None = None,
-        *,
-        throttle_rate: int = 0,
-        queue_length: int = 0,
-        max_queue: int = 1000,
-        qos: dict[str, Any] | None = None,
-        compression: Literal["cbor"] | None = None,
-    ) -> Subscription:
-        """A :class:`Subscription` (``async with client.subscribe("/chatter") as sub: ...``).
-
-        ``qos`` is sent as the ROS 2 ``qos`` object (read by rosbridge 2.0.7 / 2.7.0 / 3.3.0 and later).
-        ``compression="cbor"`` asks for binary CBOR frames: numeric arrays then arrive as ``array.array``
-        and ``uint8[]`` as bytes (far faster for large maps); a bridge that ignores it sends JSON.
-        """
-        return self.topics.subscribe(
-            topic,
-            msg_type,
-            throttle_rate=throttle_rate,
-            queue_length=queue_length,
-            max_queue=max_queue,
-            qos=qos,
-            compression=compression,
-        )
-
-    async def ping(self, timeout: float | None = None) -> float:
-        """Round-trip a WebSocket ping on the main connection; returns the seconds it took.
-
-        Proves the bridge reads the connection now: a frozen bridge, or a link that died without a close,
-        still takes frames into the socket buffer and would act on them whenever it wakes up.
-        :class:`RequestTimeoutError` if no pong within *timeout* (default ``request_timeout``),
-        :class:`NotConnectedError` when there is no connection.
-        """
-        session = self.require_session()
-        return await session.connection.ping(self.request_timeout if timeout is None else timeout)
-
-    async def handled(self, timeout: float) -> bool:
-        """Whether the bridge has handled everything sent so far on the main connection (one call's round
-        trip, within *timeout*); ``False`` when there is no connection or no answer in time."""
-        session = self.session
-        return session is not None and await session.handled(timeout)
-
-    # --- action goals: ids, lanes and cancels (what a goal means is robot/goals' job) ----------------
-
-    def new_goal_id(self, action: str) -> str:
-        """A goal id unique across every client of the bridge (rosbridge's goal table is process-wide)."""
-        return self._ids.goal_id(action)
-
-    async def open_goal_lane(self, action: str, goal_id: str, what: str, timeout: float) -> GoalLane:
-        """A connection of its own for goal *goal_id* of *action*, opened within *timeout*; ``lane.close()``
-        after. :class:`NotConnectedError` at once when there is no session (a goal is never queued)."""
-        session = self.require_session()
-        return await self._goal_lanes.open(action, goal_id, what, session.capabilities, timeout)
-
-    async def cancel_goal(self, action: str, goal_id: str, lane: GoalLane | None = None) -> GoalCancel:
-        """Send goal *goal_id*'s cancel on every connection a bridge may need it on; what reached it.
-
-        The main connection first: on a bridge whose goals hold their connection up (2.1.0's and Humble's
-        defaults) the goal's own *lane* reads its copy only after the goal ended. The lane's copy is for a
-        bridge that lets only the starting connection cancel (rosbridge-server-rs, which refuses the main
-        connection's copy with an error ``status``: expected here, so not logged). Each bridge acts on one of
-        the two and ignores the other.
-        """
-        session = self.session
-        if session is not None and session.capabilities.status_replies:
-            conn = session.connection
-            conn.expect(goal_id, f"the refusal of goal {goal_id}'s cancel", _REFUSAL_SECONDS)
-            asyncio.get_running_loop().call_later(_REFUSAL_SECONDS, conn.forget, goal_id)
-        on_main = session is not None and await session.try_cancel_goal(action, goal_id)
-        if on_main:
-            self.unhandled_acts = True
-        on_lane = lane is not None and await lane.try_cancel()
-        caps = (
-            lane.capabilities if lane is not None else session.capabilities if session is not None else None
-        )
-        reaches = caps is not None and (
-            (on_main and not caps.cancel_by_owner_only) or (on_lane and not caps.goals_hold_connection)
-        )
-        return GoalCancel(on_main, on_lane, reaches)
-
-    async def cancel_goal_heard(self, action: str, goal_id: str, timeout: float) -> str | None:
-        """Cancel goal *goal_id* (another client's, by its rosbridge id) on the main connection and tell
-        whether the bridge refused it.
-
-        Returns the bridge's refusal (an error ``status`` naming the goal: rosbridge-server-rs answers
-        "unknown active goal" for a goal another connection started) if it came before the answer to a call
-        sent after the cancel, else ``None``: rosbridge_suite cancels silently, and ignores an id it does
-        not know just as silently. A refusal is also learnt: the session's capabilities then say
-        ``cancel_by_owner_only``.
-        """
-        session = self.require_session()
-        conn = session.connection
-        heard = conn.expect(goal_id, f"a refusal of the cancel of goal {goal_id}", timeout)
-        try:
-            await session.cancel_goal(action, goal_id)
-            self.unhandled_acts = True
-            if not heard.done():
-                await session.handled(timeout)
-            if not heard.done() or heard.cancelled() or heard.exception() is not None:
-                return None
-            frame = heard.result()
-        finally:
-            conn.forget(goal_id)
-        session.learn_cancel_by_owner_only()
-        return str(frame.get("msg") or "the bridge refused the cancel")
-
-
-@dataclass(frozen=True, slots=True)
-class GoalCancel:
-    """Where a goal's cancel went: on the main connection, on the goal's own lane, and whether one of them
-    surely reaches the goal on this bridge (else the goal is cancelled again once a connection is back)."""
-
-    on_main: bool
-    on_lane: bool
-    reaches: bool
-
-    @property
-    def sent(self) -> bool:
-        """The cancel went out on at least one connection."""
-        return self.on_main or self.on_lane
-
-
-#: How long the main connection takes a refusal of our own goal's cancel as expected (not logged).
-_REFUSAL_SECONDS: Final = 5.0

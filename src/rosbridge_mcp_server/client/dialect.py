@@ -1,7 +1,7 @@
 """The bridge's dialect as one object per session: what ``robot/`` asks instead of knowing ROS 1 from ROS 2.
 
 ``robot/`` works with type names as people write them and with ROS 2's time fields; a :class:`Dialect`,
-built once per :class:`~rosbridge_mcp_server.client.session.Session` from its
+built once per :class:`~rosbridge_mcp_server.client.session.BridgeSession` from its
 :class:`~rosbridge_mcp_server.wire.dialect.RosInfo`, spells them for the bridge behind that session. The
 client adapts an outgoing message once, on the way out (``publish``, ``call_service``); nothing above it
 converts time fields. The rules themselves are pure and live in :mod:`rosbridge_mcp_server.wire.dialect`.

@@ -2,9 +2,9 @@
 
 rosbridge 2.0.x (Humble) runs a goal inside the connection's one incoming thread until the goal ends, so a
 goal on the shared connection would block every other tool and its own cancel; a lane of its own keeps the
-main connection free. The lane hands its goal's frames on as typed events (``wire/goals.py``); which
-connections a cancel goes on is :meth:`RosbridgeClient.cancel_goal`'s. What a goal means (timeouts, what a
-drop leaves running) is ``robot/goals``.
+main connection free. The lane hands its goal's frames on as typed events (``wire/goals.py``) to the goal's
+:class:`~.goals.GoalHandle`, which sends its cancels. What a goal means (timeouts, its record) is
+``robot/goals``.
 """
 
 from __future__ import annotations
@@ -14,7 +14,6 @@ from typing import Any
 
 from rosbridge_mcp_server.client.capabilities import BridgeCapabilities
 from rosbridge_mcp_server.client.connection import Connection, GoalStream
-from rosbridge_mcp_server.client.session import send_quietly
 from rosbridge_mcp_server.errors import NotConnectedError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.goals import GoalEvent, goal_event
@@ -51,10 +50,6 @@ class GoalLane:
         await self.connection.send(
             protocol.send_action_goal(self.action, action_type, goal, id=self.goal_id, feedback=True)
         )
-
-    async def try_cancel(self) -> bool:
-        """Send the goal's cancel on the lane if it is open; False when it could not be sent."""
-        return await send_quietly(self.connection, protocol.cancel_action_goal(self.action, id=self.goal_id))
 
     async def next(self) -> GoalEvent:
         """The next thing the bridge said of the goal: feedback, its end, or a refusal (typed events).

@@ -7,23 +7,23 @@ graph. So it is measured: one connection offers a short-lived ``std_srvs/Trigger
 second calls it and then ``/rosapi/get_time`` (no other rosapi call); the service answers only after
 ``get_time`` did, or after *hold* seconds. When ``get_time`` had to wait, the bridge handles a connection's
 calls in order. The service is taken away before its connection closes (rosbridge keeps a departed client's
-services).
+services). Both connections are the client's own kind (:class:`Connection`, opened through the client's
+transport), so replies are matched by id as everywhere else.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import ssl
 import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, Final
 
-from websockets.asyncio.client import ClientConnection, connect
-from websockets.exceptions import WebSocketException
-
+from rosbridge_mcp_server.client.connection import Connection, GoalStream, open_connection
 from rosbridge_mcp_server.client.dialect import Dialect
+from rosbridge_mcp_server.client.transport import Dial, websocket_dial
+from rosbridge_mcp_server.errors import RosbridgeError
 
 __all__ = ["PROBE_SERVICE_PREFIX", "call_ordering"]
 
@@ -37,10 +37,11 @@ _UNADVERTISE_SECONDS: Final = 3.0
 #: The same wait while the probe is being cancelled (the client is closing): a bridge that answers at all
 #: answers within milliseconds, and close() must not wait long on one that does not.
 _CANCELLED_UNADVERTISE_SECONDS: Final = 1.0
-#: At most this many unawaited frames are kept per connection (the bridge may publish; ours are few).
-_KEPT_FRAMES: Final = 64
 #: How often the probe calls its service before giving up (the bridge may not reach it at once).
 _CALL_ATTEMPTS: Final = 20
+_GET_TIME: Final = "/rosapi/get_time"
+#: The probe's replies wait no deadline of their own: the whole probe's bounds them.
+_UNBOUNDED: Final = 3600.0
 
 
 async def call_ordering(
@@ -51,101 +52,99 @@ async def call_ordering(
     hold: float = HOLD_SECONDS,
     ssl_context: ssl.SSLContext | None = None,
     headers: Sequence[tuple[str, str]] = (),
+    dial: Dial | None = None,
 ) -> bool:
     """True when a slow call held up the next one on its connection (see the module's docstring).
 
-    Raises :class:`WebSocketException`, ``TimeoutError`` or ``OSError`` when the probe cannot run (no
-    ``std_srvs`` on the robot, a bridge that cannot host services, no rosapi).
+    The connections open through *dial* (the client's transport), else as WebSockets to *url* with
+    ``ssl_context`` and ``headers``. Raises :class:`RosbridgeError`, ``TimeoutError`` or ``LookupError`` when
+    the probe cannot run (no ``std_srvs`` on the robot, a bridge that cannot host services, no rosapi).
     """
     name = f"{PROBE_SERVICE_PREFIX}{uuid.uuid4().hex[:8]}"
     srv_type = Dialect.for_version(version).service_type("std_srvs/Trigger")
-    options: dict[str, Any] = {"compression": None, "proxy": None, "open_timeout": timeout}
-    if ssl_context is not None:
-        options["ssl"] = ssl_context
-    if headers:
-        options["additional_headers"] = list(headers)
-    loop = asyncio.get_running_loop()
-    deadline = loop.time() + timeout
+    dial = dial or websocket_dial(url, ssl_context=ssl_context, headers=headers)
+    deadline = asyncio.get_running_loop().time() + timeout
     failure: BaseException | None = None
-    sockets: list[ClientConnection] = []
+    connections: list[Connection] = []
     try:
         async with asyncio.timeout_at(deadline):
-            sockets.append(await connect(url, **options))
-            sockets.append(await connect(url, **options))
-            host, caller = _Frames(sockets[0]), _Frames(sockets[1])
-            # Failures are caught inside, so both sockets close politely (a socket dropped without a close
-            # frame may be logged by the bridge as an error of its own).
+            connections.append(await open_connection(dial, url, "ordering probe host", timeout))
+            connections.append(await open_connection(dial, url, "ordering probe caller", timeout))
+            host, caller = connections
+            # Failures are caught inside, so both connections close politely (a socket dropped without a
+            # close frame may be logged by the bridge as an error of its own).
             try:
+                calls = host.host(name, f"calls of {name}")
                 await host.send({"op": "advertise_service", "service": name, "type": srv_type})
                 try:
                     async with asyncio.timeout_at(deadline - _UNADVERTISE_SECONDS / 3):
-                        queued = await _measure(host, caller, name, hold)
+                        queued = await _measure(host, caller, calls, name, hold)
                 finally:
                     await _unadvertise(host, name)
-            except (TimeoutError, LookupError, ValueError, WebSocketException) as exc:
+            except (TimeoutError, LookupError, ValueError, RosbridgeError) as exc:
                 failure = exc
-            await asyncio.gather(*(ws.close() for ws in sockets))
+            await asyncio.gather(*(conn.aclose() for conn in connections))
     except BaseException:
-        # Cancelled (the client is closing) or past the deadline: the sockets go at once. A closing handshake
-        # waits for the bridge's close frame, which a bridge that stopped reading (or a socket whose unread
-        # frames paused reading) never delivers: close() would wait websockets' close_timeout, 10 s.
-        for ws in sockets:
-            ws.transport.abort()
+        # Cancelled (the client is closing) or past the deadline: the connections go at once. A closing
+        # handshake waits for the bridge's close frame, which a bridge that stopped reading never delivers.
+        for conn in connections:
+            conn.transport.abort()
         raise
     if failure is not None:
         raise failure
     return queued
 
 
-async def _measure(host: _Frames, caller: _Frames, name: str, hold: float) -> bool:
+async def _measure(host: Connection, caller: Connection, calls: GoalStream, name: str, hold: float) -> bool:
     # A reply on the host's own connection says its advertisement was handled (both lines handle a
     # connection's ops in turn); the caller may still find the service missing for a moment: then again.
-    await host.send({"op": "call_service", "id": "advertised", "service": "/rosapi/get_time"})
-    await host.next(_with_id("advertised"))
+    barrier = _call("advertised", _GET_TIME)
+    await host.request("advertised", barrier, "the advertisement's barrier", _UNBOUNDED)
     for attempt in range(_CALL_ATTEMPTS):
         slow, fast = f"slow-{attempt}", f"fast-{attempt}"
-        for rid, service in ((slow, name), (fast, "/rosapi/get_time")):
-            await caller.send({"op": "call_service", "id": rid, "service": service})
-        hosted = asyncio.ensure_future(host.next(lambda f: f.get("op") == "call_service"))
-        refused = asyncio.ensure_future(caller.next(_with_id(slow)))
+        slow_reply = caller.expect(slow, f"the probe's call of {name}", _UNBOUNDED)
+        fast_reply = caller.expect(fast, "the probe's get_time", _UNBOUNDED)
         try:
-            done, _ = await asyncio.wait({hosted, refused}, return_when=asyncio.FIRST_COMPLETED)
-        finally:
-            # Cancelling recv() loses no frame (websockets keeps it for the next recv()). Also when the probe
-            # itself is cancelled: a reader left behind would make the unadvertise's wait fail at once (two
-            # recv() at a time), and the service would outlive the probe.
-            for task in (hosted, refused):
-                if not task.done():
-                    task.cancel()
+            await caller.send(_call(slow, name))
+            await caller.send(_call(fast, _GET_TIME))
+            hosted = asyncio.ensure_future(calls.next())
+            either: set[asyncio.Future[Any]] = {hosted, slow_reply}
+            try:
+                done, _ = await asyncio.wait(either, return_when=asyncio.FIRST_COMPLETED)
+            finally:
+                if not hosted.done():
+                    hosted.cancel()
                     with contextlib.suppress(asyncio.CancelledError):
-                        await task
-        if hosted in done:
-            request = hosted.result()
-            break
-        await caller.next(_with_id(fast))
+                        await hosted
+            if hosted in done:
+                return await _answer(host, name, hosted.result()[1], (slow_reply, fast_reply), hold)
+            await fast_reply
+        finally:
+            caller.forget(slow)
+            caller.forget(fast)
         await asyncio.sleep(0.05)
-    else:
-        raise LookupError(f"the bridge never reached the probe's service {name}")
-    try:
-        async with asyncio.timeout(hold):
-            await caller.next(_with_id(fast))
-        queued = False
-    except TimeoutError:
-        queued = True
+    raise LookupError(f"the bridge never reached the probe's service {name}")
+
+
+async def _answer(
+    host: Connection,
+    name: str,
+    request: dict[str, Any],
+    replies: tuple[asyncio.Future[dict[str, Any]], asyncio.Future[dict[str, Any]]],
+    hold: float,
+) -> bool:
+    """The service holds its caller: did ``get_time`` answer meanwhile? Then answer the held call."""
+    slow_reply, fast_reply = replies
+    done, _ = await asyncio.wait({fast_reply}, timeout=hold)
+    queued = not done
     answer = {"success": True, "message": "rosbridge-mcp-server probe"}
-    response = {
-        "op": "service_response",
-        "id": request.get("id"),
-        "service": name,
-        "result": True,
-        "values": answer,
-    }
-    await host.send(response)
-    await caller.next(_with_id(slow))
+    response = {"op": "service_response", "id": request.get("id"), "service": name, "result": True}
+    await host.send({**response, "values": answer})
+    await slow_reply
     return queued
 
 
-async def _unadvertise(host: _Frames, name: str) -> None:
+async def _unadvertise(host: Connection, name: str) -> None:
     """Take the probe's service away for good before the connection closes.
 
     Both rosbridge 0.11.17 and 2.1.0 keep a client's advertised services after it disconnects (a call to one
@@ -157,41 +156,14 @@ async def _unadvertise(host: _Frames, name: str) -> None:
     """
     task = asyncio.current_task()
     cancelled = task is not None and task.cancelling() > 0
+    wait = _CANCELLED_UNADVERTISE_SECONDS if cancelled else _UNADVERTISE_SECONDS
     try:
         await host.send({"op": "unadvertise_service", "service": name})
-        barrier = {"op": "call_service", "id": "unadvertised", "service": "/rosapi/get_time"}
-        await host.send(barrier)
-        async with asyncio.timeout(_CANCELLED_UNADVERTISE_SECONDS if cancelled else _UNADVERTISE_SECONDS):
-            await host.next(_with_id("unadvertised"))
-    except (TimeoutError, ValueError, WebSocketException, OSError):
+        barrier = _call("unadvertised", _GET_TIME)
+        await host.request("unadvertised", barrier, "the unadvertise's barrier", wait)
+    except (TimeoutError, RosbridgeError):
         pass  # the probe's own outcome (or failure, or cancellation) is what matters
 
 
-class _Frames:
-    """One probe socket: frames read while waiting for another one are kept for a later wait, not lost."""
-
-    def __init__(self, ws: ClientConnection) -> None:
-        self.ws = ws
-        self._kept: list[dict[str, Any]] = []
-
-    async def send(self, op: dict[str, Any]) -> None:
-        await self.ws.send(json.dumps(op))
-
-    async def next(self, wanted: Callable[[dict[str, Any]], bool]) -> dict[str, Any]:
-        """The next frame that ``wanted`` accepts."""
-        for index, frame in enumerate(self._kept):
-            if wanted(frame):
-                del self._kept[index]
-                return frame
-        while True:
-            frame = json.loads(await self.ws.recv())
-            if not isinstance(frame, dict):
-                continue
-            if wanted(frame):
-                return frame
-            if len(self._kept) < _KEPT_FRAMES:
-                self._kept.append(frame)
-
-
-def _with_id(rid: str) -> Callable[[dict[str, Any]], bool]:
-    return lambda frame: frame.get("id") == rid
+def _call(rid: str, service: str) -> dict[str, Any]:
+    return {"op": "call_service", "id": rid, "service": service}

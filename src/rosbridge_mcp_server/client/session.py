@@ -1,5 +1,9 @@
 """One session with the bridge: the main connection and what was learnt on it, replaced whole on a reconnect.
 
+Named ``BridgeSession`` (the client's, one per connection) to tell it from ``robot/session.py``'s
+``RobotSession`` (one robot as this server drives it, for the server's life) and the MCP session (one
+assistant's conversation with the server). It stays inside ``client/``: nothing above imports it.
+
 Whatever depends on the bridge behind the connection (its ROS version and distro, whether it may handle
 a connection in order, whether it honours a service call's ``timeout``) lives here, so a new connection
 can never inherit a fact about the old one: the client swaps the whole object.
@@ -22,14 +26,14 @@ from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.dialect import RosInfo
 
-__all__ = ["Session", "open_session", "send_quietly"]
+__all__ = ["BridgeSession", "open_session", "send_quietly"]
 
 logger = logging.getLogger("rosbridge_mcp_server.client")
 
 _barrier_ids = itertools.count(1)
 
 
-class Session:
+class BridgeSession:
     """The main connection to the bridge, with the bridge's :class:`RosInfo` detected on it."""
 
     __slots__ = (
@@ -85,14 +89,6 @@ class Session:
         """Send one op if the connection is open; False (and nothing raised) when it could not be sent."""
         return await send_quietly(self.connection, op)
 
-    async def cancel_goal(self, action: str, goal_id: str) -> None:
-        """Send the cancel of goal *goal_id* of *action*; :class:`NotConnectedError` once it is closed."""
-        await self.connection.send(protocol.cancel_action_goal(action, id=goal_id))
-
-    async def try_cancel_goal(self, action: str, goal_id: str) -> bool:
-        """Send the cancel of goal *goal_id* of *action* if the connection is open; False if it could not."""
-        return await send_quietly(self.connection, protocol.cancel_action_goal(action, id=goal_id))
-
     async def handled(self, timeout: float) -> bool:
         """Whether the bridge has handled (not only read) everything sent on this session so far.
 
@@ -143,8 +139,8 @@ async def open_session(
     *,
     number: int,
     detect_timeout: float,
-    prepare: Callable[[Session], Awaitable[None]],
-) -> Session:
+    prepare: Callable[[BridgeSession], Awaitable[None]],
+) -> BridgeSession:
     """Connect, learn what the bridge is, and let *prepare* restore what is still wanted on the new session.
 
     On any failure, cancellation included, the half-set-up socket is closed here: it is nobody's session yet,
@@ -153,7 +149,7 @@ async def open_session(
     conn = await connect()
     try:
         info = await detect(conn, ids, url, detect_timeout)
-        session = Session(conn, info, number)
+        session = BridgeSession(conn, info, number)
         await prepare(session)
     except BaseException:
         await conn.aclose()

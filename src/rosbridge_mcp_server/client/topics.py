@@ -13,7 +13,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from rosbridge_mcp_server.client.session import Session, send_quietly
+from rosbridge_mcp_server.client.session import BridgeSession, send_quietly
 from rosbridge_mcp_server.client.subscription import Subscription
 from rosbridge_mcp_server.errors import NotSentError
 from rosbridge_mcp_server.wire import protocol
@@ -42,8 +42,8 @@ class Topics:
         self,
         url: str,
         ids: protocol.IdMinter,
-        current: Callable[[], Session | None],
-        wait_for_session: Callable[[], Awaitable[Session]],
+        current: Callable[[], BridgeSession | None],
+        wait_for_session: Callable[[], Awaitable[BridgeSession]],
     ) -> None:
         self.url = url
         self._ids = ids
@@ -57,7 +57,7 @@ class Topics:
     # --- publishing -------------------------------------------------------------------------------------
 
     async def advertise(
-        self, session: Session, topic: str, msg_type: str, *, latch: bool, queue_size: int
+        self, session: BridgeSession, topic: str, msg_type: str, *, latch: bool, queue_size: int
     ) -> None:
         """Advertise *topic* on *session* unless it already is, with this type and latching."""
         conn = session.connection
@@ -87,7 +87,7 @@ class Topics:
 
     async def publish(
         self,
-        session: Session,
+        session: BridgeSession,
         topic: str,
         msg_type: str,
         msg: dict[str, Any],
@@ -115,7 +115,7 @@ class Topics:
             session.connection.advertised.discard(topic)
             await session.try_send(protocol.unadvertise(topic, id=advert.id))
 
-    async def unadvertise_all(self, session: Session) -> None:
+    async def unadvertise_all(self, session: BridgeSession) -> None:
         """Unadvertise everything on *session* (the client is closing)."""
         for topic, advert in list(self.adverts.items()):
             if topic in session.connection.advertised:
@@ -206,7 +206,7 @@ class Topics:
 
     # --- reconnects -------------------------------------------------------------------------------------
 
-    async def restore(self, session: Session) -> None:
+    async def restore(self, session: BridgeSession) -> None:
         """Re-advertise and re-subscribe what is still wanted. Never re-sends a publish.
 
         Type names are spelled again for this session's bridge: the robot may have come back with another

@@ -33,7 +33,7 @@ from typing import Any
 
 from rosbridge_mcp_server.config.robot import Config, parse_url
 from rosbridge_mcp_server.config.sources import ConfigError, Setting, Sources
-from rosbridge_mcp_server.safety.policy import PolicyError, load_policy
+from rosbridge_mcp_server.safety.policy import Policy, PolicyError, load_policy
 
 __all__ = ["NAME_PATTERN", "load_fleet"]
 
@@ -138,33 +138,13 @@ def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> 
             raise ConfigError(f"{where}: {setting.key} {str(resolved)!r} does not exist")
         return str(resolved)
 
-    policy_path = file(_POLICY)
-    if policy_path is not None:
-        try:
-            policy = load_policy(policy_path, source=f"{where} policy")
-        except PolicyError as exc:
-            raise ConfigError(str(exc)) from None
-    else:
-        policy = base.policy
-    read_only = entry.get("read_only", False)
-    if not isinstance(read_only, bool):
-        raise ConfigError(f"{where}: read_only must be true or false")
-    # An on-only switch: the robot's own read_only, its policy file's, or every robot's (flag, variable or the
-    # shared policy file: base.policy) makes it read-only; none can make a read-only one writable.
-    if own.switch(_READ_ONLY) or base.policy.read_only:
-        policy = policy.with_read_only()
+    policy = _robot_policy(base, entry, own, file(_POLICY), where)
     namespace = entry.get("namespace")
     if namespace is not None:
         if not isinstance(namespace, str):
             raise ConfigError(f'{where}: namespace must be a string, e.g. "/robot2"')
         namespace = _namespace(namespace, where)
-    headers = base.headers
-    given_headers = own.pick(_HEADERS)
-    if given_headers is not None:
-        raw = given_headers.value
-        if not isinstance(raw, dict) or not all(isinstance(v, str) for v in raw.values()):
-            raise ConfigError(f'{where}: headers must be a table of strings, e.g. {{ Authorization = "…" }}')
-        headers = tuple((str(k), v) for k, v in raw.items())
+    headers = _robot_headers(base, own, where)
     config = replace(
         config,
         policy=policy,
@@ -176,3 +156,35 @@ def _robot(base: Config, entry: Mapping[str, Any], where: str, folder: Path) -> 
     )
     config.ssl_context()
     return config
+
+
+def _robot_policy(
+    base: Config, entry: Mapping[str, Any], own: Sources, path: str | None, where: str
+) -> Policy:
+    """A robot's policy: its own file's, else every robot's; read-only when anything says so."""
+    if path is not None:
+        try:
+            policy = load_policy(path, source=f"{where} policy")
+        except PolicyError as exc:
+            raise ConfigError(str(exc)) from None
+    else:
+        policy = base.policy
+    read_only = entry.get("read_only", False)
+    if not isinstance(read_only, bool):
+        raise ConfigError(f"{where}: read_only must be true or false")
+    # An on-only switch: the robot's own read_only, its policy file's, or every robot's (flag, variable or the
+    # shared policy file: base.policy) makes it read-only; none can make a read-only one writable.
+    if own.switch(_READ_ONLY) or base.policy.read_only:
+        policy = policy.with_read_only()
+    return policy
+
+
+def _robot_headers(base: Config, own: Sources, where: str) -> tuple[tuple[str, str], ...]:
+    """A robot's handshake headers: its own table's, else every robot's."""
+    given = own.pick(_HEADERS)
+    if given is None:
+        return base.headers
+    raw = given.value
+    if not isinstance(raw, dict) or not all(isinstance(v, str) for v in raw.values()):
+        raise ConfigError(f'{where}: headers must be a table of strings, e.g. {{ Authorization = "…" }}')
+    return tuple((str(k), v) for k, v in raw.items())

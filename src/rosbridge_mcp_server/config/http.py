@@ -162,40 +162,30 @@ def load_http_settings(
     if chosen not in ("stdio", "http"):
         raise ConfigError(f"{transport_source}: {chosen!r} is not a transport; use stdio or http")
     if chosen == "stdio":
-        given = [
-            name
-            for name, value in (
-                ("--bind", bind),
-                ("--auth-tokens", auth_tokens),
-                ("--tls-cert", tls_cert),
-                ("--oauth-issuer", oauth_issuer),
-                ("--behind-tls-proxy", behind_tls_proxy),
-            )
-            if value
-        ]
+        flags = (bind, auth_tokens, tls_cert, oauth_issuer, behind_tls_proxy)
+        given = [name for name, value in zip(_HTTP_ONLY, flags, strict=True) if value]
         if given:
             raise ConfigError(f"{given[0]} needs --transport http (stdio has no address and no tokens)")
         return HttpSettings()
+    settings = _http(sources)
+    _refuse_exposed(settings)
+    return settings
+
+
+def _http(sources: Sources) -> HttpSettings:
+    """The HTTP transport's settings as *sources* choose them (address, tokens or OAuth, TLS, allowed hosts
+    and origins)."""
     bind_value, bind_source = sources.text(BIND)
     host, port = parse_bind(bind_value if bind_value is not None else DEFAULT_BIND, source=bind_source)
     tokens = _tokens(sources.pick(AUTH_TOKENS))
-    cert, cert_source = sources.text(TLS_CERT)
-    key, key_source = sources.text(TLS_KEY)
-    for path, name in ((cert, cert_source), (key, key_source)):
-        if path is not None and not path.strip():
-            raise ConfigError(f"{name} is empty; give a file path")
-    if key and not cert:
-        raise ConfigError(f"{key_source} needs --tls-cert")
-    for path, name in ((cert, cert_source), (key, key_source)):
-        if path and not Path(path).is_file():
-            raise ConfigError(f"{name}: {path!r} is not a readable file")
+    cert, key = _tls_files(sources)
     oauth = _oauth(sources, HttpSettings(transport="http", host=host, port=port, tls_cert=cert))
     if oauth is not None and tokens:
         raise ConfigError("give either --auth-tokens or --oauth-issuer, not both")
     proxied = sources.switch(BEHIND_TLS_PROXY) is not None
     hosts = _list(sources.pick(ALLOWED_HOSTS))
     origins = _list(sources.pick(ALLOWED_ORIGINS))
-    settings = HttpSettings(
+    return HttpSettings(
         transport="http",
         host=host,
         port=port,
@@ -207,19 +197,42 @@ def load_http_settings(
         tls_key=key,
         behind_tls_proxy=proxied,
     )
+
+
+#: The flags only the HTTP transport takes, in load_http_settings' order.
+_HTTP_ONLY = ("--bind", "--auth-tokens", "--tls-cert", "--oauth-issuer", "--behind-tls-proxy")
+
+
+def _tls_files(sources: Sources) -> tuple[str | None, str | None]:
+    """The HTTPS certificate and key files, checked: not empty, a key only with a certificate, both there."""
+    cert, cert_source = sources.text(TLS_CERT)
+    key, key_source = sources.text(TLS_KEY)
+    for path, name in ((cert, cert_source), (key, key_source)):
+        if path is not None and not path.strip():
+            raise ConfigError(f"{name} is empty; give a file path")
+    if key and not cert:
+        raise ConfigError(f"{key_source} needs --tls-cert")
+    for path, name in ((cert, cert_source), (key, key_source)):
+        if path and not Path(path).is_file():
+            raise ConfigError(f"{name}: {path!r} is not a readable file")
+    return cert, key
+
+
+def _refuse_exposed(settings: HttpSettings) -> None:
+    """Beyond loopback: no listening without authentication, nor in plain HTTP without a TLS proxy."""
+    host, port = settings.host, settings.port
     if not settings.authenticated and not is_loopback(host):
         raise ConfigError(
             f"refusing to listen on {host}:{port} without authentication: anyone on the network could drive "
             "the robot. Give --auth-tokens FILE (or ROSBRIDGE_MCP_AUTH_TOKENS) or --oauth-issuer URL, or "
             "bind to 127.0.0.1"
         )
-    if not cert and not proxied and not is_loopback(host):
+    if not settings.tls_cert and not settings.behind_tls_proxy and not is_loopback(host):
         raise ConfigError(
             f"refusing to listen on {host}:{port} in plain HTTP: the bearer tokens would cross the network "
             "in clear text. Give --tls-cert FILE and --tls-key FILE (HTTPS), or --behind-tls-proxy when a "
             "reverse proxy in front terminates TLS, or bind to 127.0.0.1 (docs/deployment.md)"
         )
-    return settings
 
 
 def _list(chosen: Given | None) -> list[str]:

@@ -180,10 +180,17 @@ def load_config(
         },
         environ,
     )
+    config = _chosen(sources, environ)
+    _check_tls(config, simulated=simulated)
+    return config
+
+
+def _chosen(sources: Sources, environ: Mapping[str, str]) -> Config:
+    """Each setting as *sources* choose it (flag > environment > default), checked."""
     given_timeout = sources.pick(TIMEOUT)
     level = sources.pick(LOG_LEVEL)
     chosen_tools = sources.pick(TOOLS)
-    config = Config(
+    return Config(
         url=_resolve_url(sources),
         request_timeout=(
             parse_timeout(given_timeout.value, source=given_timeout.source)
@@ -200,8 +207,6 @@ def load_config(
         tools=_parse_tools(chosen_tools.value, source=chosen_tools.source) if chosen_tools else None,
         record_dir=_record_dir(sources, environ),
     )
-    _check_tls(config, simulated=simulated)
-    return config
 
 
 def _load_policy(sources: Sources) -> Policy:

@@ -284,6 +284,7 @@ class ConsoleHub:
                     "robot": robot.name,
                     "streams_stopped": report.streams_stopped,
                     "zeroed_topics": report.zeroed_topics,
+                    "held_topics": report.held_topics,
                     "goals_cancelled": report.goals_cancelled,
                     "cancels": report.cancel_lines(),
                     "failures": report.failures,

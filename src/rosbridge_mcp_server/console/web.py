@@ -75,11 +75,37 @@ Handler = Callable[[Request], Awaitable[Response]]
 
 def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starlette:
     """The console as an ASGI app, for ``hub``, guarded by ``secret``; ``allowed_hosts`` are Host values."""
+    guard = _Guard(hub, secret, allowed_hosts)
+    api = _Api(hub)
+    guarded, secret_or_token = guard.guarded, guard.secret_or_token
+    routes = [Route(path, guard.page, methods=["GET"]) for path in _STATIC]
+    routes += [
+        Route("/api/events", guarded(api.events), methods=["GET"]),
+        Route("/api/image-topics", guarded(api.image_topics), methods=["GET"]),
+        Route("/api/confirmations/{id}", secret_or_token(api.confirmation), methods=["GET"]),
+        Route("/api/confirmations/{id}/approve", secret_or_token(api.approve), methods=["POST"]),
+        Route("/api/confirmations/{id}/deny", secret_or_token(api.deny), methods=["POST"]),
+        Route("/api/estop", guarded(api.estop, own_origin_may=True), methods=["POST"]),
+        Route("/api/release", guarded(api.release), methods=["POST"]),
+        Route("/api/camera", guarded(api.camera), methods=["POST"]),
+        Route("/api/map", guarded(api.map_panel), methods=["POST"]),
+    ]
+    return Starlette(routes=routes)
 
-    def guarded(handler: Handler, *, own_origin_may: bool = False) -> Handler:
+
+class _Guard:
+    """Who reaches a route: the session secret on every ``/api`` route (an E-STOP from a page of the console's
+    own origin without it), or a link's token for its one confirmation; the pages need the Host only."""
+
+    def __init__(self, hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> None:
+        self.hub = hub
+        self.secret = secret
+        self.allowed_hosts = allowed_hosts
+
+    def guarded(self, handler: Handler, *, own_origin_may: bool = False) -> Handler:
         async def check(request: Request) -> Response:
-            refusal = _refusal(request, secret, allowed_hosts, need_secret=True)
-            if refusal is not None and own_origin_may and _from_own_origin(request, allowed_hosts):
+            refusal = _refusal(request, self.secret, self.allowed_hosts, need_secret=True)
+            if refusal is not None and own_origin_may and _from_own_origin(request, self.allowed_hosts):
                 _log.warning(
                     "console: %s %s without the session secret, from a page of the console's own origin",
                     request.method,
@@ -90,16 +116,16 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
 
         return check
 
-    def secret_or_token(handler: Handler) -> Handler:
+    def secret_or_token(self, handler: Handler) -> Handler:
         # The session secret, or the token of the one confirmation the path names (a link's).
         async def check(request: Request) -> Response:
             token = request.headers.get(TOKEN_HEADER)
             if token is None or request.headers.get(SECRET_HEADER) is not None:
-                return await guarded(handler)(request)
-            refusal = _refusal(request, secret, allowed_hosts, need_secret=False)
+                return await self.guarded(handler)(request)
+            refusal = _refusal(request, self.secret, self.allowed_hosts, need_secret=False)
             if refusal is not None:
                 return refusal
-            if hub.operator.by_token(request.path_params["id"], token) is None:
+            if self.hub.operator.by_token(request.path_params["id"], token) is None:
                 _log.warning(
                     "console: refused %s %s with a wrong or spent token", request.method, request.url.path
                 )
@@ -110,8 +136,22 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
 
         return check
 
-    async def confirmation(request: Request) -> Response:
-        pending = next((p for p in hub.operator.pending if p.id == request.path_params["id"]), None)
+    async def page(self, request: Request) -> Response:
+        refusal = _refusal(request, self.secret, self.allowed_hosts, need_secret=False)
+        if refusal is not None:
+            return refusal
+        name, media_type = _STATIC[request.url.path]
+        return Response(static_text(name), media_type=media_type, headers=_SECURITY_HEADERS)
+
+
+class _Api:
+    """The ``/api`` routes' handlers, on the hub (each reached through a :class:`_Guard`)."""
+
+    def __init__(self, hub: ConsoleHub) -> None:
+        self.hub = hub
+
+    async def confirmation(self, request: Request) -> Response:
+        pending = next((p for p in self.hub.operator.pending if p.id == request.path_params["id"]), None)
         if pending is None:
             return _json({"error": "this confirmation is no longer waiting"}, 404)
         act = pending.act
@@ -127,41 +167,34 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
             }
         )
 
-    async def page(request: Request) -> Response:
-        refusal = _refusal(request, secret, allowed_hosts, need_secret=False)
-        if refusal is not None:
-            return refusal
-        name, media_type = _STATIC[request.url.path]
-        return Response(static_text(name), media_type=media_type, headers=_SECURITY_HEADERS)
-
-    async def events(request: Request) -> Response:
+    async def events(self, request: Request) -> Response:
         return StreamingResponse(
-            _event_stream(hub),
+            _event_stream(self.hub),
             media_type="text/event-stream",
             headers={**_SECURITY_HEADERS, "X-Accel-Buffering": "no"},
         )
 
-    async def image_topics(request: Request) -> Response:
+    async def image_topics(self, request: Request) -> Response:
         try:
-            topics = await hub.image_topics()
+            topics = await self.hub.image_topics()
         except RosbridgeError as exc:
             return _json({"error": str(exc)}, 503)
-        return _json({"topics": topics, "default": await hub.default_camera(topics)})
+        return _json({"topics": topics, "default": await self.hub.default_camera(topics)})
 
-    async def approve(request: Request) -> Response:
-        return _answered(hub, request.path_params["id"], approve=True)
+    async def approve(self, request: Request) -> Response:
+        return _answered(self.hub, request.path_params["id"], approve=True)
 
-    async def deny(request: Request) -> Response:
-        return _answered(hub, request.path_params["id"], approve=False)
+    async def deny(self, request: Request) -> Response:
+        return _answered(self.hub, request.path_params["id"], approve=False)
 
-    async def estop(request: Request) -> Response:
-        reports = await hub.estop()
+    async def estop(self, request: Request) -> Response:
+        reports = await self.hub.estop()
         return _json({"latched": True, "robots": reports})
 
-    async def release(request: Request) -> Response:
-        return _json({"released": hub.release(), "latched": False})
+    async def release(self, request: Request) -> Response:
+        return _json({"released": self.hub.release(), "latched": False})
 
-    async def camera(request: Request) -> Response:
+    async def camera(self, request: Request) -> Response:
         try:
             body = json.loads(await request.body() or b"{}")
         except ValueError:
@@ -170,12 +203,12 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
         if topic is not None and (not isinstance(topic, str) or len(topic) > 256):
             return _json({"error": "topic must be a topic name (at most 256 characters) or empty"}, 400)
         try:
-            hub.show_camera(topic or None)
+            self.hub.show_camera(topic or None)
         except RosbridgeError as exc:
             return _json({"error": str(exc)}, 400)
-        return _json({"topic": hub.camera_topic})
+        return _json({"topic": self.hub.camera_topic})
 
-    async def map_panel(request: Request) -> Response:
+    async def map_panel(self, request: Request) -> Response:
         try:
             body = json.loads(await request.body() or b"{}")
         except ValueError:
@@ -189,24 +222,10 @@ def console_app(hub: ConsoleHub, secret: str, allowed_hosts: set[str]) -> Starle
             if not isinstance(value, str) or len(value) > 256:
                 return _json({"error": f"{key} must be a name (at most 256 characters) or empty"}, 400)
         try:
-            hub.map.choose(topic, base)
+            self.hub.map.choose(topic, base)
         except RosbridgeError as exc:
             return _json({"error": str(exc)}, 400)
-        return _json({"topic": hub.map.topic, "base_frame": hub.map.base_frame})
-
-    routes = [Route(path, page, methods=["GET"]) for path in _STATIC]
-    routes += [
-        Route("/api/events", guarded(events), methods=["GET"]),
-        Route("/api/image-topics", guarded(image_topics), methods=["GET"]),
-        Route("/api/confirmations/{id}", secret_or_token(confirmation), methods=["GET"]),
-        Route("/api/confirmations/{id}/approve", secret_or_token(approve), methods=["POST"]),
-        Route("/api/confirmations/{id}/deny", secret_or_token(deny), methods=["POST"]),
-        Route("/api/estop", guarded(estop, own_origin_may=True), methods=["POST"]),
-        Route("/api/release", guarded(release), methods=["POST"]),
-        Route("/api/camera", guarded(camera), methods=["POST"]),
-        Route("/api/map", guarded(map_panel), methods=["POST"]),
-    ]
-    return Starlette(routes=routes)
+        return _json({"topic": self.hub.map.topic, "base_frame": self.hub.map.base_frame})
 
 
 def _refusal(request: Request, secret: str, allowed_hosts: set[str], *, need_secret: bool) -> Response | None:

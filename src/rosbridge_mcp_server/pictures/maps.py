@@ -120,16 +120,7 @@ def draw_map(
     raw = Image.frombuffer("L", (grid.width, grid.height), grid.cells, "raw", "L", 0, 1)
     found = shares(grid, raw.histogram())
     # Cells → columns/rows of the picture: the grid's own axes, row 0 at the bottom.
-    if window is not None:
-        corners = [grid.to_cell(x, y) for x in (window[0], window[2]) for y in (window[1], window[3])]
-        col0 = max(0, math.floor(min(c for c, _ in corners)))
-        col1 = min(grid.width, math.ceil(max(c for c, _ in corners)))
-        row0 = max(0, math.floor(min(r for _, r in corners)))
-        row1 = min(grid.height, math.ceil(max(r for _, r in corners)))
-        if col1 <= col0 or row1 <= row0:
-            col0, col1, row0, row1 = 0, grid.width, 0, grid.height
-    else:
-        col0, col1, row0, row1 = 0, grid.width, 0, grid.height
+    col0, col1, row0, row1 = _cells_shown(grid, window)
     cells_w, cells_h = col1 - col0, row1 - row0
     plot = max(16, max_size - MARGIN_LEFT)
     scale = min(plot / cells_w, (max_size - MARGIN_BOTTOM) / cells_h)  # pixels per cell
@@ -175,6 +166,20 @@ def draw_map(
     x_min, y_min = grid.to_map(col0, row0)
     x_max, y_max = grid.to_map(col1, row1)
     return MapPicture(image, found, (x_min, y_min, x_max, y_max), pixels_per_metre, bar)
+
+
+def _cells_shown(grid: Grid, window: tuple[float, float, float, float] | None) -> tuple[int, int, int, int]:
+    """(first column, end column, first row, end row) of the cells *window* covers; the whole grid without
+    one, or when the window misses it."""
+    whole = (0, grid.width, 0, grid.height)
+    if window is None:
+        return whole
+    corners = [grid.to_cell(x, y) for x in (window[0], window[2]) for y in (window[1], window[3])]
+    col0 = max(0, math.floor(min(c for c, _ in corners)))
+    col1 = min(grid.width, math.ceil(max(c for c, _ in corners)))
+    row0 = max(0, math.floor(min(r for _, r in corners)))
+    row1 = min(grid.height, math.ceil(max(r for _, r in corners)))
+    return whole if col1 <= col0 or row1 <= row0 else (col0, col1, row0, row1)
 
 
 def _draw_axes(

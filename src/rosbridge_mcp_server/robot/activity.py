@@ -11,10 +11,12 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections.abc import Awaitable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
+from rosbridge_mcp_server.robot.arm_stop import TrajectorySent, trajectory_sent
 from rosbridge_mcp_server.robot.velocity import is_velocity_type, stamped
 
 __all__ = ["SessionActivity", "Stream", "VelocityTopic"]
@@ -88,9 +90,14 @@ class SessionActivity:
     def __init__(self) -> None:
         self._velocity: dict[str, VelocityTopic] = {}
         self._streams: list[Stream] = []
+        self._trajectories: dict[str, TrajectorySent] = {}
 
     def published(self, topic: str, type_name: str, message: Any) -> None:
-        """Note a message that reached the bridge; only velocity commands are remembered."""
+        """Note a message that reached the bridge; only velocity commands and joint trajectories (on a
+        controller's topic: ``robot/arm_stop.py``) are remembered."""
+        sent = trajectory_sent(topic, type_name, message, time.monotonic())
+        if sent is not None:
+            self._trajectories[topic] = sent
         if not is_velocity_type(type_name):
             return
         frame_id = ""
@@ -103,6 +110,15 @@ class SessionActivity:
     @property
     def velocity_topics(self) -> list[VelocityTopic]:
         return list(self._velocity.values())
+
+    @property
+    def trajectories(self) -> list[TrajectorySent]:
+        """The last joint trajectory published on each topic (a stop holds those still running)."""
+        return list(self._trajectories.values())
+
+    def forget_trajectory(self, topic: str) -> None:
+        """*topic*'s trajectory was stopped (a later stop need not hold it again)."""
+        self._trajectories.pop(topic, None)
 
     @contextlib.contextmanager
     def stream(self, topic: str, type_name: str, task: asyncio.Task[Any] | None = None) -> Iterator[Stream]:

@@ -3,7 +3,7 @@ named poses.
 
 :func:`learn_arm` reads them (``robot/arm/reading.py``'s :func:`read_arm`, as ``view_arm`` sees the arm: the
 ``/robot_description`` topic, else ``robot_state_publisher``'s parameter) just before an arm act is approved
-(``robot/acting.py``), whichever tool and carrier sends it, so that the guard (``safety/arm.py``) judges every
+(``robot/acting/``), whichever tool and carrier sends it, so that the guard (``safety/arm.py``) judges every
 carrier the same. What could not be read is a problem of the scene, never an exception: the guard decides
 what that means.
 """

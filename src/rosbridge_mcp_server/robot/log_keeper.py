@@ -29,9 +29,7 @@ from rosbridge_mcp_server.robot.logs import LogRing, line_of
 from rosbridge_mcp_server.robot.nodes import node_names
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.client.session import Session
-    from rosbridge_mcp_server.client.subscription import Subscription
+    from rosbridge_mcp_server.client import RosbridgeClient, SessionFacts, Subscription
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["DIAGNOSTICS_TOPICS", "LOG_QUEUE", "LogKeeper"]
@@ -41,6 +39,9 @@ _log = logging.getLogger(__name__)
 LOG_QUEUE = 20_000
 #: The diagnostics topics followed when the graph has them.
 DIAGNOSTICS_TOPICS = ("/diagnostics", "/diagnostics_agg")
+#: Seconds before the topics are asked again after a failure, doubling up to RETRY_MOST.
+RETRY_FIRST = 1.0
+RETRY_MOST = 30.0
 
 
 class LogKeeper:
@@ -75,25 +76,22 @@ class LogKeeper:
 
     # --- the session watcher ------------------------------------------------------------------------------
 
-    def session_started(self, session: Session) -> None:
+    def session_started(self, session: SessionFacts) -> None:
         """Open the log subscription if it is not open yet (a reconnect restores an open one)."""
         if self.connected_at is None:
             self.connected_at = time.time()
         if self._task is None or self._task.done():
             self._task = self._client.run_in_background(self._follow(session), "keep the robot's log")
 
-    async def client_closing(self, session: Session | None) -> None:
+    async def client_closing(self, session: SessionFacts | None) -> None:
         if self._task is not None:
             self._task.cancel()
 
     # --- reading ---------------------------------------------------------------------------------------
 
-    async def _follow(self, session: Session) -> None:
-        try:
-            topics = {entry.name: entry.type for entry in await self._graph.topics()}
-        except RosbridgeError as exc:
-            _log.debug("could not list the topics to find the log on connection %d: %s", session.number, exc)
-            self.looked.set()
+    async def _follow(self, session: SessionFacts) -> None:
+        topics = await self._topics(session)
+        if topics is None:
             return
         await self._look(session)
         self.looked.set()
@@ -113,6 +111,28 @@ class LogKeeper:
             self.ready.set()
             return
         await asyncio.gather(*readers)
+
+    async def _topics(self, session: SessionFacts) -> dict[str, str] | None:
+        """The graph's topics and types, asked again after a failure (a busy bridge may not answer rosapi in
+        time) until the connection ends: then None, and the next connection starts a new follow."""
+        delay = RETRY_FIRST
+        while True:
+            try:
+                return {entry.name: entry.type for entry in await self._graph.topics()}
+            except NotConnectedError as exc:
+                _log.debug("no log kept on connection %d: %s", session.number, exc)
+                self.looked.set()
+                return None
+            except RosbridgeError as exc:
+                _log.debug(
+                    "could not list the topics to find the log on connection %d (%s); again in %g s",
+                    session.number,
+                    exc,
+                    delay,
+                )
+                self.looked.set()
+                await asyncio.sleep(delay)
+                delay = min(delay * 2, RETRY_MOST)
 
     def _log_line(self, topic: str, msg: dict[str, Any], now: float) -> None:
         self.ring.add(line_of(msg, now))
@@ -154,7 +174,7 @@ class LogKeeper:
             with contextlib.suppress(RosbridgeError):
                 await asyncio.shield(sub.close())
 
-    async def _look(self, session: Session) -> None:
+    async def _look(self, session: SessionFacts) -> None:
         if self.nodes_seen is not None:
             return
         try:

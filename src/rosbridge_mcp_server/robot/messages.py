@@ -30,7 +30,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from rosbridge_mcp_server.client.dialect import Dialect
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import InvalidMessageError, NotSentError
 from rosbridge_mcp_server.robot.text import json_shown
 from rosbridge_mcp_server.robot.wording import full_stop

@@ -185,8 +185,7 @@ async def _every_nodes_names(graph: RosGraph, client: RosbridgeClient) -> list[P
     names is not waited for and its answer not used, a node new in it is asked then. Each node's names are
     sorted as they come, while the others are still on their way.
     """
-    session = client.session
-    shared = session is not None and not session.lanes_by_default
+    shared = client.calls_share_connection
     gate = asyncio.Semaphore(_LOOKUPS_AT_ONCE_SHARED if shared else _LOOKUPS_AT_ONCE)
 
     async def one(name: str) -> list[str]:

@@ -1,6 +1,6 @@
 """The safety seam: what an act on the robot is, who approves it, and the person who may be asked.
 
-``robot/acting.py`` builds an :class:`Act` for every checked send and asks the :class:`Guard` before anything
+``robot/acting/`` builds an :class:`Act` for every checked send and asks the :class:`Guard` before anything
 is sent: ``await guard.approve(act, ask_person)``. The guard may return a clamped copy of the act (what is
 then sent) or raise :class:`~rosbridge_mcp_server.errors.PolicyRefusal`; either way it is told the outcome
 (``guard.record``), once per act. Then every frame of it passes the robot's send gate
@@ -22,6 +22,7 @@ from rosbridge_mcp_server.robot.effects import Effect
 __all__ = [
     "ALLOW_ALL",
     "Act",
+    "ActKind",
     "Answer",
     "AnswerNotInForm",
     "Approving",
@@ -47,6 +48,11 @@ def cancelled_why() -> str:
     return why() if why is not None else "cancelled"
 
 
+#: What an act on the robot goes through: the one spelling of the kinds (a tool's ``ToolSpec.acts_on``, the
+#: audit's ``kind``, the policy's rules).
+ActKind = Literal["topic", "service", "action", "parameter"]
+
+
 @dataclass(frozen=True)
 class Act:
     """One act on the robot, as it will be sent: checked, normalised, with an absolute name.
@@ -59,7 +65,7 @@ class Act:
     """
 
     tool: str  #: the tool that asks, e.g. "publish_topic"
-    kind: Literal["topic", "service", "action", "parameter"]
+    kind: ActKind
     name: str  #: absolute ROS name (topic/service/action/parameter)
     type: str  #: ROS type as sent to the bridge ("" when none, e.g. a parameter)
     payload: Any  #: message / request / goal / value that will be sent

@@ -1,12 +1,12 @@
 """One robot as this server drives it: the one owner of everything that lasts as long as the server does.
 
 A :class:`RobotSession` is made once per robot, beside its client, and lives across reconnects (unlike the
-client's :class:`~rosbridge_mcp_server.client.session.Session`, which is one connection). It holds:
+client's ``BridgeSession``, which is one connection). It holds:
 
 * ``client``: the rosbridge client (started and closed by whoever serves, not here);
 * ``graph``: what was learnt about the robot's graph (:class:`RosGraph`, per connection inside);
-* ``goals``: the goals sent through the client (:class:`GoalRegistry`: running ones, and those a drop cut
-  off, cancelled once the connection is back);
+* ``goals``: the goals sent through the client (:class:`GoalRegistry`: running ones, and those a publish or
+  a service call started; those a drop cut off are the client's, cancelled once the connection is back);
 * ``activity``: what this server set going (velocity topics, streams), which ``stop_robot`` and the operator
   console's E-STOP stop;
 * ``guard``: the safety seam's guard every act asks first, and that records every outcome;

@@ -10,15 +10,13 @@ then, one at a time.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from typing import TYPE_CHECKING, Final
 
 from rosbridge_mcp_server.errors import RosbridgeError
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.client.session import Session
+    from rosbridge_mcp_server.client import RosbridgeClient, SessionFacts
     from rosbridge_mcp_server.robot.graph import RosGraph
 
 __all__ = ["ServiceTypeWarmUp"]
@@ -38,25 +36,24 @@ class ServiceTypeWarmUp:
         #: Set when the latest run has ended, however it ended (tests and diagnostics wait on it).
         self.done = asyncio.Event()
 
-    def session_started(self, session: Session) -> None:
+    def session_started(self, session: SessionFacts) -> None:
         """Start learning on the new connection (what the old one learnt was dropped with it)."""
         if self._task is not None:
             self._task.cancel()
         self.done.clear()
         self._task = self._client.run_in_background(self._learn(session), "learn service types")
 
-    async def client_closing(self, session: Session | None) -> None:
+    async def client_closing(self, session: SessionFacts | None) -> None:
         """Stop learning: the client is closing."""
         if self._task is not None:
             self._task.cancel()
 
-    async def _learn(self, session: Session) -> None:
+    async def _learn(self, session: SessionFacts) -> None:
         loop = asyncio.get_running_loop()
         began = loop.time()
         # After the client's measurement of the bridge's call ordering: its short-lived probe service is
         # gone from the graph by then (nothing to learn about it), and rosapi answers one call at a time.
-        with contextlib.suppress(TimeoutError):
-            await asyncio.wait_for(session.ordering_known.wait(), _ORDERING_WAIT_SECONDS)
+        await self._client.ordering_known(_ORDERING_WAIT_SECONDS)
         try:
             learnt = await self._graph.learn_service_types()
         except RosbridgeError as exc:

@@ -5,7 +5,7 @@ carrier sends it and however its type is spelt (``robot/arm_goals.py``: ``move_a
 ``JointTrajectory`` on ``…/joint_trajectory`` through ``publish_topic``).
 
 The act carries the arm it is judged against (``Act.scene``: an :class:`~rosbridge_mcp_server.robot.arm_scene.
-ArmScene`, the URDF and the joint positions now, learnt by ``robot/acting.py`` just before). In order:
+ArmScene`, the URDF and the joint positions now, learnt by ``robot/acting/`` just before). In order:
 
 1. the act must be readable (joint names, finite positions, times that increase); a multi-DOF trajectory is
    refused;
@@ -288,7 +288,7 @@ def _sample_problem(
         if base is not None:
             points = [(link, transform_point(base, point)) for link, point in points]
         problem = _workspace_problem(chain.tip, points[-1][1], rules) or _keep_out_problem(
-            points, moving, rules
+            points, moving, rules, chain.robot.radii
         )
         if problem is not None:
             return problem
@@ -317,13 +317,20 @@ def _workspace_problem(tool: str, point: Point, rules: ArmRules) -> str | None:
     return f"the path takes {tool} to ({x:.3f}, {y:.3f}, {z:.3f}) m, outside the workspace ({names})"
 
 
-def _keep_out_problem(points: list[tuple[str, Point]], moving: set[str], rules: ArmRules) -> str | None:
-    """Each moving link's segment from the link before it on the chain, against every keep-out box."""
+def _keep_out_problem(
+    points: list[tuple[str, Point]], moving: set[str], rules: ArmRules, radii: Mapping[str, float]
+) -> str | None:
+    """Each moving link's segment from the link before it on the chain, as a capsule as thick as the thicker
+    of its two links (``robot/arm/geometry.py``; ``[arm] link_radius`` where the URDF gives no size), against
+    every keep-out box."""
     from rosbridge_mcp_server.robot.arm_path import segment_hits  # noqa: PLC0415 - arm acts only
 
     for box in rules.keep_out:
-        for (_, a), (link, b) in itertools.pairwise(points):
-            if link in moving and segment_hits(a, b, box[1], box[2], rules.margin):
+        for (before, a), (link, b) in itertools.pairwise(points):
+            if link not in moving:
+                continue
+            radius = max(radii.get(before, rules.link_radius), radii.get(link, rules.link_radius))
+            if segment_hits(a, b, box[1], box[2], rules.margin + radius):
                 return f"the path takes {link} into the keep-out box {box[0]}"
     return None
 

@@ -6,6 +6,7 @@ The URDF's joint position and speed limits hold always (``safety/arm.py``); this
     speed_scale = 0.25           # at most this share of each joint's URDF speed (0 < scale ≤ 1; default 0.25)
     frame = "base_link"          # the link the boxes are given in (default: the URDF's root link)
     margin = 0.05                # m kept from every keep-out box and inside every workspace box (default 0)
+    link_radius = 0.05           # m: a link's radius where its URDF geometry gives none (default 0.05)
     confirm = "motion"           # "never" | "motion": ask before each arm motion and controller switch
     max_gripper_effort = 20      # N: most effort a gripper goal may ask (default: the URDF's effort limit)
     [arm.workspace]              # boxes the tool stays inside (one of them): min and max corners [x, y, z] m
@@ -24,16 +25,35 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
-__all__ = ["ARM_KEYS", "DEFAULT_SPEED_SCALE", "ArmRules", "Box", "describe_arm", "parse_arm"]
+__all__ = [
+    "ARM_KEYS",
+    "DEFAULT_LINK_RADIUS",
+    "DEFAULT_SPEED_SCALE",
+    "ArmRules",
+    "Box",
+    "describe_arm",
+    "parse_arm",
+]
 
 #: The share of each joint's URDF speed an arm motion may use when the policy says nothing.
 DEFAULT_SPEED_SCALE = 0.25
+#: A link's capsule radius (m) against the keep-out boxes where its URDF geometry gives none.
+DEFAULT_LINK_RADIUS = 0.05
 
 ArmConfirm = Literal["never", "motion"]
 #: A named box: its name, its minimum corner and its maximum corner (x, y, z in metres).
 Box = tuple[str, tuple[float, float, float], tuple[float, float, float]]
 
-ARM_KEYS = ("speed_scale", "frame", "margin", "confirm", "max_gripper_effort", "workspace", "keep_out")
+ARM_KEYS = (
+    "speed_scale",
+    "frame",
+    "margin",
+    "link_radius",
+    "confirm",
+    "max_gripper_effort",
+    "workspace",
+    "keep_out",
+)
 
 
 @dataclass(frozen=True)
@@ -44,6 +64,7 @@ class ArmRules:
     #: The link the boxes are given in; ``None``: the URDF's root link.
     frame: str | None = None
     margin: float = 0.0
+    link_radius: float = DEFAULT_LINK_RADIUS
     confirm: ArmConfirm = "never"
     max_gripper_effort: float | None = None
     workspace: tuple[Box, ...] = ()
@@ -83,6 +104,9 @@ def parse_arm(data: Mapping[str, Any], where: str) -> ArmRules:
     margin = _number(table, "margin", where, 0.0)
     if margin < 0:
         raise _fail(where, f"[arm] margin must be a number of metres ≥ 0, not {margin!r}")
+    radius = _number(table, "link_radius", where, DEFAULT_LINK_RADIUS)
+    if radius < 0 or radius > 1:
+        raise _fail(where, f"[arm] link_radius must be a number of metres from 0 to 1, not {radius!r}")
     effort = _number(table, "max_gripper_effort", where, None) if "max_gripper_effort" in table else None
     if effort is not None and effort <= 0:
         raise _fail(where, f"[arm] max_gripper_effort must be more than 0 N, not {effort!r}")
@@ -96,6 +120,7 @@ def parse_arm(data: Mapping[str, Any], where: str) -> ArmRules:
         speed_scale=scale,
         frame=frame.strip().strip("/") if isinstance(frame, str) else None,
         margin=margin,
+        link_radius=radius,
         confirm=confirm,
         max_gripper_effort=effort,
         workspace=_boxes(table, "workspace", where),
@@ -149,7 +174,10 @@ def describe_arm(rules: ArmRules) -> str:
     if rules.workspace:
         parts.append(f"the tool inside {', '.join(name for name, _, _ in rules.workspace)}")
     if rules.keep_out:
-        parts.append(f"no link in {', '.join(name for name, _, _ in rules.keep_out)}")
+        parts.append(
+            f"no link in {', '.join(name for name, _, _ in rules.keep_out)} (links as capsules, "
+            f"{rules.link_radius:g} m where the URDF gives no size)"
+        )
     if rules.margin:
         parts.append(f"a margin of {rules.margin:g} m")
     if rules.max_gripper_effort is not None:

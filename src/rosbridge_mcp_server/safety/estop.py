@@ -1,4 +1,4 @@
-"""The e-stop: streams ended, velocity topics zeroed, goals cancelled.
+"""The e-stop: streams ended, velocity topics zeroed, joint trajectories held, goals cancelled.
 
 Both stops cancel every goal this server caused, by any carrier (``robot/goals/stopping.py``); the operator's
 E-STOP (the console) also cancels every goal of the robot's known motion action servers, whoever sent it.
@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Final, Literal, get_args
 
 from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.robot.arm_stop import stop_trajectories
 from rosbridge_mcp_server.robot.goals import CanceledBy
 from rosbridge_mcp_server.robot.goals.stopping import Cancelled, cancel_caused, cancel_motion_servers, summary
 from rosbridge_mcp_server.robot.velocity import zero_command
@@ -66,10 +67,12 @@ class StopReport:
     streams_stopped: list[str] = field(default_factory=list)
     streams_still_running: list[str] = field(default_factory=list)
     zeroed_topics: list[str] = field(default_factory=list)
+    #: Controllers' trajectory topics that got a trajectory holding the joints (``robot/arm_stop.py``).
+    held_topics: list[str] = field(default_factory=list)
     #: Ids of the goals a cancel was sent for (every goal of an action: ``cancels``).
     goals_cancelled: list[str] = field(default_factory=list)
     failures: list[str] = field(default_factory=list)
-    #: Every zero command sent: (topic, type, message), for the audit.
+    #: Every zero command (and trajectory hold) sent: (topic, type, message), for the audit.
     zero_messages: list[tuple[str, str, dict[str, Any]]] = field(default_factory=list)
     #: Every goal a cancel was sent for: (action, goal id, or "" for every goal of the action).
     goals: list[tuple[str, str]] = field(default_factory=list)
@@ -82,6 +85,7 @@ class StopReport:
             self.streams_stopped
             or self.streams_still_running
             or self.zeroed_topics
+            or self.held_topics
             or self.goals_cancelled
             or self.cancels
         )
@@ -144,6 +148,7 @@ async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
             else:
                 report.zeroed_topics.append(target.topic)
                 report.zero_messages.append((target.topic, target.type, message))
+        await _hold_trajectories(robot, report)
 
     await _cancel_goals(robot, by, source, report)
     if connected and not await client.handled(HANDLED_SECONDS):
@@ -152,6 +157,17 @@ async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
             "the stop; check the robot"
         )
     return report
+
+
+async def _hold_trajectories(robot: RobotSession, report: StopReport) -> None:
+    """Hold every controller a trajectory this server published on its topic may still drive."""
+    streamed = {*report.streams_stopped, *report.streams_still_running}
+    held, failed = await stop_trajectories(robot.client, robot.graph, robot.activity.trajectories, streamed)
+    for topic, type_name, message in held:
+        robot.activity.forget_trajectory(topic)
+        report.held_topics.append(topic)
+        report.zero_messages.append((topic, type_name, message))
+    report.failures.extend(failed)
 
 
 async def _cancel_goals(robot: RobotSession, by: Presser, source: CanceledBy, report: StopReport) -> None:

@@ -84,6 +84,36 @@ class Audit:
 
     def write(self, act: Act, outcome: str, detail: str | None = None) -> str | None:
         """Write the line; why it could not go into the audit file, or ``None`` (written, or no file)."""
+        self._log_line(act, outcome, detail)
+        if self._stream is None and not self._listeners:
+            return None
+        entry = self._entry(act, outcome, detail)
+        for callback in self._listeners:
+            try:
+                callback(entry)
+            except Exception:
+                _log.exception("an audit listener failed")
+        if self._stream is None:
+            return None
+        line = json.dumps(entry, ensure_ascii=False, default=str)
+        if len(line) > AUDIT_PAYLOAD_LIMIT:
+            # A camera frame in every line would bury the audit; its size and start are enough.
+            body = json.dumps(act.payload, ensure_ascii=False, default=str)
+            entry["payload"] = {"truncated": body[: AUDIT_PAYLOAD_LIMIT // 4], "characters": len(body)}
+            line = json.dumps(entry, ensure_ascii=False, default=str)
+        try:
+            self._stream.write(line + "\n")
+            self._stream.flush()
+        except (OSError, ValueError) as exc:
+            # The guard refuses an act whose line this is (nothing unaudited is sent); stderr has the line.
+            _log.error("could not write to the audit log: %s", exc)
+            return (exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)) or type(
+                exc
+            ).__name__
+        return None
+
+    def _log_line(self, act: Act, outcome: str, detail: str | None) -> None:
+        """The act on stderr: INFO when routine, WARNING otherwise."""
         extra = f" ({detail})" if detail else ""
         stream = f" at {act.rate_hz:g} Hz for {act.duration:g} s" if act.rate_hz and act.duration else ""
         # A stream that sent what it planned ("sent 30 of 30") is as routine as one message sent.
@@ -107,8 +137,9 @@ class Audit:
             extra,
             f" [caller {caller}]" if caller else "",
         )
-        if self._stream is None and not self._listeners:
-            return None
+
+    def _entry(self, act: Act, outcome: str, detail: str | None) -> AuditEntry:
+        """The act as one JSON line's object (what the file and the listeners get)."""
         entry: AuditEntry = {
             "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="milliseconds"),
             "tool": act.tool,
@@ -134,33 +165,11 @@ class Audit:
                 }
                 for e in act.effects
             ]
-        if caller is not None:
-            entry["caller"] = caller
+        if act.caller is not None:
+            entry["caller"] = act.caller
         if self.robot is not None:
             entry["robot"] = self.robot
-        for callback in self._listeners:
-            try:
-                callback(entry)
-            except Exception:
-                _log.exception("an audit listener failed")
-        if self._stream is None:
-            return None
-        line = json.dumps(entry, ensure_ascii=False, default=str)
-        if len(line) > AUDIT_PAYLOAD_LIMIT:
-            # A camera frame in every line would bury the audit; its size and start are enough.
-            body = json.dumps(act.payload, ensure_ascii=False, default=str)
-            entry["payload"] = {"truncated": body[: AUDIT_PAYLOAD_LIMIT // 4], "characters": len(body)}
-            line = json.dumps(entry, ensure_ascii=False, default=str)
-        try:
-            self._stream.write(line + "\n")
-            self._stream.flush()
-        except (OSError, ValueError) as exc:
-            # The guard refuses an act whose line this is (nothing unaudited is sent); stderr has the line.
-            _log.error("could not write to the audit log: %s", exc)
-            return (exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)) or type(
-                exc
-            ).__name__
-        return None
+        return entry
 
 
 class PolicyGuard:

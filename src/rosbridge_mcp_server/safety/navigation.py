@@ -4,7 +4,7 @@ carrier sends it and however its type is spelt (``robot/motion_goals.py``: ``nav
 ``<action>/goal`` and the goal pose topics through ``publish_topic``).
 
 The act carries the scene it is judged against (``Act.scene``: the map, the robot's pose and the goal placed
-on the map, learnt by ``robot/acting.py`` just before). In order:
+on the map, learnt by ``robot/acting/`` just before). In order:
 
 1. the goal must be readable; one the fence cannot place at all (AssistedTeleop, a dock by id, UndockRobot,
    route node ids, GPS waypoints, an unknown type sent to a motion action's name) is refused while

@@ -29,7 +29,7 @@ from typing import Any
 
 from mcp.server import ServerRequestContext
 from mcp.types import CallToolResult, InputRequiredResult, TextContent, Tool, ToolAnnotations
-from pydantic import BaseModel, ConfigDict, create_model
+from pydantic import BaseModel, create_model
 
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.seam import call_ending
@@ -38,6 +38,7 @@ from rosbridge_mcp_server.server.answers import images, merged, where_set
 from rosbridge_mcp_server.server.asking import Asker, AskInNextRound, question_round
 from rosbridge_mcp_server.server.failures import error_text
 from rosbridge_mcp_server.server.sdk import cancelled_by_client
+from rosbridge_mcp_server.tools.arguments import ARGUMENTS_CONFIG
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 from rosbridge_mcp_server.tools.schemas import compact_input_schema, compact_output_schema, inline_refs
 
@@ -91,18 +92,25 @@ class EdgeTool:
     strict model its arguments are validated with (once), and its handler.
 
     ``on_robot``: the call runs on a robot (a fleet's calls name one); ``list_robots`` and ``show_console``
-    are about every robot at once. ``acts_on``: what an acting tool acts through (``None`` for a reading one).
+    are about every robot at once. ``spec``: what a tool module declares (``None`` for the edge's own tools,
+    which read); the edge reads it, never a tool's name.
     """
 
     definition: Tool
     arguments: type[BaseModel]
     handler: Handler
     on_robot: bool = True
-    acts_on: typing.Literal["topic", "service", "action", "parameter"] | None = None
+    spec: ToolSpec | None = None
 
     @property
     def name(self) -> str:
         return self.definition.name
+
+    @property
+    def reads(self) -> bool:
+        """Whether the tool only reads (its read-only hint): what a read-only robot or server allows."""
+        hints = self.definition.annotations
+        return hints is not None and hints.read_only_hint is True
 
     @property
     def input_schema(self) -> dict[str, Any]:
@@ -110,13 +118,12 @@ class EdgeTool:
 
 
 def arguments_model(name: str, parameters: list[inspect.Parameter]) -> type[BaseModel]:
-    """The strict model of a tool's arguments: *parameters* (annotations resolved) as fields, nothing else."""
+    """The strict model of a tool's arguments: *parameters* (annotations resolved) as fields, nothing else
+    (``tools/arguments.py``: every check an argument gets is this model's one validation)."""
     fields: dict[str, Any] = {
         p.name: (p.annotation, ... if p.default is inspect.Parameter.empty else p.default) for p in parameters
     }
-    model: type[BaseModel] = create_model(
-        f"{name}Arguments", __config__=ConfigDict(extra="forbid", arbitrary_types_allowed=True), **fields
-    )
+    model: type[BaseModel] = create_model(f"{name}Arguments", __config__=ARGUMENTS_CONFIG, **fields)
     return model
 
 
@@ -130,7 +137,7 @@ def edge_tool(
     output: type[BaseModel] | None,
     handler: Handler,
     on_robot: bool = True,
-    acts_on: typing.Literal["topic", "service", "action", "parameter"] | None = None,
+    spec: ToolSpec | None = None,
     meta: dict[str, Any] | None = None,
 ) -> EdgeTool:
     """The one way a tool is made: its definition as listed (compact input and output schemas, said where
@@ -146,7 +153,7 @@ def edge_tool(
         annotations=annotations,
         _meta=meta,
     )
-    return EdgeTool(definition, arguments, handler, on_robot, acts_on)
+    return EdgeTool(definition, arguments, handler, on_robot, spec)
 
 
 @functools.cache
@@ -155,9 +162,9 @@ def module_tool(module: ModuleType) -> EdgeTool:
     robot it runs on.
 
     A call runs on the robots the edge chose for it, with each robot's client, guard and activity (shared by
-    every tool of the robot, so that stop_robot sees what the others started); stop_robot chosen for every
-    robot runs on each and says what it did on each. Made once per process: every server (one per MCP
-    session over HTTP, one per test) serves the same tools.
+    every tool of the robot, so that the stop sees what the others started); a tool whose spec says
+    ``every_robot``, chosen for every robot, runs on each and says what it did on each. Made once per process:
+    every server (one per MCP session over HTTP, one per test) serves the same tools.
     """
     spec: ToolSpec = module.SPEC
     run: Callable[..., Awaitable[ToolAnswer]] = module.run
@@ -183,7 +190,7 @@ def module_tool(module: ModuleType) -> EdgeTool:
         arguments=model,
         output=spec.output,
         handler=handle,
-        acts_on=spec.acts_on,
+        spec=spec,
     )
 
 

@@ -28,15 +28,15 @@ from mcp.types import (
 
 from mcp import MCPError
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.robot.seam import Act
+from rosbridge_mcp_server.robot.seam import Act, ActKind
 from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
 from rosbridge_mcp_server.server.checks import ToolCalls
 from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, console_app
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
 from rosbridge_mcp_server.server.shutdown import stop_robots
 from rosbridge_mcp_server.server.tasks import TaskBoard
-from rosbridge_mcp_server.tools import TOOL_MODULES, diagnose, list_services, read_logs, stop_robot
-from rosbridge_mcp_server.tools.base import ToolSpec
+from rosbridge_mcp_server.tools import TOOL_MODULES
+from rosbridge_mcp_server.tools.base import Need, ToolSpec
 
 if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.config import Config
@@ -48,10 +48,28 @@ _log = logging.getLogger("rosbridge_mcp_server.server")
 
 SERVER_NAME = "rosbridge"
 
-INSTRUCTIONS = """\
-This server connects to a real (or simulated) ROS robot through rosbridge. Some tools only read the robot's \
-state; publish_topic, publish_service, publish_action, cancel_action and set_parameter act on the robot and \
-can make it move or change how it behaves.
+
+def _names(names: Sequence[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return " and ".join([", ".join(names[:-1]), names[-1]] if len(names) > 1 else names)
+
+
+def instructions(specs: Sequence[ToolSpec]) -> str:
+    """What the model is told first: which of *specs* act on the robot (every one, from its spec), what
+    else changes something, the stop, and how to work."""
+    acting = [spec.name for spec in specs if spec.acts_on is not None]
+    elsewhere = [f"{spec.name} changes {spec.changes}" for spec in specs if spec.changes is not None]
+    stops = _names([spec.name for spec in specs if spec.stops])
+    return _INSTRUCTIONS.format(
+        acting=_names(acting),
+        elsewhere=f" ({_names(elsewhere)})" if elsewhere else "",
+        stops=stops,
+    )
+
+
+_INSTRUCTIONS = """\
+This server connects to a real (or simulated) ROS robot through rosbridge. {acting} act on the robot and \
+can make it move or change how it behaves; every other tool only reads the robot's state{elsewhere}.
 
 Work like this:
 1. Look before acting: list_topics, list_services and list_actions show what the robot has, with the exact \
@@ -61,12 +79,12 @@ get_transform says where a frame is (e.g. base_link in odom). When something see
 not move, a sensor is quiet, a node died), diagnose looks at everything at once; read_logs shows the robot's \
 log since this server connected.
 2. Use those exact names and types. Messages, requests and goals are JSON objects; omitted fields are \
-zero or empty, and {} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
+zero or empty, and {{}} is fine for empty messages. Units are SI: metres, seconds, radians, m/s, rad/s.
 3. Movement: velocity commands (e.g. geometry_msgs/msg/Twist on /turtle1/cmd_vel) usually act briefly; \
 publish_topic with rate_hz and duration keeps the robot moving and stops it with zeros at the end. Prefer \
 small, safe values and say what you are about to do.
 4. publish_action waits for the goal to finish and cancels it on timeout; cancel_action stops goals that run.
-5. stop_robot stops everything this server started (streams, velocity, goals): use it when in doubt.
+5. {stops} stops everything this server started (streams, velocity, goals): use it when in doubt.
 
 A safety policy set by the robot's operator may refuse a call (the error names the rule) or ask the person \
 at the client to confirm it. A refusal is final: do not try to reach the same effect another way; tell the \
@@ -78,22 +96,44 @@ unreachable, and publish_topic first checks that the bridge answers, so a comman
 request that timed out may still take effect later: check the robot's state before repeating it.\
 """
 
+#: The instructions of a server with every tool of the catalogue.
+INSTRUCTIONS = instructions([module.SPEC for module in TOOL_MODULES])
 
-_FLEET_NOTE = """
-
-This server drives several robots: list_robots names them, and every other tool needs the robot argument \
-saying which one (stop_robot without it stops every robot).\
-"""
 
 _READ_ONLY_NOTE = """
 
 This server is read-only: it lists only tools that read the robot, and refuses any other.\
 """
 
-_READ_ONLY_ROBOTS_NOTE = """
+#: What each need of a tool (its spec's ``needs``) starts in every robot's session.
+_KEEPERS: dict[Need, Callable[[RobotSession], object]] = {
+    "service_types": lambda session: session.learn_service_types(),
+    "robot_log": lambda session: session.keep_logs(),
+}
 
-Read-only robots ({names}): only reading tools and stop_robot work on them; any other is refused.\
-"""
+
+def _notes(specs: Sequence[ToolSpec], fleet: Fleet, read_only: bool) -> str:
+    """What the instructions add for a fleet, a read-only server and read-only robots of a fleet."""
+    notes = ""
+    if fleet.several:
+        every = [
+            f"{spec.name} without it {'stops' if spec.stops else 'runs on'} every robot"
+            for spec in specs
+            if spec.every_robot
+        ]
+        notes += (
+            "\n\nThis server drives several robots: list_robots names them, and every other tool needs the "
+            "robot argument saying which one" + (f" ({'; '.join(every)})." if every else ".")
+        )
+    if read_only:
+        notes += _READ_ONLY_NOTE
+    elif fleet.read_only_names:
+        also = "".join(f" and {spec.name}" for spec in specs if spec.stops)
+        notes += (
+            f"\n\nRead-only robots ({', '.join(fleet.read_only_names)}): only reading tools{also} work on "
+            "them; any other is refused."
+        )
+    return notes
 
 
 def build_server(
@@ -134,16 +174,15 @@ def build_fleet_server(
     # Read-only when the server is, or when every robot is (a fleet file may make each read-only).
     read_only = policy.read_only or not fleet.acting_names
     chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
-    if any(not m.SPEC.hints.read_only for m in chosen) and stop_robot not in chosen:
+    if any(not m.SPEC.hints.read_only for m in chosen):
         # Whoever can set the robot going can stop it, whatever --tools picked.
-        chosen.append(stop_robot)
+        chosen += [m for m in TOOL_MODULES if m.SPEC.stops and m not in chosen]
     modules = [m for m in chosen if m.SPEC.hints.read_only or not read_only]
-    if list_services in modules:
+    specs = [m.SPEC for m in modules]
+    for need in sorted({need for spec in specs for need in spec.needs}):
         for robot in fleet.robots:
-            robot.session.learn_service_types()
-    if read_logs in modules or diagnose in modules:
-        for robot in fleet.robots:
-            robot.session.keep_logs()
+            _KEEPERS[need](robot.session)
+    stops = [spec.name for spec in specs if spec.stops]
 
     @asynccontextmanager
     async def lifespan(_server: Server[None]) -> AsyncIterator[None]:
@@ -189,10 +228,11 @@ def build_fleet_server(
         spec = withheld.get(name)
         if spec is None:
             return None
-        for robot in fleet.robots:
-            robot.session.guard.record(
-                _withheld_act(spec.name, spec.acts_on, arguments, caller), "withheld: read-only"
-            )
+        if spec.acts_on is not None:
+            for robot in fleet.robots:
+                robot.session.guard.record(
+                    _withheld_act(spec.name, spec.acts_on, arguments, caller), "withheld: read-only"
+                )
         return (
             f"{name} is not available: this server is read-only (its operator started it with --read-only or "
             "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
@@ -201,16 +241,17 @@ def build_fleet_server(
     def robot_check(
         tool: EdgeTool, chosen: tuple[Robot, ...], arguments: dict[str, Any], caller: str | None
     ) -> str | None:
-        """An acting tool on a read-only robot of the fleet: refused, and audited on that robot. Stopping is
-        allowed everywhere."""
-        if tool.acts_on is None or tool.name == stop_robot.SPEC.name:
+        """A tool that is not read-only on a read-only robot of the fleet: refused, and audited on that robot
+        when it acts on it. Stopping is allowed everywhere."""
+        spec = tool.spec
+        if tool.reads or spec is None or spec.stops:
             return None
-        refusal = fleet.read_only_refusal(tool.name, chosen)
-        if refusal is not None:
+        refusal = fleet.read_only_refusal(tool.name, chosen, stops)
+        if refusal is not None and spec.acts_on is not None:
             for robot in chosen:
                 if robot.config.policy.read_only:
                     robot.session.guard.record(
-                        _withheld_act(tool.name, tool.acts_on, arguments, caller), "withheld: read-only"
+                        _withheld_act(tool.name, spec.acts_on, arguments, caller), "withheld: read-only"
                     )
         return refusal
 
@@ -234,16 +275,12 @@ def build_fleet_server(
     ) -> ListPromptsResult:
         return ListPromptsResult(prompts=[])
 
-    some_read_only = fleet.read_only_names if not read_only else []
     server: Server[None] = Server(
         SERVER_NAME,
         version=__version__,
         title="rosbridge MCP server",
         description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
-        instructions=INSTRUCTIONS
-        + (_FLEET_NOTE if fleet.several else "")
-        + (_READ_ONLY_NOTE if read_only else "")
-        + (_READ_ONLY_ROBOTS_NOTE.format(names=", ".join(some_read_only)) if some_read_only else ""),
+        instructions=INSTRUCTIONS + _notes(specs, fleet, read_only),
         lifespan=lifespan,
         get_tool_input_schema=calls.input_schema,
         on_list_tools=calls.list_tools,
@@ -261,13 +298,6 @@ def build_fleet_server(
     return server
 
 
-def _withheld_act(
-    name: str,
-    acts_on: typing.Literal["topic", "service", "action", "parameter"] | None,
-    arguments: dict[str, Any],
-    caller: str | None,
-) -> Act:
+def _withheld_act(name: str, acts_on: ActKind, arguments: dict[str, Any], caller: str | None) -> Act:
     """The audit's act for an acting tool refused before it ran: what it acts through, and its arguments."""
-    if acts_on is None:
-        raise ValueError(f"{name} acts on the robot but its ToolSpec does not say through what (acts_on)")
     return Act(name, acts_on, "", "", arguments, caller=caller)

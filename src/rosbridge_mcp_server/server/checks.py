@@ -9,9 +9,9 @@ Whatever the transport (stdio, Streamable HTTP, in-memory) and protocol era, a `
 3. with several robots, the ``robot`` argument is taken off the call and chooses the robots it runs on
    (``fleet.py``); a missing or unknown one is refused with the robots' names, and an acting tool on a
    read-only robot of the fleet is refused (the server's ``robot_check``);
-4. the arguments as the client sent them go through ``tools/arguments.py`` (unknown keys, booleans for
-   numbers, sizes), JSON text is read, and the tool's own model validates them, once: what does not fit is
-   one sentence naming each wrong argument;
+4. the tool's own strict model validates the arguments as the client sent them, once (``tools/arguments.py``:
+   unknown keys, booleans for numbers, sizes, JSON text for an object): what does not fit is one sentence
+   naming each wrong argument (``failures.py``);
 5. the tool's handler runs with a :class:`~rosbridge_mcp_server.server.adapter.ToolCall` naming the robots,
    the caller the transport authenticated (a token's name, a JWT's subject) and the person's answers, in a
    task of its own (``cancelling.py``: a cancel lets it clean up and cannot end the session; an exception it
@@ -43,8 +43,8 @@ from rosbridge_mcp_server.server.adapter import EdgeTool, ToolCall
 from rosbridge_mcp_server.server.answers import writable
 from rosbridge_mcp_server.server.cancelling import run_call
 from rosbridge_mcp_server.server.failures import arguments_text
-from rosbridge_mcp_server.server.fleet import LIST_ROBOTS, ROBOT_ARGUMENT
-from rosbridge_mcp_server.tools.arguments import argument_problem, parameter_listing, read_json_text
+from rosbridge_mcp_server.server.fleet import ROBOT_ARGUMENT
+from rosbridge_mcp_server.tools.arguments import parameter_listing
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.server.fleet import Fleet, Robot
@@ -83,7 +83,7 @@ class ToolCalls:
     def _listed_as(self, tool: EdgeTool) -> Tool:
         if not tool.on_robot or not self._fleet.several:
             return tool.definition
-        schema = self._fleet.schema_with_robot(tool.input_schema, tool.name, acting=tool.acts_on is not None)
+        schema = self._fleet.schema_with_robot(tool)
         return tool.definition.model_copy(update={"input_schema": schema})
 
     def input_schema(self, name: str) -> dict[str, Any] | None:
@@ -120,34 +120,26 @@ class ToolCalls:
         caller = _caller()
         if tool is None:
             refusal = self._unlisted(name, arguments, caller) if self._unlisted is not None else None
-            if refusal is None and name == LIST_ROBOTS:
-                refusal = (
-                    f"Unknown tool: {LIST_ROBOTS} is listed only when the server drives several robots "
-                    "(start it with --robot NAME=URL once per robot, or --robots FILE); this server drives "
-                    "one robot, and every tool works on it without a robot argument."
-                )
+            refusal = refusal or self._fleet.not_listed(name)
             return refusal_result(refusal or f"Unknown tool: {name}")
         robots: tuple[Robot, ...] = self._fleet.robots[:1]
         if tool.on_robot:
             if self._fleet.several:
                 arguments = dict(arguments)
-                robots, refusal = self._fleet.choose(name, arguments.pop(ROBOT_ARGUMENT, None))
+                every_robot = tool.spec is not None and tool.spec.every_robot
+                robots, refusal = self._fleet.choose(
+                    name, arguments.pop(ROBOT_ARGUMENT, None), every_robot=every_robot
+                )
                 if refusal is not None:
                     return refusal_result(refusal)
             if self._robot_check is not None:
                 refusal = self._robot_check(tool, robots, arguments, caller)
                 if refusal is not None:
                     return refusal_result(refusal)
-        problem = argument_problem(name, arguments, tool.input_schema)
-        if problem is not None:
-            return refusal_result(problem)
-        read, problem = read_json_text(name, arguments, tool.arguments)
-        if problem is not None:
-            return refusal_result(problem)
         try:
-            validated = tool.arguments.model_validate(read)
+            validated = tool.arguments.model_validate(arguments, strict=True)
         except ValidationError as exc:
-            return refusal_result(_arguments_refusal(tool, exc, arguments, read))
+            return refusal_result(arguments_text(name, exc, tool.input_schema))
         call = ToolCall(ctx, robots, caller, params.input_responses)
         # Its own task: a cancel lets it clean up and cannot end the session; a bug is an answer in our words.
         result = writable(await run_call(name, tool.handler(call, validated)))
@@ -155,17 +147,6 @@ class ToolCalls:
             # The calls an answer suggests go to the robot it came from.
             return self._fleet.calls_on(result, robots[0].name, self._tools)
         return result
-
-
-def _arguments_refusal(
-    tool: EdgeTool, error: ValidationError, given: dict[str, Any], read: dict[str, Any]
-) -> str:
-    text = arguments_text(tool.name, error, tool.input_schema)
-    wrong = {str(item["loc"][0]) for item in error.errors() if item["loc"]}
-    for key, value in given.items():
-        if key in wrong and read[key] is not value:
-            text += f" {key} was given as the text {_short(value)}, which is read as JSON."
-    return text
 
 
 def _caller() -> str | None:
@@ -187,8 +168,3 @@ def _kind(value: Any) -> str:
     if isinstance(value, str):
         return "a string"
     return f"a {type(value).__name__}"
-
-
-def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."

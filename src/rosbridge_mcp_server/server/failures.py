@@ -3,9 +3,12 @@ do not fit a tool (one line per wrong argument, instead of pydantic's dump)."""
 
 from __future__ import annotations
 
+import difflib
+import reprlib
 from typing import Any
 
 from pydantic import ValidationError
+from pydantic_core import ErrorDetails
 
 from rosbridge_mcp_server.errors import (
     ActionError,
@@ -18,7 +21,7 @@ from rosbridge_mcp_server.errors import (
 )
 from rosbridge_mcp_server.robot.text import shown
 from rosbridge_mcp_server.server.advice import advised
-from rosbridge_mcp_server.tools.arguments import parameter_listing
+from rosbridge_mcp_server.tools.arguments import MAX_TEXT_ARGUMENT, parameter_listing
 from rosbridge_mcp_server.tools.base import ToolFailure
 
 __all__ = ["arguments_text", "error_text"]
@@ -78,33 +81,105 @@ def _sentence(text: str) -> str:
 
 
 def arguments_text(tool: str, error: ValidationError, schema: dict[str, Any]) -> str:
-    problems: list[str] = []
-    union_kinds: dict[str, list[str]] = {}
-    union_inputs: dict[str, Any] = {}
-    for item in error.errors(include_url=False):
-        loc = [str(part) for part in item["loc"]]
-        where = loc[0] if loc else "(arguments)"
-        if item["type"] == "missing":
-            problems.append(f"{where}: required but missing")
-        elif len(loc) == 2 and loc[1] in _UNION_KINDS:
-            # pydantic reports each arm of `dict | str` separately, named by its type; say it once.
-            if where not in union_kinds:
-                problems.append(where)
-            union_kinds.setdefault(where, []).append(_UNION_KINDS[loc[1]])
-            union_inputs[where] = item.get("input")
-        else:
-            problems.append(
-                f"{'.'.join(loc) or where}: {item['msg'].lower()} (got {_short(item.get('input'))})"
-            )
-    for where, kinds in union_kinds.items():
-        index = problems.index(where)
-        problems[index] = f"{where}: expected {' or '.join(kinds)} (got {_short(union_inputs[where])})"
-    return f"Invalid arguments for {tool}: {'; '.join(problems)}. It takes: {parameter_listing(schema)}."
+    """One sentence for arguments the tool's model refused: the unknown keys first (with the likely meant
+    one), then each wrong argument in our words, then what the tool takes (*schema*, as listed)."""
+    items = error.errors(include_url=False)
+    known = list(schema.get("properties", {}))
+    unknown = [str(item["loc"][0]) for item in items if _unknown_argument(item)]
+    problems = [_unknown(unknown, known)] if unknown else []
+    for item in items:
+        if item["type"] == "extra_forbidden" and not _unknown_argument(item):
+            # A key an object argument does not take (qos.depht), with the likely meant one.
+            where = ".".join(str(part) for part in item["loc"][:-1])
+            problems.append(f"{where}: unknown key {_key(str(item['loc'][-1]), _keys_at(schema, item))}")
+        elif not _unknown_argument(item):
+            problems.append(_problem(item) + _example(item, schema))
+    return (
+        f"Invalid arguments for {tool}: {'; '.join(problems)}. Nothing was sent. "
+        f"It takes: {parameter_listing(schema)}."
+    )
 
 
-_UNION_KINDS = {"dict[str,any]": "a JSON object", "str": "a string", "float": "a number", "int": "an integer"}
+def _example(item: ErrorDetails, schema: dict[str, Any]) -> str:
+    """What an object argument given in the wrong form takes, as its listed description says (with an
+    example); nothing for any other problem."""
+    if item["type"] not in _FORM_KINDS or len(item["loc"]) != 1:
+        return ""
+    described = schema.get("properties", {}).get(str(item["loc"][0]), {})
+    description = described.get("description") if isinstance(described, dict) else None
+    return f" (it takes: {description})" if isinstance(description, str) else ""
+
+
+def _unknown_argument(item: ErrorDetails) -> bool:
+    return item["type"] == "extra_forbidden" and len(item["loc"]) == 1
+
+
+def _keys_at(schema: dict[str, Any], item: ErrorDetails) -> list[str]:
+    """The keys the object holding the unknown one takes, as the listed schema says."""
+    node: Any = schema
+    for part in item["loc"][:-1]:
+        node = node.get("properties", {}).get(str(part), {}) if isinstance(node, dict) else {}
+    return list(node.get("properties", {})) if isinstance(node, dict) else []
+
+
+def _meant(key: str, known: list[str]) -> str:
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.7) if len(key) <= 100 else []
+    return f" (did you mean {close[0]}?)" if close else ""
+
+
+def _unknown(keys: list[str], known: list[str]) -> str:
+    shown = ", ".join(_key(key, known) for key in keys[:5])
+    more = ", ..." if len(keys) > 5 else ""
+    return f"unknown argument{'s' if len(keys) > 1 else ''} {shown}{more}"
+
+
+def _key(key: str, known: list[str]) -> str:
+    return (repr(key) if len(key) <= 40 else repr(key[:37]) + "...") + _meant(key, known)
+
+
+def _problem(item: ErrorDetails) -> str:
+    """One wrong argument: where (``qos.depth``), then what is wrong with it."""
+    where = ".".join(str(part) for part in item["loc"]) or "(arguments)"
+    kind, given = item["type"], item.get("input")
+    if kind == "missing":
+        return f"{where}: required but missing"
+    if kind == "string_too_long" and isinstance(given, str):
+        limit = item.get("ctx", {}).get("max_length", MAX_TEXT_ARGUMENT)
+        return (
+            f"{where}: {len(given)} characters, more than the {limit} this argument may have (names and ids "
+            "are far shorter)"
+        )
+    if isinstance(given, bool) and kind in _NUMBER_KINDS:
+        return f"{where}: expected a number, got {str(given).lower()} (a boolean is not a number)"
+    if kind in _OURS:
+        return f"{where}: {item['msg']}"  # already our words, and the value may be large
+    message = item["msg"][:1].lower() + item["msg"][1:]
+    return f"{where}: {_WORDS.get(kind, message)} (got {_short(given)})"
+
+
+#: pydantic's error types for a value that should have been a number.
+_NUMBER_KINDS = frozenset({"float_type", "int_type", "int_from_float", "float_parsing", "int_parsing"})
+#: A JSON object given in the wrong form: the refusal says what the argument takes, with its example.
+_FORM_KINDS = frozenset({"json_text", "json_object", "dict_type"})
+#: Refusals worded by tools/arguments.py.
+_OURS = frozenset({"json_text", "json_nesting", "json_object", "payload"})
+#: pydantic's words for a wrong kind of value, in ours.
+_WORDS = {
+    "dict_type": "expected a JSON object",
+    "model_type": "expected a JSON object",
+    "list_type": "expected a list",
+    "string_type": "expected a string",
+    "bool_type": "expected true or false",
+    "float_type": "expected a number",
+    "int_type": "expected an integer",
+}
+
+
+#: A value shown in a refusal: a few levels and characters of it, whatever its size or nesting.
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxstring, _SHORT.maxother, _SHORT.maxdict, _SHORT.maxlist = 2, 40, 40, 4, 4
 
 
 def _short(value: Any) -> str:
-    text = repr(value)
+    text = _SHORT.repr(value)
     return text if len(text) <= 60 else text[:57] + "..."

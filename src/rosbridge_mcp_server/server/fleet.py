@@ -3,13 +3,15 @@ activity, guard).
 
 With one robot nothing here shows: tools take no ``robot`` argument and ``tools/list`` is as before. With
 several, the edge (``checks.py``) takes the ``robot`` argument off every call before the tool's arguments
-are validated (:meth:`Fleet.choose`) and hands the chosen robots to the tool's handler with the call;
-``stop_robot`` without one stops every robot. ``list_robots`` says what each robot is.
+are validated (:meth:`Fleet.choose`) and hands the chosen robots to the tool's handler with the call; a
+tool whose spec says ``every_robot`` (``stop_robot``) runs on every robot without one. ``list_robots`` says
+what each robot is.
 
 A robot whose policy is read-only (``read_only = true`` in the fleet file, or the whole server read-only) is
 read-only in a fleet too: an acting tool's ``robot`` property offers only the robots that may act, and a call
 naming a read-only robot is refused by the checks (:meth:`Fleet.read_only_refusal`) before the tool runs, so
-nothing reaches its bridge (which may be another robot's too). ``stop_robot`` stays allowed on every robot.
+nothing reaches its bridge (which may be another robot's too). The stop (a spec's ``stops``) stays allowed on
+every robot. What a tool is comes from its spec (``EdgeTool.spec``), never from its name.
 """
 
 from __future__ import annotations
@@ -31,13 +33,11 @@ if typing.TYPE_CHECKING:
     from rosbridge_mcp_server.config import Config
     from rosbridge_mcp_server.robot.session import RobotSession
 
-__all__ = ["LIST_ROBOTS", "ROBOT_ARGUMENT", "STOP_ALL", "Fleet", "Robot", "list_robots_tool"]
+__all__ = ["LIST_ROBOTS", "ROBOT_ARGUMENT", "Fleet", "Robot", "list_robots_tool"]
 
 ROBOT_ARGUMENT = "robot"
 #: The tool about the fleet itself: it runs on no robot and takes no ``robot`` argument.
 LIST_ROBOTS = "list_robots"
-#: The one tool that, called without ``robot`` on a fleet, acts on every robot.
-STOP_ALL = "stop_robot"
 
 
 @dataclass(frozen=True)
@@ -76,8 +76,9 @@ class Fleet:
         """The robots an acting tool may act on."""
         return [robot.name for robot in self.robots if not robot.config.policy.read_only]
 
-    def read_only_refusal(self, tool: str, robots: Sequence[Robot]) -> str | None:
-        """The sentence refusing acting *tool* on *robots* when one of them is read-only, or ``None``."""
+    def read_only_refusal(self, tool: str, robots: Sequence[Robot], stops: Sequence[str]) -> str | None:
+        """The sentence refusing acting *tool* on *robots* when one of them is read-only, or ``None``; *stops*
+        are the tools that stop the robot, allowed everywhere."""
         read_only = [robot.name for robot in robots if robot.config.policy.read_only]
         if not read_only:
             return None
@@ -89,14 +90,28 @@ class Fleet:
         )
         return (
             f"{tool} is not available on {', '.join(read_only)}: that robot is read-only (read_only = true "
-            f"in its policy or the fleet file), so nothing was sent.{can} Reading tools work on every robot, "
-            "and stop_robot too."
+            f"in its policy or the fleet file), so nothing was sent.{can} Reading tools work on every robot"
+            + (f", and {' and '.join(stops)} too." if stops else ".")
         )
 
-    def choose(self, tool: str, name: object) -> tuple[tuple[Robot, ...], str | None]:
-        """The robots a call of *tool* with ``robot=name`` runs on, or a refusal naming the robots."""
+    def not_listed(self, tool: str) -> str | None:
+        """Why the fleet's own tool *tool* is not listed (``list_robots`` on a server of one robot), or
+        ``None``."""
+        if tool != LIST_ROBOTS or self.several:
+            return None
+        return (
+            f"Unknown tool: {LIST_ROBOTS} is listed only when the server drives several robots (start it "
+            "with --robot NAME=URL once per robot, or --robots FILE); this server drives one robot, and "
+            "every tool works on it without a robot argument."
+        )
+
+    def choose(
+        self, tool: str, name: object, *, every_robot: bool = False
+    ) -> tuple[tuple[Robot, ...], str | None]:
+        """The robots a call of *tool* with ``robot=name`` runs on, or a refusal naming the robots; without a
+        name, every robot when the tool's spec says ``every_robot``."""
         if name is None:
-            if tool == STOP_ALL:
+            if every_robot:
                 return self.robots, None
             return (), (
                 f"{tool} needs the robot argument: this server drives {len(self.robots)} robots "
@@ -126,15 +141,20 @@ class Fleet:
             data = _each_text(data, lambda text: _robot_in_calls(text, robot, tools))
         return result.model_copy(update={"content": content, "structured_content": data})
 
-    def schema_with_robot(self, schema: dict[str, Any], tool: str, *, acting: bool = False) -> dict[str, Any]:
-        """*schema* with the ``robot`` property (required, except for stop_robot) when there are several; an
-        *acting* tool's offers only the robots that are not read-only."""
+    def schema_with_robot(self, tool: EdgeTool) -> dict[str, Any]:
+        """*tool*'s input schema with the ``robot`` property when there are several: required unless its spec
+        says ``every_robot``; an acting tool's offers only the robots that are not read-only, unless it is
+        the stop."""
+        schema = tool.input_schema
         if not self.several:
             return schema
-        names = self.acting_names if acting and tool != STOP_ALL else self.names
+        spec = tool.spec
+        every = spec is not None and spec.every_robot
+        anywhere = tool.reads or (spec is not None and spec.stops)
+        names = self.names if anywhere else self.acting_names
         description = "Which robot: " + ", ".join(names)
-        if tool == STOP_ALL:
-            description += " (omit to stop every robot)"
+        if every:
+            description += f" (omit to {'stop' if spec is not None and spec.stops else 'run on'} every robot)"
         elif names != self.names:
             description += f" ({', '.join(self.read_only_names)}: read-only)"
         properties = {
@@ -142,7 +162,7 @@ class Fleet:
             ROBOT_ARGUMENT: {"type": "string", "enum": names, "description": description},
         }
         required = list(schema.get("required", []))
-        if tool != STOP_ALL:
+        if not every:
             required.append(ROBOT_ARGUMENT)
         return {**schema, "properties": properties, "required": required}
 

@@ -3,7 +3,7 @@
 The server is the SDK's low-level ``mcp.server.Server`` (``on_list_tools``, ``on_call_tool``,
 ``add_request_handler``, ``run``, ``streamable_http_app``), which is documented and owns our schemas and
 results exactly; the tools' handlers use the request context's session (progress, elicitation) and
-``mcp.server.elicitation``. One thing has no documented way, and stays here; ``tests/mcp/test_sdk_seam.py``
+``mcp.server.elicitation``. What has no documented way stays here; ``tests/mcp/test_sdk_seam.py``
 holds it to its effect, so an SDK upgrade that changes it fails there, by name, instead of somewhere in a
 call:
 
@@ -19,6 +19,13 @@ call:
   session's own channel (``related_request_id=None``: the call's request was answered with the task). It
   relies on the tool handlers reaching progress and the person only through ``ctx.session`` (ours do:
   ``adapter.py``) and on the runner handing ``ctx.session`` on untouched.
+* :func:`stdio_streams`: the SDK's stdio transport (``mcp.server.stdio.stdio_server``, documented) given
+  streams of ours (``stdio.py``: lines bounded, pipes on the event loop). Its parameters are typed
+  ``anyio.AsyncFile[str]``, but all it uses of them is this contract, which :class:`LineSource` and
+  :class:`LineSink` list: it reads stdin only by ``async for line in stdin`` (one JSON-RPC message a line;
+  the end of iteration is the end of the session) and writes each message to stdout as
+  ``await stdout.write(json + "\n")`` then ``await stdout.flush()``. Given a stream, it leaves fd 0 and fd 1
+  alone ("explicit streams skip the claim"): the caller diverts them itself (``stdio.py``).
 * :func:`cancelled_by_client`: whether the client sent ``notifications/cancelled`` for the request being
   handled. The dispatch context has it (``cancel_requested``, documented), but the low-level server's request
   context reaches it only through its session's private ``_request_outbound``
@@ -27,14 +34,50 @@ call:
 
 from __future__ import annotations
 
-from collections.abc import Awaitable, Callable
-from typing import Any, cast
+import contextlib
+from collections.abc import AsyncIterator, Awaitable, Callable
+from typing import Any, Protocol, cast
 
 import anyio
+from mcp.server.stdio import stdio_server
 from mcp.shared.message import SessionMessage
 from mcp.types import JSONRPCError
 
-__all__ = ["answering_stream", "cancelled_by_client", "task_session"]
+__all__ = [
+    "LineSink",
+    "LineSource",
+    "answering_stream",
+    "cancelled_by_client",
+    "stdio_streams",
+    "task_session",
+]
+
+
+class LineSource(Protocol):
+    """What the SDK's stdio transport reads as stdin: text lines, by ``async for`` alone."""
+
+    def __aiter__(self) -> AsyncIterator[str]: ...
+
+
+class LineSink(Protocol):
+    """What the SDK's stdio transport writes to as stdout: each message ``write(json + "\n")``, then
+    ``flush()``."""
+
+    async def write(self, text: str, /) -> object: ...
+
+    async def flush(self) -> object: ...
+
+
+@contextlib.asynccontextmanager
+async def stdio_streams(lines: LineSource | None, out: LineSink | None) -> AsyncIterator[tuple[Any, Any]]:
+    """The SDK's stdio transport reading *lines* and writing to *out* (``None``: the process's stdin or
+    stdout, which the SDK then diverts itself); its read and write streams, as ``stdio_server`` yields
+    them."""
+    stdin = cast("anyio.AsyncFile[str] | None", lines)
+    stdout = cast("anyio.AsyncFile[str] | None", out)
+    async with stdio_server(stdin=stdin, stdout=stdout) as streams:
+        yield streams
+
 
 #: The reply for an unreadable line (the exception the transport handed on), or None to answer nothing.
 ReplyFor = Callable[[Exception], JSONRPCError | None]

@@ -16,7 +16,9 @@ JSON-RPC error reply (-32700 / -32600) under the request's id when the text show
 answer.
 
 Stray output stays off the wire, as with the SDK's own transport: while serving, fd 0 points at the null
-device and fd 1 at stderr, the wire is served from private duplicates, and both are restored on the way out.
+device and fd 1 at stderr, the wire is served from private duplicates, and both are restored on the way out
+(:func:`_diverted`; the SDK diverts a descriptor itself only when it is given no stream for it, and what it
+relies on of the streams it is given is listed in ``server/sdk.py``: :func:`~.sdk.stdio_streams`).
 
 Lines are bounded: the transport reads a line whole, so a client could make the server hold any amount of
 memory with one line. We give it stdin's lines ourselves (:class:`_BoundedLines`): a line longer than
@@ -35,14 +37,13 @@ import re
 import stat
 import sys
 from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
-from typing import TYPE_CHECKING, Any, BinaryIO, cast
+from typing import TYPE_CHECKING, Any, BinaryIO
 
 import anyio
-from mcp.server.stdio import stdio_server
 from mcp.types import INVALID_REQUEST, PARSE_ERROR, ErrorData, JSONRPCError
 from pydantic import ValidationError
 
-from rosbridge_mcp_server.server.sdk import answering_stream
+from rosbridge_mcp_server.server.sdk import LineSink, LineSource, answering_stream, stdio_streams
 
 if TYPE_CHECKING:
     from mcp.server import Server
@@ -62,31 +63,39 @@ _TOO_LONG = "rosbridge_mcp_line_too_long"
 _TAIL_BYTES = 1000
 _CHUNK_BYTES = 1024 * 1024
 
-#: Streams for the SDK's transport: what it reads lines from and what it writes them to (None: its own).
-_Streams = tuple["anyio.AsyncFile[str] | None", "anyio.AsyncFile[str] | None"]
-
 
 async def serve_stdio(server: Server[Any]) -> None:
     """Serve ``server`` on this process's stdin/stdout until stdin closes."""
     async with (
-        _wire() as (stdin, stdout),
-        stdio_server(stdin=stdin, stdout=stdout) as (read_stream, write_stream),
+        _wire() as (lines, out),
+        stdio_streams(lines, out) as (read_stream, write_stream),
     ):
         answering = answering_stream(read_stream, write_stream, reply_for_unreadable)
         await server.run(answering, write_stream, server.create_initialization_options())
 
 
 @contextlib.asynccontextmanager
-async def _wire() -> AsyncIterator[_Streams]:
-    """The streams for the SDK's transport: asyncio pipes when fd 0 and fd 1 are pipes or sockets; else
-    stdin's lines read by a worker thread and stdout left to the SDK (both ``None``: stdin is not fd 0)."""
-    if sys.platform != "win32" and _is_pipe_or_socket(0) and _is_pipe_or_socket(1):
+async def _wire() -> AsyncIterator[tuple[LineSource | None, LineSink | None]]:
+    """What the SDK's transport reads and writes: asyncio pipes when fd 0 and fd 1 are pipes or sockets; else
+    stdin's lines read by a worker thread and stdout left to the SDK (which then diverts fd 1 itself); both
+    ``None`` when stdin is not fd 0 (the SDK's own transport, whole)."""
+    if sys.platform == "win32":
+        yield None, None
+    elif _is_pipe_or_socket(0) and _is_pipe_or_socket(1):
         async with _pipes() as streams:
             yield streams
-        return
-    with _stdin_lines() as lines:
-        # The SDK's transport only iterates over its stdin (``async for line in stdin``).
-        yield cast("anyio.AsyncFile[str] | None", lines), None
+    elif _backed_by(sys.stdin, 0):
+        with _diverted(0, _null) as private:
+            yield _BoundedLines.from_file(os.fdopen(private, "rb", closefd=False)), None
+    else:
+        yield None, None
+
+
+def _backed_by(stream: Any, fd: int) -> bool:
+    try:
+        return stream is not None and bool(stream.buffer.fileno() == fd)
+    except (AttributeError, OSError, ValueError):
+        return False
 
 
 def _is_pipe_or_socket(fd: int) -> bool:
@@ -97,56 +106,70 @@ def _is_pipe_or_socket(fd: int) -> bool:
     return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
 
 
-@contextlib.asynccontextmanager
-async def _pipes() -> AsyncIterator[_Streams]:
-    """stdin's lines and a stdout writer on the event loop, from private duplicates of fd 0 and fd 1 while
-    fd 0 points at the null device and fd 1 at stderr."""
+def _null() -> int:
+    return os.open(os.devnull, os.O_RDONLY)
+
+
+def _stderr() -> int:
+    return os.dup(2)
+
+
+@contextlib.contextmanager
+def _diverted(fd: int, diversion: Callable[[], int]) -> Iterator[int]:
+    """A private duplicate of *fd* (the wire, above the standard descriptors and closed in child processes)
+    while *fd* points at *diversion* (the null device for stdin, stderr for stdout), so a child process or a
+    stray read or print misses the wire; *fd* is restored on the way out, blocking again.
+
+    The SDK's transport diverts fd 0 and fd 1 so only when it is given no streams (``server/sdk.py``)."""
     import fcntl  # noqa: PLC0415 - POSIX only
 
-    wire_in = fcntl.fcntl(0, fcntl.F_DUPFD_CLOEXEC, 3)
-    wire_out = fcntl.fcntl(1, fcntl.F_DUPFD_CLOEXEC, 3)
-    null = os.open(os.devnull, os.O_RDONLY)
+    private = fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 3)
+    target = diversion()
     try:
-        os.dup2(null, 0)
-        os.dup2(2, 1)
+        os.dup2(target, fd)
     finally:
-        os.close(null)
+        os.close(target)
+    try:
+        yield private
+    finally:
+        # The event loop made the wire non-blocking; a host passing one socket as both ends shares that flag.
+        with contextlib.suppress(OSError):
+            os.set_blocking(private, True)
+        with contextlib.suppress(OSError):
+            os.dup2(private, fd)
+        os.close(private)
+
+
+@contextlib.asynccontextmanager
+async def _pipes() -> AsyncIterator[tuple[LineSource, LineSink]]:
+    """stdin's lines and a stdout writer on the event loop, from the private duplicates of fd 0 and fd 1."""
     loop = asyncio.get_running_loop()
     read_transport: asyncio.ReadTransport | None = None
     writer: asyncio.StreamWriter | None = None
-    try:
-        reader = asyncio.StreamReader(limit=_CHUNK_BYTES)
-        read_transport, _ = await loop.connect_read_pipe(
-            lambda: asyncio.StreamReaderProtocol(reader), os.fdopen(wire_in, "rb", buffering=0, closefd=False)
-        )
-        write_transport, write_protocol = await loop.connect_write_pipe(
-            asyncio.streams.FlowControlMixin, os.fdopen(wire_out, "wb", buffering=0, closefd=False)
-        )
-        writer = asyncio.StreamWriter(write_transport, write_protocol, None, loop)
-        yield (
-            cast("anyio.AsyncFile[str]", _BoundedLines.from_stream(reader)),
-            cast("anyio.AsyncFile[str]", _PipeOut(writer)),
-        )
-    finally:
-        if read_transport is not None:
-            read_transport.close()
-        if writer is not None:
-            # What is still buffered goes out before the wire is handed back (the host may be waiting for it).
-            with contextlib.suppress(OSError, TimeoutError):
-                await asyncio.wait_for(writer.drain(), 5)
-            writer.close()
-        # The event loop made the wire non-blocking; a host passing one socket as both ends shares that flag.
-        for fd in (wire_in, wire_out):
-            with contextlib.suppress(OSError):
-                os.set_blocking(fd, True)
-        os.dup2(wire_in, 0)
-        os.dup2(wire_out, 1)
-        os.close(wire_in)
-        os.close(wire_out)
+    with _diverted(0, _null) as wire_in, _diverted(1, _stderr) as wire_out:
+        try:
+            reader = asyncio.StreamReader(limit=_CHUNK_BYTES)
+            read_transport, _ = await loop.connect_read_pipe(
+                lambda: asyncio.StreamReaderProtocol(reader),
+                os.fdopen(wire_in, "rb", buffering=0, closefd=False),
+            )
+            write_transport, write_protocol = await loop.connect_write_pipe(
+                asyncio.streams.FlowControlMixin, os.fdopen(wire_out, "wb", buffering=0, closefd=False)
+            )
+            writer = asyncio.StreamWriter(write_transport, write_protocol, None, loop)
+            yield _BoundedLines.from_stream(reader), _PipeOut(writer)
+        finally:
+            if read_transport is not None:
+                read_transport.close()
+            if writer is not None:
+                # What is still buffered goes out before the wire is handed back (the host may wait for it).
+                with contextlib.suppress(OSError, TimeoutError):
+                    await asyncio.wait_for(writer.drain(), 5)
+                writer.close()
 
 
 class _PipeOut:
-    """stdout for the SDK's transport (it calls ``write`` then ``flush`` for each message): written from the
+    """stdout for the SDK's transport (a :class:`~rosbridge_mcp_server.server.sdk.LineSink`): written from the
     event loop, ``flush`` waiting only while the host reads slower than we write."""
 
     def __init__(self, writer: asyncio.StreamWriter) -> None:
@@ -159,38 +182,11 @@ class _PipeOut:
         await self._writer.drain()
 
 
-@contextlib.contextmanager
-def _stdin_lines() -> Iterator[_BoundedLines | None]:
-    """stdin's lines, bounded, from a private copy of fd 0 while fd 0 points at the null device (so a child
-    process or stray read gets end of file, as with the SDK's own transport); ``None`` (the SDK reads stdin
-    itself) when stdin is not fd 0."""
-    try:
-        backed = sys.stdin is not None and sys.stdin.buffer.fileno() == 0
-    except (AttributeError, OSError, ValueError):
-        backed = False
-    if not backed or sys.platform == "win32":
-        yield None
-        return
-    import fcntl  # noqa: PLC0415 - POSIX only
-
-    # Above the standard descriptors, as the SDK's transport does, and closed in child processes.
-    private = fcntl.fcntl(0, fcntl.F_DUPFD_CLOEXEC, 3)
-    null = os.open(os.devnull, os.O_RDONLY)
-    os.dup2(null, 0)
-    os.close(null)
-    binary = os.fdopen(private, "rb")
-    try:
-        yield _BoundedLines.from_file(binary)
-    finally:
-        with contextlib.suppress(OSError):
-            os.dup2(private, 0)
-        binary.close()
-
-
 class _BoundedLines:
-    """Lines as text (bad UTF-8 replaced, as the SDK's transport does), none longer than
-    :data:`MAX_LINE_BYTES`: an over-long line is read to its end without being kept, and handed on as a small
-    JSON object that is no JSON-RPC message, which :func:`reply_for_unreadable` answers.
+    """stdin for the SDK's transport (a :class:`~rosbridge_mcp_server.server.sdk.LineSource`): lines as text
+    (bad UTF-8 replaced, as the SDK's transport does), none longer than :data:`MAX_LINE_BYTES`: an over-long
+    line is read to its end without being kept, and handed on as a small JSON object that is no JSON-RPC
+    message, which :func:`reply_for_unreadable` answers.
 
     ``readline(n)`` gives the next piece of a line: at most about ``n`` bytes, ending at a newline when one
     comes first; ``b""`` at the end.

@@ -88,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
         choices=WORLDS,
         default="turtle",
         help="turtle (the small demo, default), nav2 (a Nav2-scale mobile robot: ~36 nodes, 14 actions) "
-        "or arm (ROS 2: the turtle with a 6-joint arm and a gripper under ros2_control)",
+        "or arm (the turtle with a 6-joint arm and a gripper under ros2_control; on ROS 1 ros_control)",
     )
     parser.add_argument(
         "--robots",
@@ -191,8 +191,6 @@ def run(argv: list[str] | None = None) -> int:
     faults = tuple(f.strip() for f in args.fault.split(",") if f.strip())
     if faults and args.world not in ("nav2", "arm"):
         parser.error("--fault needs --world nav2 or --world arm")
-    if args.world == "arm" and args.dialect != "ros2":
-        parser.error("--world arm needs --dialect ros2 (ROS 1's control_msgs are not simulated)")
     unknown = [f for f in faults if f not in ARM_FAULTS]
     if args.world == "arm" and unknown:
         parser.error(f"--fault: unknown arm fault {', '.join(unknown)}; choose from {', '.join(ARM_FAULTS)}")

@@ -15,12 +15,11 @@ import logging
 import math
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import cbor2
-from websockets.asyncio.server import ServerConnection
 from websockets.exceptions import ConnectionClosed
 
 from rosbridge_mcp_server.sim.interfaces.base import ConversionError
@@ -32,6 +31,7 @@ __all__ = [
     "Connection",
     "Dumps",
     "OutgoingMessage",
+    "PeerSocket",
     "SubscriptionOptions",
     "TopicSubscription",
     "dumps_standard",
@@ -159,6 +159,22 @@ class TopicSubscription:
         )
 
 
+class PeerSocket(Protocol):
+    """What the bridge uses of a client's socket: a ``websockets`` server connection, or the bridge's end of
+    an in-memory one (``sim/memory.py``)."""
+
+    @property
+    def remote_address(self) -> Any: ...
+
+    async def send(self, message: str | bytes) -> None: ...
+
+    async def close(self, code: int = 1000, reason: str = "") -> None: ...
+
+    async def wait_closed(self) -> None: ...
+
+    def __aiter__(self) -> AsyncIterator[str | bytes]: ...
+
+
 @dataclass
 class _Queued:
     droppable: bool
@@ -171,7 +187,7 @@ class Connection:
 
     def __init__(
         self,
-        ws: ServerConnection,
+        ws: PeerSocket,
         cid: int,
         *,
         fragment_size: int | None,

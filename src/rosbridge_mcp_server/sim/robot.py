@@ -15,6 +15,7 @@ from rosbridge_mcp_server.sim.actions import HostedActionServer
 from rosbridge_mcp_server.sim.bridge import Bridge, BridgeConfig
 from rosbridge_mcp_server.sim.graph import Graph
 from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
+from rosbridge_mcp_server.sim.memory import MemoryClientEnd, MemoryServer
 from rosbridge_mcp_server.sim.nodes import CameraSettings, WorldNodes
 from rosbridge_mcp_server.sim.nodes.arm import ArmWorld
 from rosbridge_mcp_server.sim.nodes.nav2 import Nav2World
@@ -108,8 +109,6 @@ class SimulatedRobot:
             raise ValueError("map_cells must be at least 8")
         if world not in WORLDS:
             raise ValueError(f"world must be one of {', '.join(WORLDS)}, not {world!r}")
-        if world == "arm" and dialect != "ros2":
-            raise ValueError("world='arm' needs dialect='ros2' (ROS 1's control_msgs are not simulated)")
         if robots < 1 or (robots > 1 and world != "nav2"):
             raise ValueError(f"robots must be >= 1, and more than one needs world='nav2' (not {robots!r})")
         if action_step <= 0 or slow_service_seconds < 0:
@@ -183,6 +182,7 @@ class SimulatedRobot:
             self.player.build()
         self.world_name = world
         self._server: Server | None = None
+        self._memory = MemoryServer(self.bridge.serve_connection, MAX_INCOMING_FRAME)
 
     @property
     def url(self) -> str:
@@ -217,12 +217,33 @@ class SimulatedRobot:
 
     @property
     def running(self) -> bool:
-        """Whether the server is accepting connections."""
+        """Whether the server is accepting connections (on its port, or in memory only)."""
+        return self._memory.accepts
+
+    @property
+    def listening(self) -> bool:
+        """Whether the server listens on a port (:meth:`start` without ``listen=False``)."""
         return self._server is not None
 
-    async def start(self) -> None:
-        """Start serving (again, on the same port after :meth:`stop`)."""
-        if self._server is not None:
+    async def dial_in_memory(self, timeout: float) -> MemoryClientEnd:
+        """A connection to this robot's bridge in the same process, no socket: pass the method itself as the
+        client's transport (``RosbridgeClient(robot.url, transport=robot.dial_in_memory)``).
+        ``ConnectionRefusedError`` while the robot is stopped."""
+        return await self._memory.dial(timeout)
+
+    async def start(self, *, listen: bool = True) -> None:
+        """Start serving (again, on the same port after :meth:`stop`); ``listen=False`` opens no port: the
+        robot is then reached through :meth:`dial_in_memory` alone (:attr:`url` still names port 0)."""
+        if self._memory.accepts:
+            return
+        if not listen:
+            self._memory.accepts = True
+            self._nodes.start()
+            log.info(
+                "simulated robot (%s, %s) serving rosbridge v2 in memory",
+                self.dialect,
+                self.bridge.config.distro,
+            )
             return
         self._server = await serve(
             self._handle,
@@ -244,6 +265,7 @@ class SimulatedRobot:
         ):
             if key in params:
                 params[key] = self.port
+        self._memory.accepts = True
         self._nodes.start()
         log.info(
             "simulated robot (%s, %s%s%s) serving rosbridge v2 on %s",
@@ -260,12 +282,15 @@ class SimulatedRobot:
         Like a rosbridge process that exits, client-advertised services and actions vanish and running goals
         end.
         """
-        server, self._server = self._server, None
-        if server is None:
+        if not self._memory.accepts:
             return
-        server.close(close_connections=True)
+        server, self._server = self._server, None
+        if server is not None:
+            server.close(close_connections=True)
+        await self._memory.close_all()
         self.bridge.cancel_all()
-        await server.wait_closed()
+        if server is not None:
+            await server.wait_closed()
         await self._nodes.stop()
         for name in [n for n, e in self.graph.services.items() if e.owner]:
             self.graph.remove_service(name)

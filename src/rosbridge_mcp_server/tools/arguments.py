@@ -1,85 +1,117 @@
-"""Checks every tool's arguments get first, before they are converted to the tool's parameters.
+"""A tool's arguments: one strict model per tool, validated once, and the types its parameters use.
 
-Conversion to the parameters is lenient (pydantic's): it would take ``true`` for the number 1, and JSON text
-given for an object is read as the object (models often send objects as strings). Here, before that:
+The model is made from the parameters of the tool's ``run`` (``server/adapter.py``: ``arguments_model``)
+with :data:`ARGUMENTS_CONFIG`, so one validation does every check:
 
+* strict types: ``true`` is no number and ``"5"`` no number (a JSON client sends numbers as numbers);
 * a key the tool does not take is an error naming it (the input schemas say ``additionalProperties: false``);
-* a boolean given for a number is an error;
 * bounded work: a plain string argument (a name, an id) has at most :data:`MAX_TEXT_ARGUMENT` characters,
   and a message, request or goal at most :data:`~rosbridge_mcp_server.client.frames.MAX_NESTING` levels
   and what rosbridge takes in one frame (:func:`~rosbridge_mcp_server.client.frames.payload_problem`).
 
-Each refusal names the argument and the limit. :func:`read_json_text` then reads JSON text given for an
-argument that is not plain text, and checks what it read as it checks an object given as one.
+Models often send an object as JSON text: :data:`JsonObject` (a message, a request, a goal) takes either
+and is the object; :data:`JsonValue` (a value of any type: a parameter's value, navigate_to's goal) reads
+text that holds an object, a list or ``null``; :data:`FROM_JSON_TEXT` lets a list or an object parameter
+take JSON text. What each refuses names the argument and the limit (``server/failures.py`` words the whole
+refusal).
 """
 
 from __future__ import annotations
 
-import difflib
 import json
-from typing import Any
+from typing import Annotated, Any
 
-from pydantic import BaseModel
+from pydantic import AfterValidator, BeforeValidator, ConfigDict, WithJsonSchema
+from pydantic_core import PydanticCustomError
 
-from rosbridge_mcp_server.robot.wording import full_stop
-from rosbridge_mcp_server.tools.base import payload_problem
+from rosbridge_mcp_server.client.frames import nesting_text, payload_problem
 
-__all__ = ["MAX_TEXT_ARGUMENT", "argument_problem", "parameter_listing", "read_json_text"]
+__all__ = [
+    "ARGUMENTS_CONFIG",
+    "FROM_JSON_TEXT",
+    "MAX_TEXT_ARGUMENT",
+    "NO_FIELDS",
+    "JsonObject",
+    "JsonValue",
+    "parameter_listing",
+]
 
 #: Longest plain string argument: names and ids are far shorter (a ROS name has at most 247 characters).
 MAX_TEXT_ARGUMENT = 1000
 
+#: The configuration of every tool's arguments model.
+ARGUMENTS_CONFIG = ConfigDict(
+    strict=True, extra="forbid", str_max_length=MAX_TEXT_ARGUMENT, arbitrary_types_allowed=True
+)
 
-def argument_problem(tool: str, arguments: dict[str, Any], schema: dict[str, Any]) -> str | None:
-    """The sentence refusing ``arguments`` for ``tool`` (its input ``schema`` at hand), or ``None``."""
-    properties: dict[str, Any] = schema.get("properties", {})
-    unknown = [key for key in arguments if key not in properties]
-    if unknown:
-        shown = ", ".join(_key(key, list(properties)) for key in unknown[:5])
-        more = ", ..." if len(unknown) > 5 else ""
-        return (
-            f"Invalid arguments for {tool}: unknown argument{'s' if len(unknown) > 1 else ''} {shown}{more}; "
-            f"nothing was sent. It takes: {parameter_listing(schema)}."
+
+def _read(text: str) -> Any:
+    """*text* read as JSON; a refusal saying why it cannot be."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise PydanticCustomError(
+            "json_text", "is not valid JSON ({why} at character {at})", {"why": exc.msg, "at": exc.pos}
+        ) from None
+    except RecursionError:
+        raise PydanticCustomError("json_nesting", nesting_text()) from None
+
+
+def _object_from_text(value: Any) -> Any:
+    """JSON text given for an object, read: empty text is ``{}``; text holding anything but an object is
+    refused, saying what it holds."""
+    if not isinstance(value, str):
+        return value
+    if not value.strip():
+        return {}
+    read = _read(value)
+    if not isinstance(read, dict):
+        raise PydanticCustomError(
+            "json_object",
+            "expected a JSON object; the text {text} holds {kind}",
+            {"text": _quoted(value), "kind": _kind(read)},
         )
-    problems: list[str] = []
-    for key, value in arguments.items():
-        problem = _value_problem(value, properties[key])
-        if problem is not None:
-            problems.append(f"{key}: {problem}")
-    if problems:
-        return f"Invalid arguments for {tool}: {'; '.join(problems)}. Nothing was sent."
-    return None
+    return read
 
 
-def read_json_text(
-    tool: str, arguments: dict[str, Any], model: type[BaseModel]
-) -> tuple[dict[str, Any], str | None]:
-    """*arguments* with JSON text read, and the sentence refusing what was read (or ``None``).
+def _from_text(value: Any) -> Any:
+    """JSON text holding an object, a list or ``null``, read; any other value or text as it is (a place
+    name, a string parameter's value)."""
+    if not isinstance(value, str) or value.strip()[:1] not in ("{", "[", "n"):
+        return value
+    try:
+        read = json.loads(value)
+    except json.JSONDecodeError:
+        return value
+    except RecursionError:
+        raise PydanticCustomError("json_nesting", nesting_text()) from None
+    return read if read is None or isinstance(read, dict | list) else value
 
-    A string given for a parameter of *model* that is not plain ``str`` is read as JSON when it holds an
-    object, a list or ``null`` (``"request": "null"`` is ``None``, ``"goal": "{...}"`` an object);
-    anything else stays the string it was (what the MCP SDK's own tool functions do, kept so that a call
-    behaves as it did). An object or list so read is checked like one given as such (nesting, size, text).
-    The dict given is left alone.
-    """
-    read = dict(arguments)
-    fields = model.model_fields
-    for key, value in arguments.items():
-        field = fields.get(key)
-        if field is None or not isinstance(value, str) or field.annotation is str:
-            continue
-        try:
-            parsed = json.loads(value)
-        except (ValueError, RecursionError):
-            continue  # not JSON, or JSON too deep to read: validation takes or refuses the string
-        if isinstance(parsed, str | int | float):
-            continue  # a number or a boolean (an int) stays the text it was; validation says what it wants
-        read[key] = parsed
-        if isinstance(parsed, dict | list):
-            problem = payload_problem(parsed)
-            if problem is not None:
-                return read, f"Invalid arguments for {tool}: {key}: {full_stop(problem)} Nothing was sent."
-    return read, None
+
+def _fits_a_frame(value: Any) -> Any:
+    """*value* when it can be sent (nesting, size, text); otherwise a refusal naming the limit."""
+    problem = payload_problem(value)
+    if problem is not None:
+        raise PydanticCustomError("payload", problem)
+    return value
+
+
+#: Lets a list or object parameter take JSON text for it (``"[\"/odom\"]"``).
+FROM_JSON_TEXT = BeforeValidator(_from_text)
+
+#: A message, request or goal: a JSON object, or JSON text holding one; within what one frame may hold.
+JsonObject = Annotated[
+    dict[str, Any],
+    BeforeValidator(_object_from_text),
+    AfterValidator(_fits_a_frame),
+    WithJsonSchema({"type": "object"}),
+]
+
+#: A value of any JSON type (JSON text holding an object, a list or null is read); within one frame.
+JsonValue = Annotated[Any, FROM_JSON_TEXT, AfterValidator(_fits_a_frame)]
+
+#: The default of a :data:`JsonObject` parameter (pydantic gives every call a copy of its own).
+NO_FIELDS: dict[str, Any] = {}
 
 
 def parameter_listing(schema: dict[str, Any]) -> str:
@@ -90,38 +122,18 @@ def parameter_listing(schema: dict[str, Any]) -> str:
     return listing or "no arguments ({})"
 
 
-def _value_problem(value: Any, prop: dict[str, Any]) -> str | None:
-    kinds = _kinds(prop)
+def _quoted(text: str) -> str:
+    return repr(text) if len(text) <= 40 else repr(text[:37]) + "..."
+
+
+def _kind(value: Any) -> str:
+    """What a JSON value is, in words."""
+    if value is None:
+        return "null"
     if isinstance(value, bool):
-        if "boolean" not in kinds and kinds & {"number", "integer"}:
-            return f"expected a number, got {str(value).lower()} (a boolean is not a number)"
-        return None
-    if isinstance(value, str) and kinds and kinds <= {"string", "null"}:
-        if len(value) > MAX_TEXT_ARGUMENT:
-            return (
-                f"{len(value)} characters, more than the {MAX_TEXT_ARGUMENT} this argument may have (names "
-                "and ids are far shorter)"
-            )
-        return None
-    if isinstance(value, dict | list | str):
-        return payload_problem(value)
-    return None
-
-
-def _kinds(prop: dict[str, Any]) -> set[str]:
-    kinds: set[str] = set()
-    kind = prop.get("type")
-    if isinstance(kind, str):
-        kinds.add(kind)
-    elif isinstance(kind, list):
-        kinds.update(k for k in kind if isinstance(k, str))
-    for arm in prop.get("anyOf", []) + prop.get("oneOf", []):
-        if isinstance(arm, dict):
-            kinds |= _kinds(arm)
-    return kinds
-
-
-def _key(key: str, known: list[str]) -> str:
-    shown = repr(key) if len(key) <= 40 else repr(key[:37]) + "..."
-    close = difflib.get_close_matches(key, known, n=1, cutoff=0.7) if len(key) <= 100 else []
-    return f"{shown} (did you mean {close[0]}?)" if close else shown
+        return "true or false"
+    if isinstance(value, int | float):
+        return "a number"
+    if isinstance(value, list):
+        return "a list"
+    return "a string"

@@ -1,26 +1,24 @@
 """What every tool module shares: its spec, its answer, and the context it runs in.
 
 A tool module never imports ``mcp`` and never touches a socket: it gets a :class:`ToolContext` (the robot's
-session, the configuration, a way to ask the person, a progress callback), parses its arguments, calls one
-function of the domain layer (``robot/``) and renders a :class:`ToolAnswer`.
-``server/adapter.py`` turns these into MCP tools.
+session, the configuration, a way to ask the person, a progress callback) and its arguments as its strict
+model validated them (``tools/arguments.py``), calls one function of the domain layer (``robot/``) and renders
+a :class:`ToolAnswer`. ``server/adapter.py`` turns these into MCP tools.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Literal
 
 from pydantic import BaseModel
 
-from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, nesting_text, payload_problem
+from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, payload_problem
 from rosbridge_mcp_server.errors import Advised
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
-from rosbridge_mcp_server.robot.seam import AskPerson, Guard, nobody_to_ask
-from rosbridge_mcp_server.robot.wording import full_stop
+from rosbridge_mcp_server.robot.seam import ActKind, AskPerson, Guard, nobody_to_ask
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -36,6 +34,7 @@ __all__ = [
     "MAX_NESTING",
     "MAX_PAYLOAD_CHARS",
     "READS_ROBOT",
+    "Need",
     "ProgressReporter",
     "ToolAnswer",
     "ToolContext",
@@ -45,7 +44,6 @@ __all__ = [
     "ToolSpec",
     "absolute_name",
     "compact_json",
-    "parse_json_object",
     "payload_problem",
 ]
 
@@ -65,14 +63,31 @@ READS_ROBOT = ToolHints(read_only=True, destructive=False, idempotent=True)
 ACTS_ON_ROBOT = ToolHints(read_only=False, destructive=True, idempotent=False)
 
 
+#: What a tool needs the robot's session to keep for it in the background, from the moment the server starts:
+#: ``service_types`` (each service's type learnt after every connect, ``RobotSession.learn_service_types``),
+#: ``robot_log`` (the robot's log and diagnostics since the server connected, ``RobotSession.keep_logs``).
+Need = Literal["service_types", "robot_log"]
+
+
 @dataclass(frozen=True)
 class ToolSpec:
-    """Name, title, description (with an example) and hints of one tool.
+    """One tool as it declares itself: name, title, description (with an example), hints, answer, and what
+    the server must know of it. The server reads these, never a tool's name.
 
     ``output`` is the pydantic model of the structured content of a successful answer; the server publishes
     its JSON schema as the tool's output schema. Answers carry an instance of it, so they fit by construction.
-    ``acts_on`` is what an acting tool acts through (the audit line of a call refused before it ran names it);
-    every acting tool says it, and no reading tool does: a spec without it fails where it is written.
+
+    ``acts_on`` is what an acting tool acts on the robot through (the audit line of a call refused before it
+    ran names it). A tool that is not read-only says either ``acts_on`` or, when it sends nothing to the
+    robot, ``changes`` (what it changes instead, in words: ``record`` writes "files on the server's host"); no
+    reading tool says either. A spec that gets this wrong fails where it is written.
+
+    ``needs``: what the robot's session keeps for it in the background (:data:`Need`), started only when the
+    tool is served. ``stops``: the tool is the stop, which only ever takes motion away: it is served whenever
+    a tool that acts is (whatever ``--tools`` chose) and works on a read-only robot of a fleet.
+    ``every_robot``: on a server that drives several robots the ``robot`` argument is optional, and a call
+    without it runs on every robot, the answers merged under each robot's name (such a tool never asks the
+    person).
     """
 
     name: str
@@ -80,13 +95,22 @@ class ToolSpec:
     description: str
     hints: ToolHints
     output: type[BaseModel]
-    acts_on: Literal["topic", "service", "action", "parameter"] | None = None
+    acts_on: ActKind | None = None
+    changes: str | None = None
+    needs: frozenset[Need] = frozenset()
+    stops: bool = False
+    every_robot: bool = False
 
     def __post_init__(self) -> None:
-        if not self.hints.read_only and self.acts_on is None:
-            raise TypeError(f"{self.name}: an acting tool's ToolSpec must say acts_on= (topic, service, ...)")
-        if self.hints.read_only and self.acts_on is not None:
+        if not self.hints.read_only and (self.acts_on is None) == (self.changes is None):
+            raise TypeError(
+                f"{self.name}: an acting tool's ToolSpec must say acts_on= (topic, service, ...), or, when "
+                "it sends nothing to the robot, changes= (what it changes instead); not both"
+            )
+        if self.hints.read_only and (self.acts_on is not None or self.changes is not None):
             raise TypeError(f"{self.name}: a reading tool acts on nothing; leave acts_on out of its ToolSpec")
+        if self.stops and self.acts_on is None:
+            raise TypeError(f"{self.name}: a tool that stops the robot acts on it; say acts_on=")
 
 
 @dataclass(frozen=True)
@@ -165,30 +189,3 @@ class ToolFailure(Advised):
     ``str()`` is a sentence saying what happened and what to try. The server turns it into an ``isError``
     result, like a :class:`~rosbridge_mcp_server.errors.RosbridgeError`.
     """
-
-
-def parse_json_object(value: dict[str, Any] | str | None, what: str, example: str) -> dict[str, Any]:
-    """A JSON object given as a dict or as JSON text (models sometimes send strings); ``None`` is ``{}``."""
-    if value is None:
-        return {}
-    if isinstance(value, dict):
-        # Checked by the MCP edge, as given or as read from JSON text (tools/arguments.py).
-        return value
-    text = value.strip()
-    if not text:
-        return {}
-    try:
-        parsed = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ToolFailure(
-            f"The {what} is not valid JSON ({exc.msg} at character {exc.pos}). Send a JSON object, e.g. "
-            f"{example}."
-        ) from None
-    except RecursionError:
-        raise ToolFailure(f"The {what} {nesting_text()}. Nothing was sent.") from None
-    if not isinstance(parsed, dict):
-        raise ToolFailure(f"The {what} must be a JSON object, e.g. {example}; got {compact_json(parsed)}.")
-    problem = payload_problem(parsed)
-    if problem is not None:
-        raise ToolFailure(f"The {what} {full_stop(problem)} Nothing was sent.")
-    return parsed

@@ -68,6 +68,7 @@ SPEC = ToolSpec(
         'problem and what to call next. Read-only. Example: {"focus": "navigation"}'
     ),
     hints=READS_ROBOT,
+    needs=frozenset({"robot_log"}),
     output=DiagnoseAnswer,
 )
 
@@ -106,8 +107,8 @@ async def run(
     return ToolAnswer(text=_text(found, focus), data=data)
 
 
-#: Each thing to look at next as the call that does it (robot/diagnosis.py names no tool). The names come from
-#: the robot, checked in robot/diagnosis.py (graph names it has, plain frame names); no acting call is ever
+#: Each thing to look at next as the call that does it (robot/diagnosis/ names no tool). The names come from
+#: the robot, checked in robot/diagnosis/ (graph names it has, plain frame names); no acting call is ever
 #: built from them.
 _CALLS: Final[dict[Look, Callable[..., str]]] = {
     Look.NODE_LOG: lambda node: f'read_logs {{"node": "{node}", "level": "info"}}',
@@ -137,8 +138,8 @@ _CALLS: Final[dict[Look, Callable[..., str]]] = {
     ),
     Look.ARM: lambda: "view_arm",
     Look.ACTIVATE_CONTROLLER: lambda manager, controller: (
-        f"activating {controller} acts on the robot ({manager}/switch_controller, activate_controllers, if "
-        "the hardware allows): ask the user first"
+        f"activating {controller} acts on the robot ({manager}/switch_controller, activate_controllers "
+        "(ROS 1: start_controllers), if the hardware allows): ask the user first"
     ),
 }
 

@@ -64,6 +64,7 @@ SPEC = ToolSpec(
         'publish_service. Example: {"filter": "map"}.'
     ),
     hints=READS_ROBOT,
+    needs=frozenset({"service_types"}),
     output=ServicesAnswer,
 )
 

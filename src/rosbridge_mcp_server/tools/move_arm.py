@@ -14,6 +14,7 @@ from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
@@ -115,6 +116,7 @@ async def run(
     joints: Annotated[
         dict[str, float] | None,
         Field(description='e.g. {"elbow_joint": 45}'),
+        FROM_JSON_TEXT,
     ] = None,
     pose: Annotated[str, Field(description='SRDF pose, e.g. "home"')] = "",
     relative: Annotated[bool, Field(description="e.g. true: add to now")] = False,
@@ -122,42 +124,16 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 60")] = 60.0,
 ) -> ToolAnswer:
     """Resolve the goal, plan its timing, send it, report progress, say where the arm ended."""
-    from rosbridge_mcp_server.robot.arm_plan import PlanError, plan_motion  # noqa: PLC0415 - on first use
-    from rosbridge_mcp_server.robot.arm_scene import learn_arm  # noqa: PLC0415 - on first use
-
     if bool(joints) == bool(pose.strip()):
         raise ToolFailure(
             f"Give joints or a named pose, not both or neither, e.g. {_EXAMPLE}. Nothing was sent."
         )
     if pose.strip() and relative:
         raise ToolFailure("relative applies to joints, not to a named pose. Nothing was sent.")
-    scene = await learn_arm(ctx.client, ctx.graph, timeout=_READY_WAIT)
-    if scene.robot is None:
-        raise ToolFailure(f"The arm cannot be moved: {'; '.join(scene.problems)}. Nothing was sent.")
-    if not scene.robot.movable_joints:
-        raise ToolFailure(
-            f"The robot description ({scene.robot.name}) has no movable joint: this robot has no arm. "
-            "Nothing was sent."
-        )
+    scene = await _learnt_arm(ctx)
     targets = _named_pose(scene, pose.strip()) if pose.strip() else _targets(scene, joints or {}, relative)
     dialect = await ctx.client.dialect()
-    try:
-        plan = plan_motion(
-            scene.robot,
-            scene.positions,
-            targets,
-            controllers=scene.controllers,
-            controller=controller.strip() or None,
-            speed_scale=ctx.config.policy.arm.speed_scale,
-            ros_version=dialect.version,
-        )
-    except PlanError as exc:
-        raise ToolFailure(f"The arm cannot be moved: {exc}. Nothing was sent.") from None
-    if plan.duration + 1.0 > timeout:
-        raise ToolFailure(
-            f"The motion takes {plan.duration:.1f} s at the allowed speed, longer than the timeout "
-            f"{timeout:g} s. Give a longer timeout. Nothing was sent."
-        )
+    plan = _planned(ctx, scene, targets, controller=controller, timeout=timeout, ros_version=dialect.version)
     action_type = (
         "control_msgs/FollowJointTrajectoryAction"
         if dialect.version == 1
@@ -193,6 +169,54 @@ async def run(
         ) from None
     answer = await _answer(ctx, scene, plan, outcome)
     return ToolAnswer(text=answer.text, data=answer.data, images=_images(await _picture(ctx, scene, plan)))
+
+
+async def _learnt_arm(ctx: ToolContext) -> ArmScene:
+    """The arm as the robot describes it now, or a worded failure when it has none that moves."""
+    from rosbridge_mcp_server.robot.arm_scene import learn_arm  # noqa: PLC0415 - on first use
+
+    scene = await learn_arm(ctx.client, ctx.graph, timeout=_READY_WAIT)
+    if scene.robot is None:
+        raise ToolFailure(f"The arm cannot be moved: {'; '.join(scene.problems)}. Nothing was sent.")
+    if not scene.robot.movable_joints:
+        raise ToolFailure(
+            f"The robot description ({scene.robot.name}) has no movable joint: this robot has no arm. "
+            "Nothing was sent."
+        )
+    return scene
+
+
+def _planned(
+    ctx: ToolContext,
+    scene: ArmScene,
+    targets: dict[str, float],
+    *,
+    controller: str,
+    timeout: float,
+    ros_version: int,
+) -> ArmPlan:
+    """The motion to *targets* planned at the policy's speed scale, refused when it cannot finish in time."""
+    from rosbridge_mcp_server.robot.arm_plan import PlanError, plan_motion  # noqa: PLC0415 - on first use
+
+    assert scene.robot is not None  # _learnt_arm's
+    try:
+        plan = plan_motion(
+            scene.robot,
+            scene.positions,
+            targets,
+            controllers=scene.controllers,
+            controller=controller.strip() or None,
+            speed_scale=ctx.config.policy.arm.speed_scale,
+            ros_version=ros_version,
+        )
+    except PlanError as exc:
+        raise ToolFailure(f"The arm cannot be moved: {exc}. Nothing was sent.") from None
+    if plan.duration + 1.0 > timeout:
+        raise ToolFailure(
+            f"The motion takes {plan.duration:.1f} s at the allowed speed, longer than the timeout "
+            f"{timeout:g} s. Give a longer timeout. Nothing was sent."
+        )
+    return plan
 
 
 class _Refused(ToolFailure):

@@ -29,6 +29,7 @@ from rosbridge_mcp_server.robot.navigation import (
 )
 from rosbridge_mcp_server.robot.nodes import node_names
 from rosbridge_mcp_server.robot.occupancy import Grid, Pose2D
+from rosbridge_mcp_server.tools.arguments import JsonValue
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
@@ -130,7 +131,7 @@ async def run(
     ctx: ToolContext,
     *,
     goal: Annotated[
-        Any,
+        JsonValue,
         Field(
             description='e.g. {"x": 2, "y": 1, "yaw": 90} (m, DEGREES; no yaw: same heading), "dock", a list',
         ),

@@ -8,6 +8,7 @@ from typing import Annotated
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.series import FieldError, Series, TopicFields, collect
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -69,6 +70,7 @@ async def run(
             max_length=MAX_SERIES,
             description=f'"TOPIC FIELD [FIELD...]", e.g. {_EXAMPLE}',
         ),
+        FROM_JSON_TEXT,
     ],
     duration: Annotated[float, Field(gt=0, le=60, description="Seconds, e.g. 5")] = 5.0,
     max_size: Annotated[int, Field(ge=200, le=2048, description="Width in pixels, e.g. 800")] = 800,

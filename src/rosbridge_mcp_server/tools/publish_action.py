@@ -9,12 +9,12 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
     ToolContext,
     ToolSpec,
-    parse_json_object,
 )
 
 __all__ = ["MAX_GOAL_TIMEOUT", "SPEC", "GoalAnswer", "run"]
@@ -75,9 +75,9 @@ async def run(
         Field(description=("e.g. example_interfaces/action/Fibonacci (ROS 1: pkg/NameAction)")),
     ],
     goal: Annotated[
-        dict[str, Any] | str,
+        JsonObject,
         Field(description=f"Goal fields as a JSON object, e.g. {_EXAMPLE}; {{}} for an empty goal"),
-    ] = "{}",
+    ] = NO_FIELDS,
     timeout: Annotated[
         float,
         Field(
@@ -88,7 +88,7 @@ async def run(
     ] = 30.0,
 ) -> ToolAnswer:
     """Check the goal, run it (feedback → progress), and describe how it ended."""
-    body = parse_json_object(goal, "goal", _EXAMPLE)
+    body = goal
 
     # Every progress message names the goal: a client can cancel it by id while this call still waits.
     async def on_feedback(running: Goal, feedback: dict[str, Any]) -> None:

@@ -8,12 +8,12 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import call_service
 from rosbridge_mcp_server.robot.messages import compact_json
+from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
     ToolAnswer,
     ToolContext,
     ToolSpec,
-    parse_json_object,
 )
 
 __all__ = ["MAX_SERVICE_TIMEOUT", "SPEC", "ServiceAnswer", "run"]
@@ -51,9 +51,9 @@ async def run(
         Field(description="e.g. example_interfaces/srv/AddTwoInts"),
     ],
     request: Annotated[
-        dict[str, Any] | str,
+        JsonObject,
         Field(description=f"Request fields as a JSON object, e.g. {_EXAMPLE}; {{}} for std_srvs/srv/Trigger"),
-    ] = "{}",
+    ] = NO_FIELDS,
     timeout: Annotated[
         float,
         Field(
@@ -64,7 +64,7 @@ async def run(
     ] = 10.0,
 ) -> ToolAnswer:
     """Check the request when the type is known, call the service, return its response."""
-    body = parse_json_object(request, "request", _EXAMPLE)
+    body = request
     reply = await call_service(
         ctx, tool=SPEC.name, service=service, service_type=service_type, request=body, timeout=timeout
     )

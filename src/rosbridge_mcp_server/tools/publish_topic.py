@@ -9,6 +9,7 @@ from pydantic import BaseModel, Field
 from rosbridge_mcp_server.robot.acting import PING_LIMIT, publish_once, publish_stream
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.wording import full_stop
+from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
 from rosbridge_mcp_server.tools.audience import audience
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
@@ -16,7 +17,6 @@ from rosbridge_mcp_server.tools.base import (
     ToolContext,
     ToolFailure,
     ToolSpec,
-    parse_json_object,
 )
 
 __all__ = ["MAX_RATE", "MAX_STREAM", "PING_LIMIT", "SPEC", "PublishAnswer", "run"]
@@ -40,7 +40,9 @@ class PublishAnswer(BaseModel):
     rate_hz: float | None = Field(default=None, description="Stream rate, when one was asked for")
     duration: float | None = Field(default=None, description="Stream length in seconds, when asked for")
     zero_sent: bool = Field(default=False, description="A stream of velocity commands ended with all zeros")
-    stopped_by_stop_robot: bool = Field(default=False, description="The stream was ended early by stop_robot")
+    ended_by_stop: bool = Field(
+        default=False, description="The stream was ended early by a stop: stop_robot or the console's E-STOP"
+    )
     adjusted: str | None = Field(
         default=None, description="How the safety policy changed the message before sending (velocity caps)"
     )
@@ -73,9 +75,9 @@ async def run(
         Field(description="e.g. geometry_msgs/msg/Twist (ROS 1: geometry_msgs/Twist)"),
     ],
     message: Annotated[
-        dict[str, Any] | str,
+        JsonObject,
         Field(description=(f"JSON object, e.g. {_EXAMPLE}; omitted fields are 0/empty")),
-    ] = "{}",
+    ] = NO_FIELDS,
     rate_hz: Annotated[
         float | None,
         Field(gt=0, le=MAX_RATE, description="Publish repeatedly at this rate, e.g. 10 (needs duration)"),
@@ -86,7 +88,7 @@ async def run(
     ] = None,
 ) -> ToolAnswer:
     """Check ``message`` against ``message_type``, then publish it on ``topic`` once or as a stream."""
-    body = parse_json_object(message, "message", _EXAMPLE)
+    body = message
     if rate_hz is not None or duration is not None:
         if duration is None:
             raise ToolFailure(
@@ -167,7 +169,7 @@ async def _stream(
         rate_hz=streamed.rate_hz,
         duration=streamed.duration,
         zero_sent=streamed.zero is not None,
-        stopped_by_stop_robot=streamed.stopped,
+        ended_by_stop=streamed.stopped,
         adjusted=streamed.adjusted,
         subscribers=heard.count,
     )

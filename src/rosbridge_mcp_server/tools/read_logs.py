@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import time
-from typing import Annotated, Final, Literal
+from typing import TYPE_CHECKING, Annotated, Final, Literal
 
 from pydantic import BaseModel, BeforeValidator, Field
 
@@ -12,6 +12,9 @@ from rosbridge_mcp_server.robot.logs import RING_LINES, RING_SECONDS, Fold, fold
 from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
 from rosbridge_mcp_server.tools.paging import OffsetArg, limit_arg, page_of
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 
 __all__ = ["DEFAULT_LIMIT", "SPEC", "LogsAnswer", "run"]
 
@@ -71,6 +74,7 @@ SPEC = ToolSpec(
         'min), repeats folded. Read-only. Example: {"node": "*controller*", "since": 60}'
     ),
     hints=READS_ROBOT,
+    needs=frozenset({"robot_log"}),
     output=LogsAnswer,
 )
 
@@ -90,16 +94,7 @@ async def run(
     offset: OffsetArg = 0,
 ) -> ToolAnswer:
     """Read the session's log ring."""
-    keeper = ctx.robot.keep_logs()
-    if not keeper.ready.is_set():
-        await ctx.client.wait_connected(ctx.config.connect_timeout)
-        try:
-            await asyncio.wait_for(keeper.ready.wait(), READY_WAIT)
-        except TimeoutError:
-            raise ToolFailure(
-                "The robot's log is not being read yet: the server is still connecting to it. Call again "
-                "in a few seconds."
-            ) from None
+    keeper = await _ready_keeper(ctx)
     if keeper.absent:
         return ToolAnswer(
             text="This robot has no /rosout topic, so there is no log to read (diagnose checks the rest).",
@@ -142,6 +137,21 @@ async def run(
         dropped=ring.dropped,
     )
     return ToolAnswer(text=text_out, data=data)
+
+
+async def _ready_keeper(ctx: ToolContext) -> LogKeeper:
+    """The robot's log keeper once its subscription is open (it opens in the background after connecting)."""
+    keeper = ctx.robot.keep_logs()
+    if not keeper.ready.is_set():
+        await ctx.client.wait_connected(ctx.config.connect_timeout)
+        try:
+            await asyncio.wait_for(keeper.ready.wait(), READY_WAIT)
+        except TimeoutError:
+            raise ToolFailure(
+                "The robot's log is not being read yet: the server is still connecting to it. Call again "
+                "in a few seconds."
+            ) from None
+    return keeper
 
 
 def _wanted(level: str, node: str | None, text: str | None, since: float | None) -> str:

@@ -11,10 +11,12 @@ from typing import TYPE_CHECKING, Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.wording import counted, size_text
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.recording.recorder import RecordingResult
+    from rosbridge_mcp_server.safety.policy import RecordingLimits
 
 __all__ = ["SPEC", "RecordAnswer", "run"]
 
@@ -52,7 +54,8 @@ SPEC = ToolSpec(
         '{"topics": ["/odom", "/tf*"], "duration": 30}'
     ),
     hints=ToolHints(read_only=False, destructive=False, idempotent=False),
-    acts_on="topic",
+    # It subscribes and writes a file: nothing is sent to the robot, so there is no act for the guard.
+    changes="files on the server's host",
     output=RecordAnswer,
 )
 
@@ -63,6 +66,7 @@ async def run(
     topics: Annotated[
         list[str] | None,
         Field(max_length=MAX_TOPICS, description='e.g. ["/odom", "/tf*"]'),
+        FROM_JSON_TEXT,
     ] = None,
     duration: Annotated[float, Field(gt=0, le=MAX_SECONDS, description="Seconds, e.g. 30")] = 10.0,
     max_megabytes: Annotated[float, Field(gt=0, le=100_000, description="MB, e.g. 500")] = DEFAULT_MEGABYTES,
@@ -73,30 +77,11 @@ async def run(
     stop: Annotated[bool, Field(description="End running ones, e.g. true")] = False,
 ) -> ToolAnswer:
     """Choose the topics, make the file, record, and say what was written."""
-    from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording  # noqa: PLC0415 - on first use
     from rosbridge_mcp_server.robot.recording.recorder import NoTopicMatched, choose_topics, record_topics  # noqa: PLC0415 - on first use
 
     if stop:
-        stopped = ctx.robot.recordings.stop(name)
-        text = (
-            f"Stopping {', '.join(stopped)}; its record call answers with what was written."
-            if stopped
-            else "No recording is running" + (f" named {name!r}." if name else ".")
-        )
-        answer = RecordAnswer(file="", bytes=0, seconds=0, ended="", topics=[], skipped=[], stopped=stopped)
-        return ToolAnswer(text=text, data=answer)
-    limits = ctx.config.policy.recording
-    if not limits.enabled:
-        raise ToolFailure(
-            "The safety policy forbids recording ([recording] enabled = false); nothing was recorded."
-        )
-    if limits.max_seconds is not None and duration > limits.max_seconds:
-        raise ToolFailure(
-            f"duration {duration:g} s is over the policy's cap of {limits.max_seconds:g} s ([recording] "
-            "max_seconds); ask for less."
-        )
-    if limits.max_megabytes is not None:
-        max_megabytes = min(max_megabytes, limits.max_megabytes)
+        return _stopping(ctx, name)
+    max_megabytes = _within_policy(ctx.config.policy.recording, duration, max_megabytes)
     if not topics:
         raise ToolFailure(
             'Name the topics to record, e.g. {"topics": ["/odom", "/scan"]}; globs like "/tf*" work.'
@@ -106,15 +91,7 @@ async def run(
     except NoTopicMatched as exc:
         raise ToolFailure(f"{exc} Nothing was recorded.") from None
     directory = ctx.config.record_dir
-    try:
-        path, fd = create_recording(directory, name)
-    except PathRefused as exc:
-        raise ToolFailure.carrying(exc) from None
-    except OSError as exc:
-        raise ToolFailure(
-            f"Cannot write in the recording directory {str(directory)!r}: {exc.strerror or exc}. Set "
-            "--record-dir to a writable folder."
-        ) from None
+    path, fd = _new_file(directory, name)
 
     async def progress(seconds: float, messages: int, written: int) -> None:
         await ctx.report_progress(
@@ -145,6 +122,49 @@ async def run(
         ctx.robot.recordings.remove(path.name)
     answer = _answer(result, directory)
     return ToolAnswer(text=_text(answer, result), data=answer)
+
+
+def _stopping(ctx: ToolContext, name: str | None) -> ToolAnswer:
+    """``stop``: the running recordings (all, or the one named) told to end."""
+    stopped = ctx.robot.recordings.stop(name)
+    text = (
+        f"Stopping {', '.join(stopped)}; its record call answers with what was written."
+        if stopped
+        else "No recording is running" + (f" named {name!r}." if name else ".")
+    )
+    answer = RecordAnswer(file="", bytes=0, seconds=0, ended="", topics=[], skipped=[], stopped=stopped)
+    return ToolAnswer(text=text, data=answer)
+
+
+def _within_policy(limits: RecordingLimits, duration: float, max_megabytes: float) -> float:
+    """The size cap to record with, after the policy's ``[recording]`` allowed the recording at all."""
+    if not limits.enabled:
+        raise ToolFailure(
+            "The safety policy forbids recording ([recording] enabled = false); nothing was recorded."
+        )
+    if limits.max_seconds is not None and duration > limits.max_seconds:
+        raise ToolFailure(
+            f"duration {duration:g} s is over the policy's cap of {limits.max_seconds:g} s ([recording] "
+            "max_seconds); ask for less."
+        )
+    if limits.max_megabytes is not None:
+        return min(max_megabytes, limits.max_megabytes)
+    return max_megabytes
+
+
+def _new_file(directory: Path, name: str | None) -> tuple[Path, int]:
+    """A new recording file in *directory* (its path and open descriptor), or a worded failure."""
+    from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording  # noqa: PLC0415 - on first use
+
+    try:
+        return create_recording(directory, name)
+    except PathRefused as exc:
+        raise ToolFailure.carrying(exc) from None
+    except OSError as exc:
+        raise ToolFailure(
+            f"Cannot write in the recording directory {str(directory)!r}: {exc.strerror or exc}. Set "
+            "--record-dir to a writable folder."
+        ) from None
 
 
 def _answer(result: RecordingResult, directory: Path) -> RecordAnswer:

@@ -2,17 +2,22 @@
 
 The input schema keeps what a model needs to call a tool right the first time (each parameter's type,
 bounds, description with an example, which are required) and drops what restates it: pydantic's titles
-(``goal_id`` → "Goal Id"), ``default: null``, and ``anyOf [X, null]`` written out (``type: [X, "null"]``
-says the same). The output schema is for the client that checks structured content: its structure and types
-stay one level deep; descriptions, titles and defaults go (the answer's text explains itself).
+(``goal_id`` → "Goal Id"), ``default: null``, the 1,000 characters every string argument may have (said
+when one is longer), and ``anyOf [X, null]`` written out (``type: [X, "null"]`` says the same). The output
+schema is for the client that checks structured content: its structure and types stay one level deep;
+descriptions, titles and defaults go (the answer's text explains itself).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from rosbridge_mcp_server.tools.arguments import MAX_TEXT_ARGUMENT
+
 __all__ = ["compact_input_schema", "compact_output_schema", "inline_refs"]
 
+# Every plain string argument's limit (tools/arguments.py): said when one is longer, not on every string.
+_EVERY_STRING = ("maxLength", MAX_TEXT_ARGUMENT)
 # Structured content always holds every field (it is a model's dump), so "required" tells a client nothing.
 _OUTPUT_DROPPED = frozenset({"title", "description", "default", "examples", "required"})
 
@@ -71,7 +76,7 @@ def _compact(node: Any, dropped: frozenset[str]) -> Any:
         return node
     out: dict[str, Any] = {}
     for key, value in node.items():
-        if key in dropped or (key == "default" and value is None):
+        if key in dropped or (key == "default" and value is None) or (key, value) == _EVERY_STRING:
             continue
         if key == "additionalProperties" and value is True:
             continue  # what JSON Schema assumes anyway

@@ -8,6 +8,7 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import set_parameter
 from rosbridge_mcp_server.robot.parameters import ParameterError
+from rosbridge_mcp_server.tools.arguments import JsonValue
 from rosbridge_mcp_server.tools.base import (
     ToolAnswer,
     ToolContext,
@@ -51,7 +52,7 @@ async def run(
         str, Field(description="ROS 2 /node:name or ROS 1 /ns/name, e.g. /turtlesim:background_r")
     ],
     value: Annotated[
-        Any, Field(description="The new value as JSON: a number, string, bool or list, e.g. 200")
+        JsonValue, Field(description="The new value as JSON: a number, string, bool or list, e.g. 200")
     ],
 ) -> ToolAnswer:
     """Set the parameter, read it back, and say whether it took."""

@@ -17,6 +17,9 @@ class StopAnswer(BaseModel):
     streams_stopped: list[str] = Field(description="Topics whose streams ended")
     streams_still_running: list[str] = Field(description="Topics whose streams did not end in time")
     zeroed_topics: list[str] = Field(description="Topics that got one zero velocity command")
+    held_topics: list[str] = Field(
+        default_factory=list, description="Trajectory topics that got a trajectory holding the joints"
+    )
     goals_cancelled: list[str] = Field(
         description="Each goal (or every goal of an action) cancelled, and what the robot answered"
     )
@@ -27,12 +30,15 @@ SPEC = ToolSpec(
     name="stop_robot",
     title="Stop what this server started",
     description=(
-        "Emergency stop for what this server started: ends streams, sends zero velocity, cancels goals. "
+        "Emergency stop for what this server started: ends streams, sends zero velocity, holds trajectories, "
+        "cancels goals. "
         "Never asks; call it with {} whenever the robot must stop."
     ),
     # It acts on the robot, but only ever takes motion away; repeating it is harmless.
     hints=ToolHints(read_only=False, destructive=False, idempotent=True),
     acts_on="topic",
+    stops=True,
+    every_robot=True,
     output=StopAnswer,
 )
 
@@ -53,6 +59,7 @@ async def run(ctx: ToolContext) -> ToolAnswer:
         streams_stopped=report.streams_stopped,
         streams_still_running=report.streams_still_running,
         zeroed_topics=report.zeroed_topics,
+        held_topics=report.held_topics,
         goals_cancelled=report.cancel_lines(),
         failures=report.failures,
     )
@@ -72,6 +79,10 @@ def _text(data: StopAnswer) -> str:
         )
     if data.zeroed_topics:
         lines.append(f"Published a zero velocity command on {', '.join(data.zeroed_topics)}.")
+    if data.held_topics:
+        lines.append(
+            f"Stopped the trajectory on {', '.join(data.held_topics)}: the joints hold where they are."
+        )
     lines.extend(f"Cancelled {cancel}." for cancel in data.goals_cancelled)
     if not lines:
         lines.append(

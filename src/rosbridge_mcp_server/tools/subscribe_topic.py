@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from rosbridge_mcp_server.pictures.summary import FieldPathError, select_fields, summarize
-from rosbridge_mcp_server.robot.listening import read_topic
+from rosbridge_mcp_server.robot.listening import Readout, read_topic
 from rosbridge_mcp_server.robot.wording import counted
+from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -28,6 +29,8 @@ _SHOWN_IN_FULL = 10
 
 class QosRequest(BaseModel):
     """ROS 2 quality of service for the subscription."""
+
+    model_config = ConfigDict(extra="forbid")
 
     reliability: Literal["reliable", "best_effort"] | None = None
     durability: Literal["transient_local", "volatile"] | None = None
@@ -84,11 +87,14 @@ async def run(
         float, Field(gt=0, le=MAX_DURATION, description="Seconds to wait for a message, e.g. 5")
     ] = 5.0,
     fields: Annotated[
-        list[str] | None, Field(description='Dotted paths to keep, e.g. ["pose.position", "header.stamp"]')
+        list[str] | None,
+        Field(description='Dotted paths to keep, e.g. ["pose.position", "header.stamp"]'),
+        FROM_JSON_TEXT,
     ] = None,
     qos: Annotated[
         QosRequest | None,
         Field(description='ROS 2 QoS, e.g. {"durability": "transient_local"}'),
+        FROM_JSON_TEXT,
     ] = None,
 ) -> ToolAnswer:
     """Subscribe, collect, unsubscribe (robot/'s read_topic); shorten each message."""
@@ -115,39 +121,42 @@ async def run(
     heard = readout.heard
     if duration is not None and len(heard.messages) < wanted_count:
         # The duration ended before the count: the listen is done, so its progress ends at its total.
-        await ctx.report_progress(
-            wanted_count,
-            wanted_count,
-            f"{counted(len(heard.messages), 'message')} from {name} in {duration:g} s",
-        )
-    received: list[ReceivedMessage] = []
-    for item in heard.messages:
-        body: dict[str, Any] = item.message
-        if fields:
-            try:
-                body = select_fields(body, fields)
-            except FieldPathError as exc:
-                raise ToolFailure(
-                    f"{exc} Call subscribe_topic without fields to see the whole message."
-                ) from None
-        summary = summarize(body, byte_fields=readout.byte_fields)
-        received.append(
-            ReceivedMessage(
-                received=round(item.at, 3),
-                message=summary.message,
-                cut=sorted({cut.describe() for cut in summary.cuts}),
-            )
-        )
-    rate = heard.rate_hz
-    answer = SubscribeAnswer(
+        done = f"{counted(len(heard.messages), 'message')} from {name} in {duration:g} s"
+        await ctx.report_progress(wanted_count, wanted_count, done)
+    answer = _answer(readout, fields)
+    return ToolAnswer(text=_text(answer, timeout), data=answer)
+
+
+def _answer(readout: Readout, fields: list[str] | None) -> SubscribeAnswer:
+    heard = readout.heard
+    return SubscribeAnswer(
         topic=readout.topic,
         message_type=readout.message_type,
-        messages=received,
-        rate_hz=round(rate, 2) if rate is not None else None,
+        messages=[_received(item.message, item.at, fields, readout.byte_fields) for item in heard.messages],
+        rate_hz=round(heard.rate_hz, 2) if heard.rate_hz is not None else None,
         timed_out=heard.first_timed_out,
         qos_note=readout.qos_note,
     )
-    return ToolAnswer(text=_text(answer, timeout), data=answer)
+
+
+def _received(
+    message: dict[str, Any], at: float, fields: list[str] | None, byte_fields: list[str]
+) -> ReceivedMessage:
+    """One message as the answer shows it: the *fields* kept, long parts shortened."""
+    body = message
+    if fields:
+        try:
+            body = select_fields(body, fields)
+        except FieldPathError as exc:
+            raise ToolFailure(
+                f"{exc} Call subscribe_topic without fields to see the whole message."
+            ) from None
+    summary = summarize(body, byte_fields=byte_fields)
+    return ReceivedMessage(
+        received=round(at, 3),
+        message=summary.message,
+        cut=sorted({cut.describe() for cut in summary.cuts}),
+    )
 
 
 def _text(answer: SubscribeAnswer, timeout: float) -> str:

@@ -273,14 +273,22 @@ def _tool_line(tool: ToolPose) -> str:
 def render(answer: ArmAnswer) -> str:
     """The answer as text: one line per joint, per tool, per controller; the named poses on one line each."""
     moving = [j for j in answer.joints if not j.mimics]
-    lines = [
-        f"Arm of robot {answer.robot}: {len(moving)} movable joints. Angles in degrees, lengths in metres.",
-        "Joints (position now; [lower, upper]; max speed):",
-        *(_joint_line(j) for j in answer.joints),
-        "End effectors (forward kinematics of the joint state):",
-        *(_tool_line(t) for t in answer.tools),
-    ]
-    if not answer.tools:
+    if not moving:
+        lines = [
+            f"No arm on robot {answer.robot}: its robot description has no movable joint, so this robot "
+            "publishes no arm to show or move (the built-in simulated robot has one with --demo "
+            "--demo-world arm)."
+        ]
+    else:
+        lines = [
+            f"Arm of robot {answer.robot}: {len(moving)} movable joints. Angles in degrees, lengths in "
+            "metres.",
+            "Joints (position now; [lower, upper]; max speed):",
+            *(_joint_line(j) for j in answer.joints),
+            "End effectors (forward kinematics of the joint state):",
+            *(_tool_line(t) for t in answer.tools),
+        ]
+    if moving and not answer.tools:
         lines.append("- none: no link lies below two or more movable joints (this robot has no arm)")
     if answer.controllers is not None:
         lines.append(f"Controllers ({answer.manager}):")

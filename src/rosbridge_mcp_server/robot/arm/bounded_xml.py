@@ -47,20 +47,22 @@ class XmlElement:
         return next((child for child in self.children if child.tag == tag), None)
 
 
-def read_xml(data: bytes, what: str, keep: frozenset[str]) -> XmlElement:
-    """The ``<robot>`` element of *data* (a URDF or SRDF, named *what* in errors) with its children and
-    grandchildren whose tags are in *keep*; bounded, DTDs refused (:class:`UrdfError`)."""
+def read_xml(data: bytes, what: str, keep: frozenset[str], levels: int = 2) -> XmlElement:
+    """The ``<robot>`` element of *data* (a URDF or SRDF, named *what* in errors) with its descendants whose
+    tags are in *keep*, *levels* below it (2: children and grandchildren); bounded, DTDs refused
+    (:class:`UrdfError`)."""
     if len(data) > MAX_URDF_BYTES:
         raise UrdfError(f"the {what} is {len(data):,} bytes; at most {MAX_URDF_BYTES:,} are read")
-    return _Reader(what, keep).read(data)
+    return _Reader(what, keep, levels).read(data)
 
 
 class _Reader:
     """expat with DTDs refused and the tree bounded; keeps the elements under ``<robot>`` that we read."""
 
-    def __init__(self, what: str, keep: frozenset[str]) -> None:
+    def __init__(self, what: str, keep: frozenset[str], levels: int) -> None:
         self.what = what
         self.keep = keep
+        self.levels = levels
         self.stack: list[XmlElement] = []
         self.root: XmlElement | None = None
         self.count = 0
@@ -100,7 +102,7 @@ class _Reader:
         depth = len(self.stack) + self.skipping
         if depth >= MAX_DEPTH:
             raise UrdfError(f"the {self.what} nests elements deeper than {MAX_DEPTH}")
-        if self.skipping or (self.stack and tag not in self.keep) or len(self.stack) > 2:
+        if self.skipping or (self.stack and tag not in self.keep) or len(self.stack) > self.levels:
             self.skipping += 1
             return
         element = XmlElement(tag, attrs)

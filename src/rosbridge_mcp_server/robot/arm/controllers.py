@@ -76,9 +76,29 @@ def _texts(value: Any) -> tuple[str, ...]:
     return tuple(text for item in value[:MAX_INTERFACES] if (text := _text(item)) is not None)
 
 
+#: ros_control's (ROS 1) controller states, as ros2_control says them.
+ROS1_STATES = {"running": "active", "stopped": "inactive", "initialized": "inactive"}
+#: ros_control's hardware interfaces (``hardware_interface::PositionJointInterface``) → the interface.
+_ROS1_INTERFACES = {"Position": "position", "Velocity": "velocity", "Effort": "effort"}
+
+
+def _ros1_interfaces(item: Mapping[str, Any]) -> tuple[str, ...]:
+    """ROS 1's ``claimed_resources`` (a hardware interface and its joints) as ``<joint>/<interface>``."""
+    resources = item.get("claimed_resources")
+    out: list[str] = []
+    for entry in resources[:MAX_INTERFACES] if isinstance(resources, list) else ():
+        if not isinstance(entry, dict):
+            continue
+        kind = str(entry.get("hardware_interface", "")).rpartition("::")[2]
+        interface = next((v for k, v in _ROS1_INTERFACES.items() if kind.startswith(k)), "command")
+        out += [f"{joint}/{interface}" for joint in _texts(entry.get("resources"))]
+    return tuple(out[:MAX_INTERFACES])
+
+
 def parse_controllers(reply: Any) -> tuple[Controller, ...]:
     """The controllers of a ``ListControllers`` reply (``{"controller": [...]}``); what is not a controller
-    (no name, wrong kinds) is left out."""
+    (no name, wrong kinds) is left out. ROS 1's form (``running``/``stopped``, ``claimed_resources``) is read
+    into ROS 2's words."""
     items = reply.get("controller") if isinstance(reply, dict) else None
     if not isinstance(items, list):
         return ()
@@ -86,13 +106,21 @@ def parse_controllers(reply: Any) -> tuple[Controller, ...]:
     for item in items[:MAX_CONTROLLERS]:
         if not isinstance(item, dict) or (name := _text(item.get("name"))) is None:
             continue
+        state = _text(item.get("state"), 40) or "?"
+        if "claimed_resources" in item:  # ROS 1: what it claims when running
+            resources = _ros1_interfaces(item)
+            state = ROS1_STATES.get(state, state)
+            claimed, required = (resources if state == "active" else ()), resources
+        else:
+            claimed = _texts(item.get("claimed_interfaces"))
+            required = _texts(item.get("required_command_interfaces"))
         controllers.append(
             Controller(
                 name=name,
                 type=_text(item.get("type")) or "?",
-                state=_text(item.get("state"), 40) or "?",
-                claimed_interfaces=_texts(item.get("claimed_interfaces")),
-                required_interfaces=_texts(item.get("required_command_interfaces")),
+                state=state,
+                claimed_interfaces=claimed,
+                required_interfaces=required,
             )
         )
     return tuple(controllers)

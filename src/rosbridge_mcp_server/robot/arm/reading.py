@@ -6,7 +6,8 @@ the description is required (:class:`~rosbridge_mcp_server.errors.NotOnRobotErro
 
 Where the description comes from: the ``/robot_description`` topic (latched / transient local, published by
 ``robot_state_publisher``), else its ``robot_description`` parameter (ROS 2) or the ``/robot_description``
-parameter (ROS 1). The SRDF: ``/robot_description_semantic``, else ``move_group``'s parameter of that name.
+parameter (ROS 1). The SRDF: ``/robot_description_semantic``, else (ROS 1) the parameter of that name, else
+``move_group``'s parameter of that name.
 """
 
 from __future__ import annotations
@@ -196,6 +197,13 @@ async def _semantic(
     if SEMANTIC_TOPIC in topics:
         message = await _one_message(client, SEMANTIC_TOPIC, topics[SEMANTIC_TOPIC], timeout)
         text, source = (message.get("data") if isinstance(message, dict) else None), f"topic {SEMANTIC_TOPIC}"
+    elif (await graph.ros_info()).version == 1:
+        # MoveIt on ROS 1 keeps the SRDF in the global parameter of that name.
+        try:
+            _, text = await get_parameter(graph, client, SEMANTIC_TOPIC)
+            source = f"parameter {SEMANTIC_TOPIC}"
+        except RosbridgeError:
+            text = None
     elif "/move_group" in await node_names(graph):
         try:
             _, text = await get_parameter(graph, client, "/move_group:robot_description_semantic")

@@ -25,6 +25,7 @@ from rosbridge_mcp_server.robot.arm.bounded_xml import (
     plain,
     read_xml,
 )
+from rosbridge_mcp_server.robot.arm.geometry import GEOMETRY_TAGS, link_radius
 
 __all__ = [
     "JOINT_TYPES",
@@ -122,6 +123,8 @@ class Robot:
     _by_name: Mapping[str, Joint] = field(repr=False, compare=False, default_factory=dict)
     _parent_joint: Mapping[str, Joint] = field(repr=False, compare=False, default_factory=dict)
     _children: Mapping[str, tuple[Joint, ...]] = field(repr=False, compare=False, default_factory=dict)
+    #: Each link's capsule radius (m) where its URDF geometry gives one (``robot/arm/geometry.py``).
+    radii: Mapping[str, float] = field(repr=False, compare=False, default_factory=dict)
 
     def joint(self, name: str) -> Joint | None:
         """The joint called *name*, or ``None``."""
@@ -202,7 +205,9 @@ def _finger_like(link: str) -> bool:
     return "finger" in lowered or "jaw" in lowered
 
 
-_URDF_TAGS = frozenset({"link", "joint", "parent", "child", "origin", "axis", "limit", "mimic"})
+_URDF_TAGS = (
+    frozenset({"link", "joint", "parent", "child", "origin", "axis", "limit", "mimic"}) | GEOMETRY_TAGS
+)
 
 
 # --- from elements to joints --------------------------------------------------------------------------------
@@ -211,8 +216,9 @@ _URDF_TAGS = frozenset({"link", "joint", "parent", "child", "origin", "axis", "l
 def parse_urdf(text: str | bytes) -> Robot:
     """The robot description in *text*, read safely; :class:`UrdfError` saying what is wrong otherwise."""
     data = text.encode("utf-8", "surrogatepass") if isinstance(text, str) else text
-    root = read_xml(data, "robot description", _URDF_TAGS)
-    links = [_name(element, "link") for element in root.children if element.tag == "link"]
+    root = read_xml(data, "robot description", _URDF_TAGS, levels=4)
+    link_elements = [element for element in root.children if element.tag == "link"]
+    links = [_name(element, "link") for element in link_elements]
     joint_elements = [element for element in root.children if element.tag == "joint"]
     if len(joint_elements) > MAX_JOINTS or len(links) > MAX_JOINTS + 1:
         raise UrdfError(
@@ -224,7 +230,12 @@ def parse_urdf(text: str | bytes) -> Robot:
     _unique(links, "link")
     joints = tuple(_joint(element) for element in joint_elements)
     _unique([joint.name for joint in joints], "joint")
-    return _tree(_name(root, "robot", required=False) or "robot", tuple(links), joints)
+    radii = {
+        name: radius
+        for name, element in zip(links, link_elements, strict=True)
+        if (radius := link_radius(element)) is not None
+    }
+    return _tree(_name(root, "robot", required=False) or "robot", tuple(links), joints, radii)
 
 
 def _name(element: XmlElement, what: str, *, required: bool = True) -> str:
@@ -339,7 +350,7 @@ def _mimic(element: XmlElement | None, joint: str) -> Mimic | None:
     return Mimic(target, multiplier, offset)
 
 
-def _tree(name: str, links: tuple[str, ...], joints: tuple[Joint, ...]) -> Robot:
+def _tree(name: str, links: tuple[str, ...], joints: tuple[Joint, ...], radii: Mapping[str, float]) -> Robot:
     known = set(links)
     parent_joint: dict[str, Joint] = {}
     children: dict[str, list[Joint]] = {}
@@ -375,6 +386,7 @@ def _tree(name: str, links: tuple[str, ...], joints: tuple[Joint, ...]) -> Robot
         by_name,
         parent_joint,
         {link: tuple(js) for link, js in children.items()},
+        dict(radii),
     )
 
 

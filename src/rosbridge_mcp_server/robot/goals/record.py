@@ -8,7 +8,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
-from rosbridge_mcp_server.client import Dialect, GoalLane
+from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import NotSentError
 
 __all__ = [
@@ -57,9 +57,6 @@ class Goal:
     succeeded: bool = False
     result: dict[str, Any] | None = None
     canceled_by: CanceledBy | None = None
-    #: The connection that started the goal (ROS 2: its own lane), for the client's cancel: some bridges let
-    #: only that connection cancel it.
-    lane: GoalLane | None = field(default=None, repr=False, compare=False)
 
     async def take_feedback(self, values: Any, listener: GoalFeedback | None) -> None:
         """Count a feedback message (anything but an object counts as ``{}``), keep it, tell *listener*."""

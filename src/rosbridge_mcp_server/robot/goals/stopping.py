@@ -23,8 +23,7 @@ from typing import TYPE_CHECKING, Final
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import RosbridgeError, ServiceError
 from rosbridge_mcp_server.robot.goals import CanceledBy, CancelReport, cancel_goals
-from rosbridge_mcp_server.robot.goals.actionlib import publish_cancel
-from rosbridge_mcp_server.robot.goals.registry import ROS1_CANCEL_REPEAT_SECONDS, GoalRegistry
+from rosbridge_mcp_server.robot.goals.registry import GoalRegistry
 from rosbridge_mcp_server.robot.graph.rosapi import bounded_map
 
 if TYPE_CHECKING:
@@ -235,24 +234,13 @@ async def _types(graph: RosGraph, names: list[str]) -> dict[str, str | None]:
 async def _cancel(
     goals: GoalRegistry, action: str, goal_id: str | None, why: str, by: CanceledBy
 ) -> Cancelled:
-    client = goals.client
-    fresh = f"{action}/cancel" not in client.topics.adverts
+    # ROS 1: the client sends a cancel on a new publisher once more a moment later (its first message is
+    # often lost).
     try:
         report = await cancel_goals(goals, action, goal_id, by=by)
     except RosbridgeError as exc:
         return Cancelled(action, goal_id, why, f"the cancel failed: {exc}", failed=True)
-    if report.dialect == 1 and fresh:
-        # The first message of a new ROS 1 publisher is often lost: once more, once the server hears it.
-        client.run_in_background(_repeat_ros1(goals, action, goal_id or ""), f"repeat the cancel on {action}")
     return Cancelled(action, goal_id, why, *_outcome(report))
-
-
-async def _repeat_ros1(goals: GoalRegistry, action: str, goal_id: str) -> None:
-    with contextlib.suppress(TimeoutError):
-        await goals.client.wait_disconnected(ROS1_CANCEL_REPEAT_SECONDS)
-        return  # the connection went: the registry's own cancels after a drop take over
-    with contextlib.suppress(Exception):
-        await publish_cancel(goals.client, action, goal_id)
 
 
 def _outcome(report: CancelReport) -> tuple[str, bool]:

@@ -10,9 +10,10 @@ not keep up with (dropped from the queue) and those the writer refused are count
 from __future__ import annotations
 
 import asyncio
+import functools
 import os
 import time
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass
 from fnmatch import fnmatchcase
 from pathlib import Path
@@ -114,18 +115,8 @@ async def record_topics(
 
     ``on_progress(seconds, messages, bytes)`` is called about once a second.
     """
-    codecs: dict[str, MessageCodec] = {}
-    types: dict[str, str] = {}
-    skipped: list[str] = []
     try:
-        version = (await graph.dialect()).info.version
-        for topic, msg_type in topics:
-            try:
-                typedefs = await graph.message_typedefs(msg_type)
-                codecs[topic] = message_codec(msg_type, typedefs, version)
-                types[topic] = msg_type
-            except (EncodingError, UnknownTypeError, RosbridgeError) as exc:
-                skipped.append(f"{topic} ({msg_type}): {exc}")
+        version, codecs, types, skipped = await _codecs(graph, topics)
     except BaseException:
         os.close(fd)  # the writer never took the file over
         raise
@@ -143,41 +134,9 @@ async def record_topics(
     lost = dict.fromkeys(codecs, 0)
     start = time.monotonic()
     end = start + duration
-
-    async def pump(topic: str) -> None:
-        # CBOR where rosbridge can send it: byte arrays come as bytes, numbers as typed arrays, NaN and ±inf
-        # as themselves (JSON sends both as null); a type with a fixed-size array comes as JSON.
-        compression = Dialect.compression_for(fixed_size_arrays=codecs[topic].fixed_size_arrays)
-        async with client.subscribe(
-            topic, types[topic], max_queue=SUBSCRIPTION_QUEUE, compression=compression
-        ) as sub:
-            try:
-                while not stopped.is_set():
-                    left = end - time.monotonic()
-                    if left <= 0:
-                        return
-                    try:
-                        message = await sub.get(min(left, 0.5))
-                    except RequestTimeoutError:
-                        continue
-                    except ConnectionLostError:
-                        continue  # the subscription is restored on the next connection: a gap, not an end
-                    if writer.state.stopped is not None:
-                        return
-                    if not writer.put(topic, time.time_ns(), message):
-                        lost[topic] += 1
-            finally:
-                lost[topic] += sub.dropped
-
-    async def progress() -> None:
-        while on_progress is not None:
-            await asyncio.sleep(PROGRESS_EVERY)
-            await on_progress(
-                time.monotonic() - start, sum(writer.state.written.values()), writer.state.bytes_in
-            )
-
-    tasks = [asyncio.create_task(pump(topic)) for topic in codecs]
-    reporter = asyncio.create_task(progress())
+    pump = functools.partial(_pump, client, writer, stopped=stopped, end=end, lost=lost)
+    tasks = [asyncio.create_task(pump(topic, types[topic], codecs[topic])) for topic in codecs]
+    reporter = asyncio.create_task(_progress(on_progress, writer, start))
     try:
         if tasks:
             await asyncio.wait(tasks, timeout=duration + 5.0)
@@ -192,29 +151,102 @@ async def record_topics(
         seconds = time.monotonic() - start
         # Finished also when the call was cancelled: the file must be readable whatever ended it.
         finish_error = await _finished([*tasks, reporter], writer)
-    state = writer.state
     errors = [t.exception() for t in tasks if t.done() and not t.cancelled() and t.exception() is not None]
-    if state.stopped is not None:
-        ended = state.stopped
-    elif stopped.is_set():
-        ended = "stopped"
-    elif errors:
-        ended = f"error: {errors[0]}"
-    else:
-        ended = "duration"
-    start_ns = min((t[0] for t in state.times.values() if t), default=0)
-    recorded = tuple(
-        RecordedTopic(
-            topic,
-            types[topic],
-            timing_of(state.times[topic], start_ns),
-            lost[topic],
-            state.failed.get(topic),
-        )
-        for topic in codecs
+    ended, recorded = _ended(writer, stopped, errors), _recorded(writer, types, lost)
+    return RecordingResult(
+        path, _size(path), round(seconds, 2), ended, recorded, tuple(skipped), finish_error
     )
-    size = _size(path)
-    return RecordingResult(path, size, round(seconds, 2), ended, recorded, tuple(skipped), finish_error)
+
+
+def _recorded(
+    writer: McapFileWriter, types: Mapping[str, str], lost: Mapping[str, int]
+) -> tuple[RecordedTopic, ...]:
+    """What was recorded of each topic: its timing from the recording's first message, what was lost or
+    failed."""
+    state = writer.state
+    start_ns = min((t[0] for t in state.times.values() if t), default=0)
+    return tuple(
+        RecordedTopic(
+            topic, types[topic], timing_of(state.times[topic], start_ns), lost[topic], state.failed.get(topic)
+        )
+        for topic in types
+    )
+
+
+async def _codecs(
+    graph: RosGraph, topics: Sequence[tuple[str, str]]
+) -> tuple[int, dict[str, MessageCodec], dict[str, str], list[str]]:
+    """The ROS version, a codec and the type of each topic whose type could be encoded, and the ones skipped
+    with why."""
+    codecs: dict[str, MessageCodec] = {}
+    types: dict[str, str] = {}
+    skipped: list[str] = []
+    version = (await graph.dialect()).info.version
+    for topic, msg_type in topics:
+        try:
+            typedefs = await graph.message_typedefs(msg_type)
+            codecs[topic] = message_codec(msg_type, typedefs, version)
+            types[topic] = msg_type
+        except (EncodingError, UnknownTypeError, RosbridgeError) as exc:
+            skipped.append(f"{topic} ({msg_type}): {exc}")
+    return version, codecs, types, skipped
+
+
+async def _pump(
+    client: RosbridgeClient,
+    writer: McapFileWriter,
+    topic: str,
+    msg_type: str,
+    codec: MessageCodec,
+    *,
+    stopped: asyncio.Event,
+    end: float,
+    lost: dict[str, int],
+) -> None:
+    """One topic's messages into the writer until *end*, a stop, or the writer stopping; what was lost is
+    counted in *lost*."""
+    # CBOR where rosbridge can send it: byte arrays come as bytes, numbers as typed arrays, NaN and ±inf
+    # as themselves (JSON sends both as null); a type with a fixed-size array comes as JSON.
+    compression = Dialect.compression_for(fixed_size_arrays=codec.fixed_size_arrays)
+    async with client.subscribe(
+        topic, msg_type, max_queue=SUBSCRIPTION_QUEUE, compression=compression
+    ) as sub:
+        try:
+            while not stopped.is_set():
+                left = end - time.monotonic()
+                if left <= 0:
+                    return
+                try:
+                    message = await sub.get(min(left, 0.5))
+                except RequestTimeoutError:
+                    continue
+                except ConnectionLostError:
+                    continue  # the subscription is restored on the next connection: a gap, not an end
+                if writer.state.stopped is not None:
+                    return
+                if not writer.put(topic, time.time_ns(), message):
+                    lost[topic] += 1
+        finally:
+            lost[topic] += sub.dropped
+
+
+async def _progress(
+    on_progress: Callable[[float, int, int], Awaitable[None]] | None, writer: McapFileWriter, start: float
+) -> None:
+    while on_progress is not None:
+        await asyncio.sleep(PROGRESS_EVERY)
+        await on_progress(time.monotonic() - start, sum(writer.state.written.values()), writer.state.bytes_in)
+
+
+def _ended(writer: McapFileWriter, stopped: asyncio.Event, errors: Sequence[BaseException | None]) -> str:
+    """What ended the recording: the writer's cap, a stop, a failed topic, or its duration."""
+    if writer.state.stopped is not None:
+        return writer.state.stopped
+    if stopped.is_set():
+        return "stopped"
+    if errors:
+        return f"error: {errors[0]}"
+    return "duration"
 
 
 async def _finished(tasks: list[asyncio.Task[None]], writer: McapFileWriter) -> str | None:

@@ -8,14 +8,13 @@ import contextlib
 import logging
 import time
 
-from websockets.asyncio.server import ServerConnection
 from websockets.exceptions import ConnectionClosed
 
 from rosbridge_mcp_server.sim.bridge.capabilities import Actions, Fragments, Services, Topics
 from rosbridge_mcp_server.sim.bridge.client_manager import ClientManager
 from rosbridge_mcp_server.sim.bridge.core import BridgeConfig, BridgeCore, Capability, OpHandler
 from rosbridge_mcp_server.sim.bridge.protocol import Protocol
-from rosbridge_mcp_server.sim.connection import Connection, dumps_standard, dumps_ujson
+from rosbridge_mcp_server.sim.connection import Connection, PeerSocket, dumps_standard, dumps_ujson
 from rosbridge_mcp_server.sim.graph import Graph
 from rosbridge_mcp_server.sim.interfaces import InterfaceRegistry
 from rosbridge_mcp_server.sim.world import World
@@ -68,7 +67,7 @@ class Bridge(BridgeCore):
 
     # --- connections --------------------------------------------------------------------------------------
 
-    async def serve_connection(self, ws: ServerConnection) -> None:
+    async def serve_connection(self, ws: PeerSocket) -> None:
         """Run one client connection until it closes, then clean up after it like rosbridge does."""
         self._next_cid += 1
         conn = Connection(

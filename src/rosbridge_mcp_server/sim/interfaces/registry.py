@@ -33,7 +33,7 @@ from .base import (
 )
 from .cbor_form import cbor_form
 from .definitions import COMMON, ROS1_ONLY, ROS2_ONLY, ROSAPI_2_1, to_ros1_text
-from .definitions_arm import ARM
+from .definitions_arm import ARM, ARM_ROS1
 from .definitions_nav2 import KILTED, NAV2
 from .ros1 import Ros1Conversion
 from .ros2 import Ros2Conversion
@@ -61,7 +61,7 @@ def _table_for(dialect: Dialect, rosapi: str, distro: str = "") -> ParsedTable:
                 else:
                     texts[key] = text
     else:
-        texts = {key: to_ros1_text(text) for key, text in {**COMMON, **NAV2}.items()}
+        texts = {key: to_ros1_text(text) for key, text in {**COMMON, **NAV2, **ARM_ROS1}.items()}
         texts.update(ROS1_ONLY)
     return parse_table(dialect, texts)
 

@@ -97,8 +97,6 @@ class WorldNodes:
         #: The arm when the robot has one (``world="arm"``: the turtle world with an arm), else ``None``.
         self.arm: ArmWorld | None = None
         if world == "arm":
-            if not self.ros2:
-                raise ValueError("world='arm' needs dialect='ros2' (ROS 1's control_msgs are not simulated)")
             self.arm = ArmWorld(self.kit, faults)
         elif world == "nav2":
             self.nav2 = Nav2World(
@@ -345,7 +343,7 @@ class WorldNodes:
                     "/run_id": "5a1e5c8e-0000-4000-8000-000000000000",
                     "/rosversion": "1.16.0\n",
                     "/rosdistro": "noetic\n",
-                    "/robot_description": robot_description(),
+                    "/robot_description": robot_description(arm_urdf() if self.arm is not None else ""),
                     "/robot_controller/slow_service_seconds": self.slow_service_seconds,
                     "/turtlesim/background_r": 69,
                     "/turtlesim/background_g": 86,

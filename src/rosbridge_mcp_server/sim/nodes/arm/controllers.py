@@ -1,5 +1,7 @@
 """The arm's ``/controller_manager``: ``list_controllers`` and ``switch_controller`` as ros2_control answers
-them (the ROS 2 lab's arm, "The arm" in its NOTES.md).
+them (the ROS 2 lab's arm, "The arm" in its NOTES.md), and on ROS 1 as ros_control's does (states
+``running`` / ``stopped``, ``claimed_resources`` per hardware interface, ``start_controllers`` /
+``stop_controllers``).
 
 ``switch_controller`` really (de)activates: STRICT (2) is all or nothing (an unknown name, or one already
 in that state: ``ok`` false, nothing switched); BEST_EFFORT (1; also 0 AUTO, 3 FORCE_AUTO) switches what it
@@ -24,6 +26,12 @@ __all__ = ["ControllerManager"]
 log = logging.getLogger("rosbridge_mcp_server.sim")
 
 MANAGER = "/controller_manager"
+#: ros_control's (ROS 1) types of the same controllers.
+ROS1_TYPES = {
+    "joint_trajectory_controller/JointTrajectoryController": "position_controllers/JointTrajectoryController",
+    "position_controllers/GripperActionController": "position_controllers/GripperActionController",
+    "joint_state_broadcaster/JointStateBroadcaster": "joint_state_controller/JointStateController",
+}
 STRICT = 2
 
 
@@ -72,13 +80,17 @@ class ControllerManager:
         kit.service(MANAGER, f"{MANAGER}/switch_controller", self._type("SwitchController"), self._switch)
 
     def _type(self, leaf: str) -> str | None:
-        return self.arm.kit.type(f"controller_manager_msgs/srv/{leaf}", "", "srv")
+        return self.arm.kit.type(
+            f"controller_manager_msgs/srv/{leaf}", f"controller_manager_msgs/{leaf}", "srv"
+        )
 
     def is_active(self, name: str) -> bool:
         controller = self.controllers.get(name)
         return controller is not None and controller.active
 
     async def _list(self, request: dict[str, Any]) -> dict[str, Any]:
+        if not self.arm.kit.ros2:
+            return {"controller": [self._ros1_state(c) for c in self.controllers.values()]}
         return {
             "controller": [
                 {
@@ -97,6 +109,19 @@ class ControllerManager:
             ]
         }
 
+    @staticmethod
+    def _ros1_state(c: _Controller) -> dict[str, Any]:
+        joints = [interface.rsplit("/", 1)[0] for interface in c.command]
+        resources = [
+            {"hardware_interface": "hardware_interface::PositionJointInterface", "resources": joints}
+        ]
+        return {
+            "name": c.name,
+            "state": "running" if c.active else "stopped",
+            "type": ROS1_TYPES.get(c.type, c.type),
+            "claimed_resources": resources if joints else [],
+        }
+
     def _switchable(self, name: str, activate: bool) -> bool:
         controller = self.controllers.get(name)
         if controller is None or controller.active == activate:
@@ -104,8 +129,9 @@ class ControllerManager:
         return not (activate and name == "arm_controller" and "arm-controller-inactive" in self.arm.faults)
 
     async def _switch(self, request: dict[str, Any]) -> dict[str, Any]:
-        wanted = [(str(n), False) for n in request.get("deactivate_controllers") or []]
-        wanted += [(str(n), True) for n in request.get("activate_controllers") or []]
+        stop, start = ("deactivate", "activate") if self.arm.kit.ros2 else ("stop", "start")
+        wanted = [(str(n), False) for n in request.get(f"{stop}_controllers") or []]
+        wanted += [(str(n), True) for n in request.get(f"{start}_controllers") or []]
         possible = [(name, activate) for name, activate in wanted if self._switchable(name, activate)]
         if not wanted or (request.get("strictness") == STRICT and len(possible) != len(wanted)):
             log.warning("/controller_manager: switch refused (strict): %s", wanted)

@@ -77,6 +77,19 @@ NAMED_POSES: dict[str, tuple[float, ...]] = {
     "zero": (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
 }
 HOME = dict(zip(ARM_JOINTS, NAMED_POSES["home"], strict=True)) | {FINGER: 0.04}
+#: Each link's collision shape (a cylinder's radius, or a box's size), as a URDF gives a link's size;
+#: tool0 and the mount have none.
+SHAPES: dict[str, str] = {
+    "shoulder_link": '<cylinder radius="0.06" length="0.12"/>',
+    "upper_arm_link": '<cylinder radius="0.05" length="0.4"/>',
+    "forearm_link": '<cylinder radius="0.04" length="0.2"/>',
+    "wrist_1_link": '<cylinder radius="0.035" length="0.17"/>',
+    "wrist_2_link": '<cylinder radius="0.035" length="0.08"/>',
+    "wrist_3_link": '<cylinder radius="0.03" length="0.03"/>',
+    "gripper_base_link": '<box size="0.1 0.04 0.04"/>',
+    "gripper_left_finger_link": '<box size="0.01 0.02 0.05"/>',
+    "gripper_right_finger_link": '<box size="0.01 0.02 0.05"/>',
+}
 
 
 def _joint_xml(joint: ArmJoint) -> str:
@@ -98,9 +111,16 @@ def _joint_xml(joint: ArmJoint) -> str:
     return text + "  </joint>\n"
 
 
+def _link_xml(name: str) -> str:
+    shape = SHAPES.get(name)
+    if shape is None:
+        return f'  <link name="{name}"/>\n'
+    return f'  <link name="{name}">\n    <collision><geometry>{shape}</geometry></collision>\n  </link>\n'
+
+
 def arm_urdf() -> str:
     """The arm's links and joints, to go inside the robot's ``<robot>`` (its root link is ``base_link``)."""
-    links = "".join(f'  <link name="{joint.child}"/>\n' for joint in JOINTS)
+    links = "".join(_link_xml(joint.child) for joint in JOINTS)
     return links + "".join(_joint_xml(joint) for joint in JOINTS)
 
 

@@ -43,9 +43,13 @@ class Invalid(Exception):
 
 
 def _seconds(duration: Any) -> float:
+    """A ``Duration`` or ``Time`` in either dialect's spelling (ROS 2 ``sec``/``nanosec``, ROS 1
+    ``secs``/``nsecs``)."""
     if not isinstance(duration, dict):
         return 0.0
-    return float(duration.get("sec", 0) or 0) + float(duration.get("nanosec", 0) or 0) / 1e9
+    sec = duration.get("sec", duration.get("secs", 0)) or 0
+    nano = duration.get("nanosec", duration.get("nsecs", 0)) or 0
+    return float(sec) + float(nano) / 1e9
 
 
 @dataclass

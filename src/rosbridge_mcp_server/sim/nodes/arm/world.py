@@ -1,6 +1,6 @@
 """The arm world: the turtle world plus an arm and its gripper, driven by ros2_control as on a real robot.
 
-What it adds (ROS 2 only; names as ros2_control and the ROS 2 lab use them):
+What it adds (names as ros2_control and the ROS 2 lab use them; on ROS 1 as ros_control does, :mod:`.ros1`):
 
 * ``/joint_states`` (``/joint_state_broadcaster``, 50 Hz while listened to): the six arm joints and
   ``gripper_finger_joint``; ``/tf`` with every movable joint's link, ``/tf_static`` with the fixed ones;
@@ -37,6 +37,7 @@ from rosbridge_mcp_server.sim.nodes.arm.motion import (
     check_trajectory,
     make_trajectory,
 )
+from rosbridge_mcp_server.sim.nodes.arm.ros1 import build_ros1
 from rosbridge_mcp_server.sim.nodes.kit import NodeKit
 
 __all__ = ["ARM_FAULTS", "ARM_NODES", "ArmWorld"]
@@ -71,23 +72,38 @@ class ArmWorld:
         self.received_trajectories: list[dict[str, Any]] = []
         self.gripper_goals: list[dict[str, Any]] = []
         self.joint_state_count = 0
+        #: ROS 1: the actionlib servers (:mod:`.ros1`).
+        self.actionlib: list[Any] = []
 
     # --- building ------------------------------------------------------------------------------------------
 
     def build(self) -> None:
         kit = self.kit
-        for node in (*ARM_NODES, SEMANTIC_NODE):
+        for node in ARM_NODES:
             kit.graph.node(node)
         kit.publisher("/joint_state_broadcaster", "/joint_states", kit.msg_type("sensor_msgs", "JointState"))
+        self.controllers.build()
+        if not kit.ros2:
+            build_ros1(self)
+            kit.world.params.update(
+                {
+                    "/arm_controller/joints": list(ARM_JOINTS),
+                    "/arm_controller/allow_partial_joints_goal": False,
+                    "/gripper_controller/joint": FINGER,
+                    "/robot_description_semantic": srdf(),
+                }
+            )
+            kit.loops.append(self._loop)
+            return
+        kit.graph.node(SEMANTIC_NODE)
         kit.publisher(
             SEMANTIC_NODE, "/robot_description_semantic", kit.msg_type("std_msgs", "String"), latched=True
         )
         trajectory_type = kit.msg_type("trajectory_msgs", "JointTrajectory")
         if trajectory_type is not None:
             kit.graph.add_subscriber(
-                "/arm_controller", "/arm_controller/joint_trajectory", trajectory_type, self._on_trajectory
+                "/arm_controller", "/arm_controller/joint_trajectory", trajectory_type, self.on_trajectory
             )
-        self.controllers.build()
         follow = kit.type("control_msgs/action/FollowJointTrajectory", "", "action")
         if follow is not None:
             self.follow = TrajectoryServer(self, follow)
@@ -116,7 +132,8 @@ class ArmWorld:
     # --- the update loop -----------------------------------------------------------------------------------
 
     async def _loop(self) -> None:
-        self.kit.publish("/robot_description_semantic", {"data": srdf()})
+        if self.kit.ros2:
+            self.kit.publish("/robot_description_semantic", {"data": srdf()})
         while True:
             self.step(time.monotonic())
             if "joint-states-stale" not in self.faults and self.controllers.is_active(
@@ -190,7 +207,8 @@ class ArmWorld:
     # --- trajectories --------------------------------------------------------------------------------------
 
     def param(self, name: str) -> Any:
-        return self.kit.world.params.get(name)
+        """The parameter ``/node:leaf`` (ROS 2 spelling; ROS 1's ``/node/leaf``)."""
+        return self.kit.world.params.get(name if self.kit.ros2 else name.replace(":", "/"))
 
     def start(self, trajectory: Any, header: Any, source: str, multi_dof: Any = None) -> Run:
         """Check and start a trajectory, preempting what runs; :class:`Invalid` when it cannot run."""
@@ -217,19 +235,52 @@ class ArmWorld:
 
     def stop(self, run: Run) -> None:
         """Stop *run* where the arm is now (a cancel)."""
+        self.stop_here(run, "canceled", "goal canceled")
+
+    def stop_here(self, run: Run, state: str, why: str) -> None:
+        """Stop *run* where the arm is now; it ends *state* (code 0 for a cancel, −1 else) with *why*."""
         if self.run is run:
             self.step(time.monotonic())
             if self.run is run:
                 self.run = None
                 for name in run.trajectory.joints:
                     self.velocities[name] = 0.0
-        run.finish("canceled", 0, "goal canceled")
+        run.finish(state, 0 if state == "canceled" else INVALID_GOAL, why)
+        self.kit.world.notify()
+
+    def trajectory_feedback(self, joints: tuple[str, ...]) -> dict[str, Any]:
+        """A FollowJointTrajectory feedback: the joints now (``desired`` = ``actual``, no error)."""
+        now = {
+            "positions": [self.positions[n] for n in joints],
+            "velocities": [self.velocities[n] for n in joints],
+        }
+        return {
+            "header": self.kit.header(""),
+            "joint_names": list(joints),
+            "desired": now,
+            "actual": now,
+            "error": {"positions": [0.0] * len(joints), "velocities": [0.0] * len(joints)},
+        }
+
+    def gripper_result(self, *, stalled: bool, reached: bool) -> dict[str, Any]:
+        """A GripperCommand result (and feedback): where the finger is."""
+        return {
+            "position": self.positions[FINGER],
+            "effort": 0.0,
+            "stalled": stalled,
+            "reached_goal": reached,
+        }
 
     def gripper_moving(self) -> bool:
         return self.gripper_target is not None
 
-    def _on_trajectory(self, message: dict[str, Any], _client: int) -> None:
+    def on_trajectory(self, message: dict[str, Any], _client: int) -> None:
         self.received_trajectories.append(message)
+        if not self.kit.ros2 and not message.get("points"):
+            # ros_control (ROS 1): an empty trajectory stops what runs and holds the arm where it is.
+            if self.run is not None:
+                self.stop_here(self.run, "aborted", "stopped by an empty trajectory on the topic")
+            return
         try:
             self.start(message, message.get("header"), "topic")
         except Invalid as exc:
@@ -288,17 +339,7 @@ class TrajectoryServer(ActionServer):
                 self.arm.stop(run)
 
     def _feedback(self, joints: tuple[str, ...]) -> dict[str, Any]:
-        now = {
-            "positions": [self.arm.positions[n] for n in joints],
-            "velocities": [self.arm.velocities[n] for n in joints],
-        }
-        return {
-            "header": self.arm.kit.header(""),
-            "joint_names": list(joints),
-            "desired": now,
-            "actual": now,
-            "error": {"positions": [0.0] * len(joints), "velocities": [0.0] * len(joints)},
-        }
+        return self.arm.trajectory_feedback(joints)
 
 
 class GripperServer(ActionServer):
@@ -335,9 +376,4 @@ class GripperServer(ActionServer):
         return ("succeeded" if reached else "aborted"), self._result(stalled=not reached, reached=reached)
 
     def _result(self, *, stalled: bool, reached: bool) -> dict[str, Any]:
-        return {
-            "position": self.arm.positions[FINGER],
-            "effort": 0.0,
-            "stalled": stalled,
-            "reached_goal": reached,
-        }
+        return self.arm.gripper_result(stalled=stalled, reached=reached)
