@@ -24,8 +24,6 @@ PENDING: frozenset[str] = frozenset(
     {
         # the MCP edge (item 5): the fleet server's one builder
         "server/app.py:build_fleet_server",
-        # parameters read through the client's face (item 1)
-        "robot/parameters.py",
     }
 )
 

@@ -15,6 +15,8 @@ from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
 
 if TYPE_CHECKING:
+    from collections.abc import Awaitable, Callable
+
     from rosbridge_mcp_server.robot.recording.recorder import RecordingResult
     from rosbridge_mcp_server.safety.policy import RecordingLimits
 
@@ -93,13 +95,6 @@ async def run(
     directory = ctx.config.record_dir
     path, fd = _new_file(directory, name)
 
-    async def progress(seconds: float, messages: int, written: int) -> None:
-        await ctx.report_progress(
-            round(min(seconds, duration), 1),
-            duration,
-            f"{seconds:.0f} of {duration:g} s, {counted(messages, 'message')}, {size_text(written)}",
-        )
-
     stop_event = ctx.robot.recordings.add(path.name)
     try:
         result = await record_topics(
@@ -112,7 +107,7 @@ async def run(
             max_bytes=int(max_megabytes * 1e6),
             free_bytes=lambda: shutil.disk_usage(path.parent).free,
             stop=stop_event,
-            on_progress=progress,
+            on_progress=_reporter(ctx, duration),
         )
     except BaseException:
         if path.exists() and path.stat().st_size == 0:
@@ -122,6 +117,19 @@ async def run(
         ctx.robot.recordings.remove(path.name)
     answer = _answer(result, directory)
     return ToolAnswer(text=_text(answer, result), data=answer)
+
+
+def _reporter(ctx: ToolContext, duration: float) -> Callable[[float, int, int], Awaitable[None]]:
+    """The recording's progress as the client sees it: seconds of the duration, messages, bytes written."""
+
+    async def progress(seconds: float, messages: int, written: int) -> None:
+        await ctx.report_progress(
+            round(min(seconds, duration), 1),
+            duration,
+            f"{seconds:.0f} of {duration:g} s, {counted(messages, 'message')}, {size_text(written)}",
+        )
+
+    return progress
 
 
 def _stopping(ctx: ToolContext, name: str | None) -> ToolAnswer:

@@ -17,6 +17,8 @@ from rosbridge_mcp_server.tools.base import ToolAnswer, ToolFailure, ToolImage
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.mcapfile import Budget
+    from rosbridge_mcp_server.robot.occupancy import Grid
+    from rosbridge_mcp_server.robot.recording.paths import PathReader
     from rosbridge_mcp_server.robot.recording.reading import RecordingSummary
 
 __all__ = [
@@ -246,29 +248,13 @@ def map_answer(
 ) -> ToolAnswer:
     from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
     from rosbridge_mcp_server.pictures.maps import Overlay, draw_map  # noqa: PLC0415 - on first use
-    from rosbridge_mcp_server.robot.recording.paths import PathReader  # noqa: PLC0415 - on first use
-    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415 - on first use
 
     known = {t.topic for t in summary.topics}
     if map_topic not in known:
         raise ToolFailure(
             f"{map_topic} is not in this recording (map_topic); its topics: {', '.join(sorted(known))}."
         )
-    grid_message: dict[str, Any] | None = None
-    tf_topics = [t.topic for t in summary.topics if t.type.replace("/msg/", "/") == "tf2_msgs/TFMessage"]
-    wanted = list(dict.fromkeys([map_topic, *([path_topic] if path_topic in known else []), *tf_topics]))
-    reader = PathReader(path_topic)
-    for topic, log_time, message in decoded_messages(summary.path, wanted, budget=budget):
-        if topic == map_topic:
-            grid_message = message
-        else:
-            reader.feed(topic, log_time, message)
-    if grid_message is None:
-        raise ToolFailure(f"No message on {map_topic} in {file}.")
-    try:
-        grid = decode_grid(grid_message)
-    except MapError as exc:
-        raise ToolFailure(f"{map_topic}: {exc}") from None
+    grid, reader = _map_and_path(file, summary, map_topic, path_topic, budget)
     found = reader.path(grid.frame_id)
     points = found.poses
     step = max(1, len(points) // 2000)
@@ -309,3 +295,28 @@ def fit(lines: list[str], more: str) -> str:
         out.append(line)
         used += len(line) + 1
     return "\n".join(out)
+
+
+def _map_and_path(
+    file: str, summary: RecordingSummary, map_topic: str, path_topic: str, budget: Budget
+) -> tuple[Grid, PathReader]:
+    """The recording read once: its last map decoded, and the path (with tf) fed to a reader."""
+    from rosbridge_mcp_server.robot.recording.paths import PathReader  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415 - on first use
+
+    known = {t.topic for t in summary.topics}
+    grid_message: dict[str, Any] | None = None
+    tf_topics = [t.topic for t in summary.topics if t.type.replace("/msg/", "/") == "tf2_msgs/TFMessage"]
+    wanted = list(dict.fromkeys([map_topic, *([path_topic] if path_topic in known else []), *tf_topics]))
+    reader = PathReader(path_topic)
+    for topic, log_time, message in decoded_messages(summary.path, wanted, budget=budget):
+        if topic == map_topic:
+            grid_message = message
+        else:
+            reader.feed(topic, log_time, message)
+    if grid_message is None:
+        raise ToolFailure(f"No message on {map_topic} in {file}.")
+    try:
+        return decode_grid(grid_message), reader
+    except MapError as exc:
+        raise ToolFailure(f"{map_topic}: {exc}") from None
