@@ -25,7 +25,7 @@ from rosbridge_mcp_server.client.topics import Topics
 from rosbridge_mcp_server.client.transport import Dial, websocket_dial
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.wire import protocol
-from rosbridge_mcp_server.wire.dialect import RosInfo
+from rosbridge_mcp_server.wire.ros_versions import RosInfo
 
 __all__ = ["RosbridgeClient", "SessionFacts", "SessionWatcher"]
 

@@ -13,7 +13,7 @@ import ssl
 from collections.abc import Callable
 from typing import Any, Final
 
-from rosbridge_mcp_server.client.frames import frame_bytes
+from rosbridge_mcp_server.client.frame_limits import frame_bytes
 from rosbridge_mcp_server.client.transport import MAX_FRAME_BYTES, BridgeTransport, Dial
 from rosbridge_mcp_server.errors import (
     ConnectionLostError,
