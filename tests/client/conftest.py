@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 from collections.abc import AsyncIterator
 from typing import Any
 
@@ -49,6 +48,4 @@ async def client(sim: SimulatedRobot, make_client: MakeClient) -> RosbridgeClien
 
 async def ordering_known(client: RosbridgeClient) -> None:
     """Wait until the client knows whether the bridge holds calls up (measured in the background)."""
-    session = client.session
-    if session is not None:
-        await asyncio.wait_for(session.ordering_known.wait(), 10.0)
+    assert await client.ordering_known(10.0) or not client.connected

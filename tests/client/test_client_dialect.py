@@ -191,7 +191,7 @@ def _importers(module: str, allowed: tuple[str, ...]) -> list[str]:
 
 def test_only_the_client_and_the_wire_import_the_dialect_rules() -> None:
     """robot/, tools/, cli/ and the rest ask the client's Dialect; none imports wire.dialect."""
-    offenders = _importers("rosbridge_mcp_server.wire.dialect", ("wire", "client"))
+    offenders = _importers("rosbridge_mcp_server.wire.ros_versions", ("wire", "client"))
     assert offenders == []
 
 

@@ -35,7 +35,8 @@ async def test_diagnose_and_read_logs_on_a_real_bridge() -> None:
     assert data is not None
     assert len(text_of(result)) <= TEXT_BUDGET
     assert {"graph", "logs"} <= set(data["checked"]) | set(data["unavailable"])
-    version = session.ros.session.dialect.version if session.ros.session else 2
+    facts = session.ros.session_facts
+    version = facts.dialect.version if facts is not None else 2
     if version == 1:
         assert data["unavailable"]["lifecycle"] == "ROS 1 has no lifecycle nodes"
     page = logs.structured_content

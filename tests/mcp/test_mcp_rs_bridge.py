@@ -68,10 +68,8 @@ async def test_the_server_judges_the_bridge_by_its_answers_not_by_a_node_of_that
     service, and the bridge node's parameters are never asked."""
     info = await rs.ros.ros_info()
     assert info.status_replies
-    session = rs.ros.session
-    assert session is not None
-    assert session.ordering_known.is_set()
-    assert not session.lanes_by_default
+    assert await rs.ros.ordering_known(0.0)
+    assert rs.ros.calls_share_connection
     asked = rs_robot.world.service_calls
     assert not any(name.startswith("/rosbridge_mcp_check_") for name in asked)
     assert not any(name.endswith("/get_parameters") for name in asked)
@@ -109,9 +107,7 @@ async def test_a_goal_another_client_started_cannot_be_cancelled_by_its_rosbridg
     assert "Goal other:2 on /fibonacci was not cancelled: the bridge refused (unknown active goal)" in text
     assert "Give the goal's UUID instead" in text
     assert "omit goal_id to cancel every goal" in text
-    session = rs.ros.session
-    assert session is not None
-    assert session.capabilities.cancel_by_owner_only
+    assert (await rs.ros.capabilities()).cancel_by_owner_only
 
 
 async def test_on_rosbridge_suite_a_goal_another_client_started_is_cancelled_by_its_rosbridge_id(

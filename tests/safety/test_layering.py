@@ -4,6 +4,8 @@
   the table of layers knows every package of ours, and the simulated robot imports nothing of the server;
 * only ``wire/``, ``client/`` and the simulated bridge import ``wire/``; ``robot/`` reads no rosbridge frame;
   no module outside ``client/`` asks which bridge it is (what detection saw), it asks ``BridgeCapabilities``;
+  no module outside ``client/`` reads a client's ``session`` or what only a session holds (it asks the
+  client: ``session_facts``, ``ordering_known(timeout)``, ``calls_share_connection``, ``capabilities()``);
 * Pillow is imported only where pictures are drawn, and ``robot/`` loads no picture code at run time;
 * ``robot/``'s texts name no MCP tool but the listed ones (what to try next is worded at the MCP edge,
   ``server/advice.py``);
@@ -331,6 +333,45 @@ def brand_questions(sources: Iterable[Source]) -> list[str]:
     return reads(sources, _brand_questions, outside=PROTOCOL_PACKAGES)
 
 
+#: What a client's ``BridgeSession`` holds beyond the facts a watcher reads (``SessionFacts``): how calls
+#: are routed on its connection. Outside client/ these are asked of the client itself:
+#: ``ordering_known(timeout)``, ``calls_share_connection``, ``await capabilities()``, ``session_facts``.
+SESSION_INTERNALS = frozenset(
+    {
+        "lanes_by_default",
+        "ordering_known",
+        "spread_calls",
+        "send_service_timeout",
+        "learn_cancel_by_owner_only",
+    }
+)
+
+
+def _is_client(node: ast.expr) -> bool:
+    """*node* names a ``RosbridgeClient`` as we spell one: ``client``, ``self._client``, ``ros``."""
+    name = node.attr if isinstance(node, ast.Attribute) else getattr(node, "id", "")
+    return name == "ros" or name.lstrip("_").endswith("client")
+
+
+def _session_reads(tree: ast.Module) -> Iterator[tuple[int, str]]:
+    called = {id(node.func) for node in ast.walk(tree) if isinstance(node, ast.Call)}
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Attribute):
+            continue
+        if node.attr == "session" and _is_client(node.value):
+            found.append((node.lineno, "client.session"))
+        elif node.attr in SESSION_INTERNALS and id(node) not in called:
+            # ``client.ordering_known(5.0)`` is the client's face; ``session.ordering_known.wait()`` is not.
+            found.append((node.lineno, f"session.{node.attr}"))
+    yield from sorted(found)
+
+
+def session_reads(sources: Iterable[Source]) -> list[str]:
+    """A client's session, or what only a session holds, read outside the client."""
+    return reads(sources, _session_reads, outside=frozenset({"client"}))
+
+
 def test_nothing_above_the_client_imports_the_wire_protocol() -> None:
     """Only wire/, client/ and the simulated bridge import ``rosbridge_mcp_server.wire``."""
     assert wire_imports(package_sources()) == []
@@ -354,6 +395,13 @@ def test_no_module_outside_the_client_asks_which_bridge_it_is() -> None:
     """Outside client/ (and wire/, sim/) what a bridge does is asked of ``BridgeCapabilities``, never read off
     what detection saw."""
     assert brand_questions(package_sources()) == []
+
+
+def test_no_module_outside_the_client_reads_its_session() -> None:
+    """Outside client/ the current session is asked of the client's face (``session_facts``,
+    ``ordering_known(timeout)``, ``calls_share_connection``, ``capabilities()``), never read off
+    ``client.session``."""
+    assert session_reads(package_sources()) == []
 
 
 # --- the wire is sans-I/O; one module moves bytes ----------------------------------------------------------
@@ -655,6 +703,25 @@ def test_the_client_face_check_catches_a_submodule_and_an_unexported_name() -> N
         "robot/example.py:2 imports rosbridge_mcp_server.client.GoalLane",
         "robot/example.py:3 imports rosbridge_mcp_server.client.goals",
     ]
+
+
+def test_the_session_check_catches_what_cli_check_read_before_issue_38() -> None:
+    """The reads ``cli/check.py`` made of the session; a call of the face and ``robot.session`` pass."""
+    text = (
+        "session = client.session\n"
+        "await asyncio.wait_for(session.ordering_known.wait(), 5.0)\n"
+        "lanes = session.lanes_by_default\n"
+        "caps = self._client.session.capabilities\n"
+        "await client.ordering_known(5.0)\n"
+        "gate = robot.session.gate\n"
+    )
+    assert session_reads([source("cli/example.py", text)]) == [
+        "cli/example.py:1 reads client.session",
+        "cli/example.py:2 reads session.ordering_known",
+        "cli/example.py:3 reads session.lanes_by_default",
+        "cli/example.py:4 reads client.session",
+    ]
+    assert session_reads([source("client/example.py", text)]) == []
 
 
 def test_the_frame_check_catches_a_frame_read() -> None:

@@ -101,9 +101,9 @@ def test_a_forgotten_request_never_comes_due() -> None:
 
 
 def test_a_stream_without_a_deadline_gets_every_frame_and_never_expires() -> None:
-    """A goal's stream is written into ``pending`` directly: feedback and result reach it, time never does."""
+    """A goal's stream listens on its id: feedback and result reach it, time never does, until forgotten."""
     talk: Conversation[str] = Conversation()
-    talk.pending["goal:/fib:t-1"] = "stream"
+    talk.listen("goal:/fib:t-1", "stream")
     talk.wait("r", "reply", deadline=1.0)
     feedback = talk.receive(text({"op": "action_feedback", "id": "goal:/fib:t-1", "values": {}}))
     result = talk.receive(text({"op": "action_result", "id": "goal:/fib:t-1", "values": {}, "result": True}))
@@ -111,6 +111,8 @@ def test_a_stream_without_a_deadline_gets_every_frame_and_never_expires() -> Non
     assert isinstance(result, Routed)
     assert (feedback.handle, feedback.op, result.op) == ("stream", "action_feedback", "action_result")
     assert talk.due(100.0) == (["reply"], None)
+    assert talk.forget("goal:/fib:t-1") == "stream"
+    assert isinstance(talk.receive(text({"op": "action_result", "id": "goal:/fib:t-1"})), Unawaited)
 
 
 def test_a_call_of_a_hosted_service_goes_to_its_handle_and_others_do_not() -> None:
@@ -127,7 +129,7 @@ def test_losing_the_connection_hands_back_every_handle_and_empties_the_table() -
     """Replies, streams and hosted services all come back once; nothing is due afterwards."""
     talk: Conversation[str] = Conversation()
     talk.wait("a", "reply", deadline=1.0)
-    talk.pending["g"] = "stream"
+    talk.listen("g", "stream")
     talk.host("/probe", "calls")
     assert sorted(talk.lose_all()) == ["calls", "reply", "stream"]
     assert talk.pending == {}

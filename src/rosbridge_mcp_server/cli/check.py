@@ -10,7 +10,6 @@ about a second), and whether an action server's type can be found. Exit code 0 w
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from fnmatch import fnmatchcase
 from typing import TextIO
 from urllib.parse import urlsplit
@@ -136,12 +135,11 @@ async def _ordering_check(
         )
     except (RosbridgeError, TimeoutError, OSError, LookupError, ValueError) as exc:
         return _NOTE, f"could not measure whether calls queue behind a slow one ({type(exc).__name__}: {exc})"
-    session = client.session
-    if session is not None:
-        # The client measures the same in the background after connecting; compare with its conclusion.
-        with contextlib.suppress(TimeoutError):
-            await asyncio.wait_for(session.ordering_known.wait(), max(config.request_timeout, 5.0))
-    lanes = session.lanes_by_default if session is not None else caps.calls_may_queue
+    # The client measures the same in the background after connecting; compare with its conclusion.
+    if await client.ordering_known(max(config.request_timeout, 5.0)):
+        lanes = not client.calls_share_connection
+    else:
+        lanes = caps.calls_may_queue
     if info.version == 1:
         how = "rosbridge 0.11 runs each call in a thread of its own"
     elif caps.status_replies:

@@ -11,7 +11,7 @@ opened whole), ``goals.py`` (a ``GoalHandle`` per goal, every goal cancel, the g
 apart), ``dialect.py`` (the bridge's spelling of types and time fields, one ``Dialect`` per session),
 ``services.py`` (service calls), ``topics.py`` and ``subscription.py`` (advertisements, subscriptions),
 ``lanes.py`` and ``goal_lane.py`` (extra connections: a ROS 2 goal's own), ``connection.py`` (one WebSocket
-and its reader), ``frames.py`` (what one frame may hold: size, text, nesting).
+and its reader), ``frame_limits.py`` (what one frame may hold: size, text, nesting).
 
 Only this face is for the layers above: the connections (``BridgeSession``, the lanes) stay inside.
 """
@@ -23,7 +23,6 @@ from rosbridge_mcp_server.client.client import RosbridgeClient, SessionFacts, Se
 from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.client.goals import GoalCancel, GoalHandle, OthersCancel
 from rosbridge_mcp_server.client.subscription import Subscription
-from rosbridge_mcp_server.wire.dialect import RosInfo
 from rosbridge_mcp_server.wire.goals import (
     GoalEnded,
     GoalEvent,
@@ -31,6 +30,7 @@ from rosbridge_mcp_server.wire.goals import (
     GoalNeverRan,
     GoalStatusRefusal,
 )
+from rosbridge_mcp_server.wire.ros_versions import RosInfo
 
 __all__ = [
     "BridgeCapabilities",

@@ -2,7 +2,8 @@
 the next, measured), topics, a ping, a barrier.
 
 Split from ``client.py`` (the lifecycle and the connect loop) by concern: :class:`BridgeCalls` is the client's
-base class, and reads the session, the lanes and the topics the client keeps.
+base class, given the current session, the lanes and the topics the client keeps (no accessor left for the
+subclass to fill in).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import logging
 from collections.abc import Callable
 from typing import Any, Final, Literal
 
+from rosbridge_mcp_server.client.current import CurrentSession
 from rosbridge_mcp_server.client.lanes import LanePool
 from rosbridge_mcp_server.client.ordering import call_ordering
 from rosbridge_mcp_server.client.services import bridge_timeout, call_on, call_on_lane
@@ -33,41 +35,51 @@ _ORDERING_LIMIT_SECONDS: Final = 5.0
 
 
 class BridgeCalls:
-    """Service calls, advertisements, publishes, subscriptions, a ping: :class:`RosbridgeClient`'s calls."""
+    """Service calls, advertisements, publishes, subscriptions, a ping: :class:`RosbridgeClient`'s calls.
 
-    url: str
-    request_timeout: float
-    unhandled_acts: bool
-    _transport: Dial
-    topics: Topics
-    _session: BridgeSession | None
-    _lanes: LanePool
-    _ids: protocol.IdMinter
+    Given what they run on: the current session (:class:`CurrentSession`, which the client's connect loop
+    sets), the pool of lanes, the topics, the id minter and the transport the ordering probe dials through.
+    """
 
-    @property
-    def session(self) -> BridgeSession | None:
-        raise NotImplementedError
+    def __init__(
+        self,
+        url: str,
+        current: CurrentSession,
+        *,
+        transport: Dial,
+        ids: protocol.IdMinter,
+        lanes: LanePool,
+        topics: Topics,
+        request_timeout: float,
+    ) -> None:
+        self.url = url
+        self.request_timeout = request_timeout
+        self.topics = topics
+        #: Something that acts (a publish, a goal cancel) went out on the main connection, and the bridge may
+        #: not have handled it yet: ``close()`` waits for it first.
+        self.unhandled_acts = False
+        self._current = current
+        self._transport = transport
+        self._ids = ids
+        self._lanes = lanes
 
-    def require_session(self) -> BridgeSession:
-        raise NotImplementedError
-
-    async def _wait_session(self, deadline: float | None = None) -> BridgeSession:
-        raise NotImplementedError
-
-    async def ordering_known(self, timeout: float) -> None:
+    async def ordering_known(self, timeout: float) -> bool:
         """Wait (at most *timeout*; no error) until it is known whether the bridge holds one connection's
         calls up behind each other (told by its answers, measured, or given up on); at once when not
-        connected."""
-        session = self.session
-        if session is not None:
+        connected. Whether it is known now: False when not connected, or still unknown after *timeout*."""
+        session = self._current.session
+        if session is None:
+            return False
+        if not session.ordering_known.is_set():
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(session.ordering_known.wait(), timeout)
+        return session.ordering_known.is_set()
 
     @property
     def calls_share_connection(self) -> bool:
         """Service calls run side by side on the shared connection now (False while down, or while calls get a
         connection of their own: a bridge that may hold them up behind each other)."""
-        session = self.session
+        session = self._current.session
         return session is not None and not session.lanes_by_default
 
     async def _measure_ordering(self, session: BridgeSession) -> None:
@@ -128,9 +140,9 @@ class BridgeCalls:
         written, after a lane is opened for it; what it raises ends the call unsent.
         """
         t = self.request_timeout if timeout is None else timeout
-        session = self._session
+        session = self._current.held
         if session is None or not session.is_open:
-            session = await self._wait_session(asyncio.get_running_loop().time() + t)
+            session = await self._current.wait(asyncio.get_running_loop().time() + t)
         args = session.dialect.outgoing(args)
         if isolated or (
             isolated is None
@@ -163,7 +175,7 @@ class BridgeCalls:
     ) -> None:
         """Advertise *topic* now (``publish`` does this on first use); restored after reconnects."""
         await self.topics.advertise(
-            self.require_session(), topic, msg_type, latch=latch, queue_size=queue_size
+            self._current.require(), topic, msg_type, latch=latch, queue_size=queue_size
         )
 
     async def publish(
@@ -183,7 +195,7 @@ class BridgeCalls:
         session (:class:`NotConnectedError` if it is gone).
         """
         await self.topics.publish(
-            session or self.require_session(), topic, msg_type, msg, latch=latch, queue_size=queue_size
+            session or self._current.require(), topic, msg_type, msg, latch=latch, queue_size=queue_size
         )
         self.unhandled_acts = True
 
@@ -226,11 +238,11 @@ class BridgeCalls:
         :class:`RequestTimeoutError` if no pong within *timeout* (default ``request_timeout``),
         :class:`NotConnectedError` when there is no connection.
         """
-        session = self.require_session()
+        session = self._current.require()
         return await session.connection.ping(self.request_timeout if timeout is None else timeout)
 
     async def handled(self, timeout: float) -> bool:
         """Whether the bridge has handled everything sent so far on the main connection (one call's round
         trip, within *timeout*); ``False`` when there is no connection or no answer in time."""
-        session = self.session
+        session = self._current.session
         return session is not None and await session.handled(timeout)

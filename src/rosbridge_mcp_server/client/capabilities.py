@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rosbridge_mcp_server.wire.dialect import RosInfo
+from rosbridge_mcp_server.wire.ros_versions import RosInfo
 
 __all__ = ["BridgeCapabilities", "capabilities_of"]
 

@@ -14,6 +14,7 @@ from typing import Any, Final, Protocol, Self
 from rosbridge_mcp_server.client.calls import BridgeCalls
 from rosbridge_mcp_server.client.capabilities import BridgeCapabilities
 from rosbridge_mcp_server.client.connection import Connection, open_connection
+from rosbridge_mcp_server.client.current import CurrentSession
 from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.client.goal_lane import GoalLanes
 from rosbridge_mcp_server.client.goals import ClientGoals, GoalHandle
@@ -24,7 +25,7 @@ from rosbridge_mcp_server.client.topics import Topics
 from rosbridge_mcp_server.client.transport import Dial, websocket_dial
 from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError
 from rosbridge_mcp_server.wire import protocol
-from rosbridge_mcp_server.wire.dialect import RosInfo
+from rosbridge_mcp_server.wire.ros_versions import RosInfo
 
 __all__ = ["RosbridgeClient", "SessionFacts", "SessionWatcher"]
 
@@ -86,38 +87,39 @@ class RosbridgeClient(BridgeCalls):
         headers: Sequence[tuple[str, str]] = (),
         transport: Dial | None = None,
     ) -> None:
-        self.url = url
         # For wss:// with a private CA or a client certificate, and for a bridge behind an authenticating
         # proxy; every connection (main, lanes, the ordering probe's) opens with them. *transport* opens them
         # another way (the simulated robot's in memory): then the URL only names the bridge.
-        self._transport = transport or websocket_dial(url, ssl_context=ssl_context, headers=headers)
+        dial = transport or websocket_dial(url, ssl_context=ssl_context, headers=headers)
         self.connect_timeout = connect_timeout
-        self.request_timeout = request_timeout
         self.reconnect_min = reconnect_min
         self.reconnect_max = max(reconnect_max, reconnect_min)
         #: The backoff's ceiling for this bridge (short on this machine and the local network).
         self.reconnect_cap = max(reconnect_cap(url, self.reconnect_max), reconnect_min)
-        self._ids = protocol.IdMinter()
-        self._session: BridgeSession | None = None
         self._attempts = Attempts(reconnect_min, self.reconnect_cap)
+        self._current = CurrentSession(url, self._attempts, connect_timeout)
         self._runner: asyncio.Task[None] | None = None
         self._closing = False
-        self._closed = False
-        #: Something that acts (a publish, a goal cancel) went out on the main connection, and the bridge may
-        #: not have handled it yet: :meth:`close` waits for it first.
-        self.unhandled_acts = False
         self._connected_event = asyncio.Event()
         self._disconnected_event = asyncio.Event()
         self._disconnected_event.set()
         self._watchers: list[SessionWatcher] = []
         self._background: set[asyncio.Task[Any]] = set()
         self._measuring: asyncio.Task[Any] | None = None
-        self._lanes = LanePool(
-            self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
+        ids = protocol.IdMinter()
+        super().__init__(
+            url,
+            self._current,
+            transport=dial,
+            ids=ids,
+            lanes=LanePool(
+                self._open_lane, self._close_in_background, cap=lane_cap, idle_seconds=lane_idle_seconds
+            ),
+            topics=Topics(url, ids, lambda: self._current.session, self._current.wait),
+            request_timeout=request_timeout,
         )
         #: The goals sent through this client: open ones, and those a drop cut off (:mod:`.goals`).
         self.goals = ClientGoals(self, GoalLanes(url, self._open_lane, self._close_in_background))
-        self.topics = Topics(url, self._ids, lambda: self.session, self._wait_session)
         self.connections_made = 0
         self._lane_numbers = itertools.count(1)
 
@@ -126,18 +128,24 @@ class RosbridgeClient(BridgeCalls):
     @property
     def connected(self) -> bool:
         """The main connection is open and the bridge's flavour is known."""
-        return self._session is not None and self._session.is_open
+        return self._current.session is not None
 
     @property
     def session(self) -> BridgeSession | None:
-        """The current session (main connection and what is known of its bridge), or None while down."""
-        session = self._session
-        return session if session is not None and session.is_open else None
+        """The current session (main connection and what is known of its bridge), or None while down: for
+        ``client/`` alone (the layers above read :attr:`session_facts`)."""
+        return self._current.session
+
+    @property
+    def session_facts(self) -> SessionFacts | None:
+        """What is known of the bridge behind the open connection (number, ``RosInfo``, dialect,
+        capabilities), or None while down."""
+        return self._current.session
 
     @property
     def closed(self) -> bool:
         """``close()`` was called."""
-        return self._closed
+        return self._current.closed
 
     @property
     def lanes(self) -> LanePool:
@@ -155,7 +163,7 @@ class RosbridgeClient(BridgeCalls):
 
     async def start(self) -> None:
         """Start the background connect/reconnect loop; returns at once."""
-        if self._closed:
+        if self._current.closed:
             raise RuntimeError("this RosbridgeClient is closed")
         if self._runner is not None:
             return
@@ -173,9 +181,9 @@ class RosbridgeClient(BridgeCalls):
 
     async def close(self) -> None:
         """Let watchers cancel what runs, unadvertise, close every socket. Idempotent."""
-        if self._closed:
+        if self._current.closed:
             return
-        self._closed = True
+        self._current.closed = True
         self._closing = True
         self._attempts.stop()
         if self._measuring is not None:
@@ -196,7 +204,8 @@ class RosbridgeClient(BridgeCalls):
                 await self._runner
         lanes = self._lanes.close_all() + self.goals.lanes.take_all()
         await asyncio.gather(*(lane.aclose() for lane in lanes), return_exceptions=True)
-        main = self._session.connection if self._session is not None else None
+        held = self._current.held
+        main = held.connection if held is not None else None
         if main is not None:
             await main.aclose()
         self._set_disconnected(main, "the client was closed")
@@ -208,7 +217,7 @@ class RosbridgeClient(BridgeCalls):
         """Wait until connected; raises :class:`NotConnectedError` naming the URL and last reason."""
         if self.connected:
             return
-        if self._closed:
+        if self._current.closed:
             raise NotConnectedError(self.url, "the client is closed")
         try:
             async with asyncio.timeout(timeout):
@@ -271,7 +280,7 @@ class RosbridgeClient(BridgeCalls):
 
     def _started(self, session: BridgeSession, attempt_done: asyncio.Event) -> None:
         """*session* is up: it is the client's now; the goals and the watchers are told."""
-        self._session = session
+        self._current.held = session
         self._attempts.succeeded()
         self.connections_made += 1
         self._disconnected_event.clear()
@@ -290,8 +299,9 @@ class RosbridgeClient(BridgeCalls):
             watcher.session_started(session)
 
     def _set_disconnected(self, conn: Connection | None, reason: str) -> None:
-        if conn is not None and self._session is not None and self._session.connection is conn:
-            self._session = None
+        held = self._current.held
+        if conn is not None and held is not None and held.connection is conn:
+            self._current.held = None
             self._attempts.last_reason = reason
         self._connected_event.clear()
         self._disconnected_event.set()
@@ -299,35 +309,12 @@ class RosbridgeClient(BridgeCalls):
         self._lanes.drop_idle()
         self.topics.fail_all(ConnectionLostError(self.url, "messages"))
 
-    async def _wait_session(self, deadline: float | None = None) -> BridgeSession:
-        """The open session, waiting only for a connection attempt under way (or prompted now).
-
-        Between attempts, a call prompts one at once rather than failing until the backoff runs out; it waits
-        for that attempt (bounded by the connect timeout and *deadline*), never for a later one. Nothing is
-        queued: the caller sends its request itself, now, or gets :class:`NotConnectedError`.
-        """
-        session = self.session
-        if session is not None:
-            return session
-        if self._closed:
-            raise NotConnectedError(self.url, "the client is closed")
-        if self._attempts.timed_out:
-            # Waiting out another handshake would cost every call the whole connect timeout: the attempt is
-            # prompted, not awaited, so a later call finds the connection if the bridge answers again.
-            self._attempts.prompt()
-            raise NotConnectedError(self.url, self._attempts.last_reason)
-        await self._attempts.wait_for_one(self.connect_timeout, deadline)
-        session = self.session
-        if session is not None:
-            return session
-        raise NotConnectedError(self.url, self._attempts.last_reason)
-
     def require_session(self) -> BridgeSession:
         """The open session, or :class:`NotConnectedError` at once (for sends that must never wait)."""
-        session = self.session
-        if session is None:
-            raise NotConnectedError(self.url, self._attempts.last_reason)
-        return session
+        return self._current.require()
+
+    async def _wait_session(self) -> BridgeSession:
+        return await self._current.wait()
 
     async def ros_info(self) -> RosInfo:
         """What the bridge is: ROS version and distro, detected once per connection."""

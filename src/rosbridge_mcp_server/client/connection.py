@@ -13,7 +13,7 @@ import ssl
 from collections.abc import Callable
 from typing import Any, Final
 
-from rosbridge_mcp_server.client.frames import frame_bytes
+from rosbridge_mcp_server.client.frame_limits import frame_bytes
 from rosbridge_mcp_server.client.transport import MAX_FRAME_BYTES, BridgeTransport, Dial
 from rosbridge_mcp_server.errors import (
     ConnectionLostError,
@@ -117,7 +117,7 @@ class Connection:
 
     @property
     def pending(self) -> dict[str, Waiting]:
-        """The requests waiting, by id (a goal's stream may be added and removed here directly)."""
+        """The requests waiting, by id (to read: `expect`, `stream` and `forget` write it)."""
         return self.conversation.pending
 
     @property
@@ -258,6 +258,12 @@ class Connection:
         waiting = self.conversation.forget(rid)
         if type(waiting) is ReplyWaiter and not waiting.future.done():
             waiting.future.cancel()
+
+    def stream(self, rid: str, what: str) -> GoalStream:
+        """Every frame with id *rid* (a goal's feedback and result) as a stream, until ``forget(rid)``."""
+        stream = GoalStream(what)
+        self.conversation.listen(rid, stream)
+        return stream
 
     def host(self, service: str, what: str) -> GoalStream:
         """The bridge's calls of *service*, which this connection offers, as a stream of frames."""

@@ -11,7 +11,7 @@ from rosbridge_mcp_server.client.connection import Connection
 from rosbridge_mcp_server.client.services import call_on
 from rosbridge_mcp_server.errors import RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.wire import protocol
-from rosbridge_mcp_server.wire.dialect import RosInfo
+from rosbridge_mcp_server.wire.ros_versions import RosInfo
 
 __all__ = ["ROS1_BRIDGE_NODE", "detect"]
 

@@ -2,9 +2,9 @@
 
 ``robot/`` works with type names as people write them and with ROS 2's time fields; a :class:`Dialect`,
 built once per :class:`~rosbridge_mcp_server.client.session.BridgeSession` from its
-:class:`~rosbridge_mcp_server.wire.dialect.RosInfo`, spells them for the bridge behind that session. The
+:class:`~rosbridge_mcp_server.wire.ros_versions.RosInfo`, spells them for the bridge behind that session. The
 client adapts an outgoing message once, on the way out (``publish``, ``call_service``); nothing above it
-converts time fields. The rules themselves are pure and live in :mod:`rosbridge_mcp_server.wire.dialect`.
+converts time fields. The rules themselves are pure and live in :mod:`rosbridge_mcp_server.wire.ros_versions`.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from __future__ import annotations
 from typing import Any, Final, Literal
 
 from rosbridge_mcp_server.client.capabilities import BridgeCapabilities, capabilities_of
-from rosbridge_mcp_server.wire import dialect as rules
-from rosbridge_mcp_server.wire.dialect import ActionTypeNames, Ros1ActionTypes, RosInfo
+from rosbridge_mcp_server.wire import ros_versions as rules
+from rosbridge_mcp_server.wire.ros_versions import ActionTypeNames, Ros1ActionTypes, RosInfo
 
 __all__ = ["ActionTypeNames", "Dialect", "Ros1ActionTypes"]
 

@@ -13,7 +13,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from rosbridge_mcp_server.client.capabilities import BridgeCapabilities
-from rosbridge_mcp_server.client.connection import Connection, GoalStream
+from rosbridge_mcp_server.client.connection import Connection
 from rosbridge_mcp_server.errors import NotConnectedError
 from rosbridge_mcp_server.wire import protocol
 from rosbridge_mcp_server.wire.goals import GoalEvent, goal_event
@@ -41,9 +41,8 @@ class GoalLane:
         self.action = action
         self.goal_id = goal_id
         self.capabilities = capabilities
-        self._stream = GoalStream(what)
+        self._stream = connection.stream(goal_id, what)
         self._on_close = on_close
-        connection.pending[goal_id] = self._stream
 
     async def send_goal(self, action_type: str, goal: dict[str, Any]) -> None:
         """Send the goal itself (with feedback) on the lane, under the lane's goal id."""
@@ -63,7 +62,7 @@ class GoalLane:
 
     def close(self) -> None:
         """Stop listening and close the lane in the background."""
-        self.connection.pending.pop(self.goal_id, None)
+        self.connection.forget(self.goal_id)
         self._on_close(self)
 
 

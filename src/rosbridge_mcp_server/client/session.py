@@ -24,7 +24,7 @@ from rosbridge_mcp_server.client.detect import detect
 from rosbridge_mcp_server.client.dialect import Dialect
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.wire import protocol
-from rosbridge_mcp_server.wire.dialect import RosInfo
+from rosbridge_mcp_server.wire.ros_versions import RosInfo
 
 __all__ = ["BridgeSession", "open_session", "send_quietly"]
 

@@ -216,8 +216,8 @@ class ConsoleHub:
         robots = []
         for robot in self.robots:
             client = robot.session.client
-            session = client.session
-            info = session.info if session is not None and client.connected else None
+            facts = client.session_facts
+            info = facts.info if facts is not None else None
             ros = None
             if info is not None:
                 ros = f"ROS {info.version}" + (f" {info.distro}" if info.distro else "")

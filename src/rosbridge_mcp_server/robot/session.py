@@ -68,8 +68,9 @@ class RobotSession:
         if self.logs is None:
             self.logs = LogKeeper(self.client, self.graph)
             self.client.watch(self.logs)
-            if self.client.session is not None:
-                self.logs.session_started(self.client.session)
+            facts = self.client.session_facts
+            if facts is not None:
+                self.logs.session_started(facts)
         return self.logs
 
     def __repr__(self) -> str:

@@ -250,10 +250,10 @@ def list_robots_tool(fleet: Fleet) -> EdgeTool:
 
 def _row(robot: Robot) -> RobotRow:
     client = robot.session.client
-    session = client.session
+    facts = client.session_facts
     ros = None
-    if client.connected and session is not None:
-        info = session.info
+    if facts is not None:
+        info = facts.info
         ros = f"ROS {info.version}" + (f" {info.distro}" if info.distro else "")
     return RobotRow(
         name=robot.name,

@@ -6,8 +6,8 @@ with :data:`ARGUMENTS_CONFIG`, so one validation does every check:
 * strict types: ``true`` is no number and ``"5"`` no number (a JSON client sends numbers as numbers);
 * a key the tool does not take is an error naming it (the input schemas say ``additionalProperties: false``);
 * bounded work: a plain string argument (a name, an id) has at most :data:`MAX_TEXT_ARGUMENT` characters,
-  and a message, request or goal at most :data:`~rosbridge_mcp_server.client.frames.MAX_NESTING` levels
-  and what rosbridge takes in one frame (:func:`~rosbridge_mcp_server.client.frames.payload_problem`).
+  and a message, request or goal at most :data:`~rosbridge_mcp_server.client.frame_limits.MAX_NESTING` levels
+  and what rosbridge takes in one frame (:func:`~rosbridge_mcp_server.client.frame_limits.payload_problem`).
 
 Models often send an object as JSON text: :data:`JsonObject` (a message, a request, a goal) takes either
 and is the object; :data:`JsonValue` (a value of any type: a parameter's value, navigate_to's goal) reads
@@ -24,7 +24,7 @@ from typing import Annotated, Any
 from pydantic import AfterValidator, BeforeValidator, ConfigDict, WithJsonSchema
 from pydantic_core import PydanticCustomError
 
-from rosbridge_mcp_server.client.frames import nesting_text, payload_problem
+from rosbridge_mcp_server.client.frame_limits import nesting_text, payload_problem
 
 __all__ = [
     "ARGUMENTS_CONFIG",

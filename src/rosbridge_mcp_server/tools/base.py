@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Literal
 
 from pydantic import BaseModel
 
-from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, payload_problem
+from rosbridge_mcp_server.client.frame_limits import MAX_NESTING, MAX_PAYLOAD_CHARS, payload_problem
 from rosbridge_mcp_server.errors import Advised
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name

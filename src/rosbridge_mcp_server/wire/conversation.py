@@ -64,7 +64,7 @@ class Conversation(Generic[H]):
     """One connection's requests and what the bridge says of them; *H* is the caller's handle type.
 
     ``pending`` (id → handle) and ``advertised`` (the topics this connection advertised) are plain data the
-    caller may read; ``pending`` may also be written for a stream that waits without a deadline.
+    caller may read; only :meth:`wait`, :meth:`listen`, :meth:`host` and :meth:`forget` write the table.
     """
 
     __slots__ = ("_deadlines", "_timer_at", "advertised", "decoder", "hosted", "pending")
@@ -98,6 +98,11 @@ class Conversation(Generic[H]):
             self._timer_at = deadline
             return deadline
         return None
+
+    def listen(self, rid: str, handle: H) -> None:
+        """Every frame with id *rid* goes to *handle* (a goal's stream: feedback and result), with no
+        deadline, until :meth:`forget`."""
+        self.pending[rid] = handle
 
     def host(self, service: str, handle: H) -> None:
         """The bridge's calls of *service* (offered on this connection) go to *handle*."""

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from rosbridge_mcp_server.errors import UnknownTypeError
-from rosbridge_mcp_server.wire import dialect
-from rosbridge_mcp_server.wire.dialect import RosInfo
+from rosbridge_mcp_server.wire import ros_versions
+from rosbridge_mcp_server.wire.ros_versions import RosInfo
 
 
 @pytest.mark.parametrize(
@@ -21,20 +21,20 @@ from rosbridge_mcp_server.wire.dialect import RosInfo
 )
 def test_message_types_are_spelled_for_the_dialect(given: str, version: int, expected: str) -> None:
     """ROS 1 gets pkg/Type (it rejects three parts); ROS 2 gets the full pkg/msg/Type."""
-    assert dialect.normalize_type(given, version) == expected
+    assert ros_versions.normalize_type(given, version) == expected
 
 
 def test_service_types_get_the_srv_category_on_ros2() -> None:
     """A short service type becomes pkg/srv/Type on ROS 2 and stays short on ROS 1."""
-    assert dialect.normalize_type("std_srvs/Trigger", 2, "srv") == "std_srvs/srv/Trigger"
-    assert dialect.normalize_type("std_srvs/srv/Trigger", 1, "srv") == "std_srvs/Trigger"
+    assert ros_versions.normalize_type("std_srvs/Trigger", 2, "srv") == "std_srvs/srv/Trigger"
+    assert ros_versions.normalize_type("std_srvs/srv/Trigger", 1, "srv") == "std_srvs/Trigger"
 
 
 @pytest.mark.parametrize("bad", ["Twist", "a/b/c/d", "geometry_msgs/", "pkg/other/Type", "1pkg/Type", ""])
 def test_malformed_type_names_are_rejected_with_an_example(bad: str) -> None:
     """Names that are not pkg/Type or pkg/category/Type raise UnknownTypeError with a hint."""
     with pytest.raises(UnknownTypeError, match="pkg/Type"):
-        dialect.normalize_type(bad, 2)
+        ros_versions.normalize_type(bad, 2)
 
 
 @pytest.mark.parametrize(
@@ -49,7 +49,7 @@ def test_malformed_type_names_are_rejected_with_an_example(bad: str) -> None:
 )
 def test_every_action_type_form_names_the_same_action(given: str) -> None:
     """pkg/Fibonacci, pkg/action/Fibonacci and pkg/FibonacciAction map to both dialects' names."""
-    names = dialect.action_type_names(given)
+    names = ros_versions.action_type_names(given)
     assert names.ros2 == "action_tutorials_interfaces/action/Fibonacci"
     ros1 = names.ros1
     assert ros1.action == "action_tutorials_interfaces/FibonacciAction"
@@ -65,7 +65,7 @@ def test_every_action_type_form_names_the_same_action(given: str) -> None:
 def test_a_service_type_is_not_an_action_type() -> None:
     """pkg/srv/X is refused as an action type."""
     with pytest.raises(UnknownTypeError, match="service type"):
-        dialect.action_type_names("std_srvs/srv/Trigger")
+        ros_versions.action_type_names("std_srvs/srv/Trigger")
 
 
 def test_ros1_messages_get_secs_and_nsecs() -> None:
@@ -76,7 +76,7 @@ def test_ros1_messages_get_secs_and_nsecs() -> None:
         "duration": {"sec": 3},
         "data": 4,
     }
-    converted = dialect.adapt_message(msg, 1)
+    converted = ros_versions.adapt_message(msg, 1)
     assert converted == {
         "header": {"stamp": {"secs": 5, "nsecs": 7}, "frame_id": "map"},
         "poses": [{"stamp": {"secs": 1, "nsecs": 2}}],
@@ -89,14 +89,14 @@ def test_ros1_messages_get_secs_and_nsecs() -> None:
 def test_ros2_messages_go_out_untouched() -> None:
     """ROS 2 reads both spellings, so its messages are not rewritten."""
     msg = {"stamp": {"secs": 1, "nsecs": 2}}
-    assert dialect.adapt_message(msg, 2) is msg
-    assert dialect.adapt_message(msg, 1) == msg, "already ROS 1's spelling"
+    assert ros_versions.adapt_message(msg, 2) is msg
+    assert ros_versions.adapt_message(msg, 1) == msg, "already ROS 1's spelling"
 
 
 def test_objects_that_merely_contain_sec_are_not_time() -> None:
     """Only objects made of time keys (numbers) are converted; other fields are left alone."""
     msg = {"sec": "text", "other": {"sec": 1, "label": "x"}}
-    assert dialect.to_ros1_time(msg) == msg
+    assert ros_versions.to_ros1_time(msg) == msg
 
 
 @pytest.mark.parametrize(
@@ -124,14 +124,14 @@ def test_goal_status_numbers_mean_different_things_per_dialect(
     code: int, version: int, word: str, terminal: bool, success: bool
 ) -> None:
     """Status words, terminal states and success follow each dialect's own numbering."""
-    assert dialect.goal_status_name(code, version) == word
-    assert dialect.is_terminal_status(code, version) is terminal
-    assert dialect.is_success_status(code, version) is success
+    assert ros_versions.goal_status_name(code, version) == word
+    assert ros_versions.is_terminal_status(code, version) is terminal
+    assert ros_versions.is_success_status(code, version) is success
 
 
 def test_unknown_status_numbers_are_named_by_number() -> None:
     """A status outside the table reads as "status N"."""
-    assert dialect.goal_status_name(42, 2) == "status 42"
+    assert ros_versions.goal_status_name(42, 2) == "status 42"
 
 
 @pytest.mark.parametrize(
