@@ -10,6 +10,9 @@ runs a goal for a second or more and sends feedback while it runs::
     ROSBRIDGE_TEST_ACTION=/fibonacci ROSBRIDGE_TEST_ACTION_TYPE=actionlib_tutorials/FibonacciAction \\
     ROSBRIDGE_TEST_ACTION_GOAL='{"order": 20}' ...
 
+Without ``ROSBRIDGE_TEST_ACTION_GOAL`` the goal is ``{"order": 30}`` (as in the safety suite): an empty goal
+(a Fibonacci of order 0) ends before its first feedback, and the goal tests would wait for it in vain.
+
 The tests publish only on topics under ``/mcp_test/`` and call only rosapi's read-only services and a service
 they offer themselves under ``/mcp_test/``.
 """
@@ -37,7 +40,7 @@ from rosbridge_mcp_server.config import Config
 REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
 ACTION = os.environ.get("ROSBRIDGE_TEST_ACTION")
 ACTION_TYPE = os.environ.get("ROSBRIDGE_TEST_ACTION_TYPE")
-ACTION_GOAL: dict[str, Any] = json.loads(os.environ.get("ROSBRIDGE_TEST_ACTION_GOAL") or "{}")
+ACTION_GOAL: dict[str, Any] = json.loads(os.environ.get("ROSBRIDGE_TEST_ACTION_GOAL") or '{"order": 30}')
 
 pytestmark = [
     pytest.mark.real_bridge,

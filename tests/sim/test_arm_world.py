@@ -234,6 +234,25 @@ async def test_switch_controller_deactivates_and_an_inactive_controller_refuses_
         assert robot.arm.positions == pytest.approx(HOME)
 
 
+async def test_hardware_interfaces_are_claimed_while_their_controller_is_active() -> None:
+    """list_hardware_interfaces (served by the lab's controller manager too): the arm's position commands are
+    claimed, and free once arm_controller is deactivated; every joint's position is a state interface."""
+    async with SimulatedRobot(world="arm") as robot, await RawClient.open(robot.url) as client:
+        listing = "/controller_manager/list_hardware_interfaces"
+
+        def claimed(listed: dict[str, Any]) -> set[str]:
+            return {i["name"] for i in listed["command_interfaces"] if i["is_claimed"]}
+
+        positions = {f"{j}/position" for j in ARM_JOINTS}
+        listed = await call(client, listing, {})
+        assert positions | {f"{FINGER}/position"} <= claimed(listed)
+        assert positions <= {i["name"] for i in listed["state_interfaces"]}
+        switch = {"deactivate_controllers": ["arm_controller"], "strictness": 2}
+        assert (await call(client, "/controller_manager/switch_controller", switch))["ok"]
+        assert claimed(await call(client, listing, {})) == {f"{FINGER}/position"}
+        assert robot.arm.positions == pytest.approx(HOME)
+
+
 async def test_the_arm_controller_fault_keeps_it_inactive() -> None:
     """arm-controller-inactive: inactive at start, and switch_controller cannot activate it."""
     async with (

@@ -28,6 +28,8 @@ REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
 SIDE_BY_SIDE = 8
 #: Per-call latency of the simulated rosapi in the timing test (the real ones take ~3-7 ms per call).
 SIM_LATENCY = 0.01
+#: The arm's trajectory action, served where the lab was built with the arm (ros2_control's layout).
+_ARM_ACTION = "/arm_controller/follow_joint_trajectory"
 
 _ADDRESS = re.compile(r"0x[0-9a-f]+")
 
@@ -41,26 +43,32 @@ class Bridge:
     distro: str
     robot: SimulatedRobot | None
     server: str = "rosbridge_suite"
+    world: str = "turtle"
 
 
-async def _detect(url: str) -> tuple[str, str, str]:
+async def _detect(url: str) -> Bridge:
     async with await RawClient.open(url) as client:
         reply = await client.call("/rosapi/get_ros_version")
         if reply["result"] is not True:
-            return "ros1", "noetic", "rosbridge_suite"
+            return Bridge(url, "ros1", "noetic", None)
+        # A lab built with the arm serves its trajectory action: the twin then carries the arm too.
+        servers = await client.call("/rosapi/action_servers")
+        world = "arm" if _ARM_ACTION in (servers.get("values") or {}).get("action_servers", []) else "turtle"
         # rosbridge-server-rs answers a cancel of a goal nobody started with an error status; 2.1.0 is silent.
         await client.send({"op": "cancel_action_goal", "id": "conformance:probe", "action": "/nobody"})
         told = any(frame.get("op") == "status" for frame in await client.frames_before_barrier())
-    return "ros2", str(reply["values"]["distro"]), "rs" if told else "rosbridge_suite"
+    distro = str(reply["values"]["distro"])
+    return Bridge(url, "ros2", distro, None, "rs" if told else "rosbridge_suite", world)
 
 
-def _twin_settings(dialect: str, distro: str, server: str = "rosbridge_suite") -> dict[str, Any]:
+def _twin_settings(bridge: Bridge) -> dict[str, Any]:
     """How to set up our robot like the real bridge: 2.1.0's defaults on ROS 2, or rosbridge-server-rs."""
-    if dialect == "ros1":
+    if bridge.dialect == "ros1":
         return {"dialect": "ros1"}
-    if server == "rs":
-        return {"dialect": "ros2", "distro": distro, "server": "rs"}
-    return {"dialect": "ros2", "in_order": True, "distro": distro, "rosapi": "2.1.0"}
+    settings: dict[str, Any] = {"dialect": "ros2", "distro": bridge.distro, "world": bridge.world}
+    if bridge.server == "rs":
+        return {**settings, "server": "rs"}
+    return {**settings, "in_order": True, "rosapi": "2.1.0"}
 
 
 @pytest.fixture(params=["ros2", "ros1"])
@@ -69,10 +77,9 @@ async def bridge(request: pytest.FixtureRequest) -> AsyncIterator[Bridge]:
     if REAL_URL:
         if request.param != "ros2":
             pytest.skip("the real bridge runs once")
-        dialect, distro, server = await _detect(REAL_URL)
-        yield Bridge(REAL_URL, dialect, distro, None, server)
+        yield await _detect(REAL_URL)
         return
-    settings = _twin_settings(request.param, "kilted")
+    settings = _twin_settings(Bridge("", request.param, "kilted", None))
     async with SimulatedRobot(**settings, rosapi_latency=SIM_LATENCY) as robot:
         yield Bridge(robot.url, robot.dialect, robot.bridge.config.distro, robot)
 
@@ -82,7 +89,7 @@ async def twin(bridge: Bridge) -> AsyncIterator[SimulatedRobot]:
     """Our robot set up like the real bridge (the comparisons need a real one)."""
     if bridge.robot is not None:
         pytest.skip("set ROSBRIDGE_TEST_URL=ws://host:port to compare with a real rosbridge")
-    async with SimulatedRobot(**_twin_settings(bridge.dialect, bridge.distro, bridge.server)) as robot:
+    async with SimulatedRobot(**_twin_settings(bridge)) as robot:
         yield robot
 
 

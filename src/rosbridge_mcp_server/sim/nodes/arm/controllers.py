@@ -1,5 +1,6 @@
-"""The arm's ``/controller_manager``: ``list_controllers`` and ``switch_controller`` as ros2_control answers
-them (the ROS 2 lab's arm, "The arm" in its NOTES.md), and on ROS 1 as ros_control's does (states
+"""The arm's ``/controller_manager``: ``list_controllers``, ``switch_controller`` (and on ROS 2
+``list_hardware_interfaces``) as ros2_control answers them (the ROS 2 lab's arm, "The arm" in its NOTES.md),
+and on ROS 1 as ros_control's does (states
 ``running`` / ``stopped``, ``claimed_resources`` per hardware interface, ``start_controllers`` /
 ``stop_controllers``).
 
@@ -83,6 +84,9 @@ class ControllerManager:
         kit.graph.node(MANAGER)
         kit.service(MANAGER, f"{MANAGER}/list_controllers", self._type("ListControllers"), self._list)
         kit.service(MANAGER, f"{MANAGER}/switch_controller", self._type("SwitchController"), self._switch)
+        if kit.ros2:
+            interfaces = self._type("ListHardwareInterfaces")
+            kit.service(MANAGER, f"{MANAGER}/list_hardware_interfaces", interfaces, self._interfaces)
 
     def _type(self, leaf: str) -> str | None:
         return self.kit.type(f"controller_manager_msgs/srv/{leaf}", f"controller_manager_msgs/{leaf}", "srv")
@@ -110,6 +114,18 @@ class ControllerManager:
                 }
                 for c in self.controllers.values()
             ]
+        }
+
+    async def _interfaces(self, request: dict[str, Any]) -> dict[str, Any]:
+        """Every command interface (claimed while an active controller holds it) and state interface."""
+        claimed = {i for c in self.controllers.values() if c.active for i in c.command}
+        commands = dict.fromkeys(i for c in self.controllers.values() for i in c.command)
+        states = dict.fromkeys(i for c in self.controllers.values() for i in c.state)
+        return {
+            "command_interfaces": [
+                {"name": i, "is_available": True, "is_claimed": i in claimed} for i in commands
+            ],
+            "state_interfaces": [{"name": i, "is_available": True, "is_claimed": False} for i in states],
         }
 
     @staticmethod
