@@ -292,7 +292,7 @@ def build_fleet_server(
     # Arguments that are no object get our sentence before the SDK checks the request's shape (checks.py).
     server.middleware.append(calls.arguments_kind)
     if board is not None:
-        board.register(server)
+        board.register(server, specs)
     if app is not None:
         server.extensions[APPS_EXTENSION] = {}
     return server

@@ -9,6 +9,7 @@ in that order, and ``server/app.py`` registers the ones the configuration chose.
 from __future__ import annotations
 
 import importlib
+import inspect
 from types import ModuleType
 
 from rosbridge_mcp_server.catalogue import CATALOGUE
@@ -17,14 +18,20 @@ __all__ = ["TOOL_MODULES"]
 
 
 def _modules() -> tuple[ModuleType, ...]:
-    """The catalogue's tool modules: each tool's module is named after the tool, and is read-only exactly
-    when the catalogue says it does not act, since the ``--tools`` groups go by it."""
+    """The catalogue's tool modules: each tool's module is named after the tool, is read-only exactly when
+    the catalogue says it does not act (the ``--tools`` groups go by it), and its long work is told by
+    arguments its ``run`` takes."""
     modules = tuple(importlib.import_module(f"{__name__}.{entry.name}") for entry in CATALOGUE)
     for entry, module in zip(CATALOGUE, modules, strict=True):
         if module.SPEC.name != entry.name:
             raise ImportError(f"tools/{entry.name}.py declares the tool {module.SPEC.name!r}")
         if module.SPEC.hints.read_only == entry.acts:
             raise ImportError(f"catalogue.py says {entry.name} acts={entry.acts}; its spec says otherwise")
+        long = module.SPEC.long_work
+        taken = inspect.signature(module.run).parameters
+        for argument in (long.given, long.unless) if long is not None else ():
+            if argument is not None and argument not in taken:
+                raise ImportError(f"{entry.name}'s long_work names {argument!r}, which its run does not take")
     return modules
 
 

@@ -13,6 +13,7 @@ from rosbridge_mcp_server.robot.series import FieldError, Series, TopicFields, c
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
+    LongWork,
     ToolAnswer,
     ToolContext,
     ToolFailure,
@@ -59,6 +60,7 @@ SPEC = ToolSpec(
     ),
     hints=READS_ROBOT,
     output=PlotAnswer,
+    long_work=LongWork(),
 )
 
 

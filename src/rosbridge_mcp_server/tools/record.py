@@ -19,7 +19,14 @@ from rosbridge_mcp_server.robot.recording.recorder import (
 )
 from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
-from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
+from rosbridge_mcp_server.tools.base import (
+    LongWork,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolHints,
+    ToolSpec,
+)
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.safety.policy import RecordingLimits
@@ -63,6 +70,7 @@ SPEC = ToolSpec(
     # It subscribes and writes a file: nothing is sent to the robot, so there is no act for the guard.
     changes="files on the server's host",
     output=RecordAnswer,
+    long_work=LongWork(unless="stop", cancelled="the recording was closed"),
 )
 
 
