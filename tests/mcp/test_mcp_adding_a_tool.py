@@ -135,7 +135,7 @@ def test_the_server_decides_by_what_a_spec_declares_never_by_a_tool_name(tmp_pat
     server = Path(rosbridge_mcp_server.server.__file__).parent
     named = [hit for path in sorted(server.glob("*.py")) for hit in _tool_names_in(path)]
     assert named == []
-    # The check sees a name where one is used (it caught app.py's, fleet.py's and tasks.py's), and not in text.
+    # The check sees a name where one is used (it caught app.py's, fleet.py's, tasks.py's), and not in text.
     by_name = tmp_path / "tasks.py"
     by_name.write_text(
         '"""Long work is record."""\n'
@@ -156,9 +156,11 @@ def test_which_calls_may_run_as_tasks_is_on_the_spec() -> None:
         "record": (None, "stop"),
         "plot_topic": (None, None),
     }
-    assert long["publish_topic"].applies({"duration": 2}) and not long["publish_topic"].applies({})
+    assert long["publish_topic"].applies({"duration": 2})
+    assert not long["publish_topic"].applies({})
     assert not long["publish_topic"].applies({"duration": None})
-    assert long["record"].applies({"topics": ["/chatter"]}) and not long["record"].applies({"stop": True})
+    assert long["record"].applies({"topics": ["/chatter"]})
+    assert not long["record"].applies({"stop": True})
     assert long["plot_topic"].cancelled == "its reading ended"
 
 

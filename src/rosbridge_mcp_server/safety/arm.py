@@ -49,7 +49,7 @@ from rosbridge_mcp_server.robot.arm_path import (
 from rosbridge_mcp_server.robot.arm_scene import ArmScene, gripper_joint
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.seam import Act
+    from rosbridge_mcp_server.robot.approval import Act
     from rosbridge_mcp_server.safety.arm_rules import ArmRules
 
 __all__ = ["ARM_SOURCES", "ArmRefusal", "act_arm", "arm_goal_text", "arm_refusal", "source_refusal"]

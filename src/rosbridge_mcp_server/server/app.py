@@ -1,7 +1,7 @@
 """The MCP server: ``build_server`` serves every tool on the SDK's low-level ``Server``.
 
 The low-level server is the SDK's documented way to own the schemas and results exactly (docs/architecture.md
-says why we chose it): ``checks.py`` answers ``tools/list`` and ``tools/call``, ``console_app.py`` the MCP
+says why we chose it): ``tool_calls.py`` answers ``tools/list`` and ``tools/call``, ``console_app.py`` the MCP
 App's resource. The rosbridge client connects in the background from the server's lifespan, so ``initialize``
 and ``tools/list`` work while the robot is down; tools then fail fast with the not-connected text naming the
 URL.
@@ -29,12 +29,12 @@ from mcp.types import (
 from mcp import MCPError
 from rosbridge_mcp_server import __version__
 from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
-from rosbridge_mcp_server.server.checks import ToolCalls
 from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, ConsoleApp, console_app
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
 from rosbridge_mcp_server.server.read_only import ReadOnlyRefusals
 from rosbridge_mcp_server.server.shutdown import stop_robots
 from rosbridge_mcp_server.server.tasks import TaskBoard
+from rosbridge_mcp_server.server.tool_calls import ToolCalls
 from rosbridge_mcp_server.tools import TOOL_MODULES
 from rosbridge_mcp_server.tools.base import Need, ToolSpec
 
@@ -160,9 +160,9 @@ def build_fleet_server(
     Every act on a robot is first approved by its session's guard (the server as ``serve`` runs it: a
     :class:`~rosbridge_mcp_server.safety.PolicyGuard` for the robot's policy, audited). *config* chooses the
     tools and, when read-only, withholds the acting ones (``read_only.py``). Every tool call first goes
-    through the checks of ``checks.py``, on any transport. With several robots every tool takes a ``robot``
-    argument and ``list_robots`` is listed (``fleet.py``). The tools record what they set going in each
-    robot's session, which the operator console's E-STOP shares. With *console_view* (the console's
+    through the checks of ``tool_calls.py``, on any transport. With several robots every tool takes a
+    ``robot`` argument and ``list_robots`` is listed (``fleet.py``). The tools record what they set going in
+    each robot's session, which the operator console's E-STOP shares. With *console_view* (the console's
     snapshot) the server also offers the console's read-only view as an MCP App: ``show_console`` and its
     ``ui://`` resource (``server/console_app.py``). Authentication is the transport's (``http.py``). With
     *tasks* (unless ``--no-tasks``) long work runs as an MCP task for a client that can follow one

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.robot.seam import Act, ActKind
+from rosbridge_mcp_server.robot.approval import Act, ActKind
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.server.adapter import EdgeTool

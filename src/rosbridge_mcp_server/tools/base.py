@@ -16,9 +16,9 @@ from pydantic import BaseModel
 
 from rosbridge_mcp_server.client.frames import MAX_NESTING, MAX_PAYLOAD_CHARS, payload_problem
 from rosbridge_mcp_server.errors import Advised
+from rosbridge_mcp_server.robot.approval import ActKind, AskPerson, Guard, nobody_to_ask
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
-from rosbridge_mcp_server.robot.seam import ActKind, AskPerson, Guard, nobody_to_ask
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
