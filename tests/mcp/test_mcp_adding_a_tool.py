@@ -7,20 +7,21 @@ import ast
 import io
 import json
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 from mcp_harness import guarded, open_session
 from pydantic import BaseModel
 
 import rosbridge_mcp_server.server
-from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
+from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES, Entry
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import load_config
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard
 from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
-from rosbridge_mcp_server.tools import TOOL_MODULES
-from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, READS_ROBOT, ToolSpec
+from rosbridge_mcp_server.tools import TOOL_MODULES, check_module
+from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, READS_ROBOT, LongWork, ToolSpec
 
 
 class _Answer(BaseModel):
@@ -162,6 +163,35 @@ def test_which_calls_may_run_as_tasks_is_on_the_spec() -> None:
     assert long["record"].applies({"topics": ["/chatter"]})
     assert not long["record"].applies({"stop": True})
     assert long["plot_topic"].cancelled == "its reading ended"
+
+
+def test_long_work_that_names_an_argument_the_tool_does_not_take_fails_at_import() -> None:
+    """A ``given``/``unless`` misspelt would make every call a plain one (or every call a task), silently:
+    the catalogue's check names it instead."""
+
+    async def run(ctx: object, topic: str, duration: float | None = None) -> None: ...
+
+    module = ModuleType("count_nodes")
+    module.run = run  # type: ignore[attr-defined]
+    module.SPEC = ToolSpec(  # type: ignore[attr-defined]
+        name="count_nodes",
+        title="Count",
+        description="d",
+        hints=READS_ROBOT,
+        output=_Answer,
+        long_work=LongWork(given="duration"),
+    )
+    check_module(Entry("count_nodes", "graph", acts=False), module)
+    module.SPEC = ToolSpec(  # type: ignore[attr-defined]
+        name="count_nodes",
+        title="Count",
+        description="d",
+        hints=READS_ROBOT,
+        output=_Answer,
+        long_work=LongWork(given="seconds"),
+    )
+    with pytest.raises(ImportError, match=r"count_nodes's long_work names 'seconds', which its run does not"):
+        check_module(Entry("count_nodes", "graph", acts=False), module)
 
 
 @pytest.mark.parametrize(
