@@ -10,7 +10,7 @@ from typing import Any
 
 from websockets.asyncio.client import connect
 
-from benchmarks.edge import NAV2_NODE, Case, graph_cases, node_info_floor
+from benchmarks.edge import NAV2_NODE, Case, allowance, graph_cases, node_info_floor
 from benchmarks.harness import (
     TOOL_PAUSE,
     Context,
@@ -109,9 +109,9 @@ def _nav2_rows(
             f"`{tool}` {shown} (text {text_size:,} / structured {structured_size:,} characters)",
             stats,
             versus=f"{over * 1e3:+.2f} ms over {floor_name} ({ms(floor.median)} after a pause)",
-            target="≤ +1.5 ms over its floor; text ≤ 8,000",
+            target=f"{allowance(case, floor.median)[1]}; text ≤ 8,000",
         )
-        row.verdict = verdict(over <= 1.5e-3 and text_size <= 8_000)
+        row.verdict = verdict(over <= allowance(case, floor.median)[0] and text_size <= 8_000)
         row.figures.update(
             over_floor_s=over,
             floor_median_s=floor.median,

@@ -130,3 +130,23 @@ async def test_after_a_silent_port_a_call_still_prompts_the_next_attempt(make_si
         with pytest.raises(NotConnectedError):
             await client.call_service("/rosapi/topics", timeout=5.0)
         await client.wait_connected(2.0)
+
+
+async def test_a_call_right_after_a_refused_attempt_waits_out_the_spacing_and_connects(
+    make_sim: MakeSim, make_client: MakeClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A call that comes within the prompt spacing of a refused attempt, when the bridge is back, connects.
+
+    It used to fail at once (bench row 16f: the first call after a bridge restart failed whenever the loop's
+    last refused attempt was under 0.1 s old). The spacing is made 2 s here so that the call surely comes
+    within it, however loaded the machine; the loop's own next attempt is 15 s away at the earliest."""
+    monkeypatch.setattr("rosbridge_mcp_server.client.reconnect.PROMPT_SPACING", 2.0)
+    robot = await make_sim()
+    client = await make_client(robot, reconnect_min=30.0, reconnect_max=60.0)
+    await robot.stop()
+    await client.wait_disconnected(5.0)
+    with pytest.raises(NotConnectedError):
+        await client.call_service("/rosapi/topics", timeout=5.0)  # prompts an attempt, refused
+    await robot.start()
+    await asyncio.wait_for(client.call_service("/rosapi/topics", timeout=10.0), 10.0)
+    assert client.connections_made == 2

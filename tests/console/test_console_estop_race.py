@@ -35,8 +35,11 @@ async def test_a_stream_and_a_goal_approved_at_the_press_send_nothing_after_esto
     async with race_console(sim.url, sim.dialect, delay, world=sim.world) as race:
         result = await run_race(race)
     nothing_after(result)
-    # The stream was registered before anything of it was sent, so E-STOP saw and named it.
-    assert result.estop["streams_stopped"] == [CMD_VEL], result
+    # The stream is registered before anything of it is sent, so E-STOP saw and named it; or (a busy machine
+    # can put the press between approval and registration) the send gate voided it before its first message.
+    if result.estop["streams_stopped"] != [CMD_VEL]:
+        assert result.stream_error, result
+        assert result.commands_before == 0, result
     assert "E-STOP" in result.stream_text, result.stream_text
     assert "E-STOP" in result.goal_text, result.goal_text
     # Refused before it was sent, or (a busy machine can send it between the approval and the press) ended by

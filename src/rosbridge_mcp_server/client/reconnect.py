@@ -21,7 +21,7 @@ __all__ = ["LOCAL_RECONNECT_MAX", "PROMPT_SPACING", "Attempts", "reconnect_cap"]
 #: use within about half a second of its bridge, however long it was gone.
 LOCAL_RECONNECT_MAX: Final = 0.5
 #: A call that finds no connection prompts an attempt at once, but not sooner than this after the last one
-#: ended: a burst of calls against a dead bridge costs at most ten attempts a second.
+#: ended (it waits out the rest): a burst of calls against a dead bridge costs at most ten attempts a second.
 PROMPT_SPACING: Final = 0.1
 
 
@@ -116,11 +116,27 @@ class Attempts:
         self._wake.set()
         return self._done
 
+    async def _prompt_when_spaced(self, deadline: float | None) -> asyncio.Event | None:
+        """Prompt an attempt; within :data:`PROMPT_SPACING` of a failed one, once the spacing has passed.
+
+        A call that came right after a failed attempt used to fail at once, so a call made just after the
+        bridge came back failed when the loop's last refused attempt was under 0.1 s old (a bridge restarted
+        at a random moment: about one call in four). It waits out the rest of the spacing instead (at most
+        0.1 s, never past *deadline*): the attempt rate stays bounded, and nothing is queued.
+        """
+        loop = asyncio.get_running_loop()
+        rest = self._last_end + PROMPT_SPACING - loop.time()
+        if rest > 0 and self._running and (deadline is None or loop.time() + rest < deadline):
+            await asyncio.sleep(rest)
+            if self._done is not None and not self._done.is_set():
+                return self._done  # the loop started an attempt meanwhile
+        return self.prompt()
+
     async def wait_for_one(self, connect_timeout: float, deadline: float | None) -> None:
         """Wait for the attempt under way, or prompt one and wait for it (at most the connect timeout)."""
         attempt = self._done
         if attempt is None or attempt.is_set():
-            attempt = self.prompt()
+            attempt = await self._prompt_when_spaced(deadline)
         if attempt is None or attempt.is_set():
             return
         # The attempt is bounded by the connect timeout itself; the margin lets it report why it failed.

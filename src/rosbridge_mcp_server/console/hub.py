@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.console.feedback import feedback_text
 from rosbridge_mcp_server.console.mapview import MapPanel, Picture, trying_again
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.pictures.images import ImageError, decode_compressed, decode_raw, encode_picture
 from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
@@ -329,6 +328,8 @@ class ConsoleHub:
         self.changed()
 
     async def _camera(self, topic: str) -> None:
+        from rosbridge_mcp_server.pictures.images import ImageError  # noqa: PLC0415 - on first use
+
         client = self.robots[0].session.client
         while True:
             try:
@@ -388,6 +389,8 @@ def default_camera(topics: Sequence[str]) -> str | None:
 
 
 def _encode(message: dict[str, Any], compressed: bool) -> tuple[str, int, int]:
+    from rosbridge_mcp_server.pictures.images import decode_compressed, decode_raw, encode_picture  # noqa: PLC0415 - on first use
+
     picture = decode_compressed(message) if compressed else decode_raw(message)
     encoded = encode_picture(picture, CAMERA_MAX_SIZE, "jpeg")
     return base64.b64encode(encoded.data).decode("ascii"), encoded.width, encoded.height

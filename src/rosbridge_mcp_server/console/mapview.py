@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import base64
+import importlib
 import math
 import time
 from collections.abc import Callable
@@ -21,8 +22,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import NotConnectedError, RosbridgeError
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
 from rosbridge_mcp_server.robot.frames import TF_TOPICS
 from rosbridge_mcp_server.robot.map_reader import GRID_TYPE
 from rosbridge_mcp_server.robot.messages import short_type_name
@@ -46,6 +45,13 @@ __all__ = [
     "pose_of",
     "trying_again",
 ]
+
+#: What the console draws with (its map here, its camera in hub.py), loaded when a console is served.
+_PICTURE_MODULES = (
+    "rosbridge_mcp_server.pictures.drawing",
+    "rosbridge_mcp_server.pictures.maps",
+    "rosbridge_mcp_server.pictures.images",
+)
 
 DEFAULT_MAP_TOPIC = "/map"
 DEFAULT_BASE_FRAME = "base_link"
@@ -93,6 +99,11 @@ class MapPanel:
         changed: Callable[[], None],
         pushed: Callable[[], None],
     ) -> None:
+        # Pillow and the drawing load with a served console, not at its first picture: E-STOP shares this
+        # event loop, which an import would hold for tens of milliseconds mid-session. A server without
+        # --console never loads them for the console.
+        for module in _PICTURE_MODULES:
+            importlib.import_module(module)
         self._client = client
         self._graph = graph
         self._changed = changed
@@ -350,6 +361,9 @@ def _pose_event(frame: str, base: str, pose: Pose2D) -> dict[str, Any]:
 
 
 def _draw(grid: Grid, robot: Pose2D | None, plan: list[tuple[float, float]]) -> tuple[str, int, int]:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.maps import Overlay, draw_map  # noqa: PLC0415 - on first use
+
     picture = draw_map(grid, max_size=MAP_MAX_SIZE, overlay=Overlay(robot=robot, path=plan))
     data = png_bytes(picture.image)
     return base64.b64encode(data).decode("ascii"), picture.image.width, picture.image.height

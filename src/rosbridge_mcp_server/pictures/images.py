@@ -23,12 +23,13 @@ import struct
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal
-
-from PIL import Image, UnidentifiedImageError
+from typing import TYPE_CHECKING, Any, Literal
 
 from rosbridge_mcp_server.robot.budget import budget_problem
 from rosbridge_mcp_server.robot.wording import full_stop
+
+if TYPE_CHECKING:
+    from PIL import Image
 
 __all__ = [
     "ENCODINGS",
@@ -120,6 +121,8 @@ def message_bytes(data: Any, what: str = "data") -> bytes:
 
 def decode_raw(msg: Mapping[str, Any]) -> Picture:
     """A ``sensor_msgs/Image`` message as a :class:`Picture`; :class:`ImageError` when it cannot be one."""
+    from PIL import Image  # noqa: PLC0415 - Pillow on first use
+
     encoding = str(msg.get("encoding", "")).strip()
     width = _dimension(msg, "width")
     height = _dimension(msg, "height")
@@ -155,6 +158,8 @@ def decode_raw(msg: Mapping[str, Any]) -> Picture:
 
 def decode_compressed(msg: Mapping[str, Any]) -> Picture:
     """A ``sensor_msgs/CompressedImage`` (JPEG or PNG; ``compressedDepth`` PNG) as a :class:`Picture`."""
+    from PIL import Image, UnidentifiedImageError  # noqa: PLC0415 - Pillow on first use
+
     fmt = str(msg.get("format", "")).strip()
     data = message_bytes(msg.get("data"))
     # image_transport's compressedDepth puts a small configuration header before the PNG.
@@ -215,6 +220,8 @@ class Encoded:
 
 def encode_picture(picture: Picture, max_size: int, fmt: ImageFormat) -> Encoded:
     """The picture no larger than ``max_size`` on its longest side, as JPEG or PNG bytes."""
+    from PIL import Image  # noqa: PLC0415 - Pillow on first use
+
     image = picture.image
     if max(image.width, image.height) > max_size:
         scale = max_size / max(image.width, image.height)
@@ -331,6 +338,8 @@ def _depth_picture(
     image: Image.Image, values: Any, encoding: str, width: int, height: int, *, unit: str
 ) -> Picture:
     """Grey over the valid depths (0 and NaN mean "no reading" in both encodings): near dark, far light."""
+    from PIL import Image  # noqa: PLC0415 - Pillow on first use
+
     valid = [v for v in values if v > 0 and math.isfinite(v)]
     if not valid:
         black = Image.new("L", (width, height), 0)

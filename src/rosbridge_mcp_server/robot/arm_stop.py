@@ -25,7 +25,6 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import RosbridgeError
 from rosbridge_mcp_server.robot.arm_goals import TRAJECTORY_TOPIC_TYPE
-from rosbridge_mcp_server.robot.arm_scene import positions_now
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -111,6 +110,10 @@ async def stop_trajectories(
     running = [entry for entry in sent if entry.until > time.monotonic() or entry.topic in streamed]
     if not running:
         return [], []
+    # Imported past the return above: a stop with no trajectory to hold never loads the arm's modules (an
+    # arm act has loaded them already, when it learnt the arm).
+    from rosbridge_mcp_server.robot.arm_scene import positions_now  # noqa: PLC0415 - arm robots only
+
     try:
         version = (await client.ros_info()).version
         positions = {} if version == 1 else await positions_now(client, graph, POSITIONS_SECONDS)

@@ -22,10 +22,18 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.errors import NotOnRobotError, NotSentError, RequestTimeoutError, ServiceError
+from rosbridge_mcp_server.errors import NotSentError, RequestTimeoutError, ServiceError
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.names import did_you_mean, parameter_name
 from rosbridge_mcp_server.robot.nodes import UnknownNodeError, node_names
+from rosbridge_mcp_server.robot.parameter_values import (
+    ParameterError,
+    from_parameter_value,
+    kind_of,
+    like,
+    same,
+    to_parameter_value,
+)
 from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 
 if TYPE_CHECKING:
@@ -50,10 +58,6 @@ __all__ = [
 #: message on it, as the raw floor sends them).
 _LOOKUPS_AT_ONCE = 8
 _LOOKUPS_AT_ONCE_SHARED = 64
-
-
-class ParameterError(NotOnRobotError):
-    """A parameter request that cannot be answered; ``str()`` says why and what exists."""
 
 
 @dataclass(frozen=True)
@@ -254,7 +258,7 @@ async def plan_set(graph: RosGraph, client: RosbridgeClient, name: str, value: A
         before = await _read_existing(graph, client, parsed, info.version)
     else:
         before = await _read(graph, client, parsed, info.version)
-    return PlannedSet(parsed, before, _like(before, value))
+    return PlannedSet(parsed, before, like(before, value))
 
 
 async def apply_set(
@@ -280,9 +284,9 @@ async def apply_set(
     else:
         reason = await _ros2_set(client, parsed, value, planned.before, before_write)
         if reason and planned.before is not None:
-            reason += f" ({parsed.full} holds {_kind_of(planned.before)}; send one of those)"
+            reason += f" ({parsed.full} holds {kind_of(planned.before)}; send one of those)"
     after = await _read(graph, client, parsed, info.version)
-    applied = _same(after, value)
+    applied = same(after, value)
     if not applied and not reason:
         reason = (
             "the node kept its value (a ROS 2 parameter keeps its type: send a value of the same type, "
@@ -362,45 +366,18 @@ def _names(listed: Any) -> list[str]:
     """The parameter names a reply lists: robot text, shown escaped and capped (``robot/text.py``)."""
     if not isinstance(listed, list):
         return []
-    return [shown(name, NAME_CHARS) for name in listed if isinstance(name, str)]
+    names = [name for name in listed if isinstance(name, str)]
+    # The usual reply (printable names within the cap) is checked in one pass: shown() would return each as
+    # it is. A node lists dozens of names, a Nav2 graph over a thousand.
+    if "".join(names).isprintable() and all(len(name) <= NAME_CHARS for name in names):
+        return names
+    return [shown(name, NAME_CHARS) for name in names]
 
 
 def _no_parameter_service(node: str, *, nodes: list[str]) -> str:
     if node not in nodes:
         return str(UnknownNodeError(node, nodes))
     return f"Node {node} offers no parameter services (it has no parameters to read or set)."
-
-
-def _same(after: Any, wanted: Any) -> bool:
-    if isinstance(after, bool) or isinstance(wanted, bool):
-        return after is wanted
-    if isinstance(after, int | float) and isinstance(wanted, int | float):
-        return float(after) == float(wanted)
-    return bool(after == wanted)
-
-
-def _like(before: Any, value: Any) -> Any:
-    """A value given as JSON text for a parameter that is not text (models often send "2.0") is decoded."""
-    if isinstance(value, str) and before is not None and not isinstance(before, str):
-        try:
-            return json.loads(value)
-        except ValueError:
-            return value
-    return value
-
-
-# rcl_interfaces/msg/ParameterType: the field of ParameterValue that holds each type's value.
-_VALUE_FIELDS = {
-    1: "bool_value",
-    2: "integer_value",
-    3: "double_value",
-    4: "string_value",
-    5: "byte_array_value",
-    6: "bool_array_value",
-    7: "integer_array_value",
-    8: "double_array_value",
-    9: "string_array_value",
-}
 
 
 async def _ros2_read(client: RosbridgeClient, parsed: ParameterName) -> Any:
@@ -410,44 +387,7 @@ async def _ros2_read(client: RosbridgeClient, parsed: ParameterName) -> Any:
     if not isinstance(values, list) or not values or not isinstance(values[0], dict):
         # rclpy answers an empty list when a name is not declared.
         raise _NotDeclared(f"Node {parsed.node} has no parameter {parsed.local!r}.")
-    return _from_parameter_value(values[0])
-
-
-def _from_parameter_value(value: dict[str, Any]) -> Any:
-    kind = value.get("type")
-    field = _VALUE_FIELDS.get(kind) if isinstance(kind, int) else None
-    return value.get(field) if field is not None else None
-
-
-def _to_parameter_value(value: Any, before: Any) -> dict[str, Any]:
-    """A ParameterValue for ``value``, typed like ``before`` where they fit (a whole number for a double)."""
-    if isinstance(value, bool):
-        kind = 1
-    elif isinstance(value, int):
-        kind = 3 if isinstance(before, float) else 2
-        value = float(value) if kind == 3 else value
-    elif isinstance(value, float):
-        kind = 3
-    elif isinstance(value, str):
-        kind = 4
-    elif isinstance(value, list) and all(isinstance(v, bool) for v in value):
-        kind = 6
-    elif isinstance(value, list) and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-        doubles = isinstance(before, list) and any(isinstance(v, float) for v in before)
-        kind = 8 if doubles else 7
-        value = [float(v) for v in value] if doubles else value
-    elif isinstance(value, list) and all(
-        isinstance(v, int | float) and not isinstance(v, bool) for v in value
-    ):
-        kind, value = 8, [float(v) for v in value]
-    elif isinstance(value, list) and all(isinstance(v, str) for v in value):
-        kind = 9
-    else:
-        raise ParameterError(
-            "A ROS 2 parameter holds a bool, an integer, a double, a string, or a list of one of these; "
-            f"{json.dumps(value)[:80]} is none of them."
-        )
-    return {"type": kind, _VALUE_FIELDS[kind]: value}
+    return from_parameter_value(values[0])
 
 
 async def _ros2_set(
@@ -459,7 +399,7 @@ async def _ros2_set(
 ) -> str:
     """Set through the node's ``set_parameters``; the node's reason when it refused, "" when it took it."""
     assert parsed.node is not None
-    parameter = {"name": parsed.local, "value": _to_parameter_value(value, before)}
+    parameter = {"name": parsed.local, "value": to_parameter_value(value, before)}
     reply = await client.call_service(
         f"{parsed.node.rstrip('/')}/set_parameters", {"parameters": [parameter]}, check=before_write
     )
@@ -469,15 +409,3 @@ async def _ros2_set(
         reason = first.get("reason")
         return reason if isinstance(reason, str) and reason else "the node refused the value"
     return ""
-
-
-def _kind_of(value: Any) -> str:
-    if isinstance(value, bool):
-        return "a bool"
-    if isinstance(value, int):
-        return "an integer"
-    if isinstance(value, float):
-        return "a double"
-    if isinstance(value, str):
-        return "a string"
-    return "a list"

@@ -32,24 +32,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from rosbridge_mcp_server.robot.arm.kinematics import Chain, inverse, transform_point, translation
-from rosbridge_mcp_server.robot.arm.urdf import Joint, Robot, UrdfError
 from rosbridge_mcp_server.robot.arm_goals import ArmAct, GripperGoal, Trajectory, carried_arm
-from rosbridge_mcp_server.robot.arm_path import (
-    CUBIC_SAMPLES,
-    MAX_SAMPLES,
-    STEP_RADIANS,
-    Point,
-    hermite,
-    inside_box,
-    path_samples,
-    peak_speeds,
-    segment_hits,
-)
-from rosbridge_mcp_server.robot.arm_scene import ArmScene, gripper_joint
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.approval import Act
+    from rosbridge_mcp_server.robot.arm.kinematics import Chain
+    from rosbridge_mcp_server.robot.arm.urdf import Joint, Robot
+    from rosbridge_mcp_server.robot.arm_path import Point
+    from rosbridge_mcp_server.robot.arm_scene import ArmScene
     from rosbridge_mcp_server.safety.arm_rules import ArmRules
 
 __all__ = ["ARM_SOURCES", "ArmRefusal", "act_arm", "arm_goal_text", "arm_refusal", "source_refusal"]
@@ -96,6 +86,8 @@ def arm_refusal(act: Act, rules: ArmRules) -> ArmRefusal | None:
             f"the {arm.what} sent to {arm.target} cannot be read: {arm.body}",
             "Send joint names, finite positions and increasing times.",
         )
+    from rosbridge_mcp_server.robot.arm_scene import ArmScene  # noqa: PLC0415 - arm acts only
+
     scene = act.scene if isinstance(act.scene, ArmScene) else None
     if scene is None or scene.robot is None:
         if not rules.configured:
@@ -162,6 +154,8 @@ def _overshoot_refusal(
     trajectory: Trajectory, joints: list[Joint], begin: tuple[float, ...]
 ) -> ArmRefusal | None:
     """A cubic segment (velocities at both ends) can swing past its ends: sampled against the URDF limits."""
+    from rosbridge_mcp_server.robot.arm_path import CUBIC_SAMPLES, hermite  # noqa: PLC0415 - arm acts only
+
     previous, previous_time = begin, 0.0
     previous_speeds: tuple[float, ...] | None = tuple(0.0 for _ in joints)  # the arm starts at rest
     for index, point in enumerate(trajectory.points):
@@ -189,6 +183,8 @@ def _overshoot_refusal(
 def _speed_refusal(
     trajectory: Trajectory, joints: list[Joint], begin: tuple[float, ...], rules: ArmRules
 ) -> ArmRefusal | None:
+    from rosbridge_mcp_server.robot.arm_path import peak_speeds  # noqa: PLC0415 - arm acts only
+
     first = trajectory.points[0]
     if first.time == 0.0:
         for joint, now, there in zip(joints, begin, first.positions, strict=True):
@@ -235,6 +231,10 @@ def _over(joint: Joint, cap: float, speed: float, where: str, rules: ArmRules) -
 def _box_refusal(
     trajectory: Trajectory, joints: list[Joint], begin: tuple[float, ...], judged: tuple[ArmScene, ArmRules]
 ) -> ArmRefusal | None:
+    from rosbridge_mcp_server.robot.arm.kinematics import Chain  # noqa: PLC0415 - arm acts only
+    from rosbridge_mcp_server.robot.arm.urdf import UrdfError  # noqa: PLC0415 - arm acts only
+    from rosbridge_mcp_server.robot.arm_path import MAX_SAMPLES, STEP_RADIANS, path_samples  # noqa: PLC0415 - arm acts only
+
     scene, rules = judged
     if not rules.configured:
         return None
@@ -279,6 +279,8 @@ def _box_refusal(
 def _sample_problem(
     chains: list[Chain], to_frame: Chain | None, held: Mapping[str, float], moving: set[str], rules: ArmRules
 ) -> str | None:
+    from rosbridge_mcp_server.robot.arm.kinematics import inverse, transform_point, translation  # noqa: PLC0415 - arm acts only
+
     base = inverse(to_frame.tip_pose(held)) if to_frame is not None else None
     for chain in chains:
         points: list[tuple[str, Point]] = [(chain.base, (0.0, 0.0, 0.0))]
@@ -306,6 +308,8 @@ def _moving_joints(robot: Robot, joints: list[Joint]) -> list[Joint]:
 
 
 def _workspace_problem(tool: str, point: Point, rules: ArmRules) -> str | None:
+    from rosbridge_mcp_server.robot.arm_path import inside_box  # noqa: PLC0415 - arm acts only
+
     if not rules.workspace or any(inside_box(point, box[1], box[2], rules.margin) for box in rules.workspace):
         return None
     x, y, z = point
@@ -319,6 +323,8 @@ def _keep_out_problem(
     """Each moving link's segment from the link before it on the chain, as a capsule as thick as the thicker
     of its two links (``robot/arm/geometry.py``; ``[arm] link_radius`` where the URDF gives no size), against
     every keep-out box."""
+    from rosbridge_mcp_server.robot.arm_path import segment_hits  # noqa: PLC0415 - arm acts only
+
     for box in rules.keep_out:
         for (before, a), (link, b) in itertools.pairwise(points):
             if link not in moving:
@@ -330,6 +336,8 @@ def _keep_out_problem(
 
 
 def _gripper_refusal(arm: ArmAct, goal: GripperGoal, scene: ArmScene, rules: ArmRules) -> ArmRefusal | None:
+    from rosbridge_mcp_server.robot.arm_scene import gripper_joint  # noqa: PLC0415 - arm acts only
+
     robot = scene.robot
     assert robot is not None
     if goal.joints:
@@ -403,6 +411,8 @@ def arm_goal_text(act: Act) -> str:
     arm = act_arm(act)
     if arm is None or isinstance(arm.body, str):
         return ""
+    from rosbridge_mcp_server.robot.arm_scene import ArmScene  # noqa: PLC0415 - arm acts only
+
     scene = act.scene if isinstance(act.scene, ArmScene) else None
     robot = scene.robot if scene is not None else None
     if isinstance(arm.body, Trajectory):

@@ -6,16 +6,12 @@ from __future__ import annotations
 
 import asyncio
 import math
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.pictures.arm import draw_arm
-from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.robot.acting import send_goal
-from rosbridge_mcp_server.robot.arm_plan import ArmPlan, PlanError, plan_motion, shown, to_si
-from rosbridge_mcp_server.robot.arm_scene import ArmScene, learn_arm, positions_now
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
@@ -27,6 +23,10 @@ from rosbridge_mcp_server.tools.base import (
     ToolImage,
     ToolSpec,
 )
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.arm_plan import ArmPlan
+    from rosbridge_mcp_server.robot.arm_scene import ArmScene
 
 __all__ = ["SPEC", "ArmAnswer", "run"]
 
@@ -70,6 +70,8 @@ SPEC = ToolSpec(
 
 
 def _targets(scene: ArmScene, joints: dict[str, Any], relative: bool) -> dict[str, float]:
+    from rosbridge_mcp_server.robot.arm_plan import to_si  # noqa: PLC0415 - on first use
+
     robot = scene.robot
     assert robot is not None
     out: dict[str, float] = {}
@@ -171,6 +173,8 @@ async def run(
 
 async def _learnt_arm(ctx: ToolContext) -> ArmScene:
     """The arm as the robot describes it now, or a worded failure when it has none that moves."""
+    from rosbridge_mcp_server.robot.arm_scene import learn_arm  # noqa: PLC0415 - on first use
+
     scene = await learn_arm(ctx.client, ctx.graph, timeout=_READY_WAIT)
     if scene.robot is None:
         raise ToolFailure(f"The arm cannot be moved: {'; '.join(scene.problems)}. Nothing was sent.")
@@ -192,6 +196,8 @@ def _planned(
     ros_version: int,
 ) -> ArmPlan:
     """The motion to *targets* planned at the policy's speed scale, refused when it cannot finish in time."""
+    from rosbridge_mcp_server.robot.arm_plan import PlanError, plan_motion  # noqa: PLC0415 - on first use
+
     assert scene.robot is not None  # _learnt_arm's
     try:
         plan = plan_motion(
@@ -227,6 +233,9 @@ def _images(image: bytes | None) -> tuple[ToolImage, ...]:
 
 async def _picture(ctx: ToolContext, scene: ArmScene, plan: ArmPlan) -> bytes | None:
     """The arm at the start and at the goal, from the side, with the policy's boxes."""
+    from rosbridge_mcp_server.pictures.arm import draw_arm  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+
     robot = scene.robot
     if robot is None:
         return None
@@ -248,6 +257,8 @@ async def _picture(ctx: ToolContext, scene: ArmScene, plan: ArmPlan) -> bytes | 
 
 
 def _in_units(scene: ArmScene, plan: ArmPlan, values: list[Any]) -> list[float]:
+    from rosbridge_mcp_server.robot.arm_plan import shown  # noqa: PLC0415 - on first use
+
     robot = scene.robot
     assert robot is not None
     out = []
@@ -259,6 +270,8 @@ def _in_units(scene: ArmScene, plan: ArmPlan, values: list[Any]) -> list[float]:
 
 
 async def _answer(ctx: ToolContext, scene: ArmScene, plan: ArmPlan, outcome: Goal) -> ToolAnswer:
+    from rosbridge_mcp_server.robot.arm_scene import positions_now  # noqa: PLC0415 - on first use
+
     now = await positions_now(ctx.client, ctx.graph, _READY_WAIT)
     target = dict(zip(plan.joints, _in_units(scene, plan, list(plan.target)), strict=True))
     final = None

@@ -4,16 +4,17 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.acting import send_goal
-from rosbridge_mcp_server.robot.arm.urdf import Joint
-from rosbridge_mcp_server.robot.arm_scene import gripper_joint, learn_arm
 from rosbridge_mcp_server.robot.goals import Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.arm.urdf import Joint
 
 __all__ = ["SPEC", "GripperAnswer", "run"]
 
@@ -76,6 +77,8 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="s, e.g. 20")] = 20.0,
 ) -> ToolAnswer:
     """Resolve the target from the URDF, send the goal, report how it ended."""
+    from rosbridge_mcp_server.robot.arm_scene import gripper_joint, learn_arm  # noqa: PLC0415 - on first use
+
     if bool(command) == (position is not None):
         raise ToolFailure('Give command ("open" or "close") or position (metres), not both or neither.')
     name = action.strip() or DEFAULT_ACTION

@@ -11,8 +11,6 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.navigation import draw_scene
 from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.frames import planar_pose
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
@@ -115,6 +113,9 @@ def _draw(
     driven: list[tuple[float, float]],
     ctx: ToolContext,
 ) -> bytes:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.navigation import draw_scene  # noqa: PLC0415 - on first use
+
     rules = ctx.config.policy.navigation
     picture = draw_scene(
         grid,

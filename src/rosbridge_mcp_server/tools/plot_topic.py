@@ -7,8 +7,6 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.pictures.charts import draw_chart, stats
-from rosbridge_mcp_server.pictures.drawing import png_bytes
 from rosbridge_mcp_server.robot.series import FieldError, Series, TopicFields, collect
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
@@ -117,10 +115,15 @@ async def run(
 
 
 def _draw(lines: list[Series], duration: float, width: int) -> bytes:
+    from rosbridge_mcp_server.pictures.charts import draw_chart  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+
     return png_bytes(draw_chart(lines, duration, width, max(160, width // 2)))
 
 
 def _figures(line: Series, messages: int, duration: float) -> SeriesFigures:
+    from rosbridge_mcp_server.pictures.charts import stats  # noqa: PLC0415 - on first use
+
     found = stats(line)
     times = line.times
     rate = (len(times) - 1) / (times[-1] - times[0]) if len(times) > 1 and times[-1] > times[0] else None

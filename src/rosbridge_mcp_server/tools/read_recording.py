@@ -8,21 +8,10 @@ import asyncio
 import functools
 import time
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import Field
 
-from rosbridge_mcp_server.robot.recording.files import (
-    PathRefused,
-    list_recordings,
-    resolve_recording,
-)
-from rosbridge_mcp_server.robot.recording.reading import (
-    NotARecording,
-    RecordingSummary,
-    read_budget,
-    summarize_recording,
-)
 from rosbridge_mcp_server.robot.series import FieldError
 from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
@@ -44,6 +33,9 @@ from rosbridge_mcp_server.tools.recording_modes import (
     stats_answer,
     wanted_fields,
 )
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.recording.reading import RecordingSummary
 
 __all__ = ["SPEC", "ReadRecordingAnswer", "run"]
 
@@ -86,6 +78,9 @@ async def run(
         FROM_JSON_TEXT,
     ] = None,
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.robot.recording.files import PathRefused, resolve_recording  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import NotARecording, read_budget, summarize_recording  # noqa: PLC0415 - on first use
+
     directory = ctx.config.record_dir
     if file is None:
         return await asyncio.to_thread(_listing, directory)
@@ -124,6 +119,8 @@ async def run(
 
 
 def _listing(directory: Path) -> ToolAnswer:
+    from rosbridge_mcp_server.robot.recording.files import list_recordings  # noqa: PLC0415 - on first use
+
     entries = list_recordings(directory)
     rows: list[dict[str, Any]] = []
     lines = [f"{counted(len(entries), 'recording')} in {str(directory)!r}" + (":" if entries else ".")]

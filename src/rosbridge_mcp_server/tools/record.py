@@ -10,13 +10,6 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording
-from rosbridge_mcp_server.robot.recording.recorder import (
-    NoTopicMatched,
-    RecordingResult,
-    choose_topics,
-    record_topics,
-)
 from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
@@ -29,6 +22,7 @@ from rosbridge_mcp_server.tools.base import (
 )
 
 if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.recording.recorder import RecordingResult
     from rosbridge_mcp_server.safety.policy import RecordingLimits
 
 __all__ = ["SPEC", "RecordAnswer", "run"]
@@ -91,6 +85,8 @@ async def run(
     stop: Annotated[bool, Field(description="End running ones, e.g. true")] = False,
 ) -> ToolAnswer:
     """Choose the topics, make the file, record, and say what was written."""
+    from rosbridge_mcp_server.robot.recording.recorder import NoTopicMatched, choose_topics, record_topics  # noqa: PLC0415 - on first use
+
     if stop:
         return _stopping(ctx, name)
     max_megabytes = _within_policy(ctx.config.policy.recording, duration, max_megabytes)
@@ -166,6 +162,8 @@ def _within_policy(limits: RecordingLimits, duration: float, max_megabytes: floa
 
 def _new_file(directory: Path, name: str | None) -> tuple[Path, int]:
     """A new recording file in *directory* (its path and open descriptor), or a worded failure."""
+    from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording  # noqa: PLC0415 - on first use
+
     try:
         return create_recording(directory, name)
     except PathRefused as exc:

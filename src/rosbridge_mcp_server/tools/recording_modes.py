@@ -8,19 +8,16 @@ from __future__ import annotations
 import itertools
 import json
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
-from rosbridge_mcp_server.mcapfile import Budget
-from rosbridge_mcp_server.pictures.charts import draw_chart, stats
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.maps import Overlay, draw_map
-from rosbridge_mcp_server.pictures.summary import summarize
 from rosbridge_mcp_server.robot.occupancy import MapError, decode_grid
-from rosbridge_mcp_server.robot.recording.paths import PathReader
-from rosbridge_mcp_server.robot.recording.reading import RecordingSummary, decoded_messages, field_series
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolFailure, ToolImage
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.mcapfile import Budget
+    from rosbridge_mcp_server.robot.recording.reading import RecordingSummary
 
 __all__ = [
     "BUDGET",
@@ -81,6 +78,9 @@ def _types(summary: RecordingSummary) -> dict[str, str]:
 def stats_answer(
     file: str, summary: RecordingSummary, wanted: dict[str, list[str]], buckets: int, budget: Budget
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.charts import stats  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import field_series  # noqa: PLC0415 - on first use
+
     lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary), budget)
     span = max(summary.seconds, 1e-9)
     lines = [f"{file}: {summary.seconds:.1f} s in {buckets} windows of {span / buckets:.3g} s."]
@@ -140,6 +140,10 @@ def stats_answer(
 def plot_answer(
     file: str, summary: RecordingSummary, wanted: dict[str, list[str]], width: int, budget: Budget
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.charts import draw_chart, stats  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import field_series  # noqa: PLC0415 - on first use
+
     lines_found, counts = field_series(summary.path, summary.start_ns, wanted, _types(summary), budget)
     if all(n == 0 for n in counts.values()):
         raise ToolFailure(f"No message of {', '.join(counts)} in {file}.")
@@ -175,6 +179,9 @@ def messages_answer(
     topics: list[str] | None,
     budget: Budget,
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.summary import summarize  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415 - on first use
+
     if at is None:
         raise ToolFailure(
             f"Give at (seconds from the start, 0-{summary.seconds:.1f}) for the messages around it."
@@ -237,6 +244,11 @@ def map_answer(
     budget: Budget,
     max_size: int = PICTURE_SIZE,
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.maps import Overlay, draw_map  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.paths import PathReader  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.robot.recording.reading import decoded_messages  # noqa: PLC0415 - on first use
+
     known = {t.topic for t in summary.topics}
     if map_topic not in known:
         raise ToolFailure(

@@ -4,26 +4,19 @@ tool is, the controllers and the named poses. Read-only."""
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.arm.kinematics import (
-    Chain,
-    MissingJointsError,
-    Transform,
-    compose,
-    from_quaternion,
-    inverse,
-    rpy,
-    translation,
-)
-from rosbridge_mcp_server.robot.arm.reading import ArmReading, at_limit, read_arm
-from rosbridge_mcp_server.robot.arm.urdf import Joint, Robot
 from rosbridge_mcp_server.robot.frames import look_up_transform
 from rosbridge_mcp_server.robot.nodes import node_names
 from rosbridge_mcp_server.robot.transforms import frame_name
 from rosbridge_mcp_server.tools.base import READS_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.arm.kinematics import Transform
+    from rosbridge_mcp_server.robot.arm.reading import ArmReading
+    from rosbridge_mcp_server.robot.arm.urdf import Joint, Robot
 
 __all__ = ["SPEC", "ArmAnswer", "render", "run"]
 
@@ -108,6 +101,8 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=30, description="Seconds per topic, e.g. 3")] = 3.0,
 ) -> ToolAnswer:
     """Read the description, joint state, controllers and SRDF, then work out the tool poses."""
+    from rosbridge_mcp_server.robot.arm.reading import read_arm  # noqa: PLC0415 - on first use
+
     reading = await read_arm(ctx.client, ctx.graph, timeout=timeout)
     outside: Transform | None = None
     if frame is not None and frame_name(frame) not in reading.robot.links:
@@ -129,6 +124,8 @@ MOVEIT_LINE = (
 
 async def _frame_to_root(ctx: ToolContext, frame: str, root: str, timeout: float) -> Transform:
     """*frame* ← the arm's root link, from tf (a frame the description does not have)."""
+    from rosbridge_mcp_server.robot.arm.kinematics import from_quaternion  # noqa: PLC0415 - on first use
+
     name = frame_name(frame)
     if not name:
         raise ToolFailure("frame is empty; give a link of the arm (e.g. base_link) or a tf frame (e.g. odom)")
@@ -148,6 +145,8 @@ def _shown(value: float | None, joint: Joint) -> float | None:
 
 def build_answer(reading: ArmReading, frame: str | None, outside: Transform | None) -> ArmAnswer:
     """The answer's data from what was read (*outside*: *frame* ← the root link for a tf frame)."""
+    from rosbridge_mcp_server.robot.arm.reading import at_limit  # noqa: PLC0415 - on first use
+
     robot = reading.robot
     state = reading.joint_state
     positions = dict(state.positions) if state else {}
@@ -207,6 +206,15 @@ def _chain_base(robot: Robot, link: str) -> str:
 def _tool_pose(
     robot: Robot, link: str, positions: dict[str, float], frame: str | None, outside: Transform | None
 ) -> ToolPose:
+    from rosbridge_mcp_server.robot.arm.kinematics import (  # noqa: PLC0415 - on first use
+        Chain,
+        MissingJointsError,
+        compose,
+        inverse,
+        rpy,
+        translation,
+    )
+
     base = _chain_base(robot, link)
     chain = Chain(robot, base, link)
     movable = [j.name for j in chain.joints if j.movable and j.mimic is None]

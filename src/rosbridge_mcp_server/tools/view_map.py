@@ -5,12 +5,10 @@ from __future__ import annotations
 import asyncio
 import math
 from collections.abc import Callable
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay, draw_map
 from rosbridge_mcp_server.robot.frames import planar_pose
 from rosbridge_mcp_server.robot.map_reader import GRID_TYPE, receive_map
 from rosbridge_mcp_server.robot.names import absolute_name
@@ -32,6 +30,9 @@ from rosbridge_mcp_server.tools.namespaces import (
     non_defaults,
 )
 from rosbridge_mcp_server.tools.typed_topics import first_message, is_type, typed_topic
+
+if TYPE_CHECKING:
+    from rosbridge_mcp_server.pictures.maps import MapPicture, Overlay
 
 __all__ = ["SPEC", "MapAnswer", "run"]
 
@@ -226,6 +227,8 @@ async def _overlay(
     topic: str = "",
 ) -> tuple[Overlay, Pose2D | None]:
     """The robot's pose, the path and the scan hits in the map's frame (each placed through /tf)."""
+    from rosbridge_mcp_server.pictures.maps import Overlay  # noqa: PLC0415 - on first use
+
     path_frame, path = decode_path(path_message) if path_message is not None else ("", [])
     scan = None
     if scan_message is not None:
@@ -262,6 +265,9 @@ async def _overlay(
 def _draw(
     grid: Grid, max_size: int, overlay: Overlay, window: tuple[float, float, float, float] | None
 ) -> tuple[MapPicture, bytes]:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.maps import draw_map  # noqa: PLC0415 - on first use
+
     picture = draw_map(grid, max_size=max_size, overlay=overlay, window=window)
     return picture, png_bytes(picture.image)
 

@@ -8,8 +8,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.pictures.drawing import png_bytes
-from rosbridge_mcp_server.pictures.scans import draw_scan
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.scans import (
     Nearest,
@@ -131,6 +129,9 @@ async def run(
 def _work(
     message: dict[str, Any], cloud: bool, radius: float | None, clearance: float, max_size: int
 ) -> tuple[ScanPoints, Nearest | None, list[Sector], bytes, float, float]:
+    from rosbridge_mcp_server.pictures.drawing import png_bytes  # noqa: PLC0415 - on first use
+    from rosbridge_mcp_server.pictures.scans import draw_scan  # noqa: PLC0415 - on first use
+
     scan = decode_cloud(message) if cloud else decode_scan(message)
     found = nearest(scan)
     sectors = free_sectors(scan, clearance)

@@ -8,13 +8,13 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from rosbridge_mcp_server.robot.approval import Approving
 from rosbridge_mcp_server.robot.arm_goals import carried_arm
-from rosbridge_mcp_server.robot.arm_scene import ArmScene, learn_arm
 from rosbridge_mcp_server.robot.motion_goals import carried_goal, read_motion
 from rosbridge_mcp_server.robot.navigation import Scene, survey
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import Dialect, RosbridgeClient
     from rosbridge_mcp_server.robot.activity import SessionActivity
+    from rosbridge_mcp_server.robot.arm_scene import ArmScene
     from rosbridge_mcp_server.robot.gate import SendGate
     from rosbridge_mcp_server.robot.goals import GoalRegistry
     from rosbridge_mcp_server.robot.graph import RosGraph
@@ -69,6 +69,8 @@ async def motion_scene(
     against, whichever carrier (``robot/motion_goals.py``); for an arm's trajectory or gripper goal
     (``robot/arm_goals.py``) the arm's description and joint positions; ``None`` when it carries none, or one
     the fence cannot read or place (the guard says why)."""
+    from rosbridge_mcp_server.robot.arm_scene import learn_arm  # noqa: PLC0415 - arm acts only
+
     arm = carried_arm(kind, name, type_name, payload)
     if arm is not None:
         if arm.kind == "switch" or isinstance(arm.body, str):

@@ -5,15 +5,14 @@ problem, a joint at a limit of the URDF (``/robot_description``, fingers left ou
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Final
+from typing import TYPE_CHECKING, Final, TypeAlias
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.arm.controllers import Controller, list_controllers
-from rosbridge_mcp_server.robot.arm.health import controller_faults, limit_faults
 from rosbridge_mcp_server.robot.diagnosis.findings import Finding, Look, Step
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
+    from rosbridge_mcp_server.robot.arm.controllers import Controller
     from rosbridge_mcp_server.robot.diagnosis.streams import Heard
     from rosbridge_mcp_server.robot.graph import RosGraph
 
@@ -22,7 +21,8 @@ __all__ = ["ARM_TOPICS", "Controllers", "arm_findings", "read_controllers"]
 #: What the arm area listens to: the URDF (latched) and the joint state.
 ARM_TOPICS: Final = ("/robot_description", "/joint_states")
 #: (the controller manager, its controllers or why they could not be read), or ``None`` without one.
-Controllers = tuple[str, tuple[Controller, ...] | str] | None
+#: A string: the arm's modules are imported only where a robot has an arm area to look at.
+Controllers: TypeAlias = "tuple[str, tuple[Controller, ...] | str] | None"
 
 
 async def read_controllers(client: RosbridgeClient, graph: RosGraph, window: float) -> Controllers:
@@ -32,6 +32,8 @@ async def read_controllers(client: RosbridgeClient, graph: RosGraph, window: flo
         return None
     manager = min(services, key=lambda s: (s != "/controller_manager/list_controllers", s))
     manager = manager.removesuffix("/list_controllers")
+    from rosbridge_mcp_server.robot.arm.controllers import list_controllers  # noqa: PLC0415 - arm robots only
+
     try:
         return manager, await list_controllers(client, manager, timeout=window + 1.0)
     except RosbridgeError as exc:
@@ -53,6 +55,8 @@ def arm_findings(
         if asked:
             unavailable["arm"] = "no controller manager (…/list_controllers) and no /joint_states"
         return []
+    from rosbridge_mcp_server.robot.arm.health import controller_faults, limit_faults  # noqa: PLC0415 - arm robots only
+
     out: list[Finding] = []
     parts = []
     if arm is not None:

@@ -17,6 +17,7 @@ from rosbridge_mcp_server.sim.bridge import Bridge
 from rosbridge_mcp_server.sim.graph import ROSBRIDGE_NODE, ServiceEntry
 from rosbridge_mcp_server.sim.nodes.arm import ARM_NODES, ArmWorld
 from rosbridge_mcp_server.sim.nodes.arm.model import arm_urdf
+from rosbridge_mcp_server.sim.nodes.arm.ros1 import build_ros1
 from rosbridge_mcp_server.sim.nodes.camera import CAMERA, Camera, CameraSettings
 from rosbridge_mcp_server.sim.nodes.kit import Loop, NodeKit
 from rosbridge_mcp_server.sim.nodes.nav2 import Nav2World
@@ -136,6 +137,8 @@ class WorldNodes:
         self.planner.build()
         if self.arm is not None:
             self.arm.build()
+            if not self.kit.ros2:
+                build_ros1(self.arm)
             self.robot_state.extra_description = arm_urdf()
             self.robot_state.extra_static = self.arm.static_transforms()
         if self.fast_topic:

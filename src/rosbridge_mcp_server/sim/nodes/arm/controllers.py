@@ -13,13 +13,14 @@ running goal and holds the arm; the ``arm-controller-inactive`` fault keeps it f
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable, Set
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.sim.nodes.arm.model import ARM_JOINTS, FINGER
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.sim.nodes.arm.world import ArmWorld
+    from rosbridge_mcp_server.sim.nodes.kit import NodeKit
 
 __all__ = ["ControllerManager"]
 
@@ -47,8 +48,12 @@ class _Controller:
 class ControllerManager:
     """The three controllers of the arm and the manager's services."""
 
-    def __init__(self, arm: ArmWorld) -> None:
-        self.arm = arm
+    def __init__(self, kit: NodeKit, faults: Set[str], deactivated: Callable[[str], None]) -> None:
+        """*faults*: the arm's (read as they are now); *deactivated*: told the name of a controller switched
+        off, so the arm stops what that controller ran."""
+        self.kit = kit
+        self.faults = faults
+        self.deactivated = deactivated
         positions = tuple(f"{j}/position" for j in (*ARM_JOINTS, FINGER))
         self.controllers = {
             c.name: c
@@ -70,26 +75,24 @@ class ControllerManager:
                 ),
             )
         }
-        if "arm-controller-inactive" in arm.faults:
+        if "arm-controller-inactive" in faults:
             self.controllers["arm_controller"].active = False
 
     def build(self) -> None:
-        kit = self.arm.kit
+        kit = self.kit
         kit.graph.node(MANAGER)
         kit.service(MANAGER, f"{MANAGER}/list_controllers", self._type("ListControllers"), self._list)
         kit.service(MANAGER, f"{MANAGER}/switch_controller", self._type("SwitchController"), self._switch)
 
     def _type(self, leaf: str) -> str | None:
-        return self.arm.kit.type(
-            f"controller_manager_msgs/srv/{leaf}", f"controller_manager_msgs/{leaf}", "srv"
-        )
+        return self.kit.type(f"controller_manager_msgs/srv/{leaf}", f"controller_manager_msgs/{leaf}", "srv")
 
     def is_active(self, name: str) -> bool:
         controller = self.controllers.get(name)
         return controller is not None and controller.active
 
     async def _list(self, request: dict[str, Any]) -> dict[str, Any]:
-        if not self.arm.kit.ros2:
+        if not self.kit.ros2:
             return {"controller": [self._ros1_state(c) for c in self.controllers.values()]}
         return {
             "controller": [
@@ -126,10 +129,10 @@ class ControllerManager:
         controller = self.controllers.get(name)
         if controller is None or controller.active == activate:
             return False
-        return not (activate and name == "arm_controller" and "arm-controller-inactive" in self.arm.faults)
+        return not (activate and name == "arm_controller" and "arm-controller-inactive" in self.faults)
 
     async def _switch(self, request: dict[str, Any]) -> dict[str, Any]:
-        stop, start = ("deactivate", "activate") if self.arm.kit.ros2 else ("stop", "start")
+        stop, start = ("deactivate", "activate") if self.kit.ros2 else ("stop", "start")
         wanted = [(str(n), False) for n in request.get(f"{stop}_controllers") or []]
         wanted += [(str(n), True) for n in request.get(f"{start}_controllers") or []]
         possible = [(name, activate) for name, activate in wanted if self._switchable(name, activate)]
@@ -140,9 +143,7 @@ class ControllerManager:
             return {"ok": False}
         for name, activate in possible:
             self.controllers[name].active = activate
-            if not activate and name == "arm_controller":
-                self.arm.preempt("arm_controller was deactivated")
-            if not activate and name == "gripper_controller":
-                self.arm.gripper_target = None
-        self.arm.kit.world.notify()
+            if not activate:
+                self.deactivated(name)
+        self.kit.world.notify()
         return {"ok": True}

@@ -37,7 +37,6 @@ from rosbridge_mcp_server.sim.nodes.arm.motion import (
     check_trajectory,
     make_trajectory,
 )
-from rosbridge_mcp_server.sim.nodes.arm.ros1 import build_ros1
 from rosbridge_mcp_server.sim.nodes.kit import NodeKit
 
 __all__ = ["ARM_FAULTS", "ARM_NODES", "ArmWorld"]
@@ -66,7 +65,7 @@ class ArmWorld:
         self.velocities: dict[str, float] = dict.fromkeys(HOME, 0.0)
         self.run: Run | None = None
         self.gripper_target: float | None = None
-        self.controllers = ControllerManager(self)
+        self.controllers = ControllerManager(kit, self.faults, self._deactivated)
         #: Goals and topic trajectories that reached the controllers, as sent (tests read them).
         self.received_goals: list[dict[str, Any]] = []
         self.received_trajectories: list[dict[str, Any]] = []
@@ -84,7 +83,6 @@ class ArmWorld:
         kit.publisher("/joint_state_broadcaster", "/joint_states", kit.msg_type("sensor_msgs", "JointState"))
         self.controllers.build()
         if not kit.ros2:
-            build_ros1(self)
             kit.world.params.update(
                 {
                     "/arm_controller/joints": list(ARM_JOINTS),
@@ -224,6 +222,12 @@ class ArmWorld:
         self.run = Run(planned, source)
         self.kit.world.notify()
         return self.run
+
+    def _deactivated(self, controller: str) -> None:
+        if controller == "arm_controller":
+            self.preempt("arm_controller was deactivated")
+        elif controller == "gripper_controller":
+            self.gripper_target = None
 
     def preempt(self, reason: str) -> None:
         """End what runs (ABORTED, −1, *reason*); the arm stays where it is."""
