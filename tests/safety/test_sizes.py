@@ -20,12 +20,7 @@ MAX_FUNCTION_LINES = 60
 ALLOWED: dict[str, str] = {}
 
 #: Files and functions other branches are splitting now (issue 38); the lead empties this after merging them.
-PENDING: frozenset[str] = frozenset(
-    {
-        # parameters read through the client's face (item 1)
-        "robot/parameters.py",
-    }
-)
+PENDING: frozenset[str] = frozenset()
 
 
 def _span(node: ast.FunctionDef | ast.AsyncFunctionDef) -> int:

@@ -78,10 +78,7 @@ async def run(
     ] = None,
     duration: Annotated[float, Field(gt=0, le=MAX_SECONDS, description="Seconds, e.g. 30")] = 10.0,
     max_megabytes: Annotated[float, Field(gt=0, le=100_000, description="MB, e.g. 500")] = DEFAULT_MEGABYTES,
-    name: Annotated[
-        str | None,
-        Field(description='File name, e.g. "run1"'),
-    ] = None,
+    name: Annotated[str | None, Field(description='File name, e.g. "run1"')] = None,
     stop: Annotated[bool, Field(description="End running ones, e.g. true")] = False,
 ) -> ToolAnswer:
     """Choose the topics, make the file, record, and say what was written."""
