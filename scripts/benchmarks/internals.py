@@ -25,13 +25,13 @@ When one of these moves, this is the one file to change.
 from __future__ import annotations
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.robot.arm.controllers import parse_controllers
 from rosbridge_mcp_server.robot.arm.kinematics import Chain
 from rosbridge_mcp_server.robot.arm.reading import ArmReading, JointStateNow
 from rosbridge_mcp_server.robot.arm.urdf import parse_urdf
 from rosbridge_mcp_server.robot.arm_scene import ArmScene
 from rosbridge_mcp_server.robot.known_types import infrastructure_types
-from rosbridge_mcp_server.robot.seam import Act
 from rosbridge_mcp_server.safety import parse_policy
 from rosbridge_mcp_server.safety.arm import arm_refusal
 from rosbridge_mcp_server.sim.nodes.arm.model import HOME, arm_urdf

@@ -20,8 +20,8 @@ from mcp import Client
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.client.transport import Dial
 from rosbridge_mcp_server.config import Config
+from rosbridge_mcp_server.robot.approval import ALLOW_ALL, Guard
 from rosbridge_mcp_server.robot.log_keeper import LogKeeper
-from rosbridge_mcp_server.robot.seam import ALLOW_ALL, Guard
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.safety import Policy, PolicyGuard

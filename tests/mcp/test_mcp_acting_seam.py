@@ -12,7 +12,7 @@ from mcp_harness import open_session, types_for
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.robot.seam import ALLOW_ALL, Act, Answer, AskPerson
+from rosbridge_mcp_server.robot.approval import ALLOW_ALL, Act, Answer, AskPerson
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.tools.base import ToolContext

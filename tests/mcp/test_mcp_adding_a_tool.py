@@ -7,20 +7,21 @@ import ast
 import io
 import json
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 from mcp_harness import guarded, open_session
 from pydantic import BaseModel
 
 import rosbridge_mcp_server.server
-from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES
+from rosbridge_mcp_server.catalogue import ALL_TOOL_NAMES, Entry
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import load_config
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard
 from rosbridge_mcp_server.server import build_server
 from rosbridge_mcp_server.sim import SimulatedRobot
-from rosbridge_mcp_server.tools import TOOL_MODULES
-from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, READS_ROBOT, ToolSpec
+from rosbridge_mcp_server.tools import TOOL_MODULES, check_module
+from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, READS_ROBOT, LongWork, ToolSpec
 
 
 class _Answer(BaseModel):
@@ -106,10 +107,6 @@ def test_a_spec_says_what_it_changes_once_and_only_an_acting_tool_stops() -> Non
         )
 
 
-#: Modules of server/ that still choose by a tool's name, and why (none may be added).
-_STILL_BY_NAME = {"tasks.py": "which calls are long work, and what a stop ends, are named there (issue 38)"}
-
-
 def _tool_names_in(path: Path) -> list[str]:
     """The catalogue's tool names *path* uses as values: string constants (not docstrings or text) and tool
     modules imported by name."""
@@ -132,19 +129,69 @@ def _tool_names_in(path: Path) -> list[str]:
     return found
 
 
-def test_the_server_decides_by_what_a_spec_declares_never_by_a_tool_name() -> None:
+def test_the_server_decides_by_what_a_spec_declares_never_by_a_tool_name(tmp_path: Path) -> None:
     """No module of server/ holds a tool's name as a value to compare, look up or import: the stop, the
-    fleet's fan-out, what a session keeps in the background and what acts are read from the tool's spec."""
+    fleet's fan-out, what a session keeps in the background, what acts and which calls run as tasks are read
+    from the tool's spec."""
     server = Path(rosbridge_mcp_server.server.__file__).parent
-    named = [
-        hit
-        for path in sorted(server.glob("*.py"))
-        if path.name not in _STILL_BY_NAME
-        for hit in _tool_names_in(path)
-    ]
+    named = [hit for path in sorted(server.glob("*.py")) for hit in _tool_names_in(path)]
     assert named == []
-    # The check sees a name where one is used (it would have caught app.py's and fleet.py's).
-    assert _tool_names_in(server / "tasks.py")
+    # The check sees a name where one is used (it caught app.py's, fleet.py's, tasks.py's), and not in text.
+    by_name = tmp_path / "tasks.py"
+    by_name.write_text(
+        '"""Long work is record."""\n'
+        "from rosbridge_mcp_server.tools import stop_robot\n"
+        '_LONG = ("navigate_to", "a navigate_to call")\n'
+    )
+    assert _tool_names_in(by_name) == ["tasks.py:2: import stop_robot", "tasks.py:3: 'navigate_to'"]
+
+
+def test_which_calls_may_run_as_tasks_is_on_the_spec() -> None:
+    """Long work (run as an MCP task) is declared on the spec: when it is, and what cancelling it ends."""
+    long = {m.SPEC.name: m.SPEC.long_work for m in TOOL_MODULES if m.SPEC.long_work is not None}
+    assert {name: (w.given, w.unless) for name, w in long.items()} == {
+        "publish_topic": ("duration", None),
+        "publish_action": (None, None),
+        "subscribe_topic": ("duration", None),
+        "navigate_to": (None, None),
+        "record": (None, "stop"),
+        "plot_topic": (None, None),
+    }
+    assert long["publish_topic"].applies({"duration": 2})
+    assert not long["publish_topic"].applies({})
+    assert not long["publish_topic"].applies({"duration": None})
+    assert long["record"].applies({"topics": ["/chatter"]})
+    assert not long["record"].applies({"stop": True})
+    assert long["plot_topic"].cancelled == "its reading ended"
+
+
+def test_long_work_that_names_an_argument_the_tool_does_not_take_fails_at_import() -> None:
+    """A ``given``/``unless`` misspelt would make every call a plain one (or every call a task), silently:
+    the catalogue's check names it instead."""
+
+    async def run(ctx: object, topic: str, duration: float | None = None) -> None: ...
+
+    module = ModuleType("count_nodes")
+    module.run = run  # type: ignore[attr-defined]
+    module.SPEC = ToolSpec(  # type: ignore[attr-defined]
+        name="count_nodes",
+        title="Count",
+        description="d",
+        hints=READS_ROBOT,
+        output=_Answer,
+        long_work=LongWork(given="duration"),
+    )
+    check_module(Entry("count_nodes", "graph", acts=False), module)
+    module.SPEC = ToolSpec(  # type: ignore[attr-defined]
+        name="count_nodes",
+        title="Count",
+        description="d",
+        hints=READS_ROBOT,
+        output=_Answer,
+        long_work=LongWork(given="seconds"),
+    )
+    with pytest.raises(ImportError, match=r"count_nodes's long_work names 'seconds', which its run does not"):
+        check_module(Entry("count_nodes", "graph", acts=False), module)
 
 
 @pytest.mark.parametrize(

@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from mcp_harness import open_session, types_for
 
-from rosbridge_mcp_server.robot.seam import Act, AskPerson
+from rosbridge_mcp_server.robot.approval import Act, AskPerson
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 WAIT = 10.0

@@ -5,7 +5,7 @@ from __future__ import annotations
 from mcp_harness import Session, open_session, parameter_names, text_of
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.robot.seam import Act, AskPerson
+from rosbridge_mcp_server.robot.approval import Act, AskPerson
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 

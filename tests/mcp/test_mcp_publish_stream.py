@@ -9,7 +9,7 @@ from collections.abc import Awaitable, Callable
 import pytest
 from mcp_harness import Session, open_session, text_of, types_for
 
-from rosbridge_mcp_server.robot.seam import Act, AskPerson
+from rosbridge_mcp_server.robot.approval import Act, AskPerson
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"

@@ -19,9 +19,9 @@ from test_mcp_effects import Watcher, watching
 from test_mcp_stop_carriers import FAR, SPEED, console_stand, moving, stamped_pose, stands_still
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.approval import ALLOW_ALL
 from rosbridge_mcp_server.robot.effects import service_effects, topic_effects
 from rosbridge_mcp_server.robot.goals.caused import caused_by_call, caused_by_publish
-from rosbridge_mcp_server.robot.seam import ALLOW_ALL
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import emergency_stop
 from rosbridge_mcp_server.sim import SimulatedRobot

@@ -25,8 +25,8 @@ from typing import Any
 
 import pytest
 
+from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.robot.gate import SendGate
-from rosbridge_mcp_server.robot.seam import Act
 from rosbridge_mcp_server.safety import Audit, PolicyGuard, parse_policy
 
 RATE = 20.0

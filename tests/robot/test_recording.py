@@ -13,11 +13,11 @@ from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.approval import ALLOW_ALL
 from rosbridge_mcp_server.robot.recording.files import PathRefused, create_recording, resolve_recording
 from rosbridge_mcp_server.robot.recording.reading import NotARecording, summarize_recording
 from rosbridge_mcp_server.robot.recording.recorder import choose_topics, record_topics
 from rosbridge_mcp_server.robot.recording.writing import DISK_RESERVE
-from rosbridge_mcp_server.robot.seam import ALLOW_ALL
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.sim import SimulatedRobot
 from sim_transport import client_for

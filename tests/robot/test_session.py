@@ -5,8 +5,8 @@ from __future__ import annotations
 import asyncio
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.approval import ALLOW_ALL
 from rosbridge_mcp_server.robot.goals import run_goal
-from rosbridge_mcp_server.robot.seam import ALLOW_ALL
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.sim import SimulatedRobot

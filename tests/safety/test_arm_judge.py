@@ -12,11 +12,11 @@ import pytest
 
 from arm_fixture import ARM_JOINTS, HOME, ROBOT, arm_urdf, scene
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.approval import Act, nobody_to_ask
 from rosbridge_mcp_server.robot.arm.kinematics import Chain, translation
 from rosbridge_mcp_server.robot.arm.urdf import parse_urdf
 from rosbridge_mcp_server.robot.arm_goals import carried_arm
 from rosbridge_mcp_server.robot.arm_scene import ArmScene
-from rosbridge_mcp_server.robot.seam import Act, nobody_to_ask
 from rosbridge_mcp_server.safety import PolicyGuard, parse_policy
 from rosbridge_mcp_server.safety.arm import arm_goal_text, arm_refusal
 
@@ -370,7 +370,7 @@ async def test_arm_confirm_motion_asks_for_every_arm_carrier() -> None:
         asked.append(question)
         return "accept"
 
-    from rosbridge_mcp_server.robot.seam import asking
+    from rosbridge_mcp_server.robot.approval import asking
 
     for act in acts(trajectory({"elbow_joint": 1.0}, 2.0)):
         await guard.approve(act, asking(ask))

@@ -11,8 +11,8 @@ import pytest
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.errors import NotConnectedError
 from rosbridge_mcp_server.robot.activity import SessionActivity
+from rosbridge_mcp_server.robot.approval import ALLOW_ALL
 from rosbridge_mcp_server.robot.goals import run_goal
-from rosbridge_mcp_server.robot.seam import ALLOW_ALL
 from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Presser, emergency_stop
 from rosbridge_mcp_server.sim import SimulatedRobot

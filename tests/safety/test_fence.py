@@ -7,8 +7,8 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.approval import Act, Answer, AskPerson
 from rosbridge_mcp_server.robot.effects import topic_effects
-from rosbridge_mcp_server.robot.seam import Act, Answer, AskPerson
 from rosbridge_mcp_server.safety import PolicyGuard, parse_policy
 from rosbridge_mcp_server.safety.policy import PolicyError
 

@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
-from rosbridge_mcp_server.robot.seam import Act, Answer, AskPerson, asking
+from rosbridge_mcp_server.robot.approval import Act, Answer, AskPerson, asking
 from rosbridge_mcp_server.robot.velocity import measure
 from rosbridge_mcp_server.safety import Audit, Policy, PolicyGuard, parse_policy, question
 

@@ -548,7 +548,7 @@ def test_the_domain_loads_neither_pictures_nor_pillow() -> None:
     "module",
     [
         "rosbridge_mcp_server.robot.acting",
-        "rosbridge_mcp_server.robot.seam",
+        "rosbridge_mcp_server.robot.approval",
         "rosbridge_mcp_server.safety",
         "rosbridge_mcp_server.safety.guard",
     ],

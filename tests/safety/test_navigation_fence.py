@@ -6,9 +6,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.robot.navigation import Scene
 from rosbridge_mcp_server.robot.occupancy import Grid, Pose2D
-from rosbridge_mcp_server.robot.seam import Act
 from rosbridge_mcp_server.safety import parse_policy
 from rosbridge_mcp_server.safety.navigation import goal_text, navigation_refusal
 

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.robot.seam import Act, Answer, asking, nobody_to_ask
+from rosbridge_mcp_server.robot.approval import Act, Answer, asking, nobody_to_ask
 from rosbridge_mcp_server.safety import LATCH_RULE, Audit, AuditEntry, Operator, PolicyGuard, parse_policy
 
 WAIT = 5.0

@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from rosbridge_mcp_server.robot.seam import Act
+from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.safety import question
 from rosbridge_mcp_server.safety.question import LINES_SHOWN, TEXT_SHOWN, shown_text
 

@@ -2,7 +2,7 @@
 
 It runs the unchanged server (the console script's ``main``) after wrapping three coroutines with timers:
 
-* ``ToolCalls.call_tool`` (``server/checks.py``) — everything the server does for one tool call after the
+* ``ToolCalls.call_tool`` (``server/tool_calls.py``) — everything the server does for one tool call after the
   SDK has read and parsed the request, up to the result it hands back to the SDK;
 * ``RosbridgeClient.call_service`` — each rosbridge round trip made inside that;
 * the stdio transport is our own (or, with ``--sdk-stdio``, the MCP SDK's worker-thread one).
@@ -25,7 +25,7 @@ from typing import Any
 from rosbridge_mcp_server import server as cli
 from rosbridge_mcp_server.cli import main
 from rosbridge_mcp_server.client import RosbridgeClient
-from rosbridge_mcp_server.server.checks import ToolCalls
+from rosbridge_mcp_server.server.tool_calls import ToolCalls
 
 __all__: list[str] = []
 

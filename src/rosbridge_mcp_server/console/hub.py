@@ -24,9 +24,9 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.console.feedback import feedback_text
 from rosbridge_mcp_server.console.mapview import MapPanel, Picture, trying_again
 from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.robot.messages import short_type_name
 from rosbridge_mcp_server.robot.names import absolute_name
-from rosbridge_mcp_server.robot.seam import Act
 from rosbridge_mcp_server.safety import PRESSER_NAMES, Audit, AuditEntry, Operator, Presser, emergency_stop
 
 if TYPE_CHECKING:

@@ -7,7 +7,7 @@ and before the send. Every send therefore passes :class:`SendGate` right before 
 * :meth:`SendGate.ticket` is taken before the act is approved; :meth:`SendGate.stop` (``stop_robot``, the
   console's E-STOP) voids every ticket taken before it, so whatever was approved (or being approved) before a
   stop never sends again;
-* the guard's :meth:`~rosbridge_mcp_server.robot.seam.Guard.held` is asked at each send too: while the
+* the guard's :meth:`~rosbridge_mcp_server.robot.approval.Guard.held` is asked at each send too: while the
   operator's E-STOP is latched nothing goes out, whenever it was approved;
 * :meth:`SendGate.pace` bounds the rate of messages per topic on this robot, across every stream and single
   publish (the guard's ``send_interval``: ``[publish] max_rate_hz``), by handing out send slots.
@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 from rosbridge_mcp_server.errors import PolicyRefusal
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.seam import Act, Guard
+    from rosbridge_mcp_server.robot.approval import Act, Guard
 
 __all__ = ["SendGate", "Ticket"]
 

@@ -35,7 +35,7 @@ from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
-    from rosbridge_mcp_server.robot.seam import Guard
+    from rosbridge_mcp_server.robot.approval import Guard
 
 __all__ = ["RobotSession"]
 

@@ -35,11 +35,11 @@ from typing import TYPE_CHECKING
 from rosbridge_mcp_server.robot.arm_goals import ArmAct, GripperGoal, Trajectory, carried_arm
 
 if TYPE_CHECKING:
+    from rosbridge_mcp_server.robot.approval import Act
     from rosbridge_mcp_server.robot.arm.kinematics import Chain
     from rosbridge_mcp_server.robot.arm.urdf import Joint, Robot
     from rosbridge_mcp_server.robot.arm_path import Point
     from rosbridge_mcp_server.robot.arm_scene import ArmScene
-    from rosbridge_mcp_server.robot.seam import Act
     from rosbridge_mcp_server.safety.arm_rules import ArmRules
 
 __all__ = ["ARM_SOURCES", "ArmRefusal", "act_arm", "arm_goal_text", "arm_refusal", "source_refusal"]

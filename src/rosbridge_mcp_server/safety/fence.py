@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 from rosbridge_mcp_server.safety.navigation import NavigationRefusal
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.seam import Act
+    from rosbridge_mcp_server.robot.approval import Act
     from rosbridge_mcp_server.safety.policy import NavigationRules
 
 __all__ = ["fence_refusal", "writes_fence"]

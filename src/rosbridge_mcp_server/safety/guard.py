@@ -28,8 +28,8 @@ from fnmatch import fnmatchcase
 from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.robot.approval import AnswerNotInForm
 from rosbridge_mcp_server.robot.motion_goals import Motion, with_speed
-from rosbridge_mcp_server.robot.seam import AnswerNotInForm
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type, measure, scaled
 from rosbridge_mcp_server.safety.arm import act_arm, arm_refusal, source_refusal
 from rosbridge_mcp_server.safety.fence import fence_refusal, writes_fence
@@ -41,7 +41,7 @@ from rosbridge_mcp_server.safety.question import question
 if TYPE_CHECKING:
     # Only for annotations: the acting layer imports this package's velocity rules, so a runtime import here
     # would be circular.
-    from rosbridge_mcp_server.robot.seam import Act, Answer, AskPerson
+    from rosbridge_mcp_server.robot.approval import Act, Answer, AskPerson
 
 __all__ = [
     "AUDIT_PAYLOAD_LIMIT",
@@ -353,7 +353,7 @@ class PolicyGuard:
                     if self.operator is None or not self.operator.present:
                         return "no console"
                     return await self.operator.ask(text, act)
-                # A person whose client can open a URL comes with a way to send them there (seam.py).
+                # A person whose client can open a URL comes with a way to send them there (approval.py).
                 link = ask.by_link
                 operator = self.operator
                 if link is not None and operator is not None and operator.present and operator.link_base:

@@ -39,7 +39,7 @@ from rosbridge_mcp_server.robot.navigation import (
 from rosbridge_mcp_server.robot.occupancy import Pose2D
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.seam import Act
+    from rosbridge_mcp_server.robot.approval import Act
     from rosbridge_mcp_server.safety.policy import NavigationRules
 
 __all__ = ["NavigationRefusal", "act_motion", "goal_text", "navigation_refusal"]

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.seam import Act, Answer, SendToLink
+    from rosbridge_mcp_server.robot.approval import Act, Answer, SendToLink
 
 __all__ = ["Operator", "PendingConfirmation"]
 

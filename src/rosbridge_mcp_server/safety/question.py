@@ -27,7 +27,7 @@ from rosbridge_mcp_server.safety.arm import arm_goal_text
 from rosbridge_mcp_server.safety.navigation import goal_text
 
 if TYPE_CHECKING:
-    from rosbridge_mcp_server.robot.seam import Act
+    from rosbridge_mcp_server.robot.approval import Act
 
 __all__ = ["ARRAY_SHOWN", "LINES_SHOWN", "TEXT_SHOWN", "question", "shown_text"]
 

@@ -1,5 +1,5 @@
 """Everything that imports ``mcp``: the server (``app``), tool modules as MCP tools (``adapter``), the checks
-every call gets first (``checks``), several robots (``fleet``), the stdio and HTTP transports (``stdio``,
+every call gets first (``tool_calls``), several robots (``fleet``), the stdio and HTTP transports (``stdio``,
 ``http``), and every use of SDK internals (``sdk``)."""
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ from mcp.types import CallToolResult, InputRequiredResult, TextContent, Tool, To
 from pydantic import BaseModel, create_model
 
 from rosbridge_mcp_server.errors import RosbridgeError
-from rosbridge_mcp_server.robot.seam import call_ending
+from rosbridge_mcp_server.robot.approval import call_ending
 from rosbridge_mcp_server.robot.text import repaired
 from rosbridge_mcp_server.server.answers import images, merged, where_set
 from rosbridge_mcp_server.server.asking import Asker, AskInNextRound, question_round

@@ -1,7 +1,7 @@
 """The MCP server: ``build_server`` serves every tool on the SDK's low-level ``Server``.
 
 The low-level server is the SDK's documented way to own the schemas and results exactly (docs/architecture.md
-says why we chose it): ``checks.py`` answers ``tools/list`` and ``tools/call``, ``console_app.py`` the MCP
+says why we chose it): ``tool_calls.py`` answers ``tools/list`` and ``tools/call``, ``console_app.py`` the MCP
 App's resource. The rosbridge client connects in the background from the server's lifespan, so ``initialize``
 and ``tools/list`` work while the robot is down; tools then fail fast with the not-connected text naming the
 URL.
@@ -13,7 +13,7 @@ import contextlib
 import logging
 import typing
 from collections.abc import AsyncIterator, Callable, Sequence
-from contextlib import asynccontextmanager
+from contextlib import AbstractAsyncContextManager, asynccontextmanager
 from typing import Any
 
 from mcp.server import Server, ServerRequestContext
@@ -28,13 +28,13 @@ from mcp.types import (
 
 from mcp import MCPError
 from rosbridge_mcp_server import __version__
-from rosbridge_mcp_server.robot.seam import Act, ActKind
 from rosbridge_mcp_server.server.adapter import EdgeTool, module_tool
-from rosbridge_mcp_server.server.checks import ToolCalls
-from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, console_app
+from rosbridge_mcp_server.server.console_app import APPS_EXTENSION, ConsoleApp, console_app
 from rosbridge_mcp_server.server.fleet import Fleet, Robot, list_robots_tool
+from rosbridge_mcp_server.server.read_only import ReadOnlyRefusals
 from rosbridge_mcp_server.server.shutdown import stop_robots
 from rosbridge_mcp_server.server.tasks import TaskBoard
+from rosbridge_mcp_server.server.tool_calls import ToolCalls
 from rosbridge_mcp_server.tools import TOOL_MODULES
 from rosbridge_mcp_server.tools.base import Need, ToolSpec
 
@@ -159,30 +159,89 @@ def build_fleet_server(
 
     Every act on a robot is first approved by its session's guard (the server as ``serve`` runs it: a
     :class:`~rosbridge_mcp_server.safety.PolicyGuard` for the robot's policy, audited). *config* chooses the
-    tools and, when read-only, withholds the acting ones. Every tool call first goes through the checks of
-    ``checks.py``, on any transport. With several robots every tool takes a ``robot`` argument and
-    ``list_robots`` is listed (``fleet.py``). The tools record what they set going in each robot's session,
-    which the operator console's E-STOP shares. With *console_view* (the console's snapshot) the server also
-    offers the console's read-only view as an MCP App: ``show_console`` and its ``ui://`` resource
-    (``server/console_app.py``). Authentication is the transport's (``http.py``). With *tasks* (unless
-    ``--no-tasks``) long work runs as an MCP task for a client that can follow one (``server/tasks.py``); a
-    :class:`TaskBoard` given is the one used (the console lists its tasks).
+    tools and, when read-only, withholds the acting ones (``read_only.py``). Every tool call first goes
+    through the checks of ``tool_calls.py``, on any transport. With several robots every tool takes a
+    ``robot`` argument and ``list_robots`` is listed (``fleet.py``). The tools record what they set going in
+    each robot's session, which the operator console's E-STOP shares. With *console_view* (the console's
+    snapshot) the server also offers the console's read-only view as an MCP App: ``show_console`` and its
+    ``ui://`` resource (``server/console_app.py``). Authentication is the transport's (``http.py``). With
+    *tasks* (unless ``--no-tasks``) long work runs as an MCP task for a client that can follow one
+    (``server/tasks.py``); a :class:`TaskBoard` given is the one used (the console lists its tasks).
     """
     fleet = Fleet(robots)
     board = tasks if isinstance(tasks, TaskBoard) else TaskBoard(fleet) if tasks else None
-    policy = config.policy
     # Read-only when the server is, or when every robot is (a fleet file may make each read-only).
-    read_only = policy.read_only or not fleet.acting_names
-    chosen = [m for m in TOOL_MODULES if config.tools is None or m.SPEC.name in config.tools]
-    if any(not m.SPEC.hints.read_only for m in chosen):
-        # Whoever can set the robot going can stop it, whatever --tools picked.
-        chosen += [m for m in TOOL_MODULES if m.SPEC.stops and m not in chosen]
-    modules = [m for m in chosen if m.SPEC.hints.read_only or not read_only]
-    specs = [m.SPEC for m in modules]
+    read_only = config.policy.read_only or not fleet.acting_names
+    chosen = _chosen(config)
+    specs = [spec for spec in chosen if spec.hints.read_only or not read_only]
+    _start_keepers(specs, fleet)
+    app = console_app(console_view) if console_view is not None else None
+    tools = _edge_tools(specs, fleet, app)
+    # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
+    withheld = [spec for spec in chosen if spec not in specs]
+    refusals = ReadOnlyRefusals(fleet, withheld, [spec.name for spec in specs if spec.stops])
+    calls = ToolCalls(tools, fleet, unlisted=refusals.unlisted, robot_check=refusals.robot_check)
+    resources = _Resources(app)
+    server: Server[None] = Server(
+        SERVER_NAME,
+        version=__version__,
+        title="rosbridge MCP server",
+        description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
+        instructions=INSTRUCTIONS + _notes(specs, fleet, read_only),
+        lifespan=_lifespan(fleet, board),
+        get_tool_input_schema=calls.input_schema,
+        on_list_tools=calls.list_tools,
+        on_call_tool=calls.call_tool,
+        on_list_resources=resources.list_resources,
+        on_read_resource=resources.read_resource,
+        on_list_prompts=resources.list_prompts,
+    )
+    # Arguments that are no object get our sentence before the SDK checks the request's shape.
+    server.middleware.append(calls.arguments_kind)
+    if board is not None:
+        board.register(server, specs)
+    if app is not None:
+        server.extensions[APPS_EXTENSION] = {}
+    return server
+
+
+#: Every tool module by its tool's name.
+_MODULES = {module.SPEC.name: module for module in TOOL_MODULES}
+
+
+def _chosen(config: Config) -> list[ToolSpec]:
+    """The tools *config* chooses (``--tools``), in the catalogue's order, with the stop whenever a tool that
+    acts is among them: whoever can set the robot going can stop it."""
+    specs = [m.SPEC for m in TOOL_MODULES]
+    chosen = [spec for spec in specs if config.tools is None or spec.name in config.tools]
+    if any(not spec.hints.read_only for spec in chosen):
+        chosen += [spec for spec in specs if spec.stops and spec not in chosen]
+    return chosen
+
+
+def _start_keepers(specs: Sequence[ToolSpec], fleet: Fleet) -> None:
+    """What the served tools need kept in the background (their specs' ``needs``), started on every robot."""
     for need in sorted({need for spec in specs for need in spec.needs}):
         for robot in fleet.robots:
             _KEEPERS[need](robot.session)
-    stops = [spec.name for spec in specs if spec.stops]
+
+
+def _edge_tools(specs: Sequence[ToolSpec], fleet: Fleet, app: ConsoleApp | None) -> list[EdgeTool]:
+    """Every tool listed, made the same way (``adapter.edge_tool``), in the order it is listed: the served
+    tools, then ``list_robots`` on a fleet and ``show_console`` with the MCP App."""
+    tools = [module_tool(_MODULES[spec.name]) for spec in specs]
+    if fleet.several:
+        tools.append(list_robots_tool(fleet))
+    if app is not None:
+        tools.append(app.tool)
+    return tools
+
+
+def _lifespan(
+    fleet: Fleet, board: TaskBoard | None
+) -> Callable[[Server[None]], AbstractAsyncContextManager[None]]:
+    """The server's lifespan: every robot's client started (connecting in the background) and, on leaving,
+    what the server set going stopped, the tasks ended, then the clients closed."""
 
     @asynccontextmanager
     async def lifespan(_server: Server[None]) -> AsyncIterator[None]:
@@ -211,93 +270,29 @@ def build_fleet_server(
                 finally:
                     await stop_robots(sessions)  # the robots first, then each task's own end
 
-    # Every tool is made the same way (adapter.edge_tool), in the order it is listed.
-    tools: list[EdgeTool] = [module_tool(module) for module in modules]
-    if fleet.several:
-        tools.append(list_robots_tool(fleet))
-    app = console_app(console_view) if console_view is not None else None
-    if app is not None:
-        tools.append(app.tool)
-    # Acting tools a read-only policy keeps from the list; a tool --tools left out stays simply unknown.
-    withheld: dict[str, ToolSpec] = {
-        m.SPEC.name: m.SPEC for m in chosen if m.SPEC.hints.read_only is False and m not in modules
-    }
+    return lifespan
 
-    def unlisted(name: str, arguments: dict[str, Any], caller: str | None) -> str | None:
-        """A withheld acting tool called by name anyway: refused, and audited like any refusal."""
-        spec = withheld.get(name)
-        if spec is None:
-            return None
-        if spec.acts_on is not None:
-            for robot in fleet.robots:
-                robot.session.guard.record(
-                    _withheld_act(spec.name, spec.acts_on, arguments, caller), "withheld: read-only"
-                )
-        return (
-            f"{name} is not available: this server is read-only (its operator started it with --read-only or "
-            "a policy with read_only = true), so nothing was sent. Only the tools in tools/list can be used."
-        )
 
-    def robot_check(
-        tool: EdgeTool, chosen: tuple[Robot, ...], arguments: dict[str, Any], caller: str | None
-    ) -> str | None:
-        """A tool that is not read-only on a read-only robot of the fleet: refused, and audited on that robot
-        when it acts on it. Stopping is allowed everywhere."""
-        spec = tool.spec
-        if tool.reads or spec is None or spec.stops:
-            return None
-        refusal = fleet.read_only_refusal(tool.name, chosen, stops)
-        if refusal is not None and spec.acts_on is not None:
-            for robot in chosen:
-                if robot.config.policy.read_only:
-                    robot.session.guard.record(
-                        _withheld_act(tool.name, spec.acts_on, arguments, caller), "withheld: read-only"
-                    )
-        return refusal
+class _Resources:
+    """``resources/list``, ``resources/read`` and ``prompts/list``: the MCP App's page when it is served."""
 
-    calls = ToolCalls(tools, fleet, unlisted=unlisted, robot_check=robot_check)
+    def __init__(self, app: ConsoleApp | None) -> None:
+        self._app = app
 
     async def list_resources(
-        ctx: ServerRequestContext[None], params: PaginatedRequestParams | None
+        self, ctx: ServerRequestContext[None], params: PaginatedRequestParams | None
     ) -> ListResourcesResult:
-        return ListResourcesResult(resources=[app.resource] if app is not None else [])
+        return ListResourcesResult(resources=[self._app.resource] if self._app is not None else [])
 
     async def read_resource(
-        ctx: ServerRequestContext[None], params: ReadResourceRequestParams
+        self, ctx: ServerRequestContext[None], params: ReadResourceRequestParams
     ) -> ReadResourceResult:
-        contents = app.read(str(params.uri)) if app is not None else None
+        contents = self._app.read(str(params.uri)) if self._app is not None else None
         if contents is None:
             raise MCPError(code=INVALID_PARAMS, message=f"Unknown resource: {params.uri}")
         return ReadResourceResult(contents=[contents])
 
     async def list_prompts(
-        ctx: ServerRequestContext[None], params: PaginatedRequestParams | None
+        self, ctx: ServerRequestContext[None], params: PaginatedRequestParams | None
     ) -> ListPromptsResult:
         return ListPromptsResult(prompts=[])
-
-    server: Server[None] = Server(
-        SERVER_NAME,
-        version=__version__,
-        title="rosbridge MCP server",
-        description="Watch and drive a ROS 1 / ROS 2 robot through rosbridge",
-        instructions=INSTRUCTIONS + _notes(specs, fleet, read_only),
-        lifespan=lifespan,
-        get_tool_input_schema=calls.input_schema,
-        on_list_tools=calls.list_tools,
-        on_call_tool=calls.call_tool,
-        on_list_resources=list_resources,
-        on_read_resource=read_resource,
-        on_list_prompts=list_prompts,
-    )
-    # Arguments that are no object get our sentence before the SDK checks the request's shape (checks.py).
-    server.middleware.append(calls.arguments_kind)
-    if board is not None:
-        board.register(server)
-    if app is not None:
-        server.extensions[APPS_EXTENSION] = {}
-    return server
-
-
-def _withheld_act(name: str, acts_on: ActKind, arguments: dict[str, Any], caller: str | None) -> Act:
-    """The audit's act for an acting tool refused before it ran: what it acts through, and its arguments."""
-    return Act(name, acts_on, "", "", arguments, caller=caller)

@@ -21,7 +21,7 @@ from mcp.server.elicitation import elicit_url, elicit_with_validation, render_el
 from mcp.types import ElicitRequest, ElicitRequestFormParams, ElicitResult, InputRequiredResult
 from pydantic import BaseModel, Field, ValidationError
 
-from rosbridge_mcp_server.robot.seam import Answer, AnswerNotInForm, AskPerson
+from rosbridge_mcp_server.robot.approval import Answer, AnswerNotInForm, AskPerson
 
 __all__ = ["AskInNextRound", "Asker", "question_round"]
 

@@ -2,7 +2,7 @@
 activity, guard).
 
 With one robot nothing here shows: tools take no ``robot`` argument and ``tools/list`` is as before. With
-several, the edge (``checks.py``) takes the ``robot`` argument off every call before the tool's arguments
+several, the edge (``tool_calls.py``) takes the ``robot`` argument off every call before the tool's arguments
 are validated (:meth:`Fleet.choose`) and hands the chosen robots to the tool's handler with the call; a
 tool whose spec says ``every_robot`` (``stop_robot``) runs on every robot without one. ``list_robots`` says
 what each robot is.

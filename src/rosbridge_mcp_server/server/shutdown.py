@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 import anyio
 
-from rosbridge_mcp_server.robot.seam import Act
+from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.safety import Presser, emergency_stop
 
 if TYPE_CHECKING:

@@ -13,14 +13,17 @@ run in the call:
   ``tasks/result`` (waits for the end) and ``tasks/cancel``; a confirmation goes out as ``elicitation/create``
   on the session's channel while the task shows ``input_required`` with the question.
 
-Long work is ``navigate_to``, ``publish_action``, ``record`` (not its ``stop``), ``plot_topic``, and
-``publish_topic`` / ``subscribe_topic`` given a ``duration``. Any other call, a client that cannot follow a
-task, a server started with ``--no-tasks`` and a call beyond :data:`MAX_RUNNING` running tasks run as a
-plain call, as before. A task's answer is kept :data:`KEEP_SECONDS` after its end (at most :data:`MAX_KEPT`
-tasks); a task belongs to its caller (the token's name over HTTP): another caller's ``tasks/*`` find nothing.
-Cancelling a task is cancelling its tool call, whose own path cancels the goal, sends the stream's zero and
-closes the recording; so is the server's shutdown. A stop (``stop_robot``, E-STOP) ends the goal or stream
-of an acting task as it ends a plain call's, and the task's status says who stopped it.
+Long work is what a tool's spec says it is (``ToolSpec.long_work``, a
+:class:`~rosbridge_mcp_server.tools.base.LongWork`): today ``navigate_to``, ``publish_action``, ``record``
+(not its ``stop``), ``plot_topic``, and ``publish_topic`` / ``subscribe_topic`` given a ``duration``. Any
+other call, a client that cannot follow a task, a server started with ``--no-tasks`` and a call beyond
+:data:`MAX_RUNNING` running tasks run as a plain call, as before. A task's answer is kept :data:`KEEP_SECONDS`
+after its end (at most :data:`MAX_KEPT` tasks); a task belongs to its caller (the token's name over HTTP):
+another caller's ``tasks/*`` find nothing. Cancelling a task is cancelling its tool call, whose own path
+cancels the goal, sends the stream's zero and closes the recording (the spec's ``LongWork.cancelled`` says
+which); so is the server's shutdown. A stop (``stop_robot``, E-STOP) ends the goal or stream of a task whose
+tool acts on the robot (its spec's ``acts_on``) as it ends a plain call's, and the task's status says who
+stopped it.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from __future__ import annotations
 import logging
 import time
 import uuid
-from collections.abc import AsyncIterator, Mapping
+from collections.abc import AsyncIterator, Mapping, Sequence
 from contextlib import asynccontextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
@@ -47,8 +50,9 @@ from rosbridge_mcp_server.server.task_state import TERMINAL, TaskState, ended_te
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.gate import SendGate, Ticket
     from rosbridge_mcp_server.server.fleet import Fleet
+    from rosbridge_mcp_server.tools.base import ToolSpec
 
-__all__ = ["KEEP_SECONDS", "MAX_KEPT", "MAX_RUNNING", "TASKS_EXTENSION", "TaskBoard", "long_work"]
+__all__ = ["KEEP_SECONDS", "MAX_KEPT", "MAX_RUNNING", "TASKS_EXTENSION", "TaskBoard"]
 
 _log = logging.getLogger("rosbridge_mcp_server.server")
 
@@ -63,25 +67,6 @@ MAX_KEPT = 64
 #: How long tasks/cancel waits for the run to end (its goal cancelled, its stream's zero sent).
 CANCEL_WAIT = 10.0
 _MODERN_FROM = "2026-07-28"
-#: The tools whose run a stop ends (their goal or stream); reading tools go on after one.
-_ACTING = frozenset({"navigate_to", "publish_action", "publish_topic"})
-_LONG = ("navigate_to", "publish_action", "plot_topic", "publish_topic", "record", "subscribe_topic")
-#: What cancelling each tool's run stops on the robot (its own cancel path).
-_STOPS = {
-    "navigate_to": "its navigation goal was cancelled on the robot",
-    "publish_action": "its goal was cancelled on the robot",
-    "publish_topic": "its stream ended (a velocity stream ends with a zero command)",
-    "record": "the recording was closed",
-}
-
-
-def long_work(name: str, arguments: Mapping[str, Any]) -> bool:
-    """Whether a call of *name* with *arguments* (as sent) is long work, run as a task when it can be."""
-    if name in ("publish_topic", "subscribe_topic"):
-        return arguments.get("duration") is not None
-    if name == "record":
-        return arguments.get("stop") is not True
-    return name in _LONG
 
 
 class TaskIdParams(RequestParams):
@@ -115,9 +100,13 @@ class TaskBoard:
         self._max_kept = max_kept
         self._tasks: dict[str, TaskState] = {}
         self._group: anyio.abc.TaskGroup | None = None
+        #: The served tools whose spec says a call may be long work, by name.
+        self._long: dict[str, ToolSpec] = {}
 
-    def register(self, server: Server[Any]) -> None:
-        """Serve tasks on *server*: its methods, its capability, and the middleware that starts them."""
+    def register(self, server: Server[Any], specs: Sequence[ToolSpec]) -> None:
+        """Serve tasks on *server*: its methods, its capability, and the middleware that starts them; the
+        tools of *specs* (the served ones) whose spec says ``long_work`` may run as tasks."""
+        self._long = {spec.name: spec for spec in specs if spec.long_work is not None}
         server.add_request_handler("tasks/get", TaskIdParams, self._get)
         server.add_request_handler("tasks/result", TaskIdParams, self._result)
         server.add_request_handler("tasks/cancel", TaskIdParams, self._cancel)
@@ -169,7 +158,7 @@ class TaskBoard:
                 wants
                 and isinstance(name, str)
                 and isinstance(arguments, Mapping)
-                and long_work(name, arguments)
+                and self._long_work(name, arguments)
                 and self._group is not None
                 and len(self._running()) < self._max_running
             ):
@@ -184,9 +173,14 @@ class TaskBoard:
             capabilities["tasks"] = {"cancel": {}, "requests": {"tools": {"call": {}}}}
         elif ctx.method == "tools/list" and isinstance(result, dict) and _legacy_tasks_client(ctx):
             for tool in result.get("tools", []):
-                if tool.get("name") in _LONG:
+                if tool.get("name") in self._long:
                     tool["execution"] = {"taskSupport": "optional"}
         return result
+
+    def _long_work(self, name: str, arguments: Mapping[str, Any]) -> bool:
+        """Whether a call of *name* with *arguments* (as sent) is long work, run as a task when it can be."""
+        spec = self._long.get(name)
+        return spec is not None and spec.long_work is not None and spec.long_work.applies(arguments)
 
     def _start(
         self,
@@ -208,8 +202,9 @@ class TaskBoard:
         return {"resultType": "task", **shown} if modern else {"task": shown}
 
     def _gates(self, name: str, arguments: Mapping[str, Any]) -> list[tuple[SendGate, Ticket]]:
-        """The send gates of the robots an acting call runs on, with their stop count now."""
-        if name not in _ACTING:
+        """The send gates of the robots a call that acts on them runs on, with their stop count now (a stop
+        ends its run); a reading tool's run goes on after a stop."""
+        if self._long[name].acts_on is None:
             return []
         robots = self._fleet.robots[:1]
         if self._fleet.several:
@@ -258,7 +253,8 @@ class TaskBoard:
         finally:
             if task.status not in TERMINAL:
                 by = task.cancelled_by or "the server shut down"
-                what = _STOPS.get(task.tool, "its reading ended")
+                long = self._long[task.tool].long_work
+                what = long.cancelled if long is not None else "its run ended"
                 task.end("cancelled", f"Cancelled by {by}: {task.tool} stopped; {what}.")
         # Left the scope without an answer: tasks/cancel cancelled it (the finally above said so).
 

@@ -8,17 +8,17 @@ a :class:`ToolAnswer`. ``server/adapter.py`` turns these into MCP tools.
 
 from __future__ import annotations
 
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import BaseModel
 
 from rosbridge_mcp_server.client.frame_limits import MAX_NESTING, MAX_PAYLOAD_CHARS, payload_problem
 from rosbridge_mcp_server.errors import Advised
+from rosbridge_mcp_server.robot.approval import ActKind, AskPerson, Guard, nobody_to_ask
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.names import absolute_name
-from rosbridge_mcp_server.robot.seam import ActKind, AskPerson, Guard, nobody_to_ask
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient
@@ -34,6 +34,7 @@ __all__ = [
     "MAX_NESTING",
     "MAX_PAYLOAD_CHARS",
     "READS_ROBOT",
+    "LongWork",
     "Need",
     "ProgressReporter",
     "ToolAnswer",
@@ -70,6 +71,28 @@ Need = Literal["service_types", "robot_log"]
 
 
 @dataclass(frozen=True)
+class LongWork:
+    """A tool whose call may be long work (a drive, a goal, a recording, a timed reading): the server runs
+    such a call as an MCP task when the client can follow one (``server/tasks.py``), and cancelling the task
+    cancels the call.
+
+    ``given``: only a call that gives this argument (not null) is long (``duration``); ``unless``: a call
+    that sets this argument true is not (``record``'s ``stop``). ``cancelled``: what cancelling the run ends
+    on the robot, in words, as the task's status says it ("its goal was cancelled on the robot").
+    """
+
+    given: str | None = None
+    unless: str | None = None
+    cancelled: str = "its reading ended"
+
+    def applies(self, arguments: Mapping[str, Any]) -> bool:
+        """Whether a call with *arguments* (as sent) is long work."""
+        if self.given is not None and arguments.get(self.given) is None:
+            return False
+        return self.unless is None or arguments.get(self.unless) is not True
+
+
+@dataclass(frozen=True)
 class ToolSpec:
     """One tool as it declares itself: name, title, description (with an example), hints, answer, and what
     the server must know of it. The server reads these, never a tool's name.
@@ -87,7 +110,8 @@ class ToolSpec:
     a tool that acts is (whatever ``--tools`` chose) and works on a read-only robot of a fleet.
     ``every_robot``: on a server that drives several robots the ``robot`` argument is optional, and a call
     without it runs on every robot, the answers merged under each robot's name (such a tool never asks the
-    person).
+    person). ``long_work``: a call of it may run long, as an MCP task (:class:`LongWork`); when the tool acts
+    on the robot (``acts_on``), a stop ends that run as it ends a plain call.
     """
 
     name: str
@@ -100,6 +124,7 @@ class ToolSpec:
     needs: frozenset[Need] = frozenset()
     stops: bool = False
     every_robot: bool = False
+    long_work: LongWork | None = None
 
     def __post_init__(self) -> None:
         if not self.hints.read_only and (self.acts_on is None) == (self.changes is None):

@@ -32,6 +32,7 @@ from rosbridge_mcp_server.robot.occupancy import Grid, Pose2D
 from rosbridge_mcp_server.tools.arguments import JsonValue
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
+    LongWork,
     ToolAnswer,
     ToolContext,
     ToolFailure,
@@ -83,6 +84,7 @@ SPEC = ToolSpec(
     hints=ACTS_ON_ROBOT,
     acts_on="action",
     output=NavigateAnswer,
+    long_work=LongWork(cancelled="its navigation goal was cancelled on the robot"),
 )
 
 

@@ -11,6 +11,7 @@ from rosbridge_mcp_server.robot.series import FieldError, Series, TopicFields, c
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
+    LongWork,
     ToolAnswer,
     ToolContext,
     ToolFailure,
@@ -57,6 +58,7 @@ SPEC = ToolSpec(
     ),
     hints=READS_ROBOT,
     output=PlotAnswer,
+    long_work=LongWork(),
 )
 
 

@@ -12,6 +12,7 @@ from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
+    LongWork,
     ToolAnswer,
     ToolContext,
     ToolSpec,
@@ -64,6 +65,7 @@ SPEC = ToolSpec(
     hints=ACTS_ON_ROBOT,
     acts_on="action",
     output=GoalAnswer,
+    long_work=LongWork(cancelled="its goal was cancelled on the robot"),
 )
 
 

@@ -13,6 +13,7 @@ from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
 from rosbridge_mcp_server.tools.audience import audience
 from rosbridge_mcp_server.tools.base import (
     ACTS_ON_ROBOT,
+    LongWork,
     ToolAnswer,
     ToolContext,
     ToolFailure,
@@ -63,6 +64,9 @@ SPEC = ToolSpec(
     hints=ACTS_ON_ROBOT,
     acts_on="topic",
     output=PublishAnswer,
+    long_work=LongWork(
+        given="duration", cancelled="its stream ended (a velocity stream ends with a zero command)"
+    ),
 )
 
 

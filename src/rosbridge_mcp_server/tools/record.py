@@ -12,7 +12,14 @@ from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
-from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolFailure, ToolHints, ToolSpec
+from rosbridge_mcp_server.tools.base import (
+    LongWork,
+    ToolAnswer,
+    ToolContext,
+    ToolFailure,
+    ToolHints,
+    ToolSpec,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable
@@ -59,6 +66,7 @@ SPEC = ToolSpec(
     # It subscribes and writes a file: nothing is sent to the robot, so there is no act for the guard.
     changes="files on the server's host",
     output=RecordAnswer,
+    long_work=LongWork(unless="stop", cancelled="the recording was closed"),
 )
 
 
@@ -72,10 +80,7 @@ async def run(
     ] = None,
     duration: Annotated[float, Field(gt=0, le=MAX_SECONDS, description="Seconds, e.g. 30")] = 10.0,
     max_megabytes: Annotated[float, Field(gt=0, le=100_000, description="MB, e.g. 500")] = DEFAULT_MEGABYTES,
-    name: Annotated[
-        str | None,
-        Field(description='File name, e.g. "run1"'),
-    ] = None,
+    name: Annotated[str | None, Field(description='File name, e.g. "run1"')] = None,
     stop: Annotated[bool, Field(description="End running ones, e.g. true")] = False,
 ) -> ToolAnswer:
     """Choose the topics, make the file, record, and say what was written."""

@@ -257,8 +257,7 @@ def map_answer(
     grid, reader = _map_and_path(file, summary, map_topic, path_topic, budget)
     found = reader.path(grid.frame_id)
     points = found.poses
-    step = max(1, len(points) // 2000)
-    path = [(p.x, p.y) for p in points[::step]]
+    path = [(p.x, p.y) for p in points[:: max(1, len(points) // 2000)]]  # at most ~2,000 drawn
     overlay = Overlay(robot=points[-1] if points else None, path=path)
     picture = draw_map(grid, max_size=max_size, overlay=overlay)
     heard = any(t.topic == path_topic and t.timing.count for t in summary.topics)

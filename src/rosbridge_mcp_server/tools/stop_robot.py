@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.seam import Act
+from rosbridge_mcp_server.robot.approval import Act
 from rosbridge_mcp_server.safety.estop import emergency_stop
 from rosbridge_mcp_server.tools.base import ToolAnswer, ToolContext, ToolHints, ToolSpec
 

@@ -12,6 +12,7 @@ from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
+    LongWork,
     ToolAnswer,
     ToolContext,
     ToolFailure,
@@ -66,6 +67,7 @@ SPEC = ToolSpec(
     ),
     hints=READS_ROBOT,
     output=SubscribeAnswer,
+    long_work=LongWork(given="duration"),
 )
 
 

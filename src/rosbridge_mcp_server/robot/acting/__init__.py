@@ -4,7 +4,7 @@ Each function takes what a caller gave (names, types, a message), makes the name
 :class:`~rosbridge_mcp_server.client.Dialect` spell the type for the bridge, compares it with the graph,
 checks the message as the bridge will read it against the type's definitions (raising a
 :class:`~rosbridge_mcp_server.errors.NotSentError` that carries an example of the type), and only then asks
-the guard of :mod:`rosbridge_mcp_server.robot.seam` whether the act may happen (:func:`approved`), telling
+the guard of :mod:`rosbridge_mcp_server.robot.approval` whether the act may happen (:func:`approved`), telling
 it the outcome once per act (:func:`carry_out`). Messages stay as the caller wrote them (time fields in
 either spelling): the client respells them once, on the way out.
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Protocol
 
+from rosbridge_mcp_server.robot.approval import Approving
 from rosbridge_mcp_server.robot.arm_goals import carried_arm
 from rosbridge_mcp_server.robot.motion_goals import carried_goal, read_motion
 from rosbridge_mcp_server.robot.navigation import Scene, survey
-from rosbridge_mcp_server.robot.seam import Approving
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import Dialect, RosbridgeClient

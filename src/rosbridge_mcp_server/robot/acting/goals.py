@@ -8,10 +8,10 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.client import Dialect
 from rosbridge_mcp_server.errors import Advice, NotSentError
 from rosbridge_mcp_server.robot.acting.context import Acting, as_read, given_name, motion_scene
+from rosbridge_mcp_server.robot.approval import Act, approved, carry_out
 from rosbridge_mcp_server.robot.goals import CancelReport, Goal, GoalFeedback, cancel_goals, run_goal
 from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros
-from rosbridge_mcp_server.robot.seam import Act, approved, carry_out
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.robot.arm_scene import ArmScene

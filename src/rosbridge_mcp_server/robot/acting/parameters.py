@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Any
 
 from rosbridge_mcp_server.robot.acting.context import Acting, given_name
+from rosbridge_mcp_server.robot.approval import Act, approved, carry_out
 from rosbridge_mcp_server.robot.effects import parameter_write
 from rosbridge_mcp_server.robot.parameters import SetOutcome, apply_set, plan_set
-from rosbridge_mcp_server.robot.seam import Act, approved, carry_out
 
 __all__ = ["set_parameter"]
 

@@ -8,12 +8,12 @@ from typing import TYPE_CHECKING, Any
 
 from rosbridge_mcp_server.errors import Advice, NotSentError, ServiceError
 from rosbridge_mcp_server.robot.acting.context import Acting, as_read, given_name, motion_scene
+from rosbridge_mcp_server.robot.approval import Act, approved, carry_out
 from rosbridge_mcp_server.robot.effects import service_effects
 from rosbridge_mcp_server.robot.goals.caused import caused_by_call
 from rosbridge_mcp_server.robot.graph import is_missing_service
 from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros, did_you_mean
-from rosbridge_mcp_server.robot.seam import Act, approved, carry_out
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import Dialect

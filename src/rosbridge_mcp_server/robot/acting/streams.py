@@ -12,9 +12,9 @@ from typing import TYPE_CHECKING, Any
 from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.acting.context import Acting, given_name, motion_scene
 from rosbridge_mcp_server.robot.acting.topics import adjusted_text, bridge_is_reading, checked_message
+from rosbridge_mcp_server.robot.approval import Act, approved, cancelled_why
 from rosbridge_mcp_server.robot.effects import topic_effects
 from rosbridge_mcp_server.robot.goals.caused import caused_by_publish
-from rosbridge_mcp_server.robot.seam import Act, approved, cancelled_why
 from rosbridge_mcp_server.robot.velocity import is_velocity_type, stamped
 
 if TYPE_CHECKING:

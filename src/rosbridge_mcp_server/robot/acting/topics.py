@@ -9,11 +9,11 @@ from typing import Any
 
 from rosbridge_mcp_server.errors import Advice, NotSentError, RequestTimeoutError
 from rosbridge_mcp_server.robot.acting.context import Acting, as_read, given_name, motion_scene
+from rosbridge_mcp_server.robot.approval import Act, approved, carry_out
 from rosbridge_mcp_server.robot.effects import topic_effects
 from rosbridge_mcp_server.robot.goals.caused import caused_by_publish
 from rosbridge_mcp_server.robot.messages import require_fit
 from rosbridge_mcp_server.robot.names import absolute_name, check_name_for_ros
-from rosbridge_mcp_server.robot.seam import Act, approved, carry_out
 from rosbridge_mcp_server.robot.velocity import clamp_text, is_velocity_type
 
 __all__ = ["PING_LIMIT", "Published", "adjusted_text", "bridge_is_reading", "checked_message", "publish_once"]

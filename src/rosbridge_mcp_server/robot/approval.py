@@ -1,4 +1,4 @@
-"""The safety seam: what an act on the robot is, who approves it, and the person who may be asked.
+"""Approval, the safety seam: what an act on the robot is, who approves it, and the person who may be asked.
 
 ``robot/acting/`` builds an :class:`Act` for every checked send and asks the :class:`Guard` before anything
 is sent: ``await guard.approve(act, ask_person)``. The guard may return a clamped copy of the act (what is
