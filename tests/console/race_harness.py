@@ -270,9 +270,12 @@ class RaceResult:
     goal_error: bool
 
 
-async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = True) -> RaceResult:
+async def run_race(
+    race: RaceConsole, *, press_after: float = 0.0, goal: bool = True, press_when_running: bool = False
+) -> RaceResult:
     """Start a 10 Hz velocity stream (and a goal), press E-STOP *press_after* s after the console first shows
-    one of them allowed, then measure; the latch is released at the end."""
+    one of them allowed (with *press_when_running*, once the simulated robot has both the stream's commands
+    and the goal, however long a busy machine takes), then measure; the latch is released at the end."""
     types = types_of(race.dialect)
     world = race.world
     race.allowed.clear()
@@ -310,6 +313,13 @@ async def run_race(race: RaceConsole, *, press_after: float = 0.0, goal: bool = 
     if press_after > 0:
         # Where in the calls' lives the press lands (approval, ping, first messages, goal start).
         await asyncio.sleep(press_after)
+    if press_when_running and world is not None:
+
+        def running(w: World) -> bool:
+            driven = any(m.received_at > started and moving(m.msg) for m in w.published.get(CMD_VEL, ()))
+            return driven and bool(set(w.goals) - goals_before)
+
+        await world.wait_for(running, WAIT)
     status, answer = await race.console.post("/api/estop")
     answered = time.monotonic()
     assert status == 200, answer

@@ -52,7 +52,7 @@ async def test_a_goal_running_when_estop_is_pressed_makes_no_progress_after_it_a
 ) -> None:
     """Pressed while the stream drives and the goal runs (150 ms link): both end before E-STOP answers."""
     async with race_console(sim.url, sim.dialect, LINK, world=sim.world) as race:
-        result = await run_race(race, press_after=1.2)
+        result = await run_race(race, press_when_running=True)
     nothing_after(result)
     assert result.estop["streams_stopped"] == [CMD_VEL], result
     # Pressed that late, the race is against a stream that drives and a goal the robot already took.

@@ -128,7 +128,7 @@ async def test_a_healthy_nav2_robot_reports_no_problem(dialect: str) -> None:
     assert "4 statuses, 4 OK" in checked["diagnostics"]
     assert checked["streams"].startswith("9 of 9 key streams flowing"), checked
     assert {"map", "odom", "base_footprint", "base_link", "laser"} <= set(data["frames"])
-    assert all(rate and rate > 3 for rate in data["streams"].values()), data["streams"]
+    assert all(rate and rate > 0 for rate in data["streams"].values()), data["streams"]
     if dialect == "ros2":
         assert checked["lifecycle"] == "16 of 16 lifecycle nodes active"
         assert data["unavailable"] == {}

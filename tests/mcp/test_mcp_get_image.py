@@ -29,8 +29,9 @@ def picture_of(result: Any) -> Image.Image:
 async def camera(robot: SimulatedRobot, topic: str, kind: str, msg: dict[str, Any]) -> AsyncIterator[None]:
     """Another client of the bridge that publishes one latched frame on ``topic``."""
     msg_type = f"sensor_msgs/msg/{kind}" if robot.dialect == "ros2" else f"sensor_msgs/{kind}"
-    async with RosbridgeClient(robot.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
-        await publisher.wait_connected(5.0)
+    # 30 s: an 8 MB frame's publish (and the ping after it) on a busy machine.
+    async with RosbridgeClient(robot.url, connect_timeout=10.0, request_timeout=30.0) as publisher:
+        await publisher.wait_connected(30.0)
         await publisher.publish(topic, msg_type, msg, latch=True)
         yield
 
