@@ -8,7 +8,7 @@ import os
 import signal
 import socket
 import sys
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -210,11 +210,23 @@ async def _watch_the_robot(server: StdioServer) -> None:
     assert streamed["structuredContent"]["zero_sent"] is True
 
 
+#: Ports held bound (never listened on) while this module's tests run: a connection there is refused, and no
+#: other test of a parallel run can take the port in the meantime, as it could a port bound and let go.
+_HELD: list[socket.socket] = []
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _release_held_ports() -> Iterator[None]:
+    yield
+    while _HELD:
+        _HELD.pop().close()
+
+
 def _closed_port_url() -> str:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
-    return f"ws://127.0.0.1:{port}"
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    _HELD.append(sock)
+    return f"ws://127.0.0.1:{sock.getsockname()[1]}"
 
 
 async def test_a_server_with_no_bridge_still_answers_and_reports_the_url() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import re
 import socket
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -76,11 +77,23 @@ ALL_TOOLS_BUDGET = len(ALL_TOOL_NAMES) * 1_024
 ORIGINAL_TOOLS_BUDGET = (len(ORIGINAL) + len(STOPS)) * 1_024
 
 
+#: Ports held bound (never listened on) while this module's tests run: a connection there is refused, and no
+#: other test of a parallel run can take the port in the meantime, as it could a port bound and let go.
+_HELD: list[socket.socket] = []
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _release_held_ports() -> Iterator[None]:
+    yield
+    while _HELD:
+        _HELD.pop().close()
+
+
 def _closed_port_url() -> str:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
-    return f"ws://127.0.0.1:{port}"
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    _HELD.append(sock)
+    return f"ws://127.0.0.1:{sock.getsockname()[1]}"
 
 
 async def test_every_tool_is_listed_with_annotations_and_described_parameters() -> None:
