@@ -14,6 +14,9 @@ import random
 from typing import Final
 from urllib.parse import urlsplit
 
+#: The backoff's jitter, from a generator of its own: the process's shared `random` state is the host's.
+_JITTER = random.Random()
+
 __all__ = ["LOCAL_RECONNECT_MAX", "PROMPT_SPACING", "Attempts", "reconnect_cap"]
 
 #: Longest wait between connection attempts to a bridge on this machine or the local network. An attempt there
@@ -97,7 +100,7 @@ class Attempts:
 
     async def pause(self) -> None:
         """Wait out the backoff, or less when a call prompts an attempt."""
-        sleep = random.uniform(self._delay / 2, self._delay)
+        sleep = _JITTER.uniform(self._delay / 2, self._delay)
         self._delay = min(self._delay * 2, self.cap)
         # No attempt is in progress while we wait; a call that needs the connection wakes us (see prompt)
         # instead of failing until the backoff runs out.

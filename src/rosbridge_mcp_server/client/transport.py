@@ -16,6 +16,7 @@ connection is closed, ``TimeoutError`` when the peer did not take it within *tim
 from __future__ import annotations
 
 import asyncio
+import itertools
 import logging
 import ssl
 from collections.abc import Awaitable, Callable, Sequence
@@ -68,10 +69,13 @@ Dial = Callable[[float], Awaitable[BridgeTransport]]
 class WebSocketTransport:
     """A ``websockets`` client connection as a :class:`BridgeTransport`."""
 
-    __slots__ = ("recv", "ws")
+    __slots__ = ("_pings", "recv", "ws")
 
     def __init__(self, ws: ClientConnection) -> None:
         self.ws = ws
+        # Our pings carry a count, not websockets' default random payload: that draws from the process's
+        # shared `random` state, which is the host's (and a property test's).
+        self._pings = itertools.count()
         # recv() is websockets' own: the reader's hot path gets no frame of ours in between.
         self.recv = ws.recv
 
@@ -104,7 +108,7 @@ class WebSocketTransport:
     async def ping(self, timeout: float) -> None:
         try:
             async with asyncio.timeout(timeout):
-                pong = await self.ws.ping()
+                pong = await self.ws.ping(next(self._pings).to_bytes(8, "big"))
                 await pong
         except ConnectionClosed:
             raise EOFError("the connection closed") from None
