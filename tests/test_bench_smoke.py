@@ -68,14 +68,15 @@ def quick_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[subprocess.Comp
         cwd=REPO,
         capture_output=True,
         text=True,
-        timeout=230,
+        # Under 230 s on a quiet 2-core machine; a busy one (264 s seen at load 12) needs the room.
+        timeout=500,
         check=False,
     )
     figures = json.loads(report.read_text()) if report.exists() else {}
     return finished, figures
 
 
-@pytest.mark.timeout(240)
+@pytest.mark.timeout(520)
 def test_quick_benchmark_exits_zero_and_prints_the_table(
     quick_run: tuple[subprocess.CompletedProcess[str], dict],
 ) -> None:
@@ -87,7 +88,7 @@ def test_quick_benchmark_exits_zero_and_prints_the_table(
     assert "**error**" not in finished.stdout
 
 
-@pytest.mark.timeout(240)
+@pytest.mark.timeout(520)
 def test_quick_benchmark_reports_every_targeted_item(
     quick_run: tuple[subprocess.CompletedProcess[str], dict],
 ) -> None:
@@ -103,7 +104,7 @@ def test_quick_benchmark_reports_every_targeted_item(
         assert rows[item]["verdict"] in expected, rows[item]
 
 
-@pytest.mark.timeout(240)
+@pytest.mark.timeout(520)
 def test_quick_benchmark_json_holds_the_floor_samples_and_machine(
     quick_run: tuple[subprocess.CompletedProcess[str], dict],
 ) -> None:
