@@ -26,18 +26,25 @@ from benchmarks.harness import (
 __all__: list[str] = []
 
 DIAGNOSE_TARGET = 1.5
+#: A look that finds a silent stream hears it for AGAIN (1 s) more before naming it (robot/diagnosis/).
+SILENT_TARGET = 2.5
 LOG_FLOOD_RATE = 10_000
 LOG_FLOOD_SECONDS = 10
 
 
 async def measure_diagnose(ctx: Context) -> list[Row]:
     """Item 13: ``diagnose`` on the simulated Nav2 world (healthy, then scan-stopped + log-errors), its p50
-    against 1.5 s; the log ring under a flood of /rosout lines."""
+    against 1.5 s (2.5 s with a silent stream, heard again before it is named); the log ring under a flood of
+    /rosout lines."""
     rows: list[Row] = []
     full = ctx.plan.name == "full"
     calls = 10 if full else 2
-    cases = (("13a", ""), ("13b", "scan-stopped,log-errors")) if full else (("13a", ""),)
-    for item, faults in cases:
+    cases = (
+        (("13a", "", DIAGNOSE_TARGET), ("13b", "scan-stopped,log-errors", SILENT_TARGET))
+        if full
+        else (("13a", "", DIAGNOSE_TARGET),)
+    )
+    for item, faults, target in cases:
         async with contextlib.AsyncExitStack() as stack:
             url = await stack.enter_async_context(simulated_robot(ctx.errlog, world="nav2", faults=faults))
             ours = await stack.enter_async_context(raw_pipe_client(our_server_command(url), ctx.errlog, {}))
@@ -54,9 +61,9 @@ async def measure_diagnose(ctx: Context) -> list[Row]:
                 item,
                 f"`diagnose` on the Nav2 world, {what}: {text.splitlines()[0]}",
                 stats,
-                target=f"p50 ≤ {DIAGNOSE_TARGET:g} s",
+                target=f"p50 ≤ {target:g} s",
             )
-            row.verdict = verdict(stats.median <= DIAGNOSE_TARGET)
+            row.verdict = verdict(stats.median <= target)
             row.figures.update(first_line=text.splitlines()[0], text_chars=len(text))
             rows.append(row)
     rows.append(await _log_flood_row(ctx))

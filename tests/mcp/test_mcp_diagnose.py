@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
@@ -17,6 +18,8 @@ import websockets
 from mcp_harness import Session, open_session, text_of
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.diagnosis import WINDOW
+from rosbridge_mcp_server.robot.diagnosis.streams import AGAIN
 from rosbridge_mcp_server.robot.log_keeper import LogKeeper
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.tools.paging import TEXT_BUDGET
@@ -299,3 +302,24 @@ async def test_a_frame_with_two_parents_and_a_stale_transform_are_named() -> Non
     assert "2 parents (map, odom)" in subjects["base_footprint"]
     assert "odom -> dock" in subjects
     assert "stale" in subjects["odom -> dock"]
+
+
+@pytest.mark.parametrize("dialect", ["ros2", "ros1"])
+async def test_a_process_frozen_through_the_window_raises_no_false_alarm(dialect: str) -> None:
+    """The whole process (server and simulated robot share it) freezes for longer than the window, as a loaded
+    machine does: nothing arrives in the window, yet every stream is healthy. Silent streams are heard again
+    before they are judged, so no problem is named; a stream that is really silent still is, heard for longer.
+
+    The freeze is a blocking sleep on purpose: it is the attack (a starved process), not a wait."""
+    streams = ("/scan", "/odom", "/imu/data", "/joint_states")
+    async with broken(dialect, ("scan-stopped",)) as (robot, session):
+        call = asyncio.create_task(session.ok("diagnose", {"focus": "streams"}))
+        await until(lambda: all(robot.bridge.has_subscribers(t) for t in streams), "the streams subscribed")
+        time.sleep(WINDOW + 0.3)  # noqa: ASYNC251 -- the frozen process is what is tested
+        result = await asyncio.wait_for(call, WAIT)
+    data = result.structured_content
+    assert data is not None
+    assert [(f["severity"], f["subject"]) for f in data["findings"]] == [("problem", "/scan")], data
+    summary = data["findings"][0]["summary"]
+    heard_for = float(re.search(r"nothing arrived in ([\d.]+) s", summary)[1])  # type: ignore[index]
+    assert heard_for >= WINDOW + AGAIN, summary

@@ -26,10 +26,12 @@ from rosbridge_mcp_server.robot.diagnosis.graph import (
 )
 from rosbridge_mcp_server.robot.diagnosis.reports import log_findings, status_findings
 from rosbridge_mcp_server.robot.diagnosis.streams import (
+    AGAIN,
     TWISTS,
     Heard,
     key_streams,
-    listen,
+    listening,
+    others,
     short_type,
     stream_findings,
     tf_namespaces,
@@ -160,16 +162,22 @@ async def _gather(look: _Gathered, client: RosbridgeClient, graph: RosGraph, foc
     ]
     lifecycle = "lifecycle" in look.areas and look.ros2
     # Who publishes and reads a stream is asked only of the silent ones, after the look (a healthy robot's
-    # look costs no more rosapi calls than the cmd_vel topics'; ROS 1 would open a lane for each).
-    look.heard, look.pubsub, look.states, look.arm = await asyncio.gather(
-        listen(client, _to_listen(look), look.window),
-        topic_details(graph, drives if "graph" in look.areas else []),
-        lifecycle_states(client, graph, focus_node, look.window) if lifecycle else _nothing(),
-        read_controllers(client, graph, look.window) if "arm" in look.areas else _nothing(),
-    )
-    silent = [t for t in look.streams if t in look.heard and not look.heard[t].times]
-    if silent and ("graph" in look.areas or "streams" in look.areas):
-        look.pubsub = {**look.pubsub, **await topic_details(graph, silent)}
+    # look costs no more rosapi calls than the cmd_vel topics'; ROS 1 would open a lane for each). A silent
+    # one with a publisher is heard again before it is judged (AGAIN).
+    async with listening(client, _to_listen(look)) as ears:
+        look.heard = ears.heard
+        _, look.pubsub, look.states, look.arm = await asyncio.gather(
+            ears.hear(look.window),
+            topic_details(graph, drives if "graph" in look.areas else []),
+            lifecycle_states(client, graph, focus_node, look.window) if lifecycle else _nothing(),
+            read_controllers(client, graph, look.window) if "arm" in look.areas else _nothing(),
+        )
+        silent = [t for t in look.streams if t in look.heard and not look.heard[t].times]
+        if silent and ("graph" in look.areas or "streams" in look.areas):
+            look.pubsub = {**look.pubsub, **await topic_details(graph, silent)}
+            silent = [t for t in silent if others(look.pubsub.get(t, ((), ()))[0])]
+        if silent:
+            await ears.hear(AGAIN, only=silent)
 
 
 # --- each area's judgement of what was gathered ------------------------------------------------------------
