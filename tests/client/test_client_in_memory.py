@@ -64,7 +64,7 @@ async def test_closing_the_client_closes_its_connections_on_the_bridge(
     client = await make_client(sim_ros2)
     assert sim_ros2.connection_count >= 1
     await client.close()
-    await sim_ros2.wait_for(lambda _world: sim_ros2.connection_count == 0, 5.0)
+    await sim_ros2.wait_for(lambda _world: sim_ros2.connection_count == 0, 15.0)
 
 
 async def test_a_frame_above_the_bridge_s_limit_closes_the_connection_with_1009(

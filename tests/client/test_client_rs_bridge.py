@@ -96,7 +96,7 @@ async def test_a_cancel_on_the_main_connection_alone_does_not_reach_its_goal_and
         assert handle is not None
         both = await handle.cancel()
         assert (both.on_main, both.on_lane, both.reaches) == (True, True, True)
-        ended = await asyncio.wait_for(goal_task, 5.0)
+        ended = await asyncio.wait_for(goal_task, 15.0)
         assert ended.status_code == 5
     finally:
         goal_task.cancel()

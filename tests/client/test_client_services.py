@@ -195,5 +195,5 @@ async def test_idle_lanes_are_closed_after_a_while(
     client = await make_client(sim_humble, lane_idle_seconds=0.1)
     await asyncio.gather(*(client.call_service("/add_two_ints", {"a": i, "b": 0}) for i in range(3)))
     assert client.lanes.opened >= 1
-    await sim_humble.wait_for(lambda _world: sim_humble.connection_count == 1, 5.0)
+    await sim_humble.wait_for(lambda _world: sim_humble.connection_count == 1, 15.0)
     assert idle_lanes(client) == 0

@@ -144,7 +144,7 @@ async def test_a_drop_interrupts_a_waiting_consumer_and_the_subscription_comes_b
         waiting = asyncio.create_task(sub.get(10.0))
         await sim.drop_connections()
         with pytest.raises(ConnectionLostError):
-            await asyncio.wait_for(waiting, 5.0)
+            await asyncio.wait_for(waiting, 15.0)
         await client.wait_connected(5.0)
         before = sim.world.chatter_count
         msg = await sub.get(5.0)

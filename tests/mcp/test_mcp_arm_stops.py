@@ -92,7 +92,7 @@ async def test_a_trajectory_published_on_the_topic_is_held_by_both_stops(
             "publish_topic", {"topic": topic, "message_type": TYPES[dialect], "message": pan(dialect, 1.5, 4)}
         )
         assert not sent.is_error, text_of(sent)
-        await robot.wait_for(lambda _: arm.run is not None and arm.velocities["shoulder_pan_joint"] > 0, 5.0)
+        await robot.wait_for(lambda _: arm.run is not None and arm.velocities["shoulder_pan_joint"] > 0, 15.0)
         await seen.count(1, 5.0)
         if how == "stop_robot":
             answer = text_of(await session.ok("stop_robot"))
@@ -135,7 +135,7 @@ async def test_a_trajectory_that_has_run_out_is_not_held(make_sim: MakeSim) -> N
         assert entry.topic == TOPIC
         assert entry.joints == tuple(ARM_JOINTS)
         await seen.count(1, 5.0)
-        await robot.wait_for(lambda _: robot.arm.run is None, 5.0)
+        await robot.wait_for(lambda _: robot.arm.run is None, 15.0)
         client, graph = session.robot.client, session.robot.graph
         over = replace(entry, until=time.monotonic() - 0.01)
         assert await stop_trajectories(client, graph, [over]) == ([], [])

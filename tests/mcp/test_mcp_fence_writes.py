@@ -320,7 +320,7 @@ async def test_rosapi_set_param_served_under_another_name_meets_parameters_deny(
     policy = parse_policy({"parameters": {"deny": [name]}}, where="test.toml")
     async with watching(sim) as host, open_session(sim.url, guard=None, policy=policy) as session:
         await host.ws.send(f'{{"op": "advertise_service", "service": "/innocent", "type": "{kind}"}}')
-        await sim.wait_for(lambda world: "/innocent" in sim.graph.services, timeout=5)
+        await sim.wait_for(lambda world: "/innocent" in sim.graph.services, timeout=15)
         text = await session.error(
             "publish_service",
             {"service": "/innocent", "service_type": kind, "request": {"name": name, "value": "9"}},
@@ -355,7 +355,7 @@ async def test_the_person_sees_every_value_they_approve_on_both_paths(sim: Simul
         await asyncio.wait_for(asked.wait(), 5.0)
         [pending] = operator.pending
         operator.answer(pending.id, False)
-        assert (await asyncio.wait_for(calling, 5.0)).is_error
+        assert (await asyncio.wait_for(calling, 15.0)).is_error
         await barrier(session, sim)
     for text in (person.questions[0], pending.question):
         assert "  pose.position.x: 9.0\n" in text

@@ -328,7 +328,7 @@ async def test_a_bridge_outage_shows_as_a_gap_and_the_recording_goes_on(
     recording = asyncio.create_task(
         session.ok("record", {"topics": ["/turtle1/pose"], "duration": 5, "name": "gap"})
     )
-    await sim.wait_for(lambda world: world.turtle is not None, timeout=5)
+    await sim.wait_for(lambda world: world.turtle is not None, timeout=15)
     async with asyncio.timeout(10):  # record's subscription is in place
         while not sim.bridge.has_subscribers("/turtle1/pose"):  # noqa: ASYNC110
             await asyncio.sleep(0.01)

@@ -140,7 +140,7 @@ async def test_estop_knows_a_motion_server_by_its_type_under_any_name(
                     }
                 )
             )
-            await robot.wait_for(lambda world: "/arm/creep" in robot.graph.actions, timeout=5.0)
+            await robot.wait_for(lambda world: "/arm/creep" in robot.graph.actions, timeout=15.0)
         else:
             prefix = "nav2_msgs/DriveOnHeadingAction"
             for leaf, type_name in (
@@ -281,4 +281,4 @@ async def test_ros1_a_goal_topic_publish_advertises_its_cancel_topic_at_once(mak
     async with open_session(robot.url) as session:
         assert "/move_base/cancel" not in bridge.publishes
         await session.ok("publish_topic", call)
-        await robot.wait_for(lambda world: "/move_base/cancel" in bridge.publishes, timeout=5.0)
+        await robot.wait_for(lambda world: "/move_base/cancel" in bridge.publishes, timeout=15.0)

@@ -38,7 +38,7 @@ class RawClient:
     @classmethod
     async def open(cls, url: str) -> RawClient:
         """Connect to ``url``."""
-        return cls(await connect(url, max_size=None))
+        return cls(await connect(url, max_size=None, open_timeout=30))
 
     async def close(self) -> None:
         """Close the socket."""
