@@ -27,7 +27,7 @@ ROBOTS = {
 #: How a goal ends: succeeded (ROS 2 SUCCEEDED, ROS 1 SUCCEEDED), cancelled (CANCELED, PREEMPTED).
 SUCCEEDED = {"ros2": 4, "ros1": 3}
 CANCELED = {"ros2": 5, "ros1": 2}
-WAIT = 5.0
+WAIT = 30.0
 
 
 @pytest.fixture(params=list(ROBOTS))

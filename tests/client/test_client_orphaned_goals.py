@@ -22,7 +22,7 @@ ROS1_TYPE = "actionlib_tutorials/FibonacciAction"
 #: 40 steps of 0.2 s: still running long after the drop and the reconnect.
 LONG_ORDER = 40
 SLOW_STEP = 0.2
-WAIT = 5.0
+WAIT = 30.0
 
 ROBOTS = {
     "jazzy": {"dialect": "ros2"},

@@ -14,7 +14,7 @@ from rosbridge_mcp_server.config import load_config
 from rosbridge_mcp_server.errors import NotConnectedError
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 5.0
+WAIT = 30.0
 
 
 @pytest.fixture

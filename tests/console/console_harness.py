@@ -180,12 +180,15 @@ async def browser_page(console: Console) -> AsyncIterator[Any]:
     from playwright.async_api import async_playwright, expect
 
     executable = need_chromium()
+    # An assertion's default wait (5 s) is not enough for a page on a busy two-core machine; a test that
+    # means a bound (an audit line within a second) gives its own.
+    expect.set_options(timeout=15_000)
     async with async_playwright() as playwright:
         browser = await playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS)
         try:
             page = await browser.new_page(viewport={"width": 1100, "height": 900})
             await page.goto(console.url)
-            await expect(page.locator("#link")).to_have_text("live", timeout=10_000)
+            await expect(page.locator("#link")).to_have_text("live", timeout=30_000)
             yield page
         finally:
             await browser.close()

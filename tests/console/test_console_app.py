@@ -20,7 +20,7 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 
 APP_URI = "ui://rosbridge/console.html"
 APP_MIME = "text/html;profile=mcp-app"
-WAIT_MS = 10_000
+WAIT_MS = 30_000
 
 HOST_PAGE = """<!doctype html><html><body>
 <iframe id="app" sandbox="allow-scripts" style="width:900px;height:800px"></iframe>

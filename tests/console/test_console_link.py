@@ -23,7 +23,7 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"
 TWIST = "geometry_msgs/msg/Twist"
-WAIT_MS = 10_000
+WAIT_MS = 30_000
 CALL = {"topic": CMD_VEL, "message_type": TWIST, "message": {"linear": {"x": 0.4}}}
 POLICY = {"confirm": "motion", "confirm_timeout": 30}
 

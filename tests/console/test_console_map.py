@@ -22,7 +22,7 @@ from rosbridge_mcp_server.console.mapview import pose_of
 from rosbridge_mcp_server.robot.transforms import FrameTree
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT_MS = 10_000
+WAIT_MS = 30_000
 CAMERA = "/camera/image_raw"
 
 pytestmark = pytest.mark.usefixtures("chromium")
@@ -71,7 +71,7 @@ async def test_the_pose_follows_the_robot(sim_ros2: SimulatedRobot) -> None:
         await expect(pose).to_have_attribute("data-frame", "map", timeout=WAIT_MS)
         sim_ros2.world.turtle.x, sim_ros2.world.turtle.y = 8.5, 2.25
         await expect(pose).to_have_attribute("data-x", "8.5", timeout=WAIT_MS)
-        await expect(pose).to_have_attribute("data-y", "2.25")
+        await expect(pose).to_have_attribute("data-y", "2.25", timeout=WAIT_MS)
 
 
 async def test_without_a_map_topic_the_panel_says_so_and_still_shows_the_pose(

@@ -35,7 +35,7 @@ pytestmark = [
 CMD_VEL = "/turtle1/cmd_vel"
 TWIST = {"linear": {"x": 0.3, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.1}}
 FIB = "/fibonacci"
-WAIT = 10.0
+WAIT = 30.0
 
 
 def _text(result: CallToolResult) -> str:

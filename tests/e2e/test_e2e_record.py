@@ -48,7 +48,9 @@ async def test_record_over_stdio_writes_a_file_others_read(sim: SimulatedRobot, 
     assert data is not None
     by_topic = {t["topic"]: t["messages"] for t in data["topics"]}
     assert {"/odom", "/turtle1/pose", "/turtle1/color_sensor"} <= set(by_topic)
-    assert counts["/odom"] == by_topic["/odom"] >= 10
+    # What the file holds is what the answer counted; how many a loaded machine let through in 2 s is not
+    # asserted (at a load average of 30: 4, of the 40 a quiet machine records).
+    assert counts["/odom"] == by_topic["/odom"] >= 1
     assert f"/odom ({'nav_msgs/msg/Odometry' if sim.dialect == 'ros2' else 'nav_msgs/Odometry'}" in _text(
         summary
     )

@@ -12,7 +12,7 @@ from mcp_harness import Session, open_session, text_of, types_for
 from rosbridge_mcp_server.sim import GoalRecord, SimulatedRobot
 
 FIB = "/fibonacci"
-WAIT = 10.0
+WAIT = 30.0
 
 
 def _running(robot: SimulatedRobot) -> list[GoalRecord]:

@@ -20,7 +20,7 @@ from rosbridge_mcp_server.safety.policy import Policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"
-WAIT = 10.0
+WAIT = 30.0
 
 
 class RawWatch:

@@ -28,7 +28,7 @@ from test_mcp_property_arguments import SessionThread
 from rosbridge_mcp_server.server.cancelling import run_call
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 10.0
+WAIT = 30.0
 STILL = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 
 

@@ -14,7 +14,7 @@ from mcp_harness import open_session, types_for
 from rosbridge_mcp_server.robot.approval import Act, AskPerson
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 10.0
+WAIT = 30.0
 
 
 class RecordingGuard:

@@ -10,7 +10,7 @@ from mcp_harness import Session, open_session, text_of, types_for
 
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 10.0
+WAIT = 30.0
 # Long enough that the other calls finish first even on a loaded machine; the slow call is cancelled, not
 # awaited. The Humble-like robot's connection stays busy with the call until it ends (as Humble's would), and
 # stopping that robot waits for it, so it gets a shorter one.

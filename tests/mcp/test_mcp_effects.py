@@ -24,7 +24,7 @@ from websockets.asyncio.client import ClientConnection, connect
 from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard, parse_policy
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 5.0
+WAIT = 30.0
 _ids = itertools.count(1)
 
 

@@ -25,7 +25,7 @@ from rosbridge_mcp_server.server import Robot, build_fleet_server, build_server
 from rosbridge_mcp_server.server.fleet import Fleet
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 10.0
+WAIT = 30.0
 ROS2_CMD = "/turtle1/cmd_vel"
 TWIST = {"linear": {"x": 0.4}, "angular": {"z": 0.0}}
 

@@ -22,7 +22,7 @@ from rosbridge_mcp_server.safety import Policy, PolicyGuard
 from rosbridge_mcp_server.server import Robot, build_fleet_server
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 10.0
+WAIT = 30.0
 FIB = "/fibonacci"
 READ_ONLY = "is not available on cam: that robot is read-only"
 

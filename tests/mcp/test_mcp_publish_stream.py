@@ -13,7 +13,7 @@ from rosbridge_mcp_server.robot.approval import Act, AskPerson
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"
-WAIT = 5.0
+WAIT = 30.0
 FORWARD = {"linear": {"x": 0.4, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.2}}
 STILL = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 

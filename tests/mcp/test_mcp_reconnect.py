@@ -16,7 +16,7 @@ from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 CMD_VEL = "/turtle1/cmd_vel"
-WAIT = 10.0
+WAIT = 30.0
 
 
 @pytest.fixture(params=["ros2", "ros1"])

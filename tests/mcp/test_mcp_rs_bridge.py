@@ -18,7 +18,7 @@ from rosbridge_mcp_server.sim.actions import ActionServer
 from rosbridge_mcp_server.sim.world import World
 
 FIB = "/fibonacci"
-WAIT = 10.0
+WAIT = 30.0
 
 
 @pytest.fixture

@@ -27,7 +27,7 @@ from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.tools import TOOL_MODULES
 
 CMD_VEL = "/turtle1/cmd_vel"
-WAIT = 5.0
+WAIT = 30.0
 
 
 def policy(**sections: Any) -> Policy:

@@ -15,7 +15,7 @@ from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.sim import SimulatedRobot
 
 MakeSim = Callable[..., Awaitable[SimulatedRobot]]
-WAIT = 5.0
+WAIT = 30.0
 
 
 def calls_since(robot: SimulatedRobot, before: dict[str, int]) -> dict[str, int]:

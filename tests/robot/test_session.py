@@ -11,7 +11,7 @@ from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 5.0
+WAIT = 30.0
 FIBONACCI = "example_interfaces/action/Fibonacci"
 #: The background learning asks rosapi one service at a time: generous on a loaded machine.
 WARM_UP_WAIT = 60.0

@@ -17,7 +17,7 @@ from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Presser, emergency_stop
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-WAIT = 5.0
+WAIT = 30.0
 CMD_VEL = "/turtle1/cmd_vel"
 
 

@@ -11,7 +11,7 @@ from rosbridge_mcp_server.errors import PolicyRefusal
 from rosbridge_mcp_server.robot.approval import Act, Answer, asking, nobody_to_ask
 from rosbridge_mcp_server.safety import LATCH_RULE, Audit, AuditEntry, Operator, PolicyGuard, parse_policy
 
-WAIT = 5.0
+WAIT = 30.0
 
 
 def twist_act(x: float = 0.2) -> Act:

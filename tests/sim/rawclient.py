@@ -24,7 +24,7 @@ __all__ = ["MakeSim", "RawClient"]
 MakeSim = Callable[..., Awaitable["SimulatedRobot"]]
 
 _ids = itertools.count(1)
-WAIT = 5.0
+WAIT = 30.0
 
 
 class RawClient:

@@ -13,7 +13,7 @@ from rawclient import RawClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.nodes.arm import ARM_JOINTS, FINGER, HOME
 
-WAIT = 5.0
+WAIT = 30.0
 FOLLOW = "/arm_controller/follow_joint_trajectory"
 
 

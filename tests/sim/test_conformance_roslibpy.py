@@ -31,7 +31,7 @@ from roslibpy.ros1.actionlib import Goal as Ros1Goal  # noqa: E402
 
 REAL_URL = os.environ.get("ROSBRIDGE_TEST_URL")
 TRANSPORT = "asyncio"
-WAIT = 10.0
+WAIT = 30.0
 
 
 @dataclass

@@ -12,7 +12,7 @@ from rawclient import RawClient
 from rosbridge_mcp_server.sim import SimulatedRobot
 from rosbridge_mcp_server.sim.nodes.nav2.health import FAULTS, check_faults
 
-WAIT = 5.0
+WAIT = 30.0
 
 
 async def messages(client: RawClient, topic: str, count: int, wait: float = WAIT) -> list[dict[str, Any]]:
