@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from typing import TextIO
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
-from rosbridge_mcp_server.cli.check import run_check
 from rosbridge_mcp_server.cli.collector import resume_collector
 from rosbridge_mcp_server.cli.demo import DemoSettings, demo_robot, demo_settings
 from rosbridge_mcp_server.cli.log_setup import configure_logging
@@ -237,6 +236,8 @@ async def check(
 ) -> int:
     """The ``check`` command: diagnose the bridge (or the *demo* robot), or each robot of a *fleet* in turn;
     0 when every one is healthy, 1 when not."""
+    from rosbridge_mcp_server.cli.check import run_check  # noqa: PLC0415 - `check` only, not a server's start
+
     if fleet:
         worst = 0
         for number, (name, robot_config) in enumerate(fleet):
