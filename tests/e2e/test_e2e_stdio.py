@@ -263,8 +263,21 @@ atexit.register(report)
 from rosbridge_mcp_server.cli import main
 main()
 """
-#: What a session that calls no tool never needs: its modules are imported by the call that needs them.
-_NOT_AT_START = ("PIL", "rosbridge_mcp_server.mcapfile")
+#: What a session that calls no tool never needs (each package with its modules): imported by the call, the
+#: command or the transport that needs it.
+_NOT_AT_START = (
+    "PIL",
+    "mcap",
+    "rosbridge_mcp_server.cli.check",
+    "rosbridge_mcp_server.console.serve",
+    "rosbridge_mcp_server.mcapfile",
+    "rosbridge_mcp_server.pictures.drawing",
+    "rosbridge_mcp_server.robot.arm",
+    "rosbridge_mcp_server.robot.arm_scene",
+    "rosbridge_mcp_server.robot.recording.recorder",
+    "rosbridge_mcp_server.server.http",
+)
+_NOT_AT_START_PACKAGES = tuple(f"{name}." for name in _NOT_AT_START)
 
 
 async def test_the_start_runs_without_the_collector_and_leaves_what_it_made_out_of_later_collections() -> (
@@ -272,7 +285,7 @@ async def test_the_start_runs_without_the_collector_and_leaves_what_it_made_out_
 ):
     """The console script pauses the collector while it starts (no collection walks the ~100 000 objects it
     makes to keep), then freezes what it made and turns the collector back on before it serves; a session
-    that calls no tool imports none of the picture, recording, diagnosis or acting code."""
+    that calls no tool imports no drawing, recording, arm, console or HTTP code, nor the ``check`` command."""
     process = await asyncio.create_subprocess_exec(
         sys.executable,
         "-c",
@@ -293,7 +306,7 @@ async def test_the_start_runs_without_the_collector_and_leaves_what_it_made_out_
     report = json.loads(stderr.decode().strip().splitlines()[-1])
     assert report["on"] is True
     assert report["frozen"] > 50_000  # the SDK's modules and ours, the tools' models: the start's objects
-    assert [m for m in report["loaded"] if m.startswith(_NOT_AT_START)] == []
+    assert [m for m in report["loaded"] if m in _NOT_AT_START or m.startswith(_NOT_AT_START_PACKAGES)] == []
 
 
 async def test_a_request_read_from_a_file_is_answered_through_the_sdk_transport(tmp_path: Path) -> None:
