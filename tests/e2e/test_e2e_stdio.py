@@ -272,20 +272,21 @@ _NOT_AT_START = (
     "rosbridge_mcp_server.console.serve",
     "rosbridge_mcp_server.mcapfile",
     "rosbridge_mcp_server.pictures.drawing",
+    "rosbridge_mcp_server.robot.acting",
     "rosbridge_mcp_server.robot.arm",
     "rosbridge_mcp_server.robot.arm_scene",
+    "rosbridge_mcp_server.robot.describing",
     "rosbridge_mcp_server.robot.recording.recorder",
     "rosbridge_mcp_server.server.http",
 )
 _NOT_AT_START_PACKAGES = tuple(f"{name}." for name in _NOT_AT_START)
 
 
-async def test_the_start_runs_without_the_collector_and_leaves_what_it_made_out_of_later_collections() -> (
-    None
-):
+async def test_the_start_pauses_the_collector_and_loads_no_code_before_its_first_use() -> None:
     """The console script pauses the collector while it starts (no collection walks the ~100 000 objects it
     makes to keep), then freezes what it made and turns the collector back on before it serves; a session
-    that calls no tool imports no drawing, recording, arm, console or HTTP code, nor the ``check`` command."""
+    that calls no tool imports no acting, drawing, recording, arm, console or HTTP code, nor the ``check``
+    command."""
     process = await asyncio.create_subprocess_exec(
         sys.executable,
         "-c",

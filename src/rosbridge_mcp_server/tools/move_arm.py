@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING, Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
@@ -124,6 +123,8 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 60")] = 60.0,
 ) -> ToolAnswer:
     """Resolve the goal, plan its timing, send it, report progress, say where the arm ended."""
+    from rosbridge_mcp_server.robot.acting import send_goal  # noqa: PLC0415 - on the first act
+
     if bool(joints) == bool(pose.strip()):
         raise ToolFailure(
             f"Give joints or a named pose, not both or neither, e.g. {_EXAMPLE}. Nothing was sent."
