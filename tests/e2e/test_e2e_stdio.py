@@ -283,7 +283,7 @@ _NOT_AT_START_PACKAGES = tuple(f"{name}." for name in _NOT_AT_START)
 
 
 async def test_the_start_pauses_the_collector_and_loads_no_code_before_its_first_use() -> None:
-    """The console script pauses the collector while it starts (no collection walks the ~100 000 objects it
+    """The console script pauses the collector while it starts (no collection walks the ~150 000 objects it
     makes to keep), then freezes what it made and turns the collector back on before it serves; a session
     that calls no tool imports no acting, drawing, recording, arm, console or HTTP code, nor the ``check``
     command."""
