@@ -33,6 +33,9 @@ _READY_WAIT = 3.0
 _MAX_TIMEOUT = 600.0
 #: How long after the motion's own duration the goal may take before it is cancelled.
 _SLACK = 10.0
+#: The controller's action type: ROS 2's, and ROS 1's.
+_TRAJECTORY_ACTION = "control_msgs/action/FollowJointTrajectory"
+_TRAJECTORY_ACTION_ROS1 = "control_msgs/FollowJointTrajectoryAction"
 _EXAMPLE = '{"joints": {"elbow_joint": 45}}'
 
 _CANCELLED_BY = {
@@ -135,11 +138,7 @@ async def run(
     targets = _named_pose(scene, pose.strip()) if pose.strip() else _targets(scene, joints or {}, relative)
     dialect = await ctx.client.dialect()
     plan = _planned(ctx, scene, targets, controller=controller, timeout=timeout, ros_version=dialect.version)
-    action_type = (
-        "control_msgs/FollowJointTrajectoryAction"
-        if dialect.version == 1
-        else ("control_msgs/action/FollowJointTrajectory")
-    )
+    action_type = _TRAJECTORY_ACTION_ROS1 if dialect.version == 1 else _TRAJECTORY_ACTION
 
     async def on_feedback(running: Goal, feedback: dict[str, Any]) -> None:
         actual = feedback.get("actual") if isinstance(feedback, dict) else None
