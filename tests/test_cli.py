@@ -353,13 +353,30 @@ def test_the_commands_that_do_not_serve_start_without_the_mcp_sdk() -> None:
     """`check`, `console-url`, `--help` and a refused command line import no MCP SDK (about a second of CPU at
     every start); the serving command imports it when it serves."""
     code = (
-        "import sys, rosbridge_mcp_server.cli;"
+        "import sys, rosbridge_mcp_server.cli.commands;"
         "print(sorted(m for m in sys.modules if m.split('.')[0] == 'mcp'))"
     )
     done = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=30, check=True
     )
     assert done.stdout.strip() == "[]"
+
+
+def test_the_console_script_pauses_the_collector_before_it_imports_the_command() -> None:
+    """Importing the package whose ``main`` is the console script loads nothing else of ours, nor pydantic or
+    the SDK: ``main`` turns the collector off before the start's imports (``cli/collector.py``)."""
+    code = (
+        "import sys, rosbridge_mcp_server.cli;"
+        "print(sorted(m for m in sys.modules if m.startswith(('rosbridge_mcp_server', 'pydantic', 'mcp'))))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=30, check=True
+    )
+    assert done.stdout.split() == [
+        "['rosbridge_mcp_server',",
+        "'rosbridge_mcp_server.cli',",
+        "'rosbridge_mcp_server.cli.collector']",
+    ]
 
 
 def test_a_log_message_quoting_robot_text_stays_one_line_of_ours() -> None:

@@ -253,6 +253,63 @@ async def test_a_server_with_no_bridge_still_answers_and_reports_the_url() -> No
     assert code == 0, stderr.decode()
 
 
+#: The console script's start, reporting at exit what the collector and the start left (``cli/collector.py``).
+_REPORTING_START = """
+import atexit, gc, json, sys
+def report():
+    state = {"on": gc.isenabled(), "frozen": gc.get_freeze_count(), "loaded": sorted(sys.modules)}
+    print(json.dumps(state), file=sys.stderr)
+atexit.register(report)
+from rosbridge_mcp_server.cli import main
+main()
+"""
+#: What a session that calls no tool never needs (each package with its modules): imported by the call, the
+#: command or the transport that needs it.
+_NOT_AT_START = (
+    "PIL",
+    "mcap",
+    "rosbridge_mcp_server.cli.check",
+    "rosbridge_mcp_server.console.serve",
+    "rosbridge_mcp_server.mcapfile",
+    "rosbridge_mcp_server.pictures.drawing",
+    "rosbridge_mcp_server.robot.acting",
+    "rosbridge_mcp_server.robot.arm",
+    "rosbridge_mcp_server.robot.arm_scene",
+    "rosbridge_mcp_server.robot.describing",
+    "rosbridge_mcp_server.robot.recording.recorder",
+    "rosbridge_mcp_server.server.http",
+)
+_NOT_AT_START_PACKAGES = tuple(f"{name}." for name in _NOT_AT_START)
+
+
+async def test_the_start_pauses_the_collector_and_loads_no_code_before_its_first_use() -> None:
+    """The console script pauses the collector while it starts (no collection walks the ~150 000 objects it
+    makes to keep), then freezes what it made and turns the collector back on before it serves; a session
+    that calls no tool imports no acting, drawing, recording, arm, console or HTTP code, nor the ``check``
+    command."""
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        "-c",
+        _REPORTING_START,
+        "--url",
+        _closed_port_url(),
+        stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    server = StdioServer(process)
+    try:
+        await server.request("initialize", INITIALIZE["params"])
+        assert len((await server.request("tools/list"))["result"]["tools"]) == len(ALL_TOOL_NAMES)
+    finally:
+        _, stderr, code = await _finish(server)
+    assert code == 0, stderr.decode()
+    report = json.loads(stderr.decode().strip().splitlines()[-1])
+    assert report["on"] is True
+    assert report["frozen"] > 50_000  # the SDK's modules and ours, the tools' models: the start's objects
+    assert [m for m in report["loaded"] if m in _NOT_AT_START or m.startswith(_NOT_AT_START_PACKAGES)] == []
+
+
 async def test_a_request_read_from_a_file_is_answered_through_the_sdk_transport(tmp_path: Path) -> None:
     """stdin a regular file, not a pipe: the SDK's own transport answers, then the server exits at EOF."""
     # Only initialize: the SDK ends the session at EOF and cancels requests still being handled, so a file

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import TextIO
 
 from rosbridge_mcp_server.cli.arguments import PROG, UsageError, build_parser
-from rosbridge_mcp_server.cli.check import run_check
+from rosbridge_mcp_server.cli.collector import resume_collector
 from rosbridge_mcp_server.cli.demo import DemoSettings, demo_robot, demo_settings
 from rosbridge_mcp_server.cli.log_setup import configure_logging
 from rosbridge_mcp_server.cli.serving import CONSOLE_EXAMPLE_PORT, serve
@@ -158,6 +158,7 @@ def _http_settings(options: argparse.Namespace, env: Mapping[str, str]) -> HttpS
 def _execute(command: str, settings: _Settings, audit_file: TextIO | None, env: Mapping[str, str]) -> int:
     """Run ``check`` (its exit code) or serve until told to stop (0)."""
     if command == "check":
+        resume_collector()  # paused for a start of the server only
         return asyncio.run(check(settings.config, sys.stdout, settings.fleet, demo=settings.demo))
     asyncio.run(
         serve(
@@ -235,6 +236,8 @@ async def check(
 ) -> int:
     """The ``check`` command: diagnose the bridge (or the *demo* robot), or each robot of a *fleet* in turn;
     0 when every one is healthy, 1 when not."""
+    from rosbridge_mcp_server.cli.check import run_check  # noqa: PLC0415 - `check` only, not a server's start
+
     if fleet:
         worst = 0
         for number, (name, robot_config) in enumerate(fleet):

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 from urllib.parse import urlsplit, urlunsplit
 
 from rosbridge_mcp_server.cli.arguments import PROG
+from rosbridge_mcp_server.cli.collector import resume_collector
 from rosbridge_mcp_server.cli.demo import DemoSettings, demo_robot
 from rosbridge_mcp_server.client import RosbridgeClient
 from rosbridge_mcp_server.config import Config, ConfigError, plain_text_warning
@@ -74,6 +75,7 @@ async def serve(
             await _serve_http(http, server_of, _console(console, hub, console_dir))
             return
         server = build_fleet_server(entries, effective, console_view=console_view, tasks=board or False)
+        resume_collector()
         _stop_on_signals([robot.session for robot in entries])
         if sys.stdin.isatty():
             # Someone ran the server by hand: it waits for JSON-RPC and would look hung without a word.
@@ -154,6 +156,7 @@ async def _serve_http(
     server = build_fleet_server(
         served.entries, served.config, console_view=served.console_view, tasks=served.board or False
     )
+    resume_collector()
     # uvicorn handles SIGTERM / Ctrl-C: it stops accepting, cancels the sessions (and so their tool
     # calls and goals), then the server's lifespan closes the client. Afterwards it raises the signal
     # again under the handler it found: for SIGTERM that is "ignore", so a stop asked for exits 0, as

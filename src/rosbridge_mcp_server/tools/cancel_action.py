@@ -6,7 +6,6 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.acting import stop_goals
 from rosbridge_mcp_server.robot.goals import CancelReport
 from rosbridge_mcp_server.robot.wording import counted
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
@@ -60,6 +59,8 @@ async def run(
     ] = None,
 ) -> ToolAnswer:
     """Send the cancel and report what it reached."""
+    from rosbridge_mcp_server.robot.acting import stop_goals  # noqa: PLC0415 - on the first act
+
     wanted = goal_id.strip() if goal_id is not None and goal_id.strip() else None
     return _answer(await stop_goals(ctx, action=action_name, goal_id=wanted))
 

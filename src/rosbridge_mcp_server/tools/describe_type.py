@@ -6,7 +6,6 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.describing import describe_type
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -59,6 +58,8 @@ async def run(
     ],
 ) -> ToolAnswer:
     """Ask rosapi for the type's definitions and outline them."""
+    from rosbridge_mcp_server.robot.describing import describe_type  # noqa: PLC0415 - on first use
+
     found = await describe_type(ctx.graph, type_name)
     parts = [
         TypePart(

@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING, Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal
-from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
@@ -34,6 +33,9 @@ _READY_WAIT = 3.0
 _MAX_TIMEOUT = 600.0
 #: How long after the motion's own duration the goal may take before it is cancelled.
 _SLACK = 10.0
+#: The controller's action type: ROS 2's, and ROS 1's.
+_TRAJECTORY_ACTION = "control_msgs/action/FollowJointTrajectory"
+_TRAJECTORY_ACTION_ROS1 = "control_msgs/FollowJointTrajectoryAction"
 _EXAMPLE = '{"joints": {"elbow_joint": 45}}'
 
 _CANCELLED_BY = {
@@ -124,6 +126,8 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="Seconds, e.g. 60")] = 60.0,
 ) -> ToolAnswer:
     """Resolve the goal, plan its timing, send it, report progress, say where the arm ended."""
+    from rosbridge_mcp_server.robot.acting import send_goal  # noqa: PLC0415 - on the first act
+
     if bool(joints) == bool(pose.strip()):
         raise ToolFailure(
             f"Give joints or a named pose, not both or neither, e.g. {_EXAMPLE}. Nothing was sent."
@@ -134,11 +138,7 @@ async def run(
     targets = _named_pose(scene, pose.strip()) if pose.strip() else _targets(scene, joints or {}, relative)
     dialect = await ctx.client.dialect()
     plan = _planned(ctx, scene, targets, controller=controller, timeout=timeout, ros_version=dialect.version)
-    action_type = (
-        "control_msgs/FollowJointTrajectoryAction"
-        if dialect.version == 1
-        else ("control_msgs/action/FollowJointTrajectory")
-    )
+    action_type = _TRAJECTORY_ACTION_ROS1 if dialect.version == 1 else _TRAJECTORY_ACTION
 
     async def on_feedback(running: Goal, feedback: dict[str, Any]) -> None:
         actual = feedback.get("actual") if isinstance(feedback, dict) else None

@@ -8,7 +8,6 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.goals import Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.base import ACTS_ON_ROBOT, ToolAnswer, ToolContext, ToolFailure, ToolSpec
@@ -77,6 +76,7 @@ async def run(
     timeout: Annotated[float, Field(gt=0, le=_MAX_TIMEOUT, description="s, e.g. 20")] = 20.0,
 ) -> ToolAnswer:
     """Resolve the target from the URDF, send the goal, report how it ended."""
+    from rosbridge_mcp_server.robot.acting import send_goal  # noqa: PLC0415 - on the first act
     from rosbridge_mcp_server.robot.arm_scene import gripper_joint, learn_arm  # noqa: PLC0415 - on first use
 
     if bool(command) == (position is not None):

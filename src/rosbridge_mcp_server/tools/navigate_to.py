@@ -11,7 +11,6 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field
 
 from rosbridge_mcp_server.errors import PolicyRefusal, RosbridgeError
-from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.frames import planar_pose
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.lifecycle import inactive_reason
@@ -258,6 +257,8 @@ async def _drive(
     ctx: ToolContext, ready: _Ready, scene: Scene, action: NavigationAction, timeout: float
 ) -> ToolAnswer:
     """Send the goal through the guard, report its progress, and answer with where the robot ended up."""
+    from rosbridge_mcp_server.robot.acting import send_goal  # noqa: PLC0415 - on the first act
+
     goals, grid, start = list(scene.goals), ready.grid, ready.start
     body = await goal_request(ctx.graph, action.type, ready.map_frame, goals)
     progress = Progress(start, goals[-1])

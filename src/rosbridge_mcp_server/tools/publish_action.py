@@ -6,7 +6,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.acting import send_goal
 from rosbridge_mcp_server.robot.goals import UNCONFIRMED_STATUS, Goal
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
@@ -90,6 +89,8 @@ async def run(
     ] = 30.0,
 ) -> ToolAnswer:
     """Check the goal, run it (feedback → progress), and describe how it ended."""
+    from rosbridge_mcp_server.robot.acting import send_goal  # noqa: PLC0415 - on the first act
+
     body = goal
 
     # Every progress message names the goal: a client can cancel it by id while this call still waits.

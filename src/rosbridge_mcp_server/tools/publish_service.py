@@ -6,7 +6,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.acting import call_service
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
 from rosbridge_mcp_server.tools.base import (
@@ -64,6 +63,8 @@ async def run(
     ] = 10.0,
 ) -> ToolAnswer:
     """Check the request when the type is known, call the service, return its response."""
+    from rosbridge_mcp_server.robot.acting import call_service  # noqa: PLC0415 - on the first act
+
     body = request
     reply = await call_service(
         ctx, tool=SPEC.name, service=service, service_type=service_type, request=body, timeout=timeout

@@ -6,7 +6,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.acting import PING_LIMIT, publish_once, publish_stream
 from rosbridge_mcp_server.robot.messages import compact_json
 from rosbridge_mcp_server.robot.wording import full_stop
 from rosbridge_mcp_server.tools.arguments import NO_FIELDS, JsonObject
@@ -20,7 +19,7 @@ from rosbridge_mcp_server.tools.base import (
     ToolSpec,
 )
 
-__all__ = ["MAX_RATE", "MAX_STREAM", "PING_LIMIT", "SPEC", "PublishAnswer", "run"]
+__all__ = ["MAX_RATE", "MAX_STREAM", "SPEC", "PublishAnswer", "run"]
 
 #: Fastest stream rate, Hz: faster than rosbridge's JSON path and a model's use for it.
 MAX_RATE = 100.0
@@ -92,6 +91,8 @@ async def run(
     ] = None,
 ) -> ToolAnswer:
     """Check ``message`` against ``message_type``, then publish it on ``topic`` once or as a stream."""
+    from rosbridge_mcp_server.robot.acting import publish_once  # noqa: PLC0415 - on the first act
+
     body = message
     if rate_hz is not None or duration is not None:
         if duration is None:
@@ -130,6 +131,8 @@ async def run(
 async def _stream(
     ctx: ToolContext, *, topic: str, message_type: str, body: dict[str, Any], rate_hz: float, duration: float
 ) -> ToolAnswer:
+    from rosbridge_mcp_server.robot.acting import publish_stream  # noqa: PLC0415 - on the first act
+
     async def progress(sent: int, planned: int) -> None:
         await ctx.report_progress(sent, planned, f"{sent} of {planned} messages")
 

@@ -6,7 +6,6 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field
 
-from rosbridge_mcp_server.robot.acting import set_parameter
 from rosbridge_mcp_server.robot.parameters import ParameterError
 from rosbridge_mcp_server.tools.arguments import JsonValue
 from rosbridge_mcp_server.tools.base import (
@@ -56,6 +55,8 @@ async def run(
     ],
 ) -> ToolAnswer:
     """Set the parameter, read it back, and say whether it took."""
+    from rosbridge_mcp_server.robot.acting import set_parameter  # noqa: PLC0415 - on the first act
+
     if value is None:
         raise ToolFailure(
             "value is null; ROS parameters cannot be null. Send a number, string, bool or list."
