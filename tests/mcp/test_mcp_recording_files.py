@@ -74,10 +74,14 @@ async def test_schemas_that_recurse_and_deep_json_are_refused_when_decoded(
     bombs.recursive_schema(directory)
     bombs.deep_schema(directory, levels=5000)
     bombs.deep_json(directory)
+    bombs.empty_elements(directory)
+    bombs.free_objects(directory)
     cases = {
         "recursive.mcap": "has a type that contains itself",
         "deep.mcap": "nests types over 64 levels deep",
         "deep-json.mcap": "nests over 64 levels deep",
+        "elements-ros1.mcap": "has an array of pkg/Nothing, a type that takes no bytes",
+        "free-objects.mcap": "objects from 0 bytes",
     }
     for name, words in cases.items():
         summary = await session.ok("read_recording", {"file": name})
@@ -158,6 +162,14 @@ async def test_the_simulator_refuses_to_play_a_hostile_file(name: str, tmp_path:
         async with SimulatedRobot(play=str(path)):
             pass
     assert words in str(caught.value)
+
+
+async def test_the_simulator_plays_no_topic_whose_schema_makes_objects_from_nothing(tmp_path: Path) -> None:
+    """A file claiming a type the simulator knows, with a schema that decodes into billions of objects: its
+    only topic is not played (decoding it froze the simulator's loop), so there is nothing to play."""
+    with pytest.raises(PlayError, match="has no topic this simulator can play"):
+        async with SimulatedRobot("ros1", play=str(bombs.empty_elements(tmp_path, name="std_msgs/String"))):
+            pass
 
 
 def test_the_play_command_says_why_a_hostile_file_cannot_play(tmp_path: Path) -> None:

@@ -29,11 +29,12 @@ from rosbridge_mcp_server.mcapfile import (
     MAX_NESTING,
     Budget,
     CutOff,
+    DecodeCost,
     McapFile,
     OverBudget,
     RecordingProblem,
     Summary,
-    schema_problem,
+    decode_cost,
 )
 from rosbridge_mcp_server.robot.budget import DECODE_BUDGET
 from rosbridge_mcp_server.robot.recording.timing import TopicTiming, timing_of
@@ -262,14 +263,20 @@ def decoded_messages(
             wanted = None
             if summary is not None and topics:
                 wanted = {cid for cid, ch in summary.channels.items() if ch.topic in topics}
-            decoders: dict[int, Any] = {}
+            decoders: dict[int, tuple[Any, DecodeCost | None]] = {}
             for channel, log_time, data in mcap.messages(wanted, start_ns, end_ns, summary):
                 if data is None or (topics and channel.topic not in topics):
                     continue
                 mcap.budget.check_time()
-                decoder = decoders.get(channel.id)
-                if decoder is None:
-                    decoder = decoders[channel.id] = _decoder_for(factories, mcap, channel)
+                if channel.id not in decoders:
+                    decoders[channel.id] = _decoder_for(factories, mcap, channel)
+                decoder, cost = decoders[channel.id]
+                if cost is not None:
+                    mcap.budget.check_bytes(
+                        f"the message on {channel.topic[:100]} at log time {log_time} ns holds {len(data)} "
+                        "bytes; decoded by its schema it could take",
+                        cost.memory(len(data)),
+                    )
                 yield channel.topic, log_time, _decoded(decoder, data, channel.topic, log_time)
     except RecordingProblem as exc:
         raise _refusal(path, exc) from None
@@ -307,12 +314,14 @@ def _depth(value: Any) -> int:
     return deepest
 
 
-def _decoder_for(factories: list[Any], mcap: McapFile, channel: Any) -> Any:
+def _decoder_for(factories: list[Any], mcap: McapFile, channel: Any) -> tuple[Any, DecodeCost | None]:
+    """The channel's decoder and what a message may cost decoded by its schema."""
     if channel.message_encoding == "json":
-        return json.loads
+        return json.loads, None
     schema = mcap.schemas.get(channel.schema_id)
-    if schema is not None and (problem := schema_problem(schema)):
-        raise RecordingProblem(f"messages on {channel.topic[:100]} cannot be read: {problem}")
+    cost = None if schema is None else decode_cost(schema)
+    if isinstance(cost, str):
+        raise RecordingProblem(f"messages on {channel.topic[:100]} cannot be read: {cost}")
     for factory in factories:
         try:
             decoder = factory.decoder_for(channel.message_encoding, schema)
@@ -324,7 +333,7 @@ def _decoder_for(factories: list[Any], mcap: McapFile, channel: Any) -> Any:
                 f"{type(exc).__name__}: {str(exc)[:200]}"
             ) from None
         if decoder is not None:
-            return decoder
+            return decoder, cost
     encoding = f"{channel.message_encoding} ({schema.encoding if schema else 'no schema'})"
     raise RecordingProblem(
         f"messages on {channel.topic[:100]} are {encoding[:100]}, which this reader cannot decode"
