@@ -261,3 +261,34 @@ async def test_view_map_says_a_late_small_map_was_not_latched_not_that_cbor_drop
     assert "(12544 cells) did not arrive within 1 s and came on a second wait" in text
     assert "does not latch it" in text
     assert "CBOR" not in text
+
+
+async def test_a_symlink_loop_in_the_folder_is_named_and_the_rest_still_listed(
+    folder_session: tuple[Session, Path],
+) -> None:
+    """A link to itself in the recordings folder: the listing still lists the good file; reading it, or
+    recording under its name, is refused in our words (was "unexpected error (RuntimeError)" for each)."""
+    session, directory = folder_session
+    bombs.good_json(directory)
+    (directory / "loop.mcap").symlink_to(directory / "loop.mcap")
+    listing = await session.ok("read_recording", {})
+    assert "good.mcap" in text_of(listing)
+    for name, arguments in (("read_recording", {"file": "loop.mcap"}), ("record", {"name": "loop"})):
+        text = await session.error(
+            name, {**arguments, "topics": ["/rosout"]} if name == "record" else arguments
+        )
+        assert "'loop.mcap' is a link that leads to itself" in text, text
+        assert "unexpected error" not in text
+
+
+async def test_log_times_over_the_signed_range_are_read(folder_session: tuple[Session, Path]) -> None:
+    """An MCAP log time is unsigned: 2**64 - 1 ns is read (was "unexpected error (OverflowError)")."""
+    session, directory = folder_session
+    body = bombs.schema(name="", text=b"", enc="") + bombs.channel(sid=0, enc="json")
+    body += bombs.message(log_time=2**64 - 1, data=b'{"data": 1}') + bombs.message(
+        log_time=0, data=b'{"data": 2}'
+    )
+    bombs._file(directory, "late.mcap", body + bombs.footer())
+    for arguments in MODES[:3]:
+        answer = await session.ok("read_recording", {"file": "late.mcap", **arguments})
+        assert "/data" in text_of(answer)

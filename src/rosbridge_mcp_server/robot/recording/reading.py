@@ -133,7 +133,7 @@ def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
     note = ""
     try:
         times = mcap.message_times(summary)
-        timings = {cid: timing_of(times.get(cid, array("q")), start) for cid in summary.channels}
+        timings = {cid: timing_of(times.get(cid, array("Q")), start) for cid in summary.channels}
     except OverBudget as exc:
         # Too many messages to time each one: the counts the file declares, and mean rates over its span.
         note = f"{exc}; counts and mean rates are the file's statistics, gaps are not known"
@@ -174,7 +174,7 @@ def _scan(path: Path, mcap: McapFile) -> RecordingSummary:
     count = 0
     try:
         for channel, log_time, _ in mcap.messages(wanted=set()):
-            times.setdefault(channel.id, array("q")).append(log_time)
+            times.setdefault(channel.id, array("Q")).append(log_time)
             count += 1
             if count % 65536 == 0:
                 mcap.budget.check_bytes(
