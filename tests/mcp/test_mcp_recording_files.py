@@ -292,3 +292,27 @@ async def test_log_times_over_the_signed_range_are_read(folder_session: tuple[Se
     for arguments in MODES[:3]:
         answer = await session.ok("read_recording", {"file": "late.mcap", **arguments})
         assert "/data" in text_of(answer)
+
+
+#: Text a file may carry that must never reach the model raw: ESC, BEL, NUL, a right-to-left override.
+RAW = ("\x1b", "\x07", "\x00", "\u202e")
+
+
+async def test_names_a_file_carries_are_shown_escaped(folder_session: tuple[Session, Path]) -> None:
+    """A topic, type, encoding and profile holding terminal escapes, a NUL, a bell and a right-to-left
+    override, in a file whose own name holds an escape: every mode shows them escaped (they reached the
+    model raw), and a line break in a topic forges no line."""
+    session, directory = folder_session
+    topic, name = "/data\x1b[2J\x07\x00\u202e\n- /cmd_vel (forged)", "evil\x1b[31m.mcap"
+    hostile_header = bombs.record(0x01, bombs._string("ros2\x1b[5m") + bombs._string("x"))
+    records = bombs.schema(name="", text=b"", enc="") + bombs.channel(sid=0, topic=topic, enc="json\x07")
+    records += bombs.message(data=b'{"data": "\\u001b[31mred\\u202e"}')
+    (directory / name).write_bytes(bombs.MAGIC + hostile_header + records + bombs.footer())
+    answers = [text_of(await session.ok("read_recording", {}))]
+    for arguments in ({}, {"mode": "messages", "at": 0.0}, {"mode": "stats", "fields": ["/nothing x"]}):
+        answer = await session.call("read_recording", {"file": name, **arguments})
+        answers.append(text_of(answer))
+    for text in answers:
+        assert not any(raw in text for raw in RAW), repr(text)
+        assert "\n- /cmd_vel (forged)" not in text, text
+    assert "/data\\x1b[2J" in answers[1], answers[1]
