@@ -50,6 +50,8 @@ STOPS = {
     "sigint-twice": (signal.SIGINT, signal.SIGINT),
     "sigterm": (signal.SIGTERM,),
     "sigint-then-sigterm": (signal.SIGINT, signal.SIGTERM),
+    # The terminal it runs in closed (a window, an ssh session): its default was to end the process at once.
+    "sighup": (signal.SIGHUP,),
 }
 
 
@@ -216,7 +218,7 @@ async def test_a_stream_ends_with_its_zero_when_the_stdio_server_is_signalled_tw
     assert seen[0] != STILL
 
 
-@pytest.mark.parametrize("stop", _stops())
+@pytest.mark.parametrize("stop", _stops("sighup"))
 async def test_stopping_the_http_server_cancels_the_goal_first(nav2: SimulatedRobot, stop: str) -> None:
     """Streamable HTTP: each signal to the group cancels the running navigate_to goal before the exit."""
     env = {**_env(None), "ROSBRIDGE_MCP_AUTH_TOKENS": TOKENS}
