@@ -217,3 +217,19 @@ async def test_a_velocity_stream_cut_off_by_an_outage_gets_its_zero_once_the_bri
     await robot.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)
     await robot_session.ok("list_topics")  # a round trip more: nothing else came on the topic
     assert robot.world.published[CMD_VEL][-1].msg == STILL
+
+
+async def test_a_stop_while_the_bridge_is_down_sends_its_zeros_once_it_is_back(
+    robot_session: Session, robot: SimulatedRobot
+) -> None:
+    """One 0.4 m/s command, the bridge down, stop_robot: it says no zero could be sent yet; once the bridge is
+    back, the zero goes out on the velocity topic."""
+    await robot_session.ok("publish_topic", _twist(robot, 0.4))
+    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
+    await robot.stop()
+    await robot_session.ros.wait_disconnected(WAIT)
+    text = text_of(await robot_session.call("stop_robot"))
+    assert "goes out on each velocity topic once the connection is back" in text, text
+    assert "Nothing to stop" not in text  # it had sent a velocity command: that was claimed not to be so
+    await robot.start()
+    await robot.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)

@@ -40,12 +40,13 @@ OWED_MAX_AGE_SECONDS = 300.0
 
 @dataclass(frozen=True)
 class OwedZero:
-    """A velocity stream's closing zero that could not be sent (the connection was down): it goes out once
-    the connection is back (``robot/owed_zeros.py``), unless a later message on the topic replaced it."""
+    """A zero velocity command that could not be sent (the connection was down: a stream's closing zero, a
+    stop's): it goes out once the connection is back (``robot/owed_zeros.py``), stamped then, unless a later
+    message on the topic replaced it."""
 
     topic: str
     type: str
-    message: dict[str, Any]
+    frame_id: str
     since: float
 
 
@@ -109,9 +110,9 @@ class SessionActivity:
         self._trajectories: dict[str, TrajectorySent] = {}
         self._owed: dict[str, OwedZero] = {}
 
-    def owe_zero(self, topic: str, type_name: str, message: dict[str, Any]) -> None:
-        """*message*, the zero that ends a velocity stream on *topic*, could not be sent: owe it."""
-        self._owed[topic] = OwedZero(topic, type_name, message, time.monotonic())
+    def owe_zero(self, topic: str, type_name: str, frame_id: str = "") -> None:
+        """A zero command of *type_name* on *topic* could not be sent: owe it."""
+        self._owed[topic] = OwedZero(topic, type_name, frame_id, time.monotonic())
 
     def owed_zeros(self) -> list[OwedZero]:
         """The zeros still owed (those owed too long ago are forgotten)."""

@@ -1,10 +1,11 @@
-"""The closing zeros a drop kept from the robot, sent once the connection is back.
+"""The zero commands a drop kept from the robot, sent once the connection is back.
 
 A velocity stream ends with an all-zero command, also when it is cancelled or fails (``robot/acting/
-streams.py``); when the connection is down at that moment the zero cannot be sent, and the robot's last
-command is the stream's, still moving. The stream owes it (``SessionActivity.owe_zero``); this session
-watcher sends every zero still owed after each reconnect, before anything else of this server on the topic
-(a later message there replaces it), as the client cancels the goals a drop cut off. Owed zeros older than
+streams.py``), and a stop sends one on every velocity topic used (``safety/estop.py``); when the connection
+is down at that moment the zero cannot be sent, and the robot's last command is still a moving one. It is
+owed instead (``SessionActivity.owe_zero``); this session watcher sends every zero still owed after each
+reconnect, stamped then, before anything else of this server on the topic (a later message there replaces
+it), as the client cancels the goals a drop cut off. Owed zeros older than
 :data:`~rosbridge_mcp_server.robot.activity.OWED_MAX_AGE_SECONDS` are forgotten.
 """
 
@@ -12,9 +13,11 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from typing import TYPE_CHECKING
 
 from rosbridge_mcp_server.errors import RosbridgeError
+from rosbridge_mcp_server.robot.velocity import zero_command
 
 if TYPE_CHECKING:
     from rosbridge_mcp_server.client import RosbridgeClient, SessionFacts
@@ -50,10 +53,10 @@ class OwedZeros:
         try:
             await self._client.wait_connected(_CONNECTED_WAIT)
             for owed in self._activity.owed_zeros():
-                await self._client.publish(owed.topic, owed.type, owed.message)
-                self._activity.zero_paid(owed)
-                _log.warning(
-                    "sent the zero that ends the stream on %s, which a drop kept from the robot", owed.topic
+                await self._client.publish(
+                    owed.topic, owed.type, zero_command(owed.type, time.time(), owed.frame_id)
                 )
+                self._activity.zero_paid(owed)
+                _log.warning("sent the zero command on %s that a drop kept from the robot", owed.topic)
         except RosbridgeError as exc:  # down again: still owed, sent on the next connection
             _log.info("the zeros owed could not be sent on connection %d yet: %s", number, exc)

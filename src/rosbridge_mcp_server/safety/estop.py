@@ -136,7 +136,14 @@ async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
         await client.ros_info()
         connected = True
     except RosbridgeError as exc:
-        report.failures.append(f"not connected, so no zero command was sent: {exc}")
+        for target in activity.velocity_topics:  # sent once the connection is back (robot/owed_zeros.py)
+            activity.owe_zero(target.topic, target.type, target.frame_id)
+        later = (
+            " (it goes out on each velocity topic once the connection is back)"
+            if activity.velocity_topics
+            else ""
+        )
+        report.failures.append(f"not connected, so no zero command was sent{later}: {exc}")
     if connected:
         now = time.time()
         for target in activity.velocity_topics:

@@ -84,7 +84,7 @@ def _text(data: StopAnswer) -> str:
             f"Stopped the trajectory on {', '.join(data.held_topics)}: the joints hold where they are."
         )
     lines.extend(f"Cancelled {cancel}." for cancel in data.goals_cancelled)
-    if not lines:
+    if not lines and not data.failures:  # a failure (not connected) says what could not be done instead
         lines.append(
             "Nothing to stop: this server has no running stream, has started no goal it has not cancelled "
             "since, and has sent no velocity command in this session."

@@ -214,7 +214,10 @@ async def _publish_quietly(ctx: Acting, act: Act, message: dict[str, Any]) -> No
     try:
         await ctx.client.publish(act.name, act.type, message)
     except (NotConnectedError, ConnectionLostError):  # the connection is down: owed until it is back
-        ctx.activity.owe_zero(act.name, act.type, message)
+        header = message.get("header")
+        ctx.activity.owe_zero(
+            act.name, act.type, header.get("frame_id", "") if isinstance(header, dict) else ""
+        )
         _log.warning("the zero that ends the stream on %s goes out once the connection is back", act.name)
     except Exception:
         _log.warning("could not send the zero message that ends the stream on %s", act.name, exc_info=True)
