@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import io
 import math
@@ -302,3 +303,30 @@ async def test_off_a_rotated_map_the_distance_is_to_its_nearest_edge(sim: Simula
         "(base_link at x=2 y=0.5 in map) is off the map, 2 m outside its extent (x 4..5, y 0..1 m)"
         in (data["notes"][0])
     )
+
+
+def _extreme(resolution: float, origin: float) -> dict[str, Any]:
+    grid = grid_message((origin, -origin))
+    grid["info"]["resolution"] = resolution
+    return grid
+
+
+@pytest.mark.parametrize(
+    ("grid", "words"),
+    [
+        # 10 cells of 1e308 m: the extent is infinite (its axis ticks never ended: a thread spun, memory grew)
+        (_extreme(1e308, 0.0), "The map's resolution is 1e+308 m per cell"),
+        (_extreme(1e-300, 0.0), "The map's resolution is 1e-300 m per cell"),
+        (_extreme(0.1, 1e308), "The map's origin (1e+308, -1e+308) lies"),  # was an OverflowError
+    ],
+)
+async def test_a_map_of_absurd_size_or_place_is_refused_in_our_words(
+    sim_ros2: SimulatedRobot, grid: dict[str, Any], words: str
+) -> None:
+    async with RosbridgeClient(sim_ros2.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
+        await publisher.wait_connected(5.0)
+        await publisher.publish("/test/small_map", "nav_msgs/msg/OccupancyGrid", grid, latch=True)
+        async with open_session(sim_ros2.url) as session:
+            text = await asyncio.wait_for(session.error("view_map", {"topic": "/test/small_map"}), 20)
+    assert words in text, text
+    assert "unexpected error" not in text

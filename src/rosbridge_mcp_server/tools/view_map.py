@@ -15,6 +15,7 @@ from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.namespaces import under
 from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_path, to_frame
 from rosbridge_mcp_server.robot.scans import ScanError, decode_scan
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -285,7 +286,7 @@ def _answer(
     shares = picture.shares
     return MapAnswer(
         topic=name,
-        frame_id=grid.frame_id,
+        frame_id=shown(grid.frame_id, NAME_CHARS),  # the robot's text: a publisher may put anything there
         cells=[grid.width, grid.height],
         resolution=round(grid.resolution, 6),
         origin=grid.origin.rounded(),
@@ -313,7 +314,7 @@ def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
     if outside <= 0:
         return None
     x_min, y_min, x_max, y_max = (round(v, 2) for v in grid.extent())
-    x, y, frame = round(robot.x, 2), round(robot.y, 2), grid.frame_id or "map"
+    x, y, frame = round(robot.x, 2), round(robot.y, 2), shown(grid.frame_id, NAME_CHARS) or "map"
     # Rounded up: a robot a millimetre off the map is not said to be 0 m off it.
     return (
         f"The robot ({base_frame} at x={x:g} y={y:g} in {frame}) is off the map, "
