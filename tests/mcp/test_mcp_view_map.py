@@ -5,10 +5,13 @@ from __future__ import annotations
 import asyncio
 import base64
 import io
+import json
 import math
+import time
 from typing import Any
 
 import pytest
+import websockets
 from mcp.types import CallToolResult, ImageContent
 from mcp_harness import Session, open_session, text_of
 from PIL import Image
@@ -330,3 +333,28 @@ async def test_a_map_of_absurd_size_or_place_is_refused_in_our_words(
             text = await asyncio.wait_for(session.error("view_map", {"topic": "/test/small_map"}), 20)
     assert words in text, text
     assert "unexpected error" not in text
+
+
+async def test_a_robot_placed_absurdly_far_by_tf_is_said_to_be_off_the_map(sim_ros2: SimulatedRobot) -> None:
+    """/tf puts the base 1.7e308 m away: the answer says the robot is off the map (how far overflowed: an
+    "unexpected error")."""
+    now = int(time.time())
+    far = {
+        "header": {"stamp": {"sec": now, "nanosec": 0}, "frame_id": "map"},
+        "child_frame_id": "far_base",
+        "transform": {"translation": {"x": 1.7e308, "y": -1.7e308}, "rotation": {"w": 1.0}},
+    }
+    async with open_session(sim_ros2.url) as session, websockets.connect(sim_ros2.url) as raw:
+        await raw.send(json.dumps({"op": "advertise", "topic": "/tf", "type": "tf2_msgs/msg/TFMessage"}))
+
+        async def publish() -> None:
+            while True:
+                await raw.send(json.dumps({"op": "publish", "topic": "/tf", "msg": {"transforms": [far]}}))
+                await asyncio.sleep(0.05)
+
+        publishing = asyncio.create_task(publish())
+        try:
+            result = await session.ok("view_map", {"base_frame": "far_base"})
+        finally:
+            publishing.cancel()
+    assert "is off the map, over 1e+12 m outside its extent" in text_of(result), text_of(result)

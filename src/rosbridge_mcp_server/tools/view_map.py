@@ -305,6 +305,10 @@ def _answer(
     )
 
 
+#: Farther than this off the map, how far is not worked out (a pose from /tf may be 1e308 m away).
+FAR = 1e12
+
+
 def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
     """The note that the robot is outside the grid (so the picture cannot show it): where it is and how far
     outside the grid's extent; ``None`` when it is on the grid or not known."""
@@ -315,10 +319,11 @@ def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
         return None
     x_min, y_min, x_max, y_max = (round(v, 2) for v in grid.extent())
     x, y, frame = round(robot.x, 2), round(robot.y, 2), shown(grid.frame_id, NAME_CHARS) or "map"
-    # Rounded up: a robot a millimetre off the map is not said to be 0 m off it.
+    # Rounded up: a robot a millimetre off the map is not said to be 0 m off it. /tf may say 1e308 m.
+    far = f"{math.ceil(outside * 100) / 100:g}" if outside < FAR else f"over {FAR:g}"
     return (
         f"The robot ({base_frame} at x={x:g} y={y:g} in {frame}) is off the map, "
-        f"{math.ceil(outside * 100) / 100:g} m outside its extent (x {x_min:g}..{x_max:g}, "
+        f"{far} m outside its extent (x {x_min:g}..{x_max:g}, "
         f"y {y_min:g}..{y_max:g} m), so the picture cannot show it."
     )
 
