@@ -161,7 +161,8 @@ async def _start_stdio(
 def _stops(*extra: str) -> list[Any]:
     """Every way of stopping: the impatient Ctrl-C (and stdin closing) in every run, the rest with -m slow."""
     quick = {"sigint-twice", *extra}
-    return [pytest.param(stop, marks=() if stop in quick else pytest.mark.slow) for stop in [*STOPS, *extra]]
+    stops = [*STOPS, *(stop for stop in extra if stop not in STOPS)]
+    return [pytest.param(stop, marks=() if stop in quick else pytest.mark.slow) for stop in stops]
 
 
 @pytest.mark.parametrize("stop", _stops("stdin-closed"))
