@@ -90,6 +90,11 @@ async def run(
     except PathRefused as exc:
         raise ToolFailure.carrying(exc) from None
     file = shown(file)  # echoed in every answer: a name found in the listing may hold what was escaped there
+    if path.parent == directory.resolve() and path.name in ctx.robot.recordings.names():
+        raise ToolFailure(
+            f"{path.name} is still being recorded: its summary and index are written when the recording "
+            f'ends. Read it then, or end it now: record {{"stop": true, "name": "{path.stem}"}}.'
+        )
     budget = read_budget()  # one call's memory and time, shared by the summary and the mode
     try:
         summary = await asyncio.to_thread(summarize_recording, path, budget)
