@@ -200,6 +200,36 @@ def many_schemas(folder: Path, count: int = 200) -> Path:
     return _file(folder, "schemas.mcap", record(0x06, body) + footer())
 
 
+#: A type that takes no bytes on the wire (ROS 1 writes nothing for an empty message).
+NOTHING = b"=" * 80 + b"\nMSG: pkg/Nothing\n"
+
+
+def empty_elements(folder: Path, dialect: str = "ros1", name: str = "pkg/msg/Bomb") -> Path:
+    """One message of four bytes: an array of ``2**32 - 16`` elements of a type that takes no bytes (ROS 1's
+    empty message; on ROS 2 a type holding only ``uint8[0]``): a decoder believing it makes billions.
+    ``name``: the type it claims to be (a known one gets it played by the simulator)."""
+    if dialect == "ros1":
+        text, data, enc = b"pkg/Nothing[] items\n" + NOTHING, struct.pack("<I", 2**32 - 16), "ros1"
+    else:
+        text, data, enc = b"pkg/Nothing[] items\n" + NOTHING + b"uint8[0] none\n", b"\0\1\0\0", "cdr"
+        data += struct.pack("<I", 2**32 - 16)
+    body = schema(name=name, text=text, enc=f"{dialect}msg") + channel(enc=enc) + message(data=data)
+    return _file(folder, f"elements-{dialect}.mcap", body + footer())
+
+
+def free_objects(folder: Path, per_level: int = 1000, levels: int = 3, name: str = "pkg/L0") -> Path:
+    """A ROS 1 message of no bytes whose type holds ``per_level`` of the next, ``levels`` deep, down to an
+    empty type: ``per_level ** levels`` objects decoded from nothing. ``name``: the type it claims to be."""
+    parts = [f"pkg/L1[{per_level}] next\n".encode()]
+    for level in range(1, levels):
+        parts.append(b"=" * 80 + f"\nMSG: pkg/L{level}\npkg/L{level + 1}[{per_level}] next\n".encode())
+    parts.append(b"=" * 80 + f"\nMSG: pkg/L{levels}\n".encode())
+    body = (
+        schema(name="pkg/L0", text=b"".join(parts), enc="ros1msg") + channel(enc="ros1") + message(data=b"")
+    )
+    return _file(folder, "free-objects.mcap", body + footer())
+
+
 #: Every class, by name: the writer and what the refusal names.
 BOMBS: dict[str, tuple[Callable[[Path], Path], str]] = {
     "declared 2 GB chunk": (chunk_declaring, "uncompressed"),
@@ -213,4 +243,6 @@ BOMBS: dict[str, tuple[Callable[[Path], Path], str]] = {
     "100,000 nesting levels": (deep_schema, "declares"),
     "100,000 nested JSON arrays": (deep_json, "nest"),
     "200 schemas of 1 MiB": (many_schemas, "schemas, channels and chunk indexes would take"),
+    "4-byte array of 4 G empty elements": (empty_elements, "takes no bytes"),
+    "a billion objects from no bytes": (free_objects, "objects from no bytes"),
 }

@@ -50,6 +50,8 @@ STOPS = {
     "sigint-twice": (signal.SIGINT, signal.SIGINT),
     "sigterm": (signal.SIGTERM,),
     "sigint-then-sigterm": (signal.SIGINT, signal.SIGTERM),
+    # The terminal it runs in closed (a window, an ssh session): its default was to end the process at once.
+    "sighup": (signal.SIGHUP,),
 }
 
 
@@ -159,7 +161,8 @@ async def _start_stdio(
 def _stops(*extra: str) -> list[Any]:
     """Every way of stopping: the impatient Ctrl-C (and stdin closing) in every run, the rest with -m slow."""
     quick = {"sigint-twice", *extra}
-    return [pytest.param(stop, marks=() if stop in quick else pytest.mark.slow) for stop in [*STOPS, *extra]]
+    stops = [*STOPS, *(stop for stop in extra if stop not in STOPS)]
+    return [pytest.param(stop, marks=() if stop in quick else pytest.mark.slow) for stop in stops]
 
 
 @pytest.mark.parametrize("stop", _stops("stdin-closed"))
@@ -216,7 +219,7 @@ async def test_a_stream_ends_with_its_zero_when_the_stdio_server_is_signalled_tw
     assert seen[0] != STILL
 
 
-@pytest.mark.parametrize("stop", _stops())
+@pytest.mark.parametrize("stop", _stops("sighup"))
 async def test_stopping_the_http_server_cancels_the_goal_first(nav2: SimulatedRobot, stop: str) -> None:
     """Streamable HTTP: each signal to the group cancels the running navigate_to goal before the exit."""
     env = {**_env(None), "ROSBRIDGE_MCP_AUTH_TOKENS": TOKENS}

@@ -303,3 +303,49 @@ async def test_frame_names_heard_on_tf_are_shown_escaped(dialect: str) -> None:
             publishing.cancel()
     assert "evil\\n[FATAL] /amcl\\u202e" in text, text
     assert not any(char in text for char in RAW), repr(text)
+
+
+async def test_frame_names_a_scan_or_a_map_carries_are_shown_escaped() -> None:
+    """A LaserScan and an OccupancyGrid whose frame_id forges a line, clears a terminal and reverses the text:
+    view_scan's and view_map's answers show it escaped (both wrote it raw)."""
+    frame = "laser\n[FATAL] /amcl\x1b[2J\u202e\x07"
+    scan = {
+        "header": {"frame_id": frame},
+        "angle_min": -1.0,
+        "angle_max": 1.0,
+        "angle_increment": 0.5,
+        "range_min": 0.1,
+        "range_max": 10.0,
+        "ranges": [1.0] * 5,
+    }
+    grid = {
+        "header": {"frame_id": frame},
+        "info": {"resolution": 0.1, "width": 2, "height": 1, "origin": {"orientation": {"w": 1.0}}},
+        "data": [0, 100],
+    }
+    robot = SimulatedRobot(dialect="ros2")
+    async with robot, open_session(robot.url) as session, websockets.connect(robot.url) as raw:
+        await raw.send(
+            json.dumps({"op": "advertise", "topic": "/hostile_scan", "type": "sensor_msgs/msg/LaserScan"})
+        )
+        await raw.send(
+            json.dumps({"op": "advertise", "topic": "/hostile_map", "type": "nav_msgs/msg/OccupancyGrid"})
+        )
+
+        async def publish() -> None:
+            while True:
+                await raw.send(json.dumps({"op": "publish", "topic": "/hostile_scan", "msg": scan}))
+                await raw.send(json.dumps({"op": "publish", "topic": "/hostile_map", "msg": grid}))
+                await asyncio.sleep(0.05)
+
+        publishing = asyncio.create_task(publish())
+        try:
+            answers = [
+                await session.ok("view_scan", {"topic": "/hostile_scan", "timeout": 10}),
+                await session.ok("view_map", {"topic": "/hostile_map"}),
+            ]
+        finally:
+            publishing.cancel()
+    for answer in answers:
+        assert_no_raw_control(text_of(answer), answer.structured_content)
+        assert "laser\\n[FATAL] /amcl\\x1b[2J\\u202e\\x07" in text_of(answer), text_of(answer)

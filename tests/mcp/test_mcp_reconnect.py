@@ -189,3 +189,47 @@ async def test_a_timed_out_goal_whose_cancel_is_not_confirmed_may_still_be_runni
     assert result.structured_content["canceled_by"] == "timeout"
     assert "may still be running" in text
     assert "it was cancelled because" not in text
+
+
+STILL = {"linear": {"x": 0.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
+
+
+@pytest.mark.parametrize("ended_by", ["cancel", "outage"])
+async def test_a_velocity_stream_cut_off_by_an_outage_gets_its_zero_once_the_bridge_is_back(
+    robot_session: Session, robot: SimulatedRobot, ended_by: str
+) -> None:
+    """A stream at 0.4 m/s, the bridge down, the call cancelled then (or failing on its own): the closing zero
+    could not be sent, and the robot's last command was 0.4 m/s. Once the bridge is back, the zero goes out
+    before anything else this server sends on the topic."""
+    stream = {**_twist(robot, 0.4), "rate_hz": 10, "duration": 30}
+    call = asyncio.create_task(robot_session.call("publish_topic", stream))
+    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) >= 2, WAIT)
+    await robot.stop()
+    await robot_session.ros.wait_disconnected(WAIT)
+    if ended_by == "cancel":
+        call.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await call
+    else:
+        assert (await asyncio.wait_for(call, WAIT)).is_error
+    assert robot.world.published[CMD_VEL][-1].msg["linear"]["x"] == 0.4
+    await robot.start()
+    await robot.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)
+    await robot_session.ok("list_topics")  # a round trip more: nothing else came on the topic
+    assert robot.world.published[CMD_VEL][-1].msg == STILL
+
+
+async def test_a_stop_while_the_bridge_is_down_sends_its_zeros_once_it_is_back(
+    robot_session: Session, robot: SimulatedRobot
+) -> None:
+    """One 0.4 m/s command, the bridge down, stop_robot: it says no zero could be sent yet; once the bridge is
+    back, the zero goes out on the velocity topic."""
+    await robot_session.ok("publish_topic", _twist(robot, 0.4))
+    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
+    await robot.stop()
+    await robot_session.ros.wait_disconnected(WAIT)
+    text = text_of(await robot_session.call("stop_robot"))
+    assert f"No zero velocity command could be sent on {CMD_VEL} (not connected); each goes out" in text, text
+    assert "Nothing to stop" not in text  # it had sent a velocity command: that was claimed not to be so
+    await robot.start()
+    await robot.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)

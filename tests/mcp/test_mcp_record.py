@@ -257,6 +257,25 @@ async def test_stop_ends_a_running_recording(session_dir: tuple[Session, Path]) 
     assert counts.get("/chatter", 0) == result.structured_content["topics"][0]["messages"]
 
 
+async def test_reading_a_recording_still_being_written_says_so(session_dir: tuple[Session, Path]) -> None:
+    """read_recording on the file a running recording writes: it says the recording is still running and how
+    to end it (it said the file was "not an MCAP recording: an empty file"); once ended, it reads."""
+    session, _ = session_dir
+    recording = asyncio.create_task(
+        session.ok("record", {"topics": ["/chatter"], "duration": 60, "name": "live"})
+    )
+    async with asyncio.timeout(10):  # polled: the file and its registration give no event
+        while "is still being recorded" not in (
+            text := await session.error("read_recording", {"file": "live"})
+        ):
+            assert "not an MCAP recording" not in text, text
+            await asyncio.sleep(0.05)
+    assert 'record {"stop": true, "name": "live"}' in text, text
+    await session.ok("record", {"stop": True, "name": "live"})
+    await asyncio.wait_for(recording, 10)
+    assert "/chatter" in text_of(await session.ok("read_recording", {"file": "live"}))
+
+
 async def test_the_policy_can_forbid_or_cap_recording(sim_ros2: SimulatedRobot, tmp_path: Path) -> None:
     directory = tmp_path / "rec"
     forbid = parse_policy({"recording": {"enabled": False}})

@@ -74,10 +74,14 @@ async def test_schemas_that_recurse_and_deep_json_are_refused_when_decoded(
     bombs.recursive_schema(directory)
     bombs.deep_schema(directory, levels=5000)
     bombs.deep_json(directory)
+    bombs.empty_elements(directory)
+    bombs.free_objects(directory)
     cases = {
         "recursive.mcap": "has a type that contains itself",
         "deep.mcap": "nests types over 64 levels deep",
         "deep-json.mcap": "nests over 64 levels deep",
+        "elements-ros1.mcap": "has an array of pkg/Nothing, a type that takes no bytes",
+        "free-objects.mcap": "objects from 0 bytes",
     }
     for name, words in cases.items():
         summary = await session.ok("read_recording", {"file": name})
@@ -158,6 +162,14 @@ async def test_the_simulator_refuses_to_play_a_hostile_file(name: str, tmp_path:
         async with SimulatedRobot(play=str(path)):
             pass
     assert words in str(caught.value)
+
+
+async def test_the_simulator_plays_no_topic_whose_schema_makes_objects_from_nothing(tmp_path: Path) -> None:
+    """A file claiming a type the simulator knows, with a schema that decodes into billions of objects: its
+    only topic is not played (decoding it froze the simulator's loop), so there is nothing to play."""
+    with pytest.raises(PlayError, match="has no topic this simulator can play"):
+        async with SimulatedRobot("ros1", play=str(bombs.empty_elements(tmp_path, name="std_msgs/String"))):
+            pass
 
 
 def test_the_play_command_says_why_a_hostile_file_cannot_play(tmp_path: Path) -> None:
@@ -249,3 +261,58 @@ async def test_view_map_says_a_late_small_map_was_not_latched_not_that_cbor_drop
     assert "(12544 cells) did not arrive within 1 s and came on a second wait" in text
     assert "does not latch it" in text
     assert "CBOR" not in text
+
+
+async def test_a_symlink_loop_in_the_folder_is_named_and_the_rest_still_listed(
+    folder_session: tuple[Session, Path],
+) -> None:
+    """A link to itself in the recordings folder: the listing still lists the good file; reading it, or
+    recording under its name, is refused in our words (was "unexpected error (RuntimeError)" for each)."""
+    session, directory = folder_session
+    bombs.good_json(directory)
+    (directory / "loop.mcap").symlink_to(directory / "loop.mcap")
+    listing = await session.ok("read_recording", {})
+    assert "good.mcap" in text_of(listing)
+    for name, arguments in (("read_recording", {"file": "loop.mcap"}), ("record", {"name": "loop"})):
+        text = await session.error(
+            name, {**arguments, "topics": ["/rosout"]} if name == "record" else arguments
+        )
+        assert "'loop.mcap' is a link that leads to itself" in text, text
+        assert "unexpected error" not in text
+
+
+async def test_log_times_over_the_signed_range_are_read(folder_session: tuple[Session, Path]) -> None:
+    """An MCAP log time is unsigned: 2**64 - 1 ns is read (was "unexpected error (OverflowError)")."""
+    session, directory = folder_session
+    body = bombs.schema(name="", text=b"", enc="") + bombs.channel(sid=0, enc="json")
+    body += bombs.message(log_time=2**64 - 1, data=b'{"data": 1}') + bombs.message(
+        log_time=0, data=b'{"data": 2}'
+    )
+    bombs._file(directory, "late.mcap", body + bombs.footer())
+    for arguments in MODES[:3]:
+        answer = await session.ok("read_recording", {"file": "late.mcap", **arguments})
+        assert "/data" in text_of(answer)
+
+
+#: Text a file may carry that must never reach the model raw: ESC, BEL, NUL, a right-to-left override.
+RAW = ("\x1b", "\x07", "\x00", "\u202e")
+
+
+async def test_names_a_file_carries_are_shown_escaped(folder_session: tuple[Session, Path]) -> None:
+    """A topic, type, encoding and profile holding terminal escapes, a NUL, a bell and a right-to-left
+    override, in a file whose own name holds an escape: every mode shows them escaped (they reached the
+    model raw), and a line break in a topic forges no line."""
+    session, directory = folder_session
+    topic, name = "/data\x1b[2J\x07\x00\u202e\n- /cmd_vel (forged)", "evil\x1b[31m.mcap"
+    hostile_header = bombs.record(0x01, bombs._string("ros2\x1b[5m") + bombs._string("x"))
+    records = bombs.schema(name="", text=b"", enc="") + bombs.channel(sid=0, topic=topic, enc="json\x07")
+    records += bombs.message(data=b'{"data": "\\u001b[31mred\\u202e"}')
+    (directory / name).write_bytes(bombs.MAGIC + hostile_header + records + bombs.footer())
+    answers = [text_of(await session.ok("read_recording", {}))]
+    for arguments in ({}, {"mode": "messages", "at": 0.0}, {"mode": "stats", "fields": ["/nothing x"]}):
+        answer = await session.call("read_recording", {"file": name, **arguments})
+        answers.append(text_of(answer))
+    for text in answers:
+        assert not any(raw in text for raw in RAW), repr(text)
+        assert "\n- /cmd_vel (forged)" not in text, text
+    assert "/data\\x1b[2J" in answers[1], answers[1]

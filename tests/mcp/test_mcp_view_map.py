@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import io
+import json
 import math
+import time
 from typing import Any
 
 import pytest
+import websockets
 from mcp.types import CallToolResult, ImageContent
 from mcp_harness import Session, open_session, text_of
 from PIL import Image
@@ -302,3 +306,55 @@ async def test_off_a_rotated_map_the_distance_is_to_its_nearest_edge(sim: Simula
         "(base_link at x=2 y=0.5 in map) is off the map, 2 m outside its extent (x 4..5, y 0..1 m)"
         in (data["notes"][0])
     )
+
+
+def _extreme(resolution: float, origin: float) -> dict[str, Any]:
+    grid = grid_message((origin, -origin))
+    grid["info"]["resolution"] = resolution
+    return grid
+
+
+@pytest.mark.parametrize(
+    ("grid", "words"),
+    [
+        # 10 cells of 1e308 m: the extent is infinite (its axis ticks never ended: a thread spun, memory grew)
+        (_extreme(1e308, 0.0), "The map's resolution is 1e+308 m per cell"),
+        (_extreme(1e-300, 0.0), "The map's resolution is 1e-300 m per cell"),
+        (_extreme(0.1, 1e308), "The map's origin (1e+308, -1e+308) lies"),  # was an OverflowError
+    ],
+)
+async def test_a_map_of_absurd_size_or_place_is_refused_in_our_words(
+    sim_ros2: SimulatedRobot, grid: dict[str, Any], words: str
+) -> None:
+    async with RosbridgeClient(sim_ros2.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
+        await publisher.wait_connected(5.0)
+        await publisher.publish("/test/small_map", "nav_msgs/msg/OccupancyGrid", grid, latch=True)
+        async with open_session(sim_ros2.url) as session:
+            text = await asyncio.wait_for(session.error("view_map", {"topic": "/test/small_map"}), 20)
+    assert words in text, text
+    assert "unexpected error" not in text
+
+
+async def test_a_robot_placed_absurdly_far_by_tf_is_said_to_be_off_the_map(sim_ros2: SimulatedRobot) -> None:
+    """/tf puts the base 1.7e308 m away: the answer says the robot is off the map (how far overflowed: an
+    "unexpected error")."""
+    now = int(time.time())
+    far = {
+        "header": {"stamp": {"sec": now, "nanosec": 0}, "frame_id": "map"},
+        "child_frame_id": "far_base",
+        "transform": {"translation": {"x": 1.7e308, "y": -1.7e308}, "rotation": {"w": 1.0}},
+    }
+    async with open_session(sim_ros2.url) as session, websockets.connect(sim_ros2.url) as raw:
+        await raw.send(json.dumps({"op": "advertise", "topic": "/tf", "type": "tf2_msgs/msg/TFMessage"}))
+
+        async def publish() -> None:
+            while True:
+                await raw.send(json.dumps({"op": "publish", "topic": "/tf", "msg": {"transforms": [far]}}))
+                await asyncio.sleep(0.05)
+
+        publishing = asyncio.create_task(publish())
+        try:
+            result = await session.ok("view_map", {"base_frame": "far_base"})
+        finally:
+            publishing.cancel()
+    assert "is off the map, over 1e+12 m outside its extent" in text_of(result), text_of(result)

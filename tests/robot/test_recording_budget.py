@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import struct
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -230,3 +231,40 @@ def test_a_rosbag2_mcap_written_by_rosbags_is_read(tmp_path: Path) -> None:
     decoded = [m for topic, _, m in decoded_messages(path, ["/odom"])]
     assert len(decoded) == 20
     assert decoded[0]["pose"]["pose"]["position"] == {"x": 1.5, "y": 2.5, "z": 0.0}
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize(
+    ("write", "words"),
+    [
+        (bombs.empty_elements, "an array of pkg/Nothing, a type that takes no bytes"),
+        (lambda d: bombs.empty_elements(d, "ros2"), "an array of pkg/Nothing, a type that takes no bytes"),
+        (bombs.free_objects, "objects from 0 bytes"),
+    ],
+)
+def test_a_schema_making_objects_from_no_bytes_is_refused_before_decoding(
+    write: Callable[[Path], Path], words: str, tmp_path: Path
+) -> None:
+    """A few bytes that a decoder believing the schema turns into billions of objects (2.7 GB and 25 s before
+    a 3 GB limit stopped it): the schema is named, nothing decoded."""
+    path = write(tmp_path)
+    assert summarize_recording(path).topics[0].topic == "/data"
+    with pytest.raises(NotARecording, match="cannot be read") as caught:
+        list(decoded_messages(path))
+    assert words in str(caught.value)
+
+
+def test_a_message_whose_schema_decodes_it_into_many_objects_is_held_to_the_budget(tmp_path: Path) -> None:
+    """256 K one-byte elements, each decoded into two objects, under a 16 MiB budget: refused by what its
+    schema makes of them, unread; the same bytes as ``uint8[]`` (one object) are read."""
+    text = b"pkg/Flag[] flags\n" + bombs.NOTHING.replace(b"Nothing", b"Flag") + b"bool on\n"
+    count = 256 * 1024
+    data = struct.pack("<I", count) + bytes(count)
+    for name, typed in (("flags", text), ("bytes", b"uint8[] flags\n")):
+        body = bombs.schema(name="pkg/Flags", text=typed, enc="ros1msg") + bombs.channel(enc="ros1")
+        bombs._file(tmp_path, f"{name}.mcap", body + bombs.message(data=data) + bombs.footer())
+    with pytest.raises(NotARecording, match="decoded by its schema") as caught:
+        list(decoded_messages(tmp_path / "flags.mcap", budget=Budget(16 * 1024 * 1024, 30)))
+    assert "over this server's budget of 16 MiB" in str(caught.value)
+    [(_, _, message)] = list(decoded_messages(tmp_path / "bytes.mcap", budget=Budget(16 * 1024 * 1024, 30)))
+    assert len(message["flags"]) > count

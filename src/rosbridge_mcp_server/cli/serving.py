@@ -171,7 +171,8 @@ async def _serve_http(
 
 
 def _stop_on_signals(robots: Sequence[RobotSession]) -> None:
-    """Make SIGTERM (how MCP clients stop a server that ignores EOF) and Ctrl-C stop the robots, then exit.
+    """Make SIGTERM (how MCP clients stop a server that ignores EOF), Ctrl-C and SIGHUP (its terminal closed)
+    stop the robots, then exit.
 
     The first signal stops what the server set going on every robot (streams ended, a zero on each velocity
     topic, goals cancelled: ``server/shutdown.py``), then cancels the server, so every tool call in flight
@@ -197,6 +198,8 @@ def _stop_on_signals(robots: Sequence[RobotSession]) -> None:
     with contextlib.suppress(NotImplementedError, RuntimeError):
         loop.add_signal_handler(signal.SIGTERM, stop, "SIGTERM", 0)
         loop.add_signal_handler(signal.SIGINT, stop, "SIGINT", 130)
+        # The terminal it runs in closed: its default ended the process at once, goals running.
+        loop.add_signal_handler(signal.SIGHUP, stop, "SIGHUP", 129)
 
 
 async def _stop_then_exit(main: asyncio.Task[Any], robots: Sequence[RobotSession], exit_code: int) -> None:

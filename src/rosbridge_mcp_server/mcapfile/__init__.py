@@ -16,7 +16,9 @@ hold, the same as a picture's, and the seconds it may take) before it reads, all
   message times kept at once fit in the memory budget;
 * a message's data, a schema's text and a metadata string are capped before they are read;
 * a ``ros2msg``/``ros1msg`` schema names no type that contains itself and nests at most :data:`MAX_NESTING`
-  levels (:func:`schema_problem`), so no decoder recurses without end.
+  levels (:func:`schema_problem`), so no decoder recurses without end, and no array of a type that takes
+  no bytes makes billions of objects from a four-byte length; what a message may cost decoded by its schema
+  (:func:`decode_cost`) is held to the budget before it is decoded.
 
 Every refusal is a :class:`RecordingProblem` whose text names what is wrong and where. Pure file reading: it
 imports nothing of ours, so the simulated robot's ``--play`` holds files to the same rules.
@@ -38,7 +40,7 @@ from rosbridge_mcp_server.mcapfile.model import (
     byte_size,
 )
 from rosbridge_mcp_server.mcapfile.reader import McapFile
-from rosbridge_mcp_server.mcapfile.schemas import schema_problem
+from rosbridge_mcp_server.mcapfile.schemas import DecodeCost, decode_cost, schema_problem
 
 __all__ = [
     "INDEX_ENTRY_COST",
@@ -48,6 +50,7 @@ __all__ = [
     "Channel",
     "ChunkIndex",
     "CutOff",
+    "DecodeCost",
     "McapFile",
     "OverBudget",
     "RecordingProblem",
@@ -55,5 +58,6 @@ __all__ = [
     "Statistics",
     "Summary",
     "byte_size",
+    "decode_cost",
     "schema_problem",
 ]

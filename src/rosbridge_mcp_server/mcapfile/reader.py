@@ -169,7 +169,7 @@ class McapFile:
         """Each channel's message log times from the message indexes, read without decompressing a chunk.
         Each chunk's indexes are read once: regions that coincide or overlap (one index named by many chunk
         indexes, the fan-out) are refused before any is read."""
-        times: dict[int, array[int]] = {cid: array("q") for cid in summary.channels}
+        times: dict[int, array[int]] = {cid: array("Q") for cid in summary.channels}
         entries = 0
         for begin, end in self._index_regions(summary):
             for opcode, body, _ in self._records(begin, end, "a message index", frozenset({_MESSAGE_INDEX})):
@@ -182,9 +182,9 @@ class McapFile:
                     f"{self.name}'s indexes list over {entries} messages; their times would take",
                     entries * INDEX_ENTRY_COST,
                 )
-                pairs = array("q")
+                pairs = array("Q")
                 pairs.frombytes(data[: len(data) // 16 * 16])
-                times.setdefault(channel, array("q")).extend(pairs[0::2])
+                times.setdefault(channel, array("Q")).extend(pairs[0::2])
             self.budget.check_time()
         return times
 

@@ -79,12 +79,15 @@ def round_down(value: float) -> float:
 
 
 def ticks(low: float, high: float, parts: int = 5) -> list[float]:
-    """Round values from ``low`` to ``high`` (inclusive) a :func:`nice_step` apart."""
+    """Round values from ``low`` to ``high`` (inclusive) a :func:`nice_step` apart; none when the span is not
+    a finite number (a robot's 1e308 must not make the loop endless)."""
+    if not math.isfinite(high - low):
+        return []
     step = nice_step(high - low, parts)
     first = math.ceil(low / step - 1e-9)
-    values = []
+    values: list[float] = []
     k = first
-    while k * step <= high + 1e-9 * step:
+    while k * step <= high + 1e-9 * step and len(values) <= 4 * parts + 2:
         values.append(round(k * step, 10))
         k += 1
     return values

@@ -1,7 +1,8 @@
 """What this server session set going on the robot, so that ``stop_robot`` can stop exactly that.
 
-Two things are remembered here: the topics on which a velocity command (Twist / TwistStamped) was published,
-with their type, and the publish streams still running. Goals are remembered by the goal registry, which
+Three things are remembered here: the topics on which a velocity command (Twist / TwistStamped) was
+published, with their type, the publish streams still running, and the closing zeros a drop kept from the
+robot (owed until the connection is back). Goals are remembered by the goal registry, which
 knows which goals this session started and which still run, whatever carried them (a goal topic, a goal pose,
 a ``send_goal`` call: ``robot/goals/caused.py``).
 """
@@ -19,7 +20,7 @@ from typing import Any
 from rosbridge_mcp_server.robot.arm_stop import TrajectorySent, trajectory_sent
 from rosbridge_mcp_server.robot.velocity import is_velocity_type, stamped
 
-__all__ = ["SessionActivity", "Stream", "VelocityTopic"]
+__all__ = ["OwedZero", "SessionActivity", "Stream", "VelocityTopic"]
 
 _log = logging.getLogger(__name__)
 
@@ -31,6 +32,22 @@ class VelocityTopic:
     topic: str
     type: str
     frame_id: str = ""
+
+
+#: An owed zero older than this is forgotten (the robot's own timeout, or a person, has long acted by then).
+OWED_MAX_AGE_SECONDS = 300.0
+
+
+@dataclass(frozen=True)
+class OwedZero:
+    """A zero velocity command that could not be sent (the connection was down: a stream's closing zero, a
+    stop's): it goes out once the connection is back (``robot/owed_zeros.py``), stamped then, unless a later
+    message on the topic replaced it."""
+
+    topic: str
+    type: str
+    frame_id: str
+    since: float
 
 
 @dataclass
@@ -91,6 +108,23 @@ class SessionActivity:
         self._velocity: dict[str, VelocityTopic] = {}
         self._streams: list[Stream] = []
         self._trajectories: dict[str, TrajectorySent] = {}
+        self._owed: dict[str, OwedZero] = {}
+
+    def owe_zero(self, topic: str, type_name: str, frame_id: str = "") -> None:
+        """A zero command of *type_name* on *topic* could not be sent: owe it."""
+        self._owed[topic] = OwedZero(topic, type_name, frame_id, time.monotonic())
+
+    def owed_zeros(self) -> list[OwedZero]:
+        """The zeros still owed (those owed too long ago are forgotten)."""
+        now = time.monotonic()
+        for topic in [t for t, owed in self._owed.items() if now - owed.since > OWED_MAX_AGE_SECONDS]:
+            del self._owed[topic]
+        return list(self._owed.values())
+
+    def zero_paid(self, owed: OwedZero) -> None:
+        """*owed* was sent (or replaced by a later message on its topic)."""
+        if self._owed.get(owed.topic) is owed:
+            del self._owed[owed.topic]
 
     def published(self, topic: str, type_name: str, message: Any) -> None:
         """Note a message that reached the bridge; only velocity commands and joint trajectories (on a
@@ -98,6 +132,7 @@ class SessionActivity:
         sent = trajectory_sent(topic, type_name, message, time.monotonic())
         if sent is not None:
             self._trajectories[topic] = sent
+        self._owed.pop(topic, None)  # a later message on the topic replaces the zero owed there
         if not is_velocity_type(type_name):
             return
         frame_id = ""

@@ -39,6 +39,11 @@ OCCUPIED_FROM = 65
 #: Bytes per cell while a map is decoded and drawn: the cells, the cropped and ranked copies, the walls kept
 #: when shrinking (two more), all one byte a cell.
 _CELL_COST = 5
+#: A real map's cells are a millimetre to a few metres; beyond these its extent (or its drawing's scale) is
+#: no number a picture can use (1e308 m cells made an infinite extent, whose axis never ended).
+MIN_RESOLUTION, MAX_RESOLUTION = 1e-6, 1e4
+#: How far from its frame's origin a map may lie (UTM coordinates reach 1e7 m).
+MAX_ORIGIN = 1e8
 
 
 class MapError(ValueError):
@@ -108,6 +113,11 @@ def decode_grid(message: Mapping[str, Any]) -> Grid:
         raise MapError(f"The map's size is {width!r} x {height!r} cells; both must be positive.")
     if not isinstance(resolution, int | float) or not resolution > 0 or not math.isfinite(resolution):
         raise MapError(f"The map's resolution is {resolution!r}; it must be positive metres per cell.")
+    if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
+        raise MapError(
+            f"The map's resolution is {resolution:g} m per cell; a real map's is {MIN_RESOLUTION:g} to "
+            f"{MAX_RESOLUTION:g} m, so it was not drawn (check what publishes it)."
+        )
     problem = budget_problem("The map", f"{width}x{height} cells", width * height * _CELL_COST)
     if problem is not None:
         raise MapError(problem)
@@ -132,15 +142,19 @@ def decode_grid(message: Mapping[str, Any]) -> Grid:
     origin = origin if isinstance(origin, Mapping) else {}
     position = origin.get("position")
     position = position if isinstance(position, Mapping) else {}
+    x, y = _number(position.get("x")), _number(position.get("y"))
+    if max(abs(x), abs(y)) > MAX_ORIGIN:
+        raise MapError(
+            f"The map's origin ({x:g}, {y:g}) lies over {MAX_ORIGIN:g} m from its frame's, farther than any "
+            "real map's, so it was not drawn (check what publishes it)."
+        )
     header = message.get("header")
     frame = header.get("frame_id", "") if isinstance(header, Mapping) else ""
     return Grid(
         width=width,
         height=height,
         resolution=float(resolution),
-        origin=Pose2D(
-            _number(position.get("x")), _number(position.get("y")), yaw_of(origin.get("orientation"))
-        ),
+        origin=Pose2D(x, y, yaw_of(origin.get("orientation"))),
         frame_id=str(frame).lstrip("/"),
         cells=cells,
     )

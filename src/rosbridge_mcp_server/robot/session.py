@@ -8,7 +8,8 @@ client's ``BridgeSession``, which is one connection). It holds:
 * ``goals``: the goals sent through the client (:class:`GoalRegistry`: running ones, and those a publish or
   a service call started; those a drop cut off are the client's, cancelled once the connection is back);
 * ``activity``: what this server set going (velocity topics, streams), which ``stop_robot`` and the operator
-  console's E-STOP stop;
+  console's E-STOP stop, and the closing zeros a drop kept from the robot (sent once the connection is back:
+  ``robot/owed_zeros.py``);
 * ``guard``: the safety seam's guard every act asks first, and that records every outcome;
 * ``gate``: the send gate every frame of an act passes at the moment it is sent (the latch, stops since the
   call began, the per-topic rate; see :mod:`~rosbridge_mcp_server.robot.gate`);
@@ -30,6 +31,7 @@ from rosbridge_mcp_server.robot.gate import SendGate
 from rosbridge_mcp_server.robot.goals import GoalRegistry
 from rosbridge_mcp_server.robot.graph import RosGraph
 from rosbridge_mcp_server.robot.log_keeper import LogKeeper
+from rosbridge_mcp_server.robot.owed_zeros import OwedZeros
 from rosbridge_mcp_server.robot.recording import RunningRecordings
 from rosbridge_mcp_server.robot.warm_up import ServiceTypeWarmUp
 
@@ -49,6 +51,7 @@ class RobotSession:
         self.graph = RosGraph(client)
         self.goals = GoalRegistry(client)
         self.activity = SessionActivity()
+        client.watch(OwedZeros(client, self.activity))  # the closing zeros a drop kept from the robot
         self.gate = SendGate(guard)
         #: The recordings ``record`` is making on this robot now (a later ``record`` call can stop them).
         self.recordings = RunningRecordings()

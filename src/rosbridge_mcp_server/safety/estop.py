@@ -67,6 +67,8 @@ class StopReport:
     streams_stopped: list[str] = field(default_factory=list)
     streams_still_running: list[str] = field(default_factory=list)
     zeroed_topics: list[str] = field(default_factory=list)
+    #: Velocity topics whose zero could not be sent (not connected): owed, sent once the connection is back.
+    zeros_owed: list[str] = field(default_factory=list)
     #: Controllers' trajectory topics that got a trajectory holding the joints (``robot/arm_stop.py``).
     held_topics: list[str] = field(default_factory=list)
     #: Ids of the goals a cancel was sent for (every goal of an action: ``cancels``).
@@ -136,6 +138,9 @@ async def emergency_stop(robot: RobotSession, *, by: Presser) -> StopReport:
         await client.ros_info()
         connected = True
     except RosbridgeError as exc:
+        for target in activity.velocity_topics:  # sent once the connection is back (robot/owed_zeros.py)
+            activity.owe_zero(target.topic, target.type, target.frame_id)
+            report.zeros_owed.append(target.topic)
         report.failures.append(f"not connected, so no zero command was sent: {exc}")
     if connected:
         now = time.time()

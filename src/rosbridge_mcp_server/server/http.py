@@ -15,14 +15,17 @@ subject). A token is compared in constant time and is never logged; neither is a
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import hashlib
 import hmac
 import json
 import logging
 import math
+import signal
 import socket
+import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
@@ -266,6 +269,22 @@ class _StoppingFirst(uvicorn.Server):
         self._signalled = True
         _log.info("signal %d: stopping the robot, then shutting down", sig)
         asyncio.get_running_loop().call_soon_threadsafe(self._stop_first, sig)
+
+    @contextlib.contextmanager
+    def capture_signals(self) -> Iterator[None]:
+        """uvicorn's signals and SIGHUP (the terminal the server runs in closed: a window, an ssh session),
+        whose default ended the process at once, goals running."""
+        hangup = getattr(signal, "SIGHUP", None)
+        if hangup is None or threading.current_thread() is not threading.main_thread():
+            with super().capture_signals():
+                yield
+            return
+        previous = signal.signal(hangup, self.handle_exit)
+        try:
+            with super().capture_signals():
+                yield
+        finally:
+            signal.signal(hangup, previous)
 
     def _stop_first(self, sig: int) -> None:
         task = asyncio.get_running_loop().create_task(self._stop_then_exit(sig))

@@ -27,7 +27,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.mcapfile import Budget, McapFile, RecordingProblem, schema_problem
+from rosbridge_mcp_server.mcapfile import (
+    Budget,
+    DecodeCost,
+    McapFile,
+    RecordingProblem,
+    decode_cost,
+    schema_problem,
+)
 from rosbridge_mcp_server.sim.interfaces import InterfaceError
 
 if TYPE_CHECKING:
@@ -200,6 +207,7 @@ class Player:
         first: int | None = None
         start = time.monotonic()
         decoders: dict[int, Any] = {}
+        costs: dict[int, DecodeCost | str | None] = {}
         with self.path.open("rb") as handle:
             # The time budget is the recording's own length, played in real time: only memory is held to it.
             mcap = McapFile(
@@ -222,6 +230,17 @@ class Player:
                 bridge = self.kit.bridge
                 if not bridge.has_subscribers(channel.topic) and channel.topic not in self.kit.graph.latched:
                     continue  # nobody listens: nothing goes out, as a real publisher's reaches no one
+                if channel.id not in costs:
+                    schema = mcap.schemas.get(channel.schema_id)
+                    costs[channel.id] = decode_cost(schema) if schema is not None else None
+                cost = costs[channel.id]
+                if isinstance(cost, DecodeCost) and cost.memory(len(data)) > PLAY_MEMORY:
+                    log.error(
+                        "playing %s: a message of %d bytes would decode over the memory",
+                        channel.topic,
+                        len(data),
+                    )
+                    continue
                 try:
                     msg = _plain(decoder(data), self.kit.ros2)
                     bridge.publish_json(channel.topic, entry.type, msg)

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 from pydantic import Field
 
 from rosbridge_mcp_server.robot.series import FieldError
+from rosbridge_mcp_server.robot.text import shown
 from rosbridge_mcp_server.robot.wording import counted, size_text
 from rosbridge_mcp_server.tools.arguments import FROM_JSON_TEXT
 from rosbridge_mcp_server.tools.base import (
@@ -88,6 +89,12 @@ async def run(
         path = resolve_recording(directory, file)
     except PathRefused as exc:
         raise ToolFailure.carrying(exc) from None
+    file = shown(file)  # echoed in every answer: a name found in the listing may hold what was escaped there
+    if path.parent == directory.resolve() and path.name in ctx.robot.recordings.names():
+        raise ToolFailure(
+            f"{path.name} is still being recorded: its summary and index are written when the recording "
+            f'ends. Read it then, or end it now: record {{"stop": true, "name": "{path.stem}"}}.'
+        )
     budget = read_budget()  # one call's memory and time, shared by the summary and the mode
     try:
         summary = await asyncio.to_thread(summarize_recording, path, budget)
@@ -126,10 +133,9 @@ def _listing(directory: Path) -> ToolAnswer:
     lines = [f"{counted(len(entries), 'recording')} in {str(directory)!r}" + (":" if entries else ".")]
     for entry in entries[:200]:
         when = time.strftime("%Y-%m-%d %H:%M", time.localtime(entry.modified))
-        rows.append({"file": entry.name, "bytes": entry.size, "modified": when, "mcap": entry.is_mcap})
-        lines.append(
-            f"- {entry.name}: {size_text(entry.size)}, {when}" + ("" if entry.is_mcap else " (not MCAP)")
-        )
+        name = shown(entry.name)  # anyone may put a file there: its name is data
+        rows.append({"file": name, "bytes": entry.size, "modified": when, "mcap": entry.is_mcap})
+        lines.append(f"- {name}: {size_text(entry.size)}, {when}" + ("" if entry.is_mcap else " (not MCAP)"))
     if not entries:
         lines.append(
             'record {"topics": ["/rosout"], "duration": 10} makes one; MCAP files put there are read too.'

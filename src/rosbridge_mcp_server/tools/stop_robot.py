@@ -20,6 +20,10 @@ class StopAnswer(BaseModel):
     held_topics: list[str] = Field(
         default_factory=list, description="Trajectory topics that got a trajectory holding the joints"
     )
+    zeros_owed: list[str] = Field(
+        default_factory=list,
+        description="Velocity topics whose zero could not be sent (not connected): sent once it is back",
+    )
     goals_cancelled: list[str] = Field(
         description="Each goal (or every goal of an action) cancelled, and what the robot answered"
     )
@@ -60,6 +64,7 @@ async def run(ctx: ToolContext) -> ToolAnswer:
         streams_still_running=report.streams_still_running,
         zeroed_topics=report.zeroed_topics,
         held_topics=report.held_topics,
+        zeros_owed=report.zeros_owed,
         goals_cancelled=report.cancel_lines(),
         failures=report.failures,
     )
@@ -84,6 +89,11 @@ def _text(data: StopAnswer) -> str:
             f"Stopped the trajectory on {', '.join(data.held_topics)}: the joints hold where they are."
         )
     lines.extend(f"Cancelled {cancel}." for cancel in data.goals_cancelled)
+    if data.zeros_owed:
+        lines.append(
+            f"No zero velocity command could be sent on {', '.join(data.zeros_owed)} (not connected); each "
+            "goes out once the connection is back."
+        )
     if not lines:
         lines.append(
             "Nothing to stop: this server has no running stream, has started no goal it has not cancelled "

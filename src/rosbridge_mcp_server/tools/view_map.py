@@ -15,6 +15,7 @@ from rosbridge_mcp_server.robot.names import absolute_name
 from rosbridge_mcp_server.robot.namespaces import under
 from rosbridge_mcp_server.robot.occupancy import Grid, MapError, Pose2D, decode_path, to_frame
 from rosbridge_mcp_server.robot.scans import ScanError, decode_scan
+from rosbridge_mcp_server.robot.text import NAME_CHARS, shown
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -285,7 +286,7 @@ def _answer(
     shares = picture.shares
     return MapAnswer(
         topic=name,
-        frame_id=grid.frame_id,
+        frame_id=shown(grid.frame_id, NAME_CHARS),  # the robot's text: a publisher may put anything there
         cells=[grid.width, grid.height],
         resolution=round(grid.resolution, 6),
         origin=grid.origin.rounded(),
@@ -304,6 +305,10 @@ def _answer(
     )
 
 
+#: Farther than this off the map, how far is not worked out (a pose from /tf may be 1e308 m away).
+FAR = 1e12
+
+
 def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
     """The note that the robot is outside the grid (so the picture cannot show it): where it is and how far
     outside the grid's extent; ``None`` when it is on the grid or not known."""
@@ -313,11 +318,12 @@ def _off_map(grid: Grid, robot: Pose2D | None, base_frame: str) -> str | None:
     if outside <= 0:
         return None
     x_min, y_min, x_max, y_max = (round(v, 2) for v in grid.extent())
-    x, y, frame = round(robot.x, 2), round(robot.y, 2), grid.frame_id or "map"
-    # Rounded up: a robot a millimetre off the map is not said to be 0 m off it.
+    x, y, frame = round(robot.x, 2), round(robot.y, 2), shown(grid.frame_id, NAME_CHARS) or "map"
+    # Rounded up: a robot a millimetre off the map is not said to be 0 m off it. /tf may say 1e308 m.
+    far = f"{math.ceil(outside * 100) / 100:g}" if outside < FAR else f"over {FAR:g}"
     return (
         f"The robot ({base_frame} at x={x:g} y={y:g} in {frame}) is off the map, "
-        f"{math.ceil(outside * 100) / 100:g} m outside its extent (x {x_min:g}..{x_max:g}, "
+        f"{far} m outside its extent (x {x_min:g}..{x_max:g}, "
         f"y {y_min:g}..{y_max:g} m), so the picture cannot show it."
     )
 

@@ -19,6 +19,8 @@ from rosbridge_mcp_server.robot.scans import (
     free_sectors,
     nearest,
 )
+from rosbridge_mcp_server.robot.text import NAME_CHARS
+from rosbridge_mcp_server.robot.text import shown as escaped
 from rosbridge_mcp_server.tools.base import (
     READS_ROBOT,
     ToolAnswer,
@@ -113,7 +115,7 @@ async def run(
     answer = ScanAnswer(
         topic=name,
         message_type=msg_type,
-        frame_id=scan.frame_id,
+        frame_id=escaped(scan.frame_id, NAME_CHARS),  # the robot's text: a publisher may put anything there
         points=len(scan.points),
         nulls=scan.nulls,
         nearest=None if found is None else [round(found.range, 3), round(found.bearing, 1)],

@@ -9,7 +9,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbridge_mcp_server.errors import PolicyRefusal
+from rosbridge_mcp_server.errors import ConnectionLostError, NotConnectedError, PolicyRefusal
 from rosbridge_mcp_server.robot.acting.context import Acting, given_name, motion_scene
 from rosbridge_mcp_server.robot.acting.topics import adjusted_text, bridge_is_reading, checked_message
 from rosbridge_mcp_server.robot.approval import Act, approved, cancelled_why
@@ -213,6 +213,12 @@ class _Stream:
 async def _publish_quietly(ctx: Acting, act: Act, message: dict[str, Any]) -> None:
     try:
         await ctx.client.publish(act.name, act.type, message)
+    except (NotConnectedError, ConnectionLostError):  # the connection is down: owed until it is back
+        header = message.get("header")
+        ctx.activity.owe_zero(
+            act.name, act.type, header.get("frame_id", "") if isinstance(header, dict) else ""
+        )
+        _log.warning("the zero that ends the stream on %s goes out once the connection is back", act.name)
     except Exception:
         _log.warning("could not send the zero message that ends the stream on %s", act.name, exc_info=True)
 

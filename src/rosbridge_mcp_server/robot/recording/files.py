@@ -39,9 +39,15 @@ class PathRefused(Advised, ValueError):
 def _inside(directory: Path, given: str) -> Path:
     if "\x00" in given:
         raise PathRefused("a file name cannot contain a NUL character")
-    root = directory.resolve()
     candidate = Path(given)
-    target = (candidate if candidate.is_absolute() else root / candidate).resolve()
+    try:
+        root = directory.resolve()
+        target = (candidate if candidate.is_absolute() else root / candidate).resolve()
+    except (RuntimeError, OSError):  # a link leading to itself (RuntimeError before Python 3.13)
+        raise PathRefused(
+            f"{candidate.name[:100]!r} is a link that leads to itself (or the folder holding it is); name "
+            "another file"
+        ).advise(Advice.RECORDINGS) from None
     if target != root and root not in target.parents:
         raise PathRefused(
             f"{given!r} is outside the recording directory {str(root)!r}; name a file inside it"
@@ -103,7 +109,10 @@ class RecordingEntry:
 
 def list_recordings(directory: Path, limit: int = 1000) -> list[RecordingEntry]:
     """The ``.mcap`` files in ``directory`` and one level of folders, newest first."""
-    root = directory.resolve()
+    try:
+        root = directory.resolve()
+    except (RuntimeError, OSError):  # the folder is a link leading to itself: it holds nothing to list
+        return []
     if not root.is_dir():
         return []
     found: list[RecordingEntry] = []
@@ -115,7 +124,7 @@ def list_recordings(directory: Path, limit: int = 1000) -> list[RecordingEntry]:
             stat = resolved.stat()
             with resolved.open("rb") as handle:
                 magic = handle.read(len(MCAP_MAGIC))
-        except OSError:
+        except (OSError, RuntimeError):  # unreadable, or a link leading to itself
             continue
         found.append(
             RecordingEntry(str(path.relative_to(root)), stat.st_size, stat.st_mtime, magic == MCAP_MAGIC)

@@ -28,16 +28,19 @@ from rosbridge_mcp_server.mcapfile import (
     INDEX_ENTRY_COST,
     MAX_NESTING,
     Budget,
+    Channel,
     CutOff,
+    DecodeCost,
     McapFile,
     OverBudget,
     RecordingProblem,
     Summary,
-    schema_problem,
+    decode_cost,
 )
 from rosbridge_mcp_server.robot.budget import DECODE_BUDGET
 from rosbridge_mcp_server.robot.recording.timing import TopicTiming, timing_of
 from rosbridge_mcp_server.robot.series import FieldError, Series, unit_of, value_at
+from rosbridge_mcp_server.robot.text import shown
 
 __all__ = [
     "READ_SECONDS",
@@ -121,9 +124,19 @@ def summarize_recording(path: Path, budget: Budget | None = None) -> RecordingSu
         raise _refusal(path, exc) from None
 
 
+#: The longest topic, type or profile name shown as it is (longer ones are cut, the cut said).
+NAME_CHARS = 200
+
+
+def _topic(channel: Channel) -> str:
+    """A channel's topic as this server names it: the file's text, escaped (and so compared)."""
+    return shown(channel.topic, NAME_CHARS)
+
+
 def _refusal(path: Path, problem: RecordingProblem) -> NotARecording:
     text = str(problem)
-    return NotARecording(f"{text}." if text.startswith(path.name) else f"{path.name}: {text}.")
+    text = text if text.startswith(path.name) else f"{path.name}: {text}"
+    return NotARecording(shown(text, 2000) + ".")  # it may quote the file's own names
 
 
 def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
@@ -132,7 +145,7 @@ def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
     note = ""
     try:
         times = mcap.message_times(summary)
-        timings = {cid: timing_of(times.get(cid, array("q")), start) for cid in summary.channels}
+        timings = {cid: timing_of(times.get(cid, array("Q")), start) for cid in summary.channels}
     except OverBudget as exc:
         # Too many messages to time each one: the counts the file declares, and mean rates over its span.
         note = f"{exc}; counts and mean rates are the file's statistics, gaps are not known"
@@ -140,9 +153,9 @@ def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
         timings = {cid: _counted(declared.get(cid, 0), span) for cid in summary.channels}
     topics = [
         TopicSummary(
-            channel.topic,
-            schema.name if (schema := summary.schemas.get(channel.schema_id)) else "",
-            channel.message_encoding,
+            _topic(channel),
+            shown(schema.name, NAME_CHARS) if (schema := summary.schemas.get(channel.schema_id)) else "",
+            shown(channel.message_encoding, NAME_CHARS),
             timings[cid],
         )
         for cid, channel in sorted(summary.channels.items(), key=lambda kv: kv[1].topic)
@@ -150,8 +163,8 @@ def _indexed(path: Path, mcap: McapFile, summary: Summary) -> RecordingSummary:
     return RecordingSummary(
         path,
         mcap.size,
-        mcap.profile,
-        mcap.library,
+        shown(mcap.profile, NAME_CHARS),
+        shown(mcap.library, NAME_CHARS),
         start,
         end,
         summary.statistics.message_count,
@@ -173,7 +186,7 @@ def _scan(path: Path, mcap: McapFile) -> RecordingSummary:
     count = 0
     try:
         for channel, log_time, _ in mcap.messages(wanted=set()):
-            times.setdefault(channel.id, array("q")).append(log_time)
+            times.setdefault(channel.id, array("Q")).append(log_time)
             count += 1
             if count % 65536 == 0:
                 mcap.budget.check_bytes(
@@ -183,7 +196,7 @@ def _scan(path: Path, mcap: McapFile) -> RecordingSummary:
     except CutOff as exc:
         if not count:
             raise
-        damaged = str(exc)
+        damaged = shown(str(exc), 2000)
     every = [t for ts in times.values() for t in (min(ts), max(ts))]
     start, end = (min(every), max(every)) if every else (0, 0)
     topics = []
@@ -192,15 +205,19 @@ def _scan(path: Path, mcap: McapFile) -> RecordingSummary:
         schema = mcap.schemas.get(known.schema_id) if known else None
         topics.append(
             TopicSummary(
-                known.topic if known else f"(channel {cid})",
-                schema.name if schema else "",
-                known.message_encoding if known else "",
+                _topic(known) if known else f"(channel {cid})",
+                shown(schema.name, NAME_CHARS) if schema else "",
+                shown(known.message_encoding, NAME_CHARS) if known else "",
                 timing_of(ts, start),
             )
         )
     topics.sort(key=lambda topic: topic.topic)
     return RecordingSummary(
-        path, mcap.size, mcap.profile, mcap.library, start, end, count, tuple(topics), False, damaged
+        path,
+        mcap.size,
+        shown(mcap.profile, NAME_CHARS),
+        shown(mcap.library, NAME_CHARS),
+        *(start, end, count, tuple(topics), False, damaged),
     )
 
 
@@ -261,16 +278,22 @@ def decoded_messages(
             factories = _decoder_factories()
             wanted = None
             if summary is not None and topics:
-                wanted = {cid for cid, ch in summary.channels.items() if ch.topic in topics}
-            decoders: dict[int, Any] = {}
+                wanted = {cid for cid, ch in summary.channels.items() if _topic(ch) in topics}
+            decoders: dict[int, tuple[Any, DecodeCost | None]] = {}
             for channel, log_time, data in mcap.messages(wanted, start_ns, end_ns, summary):
-                if data is None or (topics and channel.topic not in topics):
+                if data is None or (topics and _topic(channel) not in topics):
                     continue
                 mcap.budget.check_time()
-                decoder = decoders.get(channel.id)
-                if decoder is None:
-                    decoder = decoders[channel.id] = _decoder_for(factories, mcap, channel)
-                yield channel.topic, log_time, _decoded(decoder, data, channel.topic, log_time)
+                if channel.id not in decoders:
+                    decoders[channel.id] = _decoder_for(factories, mcap, channel)
+                decoder, cost = decoders[channel.id]
+                if cost is not None:
+                    mcap.budget.check_bytes(
+                        f"the message on {channel.topic[:100]} at log time {log_time} ns holds {len(data)} "
+                        "bytes; decoded by its schema it could take",
+                        cost.memory(len(data)),
+                    )
+                yield _topic(channel), log_time, _decoded(decoder, data, channel.topic, log_time)
     except RecordingProblem as exc:
         raise _refusal(path, exc) from None
 
@@ -307,12 +330,14 @@ def _depth(value: Any) -> int:
     return deepest
 
 
-def _decoder_for(factories: list[Any], mcap: McapFile, channel: Any) -> Any:
+def _decoder_for(factories: list[Any], mcap: McapFile, channel: Any) -> tuple[Any, DecodeCost | None]:
+    """The channel's decoder and what a message may cost decoded by its schema."""
     if channel.message_encoding == "json":
-        return json.loads
+        return json.loads, None
     schema = mcap.schemas.get(channel.schema_id)
-    if schema is not None and (problem := schema_problem(schema)):
-        raise RecordingProblem(f"messages on {channel.topic[:100]} cannot be read: {problem}")
+    cost = None if schema is None else decode_cost(schema)
+    if isinstance(cost, str):
+        raise RecordingProblem(f"messages on {channel.topic[:100]} cannot be read: {cost}")
     for factory in factories:
         try:
             decoder = factory.decoder_for(channel.message_encoding, schema)
@@ -324,7 +349,7 @@ def _decoder_for(factories: list[Any], mcap: McapFile, channel: Any) -> Any:
                 f"{type(exc).__name__}: {str(exc)[:200]}"
             ) from None
         if decoder is not None:
-            return decoder
+            return decoder, cost
     encoding = f"{channel.message_encoding} ({schema.encoding if schema else 'no schema'})"
     raise RecordingProblem(
         f"messages on {channel.topic[:100]} are {encoding[:100]}, which this reader cannot decode"
