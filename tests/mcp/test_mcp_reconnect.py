@@ -8,12 +8,15 @@ import socket
 import sys
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import asynccontextmanager
+from typing import Any
 
 import pytest
 from mcp_harness import Session, open_session, text_of, types_for
 
 from rosbridge_mcp_server.client import RosbridgeClient
+from rosbridge_mcp_server.robot.owed_zeros import ROS1_REPEAT_SECONDS
 from rosbridge_mcp_server.sim import SimulatedRobot
+from rosbridge_mcp_server.sim.world import PublishedMessage, World
 
 CMD_VEL = "/turtle1/cmd_vel"
 WAIT = 30.0
@@ -233,3 +236,48 @@ async def test_a_stop_while_the_bridge_is_down_sends_its_zeros_once_it_is_back(
     assert "Nothing to stop" not in text  # it had sent a velocity command: that was claimed not to be so
     await robot.start()
     await robot.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)
+
+
+async def test_an_owed_zero_goes_twice_on_ros1_as_a_new_publishers_first_message_is_often_lost(
+    robot_session: Session, robot: SimulatedRobot
+) -> None:
+    """rospy often loses what a publisher created a moment ago sends: on ROS 1 the owed zero goes once more a
+    second later, on the same connection; ROS 2 sends it once."""
+    await robot_session.ok("publish_topic", _twist(robot, 0.4))
+    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
+    await robot.stop()
+    await robot_session.ros.wait_disconnected(WAIT)
+    await robot_session.call("stop_robot")
+    await robot.start()
+
+    def zeros(world: World) -> list[PublishedMessage]:
+        return [m for m in world.published.get(CMD_VEL, ()) if m.msg == STILL]
+
+    if robot.dialect == "ros1":
+        await robot.wait_for(lambda w: len(zeros(w)) >= 2, WAIT)
+        first, second = zeros(robot.world)
+        assert first.connection_id == second.connection_id
+        assert second.received_at - first.received_at >= ROS1_REPEAT_SECONDS * 0.9
+    else:
+        await robot.wait_for(lambda w: len(zeros(w)) >= 1, WAIT)
+        # Past the moment a ROS 1 repeat would come, one round trip more: no second zero.
+        await asyncio.sleep(ROS1_REPEAT_SECONDS * 1.5)  # the absence of a repeat is what is checked
+        await robot_session.ok("list_topics")
+        assert len(zeros(robot.world)) == 1
+
+
+async def test_on_ros1_an_owed_zero_is_not_repeated_over_a_later_command(make_sim: Any) -> None:
+    """A command this server sends on the topic after the owed zero went out replaces it: no repeat."""
+    robot = await make_sim(dialect="ros1")
+    async with open_session(robot.url, request_timeout=60.0) as session:
+        await session.ok("publish_topic", _twist(robot, 0.4))
+        await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
+        await robot.stop()
+        await session.ros.wait_disconnected(WAIT)
+        await session.call("stop_robot")
+        await robot.start()
+        await robot.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)
+        await session.ok("publish_topic", _twist(robot, 0.2))
+        await asyncio.sleep(ROS1_REPEAT_SECONDS * 1.5)  # the absence of a repeat is what is checked
+        await session.ok("list_topics")
+    assert robot.world.published[CMD_VEL][-1].msg["linear"]["x"] == 0.2

@@ -109,6 +109,7 @@ class SessionActivity:
         self._streams: list[Stream] = []
         self._trajectories: dict[str, TrajectorySent] = {}
         self._owed: dict[str, OwedZero] = {}
+        self._sent: dict[str, int] = {}
 
     def owe_zero(self, topic: str, type_name: str, frame_id: str = "") -> None:
         """A zero command of *type_name* on *topic* could not be sent: owe it."""
@@ -126,9 +127,14 @@ class SessionActivity:
         if self._owed.get(owed.topic) is owed:
             del self._owed[owed.topic]
 
+    def sent_on(self, topic: str) -> int:
+        """How many messages this session has sent on *topic* (that :meth:`published` was told of)."""
+        return self._sent.get(topic, 0)
+
     def published(self, topic: str, type_name: str, message: Any) -> None:
         """Note a message that reached the bridge; only velocity commands and joint trajectories (on a
         controller's topic: ``robot/arm_stop.py``) are remembered."""
+        self._sent[topic] = self._sent.get(topic, 0) + 1
         sent = trajectory_sent(topic, type_name, message, time.monotonic())
         if sent is not None:
             self._trajectories[topic] = sent
