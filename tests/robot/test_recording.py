@@ -78,7 +78,7 @@ async def test_encoded_messages_decode_with_rosbags_in_both_dialects(
             topics,
             path=path,
             fd=fd,
-            duration=1.5,
+            duration=3.0,  # 1.5 s saw no message at a load of 25
             max_bytes=10**9,
             free_bytes=lambda: 10**12,
         )

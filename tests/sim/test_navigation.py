@@ -16,11 +16,12 @@ from rosbridge_mcp_server.sim.world import TURTLE_ARENA, TURTLE_HOME
 
 
 async def test_map_is_latched_and_shows_the_room_walls_pillar_and_unknown_beyond(sim: SimulatedRobot) -> None:
-    """A late subscriber gets /map at once: free inside, occupied walls and pillar, unknown outside."""
+    """A late subscriber gets /map (latched: it is published once): free inside, occupied walls and pillar,
+    unknown outside."""
     async with await RawClient.open(sim.url) as client:
         await client.send({"op": "subscribe", "topic": "/map", "id": "map"})
-        frames = await client.frames_before_barrier()
-    (published,) = [f for f in frames if f.get("topic") == "/map"]
+        # Not before a barrier's reply: a loaded machine delivered the latched message just after it.
+        published = await client.next_publish("/map")
     msg = published["msg"]
     info = msg["info"]
     assert msg["header"]["frame_id"] == "map"
