@@ -28,7 +28,7 @@ async def make_client() -> AsyncIterator[MakeClient]:
         clients.append(client)
         await client.start()
         if connected:
-            await client.wait_connected(5.0)
+            await client.wait_connected(30.0)
             if not isinstance(target, str):
                 await ordering_known(client)
         return client

@@ -126,6 +126,6 @@ async def test_a_cbor_subscription_asks_for_cbor_again_after_the_robot_restarts(
         await sim_ros2.stop()
         await client.wait_disconnected(5.0)
         await sim_ros2.start()
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         again = await sub.get(5.0)
     assert isinstance(again["data"], array)

@@ -82,7 +82,7 @@ async def test_the_dialect_is_the_sessions_and_is_replaced_with_it(
     assert first.info is client.session.info
     await sim_ros2.drop_connections()
     await client.wait_disconnected(5.0)
-    await client.wait_connected(5.0)
+    await client.wait_connected(30.0)
     second = await client.dialect()
     assert second is not first
     assert client.session is not None
@@ -93,7 +93,7 @@ async def test_the_dialect_is_the_sessions_and_is_replaced_with_it(
 async def test_a_service_request_is_respelled_once_on_the_way_out(recording: RecordingBridge) -> None:
     """ROS 1 gets secs/nsecs (it ignores sec/nanosec); ROS 2 reads both: the request goes out as written."""
     async with RosbridgeClient(recording.url, reconnect_min=0.05, reconnect_max=0.2) as client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         await client.call_service("/stamp_echo", STAMPED, timeout=5.0, isolated=False)
     sent = recording.args["/stamp_echo"]
     if recording.version == 1:

@@ -107,7 +107,7 @@ async def test_garbage_frames_cost_one_log_line_each_and_nothing_else(
 ) -> None:
     """Every bad frame is logged once without a traceback; the connection answers the next call."""
     async with RosbridgeClient(hostile.url, reconnect_min=0.05, reconnect_max=0.2) as client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         caplog.clear()
         with caplog.at_level(logging.DEBUG, logger="rosbridge_mcp_server.client"):
             await client.call_service("/hostile/garbage", timeout=10.0)
@@ -125,7 +125,7 @@ async def test_partial_fragments_from_a_bridge_leave_the_connection_answering(ho
     """100 MB of fragments that never complete: the connection still answers (what the decoder holds of them
     is bounded: tests/protocol/test_protocol_inbound.py)."""
     async with RosbridgeClient(hostile.url, reconnect_min=0.05, reconnect_max=0.2) as client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         # On the main connection: a lane would hold the fragments (ordering is not measured here).
         await client.call_service("/hostile/fragments", timeout=20.0, isolated=False)
         await client.call_service("/hostile/after", timeout=5.0)

@@ -145,7 +145,7 @@ async def test_a_drop_interrupts_a_waiting_consumer_and_the_subscription_comes_b
         await sim.drop_connections()
         with pytest.raises(ConnectionLostError):
             await asyncio.wait_for(waiting, 15.0)
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         before = sim.world.chatter_count
         msg = await sub.get(5.0)
         while msg is not None and int(msg["data"].rsplit(" ", 1)[-1]) <= before:
@@ -166,7 +166,7 @@ async def test_nothing_published_during_an_outage_arrives_after_the_robot_restar
         with pytest.raises(NotConnectedError):
             await client.publish("/turtle1/cmd_vel", "geometry_msgs/Twist", {"linear": {"x": stale}})
     await sim.start()
-    await client.wait_connected(5.0)
+    await client.wait_connected(30.0)
     await client.call_service("/rosapi/topics")  # the bridge handles our frames in order: a barrier
     advertised = [c.advertisements.get("/turtle1/cmd_vel") for c in sim.bridge.connections.values()]
     assert any(advertised), "the advertisement is restored on reconnect"
@@ -223,7 +223,7 @@ async def test_a_latched_publish_says_latch_so_the_bridge_keeps_it_latched_witho
     robot = await make_sim(dialect=dialect)
     msg_type = "std_msgs/msg/String" if dialect == "ros2" else "std_msgs/String"
     async with client_for(robot) as client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         for text in ("first", "second"):
             await client.publish("/latched_note", msg_type, {"data": text}, latch=True)
         await robot.world.wait_for(lambda w: len(w.published.get("/latched_note", ())) == 2)

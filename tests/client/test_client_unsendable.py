@@ -65,6 +65,6 @@ async def test_an_advertisement_that_could_not_be_sent_is_not_restored_after_a_r
         await client.publish(topic, "std_msgs/String", {"data": "x"})
     await sim.drop_connections()
     await client.wait_disconnected(5.0)
-    await client.wait_connected(5.0)
+    await client.wait_connected(30.0)
     await client.call_service("/rosapi/topics", timeout=5.0)
     assert client.connections_made == 2

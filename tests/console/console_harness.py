@@ -35,7 +35,7 @@ from rosbridge_mcp_server.robot.session import RobotSession
 from rosbridge_mcp_server.safety import Audit, Operator, Policy, PolicyGuard
 from rosbridge_mcp_server.server import build_server
 
-CONNECT_WAIT = 5.0
+CONNECT_WAIT = 30.0
 #: How long a console request may take to answer.
 HTTP_WAIT = 15.0
 

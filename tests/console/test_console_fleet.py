@@ -54,7 +54,7 @@ async def test_one_estop_stops_every_robot_and_latches_them_all(
     server = build_fleet_server(entries, base, console_view=hub.snapshot)
     async with Client(server, mode="legacy") as client:
         for entry in entries:
-            await entry.session.client.wait_connected(5)
+            await entry.session.client.wait_connected(30.0)
         streaming = [
             asyncio.create_task(client.call_tool("publish_topic", stream(name, rate_hz=10, duration=30)))
             for name in sims

@@ -83,7 +83,7 @@ async def test_the_console_estop_stops_a_navigating_robot_and_refuses_the_next_g
     session = RobotSession(ros, PolicyGuard(config.policy, audit, operator))
     hub = ConsoleHub([RobotView("robot", session, audit)], operator)
     async with Client(build_server(session, config, console_view=hub.snapshot), mode="legacy") as client:
-        await ros.wait_connected(5)
+        await ros.wait_connected(30.0)
         driving = asyncio.create_task(client.call_tool("navigate_to", {"goal": {"x": 1.5, "y": 2.0}}))
         await robot.wait_for(lambda world: state.linear > 0.1, timeout=15)
         await hub.estop()

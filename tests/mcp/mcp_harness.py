@@ -30,7 +30,7 @@ from rosbridge_mcp_server.server.fleet import Fleet
 from rosbridge_mcp_server.server.tasks import TaskBoard
 from rosbridge_mcp_server.sim import SimulatedRobot
 
-CONNECT_WAIT = 5.0
+CONNECT_WAIT = 30.0
 
 
 @dataclass

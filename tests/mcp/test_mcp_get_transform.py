@@ -38,7 +38,7 @@ async def broadcaster(robot: SimulatedRobot) -> AsyncIterator[None]:
     """
     msg_type = "tf2_msgs/msg/TFMessage" if robot.dialect == "ros2" else "tf2_msgs/TFMessage"
     async with RosbridgeClient(robot.url, connect_timeout=2.0, request_timeout=5.0) as tf:
-        await tf.wait_connected(5.0)
+        await tf.wait_connected(30.0)
         static = {"transforms": [link(robot, "dock", "cart", x=1.0, y=0.0, yaw_deg=0.0)]}
         await tf.publish("/tf_static", msg_type, static, latch=True)
         moving = {

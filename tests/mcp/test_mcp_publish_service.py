@@ -155,7 +155,7 @@ async def test_a_service_offered_anew_with_another_type_is_called_with_the_new_t
             await provider.send(json.dumps({"op": "advertise_service", "service": "/dyn", "type": srv_type}))
             # No acknowledgement exists in rosbridge: wait until rosapi lists the new type.
             async with RosbridgeClient(sim_ros2.url) as probe:
-                await probe.wait_connected(5.0)
+                await probe.wait_connected(30.0)
                 for _ in range(100):
                     found = await probe.call_service("/rosapi/service_type", {"service": "/dyn"})
                     if found["type"] == srv_type:

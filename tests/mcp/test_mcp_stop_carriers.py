@@ -97,7 +97,7 @@ async def console_stand(robot: SimulatedRobot) -> AsyncIterator[tuple[Session, C
     session = RobotSession(ros, PolicyGuard(config.policy, audit, operator))
     hub = ConsoleHub([RobotView("robot", session, audit)], operator)
     async with Client(build_server(session, config, console_view=hub.snapshot), mode="legacy") as client:
-        await ros.wait_connected(5.0)
+        await ros.wait_connected(30.0)
         yield Session(client, ros), hub, trail
 
 

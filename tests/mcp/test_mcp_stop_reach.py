@@ -170,7 +170,7 @@ async def test_a_goal_sent_through_send_goal_is_cancelled_by_its_uuid(make_sim: 
     client = RosbridgeClient(robot.url, request_timeout=5.0)
     session = RobotSession(client, ALLOW_ALL)
     async with client, watching(robot) as watcher:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         await watcher.subscribe("/navigate_to_pose/_action/status", STATUS)
         server = robot.graph.actions["/navigate_to_pose"]
         uuid = bytes(range(1, 17))
@@ -219,7 +219,7 @@ async def test_a_cancel_that_cannot_be_sent_is_said(make_sim: MakeSim) -> None:
     session = RobotSession(client, ALLOW_ALL)
     message = {"goal_id": {"id": "g"}, "goal": {}}
     async with client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         topic = "/move_base/goal"
         effects = topic_effects(topic, "move_base_msgs/MoveBaseActionGoal")
         session.goals.caused(caused_by_publish(topic, message, effects, 1))
@@ -262,7 +262,7 @@ async def test_estop_says_which_servers_it_could_not_place_in_time(make_sim: Mak
     client = RosbridgeClient(robot.url, request_timeout=10.0)
     session = RobotSession(client, ALLOW_ALL)
     async with client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         report = await emergency_stop(session, by="console")
     late = [failure for failure in report.failures if "its type was not learnt" in failure]
     assert late, report.failures

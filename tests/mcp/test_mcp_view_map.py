@@ -141,7 +141,7 @@ async def test_a_costmap_in_the_odom_frame_is_shaded_and_places_the_robot_throug
         "data": cells,
     }
     async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
-        await publisher.wait_connected(5.0)
+        await publisher.wait_connected(30.0)
         await publisher.publish("/test/costmap", costmap_type, costmap, latch=True)
         async with open_session(sim.url) as session:
             result = await session.ok("view_map", {"topic": "/test/costmap"})
@@ -187,7 +187,7 @@ async def test_a_path_without_a_frame_is_drawn_in_the_maps(sim: SimulatedRobot) 
     path_type = "nav_msgs/msg/Path" if sim.dialect == "ros2" else "nav_msgs/Path"
     poses = [{"pose": {"position": {"x": x, "y": 2.0}, "orientation": {"w": 1.0}}} for x in (2.0, 4.0, 6.0)]
     async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
-        await publisher.wait_connected(5.0)
+        await publisher.wait_connected(30.0)
         await publisher.publish("/test/path", path_type, {"poses": poses}, latch=True)
         async with open_session(sim.url) as session:
             result = await session.ok("view_map", {"path_topic": "/test/path"})
@@ -203,7 +203,7 @@ async def test_a_silent_path_topic_is_a_note_and_the_map_still_comes(sim: Simula
     """A Path topic that is advertised but never published: the map is drawn, the note names the topic."""
     path_type = "nav_msgs/msg/Path" if sim.dialect == "ros2" else "nav_msgs/Path"
     async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
-        await publisher.wait_connected(5.0)
+        await publisher.wait_connected(30.0)
         await publisher.advertise("/test/silent_plan", path_type)
         async with open_session(sim.url) as session:
             result = await session.ok("view_map", {"path_topic": "/test/silent_plan", "timeout": 3.0})
@@ -255,7 +255,7 @@ async def view_grid(sim: SimulatedRobot, grid: dict[str, Any], calls: list[dict[
     """view_map of *grid* (latched on /test/small_map) once per argument set in *calls*."""
     grid_type = "nav_msgs/msg/OccupancyGrid" if sim.dialect == "ros2" else "nav_msgs/OccupancyGrid"
     async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
-        await publisher.wait_connected(5.0)
+        await publisher.wait_connected(30.0)
         await publisher.publish("/test/small_map", grid_type, grid, latch=True)
         async with open_session(sim.url) as session:
             return [await session.ok("view_map", {"topic": "/test/small_map", **call}) for call in calls]
@@ -327,7 +327,7 @@ async def test_a_map_of_absurd_size_or_place_is_refused_in_our_words(
     sim_ros2: SimulatedRobot, grid: dict[str, Any], words: str
 ) -> None:
     async with RosbridgeClient(sim_ros2.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
-        await publisher.wait_connected(5.0)
+        await publisher.wait_connected(30.0)
         await publisher.publish("/test/small_map", "nav_msgs/msg/OccupancyGrid", grid, latch=True)
         async with open_session(sim_ros2.url) as session:
             text = await asyncio.wait_for(session.error("view_map", {"topic": "/test/small_map"}), 20)

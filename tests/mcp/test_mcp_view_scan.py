@@ -85,7 +85,7 @@ async def test_a_point_cloud_is_drawn_from_above(sim: SimulatedRobot) -> None:
         "is_dense": True,
     }
     async with RosbridgeClient(sim.url, connect_timeout=2.0, request_timeout=5.0) as publisher:
-        await publisher.wait_connected(5.0)
+        await publisher.wait_connected(30.0)
         await publisher.publish("/test/points", cloud_type, cloud, latch=True)
         async with open_session(sim.url) as session:
             result = await session.ok("view_scan", {"topic": "/test/points", "max_size": 400})

@@ -46,7 +46,7 @@ async def jazzy() -> AsyncIterator[SimulatedRobot]:
 @pytest.fixture
 async def client(jazzy: SimulatedRobot) -> AsyncIterator[RosbridgeClient]:
     async with client_for(jazzy) as client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         assert not (await client.capabilities()).node_details_of_unknown_safe
         yield client
 

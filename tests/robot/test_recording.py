@@ -32,7 +32,7 @@ def sim_in_memory() -> bool:
 async def _robot(sim: SimulatedRobot) -> tuple[RosbridgeClient, RobotSession]:
     client = client_for(sim, connect_timeout=2.0, request_timeout=5.0)
     await client.start()
-    await client.wait_connected(5.0)
+    await client.wait_connected(30.0)
     return client, RobotSession(client, ALLOW_ALL)
 
 

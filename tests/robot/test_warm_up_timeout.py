@@ -22,7 +22,7 @@ async def test_learning_stops_at_the_first_look_up_that_times_out(make_sim: Make
     # rosapi takes 1 s a call: the test has that long to queue its hanging call behind the first look-up,
     # which a loaded machine needs (0.2 s was lost under load, and a third look-up was asked).
     async with RosbridgeClient(robot.url, request_timeout=2.5) as client:
-        await client.wait_connected(5.0)
+        await client.wait_connected(30.0)
         graph = RosGraph(client)
         learning = asyncio.create_task(graph.learn_service_types())
         # The first look-up comes after ros_info and the service list, each 1 s of rosapi, and beside the
