@@ -176,8 +176,10 @@ async def _gather(look: _Gathered, client: RosbridgeClient, graph: RosGraph, foc
         if silent and ("graph" in look.areas or "streams" in look.areas):
             look.pubsub = {**look.pubsub, **await topic_details(graph, silent)}
             silent = [t for t in silent if others(look.pubsub.get(t, ((), ()))[0])]
-        if silent:
-            await ears.hear(AGAIN, only=silent)
+        # A rate needs two messages: one that sent only one (a busy machine) is heard again with the silent.
+        thin = [t for t in look.streams if t in look.heard and len(look.heard[t].times) == 1]
+        if silent or thin:
+            await ears.hear(AGAIN, only=silent + thin)
 
 
 # --- each area's judgement of what was gathered ------------------------------------------------------------

@@ -57,8 +57,8 @@ PubSub = Mapping[str, tuple[tuple[str, ...], tuple[str, ...]]]
 
 #: A key stream with a publisher that sent nothing in the window is heard for up to this much longer before it
 #: is called silent: a loaded machine or a bridge busy for a moment can hold a healthy stream's messages back
-#: (seen: eleven healthy simulated streams silent in 1 s at a load average of 16). A look at a healthy robot
-#: never waits for it; a silent stream costs it once.
+#: (seen: eleven healthy simulated streams silent in 1 s at a load average of 16). So is one that sent one
+#: message only (no rate). A look at a healthy robot never waits for it; such a stream costs it once.
 AGAIN: Final = 1.0
 
 
