@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import random
 import socket
 import threading
 import time
@@ -129,3 +130,16 @@ async def test_a_peer_that_does_not_answer_is_still_a_timeout(peer: str) -> None
             await transport.ping(LIMIT)
     finally:
         transport.abort()
+
+
+async def test_no_ping_draws_from_the_shared_random_state(peer: str) -> None:
+    """Ours and websockets' keepalive's (a ping without a payload) carry a count: the process's `random` is
+    the host's, and a property test's strategies failed when a keepalive ping drew from it in the middle."""
+    transport = await websocket_dial(peer)(10.0)
+    try:
+        before = random.getstate()
+        await transport.ping(10.0)
+        await asyncio.wait_for(await transport.ws.ping(), 10.0)  # type: ignore[attr-defined]  # the keepalive's way
+        assert random.getstate() == before
+    finally:
+        await transport.close()

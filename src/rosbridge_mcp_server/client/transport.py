@@ -74,16 +74,27 @@ class BridgeTransport(Protocol):
 Dial = Callable[[float], Awaitable[BridgeTransport]]
 
 
+class _CountedPings(ClientConnection):
+    """websockets' connection whose pings carry a count when given no payload: its keepalive's pings too.
+
+    websockets' own payload draws from the process's shared ``random`` state, which is the host's (a property
+    test's strategies failed on it, its draws changed by a keepalive ping in the middle)."""
+
+    _count = itertools.count()
+
+    async def ping(self, data: Any = None) -> Awaitable[float]:
+        if data is None:
+            data = next(self._count).to_bytes(8, "big")
+        return await super().ping(data)
+
+
 class WebSocketTransport:
     """A ``websockets`` client connection as a :class:`BridgeTransport`."""
 
-    __slots__ = ("_pings", "recv", "ws")
+    __slots__ = ("recv", "ws")
 
     def __init__(self, ws: ClientConnection) -> None:
         self.ws = ws
-        # Our pings carry a count, not websockets' default random payload: that draws from the process's
-        # shared `random` state, which is the host's (and a property test's).
-        self._pings = itertools.count()
         # recv() is websockets' own: the reader's hot path gets no frame of ours in between.
         self.recv = ws.recv
 
@@ -118,7 +129,8 @@ class WebSocketTransport:
         began = loop.time()
         try:
             async with asyncio.timeout(timeout):
-                pong = asyncio.ensure_future(await self.ws.ping(next(self._pings).to_bytes(8, "big")))
+                # A count for a payload (``_CountedPings``), one sequence with the keepalive's.
+                pong = asyncio.ensure_future(await self.ws.ping())
         except ConnectionClosed:
             raise EOFError("the connection closed") from None
         left = timeout - (loop.time() - began)
@@ -183,6 +195,7 @@ def websocket_dial(
             # the handshake and every frame lean. No proxy: a robot is on the local network.
             compression=None,
             proxy=None,
+            create_connection=_CountedPings,
         )
         return WebSocketTransport(ws)
 
