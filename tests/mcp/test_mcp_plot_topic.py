@@ -46,7 +46,8 @@ async def test_a_moving_turtle_shows_in_pose_and_odometry(session: Session, sim:
     pose, odom = data["series"]
     assert (pose["topic"], pose["field"], pose["unit"]) == ("/turtle1/pose", "x", "m")
     assert pose["min"] == pytest.approx(TURTLE_HOME, abs=0.15)
-    assert pose["max"] - pose["min"] > 0.6
+    # It rose; by how much depends on how much of the drive fell in the window (0.47 m at a load of 20).
+    assert pose["max"] - pose["min"] > 0.2
     # The observed rates: the simulator publishes pose at 25 Hz and odometry at 20 Hz, or slower on a loaded
     # machine, never faster (a lower bound here failed under load: 17 Hz).
     assert 2 / 1.5 <= pose["rate_hz"] <= 25 * 1.3
