@@ -222,16 +222,21 @@ async def test_a_velocity_stream_cut_off_by_an_outage_gets_its_zero_once_the_bri
     assert robot.world.published[CMD_VEL][-1].msg == STILL
 
 
+async def _stop_while_down(session: Session, robot: SimulatedRobot) -> str:
+    """One 0.4 m/s command, the bridge down, then stop_robot (its zero owed): the stop's text."""
+    await session.ok("publish_topic", _twist(robot, 0.4))
+    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
+    await robot.stop()
+    await session.ros.wait_disconnected(WAIT)
+    return text_of(await session.call("stop_robot"))
+
+
 async def test_a_stop_while_the_bridge_is_down_sends_its_zeros_once_it_is_back(
     robot_session: Session, robot: SimulatedRobot
 ) -> None:
     """One 0.4 m/s command, the bridge down, stop_robot: it says no zero could be sent yet; once the bridge is
     back, the zero goes out on the velocity topic."""
-    await robot_session.ok("publish_topic", _twist(robot, 0.4))
-    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
-    await robot.stop()
-    await robot_session.ros.wait_disconnected(WAIT)
-    text = text_of(await robot_session.call("stop_robot"))
+    text = await _stop_while_down(robot_session, robot)
     assert f"No zero velocity command could be sent on {CMD_VEL} (not connected); each goes out" in text, text
     assert "Nothing to stop" not in text  # it had sent a velocity command: that was claimed not to be so
     await robot.start()
@@ -243,11 +248,7 @@ async def test_an_owed_zero_goes_twice_on_ros1_as_a_new_publishers_first_message
 ) -> None:
     """rospy often loses what a publisher created a moment ago sends: on ROS 1 the owed zero goes once more a
     second later, on the same connection; ROS 2 sends it once."""
-    await robot_session.ok("publish_topic", _twist(robot, 0.4))
-    await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
-    await robot.stop()
-    await robot_session.ros.wait_disconnected(WAIT)
-    await robot_session.call("stop_robot")
+    await _stop_while_down(robot_session, robot)
     await robot.start()
 
     def zeros(world: World) -> list[PublishedMessage]:
@@ -270,11 +271,7 @@ async def test_on_ros1_an_owed_zero_is_not_repeated_over_a_later_command(make_si
     """A command this server sends on the topic after the owed zero went out replaces it: no repeat."""
     robot = await make_sim(dialect="ros1")
     async with open_session(robot.url, request_timeout=60.0) as session:
-        await session.ok("publish_topic", _twist(robot, 0.4))
-        await robot.wait_for(lambda w: len(w.published.get(CMD_VEL, ())) == 1, WAIT)
-        await robot.stop()
-        await session.ros.wait_disconnected(WAIT)
-        await session.call("stop_robot")
+        await _stop_while_down(session, robot)
         await robot.start()
         await robot.wait_for(lambda w: w.published[CMD_VEL][-1].msg == STILL, WAIT)
         await session.ok("publish_topic", _twist(robot, 0.2))
